@@ -1,0 +1,34 @@
+# Entry points: `make demo` and `make test` (see README.md).
+# Both set up .venv first; the package is installed editable with the ROS 2
+# Jazzy wheels from PyPI, so no system ROS install is needed.
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+# DDS stays on this machine; a fresh domain per run keeps parallel runs apart
+# (10..99 is inside the range Fast DDS accepts). An exported ROS_DOMAIN_ID wins.
+ROS_ENV := export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ROS_STATIC_PEERS= ; \
+	export ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-$$(( $$$$ % 90 + 10 ))} ;
+
+.PHONY: venv test demo
+
+venv: $(STAMP)
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+
+# Reinstall only when setup.py changes (or the venv is new).
+$(STAMP): setup.py | $(PY)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[ros,test]'
+	touch $@
+
+test: venv
+	@$(ROS_ENV) \
+	echo "ROS_DOMAIN_ID=$$ROS_DOMAIN_ID ROS_AUTOMATIC_DISCOVERY_RANGE=$$ROS_AUTOMATIC_DISCOVERY_RANGE"; \
+	$(PY) -m pytest -q $(PYTEST_ARGS)
+
+demo: venv
+	@$(ROS_ENV) bash scripts/demo.sh

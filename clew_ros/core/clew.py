@@ -1,0 +1,137 @@
+"""ARIADNE'S CLEW for manipulation (paper 1.2): EXPLORE, then SEARCH from each new landmark."""
+
+from __future__ import annotations
+
+import time
+import traceback
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from clew_ros.core.collision import is_placement_valid, is_valid
+from clew_ros.core.explore import Explorer
+from clew_ros.core.kinematics import transform_points
+from clew_ros.core.search import PlanningContext, search_transfer
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.tree import LandmarkTree, Segment, append_path
+from clew_ros.core.world import World
+
+__all__ = ["Progress", "PlanResult", "plan"]
+
+
+@dataclass(frozen=True)
+class Progress:
+    """Reported after every landmark: how far the run has come."""
+
+    landmarks: int
+    best_distance: float  # m, smallest goal distance reached by SEARCH_TRANSFER so far (inf before any)
+    elapsed: float  # s
+    tree: LandmarkTree
+
+
+@dataclass
+class PlanResult:
+    """What a run produced. ``segments`` is empty unless it succeeded."""
+
+    outcome: Outcome
+    message: str
+    segments: list[Segment]
+    final_object_pose: np.ndarray | None
+    tree: LandmarkTree
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.outcome.succeeded
+
+
+def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: np.ndarray | None = None,
+         termination: Termination | None = None,
+         progress: Callable[[Progress], None] | None = None) -> PlanResult:
+    """Plan a manipulation path from the world's start to ``goal`` (default ``world.object.goal``).
+
+    Never raises for planning failures: the outcome says what happened. The
+    run stops on success, when EXPLORE's new landmark is closer than
+    ``settings.resolution`` to the others, or when ``termination`` says so.
+    """
+    goal = np.asarray(world.object.goal if goal is None else goal, dtype=float)
+    termination = termination or Termination(settings.time_limit)
+    ctx = PlanningContext(world, settings, np.random.default_rng(settings.seed), termination)
+    tree = LandmarkTree(world.robot.initial, world.object.initial)
+
+    def finish(outcome: Outcome, message: str, segments=None, final_pose=None) -> PlanResult:
+        stats = {
+            "time_s": round(termination.elapsed, 4),
+            "landmarks": len(tree),
+            "collision_checks": ctx.counters.clearance_checks,
+            "evaluations": ctx.counters.evaluations,
+            "seed": settings.seed,
+        }
+        return PlanResult(outcome, message, segments or [], final_pose, tree, stats)
+
+    quick = _quick_refusal(world, goal)
+    if quick is not None:
+        return finish(*quick)
+    best = np.inf
+    try:
+        explorer = Explorer(ctx, tree)
+        failures = 0
+        while True:
+            reason = termination.reason()
+            if reason is not None:
+                return finish(reason, _stopped_message(reason, settings, len(tree)))
+            exploration = explorer.explore()
+            if exploration is None:
+                reason = termination.reason()
+                if reason is not None:
+                    continue
+                failures += 1
+                if failures >= 3:
+                    return finish(Outcome.NO_PATH_AT_RESOLUTION, "no grasp of the object can be reached from any "
+                                  f"of the {len(tree)} landmarks")
+                continue
+            landmark = tree.add(**exploration.fields)
+            transfer = search_transfer(ctx, landmark.joints, landmark.grasp_rel, goal)
+            best = min(best, transfer.distance)
+            if progress is not None:
+                progress(Progress(len(tree), best, termination.elapsed, tree))
+            if transfer.success:
+                segments = tree.history_of(landmark.id)
+                append_path(segments, "transfer", landmark.grasp, transfer.waypoints)
+                return finish(Outcome.SUCCEEDED, f"plan found with {len(tree)} landmarks, "
+                              f"{sum(s.kind == 'transfer' for s in segments)} grasp(s)",
+                              segments, transfer.object_pose)
+            if exploration.distance < settings.resolution:
+                return finish(Outcome.NO_PATH_AT_RESOLUTION,
+                              f"no path at resolution {settings.resolution}: the new landmark lies "
+                              f"{exploration.distance:.4g} from the others after {len(tree)} landmarks; "
+                              f"best goal distance {best:.4g} m")
+    except Exception as error:  # a bug: reported as an outcome so a node keeps running
+        return finish(Outcome.INTERNAL_ERROR, f"internal error: {error!r}\n{traceback.format_exc(limit=4)}")
+
+
+def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int) -> str:
+    if reason is Outcome.CANCELED:
+        return f"canceled after {landmarks} landmarks"
+    return f"time limit of {settings.time_limit} s reached after {landmarks} landmarks; no plan found"
+
+
+def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None:
+    """Answers knowable at once: a colliding start or goal, a goal beyond reach."""
+    if not np.all(np.isfinite(goal)) or goal.shape != (3,):
+        return Outcome.INVALID_WORLD, "goal: expected three finite numbers (x, y, theta)"
+    if not is_placement_valid(world, goal[None])[0]:
+        return Outcome.GOAL_IN_COLLISION, f"goal placement {goal.tolist()} collides or leaves world.bounds"
+    if not is_valid(world, world.robot.initial[None], world.object.initial[None])[0]:
+        return Outcome.START_IN_COLLISION, "the start configuration is not valid"
+    grasp_points = transform_points(goal, world.object.grasps)
+    nearest = float(np.min(np.linalg.norm(grasp_points - world.robot.base, axis=1)))
+    if nearest > world.robot.reach + world.grasp_tolerance:
+        return (Outcome.GOAL_OUT_OF_REACH, f"goal placement out of reach: its nearest grasp is {nearest:.3f} m "
+                f"from the base, the arm reaches {world.robot.reach:.3f} m")
+    return None
+
+
+def wall_time() -> float:
+    return time.time()

@@ -1,0 +1,151 @@
+"""The validity test of ``interface.md`` section 1, over batches of configurations.
+
+Two views of the same static geometry, prepared once per world (:func:`scene_of`):
+
+* exact tests with shapely 2 ufuncs on arrays of geometries (:func:`is_valid`,
+  :func:`explain_invalid`), used for validation, world checks and the plan
+  validator; touching counts as collision, exactly as the contract says;
+* edge arrays used by :mod:`clew_ros.core.manhattan` to compute clearances in
+  numpy when it sweeps a joint.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import shapely
+
+from clew_ros.core.geometry import polygon_edges
+from clew_ros.core.kinematics import joint_positions, transform_points
+from clew_ros.core.world import World
+
+__all__ = ["Scene", "scene_of", "is_valid", "explain_invalid", "explain_placement", "is_placement_valid"]
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """Static geometry of a world, prepared once."""
+
+    obstacle_edges: np.ndarray  # (E, 2, 2)
+    obstacle_union: shapely.Geometry  # prepared
+    obstacle_polygons: np.ndarray  # (O,) shapely polygons
+    object_edges: np.ndarray  # (V, 2, 2) object frame
+    shrunk_parts: tuple[np.ndarray, ...]  # rings (Vs, 2) of the object shrunk by grasp_tolerance
+    shrunk_edges: np.ndarray  # (Es, 2, 2) object frame
+    link_radius: float
+    adjacent_pairs: np.ndarray  # (P, 2) non-adjacent link pairs (a, b), b >= a + 2
+
+
+@lru_cache(maxsize=64)
+def scene_of(world: World) -> Scene:
+    """The prepared static geometry of ``world`` (cached per world object)."""
+    polygons = np.array([shapely.Polygon(o.vertices) for o in world.obstacles], dtype=object)
+    union = shapely.union_all(polygons) if len(polygons) else shapely.GeometryCollection()
+    shapely.prepare(union)
+    edges = (np.concatenate([polygon_edges(o.vertices) for o in world.obstacles])
+             if world.obstacles else np.zeros((0, 2, 2)))
+    shrunk = shapely.Polygon(world.object.polygon).buffer(-world.grasp_tolerance, join_style="mitre")
+    parts = tuple(np.asarray(g.exterior.coords)[:-1] for g in getattr(shrunk, "geoms", [shrunk]) if not g.is_empty)
+    shrunk_edges = np.concatenate([polygon_edges(p) for p in parts]) if parts else np.zeros((0, 2, 2))
+    n = world.robot.dof
+    pairs = np.array([(a, b) for a in range(n) for b in range(a + 2, n)], dtype=int).reshape(-1, 2)
+    if not world.robot.self_collision:
+        pairs = pairs[:0]
+    return Scene(edges, union, polygons, polygon_edges(world.object.polygon), parts, shrunk_edges,
+                 world.robot.link_width / 2.0, pairs)
+
+
+def _inside_bounds(bounds: np.ndarray, points: np.ndarray, inset: float) -> np.ndarray:
+    """Whether all points ``(N, P, 2)`` are inside the closed box shrunk by ``inset``."""
+    low = bounds[:2] + inset
+    high = bounds[2:] - inset
+    return np.all((points >= low) & (points <= high), axis=(1, 2))
+
+
+def _link_lines(points: np.ndarray) -> np.ndarray:
+    n_conf, n_points = points.shape[:2]
+    segments = np.stack([points[:, :-1], points[:, 1:]], axis=2)  # (N, n, 2, 2)
+    return shapely.linestrings(segments.reshape(-1, 2, 2)).reshape(n_conf, n_points - 1)
+
+
+def _near(a, b, distance: float) -> np.ndarray:
+    return shapely.dwithin(a, b, distance) if distance > 0 else shapely.intersects(a, b)
+
+
+def is_placement_valid(world: World, object_poses: np.ndarray) -> np.ndarray:
+    """Object inside bounds and outside every obstacle, per pose ``(N, 3)`` → ``(N,)``."""
+    object_poses = np.atleast_2d(object_poses)
+    scene = scene_of(world)
+    vertices = transform_points(object_poses, world.object.polygon)
+    ok = _inside_bounds(world.bounds, vertices, 0.0)
+    if len(world.obstacles):
+        ok &= ~shapely.intersects(shapely.polygons(vertices), scene.obstacle_union)
+    return ok
+
+
+def is_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.ndarray:
+    """Section 1's validity test for configurations ``q`` ``(N, n)`` with the object at ``(N, 3)``.
+
+    Returns a boolean array ``(N,)``. The object pose is where the object is,
+    carried or resting; the test is the same for transit and transfer.
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    object_poses = np.broadcast_to(np.asarray(object_poses, dtype=float), (len(q), 3))
+    scene = scene_of(world)
+    points = joint_positions(world.robot, q)
+    r = scene.link_radius
+    ok = _inside_bounds(world.bounds, points, r) & is_placement_valid(world, object_poses)
+    lines = _link_lines(points)
+    if len(world.obstacles):
+        ok &= ~np.any(_near(lines, scene.obstacle_union, r), axis=1)
+    for part in scene.shrunk_parts:
+        shrunk = shapely.polygons(transform_points(object_poses, part))
+        ok &= ~np.any(shapely.intersects(lines, shrunk[:, None]), axis=1)
+    for a, b in scene.adjacent_pairs:
+        ok &= ~_near(lines[:, a], lines[:, b], 2 * r)
+    return ok
+
+
+def explain_placement(world: World, object_pose: np.ndarray) -> str | None:
+    """Why the object cannot rest at ``object_pose``, or ``None`` when it can."""
+    scene = scene_of(world)
+    vertices = transform_points(np.asarray(object_pose, float)[None], world.object.polygon)
+    if not _inside_bounds(world.bounds, vertices, 0.0)[0]:
+        return "the object leaves world.bounds"
+    polygon = shapely.Polygon(vertices[0])
+    for obstacle, geometry in zip(world.obstacles, scene.obstacle_polygons):
+        if polygon.intersects(geometry):
+            return f"the object hits obstacle '{obstacle.name}'"
+    return None
+
+
+def explain_invalid(world: World, q: np.ndarray, object_pose: np.ndarray) -> str | None:
+    """Why configuration ``q`` with the object at ``object_pose`` is invalid, or ``None``."""
+    scene = scene_of(world)
+    q = np.asarray(q, dtype=float)
+    object_pose = np.asarray(object_pose, dtype=float)
+    points = joint_positions(world.robot, q[None])
+    r = scene.link_radius
+    lines = _link_lines(points)[0]
+    low, high = world.bounds[:2] + r, world.bounds[2:] - r
+    for i, line in enumerate(lines):
+        ends = points[0, i:i + 2]
+        if np.any(ends < low) or np.any(ends > high):
+            return f"link {i + 1} leaves world.bounds"
+        for obstacle, geometry in zip(world.obstacles, scene.obstacle_polygons):
+            if _near(line, geometry, r):
+                return f"link {i + 1} hits obstacle '{obstacle.name}'"
+    reason = explain_placement(world, object_pose)
+    if reason:
+        return reason
+    for part in scene.shrunk_parts:
+        shrunk = shapely.Polygon(transform_points(object_pose[None], part)[0])
+        for i, line in enumerate(lines):
+            if line.intersects(shrunk):
+                return f"link {i + 1} goes into the object (deeper than world.grasp_tolerance)"
+    for a, b in scene.adjacent_pairs:
+        if _near(lines[a], lines[b], 2 * r):
+            return f"link {a + 1} hits link {b + 1} (self-collision)"
+    return None

@@ -1,0 +1,122 @@
+"""EXPLORE: place the next landmark as far as possible from the existing ones (paper 1.2, 1.3.4).
+
+The search space is the paper's ``[landmark] x [grasp] x R^(k n)``: a
+candidate is a landmark ``L_i``, a grasp ``g_j`` reached from it by
+SEARCH_TRANSIT (or ``L_i``'s own grasp, kept without a transit), and the genes
+of a transfer Manhattan path. The genetic algorithm maximises the distance
+from the transfer's end to the nearest landmark, evaluating the transfers of a
+whole population in one batch (each individual has its own start and grasp).
+Transits are computed once per (landmark, grasp) pair and cached.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from clew_ros.core.genetic import minimize
+from clew_ros.core.search import PlanningContext, search_transit
+from clew_ros.core.tree import LandmarkTree, landmark_features
+
+__all__ = ["Explorer", "Exploration"]
+
+
+@dataclass
+class _Candidate:
+    parent: int
+    grasp: int
+    start: np.ndarray  # (n,) joints holding the grasp
+    grasp_rel: np.ndarray  # (3,)
+    transit: np.ndarray | None  # None: the parent's grasp is kept
+
+
+@dataclass
+class Exploration:
+    """One EXPLORE step's result: the new landmark's fields and its distance to the others."""
+
+    fields: dict
+    distance: float
+
+
+class Explorer:
+    """EXPLORE with its transit cache, for one planning run."""
+
+    def __init__(self, ctx: PlanningContext, tree: LandmarkTree) -> None:
+        self.ctx = ctx
+        self.tree = tree
+        self._transits: dict[tuple[int, int], _Candidate | None] = {}
+
+    def candidate(self, landmark_id: int, grasp: int) -> _Candidate | None:
+        """The single manipulation path's transit part from a landmark to a grasp (cached)."""
+        key = (landmark_id, grasp)
+        if key not in self._transits:
+            landmark = self.tree[landmark_id]
+            if landmark.grasp == grasp:
+                self._transits[key] = _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
+            else:
+                result = search_transit(self.ctx, landmark.joints, landmark.object_pose, grasp)
+                self._transits[key] = (_Candidate(landmark_id, grasp, result.waypoints[-1], result.grasp_rel,
+                                                  result.waypoints) if result.success else None)
+        return self._transits[key]
+
+    def explore(self) -> Exploration | None:
+        """Place one new landmark; ``None`` when no candidate transit succeeded."""
+        ctx = self.ctx
+        world = ctx.world
+        grasps = len(world.object.grasps)
+        pairs = [(i, g) for i in range(len(self.tree)) for g in range(grasps)]
+        fresh = [p for p in pairs if p not in self._transits]
+        known = [p for p in pairs if self._transits.get(p) is not None]
+        wanted = ctx.settings.explore_candidates
+        order = ctx.rng.permutation(len(fresh))
+        chosen = [fresh[i] for i in order[:wanted]]
+        # previously successful pairs stay in the pool, newest landmarks first
+        chosen += sorted(known, key=lambda p: -p[0])[: max(0, 2 * wanted - len(chosen))]
+        candidates = []
+        for landmark_id, grasp in chosen:
+            if ctx.termination():
+                return None
+            candidate = self.candidate(landmark_id, grasp)
+            if candidate is not None:
+                candidates.append(candidate)
+        if not candidates:
+            return None
+
+        n = world.robot.dof
+        k = ctx.settings.manhattan_order
+        starts = np.array([c.start for c in candidates])
+        rels = np.array([c.grasp_rel for c in candidates])
+        features = self.tree.features(ctx.settings.joint_weight, world.object.radius)
+
+        def decode(population: np.ndarray):
+            index = np.clip(population[:, 0].astype(int), 0, len(candidates) - 1)
+            genes = population[:, 1:].reshape(-1, k, n)
+            return index, ctx.manhattan(starts[index], genes, grasp_rel=rels[index])
+
+        def evaluate(population: np.ndarray) -> np.ndarray:
+            _, paths = decode(population)
+            ctx.counters.evaluations += len(population)
+            ends = landmark_features(paths.final, paths.object_poses, ctx.settings.joint_weight,
+                                     world.object.radius)
+            nearest = np.min(np.linalg.norm(ends[:, None] - features[None], axis=2), axis=1)
+            return -nearest
+
+        size = ctx.settings.population
+        initial = np.empty((size, 1 + k * n))
+        initial[:, 0] = ctx.rng.integers(0, len(candidates), size=size)
+        initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
+        result = minimize(evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(candidates),
+                          should_stop=ctx.termination)
+        index, paths = decode(result.genes[None])
+        chosen_candidate = candidates[int(index[0])]
+        fields = dict(
+            parent=chosen_candidate.parent,
+            joints=paths.final[0].copy(),
+            object_pose=paths.object_poses[0].copy(),
+            grasp=chosen_candidate.grasp,
+            grasp_rel=chosen_candidate.grasp_rel,
+            transit=chosen_candidate.transit,
+            transfer=np.concatenate([chosen_candidate.start[None], paths.waypoints[0, 1:]]),
+        )
+        return Exploration(fields, -result.fitness)

@@ -1,0 +1,46 @@
+"""Vectorised planar primitives: segment distances and edge lists.
+
+Segments are arrays ``(..., 2, 2)`` (start, end); every function broadcasts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["polygon_edges", "point_segment_distance", "segment_distance"]
+
+
+def polygon_edges(vertices: np.ndarray) -> np.ndarray:
+    """Closed ring ``(..., V, 2)`` as edges ``(..., V, 2, 2)``."""
+    return np.stack([vertices, np.roll(vertices, -1, axis=-2)], axis=-2)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from points ``p`` to segments ``[a, b]`` (all ``(..., 2)``)."""
+    ab = b - a
+    ap = p - a
+    denominator = np.einsum("...i,...i->...", ab, ab)
+    t = np.einsum("...i,...i->...", ap, ab) / np.where(denominator > 0, denominator, 1.0)
+    t = np.clip(t, 0.0, 1.0)
+    d = ap - t[..., None] * ab
+    return np.sqrt(np.einsum("...i,...i->...", d, d))
+
+
+def segment_distance(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """Distance between segments ``[p1, p2]`` and ``[q1, q2]``; 0 where they cross."""
+    d = np.minimum(
+        np.minimum(point_segment_distance(p1, q1, q2), point_segment_distance(p2, q1, q2)),
+        np.minimum(point_segment_distance(q1, p1, p2), point_segment_distance(q2, p1, p2)),
+    )
+    r = p2 - p1
+    s = q2 - q1
+    o1 = _cross(r, q1 - p1)
+    o2 = _cross(r, q2 - p1)
+    o3 = _cross(s, p1 - q1)
+    o4 = _cross(s, p2 - q1)
+    crossing = (o1 * o2 < 0) & (o3 * o4 < 0)
+    return np.where(crossing, 0.0, d)

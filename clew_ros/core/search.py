@@ -1,0 +1,181 @@
+"""SEARCH_TRANSIT and SEARCH_TRANSFER: local planners as optimisation (paper 1.3.2, 1.3.4).
+
+Both minimise a distance over Manhattan paths of order k coded with bouncing
+(so every candidate is collision-free), with the genetic algorithm, repeating
+from the best end point while it improves (the paper's do-while loop). A short
+numeric refinement then closes the last millimetres: damped least squares on a
+finite-difference Jacobian, applied as single-joint moves clamped to their
+free intervals. No inverse kinematics anywhere, so redundant arms work alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from clew_ros.core.genetic import minimize
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
+from clew_ros.core.manhattan import Counters, run_manhattan, single_moves
+from clew_ros.core.settings import PlannerSettings, Termination
+from clew_ros.core.world import World
+
+__all__ = ["PlanningContext", "PathResult", "search_transit", "search_transfer", "goal_error"]
+
+
+@dataclass
+class PlanningContext:
+    """Everything one planning run shares: world, settings, randomness, stop test, counters."""
+
+    world: World
+    settings: PlannerSettings
+    rng: np.random.Generator
+    termination: Termination = field(default_factory=Termination)
+    counters: Counters = field(default_factory=Counters)
+
+    def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode) -> "np.ndarray":
+        return run_manhattan(self.world, q0, genes, margin_m=self.settings.clearance, counters=self.counters,
+                             **mode)
+
+    def initial_genes(self, count: int) -> np.ndarray:
+        """Random Manhattan genes ``(count, k, n)``; the first individual stays put."""
+        n = self.world.robot.dof
+        genes = self.rng.normal(0.0, 1.2, size=(count, self.settings.manhattan_order, n))
+        genes[0] = 0.0
+        return genes
+
+
+@dataclass
+class PathResult:
+    success: bool
+    waypoints: np.ndarray  # (m, n), starting at the start configuration
+    distance: float  # final value of the objective (m)
+    grasp_rel: np.ndarray | None = None  # transit: object pose in the end-effector frame at the grasp
+    object_pose: np.ndarray | None = None  # transfer: where the object ends
+
+
+def _local_search(ctx: PlanningContext, q0: np.ndarray, objective: Callable[[np.ndarray, np.ndarray], np.ndarray],
+                  error: Callable[[np.ndarray], np.ndarray], accept: float, mode: dict) -> tuple[np.ndarray, float]:
+    """Shared do-while loop of SEARCH: GA rounds from the best end point, then refinement.
+
+    ``objective(final_q, object_poses)`` is minimised; ``error(q)`` ``(B, m)`` is
+    the residual that refinement drives to zero. Returns waypoints and the final
+    objective.
+    """
+    n = ctx.world.robot.dof
+    k = ctx.settings.manhattan_order
+    q = np.asarray(q0, dtype=float)
+    waypoints = [q[None]]
+    best = float(objective(q[None], _object_at(ctx, q[None], mode))[0])
+    refine_radius = 0.15 * ctx.world.robot.reach
+    for _ in range(ctx.settings.search_rounds):
+        if best <= refine_radius * 0.2 or ctx.termination():
+            break
+
+        def evaluate(population: np.ndarray) -> np.ndarray:
+            paths = ctx.manhattan(q, population.reshape(-1, k, n), **mode)
+            ctx.counters.evaluations += len(population)
+            return objective(paths.final, paths.object_poses)
+
+        result = minimize(evaluate, ctx.initial_genes(ctx.settings.population).reshape(-1, k * n), ctx.rng,
+                          ctx.settings.genetic, target=accept, should_stop=ctx.termination)
+        if result.fitness >= best - 1e-4:
+            break  # local minimum: the end point did not move closer
+        path = ctx.manhattan(q, result.genes.reshape(1, k, n), **mode)
+        waypoints.append(path.waypoints[0, 1:])
+        q = path.final[0]
+        best = float(objective(q[None], _object_at(ctx, q[None], mode))[0])
+    if best <= refine_radius:
+        refined = _refine(ctx, q, error, accept, mode)
+        waypoints.append(refined[1:])
+        q = refined[-1]
+        best = float(objective(q[None], _object_at(ctx, q[None], mode))[0])
+    return np.concatenate(waypoints), best
+
+
+def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict) -> np.ndarray:
+    if mode.get("grasp_rel") is None:
+        return np.broadcast_to(mode["object_poses"], (len(q), 3))
+    return compose(tip_poses(ctx.world.robot, q), mode["grasp_rel"])
+
+
+def _refine(ctx: PlanningContext, q: np.ndarray, error: Callable[[np.ndarray], np.ndarray], accept: float,
+            mode: dict, iterations: int = 30) -> np.ndarray:
+    """Damped least squares on ``error``, moved one joint at a time within free intervals."""
+    n = len(q)
+    waypoints = [q.copy()]
+    h = 1e-6
+    for _ in range(iterations):
+        if ctx.termination():
+            break
+        e = error(q[None])[0]
+        if np.linalg.norm(e) <= accept:
+            break
+        jacobian = (error(q[None] + h * np.eye(n)) - e[None]).T / h  # (m, n)
+        damping = 1e-4
+        step = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping * np.eye(len(e)), e)
+        largest = np.max(np.abs(step))
+        if largest > 0.3:
+            step *= 0.3 / largest
+        moved = single_moves(ctx.world, q, step, margin_m=ctx.settings.clearance, counters=ctx.counters,
+                             **mode)
+        if len(moved) < 2 or np.max(np.abs(moved[-1] - q)) < 1e-10:
+            break
+        waypoints.extend(moved[1:])
+        if np.linalg.norm(error(moved[-1][None])[0]) >= np.linalg.norm(e) - 1e-9:
+            q = moved[-1]
+            break  # clamped by an obstacle: no more progress
+        q = moved[-1]
+    return np.array(waypoints)
+
+
+def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray, grasp: int) -> PathResult:
+    """SEARCH_TRANSIT: move the arm, object at rest, until its tip holds ``grasp``."""
+    world = ctx.world
+    target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
+    accept = 0.25 * world.grasp_tolerance
+    mode = {"object_poses": np.asarray(object_pose, float)[None]}
+
+    def tip_error(q: np.ndarray) -> np.ndarray:
+        return tip_poses(world.robot, q)[:, :2] - target
+
+    def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(tip_error(q), axis=1)
+
+    waypoints, distance = _local_search(ctx, q0, objective, tip_error, accept, mode)
+    success = distance <= 0.5 * world.grasp_tolerance
+    grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], object_pose) if success else None
+    return PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
+
+
+def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """Residual ``(B, 3)`` between object poses and the goal: position (m), excess angle as arc (m)."""
+    d_theta = wrap_angle(object_poses[:, 2] - goal[2])
+    excess = np.sign(d_theta) * np.maximum(0.0, np.abs(d_theta) - 0.5 * world.goal_angle_tolerance)
+    return np.concatenate([object_poses[:, :2] - goal[:2], world.object.radius * excess[:, None]], axis=1)
+
+
+def goal_reached(world: World, object_pose: np.ndarray, goal: np.ndarray) -> bool:
+    """Whether ``object_pose`` is within the goal tolerances of ``goal`` (section 2)."""
+    position = float(np.hypot(*(object_pose[:2] - goal[:2])))
+    angle = float(abs(wrap_angle(object_pose[2] - goal[2])))
+    return position <= world.goal_tolerance and angle <= world.goal_angle_tolerance + 1e-9
+
+
+def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray) -> PathResult:
+    """SEARCH_TRANSFER: carry the object (held as ``grasp_rel``) toward the ``goal`` placement."""
+    world = ctx.world
+    mode = {"grasp_rel": np.asarray(grasp_rel, float)[None]}
+
+    def error(q: np.ndarray) -> np.ndarray:
+        return goal_error(world, compose(tip_poses(world.robot, q), mode["grasp_rel"]), goal)
+
+    def objective(_q: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(goal_error(world, poses, goal), axis=1)
+
+    accept = 0.25 * world.goal_tolerance
+    waypoints, distance = _local_search(ctx, q0, objective, error, accept, mode)
+    final_pose = compose(tip_poses(world.robot, waypoints[-1:]), mode["grasp_rel"])[0]
+    success = goal_reached(world, final_pose, goal) and distance <= 0.5 * world.goal_tolerance
+    return PathResult(success, waypoints, distance, object_pose=final_pose)

@@ -1,0 +1,118 @@
+"""The landmark tree (paper 1.2) and ``history_of``.
+
+A landmark is a configuration in CP ∩ CG: the object rests at a placement and
+the arm holds one of its grasps (the root holds none). Each landmark but the
+root is reached from its parent by a single manipulation path: a transit to
+its grasp (``None`` when it keeps its parent's grasp) and a transfer.
+The tree is a plain value shared by the planner, the node's markers, the
+recorder and the renderer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Landmark", "LandmarkTree", "Segment", "append_path"]
+
+
+@dataclass(frozen=True, eq=False)
+class Landmark:
+    id: int
+    parent: int | None
+    joints: np.ndarray  # (n,) rad
+    object_pose: np.ndarray  # (3,) where the object rests
+    grasp: int | None  # held grasp index
+    grasp_rel: np.ndarray | None  # (3,) object pose in the end-effector frame
+    transit: np.ndarray | None  # (m, n) from the parent's joints to the grasp; None: parent's grasp kept
+    transfer: np.ndarray | None  # (m, n) carrying the object to this landmark
+
+
+@dataclass
+class Segment:
+    kind: str  # "transit" or "transfer"
+    grasp: int | None
+    waypoints: list[np.ndarray]
+
+
+def append_path(segments: list[Segment], kind: str, grasp: int | None, waypoints: np.ndarray | None) -> None:
+    """Append waypoints to ``segments``, merging with the last segment when kind and grasp agree.
+
+    A new transfer always starts a new segment unless it continues the same
+    grasp without a transit in between; repeated waypoints are dropped.
+    """
+    if waypoints is None or len(waypoints) == 0:
+        return
+    last = segments[-1] if segments else None
+    if last is None or last.kind != kind or last.grasp != grasp:
+        start = [last.waypoints[-1]] if last is not None else [waypoints[0]]
+        last = Segment(kind, grasp, start)
+        segments.append(last)
+    for point in waypoints:
+        if np.max(np.abs(point - last.waypoints[-1])) > 1e-12:
+            last.waypoints.append(np.asarray(point, dtype=float))
+
+
+class LandmarkTree:
+    """Landmarks indexed by id, with their parent links."""
+
+    def __init__(self, root_joints: np.ndarray, root_object_pose: np.ndarray) -> None:
+        root = Landmark(0, None, np.asarray(root_joints, float), np.asarray(root_object_pose, float),
+                        None, None, None, None)
+        self.landmarks: list[Landmark] = [root]
+
+    def __len__(self) -> int:
+        return len(self.landmarks)
+
+    def __getitem__(self, index: int) -> Landmark:
+        return self.landmarks[index]
+
+    def __iter__(self):
+        return iter(self.landmarks)
+
+    def add(self, **fields) -> Landmark:
+        landmark = Landmark(id=len(self.landmarks), **fields)
+        self.landmarks.append(landmark)
+        return landmark
+
+    def lineage(self, landmark_id: int) -> list[Landmark]:
+        """Landmarks from the root to ``landmark_id`` inclusive."""
+        chain = []
+        current: int | None = landmark_id
+        while current is not None:
+            chain.append(self.landmarks[current])
+            current = self.landmarks[current].parent
+        return chain[::-1]
+
+    def history_of(self, landmark_id: int) -> list[Segment]:
+        """The manipulation path from the root to the landmark, as plan segments."""
+        root = self.landmarks[0]
+        segments = [Segment("transit", None, [root.joints.copy()])]
+        for landmark in self.lineage(landmark_id)[1:]:
+            if landmark.transit is not None:
+                append_path(segments, "transit", None, landmark.transit)
+                # a regrasp of the same grasp index is a new grasp: force a new segment
+                segments.append(Segment("transfer", landmark.grasp, [segments[-1].waypoints[-1]]))
+            append_path(segments, "transfer", landmark.grasp, landmark.transfer)
+        return segments
+
+    def features(self, joint_weight: float, object_radius: float) -> np.ndarray:
+        """Points ``(L, 4 + n)`` whose Euclidean distances are the landmark distances."""
+        return landmark_features(np.array([lm.joints for lm in self.landmarks]),
+                                 np.array([lm.object_pose for lm in self.landmarks]), joint_weight, object_radius)
+
+
+def landmark_features(joints: np.ndarray, object_poses: np.ndarray, joint_weight: float,
+                      object_radius: float) -> np.ndarray:
+    """Embedding of (joints, object pose) where Euclidean distance is the landmark distance.
+
+    Object position (m), orientation as a chord on a circle of the object's
+    radius (m), joints weighted by ``joint_weight`` (m/rad).
+    """
+    theta = object_poses[:, 2]
+    return np.concatenate([
+        object_poses[:, :2],
+        object_radius * np.stack([np.cos(theta), np.sin(theta)], axis=1),
+        joint_weight * joints,
+    ], axis=1)

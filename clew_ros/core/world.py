@@ -1,0 +1,378 @@
+"""The world: robot, obstacles and movable object, loaded from the parameter file.
+
+The parameter file is the ROS 2 parameter YAML of ``interface.md`` section 1.
+Loading validates everything and returns immutable objects; any fault raises
+:class:`~clew_ros.core.errors.WorldError` naming the parameter at fault.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import shapely
+import yaml
+
+from clew_ros.core.errors import WorldError
+
+__all__ = [
+    "Robot",
+    "Obstacle",
+    "MovableObject",
+    "World",
+    "GRASP_ON_BOUNDARY_TOLERANCE_M",
+    "read_parameter_file",
+    "world_from_parameters",
+    "load_world",
+    "world_to_parameters",
+]
+
+#: A grasp point lies on the object's boundary when it is this close to it (m).
+GRASP_ON_BOUNDARY_TOLERANCE_M = 1e-6
+
+
+def _frozen(values: Any, dtype: type = float) -> np.ndarray:
+    array = np.array(values, dtype=dtype)
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """Planar chain of revolute joints (angles in rad, lengths in m)."""
+
+    base: np.ndarray  # (2,)
+    link_lengths: np.ndarray  # (n,)
+    joint_lower: np.ndarray  # (n,)
+    joint_upper: np.ndarray  # (n,)
+    initial: np.ndarray  # (n,)
+    link_width: float = 0.0
+    self_collision: bool = True
+
+    @property
+    def dof(self) -> int:
+        return len(self.link_lengths)
+
+    @property
+    def reach(self) -> float:
+        """Sum of the link lengths (m)."""
+        return float(self.link_lengths.sum())
+
+    @property
+    def joint_names(self) -> list[str]:
+        return [f"joint_{i + 1}" for i in range(self.dof)]
+
+
+@dataclass(frozen=True, eq=False)
+class Obstacle:
+    name: str
+    vertices: np.ndarray  # (V, 2), counter-clockwise
+
+
+@dataclass(frozen=True, eq=False)
+class MovableObject:
+    """The object: polygon and grasps in its own frame, poses as (x, y, theta)."""
+
+    polygon: np.ndarray  # (V, 2), counter-clockwise
+    initial: np.ndarray  # (3,)
+    goal: np.ndarray  # (3,)
+    grasps: np.ndarray  # (G, 2)
+
+    @cached_property
+    def radius(self) -> float:
+        """Largest distance from the object's origin to one of its vertices (m)."""
+        return float(np.linalg.norm(self.polygon, axis=1).max())
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    name: str
+    bounds: np.ndarray  # (4,) xmin, ymin, xmax, ymax
+    robot: Robot
+    obstacles: tuple[Obstacle, ...]
+    object: MovableObject
+    grasp_tolerance: float = 0.005
+    goal_tolerance: float = 0.02
+    goal_angle_tolerance: float = math.pi
+    parameters: Mapping[str, Any] = field(default_factory=dict, repr=False)
+    """The ``world`` parameter tree it was loaded from (for recordings)."""
+
+
+# --------------------------------------------------------------------------- parsing
+
+
+def read_parameter_file(path: str | Path) -> dict:
+    """Read a ROS 2 parameter YAML and return its ``ros__parameters`` tree.
+
+    The node key may be ``clew_planner`` (with or without a leading slash or
+    namespace) or the wildcard ``/**``.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise WorldError(str(path), f"cannot read the parameter file ({error.strerror})") from None
+    try:
+        document = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        raise WorldError(str(path), f"expected valid YAML ({error})") from None
+    if not isinstance(document, dict):
+        raise WorldError(str(path), "expected a mapping with a 'clew_planner' or '/**' key")
+    for key, value in document.items():
+        node = str(key).rsplit("/", 1)[-1]
+        if node in ("clew_planner", "**") and isinstance(value, dict):
+            parameters = value.get("ros__parameters")
+            if not isinstance(parameters, dict):
+                raise WorldError(f"{key}.ros__parameters", "expected a mapping of parameters")
+            return parameters
+    raise WorldError(str(path), "expected a top-level 'clew_planner' or '/**' key with 'ros__parameters'")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def _number(tree: Mapping, key: str, prefix: str, default: Any = None, *, positive: bool = False,
+            non_negative: bool = False) -> float:
+    name = f"{prefix}.{key}"
+    value = tree.get(key, default)
+    if value is None:
+        raise WorldError(name, "is required (a number)")
+    if not _is_number(value):
+        raise WorldError(name, f"expected a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise WorldError(name, f"expected a finite number, got {value}")
+    if positive and value <= 0:
+        raise WorldError(name, f"expected a number > 0, got {value}")
+    if non_negative and value < 0:
+        raise WorldError(name, f"expected a number >= 0, got {value}")
+    return value
+
+
+def _numbers(tree: Mapping, key: str, prefix: str, *, length: int | None = None,
+             min_length: int = 1, even: bool = False, default: Any = None) -> np.ndarray:
+    name = f"{prefix}.{key}"
+    value = tree.get(key, default)
+    if value is None:
+        raise WorldError(name, "is required (a list of numbers)")
+    if not isinstance(value, (list, tuple)):
+        raise WorldError(name, f"expected a list of numbers, got {value!r}")
+    for item in value:
+        if not _is_number(item):
+            raise WorldError(name, f"expected a list of numbers, got the item {item!r}")
+    array = np.array(value, dtype=float)
+    if not np.all(np.isfinite(array)):
+        raise WorldError(name, "expected finite numbers, got NaN or inf")
+    if length is not None and len(array) != length:
+        raise WorldError(name, f"expected {length} numbers, got {len(array)}")
+    if len(array) < min_length:
+        raise WorldError(name, f"expected at least {min_length} numbers, got {len(array)}")
+    if even and len(array) % 2:
+        raise WorldError(name, f"expected an even number of values (x, y pairs), got {len(array)}")
+    return array
+
+
+def _polygon(tree: Mapping, key: str, prefix: str) -> np.ndarray:
+    """A flat x0, y0, x1, y1, ... list as a valid, counter-clockwise polygon."""
+    name = f"{prefix}.{key}"
+    flat = _numbers(tree, key, prefix, min_length=6, even=True)
+    vertices = flat.reshape(-1, 2)
+    if len(vertices) > 1 and np.allclose(vertices[0], vertices[-1]):
+        vertices = vertices[:-1]  # tolerate an explicitly closed ring
+    if len(vertices) < 3:
+        raise WorldError(name, "expected at least 3 distinct vertices")
+    polygon = shapely.Polygon(vertices)
+    if polygon.area <= 1e-12:
+        raise WorldError(name, "expected a polygon with non-zero area")
+    if not polygon.is_valid:
+        reason = shapely.is_valid_reason(polygon)
+        raise WorldError(name, f"expected a simple polygon (no self-intersection), got: {reason}")
+    if not polygon.exterior.is_ccw:
+        vertices = vertices[::-1]
+    return vertices.copy()
+
+
+def _mapping(tree: Mapping, key: str, prefix: str, *, required: bool = True) -> Mapping:
+    value = tree.get(key)
+    if value is None and not required:
+        return {}
+    if not isinstance(value, Mapping):
+        raise WorldError(f"{prefix}.{key}", f"expected a mapping, got {value!r}")
+    return value
+
+
+def _bool(tree: Mapping, key: str, prefix: str, default: bool) -> bool:
+    value = tree.get(key, default)
+    if not isinstance(value, bool):
+        raise WorldError(f"{prefix}.{key}", f"expected true or false, got {value!r}")
+    return value
+
+
+def world_from_parameters(parameters: Mapping[str, Any], *, check_collisions: bool = True) -> World:
+    """Build and validate a :class:`World` from a ``ros__parameters`` tree.
+
+    ``parameters`` holds a ``world`` key (other keys are ignored). With
+    ``check_collisions`` the initial configuration and the object's start and
+    goal placements are checked against section 1's validity test.
+    """
+    if not isinstance(parameters, Mapping):
+        raise WorldError("ros__parameters", f"expected a mapping, got {parameters!r}")
+    tree = parameters.get("world")
+    if not isinstance(tree, Mapping):
+        raise WorldError("world", f"expected a mapping of world parameters, got {tree!r}")
+    return _world_from_tree(tree, check_collisions=check_collisions)
+
+
+def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
+    p = "world"
+    name = tree.get("name", "world")
+    if not isinstance(name, str) or not name:
+        raise WorldError("world.name", f"expected a non-empty string, got {name!r}")
+
+    bounds = _numbers(tree, "bounds", p, length=4)
+    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+        raise WorldError("world.bounds", f"expected xmin < xmax and ymin < ymax, got {bounds.tolist()}")
+
+    rp = "world.robot"
+    robot_tree = _mapping(tree, "robot", p)
+    lengths = _numbers(robot_tree, "link_lengths", rp, min_length=2)
+    n = len(lengths)
+    if np.any(lengths <= 0):
+        raise WorldError(f"{rp}.link_lengths", f"expected lengths > 0, got {lengths.tolist()}")
+    lower = _numbers(robot_tree, "joint_lower", rp)
+    upper = _numbers(robot_tree, "joint_upper", rp)
+    initial = _numbers(robot_tree, "initial", rp)
+    for key, array in (("joint_lower", lower), ("joint_upper", upper), ("initial", initial)):
+        if len(array) != n:
+            raise WorldError(f"{rp}.{key}", f"expected {n} values (one per link in link_lengths), got {len(array)}")
+    for i in range(n):
+        if lower[i] > upper[i]:
+            raise WorldError(f"{rp}.joint_lower", f"expected joint_lower <= joint_upper, but joint_{i + 1} has "
+                             f"{lower[i]} > {upper[i]}")
+        if not lower[i] <= initial[i] <= upper[i]:
+            raise WorldError(f"{rp}.initial", f"expected joint_{i + 1} within [{lower[i]}, {upper[i]}], "
+                             f"got {initial[i]}")
+    robot = Robot(
+        base=_frozen(_numbers(robot_tree, "base", rp, length=2)),
+        link_lengths=_frozen(lengths),
+        joint_lower=_frozen(lower),
+        joint_upper=_frozen(upper),
+        initial=_frozen(initial),
+        link_width=_number(robot_tree, "link_width", rp, 0.0, non_negative=True),
+        self_collision=_bool(robot_tree, "self_collision", rp, True),
+    )
+
+    obstacles = []
+    names = tree.get("obstacle_names")
+    obstacle_tree = tree.get("obstacles") or {}
+    if not isinstance(obstacle_tree, Mapping):
+        raise WorldError("world.obstacles", f"expected a mapping of name: [x0, y0, ...], got {obstacle_tree!r}")
+    if names is None:
+        names = []
+    if not isinstance(names, (list, tuple)) or not all(isinstance(s, str) and s for s in names):
+        raise WorldError("world.obstacle_names", f"expected a list of non-empty strings, got {names!r}")
+    if len(set(names)) != len(names):
+        raise WorldError("world.obstacle_names", "expected unique names")
+    for key in obstacle_tree:
+        if key not in names:
+            raise WorldError(f"world.obstacles.{key}", f"unknown obstacle: not listed in world.obstacle_names {names}")
+    for obstacle_name in names:
+        if obstacle_name not in obstacle_tree:
+            raise WorldError(f"world.obstacles.{obstacle_name}",
+                             "is required: it is listed in world.obstacle_names")
+        obstacles.append(Obstacle(obstacle_name, _frozen(_polygon(obstacle_tree, obstacle_name, "world.obstacles"))))
+
+    op = "world.object"
+    object_tree = _mapping(tree, "object", p)
+    polygon = _polygon(object_tree, "polygon", op)
+    grasps = _numbers(object_tree, "grasps", op, min_length=2, even=True).reshape(-1, 2)
+    boundary = shapely.Polygon(polygon).exterior
+    distances = shapely.distance(boundary, shapely.points(grasps))
+    for index, distance in enumerate(distances):
+        if distance > GRASP_ON_BOUNDARY_TOLERANCE_M:
+            raise WorldError(f"{op}.grasps", f"expected every grasp on the object's boundary (within "
+                             f"{GRASP_ON_BOUNDARY_TOLERANCE_M} m), but grasp {index} "
+                             f"{grasps[index].tolist()} is {distance:.6g} m away")
+    movable = MovableObject(
+        polygon=_frozen(polygon),
+        initial=_frozen(_numbers(object_tree, "initial", op, length=3)),
+        goal=_frozen(_numbers(object_tree, "goal", op, length=3)),
+        grasps=_frozen(grasps),
+    )
+
+    world = World(
+        name=name,
+        bounds=_frozen(bounds),
+        robot=robot,
+        obstacles=tuple(obstacles),
+        object=movable,
+        grasp_tolerance=_number(tree, "grasp_tolerance", p, 0.005, positive=True),
+        goal_tolerance=_number(tree, "goal_tolerance", p, 0.02, positive=True),
+        goal_angle_tolerance=_number(tree, "goal_angle_tolerance", p, math.pi, non_negative=True),
+        parameters=_plain(tree),
+    )
+    if check_collisions:
+        _check_start_and_goal(world)
+    return world
+
+
+def _check_start_and_goal(world: World) -> None:
+    from clew_ros.core.collision import explain_invalid, explain_placement  # local: collision needs World
+
+    reason = explain_placement(world, world.object.initial)
+    if reason:
+        raise WorldError("world.object.initial", f"expected a collision-free placement, but {reason}")
+    reason = explain_placement(world, world.object.goal)
+    if reason:
+        raise WorldError("world.object.goal", f"expected a collision-free placement, but {reason}")
+    reason = explain_invalid(world, world.robot.initial, world.object.initial)
+    if reason:
+        raise WorldError("world.robot.initial", f"expected a valid start configuration, but {reason}")
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def load_world(path: str | Path, *, check_collisions: bool = True) -> World:
+    """Read and validate the world of a parameter file."""
+    return world_from_parameters(read_parameter_file(path), check_collisions=check_collisions)
+
+
+def world_to_parameters(world: World) -> dict:
+    """The world as a ``{'world': {...}}`` parameter tree (ROS 2 YAML-ready)."""
+    tree: dict[str, Any] = {
+        "name": world.name,
+        "bounds": world.bounds.tolist(),
+        "robot": {
+            "base": world.robot.base.tolist(),
+            "link_lengths": world.robot.link_lengths.tolist(),
+            "link_width": world.robot.link_width,
+            "joint_lower": world.robot.joint_lower.tolist(),
+            "joint_upper": world.robot.joint_upper.tolist(),
+            "initial": world.robot.initial.tolist(),
+            "self_collision": world.robot.self_collision,
+        },
+        "object": {
+            "polygon": world.object.polygon.ravel().tolist(),
+            "initial": world.object.initial.tolist(),
+            "goal": world.object.goal.tolist(),
+            "grasps": world.object.grasps.ravel().tolist(),
+        },
+        "grasp_tolerance": world.grasp_tolerance,
+        "goal_tolerance": world.goal_tolerance,
+        "goal_angle_tolerance": world.goal_angle_tolerance,
+    }
+    if world.obstacles:
+        tree["obstacle_names"] = [o.name for o in world.obstacles]
+        tree["obstacles"] = {o.name: o.vertices.ravel().tolist() for o in world.obstacles}
+    return {"world": tree}

@@ -1,0 +1,56 @@
+"""Build script for clew_ros (ament_python: colcon and pip both use it)."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = "clew_ros"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    description=(
+        "Manipulation planning with the Ariadne's Clew Algorithm, served as a ROS 2 node."
+    ),
+    maintainer="clew_ros maintainers",
+    maintainer_email="clew-ros@example.com",
+    license="Apache-2.0",
+    packages=find_packages(exclude=["test", "test.*"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+        (
+            "share/" + package_name + "/config",
+            sorted(glob("config/*.yaml") + glob("config/*.json")),
+        ),
+        ("share/" + package_name + "/launch", sorted(glob("launch/*.py"))),
+    ],
+    python_requires=">=3.10",
+    install_requires=[
+        "numpy>=1.26",
+        "shapely>=2.0",
+        "pyyaml>=6.0",
+        "mcap>=1.2",
+        "mcap-ros2-support>=0.5",
+        "pillow>=10.0",
+    ],
+    extras_require={
+        # ROS 2 Jazzy from PyPI wheels; a native install uses the distro's instead.
+        "ros": [
+            "ros-jazzy-rclpy[fastrtps]>=7.1",
+            "ros-jazzy-common-interfaces>=5.3",
+            "ros-jazzy-std-srvs>=5.3",
+        ],
+        "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10"],
+        "bench": ["ompl>=2.0", "matplotlib>=3.8"],
+    },
+    zip_safe=True,
+    entry_points={
+        "console_scripts": [
+            "clew_planner = clew_ros.node.main:main",
+            "clew_plan = clew_ros.cli.plan:main",
+            "clew_replay = clew_ros.cli.replay:main",
+            "clew_render = clew_ros.cli.render:main",
+        ],
+    },
+)

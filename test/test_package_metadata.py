@@ -1,0 +1,131 @@
+"""The package metadata that colcon, rosdep and pip read."""
+
+import importlib
+import importlib.util
+import runpy
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import pytest
+import setuptools
+
+import clew_ros
+
+ROOT = Path(__file__).resolve().parents[1]
+
+REQUIRED_EXEC_DEPENDS = {
+    "rclpy",
+    "std_msgs",
+    "std_srvs",
+    "sensor_msgs",
+    "geometry_msgs",
+    "trajectory_msgs",
+    "visualization_msgs",
+    "diagnostic_msgs",
+    "action_msgs",
+    "python3-numpy",
+    "python3-shapely",
+    "python3-yaml",
+}
+
+CONSOLE_SCRIPTS = {
+    "clew_planner": "clew_ros.node.main:main",
+    "clew_plan": "clew_ros.cli.plan:main",
+    "clew_replay": "clew_ros.cli.replay:main",
+    "clew_render": "clew_ros.cli.render:main",
+}
+
+
+@pytest.fixture(scope="module")
+def package_xml() -> ET.Element:
+    return ET.parse(ROOT / "package.xml").getroot()
+
+
+def run_setup_py(cwd: Path) -> dict[str, Any]:
+    """Run setup.py in ``cwd`` with setup() replaced; return what it was given."""
+    captured: dict[str, Any] = {}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.chdir(cwd)  # setup.py globs relative to where it runs, as under colcon
+        mp.setattr(setuptools, "setup", lambda **kwargs: captured.update(kwargs))
+        runpy.run_path(str(ROOT / "setup.py"), run_name="__main__")
+    return captured
+
+
+@pytest.fixture(scope="module")
+def setup_kwargs() -> dict[str, Any]:
+    """The arguments setup.py passes to setup() in this repository."""
+    return run_setup_py(ROOT)
+
+
+def test_package_xml_is_format_3_clew_ros(package_xml: ET.Element) -> None:
+    assert package_xml.tag == "package"
+    assert package_xml.get("format") == "3"
+    assert package_xml.findtext("name") == "clew_ros"
+    assert package_xml.findtext("version") == clew_ros.__version__
+    assert package_xml.findtext("license") == "Apache-2.0"
+    assert package_xml.find("maintainer").get("email")
+    assert package_xml.findtext("export/build_type") == "ament_python"
+
+
+def test_package_xml_depends(package_xml: ET.Element) -> None:
+    exec_depends = {e.text for e in package_xml.findall("exec_depend")}
+    assert REQUIRED_EXEC_DEPENDS <= exec_depends
+    assert "python3-pytest" in {e.text for e in package_xml.findall("test_depend")}
+
+
+def test_package_xml_element_order(package_xml: ET.Element) -> None:
+    # REP 149 (format 3) fixes the order of the leading elements and puts
+    # export last.
+    tags = [child.tag for child in package_xml if isinstance(child.tag, str)]
+    assert tags[:5] == ["name", "version", "description", "maintainer", "license"]
+    assert tags[-1] == "export"
+
+
+def test_setup_py_matches_package_xml(
+    setup_kwargs: dict[str, Any], package_xml: ET.Element
+) -> None:
+    assert setup_kwargs["name"] == package_xml.findtext("name")
+    assert setup_kwargs["version"] == package_xml.findtext("version")
+    assert setup_kwargs["license"] == package_xml.findtext("license")
+
+
+def test_setup_py_installs_ament_files(setup_kwargs: dict[str, Any]) -> None:
+    data_files = dict(setup_kwargs["data_files"])
+    assert data_files["share/ament_index/resource_index/packages"] == ["resource/clew_ros"]
+    assert (ROOT / "resource" / "clew_ros").is_file()
+    assert data_files["share/clew_ros"] == ["package.xml"]
+    assert data_files["share/clew_ros/launch"] == ["launch/clew_planner.launch.py"]
+
+
+def test_setup_py_installs_config_worlds(tmp_path: Path) -> None:
+    # In a scratch tree, so that the check does not depend on which worlds
+    # config/ holds today.
+    for name in ["config/a.yaml", "config/b.json", "config/notes.txt", "launch/x.launch.py"]:
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).touch()
+    data_files = dict(run_setup_py(tmp_path)["data_files"])
+    assert data_files["share/clew_ros/config"] == ["config/a.yaml", "config/b.json"]
+    assert data_files["share/clew_ros/launch"] == ["launch/x.launch.py"]
+
+
+def test_setup_py_console_scripts(setup_kwargs: dict[str, Any]) -> None:
+    scripts = dict(
+        (name.strip(), target.strip())
+        for name, target in (s.split("=") for s in setup_kwargs["entry_points"]["console_scripts"])
+    )
+    assert scripts == CONSOLE_SCRIPTS
+
+
+@pytest.mark.parametrize("script", sorted(CONSOLE_SCRIPTS))
+def test_console_script_target_is_callable(script: str) -> None:
+    module_name, func = CONSOLE_SCRIPTS[script].split(":")
+    if importlib.util.find_spec(module_name) is None:
+        pytest.skip(f"{module_name} is not written yet")
+    assert callable(getattr(importlib.import_module(module_name), func))
+
+
+def test_setup_cfg_installs_scripts_where_ros2_run_looks() -> None:
+    text = (ROOT / "setup.cfg").read_text()
+    assert "script_dir=$base/lib/clew_ros" in text
+    assert "install_scripts=$base/lib/clew_ros" in text

@@ -23,12 +23,13 @@ which is what the plan validator checks at 0.002 rad.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from clew_ros.core.collision import scene_of
-from clew_ros.core.geometry import polygon_edges, segment_distance
+from clew_ros.core.geometry import point_segment_distance, segment_distance
 from clew_ros.core.kinematics import compose, joint_positions, tip_poses, transform_points
 from clew_ros.core.world import World
 
@@ -53,44 +54,60 @@ class _Body:
     """The pieces that turn about the pivot and the pieces they may hit."""
 
     pivot: np.ndarray  # (B, 2)
-    groups: list = field(default_factory=list)  # (moving (B,M,2,2), static (B|1,S,2,2), offset, mask (M,S)|None)
-    points: list = field(default_factory=list)  # (moving points (B,P,2), inset)
+    moving: np.ndarray  # (B, M, 2, 2) segments turning with the joint
+    static: np.ndarray  # (B, S, 2, 2) segments they may hit
+    offsets: np.ndarray  # (M, S) distance to keep (m), NaN for pairs never checked
+    points: np.ndarray  # (B, P, 2) moving points that must stay in bounds
+    insets: np.ndarray  # (P,) how far inside the bounds (m)
+
+
+@lru_cache(maxsize=256)
+def _pair_offsets(world: World, joint: int, transfer: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (M, S) between moving and static pieces for one joint, and point insets (P,).
+
+    Moving: links ``joint..n-1`` [, object edges, shrunk-object edges]; static:
+    obstacle edges, links ``0..joint-1`` [, shrunk-object edges in transit].
+    """
+    scene = scene_of(world)
+    n = world.robot.dof
+    r = scene.link_radius
+    n_obstacle, n_object, n_shrunk = len(scene.obstacle_edges), len(scene.object_edges), len(scene.shrunk_edges)
+    moving_links = np.arange(joint, n)
+    static_links = np.arange(joint)
+    links_vs_links = np.where(np.abs(moving_links[:, None] - static_links[None]) >= 2, 2 * r, np.nan)
+    if not world.robot.self_collision:
+        links_vs_links[:] = np.nan
+    rows = [np.hstack([np.full((len(moving_links), n_obstacle), r), links_vs_links,
+                       np.full((len(moving_links), 0 if transfer else n_shrunk), 0.0)])]
+    insets = [np.full(len(moving_links), r)]
+    if transfer:
+        rows.append(np.hstack([np.zeros((n_object, n_obstacle)), np.full((n_object, joint), np.nan)]))
+        rows.append(np.hstack([np.full((n_shrunk, n_obstacle), np.nan), np.zeros((n_shrunk, joint))]))
+        insets.append(np.zeros(n_object))
+    return np.vstack(rows), np.concatenate(insets)
 
 
 def _body(world: World, q: np.ndarray, joint: int, object_poses: np.ndarray | None,
           grasp_rel: np.ndarray | None) -> _Body:
     scene = scene_of(world)
-    robot = world.robot
-    r = scene.link_radius
-    pts = joint_positions(robot, q)
-    n = robot.dof
+    pts = joint_positions(world.robot, q)
+    batch = len(q)
     links = np.stack([pts[:, :-1], pts[:, 1:]], axis=2)  # (B, n, 2, 2)
-    moving_links = links[:, joint:]
-    static_links = links[:, :joint]
-    body = _Body(pivot=pts[:, joint])
-    obstacles = scene.obstacle_edges[None]
-    if obstacles.shape[1]:
-        body.groups.append((moving_links, obstacles, r, None))
-    if joint >= 1 and len(scene.adjacent_pairs):
-        moving_index = np.arange(joint, n)[:, None]
-        static_index = np.arange(joint)[None, :]
-        mask = (moving_index - static_index) >= 2
-        if mask.any():
-            body.groups.append((moving_links, static_links, 2 * r, mask))
-    body.points.append((pts[:, joint + 1:], r))
-    if grasp_rel is None:
-        if len(scene.shrunk_edges):
-            shrunk = _edges_at(object_poses, scene.shrunk_edges)
-            body.groups.append((moving_links, shrunk, 0.0, None))
-    else:
-        object_pose = compose(tip_poses(robot, q), grasp_rel)
+    obstacles = np.broadcast_to(scene.obstacle_edges[None], (batch,) + scene.obstacle_edges.shape)
+    transfer = grasp_rel is not None
+    offsets, insets = _pair_offsets(world, joint, transfer)
+    moving = [links[:, joint:]]
+    static = [obstacles, links[:, :joint]]
+    points = [pts[:, joint + 1:]]
+    if transfer:
+        object_pose = compose(tip_poses(world.robot, q), grasp_rel)
         object_edges = _edges_at(object_pose, scene.object_edges)
-        if obstacles.shape[1]:
-            body.groups.append((object_edges, obstacles, 0.0, None))
-        if joint >= 1 and len(scene.shrunk_edges):
-            body.groups.append((_edges_at(object_pose, scene.shrunk_edges), static_links, 0.0, None))
-        body.points.append((object_edges[:, :, 0], 0.0))
-    return body
+        moving += [object_edges, _edges_at(object_pose, scene.shrunk_edges)]
+        points.append(object_edges[:, :, 0])
+    else:
+        static.append(_edges_at(np.broadcast_to(object_poses, (batch, 3)), scene.shrunk_edges))
+    return _Body(pts[:, joint], np.concatenate(moving, axis=1), np.concatenate(static, axis=1), offsets,
+                 np.concatenate(points, axis=1), insets)
 
 
 def _edges_at(poses: np.ndarray, local_edges: np.ndarray) -> np.ndarray:
@@ -153,13 +170,46 @@ class _Nearest:
         self.hi = np.full(batch, np.inf)
         self.lo = np.full(batch, -np.inf)
 
-    def take(self, phi: np.ndarray) -> None:
-        """Add candidate rotation angles ``(B, ...)``; NaN entries are ignored."""
-        phi = np.mod(phi.reshape(self.batch, -1), _TWO_PI)
-        phi = np.where(phi < 1e-12, np.nan, phi)  # a contact at the current angle is not a crossing
-        self.hi = np.minimum(self.hi, np.min(np.where(np.isnan(phi), np.inf, phi), axis=1))
-        last = np.max(np.where(np.isnan(phi), -np.inf, phi), axis=1)
-        self.lo = np.maximum(self.lo, last - _TWO_PI)
+    def take(self, index: np.ndarray, phi: np.ndarray) -> None:
+        """Add candidate rotation angles ``phi`` ``(K, c)`` of configurations ``index`` ``(K,)``."""
+        if not len(index):
+            return
+        phi = np.mod(phi, _TWO_PI)
+        phi[phi < 1e-12] = np.nan  # a contact at the current angle is not a crossing
+        with np.errstate(invalid="ignore"):
+            np.fmin.at(self.hi, index, np.fmin.reduce(phi, axis=1))
+            np.fmax.at(self.lo, index, np.fmax.reduce(phi, axis=1) - _TWO_PI)
+
+
+def _reach(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest and farthest distance (m) of segments ``(..., 2, 2)`` from the origin."""
+    origin = np.zeros(segments.shape[:-2] + (2,))
+    near = point_segment_distance(origin, segments[..., 0, :], segments[..., 1, :])
+    far = np.linalg.norm(segments, axis=-1).max(axis=-1)
+    return near, far
+
+
+def _ends_against_stadiums(nearest: _Nearest, ends: np.ndarray, segments: np.ndarray, offset: np.ndarray,
+                           sign: float) -> None:
+    """Contacts of end points ``ends`` ``(B, A, 2, 2)`` with stadiums around ``segments`` ``(B, C, 2, 2)``.
+
+    ``offset`` is ``(B, A, C)`` (NaN: pair skipped). With ``sign`` +1 the end
+    points turn (``phi = psi - alpha``), with -1 the stadiums do
+    (``phi = alpha - psi``). Only pairs whose end point's circle reaches the
+    stadium's annulus about the pivot are solved.
+    """
+    rho = np.linalg.norm(ends, axis=-1)  # (B, A, 2)
+    near, far = _reach(segments)  # (B, C)
+    pair = offset[..., None]  # (B, A, C, 1)
+    with np.errstate(invalid="ignore"):
+        hit = ((rho[:, :, None, :] >= near[:, None, :, None] - pair) & (rho[:, :, None, :] <= far[:, None, :, None] + pair))
+    b, a, c, e = np.nonzero(hit)
+    if not len(b):
+        return
+    point = ends[b, a, e]
+    psi = _circle_stadium(rho[b, a, e], segments[b, c, 0], segments[b, c, 1], offset[b, a, c])
+    alpha = _angle(point)[:, None]
+    nearest.take(b, psi - alpha if sign > 0 else alpha - psi)
 
 
 def _contact_angles(world: World, body: _Body, margin: float) -> tuple[np.ndarray, np.ndarray]:
@@ -172,46 +222,32 @@ def _contact_angles(world: World, body: _Body, margin: float) -> tuple[np.ndarra
     """
     pivot = body.pivot
     nearest = _Nearest(len(pivot))
-    for moving, static, offset, mask in body.groups:
-        m_rel = moving - pivot[:, None, None, :]  # (B, M, 2, 2)
-        s_rel = static - pivot[:, None, None, :]  # (B, S, 2, 2)
+    m_rel = body.moving - pivot[:, None, None, :]  # (B, M, 2, 2)
+    s_rel = body.static - pivot[:, None, None, :]  # (B, S, 2, 2)
+    if m_rel.shape[1] and s_rel.shape[1]:
         d0 = segment_distance(m_rel[:, :, None, 0], m_rel[:, :, None, 1], s_rel[:, None, :, 0], s_rel[:, None, :, 1])
-        pair_offset = offset + np.where(d0 > offset + 1.5 * margin, margin, 0.0)  # (B, M, S)
-        if mask is not None:
-            pair_offset = np.where(mask[None], pair_offset, np.nan)
-        skip = np.isnan(pair_offset)[..., None, None]
-        pair_offset = np.nan_to_num(pair_offset)[..., None]
-        # moving end points against static stadiums: phi = psi - alpha
-        ends = m_rel[:, :, None, :, :]  # (B, M, 1, 2, 2)
-        psi = _circle_stadium(np.linalg.norm(ends, axis=-1), s_rel[:, None, :, None, 0], s_rel[:, None, :, None, 1],
-                              pair_offset)
-        nearest.take(np.where(skip, np.nan, psi - _angle(ends)[..., None]))
-        # static end points against moving stadiums: phi = alpha - psi
-        points = s_rel[:, None, :, :, :]  # (B, 1, S, 2, 2)
-        psi = _circle_stadium(np.linalg.norm(points, axis=-1), m_rel[:, :, None, None, 0],
-                              m_rel[:, :, None, None, 1], pair_offset)
-        nearest.take(np.where(skip, np.nan, _angle(points)[..., None] - psi))
+        offsets = body.offsets[None]
+        pair_offset = offsets + np.where(d0 > offsets + 1.5 * margin, margin, 0.0)  # (B, M, S), NaN: skip
+        _ends_against_stadiums(nearest, m_rel, s_rel, pair_offset, +1.0)
+        _ends_against_stadiums(nearest, s_rel, m_rel, np.swapaxes(pair_offset, 1, 2), -1.0)
     xmin, ymin, xmax, ymax = world.bounds
-    for points, inset in body.points:
-        if points.shape[1] == 0:
-            continue
-        rel = points - pivot[:, None, :]
-        rho = np.linalg.norm(rel, axis=-1)
-        alpha = _angle(rel)
-        safe_rho = np.where(rho > 0, rho, 1.0)
-        limit = inset + margin
-        candidates = []
-        for axis, bound in ((0, xmin + limit), (0, xmax - limit), (1, ymin + limit), (1, ymax - limit)):
-            c = (bound - pivot[:, axis, None]) / safe_rho
-            ok = (np.abs(c) <= 1.0) & (rho > 0)
-            if axis == 0:
-                base = np.arccos(np.clip(c, -1.0, 1.0))
-                roots = (base, -base)
-            else:
-                base = np.arcsin(np.clip(c, -1.0, 1.0))
-                roots = (base, np.pi - base)
-            candidates.extend(np.where(ok, root - alpha, np.nan) for root in roots)
-        nearest.take(np.stack(candidates, axis=-1))
+    rel = body.points - pivot[:, None, :]
+    rho = np.linalg.norm(rel, axis=-1)
+    alpha = _angle(rel)
+    safe_rho = np.where(rho > 0, rho, 1.0)
+    limit = body.insets + margin
+    candidates = []
+    for axis, bound in ((0, xmin + limit), (0, xmax - limit), (1, ymin + limit), (1, ymax - limit)):
+        c = (bound - pivot[:, axis, None]) / safe_rho
+        ok = (np.abs(c) <= 1.0) & (rho > 0)
+        if axis == 0:
+            base = np.arccos(np.clip(c, -1.0, 1.0))
+            roots = (base, -base)
+        else:
+            base = np.arcsin(np.clip(c, -1.0, 1.0))
+            roots = (base, np.pi - base)
+        candidates.extend(np.where(ok, root - alpha, np.nan) for root in roots)
+    nearest.take(np.repeat(np.arange(len(pivot)), rel.shape[1]), np.stack(candidates, axis=-1).reshape(-1, 8))
     return nearest.hi, nearest.lo
 
 

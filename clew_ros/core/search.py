@@ -152,7 +152,8 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
 def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
     """Residual ``(B, 3)`` between object poses and the goal: position (m), excess angle as arc (m)."""
     d_theta = wrap_angle(object_poses[:, 2] - goal[2])
-    excess = np.sign(d_theta) * np.maximum(0.0, np.abs(d_theta) - 0.5 * world.goal_angle_tolerance)
+    slack = np.inf if world.goal_angle_tolerance >= np.pi - 1e-6 else 0.8 * world.goal_angle_tolerance
+    excess = np.sign(d_theta) * np.maximum(0.0, np.abs(d_theta) - slack)
     return np.concatenate([object_poses[:, :2] - goal[:2], world.object.radius * excess[:, None]], axis=1)
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 import traceback
 from dataclasses import dataclass, field
 from typing import Callable
@@ -92,16 +91,19 @@ def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: n
                                   f"of the {len(tree)} landmarks")
                 continue
             landmark = tree.add(**exploration.fields)
-            transfer = search_transfer(ctx, landmark.joints, landmark.grasp_rel, goal)
-            best = min(best, transfer.distance)
+            found = _search(ctx, explorer, tree, landmark, goal)
+            best = min(best, found.distance)
             if progress is not None:
                 progress(Progress(len(tree), best, termination.elapsed, tree))
-            if transfer.success:
+            if found.success:
                 segments = tree.history_of(landmark.id)
-                append_path(segments, "transfer", landmark.grasp, transfer.waypoints)
+                if found.transit is not None:
+                    append_path(segments, "transit", None, found.transit)
+                    segments.append(Segment("transfer", found.grasp, [segments[-1].waypoints[-1]]))
+                append_path(segments, "transfer", found.grasp, found.transfer)
                 return finish(Outcome.SUCCEEDED, f"plan found with {len(tree)} landmarks, "
                               f"{sum(s.kind == 'transfer' for s in segments)} grasp(s)",
-                              segments, transfer.object_pose)
+                              segments, found.object_pose)
             if exploration.distance < settings.resolution:
                 return finish(Outcome.NO_PATH_AT_RESOLUTION,
                               f"no path at resolution {settings.resolution}: the new landmark lies "
@@ -109,6 +111,35 @@ def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: n
                               f"best goal distance {best:.4g} m")
     except Exception as error:  # a bug: reported as an outcome so a node keeps running
         return finish(Outcome.INTERNAL_ERROR, f"internal error: {error!r}\n{traceback.format_exc(limit=4)}")
+
+
+@dataclass
+class _Found:
+    success: bool
+    distance: float
+    grasp: int | None = None
+    transit: np.ndarray | None = None
+    transfer: np.ndarray | None = None
+    object_pose: np.ndarray | None = None
+
+
+def _search(ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark, goal: np.ndarray) -> _Found:
+    """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
+    reachable by a transit at its placement (a regrasp in place), until one reaches the goal."""
+    best = np.inf
+    grasps = [landmark.grasp] + [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist()
+                                 if g != landmark.grasp]
+    for grasp in grasps:
+        if ctx.termination():
+            break
+        candidate = explorer.candidate(landmark.id, grasp)
+        if candidate is None:
+            continue
+        result = search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
+        best = min(best, result.distance)
+        if result.success:
+            return _Found(True, result.distance, grasp, candidate.transit, result.waypoints, result.object_pose)
+    return _Found(False, best)
 
 
 def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int) -> str:
@@ -131,7 +162,3 @@ def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None
         return (Outcome.GOAL_OUT_OF_REACH, f"goal placement out of reach: its nearest grasp is {nearest:.3f} m "
                 f"from the base, the arm reaches {world.robot.reach:.3f} m")
     return None
-
-
-def wall_time() -> float:
-    return time.time()

@@ -29,7 +29,7 @@ from functools import lru_cache
 import numpy as np
 
 from clew_ros.core.collision import scene_of
-from clew_ros.core.geometry import point_segment_distance, segment_distance
+from clew_ros.core.geometry import point_segment_distance
 from clew_ros.core.kinematics import compose, joint_positions, tip_poses, transform_points
 from clew_ros.core.world import World
 
@@ -171,14 +171,17 @@ class _Nearest:
         self.lo = np.full(batch, -np.inf)
 
     def take(self, index: np.ndarray, phi: np.ndarray) -> None:
-        """Add candidate rotation angles ``phi`` ``(K, c)`` of configurations ``index`` ``(K,)``."""
+        """Add candidate rotation angles ``phi`` ``(K, c)`` of configurations ``index`` ``(K,)``, sorted."""
         if not len(index):
             return
         phi = np.mod(phi, _TWO_PI)
         phi[phi < 1e-12] = np.nan  # a contact at the current angle is not a crossing
+        which, starts = np.unique(index, return_index=True)
         with np.errstate(invalid="ignore"):
-            np.fmin.at(self.hi, index, np.fmin.reduce(phi, axis=1))
-            np.fmax.at(self.lo, index, np.fmax.reduce(phi, axis=1) - _TWO_PI)
+            first = np.fmin.reduceat(np.fmin.reduce(phi, axis=1), starts)
+            last = np.fmax.reduceat(np.fmax.reduce(phi, axis=1), starts)
+        self.hi[which] = np.fmin(self.hi[which], first)
+        self.lo[which] = np.fmax(self.lo[which], last - _TWO_PI)
 
 
 def _reach(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -190,24 +193,30 @@ def _reach(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _ends_against_stadiums(nearest: _Nearest, ends: np.ndarray, segments: np.ndarray, offset: np.ndarray,
-                           sign: float) -> None:
+                           margin: float, sign: float) -> None:
     """Contacts of end points ``ends`` ``(B, A, 2, 2)`` with stadiums around ``segments`` ``(B, C, 2, 2)``.
 
-    ``offset`` is ``(B, A, C)`` (NaN: pair skipped). With ``sign`` +1 the end
-    points turn (``phi = psi - alpha``), with -1 the stadiums do
-    (``phi = alpha - psi``). Only pairs whose end point's circle reaches the
-    stadium's annulus about the pivot are solved.
+    ``offset`` ``(A, C)`` is the distance to keep (NaN: pair skipped), plus
+    ``margin`` for end points that start outside ``offset + 1.5 margin``. With
+    ``sign`` +1 the end points turn (``phi = psi - alpha``), with -1 the
+    stadiums do (``phi = alpha - psi``). Only pairs whose end point's circle
+    reaches the stadium's annulus about the pivot are solved.
     """
     rho = np.linalg.norm(ends, axis=-1)  # (B, A, 2)
     near, far = _reach(segments)  # (B, C)
-    pair = offset[..., None]  # (B, A, C, 1)
+    reach = (offset + margin)[None, :, :, None]  # (1, A, C, 1)
+    r = rho[:, :, None, :]
     with np.errstate(invalid="ignore"):
-        hit = ((rho[:, :, None, :] >= near[:, None, :, None] - pair) & (rho[:, :, None, :] <= far[:, None, :, None] + pair))
+        hit = (r >= near[:, None, :, None] - reach) & (r <= far[:, None, :, None] + reach)
     b, a, c, e = np.nonzero(hit)
     if not len(b):
         return
     point = ends[b, a, e]
-    psi = _circle_stadium(rho[b, a, e], segments[b, c, 0], segments[b, c, 1], offset[b, a, c])
+    e1 = segments[b, c, 0]
+    e2 = segments[b, c, 1]
+    keep = offset[a, c]
+    keep = keep + np.where(point_segment_distance(point, e1, e2) > keep + 1.5 * margin, margin, 0.0)
+    psi = _circle_stadium(rho[b, a, e], e1, e2, keep)
     alpha = _angle(point)[:, None]
     nearest.take(b, psi - alpha if sign > 0 else alpha - psi)
 
@@ -217,19 +226,16 @@ def _contact_angles(world: World, body: _Body, margin: float) -> tuple[np.ndarra
 
     Two segments kept ``offset + margin`` apart first touch where an end point of
     one meets the stadium around the other: circle-line and circle-circle
-    intersections in closed form (after Lozano-Perez 1987). A pair already
-    closer than ``offset + 1.5 margin`` is kept only ``offset`` apart.
+    intersections in closed form (after Lozano-Perez 1987). An end point already
+    closer than ``offset + 1.5 margin`` is kept only ``offset`` away.
     """
     pivot = body.pivot
     nearest = _Nearest(len(pivot))
     m_rel = body.moving - pivot[:, None, None, :]  # (B, M, 2, 2)
     s_rel = body.static - pivot[:, None, None, :]  # (B, S, 2, 2)
     if m_rel.shape[1] and s_rel.shape[1]:
-        d0 = segment_distance(m_rel[:, :, None, 0], m_rel[:, :, None, 1], s_rel[:, None, :, 0], s_rel[:, None, :, 1])
-        offsets = body.offsets[None]
-        pair_offset = offsets + np.where(d0 > offsets + 1.5 * margin, margin, 0.0)  # (B, M, S), NaN: skip
-        _ends_against_stadiums(nearest, m_rel, s_rel, pair_offset, +1.0)
-        _ends_against_stadiums(nearest, s_rel, m_rel, np.swapaxes(pair_offset, 1, 2), -1.0)
+        _ends_against_stadiums(nearest, m_rel, s_rel, body.offsets, margin, +1.0)
+        _ends_against_stadiums(nearest, s_rel, m_rel, body.offsets.T, margin, -1.0)
     xmin, ymin, xmax, ymax = world.bounds
     rel = body.points - pivot[:, None, :]
     rho = np.linalg.norm(rel, axis=-1)

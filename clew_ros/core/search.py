@@ -79,7 +79,7 @@ def _local_search(ctx: PlanningContext, q0: np.ndarray, objective: Callable[[np.
             return objective(paths.final, paths.object_poses)
 
         result = minimize(evaluate, ctx.initial_genes(ctx.settings.population).reshape(-1, k * n), ctx.rng,
-                          ctx.settings.genetic, target=accept, should_stop=ctx.termination)
+                          ctx.settings.genetic, target=refine_radius * 0.2, should_stop=ctx.termination)
         if result.fitness >= best - 1e-4:
             break  # local minimum: the end point did not move closer
         path = ctx.manhattan(q, result.genes.reshape(1, k, n), **mode)
@@ -143,10 +143,31 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
     def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
         return np.linalg.norm(tip_error(q), axis=1)
 
+    if not _within_reach(world, target[0]):
+        return PathResult(False, np.asarray(q0, float)[None], float(objective(np.asarray(q0, float)[None], None)[0]))
     waypoints, distance = _local_search(ctx, q0, objective, tip_error, accept, mode)
     success = distance <= 0.5 * world.grasp_tolerance
     grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], object_pose) if success else None
     return PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
+
+
+def _within_reach(world: World, point: np.ndarray, slack: float = 0.0) -> bool:
+    """Whether the tip could be at ``point`` at all (the chain's annulus, obstacles ignored)."""
+    lengths = world.robot.link_lengths
+    distance = float(np.hypot(*(point - world.robot.base)))
+    inner = max(0.0, 2.0 * float(lengths.max()) - float(lengths.sum()))
+    return inner - slack <= distance <= float(lengths.sum()) + slack
+
+
+def _goal_within_reach(world: World, grasp_rel: np.ndarray, goal: np.ndarray) -> bool:
+    """Whether some goal orientation within tolerance puts the tip (holding ``grasp_rel``) in reach."""
+    span = min(world.goal_angle_tolerance, np.pi)
+    thetas = goal[2] + np.linspace(-span, span, 65)
+    poses = np.stack([np.full_like(thetas, goal[0]), np.full_like(thetas, goal[1]), thetas], axis=1)
+    inverse = relative(np.asarray(grasp_rel, float), np.zeros(3))  # end effector in the object frame
+    tips = compose(poses, inverse)[:, :2]
+    slack = world.goal_tolerance + world.grasp_tolerance
+    return any(_within_reach(world, tip, slack) for tip in tips)
 
 
 def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
@@ -176,6 +197,10 @@ def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray,
         return np.linalg.norm(goal_error(world, poses, goal), axis=1)
 
     accept = 0.25 * world.goal_tolerance
+    if not _goal_within_reach(world, grasp_rel, goal):
+        start_pose = compose(tip_poses(world.robot, np.asarray(q0, float)[None]), mode["grasp_rel"])
+        return PathResult(False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]),
+                          object_pose=start_pose[0])
     waypoints, distance = _local_search(ctx, q0, objective, error, accept, mode)
     final_pose = compose(tip_poses(world.robot, waypoints[-1:]), mode["grasp_rel"])[0]
     success = goal_reached(world, final_pose, goal) and distance <= 0.5 * world.goal_tolerance

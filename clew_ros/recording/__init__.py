@@ -1,0 +1,40 @@
+"""Recordings of planning runs (interface.md section 4).
+
+Each run is a rosbag2 directory ``<record dir>/<run id>/`` holding
+``metadata.yaml`` (rosbag2 version 9, as ROS 2 Jazzy writes it) and one MCAP
+file ``<run id>_0.mcap``: schema encoding ``ros2msg`` with the full dependency
+text, message encoding ``cdr``. Foxglove, ``ros2 bag``, ``rosbags`` and the
+``mcap`` readers open it.
+
+- :class:`RunRecorder` writes a run from the node without ever blocking it.
+- :class:`Recording` reads one back (also one cut short by a killed writer);
+  :func:`recover_recording` rewrites such a file whole.
+- :func:`trajectory_to_plan` rebuilds the plan from a recorded trajectory.
+
+Importing this package needs no rclpy; :class:`RunRecorder` does.
+"""
+
+from clew_ros.recording.errors import RecordingError
+from clew_ros.recording.reader import RecordedMessage, Recording, TopicInfo, find_mcap, recover_recording
+from clew_ros.recording.recorder import (
+    ROSBAG2_VERSION,
+    TRANSIENT_LOCAL_TOPICS,
+    RunRecorder,
+    default_offered_qos,
+)
+from clew_ros.recording.trajectory import GRIPPER_JOINT, trajectory_to_plan
+
+__all__ = [
+    "RunRecorder",
+    "RecordingError",
+    "Recording",
+    "RecordedMessage",
+    "TopicInfo",
+    "find_mcap",
+    "recover_recording",
+    "trajectory_to_plan",
+    "default_offered_qos",
+    "GRIPPER_JOINT",
+    "ROSBAG2_VERSION",
+    "TRANSIENT_LOCAL_TOPICS",
+]

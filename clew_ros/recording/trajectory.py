@@ -1,0 +1,108 @@
+"""Rebuild a ``clew-plan/1`` plan from a recorded ``~/trajectory`` (interface.md section 3).
+
+The trajectory's points are the plan's waypoints in order; ``gripper`` is 1.0
+on every point of a transfer segment and 0.0 on transit points, so a grasp or
+an ungrasp shows as two consecutive points with the same joints and a
+different ``gripper``. Which grasp a transfer holds is not in the trajectory:
+it comes from the run's ``grasp`` events when given, else it is the grasp
+point nearest to the tip where the transfer starts.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.world import World
+
+__all__ = ["GRIPPER_JOINT", "trajectory_to_plan"]
+
+#: Name of the extra joint that says whether the arm holds the object.
+GRIPPER_JOINT = "gripper"
+
+
+def _segments_of(points: np.ndarray, gripper: np.ndarray) -> list[tuple[str, list[np.ndarray]]]:
+    segments: list[tuple[str, list[np.ndarray]]] = []
+    for joints, closed in zip(points, gripper >= 0.5):
+        kind = "transfer" if closed else "transit"
+        if not segments or segments[-1][0] != kind:
+            segments.append((kind, []))
+        segments[-1][1].append(joints)
+    if segments and segments[0][0] == "transfer":  # the start already holds a grasp
+        segments.insert(0, ("transit", [segments[0][1][0]]))
+    for index in range(1, len(segments)):  # a segment starts where the previous one ended
+        previous_end = segments[index - 1][1][-1]
+        if np.max(np.abs(segments[index][1][0] - previous_end)) > 1e-9:
+            segments[index][1].insert(0, previous_end)
+    return segments
+
+
+def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] | None = None,
+                       message: str = "rebuilt from the recorded trajectory") -> dict[str, Any]:
+    """The plan dict (``clew-plan/1``) that a ``JointTrajectory`` plays.
+
+    Parameters
+    ----------
+    world:
+        The world the trajectory was planned in.
+    trajectory:
+        Anything with ``joint_names`` and ``points[i].positions`` (an rclpy
+        ``JointTrajectory`` or a message decoded from a recording).
+    grasps:
+        Grasp index of each transfer segment, in order (from the run's
+        ``grasp`` events); when absent or of the wrong length each transfer
+        gets the grasp point nearest to the tip at its first waypoint.
+
+    Returns
+    -------
+    dict
+        A plan with ``success`` true when the trajectory has points; its
+        ``landmarks`` list is empty (the trajectory does not hold the tree).
+    """
+    names = list(trajectory.joint_names)
+    robot_names = world.robot.joint_names
+    n = world.robot.dof
+    columns = [names.index(j) for j in robot_names] if all(j in names for j in robot_names) else list(range(n))
+    gripper_column = names.index(GRIPPER_JOINT) if GRIPPER_JOINT in names else None
+    rows = [list(p.positions) for p in trajectory.points]
+    plan: dict[str, Any] = {
+        "format": "clew-plan/1",
+        "world": world.name,
+        "success": False,
+        "message": message,
+        "joint_names": robot_names,
+        "segments": [],
+        "final_object_pose": None,
+        "landmarks": [],
+        "stats": {},
+    }
+    if not rows:
+        plan["message"] = "the recorded trajectory has no points"
+        return plan
+    positions = np.asarray(rows, dtype=float)
+    points = positions[:, columns]
+    gripper = positions[:, gripper_column] if gripper_column is not None else np.zeros(len(points))
+    segments = _segments_of(points, gripper)
+
+    transfers = sum(kind == "transfer" for kind, _ in segments)
+    given = list(grasps) if grasps is not None and len(grasps) == transfers else None
+    pose = np.asarray(world.object.initial, dtype=float)
+    out = []
+    transfer_index = 0
+    for kind, waypoints in segments:
+        array = np.asarray(waypoints)
+        grasp = None
+        if kind == "transfer":
+            tip = tip_poses(world.robot, array[:1])[0]
+            if given is not None:
+                grasp = int(given[transfer_index])
+            else:
+                held = transform_points(pose, world.object.grasps)
+                grasp = int(np.argmin(np.linalg.norm(held - tip[:2], axis=1)))
+            transfer_index += 1
+            pose = compose(tip_poses(world.robot, array[-1:])[0], relative(tip, pose))
+        out.append({"kind": kind, "grasp": grasp, "waypoints": [[float(v) for v in w] for w in array]})
+    plan.update(success=True, segments=out, final_object_pose=[float(v) for v in pose])
+    return plan

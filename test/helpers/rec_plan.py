@@ -1,0 +1,34 @@
+"""The quick world of the recording tests and one plan for it, computed once per process.
+
+``test/worlds/rec_quick.yaml`` is small on purpose (2-link arm, no obstacles,
+the object a short hop from its goal) so the core plans it in about a second.
+"""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+WORLD_PATH = Path(__file__).resolve().parents[1] / "worlds" / "rec_quick.yaml"
+TIME_LIMIT_S = 20.0
+
+
+@functools.lru_cache(maxsize=1)
+def quick_world():
+    from clew_ros.core.world import load_world
+
+    return load_world(WORLD_PATH)
+
+
+@functools.lru_cache(maxsize=1)
+def quick_plan() -> dict:
+    """A successful plan (``clew-plan/1`` dict) for the quick world; raises if the core finds none."""
+    from clew_ros.core.clew import plan
+    from clew_ros.core.plan import plan_to_dict
+    from clew_ros.core.settings import PlannerSettings
+
+    world = quick_world()
+    result = plan(world, PlannerSettings(seed=0, time_limit=TIME_LIMIT_S))
+    if not result.success:
+        raise RuntimeError(f"the core found no plan for {WORLD_PATH.name}: {result.message}")
+    return plan_to_dict(world, result)

@@ -47,14 +47,66 @@ else
     esac
 fi
 
-# TODO(node): start the clew_planner node in the background with
-#   "$BIN/clew_planner" --ros-args --params-file "$WORLD" -r __node:=clew_planner
-#   and stop it (by its pid) on exit.
-# TODO(client): call ~/plan (std_srvs/srv/Trigger) and print the response.
-# TODO(recording): show the run's rosbag2 directory under $OUT/recordings/
-#   (record.directory) and check it with clew_replay.
-# TODO(render): "$BIN/clew_render" the plan / recording to $OUT/plan.png.
-not_built+=("clew_planner node + service call" "recording" "clew_replay" "clew_render")
+# Step 2: the clew_planner node on the default world (no parameter file: it
+# serves config/figure1.yaml), recording to $OUT/recordings; a client calls
+# ~/plan, prints the answer and waits for the playback; then SIGINT stops the
+# node (which must exit 0). Works with or without the recorder: the answer
+# says where the run was recorded, or why not. Joints move at 3 rad/s in the
+# trajectory (default 1 rad/s) so that the playback is short.
+RECORDINGS="$OUT/recordings"
+mkdir -p "$RECORDINGS"
+node_pid=""
+stop_node() {
+    if [[ -n "$node_pid" ]] && kill -0 "$node_pid" 2>/dev/null; then
+        kill -INT "$node_pid" 2>/dev/null || true
+        for _ in $(seq 100); do kill -0 "$node_pid" 2>/dev/null || break; sleep 0.1; done
+        kill -KILL "$node_pid" 2>/dev/null || true
+    fi
+}
+trap stop_node EXIT
 
-echo "demo: not built yet: $(IFS=','; echo "${not_built[*]}" | sed 's/,/, /g')"
+echo "demo: clew_planner --ros-args -p record.directory:=$RECORDINGS -p trajectory.joint_speed:=3.0" \
+     "(log: $OUT/clew_planner.log)"
+"$BIN/clew_planner" --ros-args -p "record.directory:=$RECORDINGS" -p trajectory.joint_speed:=3.0 \
+    >"$OUT/clew_planner.log" 2>&1 &
+node_pid=$!
+
+echo "demo: calling /clew_planner/plan (std_srvs/srv/Trigger)"
+set +e
+"$PY" -m clew_ros.node.call_plan --node /clew_planner --timeout 180 --wait-playback | tee "$OUT/plan_call.txt"
+rc=${PIPESTATUS[0]}
+set -e
+case $rc in
+    0) echo "demo: the node found a plan" ;;
+    1) echo "demo: the node found no plan (see above)" >&2; status=1 ;;
+    *) echo "demo: no answer from the node; its log:" >&2; cat "$OUT/clew_planner.log" >&2; status=$rc ;;
+esac
+
+kill -INT "$node_pid" 2>/dev/null || true
+set +e
+wait "$node_pid"
+node_rc=$?
+set -e
+node_pid=""
+if [[ $node_rc -ne 0 ]]; then
+    echo "demo: clew_planner exited with code $node_rc; its log:" >&2
+    cat "$OUT/clew_planner.log" >&2
+    [[ $status -eq 0 ]] && status=$node_rc
+else
+    echo "demo: clew_planner stopped cleanly (SIGINT, exit 0)"
+fi
+
+run_id=$(grep -oE 'run [0-9a-f]{32}' "$OUT/plan_call.txt" | head -1 | cut -d' ' -f2 || true)
+RUN_DIR="$RECORDINGS/$run_id"
+if [[ -n "$run_id" && -f "$RUN_DIR/metadata.yaml" ]]; then
+    echo "demo: run recorded in $RUN_DIR"
+else
+    not_built+=("recording of the node's run")
+fi
+# replay: "$BIN/clew_replay" "$RUN_DIR" --rate 4
+# render: "$BIN/clew_render" "$RUN_DIR" -o "$OUT/run.png"
+
+if [[ ${#not_built[@]} -gt 0 ]]; then
+    echo "demo: not built yet: $(IFS=','; echo "${not_built[*]}" | sed 's/,/, /g')"
+fi
 exit "$status"

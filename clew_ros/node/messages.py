@@ -1,0 +1,383 @@
+"""The one place where core values become ROS 2 messages, and back.
+
+Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
+plan dicts, :class:`~clew_ros.node.playback.Track`) and a stamp, and returns
+a standard message, or the reverse. The node calls these and nothing else to
+build what it publishes (interface.md §3).
+
+Conventions:
+
+- everything lies in the plane z = 0 of frame :data:`FRAME_ID`;
+- an object pose ``(x, y, theta)`` is a ``Pose`` with a rotation of
+  ``theta`` about z;
+- a run id is a ``uuid.UUID``; in messages it is the 16 bytes of
+  ``unique_identifier_msgs/UUID`` or the 32 hex digits of ``uuid.hex``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import uuid
+from collections.abc import Iterable
+from dataclasses import asdict
+from typing import Any
+
+import numpy as np
+import shapely
+import yaml
+from action_msgs.msg import GoalInfo, GoalStatus, GoalStatusArray
+from builtin_interfaces.msg import Duration, Time
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
+from sensor_msgs.msg import JointState
+from std_msgs.msg import ColorRGBA, Header, String
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from unique_identifier_msgs.msg import UUID
+from visualization_msgs.msg import Marker, MarkerArray
+
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.plan import FORMAT
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.tree import LandmarkTree
+from clew_ros.core.world import World, world_to_parameters
+from clew_ros.node.playback import Track
+
+__all__ = [
+    "FRAME_ID",
+    "GRIPPER_JOINT",
+    "GoalPoseError",
+    "event_message",
+    "feedback_status",
+    "goal_from_pose_stamped",
+    "goal_pose_stamped",
+    "goal_status_array",
+    "joint_state",
+    "joint_trajectory",
+    "landmark_markers",
+    "object_pose_stamped",
+    "plan_from_trajectory",
+    "pose_msg",
+    "quaternion_to_yaw",
+    "time_msg",
+    "uuid_msg",
+    "world_markers",
+    "world_yaml_message",
+    "yaw_to_quaternion",
+]
+
+FRAME_ID = "world"
+GRIPPER_JOINT = "gripper"
+#: Tolerance on |q| - 1 for a goal orientation quaternion, and on its x, y (a rotation about z only).
+QUATERNION_TOLERANCE = 1e-3
+
+
+class GoalPoseError(ValueError):
+    """A ``~/goal_pose`` message the node cannot plan to; ``str()`` says why."""
+
+
+# --------------------------------------------------------------------------- basics
+
+
+def time_msg(time_ns: int) -> Time:
+    return Time(sec=int(time_ns // 1_000_000_000), nanosec=int(time_ns % 1_000_000_000))
+
+
+def duration_msg(duration_ns: int) -> Duration:
+    return Duration(sec=int(duration_ns // 1_000_000_000), nanosec=int(duration_ns % 1_000_000_000))
+
+
+def duration_ns(msg: Duration) -> int:
+    return int(msg.sec) * 1_000_000_000 + int(msg.nanosec)
+
+
+def _header(time_ns: int, frame_id: str = FRAME_ID) -> Header:
+    return Header(stamp=time_msg(time_ns), frame_id=frame_id)
+
+
+def yaw_to_quaternion(yaw: float) -> Quaternion:
+    return Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
+
+
+def quaternion_to_yaw(q: Quaternion) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def pose_msg(pose: np.ndarray, z: float = 0.0) -> Pose:
+    """A planar pose ``(x, y, theta)`` as a ``Pose``."""
+    return Pose(position=Point(x=float(pose[0]), y=float(pose[1]), z=z), orientation=yaw_to_quaternion(float(pose[2])))
+
+
+def _point(xy: Iterable[float], z: float = 0.0) -> Point:
+    x, y = xy
+    return Point(x=float(x), y=float(y), z=z)
+
+
+def _color(r: float, g: float, b: float, a: float = 1.0) -> ColorRGBA:
+    return ColorRGBA(r=r, g=g, b=b, a=a)
+
+
+# --------------------------------------------------------------------------- goals
+
+
+def goal_from_pose_stamped(msg: PoseStamped, world: World) -> np.ndarray:
+    """The object goal ``(x, y, yaw)`` of a ``~/goal_pose`` message, checked.
+
+    The frame must be ``world`` (an empty frame id is read as ``world``);
+    position and orientation must be finite, the quaternion of unit length
+    and a rotation about z only; ``(x, y)`` must lie inside ``world.bounds``.
+    ``position.z`` is ignored. Raises :class:`GoalPoseError` saying why not.
+    """
+    frame = msg.header.frame_id
+    if frame not in ("", FRAME_ID):
+        raise GoalPoseError(f"goal_pose: header.frame_id must be '{FRAME_ID}' (or empty), got '{frame}'")
+    p, q = msg.pose.position, msg.pose.orientation
+    values = [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
+    if not all(math.isfinite(v) for v in values):
+        raise GoalPoseError(f"goal_pose: position and orientation must be finite numbers, got position "
+                            f"({p.x}, {p.y}, {p.z}) orientation ({q.x}, {q.y}, {q.z}, {q.w})")
+    norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+    if abs(norm - 1.0) > QUATERNION_TOLERANCE:
+        raise GoalPoseError(f"goal_pose: orientation must be a unit quaternion, got norm {norm:.6g}")
+    if abs(q.x) > QUATERNION_TOLERANCE or abs(q.y) > QUATERNION_TOLERANCE:
+        raise GoalPoseError(f"goal_pose: orientation must be a rotation about z only (x = y = 0), "
+                            f"got x={q.x:.6g} y={q.y:.6g}")
+    xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
+    if not (xmin <= p.x <= xmax and ymin <= p.y <= ymax):
+        raise GoalPoseError(f"goal_pose: position ({p.x:.6g}, {p.y:.6g}) lies outside world.bounds "
+                            f"[{xmin}, {ymin}, {xmax}, {ymax}]")
+    return np.array([p.x, p.y, quaternion_to_yaw(q)], dtype=float)
+
+
+def goal_pose_stamped(goal: np.ndarray, time_ns: int) -> PoseStamped:
+    """An object goal ``(x, y, theta)`` as the ``PoseStamped`` RViz's 2D Goal Pose tool sends."""
+    return PoseStamped(header=_header(time_ns), pose=pose_msg(goal))
+
+
+def object_pose_stamped(pose: np.ndarray, time_ns: int) -> PoseStamped:
+    return PoseStamped(header=_header(time_ns), pose=pose_msg(pose))
+
+
+# --------------------------------------------------------------------------- runs
+
+
+def uuid_msg(run_id: uuid.UUID) -> UUID:
+    return UUID(uuid=list(run_id.bytes))
+
+
+def goal_status_array(entries: Iterable[tuple[uuid.UUID, int, int]], time_ns: int) -> GoalStatusArray:
+    """``~/status`` from ``(run id, accepted time (ns), GoalStatus.STATUS_*)`` entries."""
+    msg = GoalStatusArray()
+    for run_id, stamp_ns, status in entries:
+        info = GoalInfo(goal_id=uuid_msg(run_id), stamp=time_msg(stamp_ns))
+        msg.status_list.append(GoalStatus(goal_info=info, status=int(status)))
+    return msg
+
+
+def _json_number(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def feedback_status(run_id: uuid.UUID, *, landmarks: int, best_distance: float, elapsed_s: float,
+                    phase: str) -> DiagnosticStatus:
+    """``~/feedback``: run id, landmarks, best distance to goal (m; ``inf`` before any), elapsed (s)."""
+    return DiagnosticStatus(
+        level=DiagnosticStatus.OK,
+        name="clew_planner",
+        message=phase,
+        hardware_id=run_id.hex,
+        values=[
+            KeyValue(key="run_id", value=run_id.hex),
+            KeyValue(key="landmarks", value=str(int(landmarks))),
+            KeyValue(key="best_distance", value=f"{best_distance:.6g}"),
+            KeyValue(key="elapsed", value=f"{elapsed_s:.3f}"),
+            KeyValue(key="phase", value=phase),
+        ],
+    )
+
+
+def event_message(run_id: uuid.UUID, event: str, time_s: float, **fields: Any) -> String:
+    """One ``~/events`` JSON object: ``run_id``, ``event``, ``time`` and ``fields``.
+
+    Non-finite numbers become ``null`` so that the text is strict JSON.
+    """
+    payload = {"run_id": run_id.hex, "event": event, "time": time_s}
+    payload.update(fields)
+
+    def clean(value: Any) -> Any:
+        if isinstance(value, (float, np.floating)):
+            return _json_number(float(value))
+        if isinstance(value, np.integer):
+            return int(value)
+        if isinstance(value, np.ndarray):
+            return [clean(v) for v in value.tolist()]
+        if isinstance(value, (list, tuple)):
+            return [clean(v) for v in value]
+        if isinstance(value, dict):
+            return {k: clean(v) for k, v in value.items()}
+        return value
+
+    return String(data=json.dumps(clean(payload), allow_nan=False))
+
+
+def world_yaml_message(world: World, settings: PlannerSettings, node_name: str = "clew_planner") -> String:
+    """``~/world_yaml``: the node's ``world.*`` and ``planner.*`` as a parameter file ``clew_plan`` reads."""
+    parameters = world_to_parameters(world)
+    parameters["planner"] = asdict(settings)
+    document = {node_name: {"ros__parameters": parameters}}
+    return String(data=yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
+
+
+# --------------------------------------------------------------------------- markers
+
+_LINE_WIDTH_M = 0.01
+
+
+def _marker(ns: str, marker_id: int, kind: int, time_ns: int, color: ColorRGBA, *, scale: float = _LINE_WIDTH_M,
+            points: Iterable[Point] = ()) -> Marker:
+    marker = Marker(header=_header(time_ns), ns=ns, id=marker_id, type=kind, action=Marker.ADD, color=color)
+    marker.pose.orientation.w = 1.0
+    marker.scale.x = marker.scale.y = marker.scale.z = scale
+    marker.points = list(points)
+    return marker
+
+
+def _delete_all(time_ns: int) -> Marker:
+    return Marker(header=_header(time_ns), action=Marker.DELETEALL)
+
+
+def _outline(vertices: np.ndarray) -> list[Point]:
+    return [_point(v) for v in vertices] + [_point(vertices[0])]
+
+
+def _triangles(vertices: np.ndarray) -> list[Point]:
+    """A simple polygon as TRIANGLE_LIST points (constrained Delaunay, so concave polygons fill right)."""
+    triangles = shapely.constrained_delaunay_triangles(shapely.Polygon(vertices))
+    points = []
+    for triangle in shapely.get_parts(triangles):
+        ring = np.asarray(triangle.exterior.coords)[:3]
+        points.extend(_point(v) for v in ring)
+    return points
+
+
+def world_markers(world: World, time_ns: int, goal: np.ndarray | None = None) -> MarkerArray:
+    """``~/world_markers``: bounds, obstacles, the object at its start and at ``goal``.
+
+    ``goal`` defaults to ``world.object.goal``. Namespaces: ``bounds``,
+    ``obstacles`` (filled, id = index in ``world.obstacles``),
+    ``obstacle_outlines``, ``object_start``, ``object_goal``, ``grasps``
+    (the grasp points at the start placement). DELETEALL comes first.
+    """
+    goal = world.object.goal if goal is None else np.asarray(goal, dtype=float)
+    xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
+    markers = [_delete_all(time_ns)]
+    corners = np.array([[xmin, ymin], [xmax, ymin], [xmax, ymax], [xmin, ymax]])
+    markers.append(_marker("bounds", 0, Marker.LINE_STRIP, time_ns, _color(0.6, 0.6, 0.6), points=_outline(corners)))
+    for index, obstacle in enumerate(world.obstacles):
+        markers.append(_marker("obstacles", index, Marker.TRIANGLE_LIST, time_ns, _color(0.35, 0.35, 0.4, 0.9),
+                               scale=1.0, points=_triangles(obstacle.vertices)))
+        markers.append(_marker("obstacle_outlines", index, Marker.LINE_STRIP, time_ns, _color(0.1, 0.1, 0.1),
+                               points=_outline(obstacle.vertices)))
+    start = transform_points(world.object.initial, world.object.polygon)
+    target = transform_points(goal, world.object.polygon)
+    markers.append(_marker("object_start", 0, Marker.LINE_STRIP, time_ns, _color(0.1, 0.7, 0.2),
+                           scale=2 * _LINE_WIDTH_M, points=_outline(start)))
+    markers.append(_marker("object_goal", 0, Marker.LINE_STRIP, time_ns, _color(0.9, 0.2, 0.1),
+                           scale=2 * _LINE_WIDTH_M, points=_outline(target)))
+    grasps = transform_points(world.object.initial, world.object.grasps)
+    markers.append(_marker("grasps", 0, Marker.SPHERE_LIST, time_ns, _color(1.0, 0.8, 0.0), scale=0.03,
+                           points=[_point(g) for g in grasps]))
+    return MarkerArray(markers=markers)
+
+
+def landmark_markers(tree: LandmarkTree, time_ns: int) -> MarkerArray:
+    """``~/landmarks``: DELETEALL, then the tree drawn at the object's resting positions.
+
+    Namespaces: ``landmarks`` (one SPHERE_LIST, the root green, the others
+    blue), ``tree_edges`` (LINE_LIST parent -> child), ``landmark_ids``
+    (TEXT_VIEW_FACING, marker id = landmark id).
+    """
+    landmarks = list(tree)
+    markers = [_delete_all(time_ns)]
+    spheres = _marker("landmarks", 0, Marker.SPHERE_LIST, time_ns, _color(0.2, 0.4, 1.0), scale=0.04,
+                      points=[_point(lm.object_pose[:2]) for lm in landmarks])
+    spheres.colors = [_color(0.1, 0.7, 0.2) if lm.parent is None else _color(0.2, 0.4, 1.0) for lm in landmarks]
+    markers.append(spheres)
+    edges = []
+    for lm in landmarks:
+        if lm.parent is not None:
+            edges += [_point(landmarks[lm.parent].object_pose[:2]), _point(lm.object_pose[:2])]
+    markers.append(_marker("tree_edges", 0, Marker.LINE_LIST, time_ns, _color(0.2, 0.4, 1.0, 0.8), points=edges))
+    for lm in landmarks:
+        text = _marker("landmark_ids", lm.id, Marker.TEXT_VIEW_FACING, time_ns, _color(1.0, 1.0, 1.0), scale=0.06)
+        text.pose.position = _point(lm.object_pose[:2], z=0.06)
+        text.text = str(lm.id)
+        markers.append(text)
+    return MarkerArray(markers=markers)
+
+
+# --------------------------------------------------------------------------- trajectory
+
+
+def joint_trajectory(track: Track, time_ns: int) -> JointTrajectory:
+    """``~/trajectory``: the track's points; ``header.stamp`` is when playback starts."""
+    msg = JointTrajectory(header=_header(time_ns), joint_names=list(track.joint_names))
+    for k in range(len(track.times_ns)):
+        positions = [float(v) for v in track.positions[k]] + [float(track.gripper[k])]
+        msg.points.append(JointTrajectoryPoint(positions=positions, time_from_start=duration_msg(int(track.times_ns[k]))))
+    return msg
+
+
+def joint_state(joint_names: list[str], joints: np.ndarray, gripper: float, time_ns: int) -> JointState:
+    """``~/joint_states``: ``joint_names`` already ends with ``gripper``."""
+    return JointState(header=_header(time_ns, frame_id=""), name=list(joint_names),
+                      position=[float(v) for v in joints] + [float(gripper)])
+
+
+def plan_from_trajectory(world: World, msg: JointTrajectory, *, goal: np.ndarray | None = None) -> dict:
+    """Turn a ``~/trajectory`` back into a ``clew-plan/1`` dict for ``validate_plan``.
+
+    Points with the same ``gripper`` value in a row form one segment
+    (transit for 0.0, transfer for 1.0). A transfer's grasp index is the
+    grasp whose position, with the object where it rests, is nearest the tip
+    at the segment's first point. ``goal`` is only written into the message
+    text. Raises ``ValueError`` when the joint names do not fit ``world``.
+    """
+    expected = list(world.robot.joint_names) + [GRIPPER_JOINT]
+    if list(msg.joint_names) != expected:
+        raise ValueError(f"joint_names: expected {expected}, got {list(msg.joint_names)}")
+    if not msg.points:
+        raise ValueError("the trajectory has no points")
+    n = world.robot.dof
+    values = np.array([list(p.positions) for p in msg.points], dtype=float)
+    joints, gripper = values[:, :n], values[:, n] > 0.5
+    segments = []
+    start = 0
+    for k in range(1, len(values) + 1):
+        if k == len(values) or gripper[k] != gripper[start]:
+            segments.append((bool(gripper[start]), joints[start:k]))
+            start = k
+    plan_segments = []
+    rest = np.asarray(world.object.initial, dtype=float)
+    # A grasp / ungrasp repeats the joints with the other gripper value, so
+    # each segment already starts where the previous one ended.
+    for transfer, waypoints in segments:
+        grasp = None
+        if transfer:
+            tip = tip_poses(world.robot, waypoints[:1])[0]
+            held = transform_points(rest, world.object.grasps)
+            grasp = int(np.argmin(np.linalg.norm(held - tip[:2], axis=1)))
+            rest = compose(tip_poses(world.robot, waypoints[-1:])[0], relative(tip, rest))
+        plan_segments.append({"kind": "transfer" if transfer else "transit", "grasp": grasp,
+                              "waypoints": [[float(v) for v in w] for w in waypoints]})
+    return {
+        "format": FORMAT,
+        "world": world.name,
+        "success": True,
+        "message": "rebuilt from ~/trajectory" + ("" if goal is None else f" toward goal {list(goal)}"),
+        "joint_names": list(world.robot.joint_names),
+        "segments": plan_segments,
+        "final_object_pose": [float(v) for v in rest],
+        "landmarks": [],
+        "stats": {},
+    }

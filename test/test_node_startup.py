@@ -1,0 +1,124 @@
+"""``clew_planner`` start-up: invalid parameters end it at once; the default world is served."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+rclpy = pytest.importorskip("rclpy")
+
+sys.path.insert(0, str(Path(__file__).parent / "helpers"))
+
+from node_harness import LATCHED, Client, NodeProcess  # noqa: E402
+from std_msgs.msg import String  # noqa: E402
+
+from clew_ros.core.world import load_world, world_from_parameters  # noqa: E402
+from clew_ros.node.parameters import default_world_file  # noqa: E402
+
+pytestmark = pytest.mark.ros
+
+QUICK = Path(__file__).parent / "worlds" / "node_quick.yaml"
+START_TIMEOUT_S = 20.0
+
+
+@pytest.mark.parametrize("overrides, parameter", [
+    ({"world.robot.initial": [5.0, 0.0]}, "world.robot.initial"),
+    ({"world.object.grasps": [0.0, 0.0, 0.3, 0.3]}, "world.object.grasps"),
+    ({"planner.time_limit": -1.0}, "planner.time_limit"),
+    ({"world.goal_tolerence": 0.1}, "world.goal_tolerence"),
+    ({"record.enabled": "sometimes"}, "record.enabled"),
+])
+def test_invalid_parameters_at_start_exit_2_naming_the_parameter(
+        tmp_path: Path, overrides: dict, parameter: str) -> None:
+    node = NodeProcess(tmp_path / "node.log", QUICK, overrides)
+    try:
+        code = node.proc.wait(timeout=START_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        node.stop()
+        pytest.fail(f"the node kept running with {overrides}:\n{node.output()}")
+    node.stop()
+    output = node.output()
+    assert code == 2, output
+    errors = [line for line in output.splitlines() if "ERROR" in line]
+    assert len(errors) == 1 and parameter in errors[0], output
+    assert "Traceback" not in output
+
+
+def test_invalid_parameter_file_exits_2(tmp_path: Path) -> None:
+    broken = tmp_path / "broken.yaml"
+    document = yaml.safe_load(QUICK.read_text())
+    del document["clew_planner"]["ros__parameters"]["world"]["bounds"]
+    broken.write_text(yaml.safe_dump(document))
+    node = NodeProcess(tmp_path / "node.log", broken)
+    code = node.proc.wait(timeout=START_TIMEOUT_S)
+    node.stop()
+    assert code == 2 and "world.bounds" in node.output()
+
+
+def test_without_parameters_the_default_world_is_served(tmp_path: Path) -> None:
+    # root namespace and no parameter file: exactly `ros2 run clew_ros clew_planner`
+    node = NodeProcess(tmp_path / "node.log", None, {"record.enabled": False}, namespace="/")
+    client = Client()
+    try:
+        message = client.inbox("/clew_planner/world_yaml", String, LATCHED).wait_for(timeout_s=START_TIMEOUT_S)
+    finally:
+        client.close()
+        code = node.stop()
+    assert code == 0, node.output()
+    served = world_from_parameters(next(iter(yaml.safe_load(message.data).values()))["ros__parameters"])
+    expected = load_world(default_world_file())
+    assert served.name == expected.name
+    assert np.allclose(served.object.goal, expected.object.goal)
+    assert [o.name for o in served.obstacles] == [o.name for o in expected.obstacles]
+
+
+def test_a_clew_planner_keyed_file_configures_the_root_node(tmp_path: Path) -> None:
+    node = NodeProcess(tmp_path / "node.log", QUICK, {"record.enabled": False}, namespace="/")
+    client = Client()
+    try:
+        message = client.inbox("/clew_planner/world_yaml", String, LATCHED).wait_for(timeout_s=START_TIMEOUT_S)
+    finally:
+        client.close()
+        code = node.stop()
+    assert code == 0, node.output()
+    assert "name: node_quick" in message.data
+
+
+@pytest.mark.parametrize("fault", ["no recorder", "directory is a file"])
+def test_runs_go_on_without_a_recording(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, fault: str) -> None:
+    """Without the recorder, or with a directory it cannot use, a run is planned and says it was not recorded."""
+    from rclpy.parameter import Parameter
+
+    from clew_ros.core.world import read_parameter_file
+    from clew_ros.node.parameters import flatten
+    from clew_ros.node.planner_node import PlannerNode
+
+    directory = tmp_path / "recordings"
+    if fault == "no recorder":
+        monkeypatch.setitem(sys.modules, "clew_ros.recording", None)  # any import of it raises ImportError
+        expected = "not recorded: the recorder is not available"
+    else:
+        directory.write_text("not a directory")
+        expected = "not recorded: record.directory"
+    overrides = [Parameter(name, value=value) for name, value in flatten(read_parameter_file(QUICK)).items()]
+    overrides.append(Parameter("record.directory", value=str(directory)))
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = PlannerNode(context=context, parameter_overrides=overrides)
+        try:
+            run, refusal = node._start_run("plan", None)
+            assert run is not None, refusal
+            assert run.done.wait(30.0), "no outcome within 30 s"
+            text = node._result_text(run)
+            assert "SUCCEEDED" in text and expected in text, text
+        finally:
+            node.shutdown_runs()
+            node.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)

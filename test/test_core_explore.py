@@ -1,0 +1,45 @@
+"""EXPLORE places landmarks farther from the others than random choices would."""
+
+from pathlib import Path
+
+import numpy as np
+
+from clew_ros.core.explore import Explorer
+from clew_ros.core.search import PlanningContext
+from clew_ros.core.settings import PlannerSettings, Termination
+from clew_ros.core.tree import LandmarkTree, landmark_features
+from clew_ros.core.world import load_world
+
+CONFIG = Path(__file__).resolve().parents[1] / "config"
+
+
+def test_explore_beats_random_single_manipulation_paths():
+    world = load_world(CONFIG / "single_transfer.yaml")
+    settings = PlannerSettings(seed=3)
+    ctx = PlanningContext(world, settings, np.random.default_rng(3), Termination(60))
+    tree = LandmarkTree(world.robot.initial, world.object.initial)
+    explorer = Explorer(ctx, tree)
+    exploration = explorer.explore()
+    assert exploration is not None
+    landmark = tree.add(**exploration.fields)
+    features = tree.features(settings.joint_weight, world.object.radius)[:1]
+
+    # random single manipulation paths from the same transits
+    candidates = [c for c in explorer._transits.values() if c is not None]
+    rng = np.random.default_rng(99)
+    n = world.robot.dof
+    distances = []
+    for candidate in candidates:
+        genes = rng.normal(0, 1.2, (64, settings.manhattan_order, n))
+        paths = ctx.manhattan(candidate.start, genes, grasp_rel=candidate.grasp_rel[None])
+        ends = landmark_features(paths.final, paths.object_poses, settings.joint_weight, world.object.radius)
+        distances.append(np.linalg.norm(ends - features, axis=1))
+    distances = np.concatenate(distances)
+    assert exploration.distance >= np.percentile(distances, 90)
+    assert landmark.parent == 0 and landmark.grasp is not None
+    # the landmark holds its grasp: tip on the grasp point of the placed object
+    from clew_ros.core.kinematics import tip_poses, transform_points
+
+    tip = tip_poses(world.robot, landmark.joints[None])[0, :2]
+    grasp = transform_points(landmark.object_pose, world.object.grasps[landmark.grasp][None])[0]
+    assert np.linalg.norm(tip - grasp) <= world.grasp_tolerance

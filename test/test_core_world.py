@@ -1,0 +1,136 @@
+"""World loading and validation: every fault names the parameter at fault."""
+
+import copy
+import math
+from pathlib import Path
+
+import pytest
+
+from clew_ros.core.errors import WorldError
+from clew_ros.core.world import load_world, read_parameter_file, world_from_parameters, world_to_parameters
+
+CONFIG = Path(__file__).resolve().parents[1] / "config"
+WORLDS = sorted(CONFIG.glob("*.yaml"))
+
+
+def base_tree() -> dict:
+    return copy.deepcopy(read_parameter_file(CONFIG / "figure1.yaml"))
+
+
+@pytest.mark.parametrize("path", WORLDS, ids=lambda p: p.stem)
+def test_config_worlds_load(path):
+    world = load_world(path)
+    assert world.name == path.stem
+    assert world.robot.dof >= 2
+
+
+def test_round_trip_parameters():
+    world = load_world(CONFIG / "figure1.yaml")
+    again = world_from_parameters(world_to_parameters(world))
+    assert again.object.grasps.tolist() == world.object.grasps.tolist()
+    assert [o.name for o in again.obstacles] == [o.name for o in world.obstacles]
+
+
+def _set(tree, dotted, value):
+    node = tree["world"]
+    keys = dotted.split(".")[1:]
+    for key in keys[:-1]:
+        node = node[key]
+    if value is _DELETE:
+        del node[keys[-1]]
+    else:
+        node[keys[-1]] = value
+
+
+_DELETE = object()
+
+BAD = [
+    ("world.bounds", [0, 0, 1], "4 numbers"),
+    ("world.bounds", [1, 0, 0, 1], "xmin < xmax"),
+    ("world.robot.link_lengths", [1.0], "at least 2"),
+    ("world.robot.link_lengths", [1.0, -0.7], "> 0"),
+    ("world.robot.link_lengths", [1.0, float("nan")], "finite"),
+    ("world.robot.joint_lower", [-3.0], "2 values"),
+    ("world.robot.joint_lower", [3.5, -2.8], "joint_lower <= joint_upper"),
+    ("world.robot.initial", [0.0, 3.0], "within"),
+    ("world.robot.initial", ["a", 0.0], "list of numbers"),
+    ("world.robot.link_width", -0.1, ">= 0"),
+    ("world.robot.self_collision", "yes", "true or false"),
+    ("world.object.polygon", [0, 0, 1, 0, 1], "at least 6"),
+    ("world.object.polygon", [0, 0, 1, 0, 1, 1, 0], "even number"),
+    ("world.object.polygon", [0, 0, 2, 2, 2, 0, 0, 1], "simple polygon"),
+    ("world.object.polygon", [0, 0, 1, 0, 2, 0], "non-zero area"),
+    ("world.object.grasps", [0.0, 0.0], "boundary"),
+    ("world.object.goal", [0.0, 0.0, float("inf")], "finite"),
+    ("world.object.goal", [2.1, 0.0, 0.0], "collision-free placement"),
+    ("world.object.initial", [0.0, 2.6, 0.0], "collision-free placement"),
+    ("world.obstacle_names", ["left_block", "left_block"], "unique"),
+    ("world.obstacles.left_block", [-2.4, -0.1, -1.8, -0.1, -1.8], "at least 6"),
+    ("world.grasp_tolerance", 0.0, "> 0"),
+    ("world.goal_tolerance", True, "a number"),
+    ("world.robot.initial", [1.5708, 0.0], "valid start configuration"),
+]
+
+
+@pytest.mark.parametrize("parameter,value,expected", BAD, ids=[f"{p}={v!r}" for p, v, _ in BAD])
+def test_bad_world_names_the_parameter(parameter, value, expected):
+    tree = base_tree()
+    _set(tree, parameter, value)
+    with pytest.raises(WorldError) as caught:
+        world_from_parameters(tree)
+    assert caught.value.parameter.startswith(parameter.rsplit(".", 1)[0])
+    message = str(caught.value)
+    assert message.startswith("world.")
+    if expected:
+        assert expected in message
+
+
+def test_unknown_obstacle_is_named():
+    tree = base_tree()
+    tree["world"]["obstacles"]["ghost"] = [0, 0, 0.1, 0, 0.1, 0.1]
+    with pytest.raises(WorldError, match=r"world\.obstacles\.ghost: unknown obstacle"):
+        world_from_parameters(tree)
+
+
+def test_listed_obstacle_missing_is_named():
+    tree = base_tree()
+    del tree["world"]["obstacles"]["left_block"]
+    with pytest.raises(WorldError, match=r"world\.obstacles\.left_block: is required"):
+        world_from_parameters(tree)
+
+
+def test_start_in_collision_says_which_link_hits_what():
+    tree = base_tree()
+    # link 2 swings onto the right block
+    tree["world"]["robot"]["initial"] = [0.0, 0.0]
+    tree["world"]["robot"]["link_lengths"] = [1.0, 0.85]
+    with pytest.raises(WorldError, match=r"world\.robot\.initial: .*link 2 hits obstacle 'right_block'"):
+        world_from_parameters(tree)
+
+
+def test_defaults_apply_when_keys_are_absent():
+    tree = base_tree()
+    for key in ("grasp_tolerance", "goal_tolerance", "goal_angle_tolerance"):
+        tree["world"].pop(key, None)
+    tree["world"]["robot"].pop("link_width", None)
+    tree["world"]["robot"].pop("self_collision", None)
+    world = world_from_parameters(tree)
+    assert world.grasp_tolerance == 0.005
+    assert world.goal_tolerance == 0.02
+    assert world.goal_angle_tolerance == pytest.approx(math.pi)
+    assert world.robot.link_width == 0.0 and world.robot.self_collision is True
+
+
+def test_world_without_obstacles_and_wildcard_key(tmp_path):
+    tree = base_tree()
+    del tree["world"]["obstacle_names"], tree["world"]["obstacles"]
+    import yaml
+
+    path = tmp_path / "w.yaml"
+    path.write_text(yaml.safe_dump({"/**": {"ros__parameters": tree}}))
+    assert load_world(path).obstacles == ()
+
+
+def test_unreadable_file_is_named(tmp_path):
+    with pytest.raises(WorldError, match="cannot read"):
+        load_world(tmp_path / "missing.yaml")

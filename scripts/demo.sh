@@ -103,8 +103,16 @@ if [[ -n "$run_id" && -f "$RUN_DIR/metadata.yaml" ]]; then
 else
     not_built+=("recording of the node's run")
 fi
-# replay: "$BIN/clew_replay" "$RUN_DIR" --rate 4
-# render: "$BIN/clew_render" "$RUN_DIR" -o "$OUT/run.png"
+# The picture: the recorded run drawn (PNG filmstrip and GIF animation).
+if [[ -n "$run_id" && -f "$RUN_DIR/metadata.yaml" ]]; then
+    if "$BIN/clew_render" "$RUN_DIR" -o "$OUT/plan.png" && "$BIN/clew_render" "$RUN_DIR" -o "$OUT/plan.gif"; then
+        echo "demo: picture of the run in $OUT/plan.png and $OUT/plan.gif"
+    else
+        echo "demo: clew_render failed" >&2
+        [[ $status -eq 0 ]] && status=1
+    fi
+fi
+# Replay it for RViz/Foxglove: "$BIN/clew_replay" "$RUN_DIR" --rate 4
 
 if [[ ${#not_built[@]} -gt 0 ]]; then
     echo "demo: not built yet: $(IFS=','; echo "${not_built[*]}" | sed 's/,/, /g')"

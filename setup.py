@@ -15,7 +15,7 @@ setup(
     maintainer="clew_ros maintainers",
     maintainer_email="clew-ros@example.com",
     license="Apache-2.0",
-    packages=find_packages(exclude=["test", "test.*"]),
+    packages=find_packages(exclude=["test", "test.*", "benchmarks", "benchmarks.*"]),
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
@@ -42,6 +42,7 @@ setup(
             "ros-jazzy-std-srvs>=5.3",
         ],
         "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10"],
+        # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
         "bench": ["ompl>=2.0", "matplotlib>=3.8"],
     },
     zip_safe=True,

@@ -1,21 +1,30 @@
 """``clew_plan WORLD.yaml --output PLAN.json [--seed N] [--time-limit S]``: plan offline, no ROS needed.
 
 Exit 0: a plan was found; 1: no plan (the file is still written with
-``success: false``); 2: invalid input, with a message naming the parameter.
+``success: false`` and the outcome ``code``); 2: invalid input, with a
+message naming the parameter. Ctrl-C (SIGINT) or SIGTERM cancels the run:
+the file is written with code ``CANCELED`` and the exit code is 1; a second
+signal aborts at once (exit 130, no file).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
-from clew_ros.core.clew import Progress, plan
+from clew_ros.core.clew import PlanResult, Progress, plan
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.plan import dumps_plan, plan_to_dict, validate_plan
-from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import read_parameter_file, world_from_parameters
+
+EXIT_ABORTED = 130
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -48,6 +57,30 @@ class _ProgressLine:
             print(file=sys.stderr)
 
 
+def _cancel_on_signals(cancel: threading.Event) -> Callable[[], None]:
+    """SIGINT / SIGTERM set ``cancel`` (the planner stops and reports CANCELED); a second one aborts.
+
+    Returns a function that restores the previous handlers. Outside the main thread it does nothing.
+    """
+    def handler(signum: int, _frame) -> None:
+        if cancel.is_set():
+            raise KeyboardInterrupt
+        cancel.set()
+        print(f"clew_plan: {signal.Signals(signum).name}: canceling the run (again to abort)", file=sys.stderr)
+
+    previous = {}
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            previous[sig] = signal.signal(sig, handler)
+    except ValueError:  # not the main thread
+        pass
+
+    def restore() -> None:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+    return restore
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
@@ -59,15 +92,27 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     progress = _ProgressLine(not args.quiet)
     started = time.monotonic()
-    result = plan(world, settings, progress=progress)
-    progress.close()
-    document = plan_to_dict(world, result)
-    if result.success:
-        problems = validate_plan(world, document)
-        if problems:  # a bug: never hand out a plan that fails the validator
-            document = plan_to_dict(world, result)
-            document.update(success=False, code="INTERNAL_ERROR", segments=[], final_object_pose=None,
-                            message="internal error: the plan failed validation: " + "; ".join(problems[:3]))
+    cancel = threading.Event()
+    restore = _cancel_on_signals(cancel)
+    try:
+        result = plan(world, settings, termination=Termination(settings.time_limit, cancel), progress=progress)
+        document = plan_to_dict(world, result)
+        if result.success:
+            problems = validate_plan(world, document)
+            if problems:  # a bug: never hand out a plan that fails the validator
+                document.update(success=False, code="INTERNAL_ERROR", segments=[], final_object_pose=None,
+                                message="internal error: the plan failed validation: " + "; ".join(problems[:3]))
+    except KeyboardInterrupt:  # a second signal
+        print("clew_plan: aborted; no plan file written", file=sys.stderr)
+        return EXIT_ABORTED
+    except Exception as error:  # noqa: BLE001 - a bug in the planner: reported in the plan file, exit 1
+        result = PlanResult(Outcome.INTERNAL_ERROR, f"internal error: {error!r}", [], None,
+                            LandmarkTree(world.robot.initial, world.object.initial),
+                            {"time_s": round(time.monotonic() - started, 4), "seed": settings.seed})
+        document = plan_to_dict(world, result)
+    finally:
+        restore()
+        progress.close()
     try:
         args.output.parent.mkdir(parents=True, exist_ok=True)
         args.output.write_text(dumps_plan(document))

@@ -91,13 +91,25 @@ def check_planner_parameter(name: str, value: Any) -> Any:
     kind, _default, _description, limits = PLANNER_PARAMETERS[name]
     full = f"planner.{name}"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(full, f"expected {'an integer' if kind is int else 'a number'}, got {value!r}")
+        raise ParameterError(full, f"expected {'an integer' if kind is int else 'a number'}, got {_short(value)}")
     if kind is int and (isinstance(value, float) and not value.is_integer()):
         raise ParameterError(full, f"expected an integer, got {value!r}")
-    value = kind(value)
-    if value != value or (limits and not limits[0] <= value <= limits[1]):
-        raise ParameterError(full, f"expected a value in [{limits[0]}, {limits[1]}], got {value}")
-    return value
+    try:
+        converted = kind(value)
+    except OverflowError:  # an integer too large for a float
+        converted = None
+    if converted is None or converted != converted or (limits and not limits[0] <= converted <= limits[1]):
+        raise ParameterError(full, f"expected a value in [{limits[0]}, {limits[1]}], got {_short(value)}")
+    return converted
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters (a 400-digit integer is not a message)."""
+    try:
+        text = repr(value)
+    except ValueError:  # an integer of more digits than Python converts to text
+        return f"an integer of {value.bit_length()} bits"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 assert [f.name for f in fields(PlannerSettings)] == list(PLANNER_PARAMETERS)

@@ -25,6 +25,9 @@ __all__ = [
     "MovableObject",
     "World",
     "GRASP_ON_BOUNDARY_TOLERANCE_M",
+    "MAX_ABS_VALUE",
+    "MAX_LINKS",
+    "MAX_PARAMETER_FILE_BYTES",
     "read_parameter_file",
     "world_from_parameters",
     "load_world",
@@ -33,6 +36,14 @@ __all__ = [
 
 #: A grasp point lies on the object's boundary when it is this close to it (m).
 GRASP_ON_BOUNDARY_TOLERANCE_M = 1e-6
+#: Largest magnitude of any number of the world (m or rad). Beyond it the
+#: geometry loses its precision (and squares overflow); no planar arm needs it.
+MAX_ABS_VALUE = 1e6
+#: Most links a robot may have: validation (self-collision pairs) and planning
+#: grow with the square of the link count.
+MAX_LINKS = 100
+#: Largest parameter file read (bytes); ``/dev/zero`` is not a world.
+MAX_PARAMETER_FILE_BYTES = 64 * 2**20
 
 
 def _frozen(values: Any, dtype: type = float) -> np.ndarray:
@@ -113,13 +124,22 @@ def read_parameter_file(path: str | Path) -> dict:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        with path.open("rb") as stream:
+            data = stream.read(MAX_PARAMETER_FILE_BYTES + 1)
     except OSError as error:
         raise WorldError(str(path), f"cannot read the parameter file ({error.strerror})") from None
+    if len(data) > MAX_PARAMETER_FILE_BYTES:
+        raise WorldError(str(path), f"expected a parameter file of at most {MAX_PARAMETER_FILE_BYTES} bytes")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise WorldError(str(path), f"expected UTF-8 text ({error.reason} at byte {error.start})") from None
     try:
         document = yaml.safe_load(text)
     except yaml.YAMLError as error:
         raise WorldError(str(path), f"expected valid YAML ({error})") from None
+    except (RecursionError, MemoryError, ValueError) as error:  # absurd nesting, or numbers YAML cannot hold
+        raise WorldError(str(path), f"expected a parameter file YAML can read ({type(error).__name__})") from None
     if not isinstance(document, dict):
         raise WorldError(str(path), "expected a mapping with a 'clew_planner' or '/**' key")
     for key, value in document.items():
@@ -136,6 +156,29 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
 
 
+def _short(value: Any, limit: int = 80) -> str:
+    """``repr(value)`` cut to ``limit`` characters (a 400-digit integer is not a message)."""
+    try:
+        text = repr(value)
+    except ValueError:  # an integer of more digits than Python converts
+        return f"an integer of about {value.bit_length() * 0.30103:.0f} digits"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _as_float(value: Any) -> float:
+    """``float(value)``; an integer too large for a float becomes ``inf`` (refused as not finite)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
+
+
+def _check_magnitude(name: str, values: np.ndarray) -> None:
+    if values.size and float(np.max(np.abs(values))) > MAX_ABS_VALUE:
+        raise WorldError(name, f"expected numbers within +-{MAX_ABS_VALUE:g} (m or rad), got "
+                         f"{float(values.flat[np.argmax(np.abs(values))]):.6g}")
+
+
 def _number(tree: Mapping, key: str, prefix: str, default: Any = None, *, positive: bool = False,
             non_negative: bool = False) -> float:
     name = f"{prefix}.{key}"
@@ -143,10 +186,11 @@ def _number(tree: Mapping, key: str, prefix: str, default: Any = None, *, positi
     if value is None:
         raise WorldError(name, "is required (a number)")
     if not _is_number(value):
-        raise WorldError(name, f"expected a number, got {value!r}")
-    value = float(value)
+        raise WorldError(name, f"expected a number, got {_short(value)}")
+    value = _as_float(value)
     if not math.isfinite(value):
         raise WorldError(name, f"expected a finite number, got {value}")
+    _check_magnitude(name, np.array([value]))
     if positive and value <= 0:
         raise WorldError(name, f"expected a number > 0, got {value}")
     if non_negative and value < 0:
@@ -161,13 +205,14 @@ def _numbers(tree: Mapping, key: str, prefix: str, *, length: int | None = None,
     if value is None:
         raise WorldError(name, "is required (a list of numbers)")
     if not isinstance(value, (list, tuple)):
-        raise WorldError(name, f"expected a list of numbers, got {value!r}")
+        raise WorldError(name, f"expected a list of numbers, got {_short(value)}")
     for item in value:
         if not _is_number(item):
-            raise WorldError(name, f"expected a list of numbers, got the item {item!r}")
-    array = np.array(value, dtype=float)
+            raise WorldError(name, f"expected a list of numbers, got the item {_short(item)}")
+    array = np.array([_as_float(item) for item in value], dtype=float)
     if not np.all(np.isfinite(array)):
         raise WorldError(name, "expected finite numbers, got NaN or inf")
+    _check_magnitude(name, array)
     if length is not None and len(array) != length:
         raise WorldError(name, f"expected {length} numbers, got {len(array)}")
     if len(array) < min_length:
@@ -202,14 +247,14 @@ def _mapping(tree: Mapping, key: str, prefix: str, *, required: bool = True) -> 
     if value is None and not required:
         return {}
     if not isinstance(value, Mapping):
-        raise WorldError(f"{prefix}.{key}", f"expected a mapping, got {value!r}")
+        raise WorldError(f"{prefix}.{key}", f"expected a mapping, got {_short(value)}")
     return value
 
 
 def _bool(tree: Mapping, key: str, prefix: str, default: bool) -> bool:
     value = tree.get(key, default)
     if not isinstance(value, bool):
-        raise WorldError(f"{prefix}.{key}", f"expected true or false, got {value!r}")
+        raise WorldError(f"{prefix}.{key}", f"expected true or false, got {_short(value)}")
     return value
 
 
@@ -221,10 +266,10 @@ def world_from_parameters(parameters: Mapping[str, Any], *, check_collisions: bo
     goal placements are checked against section 1's validity test.
     """
     if not isinstance(parameters, Mapping):
-        raise WorldError("ros__parameters", f"expected a mapping, got {parameters!r}")
+        raise WorldError("ros__parameters", f"expected a mapping, got {_short(parameters)}")
     tree = parameters.get("world")
     if not isinstance(tree, Mapping):
-        raise WorldError("world", f"expected a mapping of world parameters, got {tree!r}")
+        raise WorldError("world", f"expected a mapping of world parameters, got {_short(tree)}")
     return _world_from_tree(tree, check_collisions=check_collisions)
 
 
@@ -232,7 +277,7 @@ def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
     p = "world"
     name = tree.get("name", "world")
     if not isinstance(name, str) or not name:
-        raise WorldError("world.name", f"expected a non-empty string, got {name!r}")
+        raise WorldError("world.name", f"expected a non-empty string, got {_short(name)}")
 
     bounds = _numbers(tree, "bounds", p, length=4)
     if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
@@ -242,6 +287,8 @@ def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
     robot_tree = _mapping(tree, "robot", p)
     lengths = _numbers(robot_tree, "link_lengths", rp, min_length=2)
     n = len(lengths)
+    if n > MAX_LINKS:
+        raise WorldError(f"{rp}.link_lengths", f"expected at most {MAX_LINKS} links, got {n}")
     if np.any(lengths <= 0):
         raise WorldError(f"{rp}.link_lengths", f"expected lengths > 0, got {lengths.tolist()}")
     lower = _numbers(robot_tree, "joint_lower", rp)
@@ -271,16 +318,18 @@ def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
     names = tree.get("obstacle_names")
     obstacle_tree = tree.get("obstacles") or {}
     if not isinstance(obstacle_tree, Mapping):
-        raise WorldError("world.obstacles", f"expected a mapping of name: [x0, y0, ...], got {obstacle_tree!r}")
+        raise WorldError("world.obstacles",
+                         f"expected a mapping of name: [x0, y0, ...], got {_short(obstacle_tree)}")
     if names is None:
         names = []
     if not isinstance(names, (list, tuple)) or not all(isinstance(s, str) and s for s in names):
-        raise WorldError("world.obstacle_names", f"expected a list of non-empty strings, got {names!r}")
+        raise WorldError("world.obstacle_names", f"expected a list of non-empty strings, got {_short(names)}")
     if len(set(names)) != len(names):
         raise WorldError("world.obstacle_names", "expected unique names")
     for key in obstacle_tree:
         if key not in names:
-            raise WorldError(f"world.obstacles.{key}", f"unknown obstacle: not listed in world.obstacle_names {names}")
+            raise WorldError(f"world.obstacles.{key}",
+                             f"unknown obstacle: not listed in world.obstacle_names {_short(names, 200)}")
     for obstacle_name in names:
         if obstacle_name not in obstacle_tree:
             raise WorldError(f"world.obstacles.{obstacle_name}",

@@ -196,7 +196,7 @@ def feedback_status(run_id: uuid.UUID, *, landmarks: int, best_distance: float, 
     )
 
 
-def event_message(run_id: uuid.UUID, event: str, time_s: float, **fields: Any) -> String:
+def event_message(run_id: uuid.UUID, event: str, time_s: float, /, **fields: Any) -> String:
     """One ``~/events`` JSON object: ``run_id``, ``event``, ``time`` and ``fields``.
 
     Non-finite numbers become ``null`` so that the text is strict JSON.

@@ -85,6 +85,9 @@ LATCHED_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=R
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
 STREAM_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
                         durability=DurabilityPolicy.VOLATILE)
+#: ~/goal_pose: a burst of goals is queued, not dropped; each is answered (a run, or a BUSY refusal).
+GOAL_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
 EVENTS_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
                         durability=DurabilityPolicy.VOLATILE)
 
@@ -108,6 +111,7 @@ class Run:
     finished: threading.Event = field(default_factory=threading.Event)  # playback over, recording closed
     phase: str = "planning"  # planning -> publishing -> playback -> finished
     outcome: Outcome | None = None
+    outcome_sent: bool = False  # the outcome event is out (never send a second one)
     message: str = ""
     landmarks: int = 1
     best_distance: float = float("inf")
@@ -171,7 +175,7 @@ class PlannerNode(Node):
         self._timer_group = MutuallyExclusiveCallbackGroup()
         self.create_service(Trigger, "~/plan", self._on_plan, callback_group=self._plan_group)
         self.create_service(Trigger, "~/cancel", self._on_cancel, callback_group=self._cancel_group)
-        self._goal_sub = self.create_subscription(PoseStamped, "~/goal_pose", self._on_goal_pose, STREAM_QOS,
+        self._goal_sub = self.create_subscription(PoseStamped, "~/goal_pose", self._on_goal_pose, GOAL_QOS,
                                                   callback_group=self._goal_group)
         self.create_timer(1.0 / STATUS_RATE_HZ, self._on_timer, callback_group=self._timer_group)
 
@@ -214,6 +218,15 @@ class PlannerNode(Node):
         return values
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        try:
+            return self._check_parameters(parameters)
+        except Exception as error:  # noqa: BLE001 - a checking bug must refuse the change, not end the node
+            names = ", ".join(p.name for p in parameters)
+            self.get_logger().error(f"internal error while checking {names}: {error!r}")
+            return SetParametersResult(successful=False, reason=f"{names}: internal error while checking the "
+                                       f"change ({type(error).__name__}: {error}); nothing was changed")
+
+    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         for p in parameters:
             if not p.name.startswith(OWN_PREFIXES) and not self.has_parameter(p.name):
                 return SetParametersResult(successful=False, reason=(
@@ -305,8 +318,10 @@ class PlannerNode(Node):
                 entries = [(run_id, stamp, status) for run_id, (stamp, status) in self._statuses.items()]
             self._emit(run, "status", messages.goal_status_array(entries, self._now_ns()))
 
-    def _event(self, run: Run | None, run_id: uuid.UUID, event: str, time_s: float | None = None, **fields: Any) -> None:
-        self._emit(run, "events", messages.event_message(run_id, event, time.time() if time_s is None else time_s,
+    def _event(self, run: Run | None, run_id: uuid.UUID, event: str, at_s: float | None = None,
+               **fields: Any) -> None:
+        """One ``~/events`` message; ``time`` is ``at_s`` if given (grasp events), else wall-clock seconds."""
+        self._emit(run, "events", messages.event_message(run_id, event, time.time() if at_s is None else at_s,
                                                          **fields))
 
     def _publish_feedback(self, run: Run, phase: str) -> None:
@@ -487,8 +502,11 @@ class PlannerNode(Node):
                 self._play_back(run)
         except Exception as error:  # noqa: BLE001 - a bug here must not take the node down
             self.get_logger().error(f"run {run.hex}: internal error: {error!r}")
-            if not run.done.is_set():
-                self._finish(run, Outcome.INTERNAL_ERROR, f"internal error in the node: {error!r}")
+            if not run.outcome_sent:  # else the outcome is out already: one outcome per run
+                try:
+                    self._finish(run, Outcome.INTERNAL_ERROR, f"internal error in the node: {error!r}")
+                except Exception as again:  # noqa: BLE001
+                    self.get_logger().error(f"run {run.hex}: cannot publish its outcome: {again!r}")
         finally:
             run.done.set()
             self._close_recording(run)
@@ -567,8 +585,18 @@ class PlannerNode(Node):
         if outcome is not Outcome.SUCCEEDED:
             # no playback follows: the recording is complete before the answer goes out
             self._close_recording(run)
-        log = self.get_logger().info if outcome is Outcome.SUCCEEDED else self.get_logger().warning
-        log(f"run {run.hex}: {outcome.name}: {message.splitlines()[0] if message else ''}")
+        run.outcome_sent = True
+        if outcome is Outcome.SUCCEEDED and run.recorder is not None:
+            # the recording closes after the playback; fold a write error met so far into the answer
+            error = getattr(run.recorder, "error", None)
+            if error:
+                self._recording_failed(run, str(error))
+        summary = f"run {run.hex}: {outcome.name}: {message.splitlines()[0] if message else ''}"
+        # one call site per severity: rclpy refuses a call site whose severity changes between calls
+        if outcome is Outcome.SUCCEEDED:
+            self.get_logger().info(summary)
+        else:
+            self.get_logger().warning(summary)
         run.done.set()
 
     def _result_text(self, run: Run) -> str:
@@ -599,7 +627,7 @@ class PlannerNode(Node):
             self._emit(run, "object_pose", messages.object_pose_stamped(pose, now))
             while next_event < len(events) and events[next_event].time_s <= t:
                 e = events[next_event]
-                self._event(run, run.id, e.kind, time_s=float(e.time_s), grasp=e.grasp)
+                self._event(run, run.id, e.kind, at_s=float(e.time_s), grasp=e.grasp)
                 next_event += 1
             if t >= track.duration_s:
                 self._publish_feedback(run, "playback_done")

@@ -15,6 +15,7 @@ leaves a file that the MCAP stream reader reads up to its last chunk
 from __future__ import annotations
 
 import atexit
+import contextlib
 import itertools
 import os
 import queue
@@ -219,13 +220,15 @@ class RunRecorder:
         try:
             self._file = open(self.mcap_path, "xb")
         except OSError as error:
+            with contextlib.suppress(OSError):
+                self.path.rmdir()  # created just above: leave nothing behind
             raise RecordingError(f"cannot create {self.mcap_path}: {error.strerror}") from None
 
         from mcap.writer import CompressionType, Writer
 
         compressions = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
         if compression not in compressions:
-            self._file.close()
+            self._abandon()
             raise RecordingError(f"compression {compression!r} is not a valid option, must be one of "
                                  f"{', '.join(compressions)}")
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=compressions[compression])
@@ -248,11 +251,19 @@ class RunRecorder:
             self._writer.start(profile="ros2", library=f"clew_ros {clew_ros.__version__} RunRecorder")
             self._file.flush()
         except OSError as error:
-            self._file.close()
+            self._abandon()
             raise RecordingError(f"cannot write {self.mcap_path}: {error.strerror}") from None
         self._thread = threading.Thread(target=self._run, name=f"recorder-{run_id[:8]}", daemon=True)
         self._thread.start()
         atexit.register(self._close_at_exit)
+
+    def _abandon(self) -> None:
+        """Undo a start that failed (disk full, ...): close the file, remove what was created."""
+        with contextlib.suppress(OSError):
+            self._file.close()  # may fail to flush the header: the fd is closed all the same
+        with contextlib.suppress(OSError):
+            self.mcap_path.unlink()
+            self.path.rmdir()
 
     # ------------------------------------------------------------------ public API
 

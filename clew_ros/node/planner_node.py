@@ -384,10 +384,13 @@ class PlannerNode(Node):
                                 f"{self._result_text(run)}" if stopped
                                 else f"cancel requested; run {run.hex} is stopping")
         else:
-            run.finished.wait(timeout=CANCEL_WAIT_S)
+            asked = time.monotonic()
+            stopped = run.finished.wait(timeout=CANCEL_WAIT_S)
+            outcome = run.outcome.name if run.outcome else "unknown"
             response.success = True
-            response.message = (f"stopped the playback of run {run.hex} (its outcome stays "
-                                f"{run.outcome.name if run.outcome else 'unknown'})")
+            response.message = (f"stopped the playback of run {run.hex} in {1000 * (time.monotonic() - asked):.0f} ms "
+                                 f"(its outcome stays {outcome})" if stopped
+                                 else f"stopping the playback of run {run.hex} (its outcome stays {outcome})")
         self.get_logger().info(response.message.splitlines()[0])
         return response
 

@@ -1,0 +1,255 @@
+"""Peer comparison on transit sub-problems: OMPL RRTConnect against the project's own planner.
+
+``python -m benchmarks.peer WORLD [--problems N] [--time-limit S] [--seed N] [--step-rad R]``
+prints one JSON object.
+
+A sub-problem: move the arm from one valid configuration to another, the
+object resting at its initial pose (pairs drawn uniformly within the joint
+limits, seeded, kept when both ends are valid and at least 1 rad apart).
+
+* **OMPL** (PyPI ``ompl`` 2.x): ``RealVectorStateSpace`` bounded by the joint
+  limits, ``RRTConnect``, state validity by :class:`~benchmarks.throughput.PerStateChecker`
+  (the project's validity test for one state, same answers as
+  :func:`~clew_ros.core.collision.is_valid` on every sampled configuration;
+  about 8x faster per state than ``is_valid`` on a batch of 1), motion
+  checking resolution set so that consecutive checked states are at most
+  ``step_rad`` apart in joint space (L2, so per joint too). Success: an exact
+  solution within the time limit. No path simplification.
+* **Project** (:func:`project_transit`): the Ariadne's Clew algorithm posed
+  on the transit problem with the core's own pieces: SEARCH is
+  ``clew_ros.core.search._local_search`` minimising the joint-space distance
+  to ``q_goal`` over Manhattan paths (the same GA, bouncing, free intervals
+  and damped least-squares refinement that SEARCH_TRANSIT uses, only the
+  objective differs: SEARCH_TRANSIT minimises the tip's distance to a grasp
+  point, which any of many configurations satisfies, so it would not pose the
+  same problem as OMPL's). The distance is weighted by ``planner.joint_weight``
+  (0.1 m/rad, the planner's own conversion in its landmark distance), because
+  SEARCH's thresholds are in metres (refinement from 0.15 x reach); when SEARCH from the start fails, EXPLORE adds a
+  landmark (GA over landmark x Manhattan genes maximising the distance to the
+  other landmarks, as :mod:`clew_ros.core.explore` does) and SEARCH runs from
+  it, until success or the time limit. Success: the end is within 1e-3 rad
+  (L2) of ``q_goal``.
+
+Both planners' paths are checked afterwards with :func:`~clew_ros.core.collision.is_valid`
+at 0.002 rad per joint (the contract's validator step).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+from benchmarks.families import all_worlds, select
+from benchmarks.throughput import PerStateChecker, random_configurations
+from clew_ros.core.collision import is_valid
+from clew_ros.core.genetic import minimize
+from clew_ros.core.search import PlanningContext, _local_search
+from clew_ros.core.settings import PlannerSettings, Termination
+from clew_ros.core.world import World, world_from_parameters
+
+__all__ = ["transit_problems", "solve_ompl", "project_transit", "path_is_valid", "ompl_unavailable_reason"]
+
+GOAL_TOLERANCE_RAD = 1e-3
+CHECK_STEP_RAD = 0.002
+
+
+def transit_problems(world: World, count: int, seed: int, min_distance_rad: float = 1.0) -> list[tuple]:
+    """``count`` pairs ``(q_start, q_goal)`` of valid transit configurations, seeded."""
+    rng = np.random.default_rng(seed)
+    pose = world.object.initial
+    problems: list[tuple] = []
+    for _ in range(1000):
+        q = random_configurations(world, 256, rng)
+        q = q[is_valid(world, q, pose[None])]
+        for a, b in zip(q[0::2], q[1::2]):
+            if np.linalg.norm(a - b) >= min_distance_rad:
+                problems.append((a, b))
+            if len(problems) == count:
+                return problems
+    return problems
+
+
+def path_is_valid(world: World, waypoints: np.ndarray, step_rad: float = CHECK_STEP_RAD) -> bool:
+    """Every configuration along the straight pieces, at most ``step_rad`` apart per joint, is valid."""
+    pieces = [waypoints[:1]]
+    for a, b in zip(waypoints[:-1], waypoints[1:]):
+        count = max(1, int(np.ceil(np.max(np.abs(b - a)) / step_rad)))
+        pieces.append(a + (np.arange(1, count + 1)[:, None] / count) * (b - a))
+    configurations = np.concatenate(pieces)
+    valid = np.concatenate([is_valid(world, configurations[i:i + 20_000], world.object.initial[None])
+                            for i in range(0, len(configurations), 20_000)])
+    return bool(valid.all())
+
+
+def ompl_unavailable_reason() -> str | None:
+    try:
+        from ompl import base, geometric  # noqa: F401
+    except ImportError as error:
+        return f"ompl not importable ({error}); install the bench extra: pip install -e '.[bench]'"
+    return None
+
+
+def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_rad: float) -> list[dict]:
+    """RRTConnect on each problem; one record per problem."""
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LOG_NONE)
+    n = world.robot.dof
+    checker = PerStateChecker(world, world.object.initial)
+    calls = [0]
+
+    def valid(state) -> bool:
+        calls[0] += 1
+        return checker(state[0:n])
+
+    records = []
+    for q_start, q_goal in problems:
+        space = ob.RealVectorStateSpace(n)
+        bounds = ob.RealVectorBounds(n)
+        for i in range(n):
+            bounds.setLow(i, float(world.robot.joint_lower[i]))
+            bounds.setHigh(i, float(world.robot.joint_upper[i]))
+        space.setBounds(bounds)
+        setup = og.SimpleSetup(space)
+        setup.setStateValidityChecker(valid)
+        information = setup.getSpaceInformation()
+        information.setStateValidityCheckingResolution(step_rad / space.getMaximumExtent())
+        start, goal = space.allocState(), space.allocState()
+        for i in range(n):
+            start[i] = float(q_start[i])
+            goal[i] = float(q_goal[i])
+        setup.setStartAndGoalStates(start, goal)
+        setup.setPlanner(og.RRTConnect(information))
+        calls[0] = 0
+        started, cpu_started = time.perf_counter(), time.process_time()
+        setup.solve(time_limit_s)
+        wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
+        success = bool(setup.haveExactSolutionPath())
+        record = {"success": success, "wall_s": wall, "cpu_s": cpu, "checks": calls[0], "valid": None,
+                  "waypoints": 0}
+        if success:
+            path = setup.getSolutionPath()
+            waypoints = np.array([[s[i] for i in range(n)] for s in path.getStates()])
+            record.update(valid=path_is_valid(world, waypoints), waypoints=len(waypoints))
+        records.append(record)
+    return records
+
+
+def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_limit_s: float, seed: int,
+                    settings: PlannerSettings | None = None) -> dict:
+    """The Ariadne's Clew algorithm on one transit problem (see the module docstring)."""
+    settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s)
+    termination = Termination(time_limit_s)
+    ctx = PlanningContext(world, settings, np.random.default_rng(seed), termination)
+    mode = {"object_poses": np.asarray(world.object.initial, float)[None]}
+    n = world.robot.dof
+    k = settings.manhattan_order
+    goal = np.asarray(q_goal, float)
+
+    weight = settings.joint_weight  # m/rad: SEARCH's thresholds are in metres (0.15 x reach)
+
+    def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
+        return weight * np.linalg.norm(q - goal, axis=1)
+
+    def error(q: np.ndarray) -> np.ndarray:
+        return weight * (q - goal)
+
+    landmarks = [np.asarray(q_start, float)]
+    parents: list[int | None] = [None]
+    arrivals: list[np.ndarray] = [landmarks[0][None]]  # waypoints from the parent to each landmark
+    started, cpu_started = time.perf_counter(), time.process_time()
+    success = False
+    searched_from_start = None
+    waypoints = landmarks[0][None]
+    while True:
+        tail, distance = _local_search(ctx, landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD,
+                                       mode)
+        distance /= weight  # rad
+        if searched_from_start is None:
+            searched_from_start = bool(distance <= GOAL_TOLERANCE_RAD)
+        if distance <= GOAL_TOLERANCE_RAD:
+            chain, index = [], len(landmarks) - 1
+            while index is not None:
+                chain.append(arrivals[index])
+                index = parents[index]
+            waypoints = np.concatenate(chain[::-1] + [tail[1:]])
+            success = True
+            break
+        if termination():
+            break
+        # EXPLORE: a landmark as far as possible from the others
+        starts = np.array(landmarks)
+
+        def decode(population: np.ndarray):
+            index = np.clip(population[:, 0].astype(int), 0, len(landmarks) - 1)
+            return index, ctx.manhattan(starts[index], population[:, 1:].reshape(-1, k, n), **mode)
+
+        def evaluate(population: np.ndarray) -> np.ndarray:
+            _, paths = decode(population)
+            ctx.counters.evaluations += len(population)
+            return -np.min(np.linalg.norm(paths.final[:, None] - starts[None], axis=2), axis=1)
+
+        initial = np.empty((settings.population, 1 + k * n))
+        initial[:, 0] = ctx.rng.integers(0, len(landmarks), size=settings.population)
+        initial[:, 1:] = ctx.initial_genes(settings.population).reshape(settings.population, -1)
+        result = minimize(evaluate, initial, ctx.rng, settings.genetic, categories=len(landmarks),
+                          should_stop=termination)
+        index, path = decode(result.genes[None])
+        landmarks.append(path.final[0].copy())
+        parents.append(int(index[0]))
+        arrivals.append(path.waypoints[0, 1:])
+        if termination():
+            break
+    wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
+    return {
+        "success": success,
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "search_only": searched_from_start,
+        "landmarks": len(landmarks),
+        "intervals": ctx.counters.clearance_checks,
+        "evaluations": ctx.counters.evaluations,
+        "valid": path_is_valid(world, waypoints) if success else None,
+        "waypoints": len(waypoints),
+    }
+
+
+def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: float, with_ompl: bool = True) -> dict:
+    matches = select(all_worlds(), name)
+    if len(matches) != 1:
+        raise SystemExit(f"peer: expected one world named {name!r}, found {len(matches)}")
+    world = world_from_parameters(matches[0].parameters)
+    problems = transit_problems(world, count, seed)
+    reason = ompl_unavailable_reason() if with_ompl else "skipped (--no-ompl)"
+    out = {"world": world.name, "problems": len(problems), "time_limit_s": time_limit_s, "step_rad": step_rad,
+           "ompl_available": reason is None, "ompl_reason": reason}
+    out["project"] = [project_transit(world, a, b, time_limit_s, seed + i) for i, (a, b) in enumerate(problems)]
+    out["ompl"] = solve_ompl(world, problems, time_limit_s, step_rad) if reason is None else None
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.peer", description=__doc__.split("\n\n")[0])
+    parser.add_argument("world")
+    parser.add_argument("--problems", type=int, default=20)
+    parser.add_argument("--time-limit", type=float, default=10.0, help="per problem and planner (s)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--step-rad", type=float, default=0.002,
+                        help="OMPL motion-check step, joint-space L2 (rad); default the contract's 0.002")
+    parser.add_argument("--no-ompl", action="store_true")
+    args = parser.parse_args(argv)
+    result = run_peer(args.world, args.problems, args.time_limit, args.seed, args.step_rad, not args.no_ompl)
+    sys.stdout.write(json.dumps(result) + "\n")
+    sys.stdout.flush()
+    os._exit(0)  # skip interpreter teardown: nanobind (ompl 2.x) prints leak warnings at exit
+
+
+if __name__ == "__main__":
+    main()

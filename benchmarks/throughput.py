@@ -1,0 +1,186 @@
+"""Collision-test throughput: batched ``is_valid`` against a per-configuration loop, and free intervals.
+
+``python -m benchmarks.throughput WORLD [--configs N]`` prints one JSON object:
+
+* ``batched``: :func:`clew_ros.core.collision.is_valid` on chunks of random
+  configurations (shapely 2 ufuncs on arrays), configurations per second;
+* ``batch1``: the same function called once per configuration;
+* ``loop``: :class:`PerStateChecker`, a plain Python loop with the same
+  semantics (link LineStrings built per configuration, tested against the
+  prepared union of the obstacles, the object shrunk by the grasp tolerance,
+  the bounds and the non-adjacent links); ``agree`` counts configurations on
+  which both answer the same (all of them, or the benchmark is wrong);
+* ``intervals``: :func:`clew_ros.core.manhattan.free_intervals`, the test the
+  planner actually uses: intervals per second for batches of 24 (the GA
+  population) and 1024 valid configurations, transit (object at rest) and
+  transfer (object held at grasp 0).
+
+All figures are for one process on one core (the libraries do not thread;
+the worker sets ``OMP_NUM_THREADS=1``), timed in process CPU time
+(``time.process_time``), so that other load on the machine does not lower them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+
+import numpy as np
+import shapely
+import shapely.affinity
+
+from benchmarks.families import all_worlds, select
+from clew_ros.core.collision import is_valid
+from clew_ros.core.kinematics import compose, tip_poses, transform_points
+from clew_ros.core.manhattan import free_intervals
+from clew_ros.core.world import World, world_from_parameters
+
+__all__ = ["PerStateChecker", "random_configurations", "measure"]
+
+
+class PerStateChecker:
+    """Section 1's validity test for one configuration at a time, with prepared shapely geometry.
+
+    The object rests at ``object_pose`` (transit), so its placement is tested
+    and its shrunk outline prepared once. Same semantics as
+    :func:`clew_ros.core.collision.is_valid`: touching counts as collision,
+    bounds are closed, links may touch the object but not enter it shrunk by
+    ``grasp_tolerance``, non-adjacent links must not meet.
+    """
+
+    def __init__(self, world: World, object_pose: np.ndarray) -> None:
+        self.world = world
+        self.base = tuple(float(v) for v in world.robot.base)
+        self.lengths = [float(v) for v in world.robot.link_lengths]
+        self.low = [float(v) + world.robot.link_width / 2 for v in world.bounds[:2]]
+        self.high = [float(v) - world.robot.link_width / 2 for v in world.bounds[2:]]
+        self.radius = world.robot.link_width / 2
+        obstacles = [shapely.Polygon(o.vertices) for o in world.obstacles]
+        self.obstacles = shapely.union_all(obstacles) if obstacles else None
+        if self.obstacles is not None:
+            shapely.prepare(self.obstacles)
+        # the object rests: its placement and shrunk outline are computed and prepared once
+        pose = np.asarray(object_pose, dtype=float)
+        vertices = transform_points(pose, world.object.polygon)
+        self.object_ok = bool(np.all(vertices >= world.bounds[:2]) and np.all(vertices <= world.bounds[2:]))
+        if self.obstacles is not None and self.obstacles.intersects(shapely.Polygon(vertices)):
+            self.object_ok = False
+        shrunk = shapely.Polygon(world.object.polygon).buffer(-world.grasp_tolerance, join_style="mitre")
+        self.shrunk = shapely.affinity.affine_transform(
+            shrunk, [math.cos(pose[2]), -math.sin(pose[2]), math.sin(pose[2]), math.cos(pose[2]), pose[0], pose[1]])
+        shapely.prepare(self.shrunk)
+        n = world.robot.dof
+        self.pairs = [(a, b) for a in range(n) for b in range(a + 2, n)] if world.robot.self_collision else []
+
+    def __call__(self, q) -> bool:
+        if not self.object_ok:
+            return False
+        x, y = self.base
+        phi = 0.0
+        points = [(x, y)]
+        for angle, length in zip(q, self.lengths):
+            phi += angle
+            x += length * math.cos(phi)
+            y += length * math.sin(phi)
+            if not (self.low[0] <= x <= self.high[0] and self.low[1] <= y <= self.high[1]):
+                return False
+            points.append((x, y))
+        lines = [shapely.LineString(points[i:i + 2]) for i in range(len(self.lengths))]
+        r = self.radius
+        for line in lines:
+            if self.obstacles is not None and (self.obstacles.dwithin(line, r) if r > 0
+                                               else self.obstacles.intersects(line)):
+                return False
+            if self.shrunk.intersects(line):
+                return False
+        for a, b in self.pairs:
+            if (lines[a].dwithin(lines[b], 2 * r) if r > 0 else lines[a].intersects(lines[b])):
+                return False
+        return True
+
+
+def random_configurations(world: World, count: int, rng: np.random.Generator) -> np.ndarray:
+    """Uniform configurations ``(count, n)`` within the joint limits."""
+    return rng.uniform(world.robot.joint_lower, world.robot.joint_upper, size=(count, world.robot.dof))
+
+
+def _rate(count: int, seconds: float) -> float:
+    return count / seconds if seconds > 0 else float("nan")
+
+
+def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000) -> dict:
+    """The throughput figures of the module docstring for ``world``."""
+    rng = np.random.default_rng(seed)
+    q = random_configurations(world, configs, rng)
+    pose = world.object.initial
+    is_valid(world, q[:100], pose[None])  # warm-up: the scene is prepared once per world
+
+    started = time.process_time()
+    batched = np.concatenate([is_valid(world, q[i:i + chunk], pose[None]) for i in range(0, configs, chunk)])
+    batched_s = time.process_time() - started
+
+    single_count = min(configs, 2_000)
+    started = time.process_time()
+    for row in q[:single_count]:
+        is_valid(world, row[None], pose[None])
+    single_s = time.process_time() - started
+
+    checker = PerStateChecker(world, pose)
+    started = time.process_time()
+    looped = np.fromiter((checker(row) for row in q.tolist()), dtype=bool, count=configs)
+    loop_s = time.process_time() - started
+
+    intervals = {}
+    valid_q = q[batched]
+    grasp_rel = np.array([-world.object.grasps[0][0], -world.object.grasps[0][1], 0.0])
+    carried = compose(tip_poses(world.robot, q), grasp_rel)
+    transfer_q = q[is_valid(world, q, carried)]
+    for mode, sample, kwargs in (("transit", valid_q, {"object_poses": pose[None]}),
+                                 ("transfer", transfer_q, {"grasp_rel": grasp_rel[None]})):
+        for batch in (24, 1024):
+            total = 0
+            started = time.process_time()
+            budget = max(4 * batch, 20_000 // world.robot.dof)
+            for start in range(0, max(len(sample), 1), batch):
+                rows = sample[start:start + batch]
+                if not len(rows) or total >= budget:
+                    break
+                for joint in range(world.robot.dof):
+                    free_intervals(world, rows, joint, **kwargs)
+                    total += len(rows)
+            seconds = time.process_time() - started
+            intervals[f"{mode}_b{batch}"] = {"intervals": total, "seconds": seconds, "per_s": _rate(total, seconds)}
+    return {
+        "world": world.name,
+        "configs": configs,
+        "valid_fraction": float(batched.mean()),
+        "batched": {"chunk": chunk, "seconds": batched_s, "per_s": _rate(configs, batched_s)},
+        "batch1": {"count": single_count, "seconds": single_s, "per_s": _rate(single_count, single_s)},
+        "loop": {"seconds": loop_s, "per_s": _rate(configs, loop_s)},
+        "agree": int(np.sum(batched == looped)),
+        "ratio_batched_over_loop": loop_s / batched_s if batched_s > 0 else float("nan"),
+        "ratio_batched_over_batch1": (single_s / single_count) / (batched_s / configs) if batched_s > 0 else None,
+        "intervals": intervals,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.throughput", description=__doc__.split("\n\n")[0])
+    parser.add_argument("world")
+    parser.add_argument("--configs", type=int, default=100_000)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    matches = select(all_worlds(), args.world)
+    if len(matches) != 1:
+        raise SystemExit(f"throughput: expected one world named {args.world!r}, found {len(matches)}")
+    world = world_from_parameters(matches[0].parameters)
+    json.dump(measure(world, args.configs, args.seed), sys.stdout)
+    print()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -6,9 +6,10 @@ succeeded); with nothing running it answers ``success: false``. The node
 here serves ``config/unreachable.yaml``: ``~/plan`` explores until canceled or
 out of time (its goal lies in a closed ring), a ``~/goal_pose`` outside the
 ring plans in about a second. Latencies are measured from the cancel request
-to the receive time of the answer / status, and printed (``-s`` shows them);
-asserts use a tolerant bound (:data:`CANCEL_BOUND_S`) because DDS and a
-loaded 2-core CI machine add their own delays.
+to the receive time of the answer / status, and printed (``-s`` shows them).
+The node's own figure (``canceled run ... in N ms``, from the request to the
+stopped run) is held to :data:`CANCEL_BOUND_S`; end to end, DDS included, to
+:data:`DDS_BOUND_S`.
 
 Cancel "before the worker started" cannot be forced over DDS (the goal and
 the cancel travel on different channels), so it is tested in-process: the
@@ -48,8 +49,12 @@ ROOT = Path(__file__).resolve().parents[1]
 UNREACHABLE = ROOT / "config" / "unreachable.yaml"
 FAST_WORLD = ROOT / "test" / "worlds" / "rel_fast.yaml"
 REACHABLE_GOAL = np.array([0.6, 1.1, 0.0])  # outside the ring: plans in about a second
-#: The contract's target is 100 ms; the assertion allows for DDS and a loaded machine.
+#: The contract's target is 100 ms; asserted on the node's own figure ("... in N ms"), with margin
+#: for a loaded machine.
 CANCEL_BOUND_S = 0.5
+#: End to end (request sent -> answer or status received here): DDS delivery adds its own jitter,
+#: now and then hundreds of ms on a busy machine (a reliable message repaired after a loss).
+DDS_BOUND_S = 2.0
 #: A run ends within planner.time_limit + this (s), measured by the planner.
 TIME_LIMIT_SLACK_S = 0.2
 #: ... and the ~/plan answer reaches the caller within time_limit + this (s), DDS included.
@@ -84,9 +89,11 @@ def cancel(session: Session) -> tuple[Trigger.Response, float, float]:
     return response, sent, time.monotonic()
 
 
-def node_side_ms(response: Trigger.Response) -> float | None:
+def node_side_s(response: Trigger.Response) -> float:
+    """The node's own figure in the answer (``... in N ms``), in seconds."""
     match = re.search(r" in (\d+) ms", response.message)
-    return float(match.group(1)) if match else None
+    assert match, f"no node-side figure in {response.message!r}"
+    return float(match.group(1)) / 1000
 
 
 def goal_pose_run(session: Session) -> str:
@@ -110,7 +117,7 @@ def test_cancel_with_nothing_running(ring: Session) -> None:
     response, sent, answered = cancel(ring)
     MEASURED["nothing_running_answer"] = answered - sent
     assert not response.success and response.message.startswith("nothing to cancel"), response.message
-    assert answered - sent < CANCEL_BOUND_S
+    assert answered - sent < DDS_BOUND_S
     assert_next_plan_works(ring)
 
 
@@ -125,9 +132,11 @@ def test_cancel_right_after_the_goal(ring: Session) -> None:
     plan_response = wait_future(plan_future, 5.0, "~/plan after the cancel")
     MEASURED["after_goal_answer"] = answered - sent
     MEASURED["after_goal_status"] = canceled_at - sent
-    assert response.success and run_id in response.message, response.message
+    MEASURED["after_goal_node_side"] = node_side_s(response)
+    assert response.success and f"canceled run {run_id} in " in response.message, response.message
     assert not plan_response.success and f"run {run_id}: CANCELED: " in plan_response.message
-    assert answered - sent < CANCEL_BOUND_S and canceled_at - sent < CANCEL_BOUND_S
+    assert node_side_s(response) < CANCEL_BOUND_S
+    assert answered - sent < DDS_BOUND_S and canceled_at - sent < DDS_BOUND_S
     outcome = [e for e in ring.events_of(run_id) if e["event"] in ("succeeded", "aborted", "canceled")]
     assert [e["code"] for e in outcome] == ["CANCELED"]
     assert_next_plan_works(ring)
@@ -144,10 +153,11 @@ def test_cancel_during_explore(ring: Session) -> None:
     plan_response = wait_future(plan_future, 5.0, "~/plan after the cancel")
     MEASURED["explore_answer"] = answered - sent
     MEASURED["explore_status"] = canceled_at - sent
-    MEASURED["explore_node_side"] = (node_side_ms(response) or 0.0) / 1000
+    MEASURED["explore_node_side"] = node_side_s(response)
     assert response.success and f"canceled run {run_id} in " in response.message, response.message
     assert not plan_response.success and "CANCELED" in plan_response.message
-    assert answered - sent < CANCEL_BOUND_S and canceled_at - sent < CANCEL_BOUND_S
+    assert node_side_s(response) < CANCEL_BOUND_S
+    assert answered - sent < DDS_BOUND_S and canceled_at - sent < DDS_BOUND_S
     ring.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "CANCELED", 2.0)
     # the recording is closed before the answer goes out
     assert (ring.recordings / run_id / "metadata.yaml").is_file()
@@ -163,8 +173,10 @@ def test_cancel_during_playback(ring: Session) -> None:
                              and kv(m).get("phase") == "playback_stopped", 5.0)
     MEASURED["playback_answer"] = answered - sent
     MEASURED["playback_feedback"] = stopped_at - sent
-    assert response.success and "stopped the playback" in response.message, response.message
-    assert answered - sent < CANCEL_BOUND_S and stopped_at - sent < CANCEL_BOUND_S
+    MEASURED["playback_node_side"] = node_side_s(response)
+    assert response.success and f"stopped the playback of run {run_id} in " in response.message, response.message
+    assert node_side_s(response) < CANCEL_BOUND_S
+    assert answered - sent < DDS_BOUND_S and stopped_at - sent < DDS_BOUND_S
     assert ring.status_of(run_id) == GoalStatus.STATUS_SUCCEEDED  # the outcome stays
     # nothing is left to cancel
     assert not cancel(ring)[0].success

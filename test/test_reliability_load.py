@@ -47,8 +47,9 @@ PLANS = 500
 WARM_UP = 50  # runs before the baseline sample: caches (scene per world, rclpy, numpy) fill up
 #: Largest RSS growth (KiB) from the warmed-up baseline to the end of the 500 runs.
 RSS_GROWTH_BOUND_KIB = 32 * 1024
-#: ~/status and ~/cancel must answer within this (s) while the load runs.
-RESPONSIVE_S = 0.5
+#: ~/status and ~/cancel must answer within this (s) while the load runs (DDS included: its delivery
+#: jitters by hundreds of ms on a busy machine).
+RESPONSIVE_S = 2.0
 BURST = 100
 DEEP = QoSProfile(depth=2000, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
                   durability=DurabilityPolicy.VOLATILE)

@@ -14,7 +14,6 @@ One node (the quick ``rel_fast`` world, recording off) in a subprocess:
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
@@ -45,8 +44,12 @@ pytestmark = pytest.mark.ros
 
 WORLD = Path(__file__).parent / "worlds" / "rel_fast.yaml"
 FAST = {"record.enabled": False, "trajectory.joint_speed": 20.0, "playback.rate": 50.0}
-#: A quick answer (a refusal the planner knows at once) must arrive within this (s), DDS included.
+#: A quick answer (a refusal the planner knows at once) is out within this (s) of the goal's acceptance,
+#: by the node's own clock (the events' wall-clock ``time``) ...
 QUICK_ANSWER_S = 0.5
+#: ... and reaches the client within this (s), DDS included (its delivery jitters on a busy machine);
+#: either way far less than rel_fast's 10 s time limit.
+DDS_BOUND_S = 2.0
 VALUES = {k: v for k, v in flatten(read_parameter_file(WORLD)).items() if k.startswith("world.")}
 LIST_PARAMETERS = sorted(k for k, v in VALUES.items() if isinstance(v, list) and k != "world.obstacle_names")
 NUMBER_PARAMETERS = ["world.robot.link_width", "world.grasp_tolerance", "world.goal_tolerance",
@@ -186,7 +189,7 @@ def test_malformed_goal_poses_are_refused(node: Session, label: str) -> None:
     assert reason in event["message"] and "goal_pose" in event["message"], event
     assert isinstance(event["code_value"], int)
     node.status.wait_for(status_is(event["run_id"], GoalStatus.STATUS_ABORTED), 5.0)
-    assert received - sent < QUICK_ANSWER_S * 2
+    assert received - sent < DDS_BOUND_S
     # nothing was accepted for it
     assert not any(e["event"] == "accepted" for e in new_events(node, mark))
 
@@ -212,8 +215,11 @@ def test_goal_pose_refused_at_once(node: Session, code: str) -> None:
     run_id = accepted["run_id"]
     outcome, received = wait_event(node, mark, lambda e: e["run_id"] == run_id and e["event"] == "aborted", 5.0)
     latency = received - sent
-    print(f"\n{code} via ~/goal_pose: answered in {1000 * latency:.0f} ms")
-    assert latency < QUICK_ANSWER_S, f"{code} took {latency:.3f} s"
+    node_side = outcome["time"] - accepted["time"]
+    print(f"\n{code} via ~/goal_pose: answered in {1000 * latency:.0f} ms "
+          f"({1000 * node_side:.0f} ms from acceptance to outcome in the node)")
+    assert node_side < QUICK_ANSWER_S, f"{code} took {node_side:.3f} s in the node"
+    assert latency < DDS_BOUND_S, f"{code} took {latency:.3f} s end to end"
     assert outcome["code"] == code and outcome["message"] and outcome["code_value"] > 0
     node.status.wait_for(status_is(run_id, GoalStatus.STATUS_ABORTED), 2.0)
     node.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == code, 2.0)
@@ -227,14 +233,16 @@ def test_plan_refused_at_once_with_its_code_in_the_answer(node: Session) -> None
         sent = time.monotonic()
         response = node.client.call(node.srv("plan"), Trigger, timeout_s=5.0)
         latency = time.monotonic() - sent
-        print(f"\nGOAL_OUT_OF_REACH via ~/plan: answered in {1000 * latency:.0f} ms")
         assert not response.success
         run_id = run_id_of(response.message)
         assert response.message.startswith(f"run {run_id}: GOAL_OUT_OF_REACH: "), response.message
-        assert latency < QUICK_ANSWER_S, f"~/plan took {latency:.3f} s"
-        events = [json.loads(m.data) for m in node.events.messages]
-        outcome = [e for e in events if e["run_id"] == run_id and e["event"] == "aborted"]
-        assert len(outcome) == 1 and outcome[0]["code"] == "GOAL_OUT_OF_REACH"
+        accepted, _ = wait_event(node, 0, lambda e: e["run_id"] == run_id and e["event"] == "accepted", 5.0)
+        outcome, _ = wait_event(node, 0, lambda e: e["run_id"] == run_id and e["event"] == "aborted", 5.0)
+        node_side = outcome["time"] - accepted["time"]
+        print(f"\nGOAL_OUT_OF_REACH via ~/plan: answered in {1000 * latency:.0f} ms "
+              f"({1000 * node_side:.0f} ms in the node)")
+        assert outcome["code"] == "GOAL_OUT_OF_REACH"
+        assert node_side < QUICK_ANSWER_S and latency < DDS_BOUND_S, f"~/plan took {latency:.3f} s"
     finally:
         assert set_parameters(node, {"world.object.goal": VALUES["world.object.goal"]})[0].successful
     assert node.plan().success  # and the next plan works

@@ -49,7 +49,7 @@ FAST = {"record.enabled": False, "trajectory.joint_speed": 20.0, "playback.rate"
 QUICK_ANSWER_S = 0.5
 #: ... and reaches the client within this (s), DDS included (its delivery jitters on a busy machine);
 #: either way far less than rel_fast's 10 s time limit.
-DDS_BOUND_S = 2.0
+DDS_BOUND_S = 5.0
 VALUES = {k: v for k, v in flatten(read_parameter_file(WORLD)).items() if k.startswith("world.")}
 LIST_PARAMETERS = sorted(k for k, v in VALUES.items() if isinstance(v, list) and k != "world.obstacle_names")
 NUMBER_PARAMETERS = ["world.robot.link_width", "world.grasp_tolerance", "world.goal_tolerance",

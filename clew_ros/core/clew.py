@@ -11,12 +11,17 @@ import numpy as np
 from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.kinematics import transform_points
-from clew_ros.core.search import PlanningContext, search_transfer
+from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree, Segment, append_path
 from clew_ros.core.world import World
 
 __all__ = ["Progress", "PlanResult", "plan"]
+
+#: When SEARCH from a landmark fails, the placement its closest transfer reached
+#: (put down there) becomes a landmark and SEARCH runs again from it, at most
+#: this many times in a row: a regrasp where the carried object got stuck.
+SEARCH_CHAIN = 2
 
 
 @dataclass(frozen=True)
@@ -93,6 +98,14 @@ def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: n
             landmark = tree.add(**exploration.fields)
             found = _search(ctx, explorer, tree, landmark, goal)
             best = min(best, found.distance)
+            for _ in range(SEARCH_CHAIN):
+                if found.success or not _worth_chaining(ctx, landmark, found, goal) or termination():
+                    break
+                landmark = tree.add(parent=landmark.id, joints=found.transfer[-1].copy(), object_pose=found.object_pose,
+                                    grasp=found.grasp, grasp_rel=found.grasp_rel, transit=found.transit,
+                                    transfer=found.transfer)
+                found = _search(ctx, explorer, tree, landmark, goal)
+                best = min(best, found.distance)
             if progress is not None:
                 progress(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
@@ -115,18 +128,21 @@ def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: n
 
 @dataclass
 class _Found:
+    """SEARCH's answer from one landmark: the reaching path, or on failure the attempt that came closest."""
+
     success: bool
     distance: float
     grasp: int | None = None
     transit: np.ndarray | None = None
     transfer: np.ndarray | None = None
     object_pose: np.ndarray | None = None
+    grasp_rel: np.ndarray | None = None
 
 
 def _search(ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark, goal: np.ndarray) -> _Found:
     """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
     reachable by a transit at its placement (a regrasp in place), until one reaches the goal."""
-    best = np.inf
+    closest = _Found(False, np.inf)
     grasps = [landmark.grasp] + [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist()
                                  if g != landmark.grasp]
     for grasp in grasps:
@@ -136,10 +152,20 @@ def _search(ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landma
         if candidate is None:
             continue
         result = search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
-        best = min(best, result.distance)
+        if result.success or result.distance < closest.distance:
+            closest = _Found(result.success, result.distance, grasp, candidate.transit, result.waypoints,
+                             result.object_pose, candidate.grasp_rel)
         if result.success:
-            return _Found(True, result.distance, grasp, candidate.transit, result.waypoints, result.object_pose)
-    return _Found(False, best)
+            break
+    return closest
+
+
+def _worth_chaining(ctx: PlanningContext, landmark, found: _Found, goal: np.ndarray) -> bool:
+    """Whether SEARCH's closest attempt ended nearer the goal than ``landmark`` by more than the resolution."""
+    if found.transfer is None or len(found.transfer) < 2 or not np.isfinite(found.distance):
+        return False
+    here = float(np.linalg.norm(goal_error(ctx.world, landmark.object_pose[None], goal)[0]))
+    return found.distance < here - ctx.settings.resolution
 
 
 def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int) -> str:

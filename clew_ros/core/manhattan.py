@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Callable
 
 import numpy as np
 
@@ -56,7 +57,7 @@ class _Body:
     pivot: np.ndarray  # (B, 2)
     moving: np.ndarray  # (B, M, 2, 2) segments turning with the joint
     static: np.ndarray  # (B, S, 2, 2) segments they may hit
-    offsets: np.ndarray  # (M, S) distance to keep (m), NaN for pairs never checked
+    pairs: tuple  # the pairs checked, from _checked_pairs
     points: np.ndarray  # (B, P, 2) moving points that must stay in bounds
     insets: np.ndarray  # (P,) how far inside the bounds (m)
 
@@ -95,7 +96,7 @@ def _body(world: World, q: np.ndarray, joint: int, object_poses: np.ndarray | No
     links = np.stack([pts[:, :-1], pts[:, 1:]], axis=2)  # (B, n, 2, 2)
     obstacles = np.broadcast_to(scene.obstacle_edges[None], (batch,) + scene.obstacle_edges.shape)
     transfer = grasp_rel is not None
-    offsets, insets = _pair_offsets(world, joint, transfer)
+    insets = _pair_offsets(world, joint, transfer)[1]
     moving = [links[:, joint:]]
     static = [obstacles, links[:, :joint]]
     points = [pts[:, joint + 1:]]
@@ -106,7 +107,8 @@ def _body(world: World, q: np.ndarray, joint: int, object_poses: np.ndarray | No
         points.append(object_edges[:, :, 0])
     else:
         static.append(_edges_at(np.broadcast_to(object_poses, (batch, 3)), scene.shrunk_edges))
-    return _Body(pts[:, joint], np.concatenate(moving, axis=1), np.concatenate(static, axis=1), offsets,
+    return _Body(pts[:, joint], np.concatenate(moving, axis=1), np.concatenate(static, axis=1),
+                 _checked_pairs(world, joint, transfer),
                  np.concatenate(points, axis=1), insets)
 
 
@@ -130,7 +132,7 @@ def _circle_stadium(rho: np.ndarray, e1: np.ndarray, e2: np.ndarray, offset: np.
     """Polar angles where the circle of radius ``rho`` about the origin meets the boundary of the
     stadium of radius ``offset`` around segment ``[e1, e2]`` (points relative to the pivot).
 
-    Returns ``(..., 8)`` angles, NaN where there is no crossing: two offset lines (two roots
+    Returns ``(8, ...)`` angles, NaN where there is no crossing: two offset lines (two roots
     each) and two end circles (two roots each). Extra roots inside the stadium are harmless:
     starting outside it, the first crossing met is always on its boundary.
     """
@@ -159,83 +161,83 @@ def _circle_stadium(rho: np.ndarray, e1: np.ndarray, e2: np.ndarray, offset: np.
         base = _angle(end)
         out.append(np.where(ok, base + beta, np.nan))
         out.append(np.where(ok, base - beta, np.nan))
-    return np.stack(out, axis=-1)
+    return np.stack(out)
 
 
-class _Nearest:
-    """Running first contact each way: ``hi`` (> 0) and ``lo`` (< 0), per configuration."""
+@lru_cache(maxsize=256)
+def _checked_pairs(world: World, joint: int, transfer: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The pairs a free interval checks, both ways round, and the moving points' insets.
 
-    def __init__(self, batch: int) -> None:
-        self.batch = batch
-        self.hi = np.full(batch, np.inf)
-        self.lo = np.full(batch, -np.inf)
-
-    def take(self, index: np.ndarray, phi: np.ndarray) -> None:
-        """Add candidate rotation angles ``phi`` ``(K, c)`` of configurations ``index`` ``(K,)``, sorted."""
-        if not len(index):
-            return
-        phi = np.mod(phi, _TWO_PI)
-        phi[phi < 1e-12] = np.nan  # a contact at the current angle is not a crossing
-        which, starts = np.unique(index, return_index=True)
-        with np.errstate(invalid="ignore"):
-            first = np.fmin.reduceat(np.fmin.reduce(phi, axis=1), starts)
-            last = np.fmax.reduceat(np.fmax.reduce(phi, axis=1), starts)
-        self.hi[which] = np.fmin(self.hi[which], first)
-        self.lo[which] = np.fmax(self.lo[which], last - _TWO_PI)
-
-
-def _reach(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest and farthest distance (m) of segments ``(..., 2, 2)`` from the origin."""
-    origin = np.zeros(segments.shape[:-2] + (2,))
-    near = point_segment_distance(origin, segments[..., 0, :], segments[..., 1, :])
-    far = np.linalg.norm(segments, axis=-1).max(axis=-1)
-    return near, far
-
-
-def _ends_against_stadiums(nearest: _Nearest, ends: np.ndarray, segments: np.ndarray, offset: np.ndarray,
-                           margin: float, sign: float) -> None:
-    """Contacts of end points ``ends`` ``(B, A, 2, 2)`` with stadiums around ``segments`` ``(B, C, 2, 2)``.
-
-    ``offset`` ``(A, C)`` is the distance to keep (NaN: pair skipped), plus
-    ``margin`` for end points that start outside ``offset + 1.5 margin``. With
-    ``sign`` +1 the end points turn (``phi = psi - alpha``), with -1 the
-    stadiums do (``phi = alpha - psi``). Only pairs whose end point's circle
-    reaches the stadium's annulus about the pivot are solved.
+    Returns ``ends_moving (Q,)`` (whether the pair's end points belong to the
+    moving piece), ``moving (Q,)``, ``static (Q,)`` (indices into the moving and
+    static pieces) and ``offsets (Q,)`` (distance to keep, m), where every
+    pair of :func:`_pair_offsets` appears twice: end points of the moving
+    piece against the static one's stadium, and the other way round.
     """
-    rho = np.linalg.norm(ends, axis=-1)  # (B, A, 2)
-    near, far = _reach(segments)  # (B, C)
-    reach = (offset + margin)[None, :, :, None]  # (1, A, C, 1)
-    r = rho[:, :, None, :]
-    with np.errstate(invalid="ignore"):
-        hit = (r >= near[:, None, :, None] - reach) & (r <= far[:, None, :, None] + reach)
-    b, a, c, e = np.nonzero(hit)
-    if not len(b):
-        return
-    point = ends[b, a, e]
-    e1 = segments[b, c, 0]
-    e2 = segments[b, c, 1]
-    keep = offset[a, c]
-    keep = keep + np.where(point_segment_distance(point, e1, e2) > keep + 1.5 * margin, margin, 0.0)
-    psi = _circle_stadium(rho[b, a, e], e1, e2, keep)
-    alpha = _angle(point)[:, None]
-    nearest.take(b, psi - alpha if sign > 0 else alpha - psi)
+    offsets, insets = _pair_offsets(world, joint, transfer)
+    moving, static = np.nonzero(~np.isnan(offsets))
+    keep = offsets[moving, static]
+    ends_moving = np.concatenate([np.ones(len(moving), bool), np.zeros(len(moving), bool)])
+    return ends_moving, np.tile(moving, 2), np.tile(static, 2), np.tile(keep, 2)
 
 
-def _contact_angles(world: World, body: _Body, margin: float) -> tuple[np.ndarray, np.ndarray]:
+def _radii(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For segments ``(B, C, 2, 2)`` relative to the pivot: their end points' distances ``(B, C, 2)``,
+    and the nearest and farthest distance ``(B, C)`` of each segment from the pivot."""
+    rho = np.sqrt(np.einsum("bcei,bcei->bce", segments, segments))
+    near = point_segment_distance(np.zeros(2), segments[:, :, 0], segments[:, :, 1])
+    return rho, near, np.maximum(rho[..., 0], rho[..., 1])
+
+
+#: Pairs x configurations handled per numpy pass: bounds the memory of huge worlds.
+_CHUNK = 1 << 16
+
+
+def _contact_angles(world: World, body: _Body, margin: float,
+                    should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """First contact angle turning each way, ``(hi > 0, lo < 0)`` per configuration (rad).
 
     Two segments kept ``offset + margin`` apart first touch where an end point of
     one meets the stadium around the other: circle-line and circle-circle
     intersections in closed form (after Lozano-Perez 1987). An end point already
-    closer than ``offset + 1.5 margin`` is kept only ``offset`` away.
+    closer than ``offset + 1.5 margin`` is kept only ``offset`` away. Only pairs
+    whose end point's circle reaches the stadium's annulus about the pivot are
+    solved. If ``should_stop`` says so between chunks of a huge world, the
+    answer is ``(0, 0)``: no motion, which is always safe.
     """
     pivot = body.pivot
-    nearest = _Nearest(len(pivot))
+    batch = len(pivot)
     m_rel = body.moving - pivot[:, None, None, :]  # (B, M, 2, 2)
     s_rel = body.static - pivot[:, None, None, :]  # (B, S, 2, 2)
-    if m_rel.shape[1] and s_rel.shape[1]:
-        _ends_against_stadiums(nearest, m_rel, s_rel, body.offsets, margin, +1.0)
-        _ends_against_stadiums(nearest, s_rel, m_rel, body.offsets.T, margin, -1.0)
+    m_rho, m_near, m_far = _radii(m_rel)
+    s_rho, s_near, s_far = _radii(s_rel)
+    ends_moving, moving, static, offsets = body.pairs
+    index_parts, phi_parts = [], []
+    step = max(1, _CHUNK // max(batch, 1))
+    for first in range(0, len(offsets), step):
+        if first and should_stop is not None and should_stop():
+            return np.zeros(batch), np.zeros(batch)
+        chunk = slice(first, first + step)
+        flip, mi, si, keep = ends_moving[chunk], moving[chunk], static[chunk], offsets[chunk]
+        # annulus test: the end point's circle about the pivot must reach the other segment's annulus
+        rho = np.where(flip[None, :, None], m_rho[:, mi], s_rho[:, si])  # (B, Q, 2)
+        near = np.where(flip[None], s_near[:, si], m_near[:, mi])[..., None]  # (B, Q, 1)
+        far = np.where(flip[None], s_far[:, si], m_far[:, mi])[..., None]
+        reach = (keep + margin)[None, :, None]
+        hit = (rho >= near - reach) & (rho <= far + reach)
+        b, q, e = np.nonzero(hit)
+        if not len(b):
+            continue
+        forward = flip[q]
+        mq, sq = mi[q], si[q]
+        point = np.where(forward[:, None], m_rel[b, mq, e], s_rel[b, sq, e])
+        e1 = np.where(forward[:, None], s_rel[b, sq, 0], m_rel[b, mq, 0])
+        e2 = np.where(forward[:, None], s_rel[b, sq, 1], m_rel[b, mq, 1])
+        keep = keep[q]
+        keep = keep + np.where(point_segment_distance(point, e1, e2) > keep + 1.5 * margin, margin, 0.0)
+        phi = _circle_stadium(rho[b, q, e], e1, e2, keep) - _angle(point)  # (8, K)
+        phi_parts.append(np.where(forward, phi, -phi))
+        index_parts.append(b)
     xmin, ymin, xmax, ymax = world.bounds
     rel = body.points - pivot[:, None, :]
     rho = np.linalg.norm(rel, axis=-1)
@@ -253,23 +255,40 @@ def _contact_angles(world: World, body: _Body, margin: float) -> tuple[np.ndarra
             base = np.arcsin(np.clip(c, -1.0, 1.0))
             roots = (base, np.pi - base)
         candidates.extend(np.where(ok, root - alpha, np.nan) for root in roots)
-    nearest.take(np.repeat(np.arange(len(pivot)), rel.shape[1]), np.stack(candidates, axis=-1).reshape(-1, 8))
-    return nearest.hi, nearest.lo
+    phi_parts.append(np.stack(candidates).reshape(8, -1))
+    index_parts.append(np.repeat(np.arange(batch), rel.shape[1]))
+    return _nearest(batch, np.concatenate(index_parts), np.concatenate(phi_parts, axis=1))
+
+
+def _nearest(batch: int, index: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First contact each way per configuration, ``hi`` (> 0) and ``lo`` (< 0), from candidate
+    rotation angles ``phi`` ``(c, K)`` (rad, any turn, NaN for none) of configurations ``index`` ``(K,)``."""
+    turns = np.rint(phi * (1.0 / _TWO_PI) - 0.5)  # floor, but rint is several times faster in numpy
+    phi = phi - _TWO_PI * turns  # in [0, 2 pi] up to rounding
+    with np.errstate(invalid="ignore"):
+        phi = np.where(phi < 1e-12, np.nan, phi)  # a contact at the current angle is not a crossing
+        hi = np.full(batch, np.inf)
+        top = np.full(batch, -np.inf)
+        np.fmin.at(hi, index, np.fmin.reduce(phi, axis=0))
+        np.fmax.at(top, index, np.fmax.reduce(phi, axis=0))
+    return hi, top - _TWO_PI
 
 
 def free_intervals(world: World, q: np.ndarray, joint: int, *, object_poses: np.ndarray | None = None,
                    grasp_rel: np.ndarray | None = None, margin_m: float = 1e-3,
-                   counters: Counters | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   counters: Counters | None = None,
+                   should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Free interval ``[dmin, dmax]`` (rad) of ``joint`` for each configuration of ``q`` ``(B, n)``.
 
     Transit: give the resting object's poses ``object_poses`` ``(B, 3)``.
     Transfer: give ``grasp_rel`` ``(B, 3)``, the object's pose in the
     end-effector frame. Every angle of the interval is valid and keeps
     ``margin_m`` metres of clearance wherever the start had it;
-    ``dmin <= 0 <= dmax``.
+    ``dmin <= 0 <= dmax``. ``should_stop`` is asked between chunks of huge
+    worlds; once it says so the intervals are empty (``[0, 0]``).
     """
     q = np.atleast_2d(q)
-    hi, lo = _contact_angles(world, _body(world, q, joint, object_poses, grasp_rel), margin_m)
+    hi, lo = _contact_angles(world, _body(world, q, joint, object_poses, grasp_rel), margin_m, should_stop)
     if counters is not None:
         counters.clearance_checks += len(q)
     robot = world.robot
@@ -311,24 +330,29 @@ class ManhattanPaths:
 
 def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_poses: np.ndarray | None = None,
                   grasp_rel: np.ndarray | None = None, margin_m: float = 1e-3,
-                  counters: Counters | None = None) -> ManhattanPaths:
+                  counters: Counters | None = None,
+                  should_stop: Callable[[], bool] | None = None) -> ManhattanPaths:
     """Decode genes ``(B, k, n)`` into collision-free Manhattan paths from ``q0`` ``(B, n)``.
 
     Transit when ``object_poses`` is given (the object rests there), transfer
-    when ``grasp_rel`` is given (the object is carried).
+    when ``grasp_rel`` is given (the object is carried). ``should_stop`` is
+    asked before every move: once it says so, the remaining moves are skipped
+    (the paths stay where they are, still collision-free), so a time limit or
+    a cancel is honoured within one free-interval computation.
     """
     q = np.array(np.broadcast_to(q0, (genes.shape[0], genes.shape[2])), dtype=float)
     order, n = genes.shape[1], genes.shape[2]
     waypoints = np.empty((len(q), order * n + 1, n))
     waypoints[:, 0] = q
-    column = 1
-    for k in range(order):
-        for joint in range(n):
-            low, high = free_intervals(world, q, joint, object_poses=object_poses, grasp_rel=grasp_rel,
-                                       margin_m=margin_m, counters=counters)
-            q[:, joint] += bounce(genes[:, k, joint], low, high)
-            waypoints[:, column] = q
-            column += 1
+    for column in range(1, order * n + 1):
+        if should_stop is not None and should_stop():
+            waypoints[:, column:] = q[:, None]
+            break
+        k, joint = divmod(column - 1, n)
+        low, high = free_intervals(world, q, joint, object_poses=object_poses, grasp_rel=grasp_rel,
+                                   margin_m=margin_m, counters=counters, should_stop=should_stop)
+        q[:, joint] += bounce(genes[:, k, joint], low, high)
+        waypoints[:, column] = q
     if grasp_rel is None:
         final_poses = np.broadcast_to(object_poses, (len(q), 3)).copy()
     else:

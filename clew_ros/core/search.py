@@ -36,7 +36,7 @@ class PlanningContext:
 
     def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode) -> "np.ndarray":
         return run_manhattan(self.world, q0, genes, margin_m=self.settings.clearance, counters=self.counters,
-                             **mode)
+                             should_stop=self.termination, **mode)
 
     def initial_genes(self, count: int) -> np.ndarray:
         """Random Manhattan genes ``(count, k, n)``; the first individual stays put."""
@@ -151,20 +151,33 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
     return PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
 
 
-def _within_reach(world: World, point: np.ndarray, slack: float = 0.0) -> bool:
-    """Whether the tip could be at ``point`` at all (the chain's annulus, obstacles ignored)."""
-    lengths = world.robot.link_lengths
+def _within_reach(world: World, point: np.ndarray, slack: float = 0.0,
+                  lengths: np.ndarray | None = None) -> bool:
+    """Whether the chain's end could be at ``point`` at all: inside the annulus its links
+    ``lengths`` (default the robot's) sweep about the base, obstacles and joint limits ignored."""
+    lengths = world.robot.link_lengths if lengths is None else lengths
     distance = float(np.hypot(*(point - world.robot.base)))
     inner = max(0.0, 2.0 * float(lengths.max()) - float(lengths.sum()))
     return inner - slack <= distance <= float(lengths.sum()) + slack
 
 
 def _goal_within_reach(world: World, grasp_rel: np.ndarray, goal: np.ndarray) -> bool:
-    """Whether some goal orientation within tolerance puts the tip (holding ``grasp_rel``) in reach."""
+    """Whether the object, held as ``grasp_rel``, could be at the goal at all.
+
+    Held rigidly, the object's origin is a point of the last link's frame, so
+    it sweeps the annulus of the chain whose last link ends there instead of at
+    the tip. Also some goal orientation within tolerance must put the tip in
+    reach. Necessary conditions: a ``False`` spares a hopeless SEARCH_TRANSFER.
+    """
+    grasp_rel = np.asarray(grasp_rel, float)
+    lengths = np.array(world.robot.link_lengths, dtype=float)
+    lengths[-1] = np.hypot(lengths[-1] + grasp_rel[0], grasp_rel[1])
+    if not _within_reach(world, goal[:2], world.goal_tolerance, lengths):
+        return False
     span = min(world.goal_angle_tolerance, np.pi)
     thetas = goal[2] + np.linspace(-span, span, 65)
     poses = np.stack([np.full_like(thetas, goal[0]), np.full_like(thetas, goal[1]), thetas], axis=1)
-    inverse = relative(np.asarray(grasp_rel, float), np.zeros(3))  # end effector in the object frame
+    inverse = relative(grasp_rel, np.zeros(3))  # end effector in the object frame
     tips = compose(poses, inverse)[:, :2]
     slack = world.goal_tolerance + world.grasp_tolerance
     return any(_within_reach(world, tip, slack) for tip in tips)

@@ -50,6 +50,7 @@ from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 from clew_ros.core.plan import validate_plan  # noqa: E402
 from clew_ros.core.world import load_world, read_parameter_file, world_from_parameters  # noqa: E402
 from clew_ros.node import messages  # noqa: E402
+from clew_ros.recording import trajectory_to_plan  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
@@ -91,7 +92,7 @@ def test_plan_succeeds_and_publishes_the_run(quick: Session, quick_world, tmp_pa
     times = [p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in trajectory.points]
     assert all(b > a for a, b in itertools.pairwise(times))
     assert {p.positions[-1] for p in trajectory.points} == {0.0, 1.0}
-    plan = messages.plan_from_trajectory(quick_world, trajectory)
+    plan = trajectory_to_plan(quick_world, trajectory, strict=True)
     assert validate_plan(quick_world, plan) == []
 
     # playback: joint_states end on the last point, the object ends at the goal
@@ -148,7 +149,7 @@ def test_late_subscriber_gets_the_latched_topics(quick: Session, quick_world) ->
         late.close()
 
     # the trajectory received over DDS is a valid plan
-    plan = messages.plan_from_trajectory(quick_world, trajectory)
+    plan = trajectory_to_plan(quick_world, trajectory, strict=True)
     assert validate_plan(quick_world, plan) == []
 
     assert landmarks.markers[0].action == Marker.DELETEALL
@@ -177,7 +178,7 @@ def test_goal_pose_starts_a_run_to_that_goal(quick: Session, quick_world) -> Non
     quick.wait_playback(run_id)
     trajectory = quick.trajectory.messages[-1]
     world = dataclasses.replace(quick_world, object=dataclasses.replace(quick_world.object, goal=goal))
-    assert validate_plan(world, messages.plan_from_trajectory(world, trajectory)) == []
+    assert validate_plan(world, trajectory_to_plan(world, trajectory, strict=True)) == []
     pose = quick.object_pose.messages[-1].pose
     assert math.hypot(pose.position.x - goal[0], pose.position.y - goal[1]) <= world.goal_tolerance
     # the latched world describes the run's problem: its goal

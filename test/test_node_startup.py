@@ -32,6 +32,7 @@ START_TIMEOUT_S = 20.0
     ({"planner.time_limit": -1.0}, "planner.time_limit"),
     ({"world.goal_tolerence": 0.1}, "world.goal_tolerence"),
     ({"record.enabled": "sometimes"}, "record.enabled"),
+    ({"world.obstacles.stray": [1.7, 1.7, 1.9, 1.7, 1.9, 1.9]}, "world.obstacles.stray"),  # not in obstacle_names
 ])
 def test_invalid_parameters_at_start_exit_2_naming_the_parameter(
         tmp_path: Path, overrides: dict, parameter: str) -> None:
@@ -117,6 +118,74 @@ def test_runs_go_on_without_a_recording(monkeypatch: pytest.MonkeyPatch, tmp_pat
             assert run.done.wait(30.0), "no outcome within 30 s"
             text = node._result_text(run)
             assert "SUCCEEDED" in text and expected in text, text
+        finally:
+            node.shutdown_runs()
+            node.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)
+
+
+#: Two obstacles with names of the user's choosing, in corners the quick world's arm never reaches.
+NAMED_OBSTACLES = {
+    "pillar_7": [-1.9, -1.9, -1.7, -1.9, -1.7, -1.7, -1.9, -1.7],
+    "north_wall": [-1.9, 1.7, -1.0, 1.7, -1.0, 1.9, -1.9, 1.9],
+}
+
+
+def test_obstacles_named_in_the_parameter_file_are_served(tmp_path: Path) -> None:
+    document = yaml.safe_load(QUICK.read_text())
+    world = document["clew_planner"]["ros__parameters"]["world"]
+    world["obstacle_names"] = list(NAMED_OBSTACLES)
+    world["obstacles"] = NAMED_OBSTACLES
+    params = tmp_path / "named.yaml"
+    params.write_text(yaml.safe_dump(document))
+    node = NodeProcess(tmp_path / "node.log", params, {"record.enabled": False})
+    client = Client()
+    try:
+        message = client.inbox(f"{node.name}/world_yaml", String, LATCHED).wait_for(timeout_s=START_TIMEOUT_S)
+    finally:
+        client.close()
+        code = node.stop()
+    assert code == 0, node.output()
+    served = world_from_parameters(next(iter(yaml.safe_load(message.data).values()))["ros__parameters"])
+    assert [o.name for o in served.obstacles] == list(NAMED_OBSTACLES)
+    for obstacle in served.obstacles:
+        assert np.allclose(obstacle.vertices.ravel(), NAMED_OBSTACLES[obstacle.name])
+
+
+def test_given_parameters_get_their_descriptors() -> None:
+    """Values given at start are declared with the node's descriptors (dynamic typing, ranges), like the others."""
+    from rcl_interfaces.msg import ParameterType
+    from rclpy.parameter import Parameter
+
+    from clew_ros.core.world import read_parameter_file
+    from clew_ros.node.parameters import descriptor_for, flatten
+    from clew_ros.node.planner_node import PlannerNode
+
+    given = flatten(read_parameter_file(QUICK))
+    given.update({"world.obstacle_names": ["pillar_7"], "world.obstacles.pillar_7": NAMED_OBSTACLES["pillar_7"],
+                  "record.enabled": False, "planner.seed": 3})
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = PlannerNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in given.items()])
+        try:
+            assert node.get_parameter("planner.seed").value == 3
+            assert list(node.get_parameter("world.obstacles.pillar_7").value) == NAMED_OBSTACLES["pillar_7"]
+            for name in ("world.obstacles.pillar_7", "world.goal_tolerance", "planner.seed", "planner.time_limit",
+                         "record.enabled", "world.robot.link_width"):
+                described = node.describe_parameters([name])[0]
+                expected = descriptor_for(name)
+                assert described.dynamic_typing, name
+                assert described.description == expected.description, name
+                assert described.additional_constraints == expected.additional_constraints, name
+            assert node.describe_parameters(["planner.seed"])[0].integer_range
+            assert node.describe_parameters(["world.goal_tolerance"])[0].type == ParameterType.PARAMETER_DOUBLE
+            # dynamic typing: an integer for a given double is checked by the node, not refused by rclpy
+            result = node.set_parameters([Parameter("world.goal_tolerance", value=1)])[0]
+            assert result.successful, result.reason
+            result = node.set_parameters([Parameter("world.obstacles.pillar_7", value=[0.0, 0.0, 1.0])])[0]
+            assert not result.successful and "world.obstacles.pillar_7" in result.reason
         finally:
             node.shutdown_runs()
             node.destroy_node()

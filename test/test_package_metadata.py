@@ -1,8 +1,10 @@
 """The package metadata that colcon, rosdep and pip read."""
 
+import ast
 import importlib
 import importlib.util
 import runpy
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
@@ -28,6 +30,11 @@ REQUIRED_EXEC_DEPENDS = {
     "python3-shapely",
     "python3-yaml",
 }
+
+#: Python modules clew_ros imports -> their rosdep key (ROS packages are their own key).
+ROSDEP_KEYS = {"numpy": "python3-numpy", "shapely": "python3-shapely", "yaml": "python3-yaml", "PIL": "python3-pil"}
+#: Imported, but with no rosdep key (setup.py's install_requires), or optional (imported under try).
+NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags"}
 
 CONSOLE_SCRIPTS = {
     "clew_planner": "clew_ros.node.main:main",
@@ -72,6 +79,28 @@ def test_package_xml_depends(package_xml: ET.Element) -> None:
     exec_depends = {e.text for e in package_xml.findall("exec_depend")}
     assert REQUIRED_EXEC_DEPENDS <= exec_depends
     assert "python3-pytest" in {e.text for e in package_xml.findall("test_depend")}
+
+
+def imported_top_level_modules(*folders: Path) -> set[str]:
+    """The top-level modules the Python files below ``folders`` import (at any depth in the file)."""
+    modules = set()
+    for folder in folders:
+        for path in folder.rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text(), str(path))):
+                if isinstance(node, ast.Import):
+                    modules.update(alias.name.split(".")[0] for alias in node.names)
+                elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                    modules.add(node.module.split(".")[0])
+    return modules
+
+
+def test_every_run_time_import_has_an_exec_depend(package_xml: ET.Element) -> None:
+    exec_depends = {e.text for e in package_xml.findall("exec_depend")}
+    imported = imported_top_level_modules(ROOT / "clew_ros", ROOT / "launch")
+    third_party = imported - set(sys.stdlib_module_names) - {"clew_ros", "__future__"} - NO_ROSDEP_KEY
+    assert "unique_identifier_msgs" in third_party  # the scan sees the node's imports
+    missing = {ROSDEP_KEYS.get(module, module) for module in third_party} - exec_depends
+    assert not missing, f"package.xml lacks <exec_depend> for {sorted(missing)}"
 
 
 def test_package_xml_element_order(package_xml: ET.Element) -> None:

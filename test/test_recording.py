@@ -241,6 +241,13 @@ def test_recording_errors_name_the_path(tmp_path: Path) -> None:
         RunRecorder(tmp_path, "run")
 
 
+def test_without_mcap_nothing_is_created(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "mcap.writer", None)  # any import of it raises ImportError
+    with pytest.raises(RecordingError, match="mcap package is not installed"):
+        RunRecorder(tmp_path, "run")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_read_only_directory_is_refused(tmp_path: Path) -> None:
     locked = tmp_path / "locked"
     locked.mkdir(mode=0o500)

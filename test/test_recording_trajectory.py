@@ -7,6 +7,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from clew_ros.core.plan import validate_plan
 from clew_ros.recording import trajectory_to_plan
@@ -74,3 +75,15 @@ def test_segments_join_even_without_a_repeated_point() -> None:
     for a, b in zip(plan["segments"][:-1], plan["segments"][1:]):
         assert a["waypoints"][-1] == b["waypoints"][0]
     assert plan["segments"][2]["waypoints"] == [[0.5, 0.4], [0.7, 0.4]]
+
+
+def test_strict_holds_the_trajectory_to_the_contract() -> None:
+    world, plan = quick_world(), quick_plan()
+    trajectory = as_trajectory(plan)
+    assert trajectory_to_plan(world, trajectory, strict=True) == trajectory_to_plan(world, trajectory)
+    for names in (["a", "b"], ["joint_1", "joint_2"], ["gripper", "joint_2", "joint_1"]):
+        with pytest.raises(ValueError, match="joint_names"):
+            trajectory_to_plan(world, as_trajectory(plan, names=names), strict=True)
+    empty = SimpleNamespace(joint_names=["joint_1", "joint_2", "gripper"], points=[])
+    with pytest.raises(ValueError, match="no points"):
+        trajectory_to_plan(world, empty, strict=True)

@@ -2,8 +2,10 @@
 
 Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
 plan dicts, :class:`~clew_ros.node.playback.Track`) and a stamp, and returns
-a standard message, or the reverse. The node calls these and nothing else to
-build what it publishes (interface.md §3).
+a standard message, or the reverse (a ``~/goal_pose``; a ``~/trajectory``
+becomes a plan again with :func:`clew_ros.recording.trajectory_to_plan`).
+The node calls these and nothing else to build what it publishes
+(interface.md §3).
 
 Conventions:
 
@@ -36,8 +38,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from unique_identifier_msgs.msg import UUID
 from visualization_msgs.msg import Marker, MarkerArray
 
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
-from clew_ros.core.plan import FORMAT
+from clew_ros.core.kinematics import transform_points
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
@@ -45,7 +46,6 @@ from clew_ros.node.playback import Track
 
 __all__ = [
     "FRAME_ID",
-    "GRIPPER_JOINT",
     "GoalPoseError",
     "event_message",
     "feedback_status",
@@ -56,7 +56,6 @@ __all__ = [
     "joint_trajectory",
     "landmark_markers",
     "object_pose_stamped",
-    "plan_from_trajectory",
     "pose_msg",
     "quaternion_to_yaw",
     "time_msg",
@@ -67,7 +66,6 @@ __all__ = [
 ]
 
 FRAME_ID = "world"
-GRIPPER_JOINT = "gripper"
 #: Tolerance on |q| - 1 for a goal orientation quaternion, and on its x, y (a rotation about z only).
 QUATERNION_TOLERANCE = 1e-3
 
@@ -332,52 +330,3 @@ def joint_state(joint_names: list[str], joints: np.ndarray, gripper: float, time
     """``~/joint_states``: ``joint_names`` already ends with ``gripper``."""
     return JointState(header=_header(time_ns, frame_id=""), name=list(joint_names),
                       position=[float(v) for v in joints] + [float(gripper)])
-
-
-def plan_from_trajectory(world: World, msg: JointTrajectory, *, goal: np.ndarray | None = None) -> dict:
-    """Turn a ``~/trajectory`` back into a ``clew-plan/1`` dict for ``validate_plan``.
-
-    Points with the same ``gripper`` value in a row form one segment
-    (transit for 0.0, transfer for 1.0). A transfer's grasp index is the
-    grasp whose position, with the object where it rests, is nearest the tip
-    at the segment's first point. ``goal`` is only written into the message
-    text. Raises ``ValueError`` when the joint names do not fit ``world``.
-    """
-    expected = list(world.robot.joint_names) + [GRIPPER_JOINT]
-    if list(msg.joint_names) != expected:
-        raise ValueError(f"joint_names: expected {expected}, got {list(msg.joint_names)}")
-    if not msg.points:
-        raise ValueError("the trajectory has no points")
-    n = world.robot.dof
-    values = np.array([list(p.positions) for p in msg.points], dtype=float)
-    joints, gripper = values[:, :n], values[:, n] > 0.5
-    segments = []
-    start = 0
-    for k in range(1, len(values) + 1):
-        if k == len(values) or gripper[k] != gripper[start]:
-            segments.append((bool(gripper[start]), joints[start:k]))
-            start = k
-    plan_segments = []
-    rest = np.asarray(world.object.initial, dtype=float)
-    # A grasp / ungrasp repeats the joints with the other gripper value, so
-    # each segment already starts where the previous one ended.
-    for transfer, waypoints in segments:
-        grasp = None
-        if transfer:
-            tip = tip_poses(world.robot, waypoints[:1])[0]
-            held = transform_points(rest, world.object.grasps)
-            grasp = int(np.argmin(np.linalg.norm(held - tip[:2], axis=1)))
-            rest = compose(tip_poses(world.robot, waypoints[-1:])[0], relative(tip, rest))
-        plan_segments.append({"kind": "transfer" if transfer else "transit", "grasp": grasp,
-                              "waypoints": [[float(v) for v in w] for w in waypoints]})
-    return {
-        "format": FORMAT,
-        "world": world.name,
-        "success": True,
-        "message": "rebuilt from ~/trajectory" + ("" if goal is None else f" toward goal {list(goal)}"),
-        "joint_names": list(world.robot.joint_names),
-        "segments": plan_segments,
-        "final_object_pose": [float(v) for v in rest],
-        "landmarks": [],
-        "stats": {},
-    }

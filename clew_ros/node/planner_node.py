@@ -142,8 +142,12 @@ class PlannerNode(Node):
     """Serves :func:`clew_ros.core.clew.plan` as ``~/plan``, ``~/goal_pose`` and ``~/cancel``."""
 
     def __init__(self, node_name: str = NODE_NAME, **kwargs: Any) -> None:
+        # Every --params-file / -p value is declared as the node is created, so that
+        # world.obstacles.<name> with any name is among the node's parameters;
+        # _declare_parameters then checks them and gives each its descriptor.
+        # Undeclared parameters stay allowed: ros2 param set may add an obstacle.
         super().__init__(node_name, allow_undeclared_parameters=True,
-                         automatically_declare_parameters_from_overrides=False, **kwargs)
+                         automatically_declare_parameters_from_overrides=True, **kwargs)
         self._lock = threading.Lock()
         self._start_lock = threading.Lock()
         # ~/status and ~/feedback are built and published under this lock, so
@@ -193,10 +197,16 @@ class PlannerNode(Node):
     # ----------------------------------------------------------------- parameters
 
     def _declare_parameters(self) -> Configuration:
-        """Declare every parameter with its descriptor; raise :class:`StartupError` if any is invalid."""
-        # rclpy keeps --params-file / -p values in _parameter_overrides; reading
-        # them first is how world.obstacles.<name> with any name can be declared.
-        overrides = {name: p.value for name, p in getattr(self, "_parameter_overrides", {}).items()}
+        """Declare every parameter with its descriptor; raise :class:`StartupError` if any is invalid.
+
+        The overrides (``--params-file`` / ``-p``) are already declared, with the
+        type of their value (``automatically_declare_parameters_from_overrides``);
+        they get their descriptor here (``dynamic_typing``, so that a later
+        ``30`` for ``30.0`` is checked by :mod:`~clew_ros.node.parameters`, not
+        refused by rclpy). The other parameters are declared with their
+        start values.
+        """
+        overrides = self._own_values()
         try:
             values = initial_values(overrides)
             config = configuration_from_values(values)
@@ -204,8 +214,11 @@ class PlannerNode(Node):
             self.get_logger().error(f"invalid parameter {error}; not starting")
             raise StartupError(str(error)) from None
         for name, value in values.items():
-            value = None if value == [] else value  # an empty list has no parameter type
-            self.declare_parameter(name, value, descriptor_for(name), ignore_override=True)
+            if name in overrides:
+                self.set_descriptor(name, descriptor_for(name))
+            else:
+                value = None if value == [] else value  # an empty list has no parameter type
+                self.declare_parameter(name, value, descriptor_for(name), ignore_override=True)
         return config
 
     def _own_values(self) -> dict[str, Any]:

@@ -26,7 +26,11 @@ import numpy as np
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.world import World
 
-__all__ = ["MIN_STEP_NS", "GripperEvent", "Track", "track_from_plan"]
+__all__ = ["GRIPPER_JOINT", "MIN_STEP_NS", "GripperEvent", "Track", "track_from_plan"]
+
+#: The joint after the arm's in ~/trajectory and ~/joint_states: 1.0 while grasping
+#: (the name clew_ros.recording.GRIPPER_JOINT reads back; the node needs no recording package).
+GRIPPER_JOINT = "gripper"
 
 #: Shortest time between two trajectory points (ns).
 MIN_STEP_NS = 1_000_000
@@ -151,7 +155,7 @@ def track_from_plan(world: World, plan: dict, *, joint_speed_rad_s: float = 1.0,
             step_s = float(np.max(np.abs(positions_a[k] - positions_a[k - 1]))) / joint_speed_rad_s
         times[k] = times[k - 1] + max(MIN_STEP_NS, round(step_s * 1e9))
     return Track(
-        joint_names=list(robot.joint_names) + ["gripper"],
+        joint_names=list(robot.joint_names) + [GRIPPER_JOINT],
         times_ns=times,
         positions=positions_a,
         gripper=gripper_a,

@@ -186,8 +186,8 @@ class RunRecorder:
     Raises
     ------
     RecordingError
-        ``directory`` is missing or not writable, or the run directory exists
-        already (a recorder never overwrites).
+        ``directory`` is missing or not writable, the run directory exists
+        already (a recorder never overwrites), or ``mcap`` is not installed.
 
     :meth:`write` never raises and never waits for the disk; the first error
     met while writing is kept in :attr:`error` and later messages are dropped.
@@ -199,6 +199,10 @@ class RunRecorder:
                  chunk_size: int = 64 * 1024, flush_period_s: float = 0.5, compression: str = "zstd") -> None:
         from rclpy.serialization import serialize_message  # here: reading recordings needs no rclpy
 
+        try:
+            from mcap.writer import CompressionType, Writer
+        except ImportError as error:  # before anything is created on disk
+            raise RecordingError(f"the mcap package is not installed ({error})") from None
         self._serialize = serialize_message
         directory = Path(directory)
         if not run_id or "/" in run_id or run_id in (".", ".."):
@@ -223,8 +227,6 @@ class RunRecorder:
             with contextlib.suppress(OSError):
                 self.path.rmdir()  # created just above: leave nothing behind
             raise RecordingError(f"cannot create {self.mcap_path}: {error.strerror}") from None
-
-        from mcap.writer import CompressionType, Writer
 
         compressions = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
         if compression not in compressions:

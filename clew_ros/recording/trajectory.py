@@ -40,7 +40,7 @@ def _segments_of(points: np.ndarray, gripper: np.ndarray) -> list[tuple[str, lis
 
 
 def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] | None = None,
-                       message: str = "rebuilt from the recorded trajectory") -> dict[str, Any]:
+                       message: str = "rebuilt from the recorded trajectory", strict: bool = False) -> dict[str, Any]:
     """The plan dict (``clew-plan/1``) that a ``JointTrajectory`` plays.
 
     Parameters
@@ -54,6 +54,14 @@ def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] |
         Grasp index of each transfer segment, in order (from the run's
         ``grasp`` events); when absent or of the wrong length each transfer
         gets the grasp point nearest to the tip at its first waypoint.
+    message:
+        The plan's ``message``.
+    strict:
+        Hold the trajectory to the contract (interface.md section 3): raise
+        ``ValueError`` unless ``joint_names`` are exactly the world's joints
+        then ``gripper`` and there is at least one point. Without it, joints
+        are found by name (in column order when a name is missing) and an
+        empty trajectory gives a plan with ``success`` false.
 
     Returns
     -------
@@ -62,7 +70,12 @@ def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] |
         ``landmarks`` list is empty (the trajectory does not hold the tree).
     """
     names = list(trajectory.joint_names)
-    robot_names = world.robot.joint_names
+    robot_names = list(world.robot.joint_names)
+    if strict:
+        if names != robot_names + [GRIPPER_JOINT]:
+            raise ValueError(f"joint_names: expected {robot_names + [GRIPPER_JOINT]}, got {names}")
+        if not len(trajectory.points):
+            raise ValueError("the trajectory has no points")
     n = world.robot.dof
     columns = [names.index(j) for j in robot_names] if all(j in names for j in robot_names) else list(range(n))
     gripper_column = names.index(GRIPPER_JOINT) if GRIPPER_JOINT in names else None

@@ -18,6 +18,7 @@ import numpy as np
 from clew_ros.core.genetic import minimize
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, run_manhattan, single_moves
+from clew_ros.core.reach import goal_within_reach, within_reach
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
@@ -143,44 +144,12 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
     def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
         return np.linalg.norm(tip_error(q), axis=1)
 
-    if not _within_reach(world, target[0]):
+    if not within_reach(world, target[0]):
         return PathResult(False, np.asarray(q0, float)[None], float(objective(np.asarray(q0, float)[None], None)[0]))
     waypoints, distance = _local_search(ctx, q0, objective, tip_error, accept, mode)
     success = distance <= 0.5 * world.grasp_tolerance
     grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], object_pose) if success else None
     return PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
-
-
-def _within_reach(world: World, point: np.ndarray, slack: float = 0.0,
-                  lengths: np.ndarray | None = None) -> bool:
-    """Whether the chain's end could be at ``point`` at all: inside the annulus its links
-    ``lengths`` (default the robot's) sweep about the base, obstacles and joint limits ignored."""
-    lengths = world.robot.link_lengths if lengths is None else lengths
-    distance = float(np.hypot(*(point - world.robot.base)))
-    inner = max(0.0, 2.0 * float(lengths.max()) - float(lengths.sum()))
-    return inner - slack <= distance <= float(lengths.sum()) + slack
-
-
-def _goal_within_reach(world: World, grasp_rel: np.ndarray, goal: np.ndarray) -> bool:
-    """Whether the object, held as ``grasp_rel``, could be at the goal at all.
-
-    Held rigidly, the object's origin is a point of the last link's frame, so
-    it sweeps the annulus of the chain whose last link ends there instead of at
-    the tip. Also some goal orientation within tolerance must put the tip in
-    reach. Necessary conditions: a ``False`` spares a hopeless SEARCH_TRANSFER.
-    """
-    grasp_rel = np.asarray(grasp_rel, float)
-    lengths = np.array(world.robot.link_lengths, dtype=float)
-    lengths[-1] = np.hypot(lengths[-1] + grasp_rel[0], grasp_rel[1])
-    if not _within_reach(world, goal[:2], world.goal_tolerance, lengths):
-        return False
-    span = min(world.goal_angle_tolerance, np.pi)
-    thetas = goal[2] + np.linspace(-span, span, 65)
-    poses = np.stack([np.full_like(thetas, goal[0]), np.full_like(thetas, goal[1]), thetas], axis=1)
-    inverse = relative(grasp_rel, np.zeros(3))  # end effector in the object frame
-    tips = compose(poses, inverse)[:, :2]
-    slack = world.goal_tolerance + world.grasp_tolerance
-    return any(_within_reach(world, tip, slack) for tip in tips)
 
 
 def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
@@ -210,7 +179,7 @@ def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray,
         return np.linalg.norm(goal_error(world, poses, goal), axis=1)
 
     accept = 0.25 * world.goal_tolerance
-    if not _goal_within_reach(world, grasp_rel, goal):
+    if not goal_within_reach(world, grasp_rel, goal):
         start_pose = compose(tip_poses(world.robot, np.asarray(q0, float)[None]), mode["grasp_rel"])
         return PathResult(False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]),
                           object_pose=start_pose[0])

@@ -191,3 +191,34 @@ def test_given_parameters_get_their_descriptors() -> None:
             node.destroy_node()
     finally:
         rclpy.shutdown(context=context)
+
+
+def _catches(pid: int, sig: int) -> bool:
+    """Whether process ``pid`` has a handler installed for ``sig`` (Linux: SigCgt in /proc)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigCgt:"):
+            return bool(int(line.split()[1], 16) >> (sig - 1) & 1)
+    return False
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads handlers from /proc")
+def test_a_stop_signal_at_any_moment_of_start_up_exits_0(tmp_path: Path) -> None:
+    # a signal while the node is still being built (the CI once saw -11 there): nodes side by
+    # side, each signalled at another moment after main() took the signals (before that, as in any
+    # Python program, Ctrl-C interrupts the imports) until well after the world is served
+    import signal
+    import time
+
+    delays_s = [0.0, 0.1, 0.25, 0.4, 0.6, 0.9]
+    nodes = [NodeProcess(tmp_path / f"node{i}.log", QUICK, {"record.enabled": False}) for i in range(len(delays_s))]
+    codes = []
+    for i, (node, delay) in enumerate(zip(nodes, delays_s)):
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while not _catches(node.proc.pid, signal.SIGTERM) and time.monotonic() < deadline:
+            time.sleep(0.005)
+        time.sleep(delay)  # staggering the moment, not waiting for a condition
+        codes.append(node.stop(signal.SIGINT if i % 2 == 0 else signal.SIGTERM))
+    for node, code in zip(nodes, codes):
+        output = node.output()
+        assert code == 0, output
+        assert "Traceback" not in output and "Fatal Python error" not in output, output

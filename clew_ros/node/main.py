@@ -5,14 +5,24 @@
 Exit codes: 0 after a clean shutdown (Ctrl-C / SIGINT or SIGTERM: the
 running plan is canceled and its recording closed first); 2 when the
 parameters are invalid at start (one error log names the parameter).
+``kill -USR1 PID`` prints every thread's Python stack to stderr (for a hang).
+
+Signals are handled here rather than by rclpy: a handler only sets a flag,
+the main thread notices it between two executor waits and then tears down in
+order (runs, executor, node, context) from that one thread. rclpy's own
+handler would shut the context down from its signal thread while the main
+thread may still be building the node, a race that can end in a crash.
 """
 
 from __future__ import annotations
 
+import faulthandler
+import signal
 import sys
+import threading
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
 from clew_ros.node.planner_node import PlannerNode, StartupError
@@ -22,34 +32,38 @@ EXIT_INVALID_PARAMETERS = 2
 #: Executor threads: a blocked ~/plan, a refused second call, ~/cancel,
 #: ~/goal_pose, the timer and the parameter services can all run at once.
 EXECUTOR_THREADS = 6
+#: Longest wait between two looks at the stop flag (the shutdown latency).
+SPIN_PERIOD_S = 0.05
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Start ``clew_planner``, spin until shutdown; return the exit code."""
+    """Start ``clew_planner``, spin until SIGINT / SIGTERM or context shutdown; return the exit code."""
     args = sys.argv if argv is None else argv
-    # SIGINT and SIGTERM both shut the context down, which makes spin() raise
-    # ExternalShutdownException (or KeyboardInterrupt for SIGINT).
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.ALL)
+    faulthandler.enable()  # a crash in a native library prints the Python stacks, not just "-11"
+    faulthandler.register(signal.SIGUSR1, all_threads=True)  # `kill -USR1 PID`: where is it stuck?
+    stop = threading.Event()
+    previous = {sig: signal.signal(sig, lambda _signum, _frame: stop.set()) for sig in STOP_SIGNALS}
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     try:
-        node = PlannerNode()
-    except StartupError:
-        rclpy.try_shutdown()
-        return EXIT_INVALID_PARAMETERS
-    except (KeyboardInterrupt, ExternalShutdownException):  # stopped while starting
-        rclpy.try_shutdown()
+        try:
+            node = PlannerNode()
+        except StartupError:
+            return EXIT_INVALID_PARAMETERS
+        executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
+        executor.add_node(node)
+        try:
+            while not stop.is_set() and rclpy.ok():
+                executor.spin_once(timeout_sec=SPIN_PERIOD_S)
+        finally:
+            node.shutdown_runs()
+            executor.shutdown(timeout_sec=5.0)
+            node.destroy_node()
         return EXIT_OK
-    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
-    executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
     finally:
-        node.shutdown_runs()
-        executor.shutdown(timeout_sec=5.0)
-        node.destroy_node()
         rclpy.try_shutdown()
-    return EXIT_OK
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 if __name__ == "__main__":

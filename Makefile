@@ -12,7 +12,7 @@ STAMP  := $(VENV)/.installed
 ROS_ENV := export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ROS_STATIC_PEERS= ; \
 	export ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-$$(( $$$$ % 90 + 10 ))} ;
 
-.PHONY: venv test demo
+.PHONY: venv test demo bench
 
 venv: $(STAMP)
 
@@ -32,3 +32,8 @@ test: venv
 
 demo: venv
 	@$(ROS_ENV) bash scripts/demo.sh
+
+# The benchmark suite (docs/benchmarks.md): installs the bench extra (OMPL, matplotlib).
+bench: venv
+	$(PY) -m pip install --quiet -e '.[bench]'
+	@$(ROS_ENV) $(PY) -m benchmarks.run --doc docs/benchmarks.md $(BENCH_ARGS)

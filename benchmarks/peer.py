@@ -7,14 +7,17 @@ A sub-problem: move the arm from one valid configuration to another, the
 object resting at its initial pose (pairs drawn uniformly within the joint
 limits, seeded, kept when both ends are valid and at least 1 rad apart).
 
-* **OMPL** (PyPI ``ompl`` 2.x): ``RealVectorStateSpace`` bounded by the joint
-  limits, ``RRTConnect``, state validity by :class:`~benchmarks.throughput.PerStateChecker`
-  (the project's validity test for one state, same answers as
-  :func:`~clew_ros.core.collision.is_valid` on every sampled configuration;
-  about 8x faster per state than ``is_valid`` on a batch of 1), motion
-  checking resolution set so that consecutive checked states are at most
-  ``step_rad`` apart in joint space (L2, so per joint too). Success: an exact
-  solution within the time limit. No path simplification.
+* **OMPL** (PyPI ``ompl`` 2.x, nanobind bindings): ``RealVectorStateSpace``
+  bounded by the joint limits, ``RRTConnect`` with its default range. The
+  validity test is the project's own, :func:`~clew_ros.core.collision.is_valid`
+  (:class:`ProjectValidity`): the state validity checker calls it on one
+  configuration, and a Python :class:`ompl.base.MotionValidator` samples each
+  straight motion every ``step_rad`` (joint-space L2, so per joint too) and
+  tests all the samples in one batched call (OMPL's default discrete motion
+  validator would call the state checker once per sample, about 30x slower
+  here). ``--checker loop`` uses the per-state shapely loop
+  :class:`~benchmarks.throughput.PerStateChecker` for both instead. Success:
+  an exact solution within the time limit. No path simplification.
 * **Project** (:func:`project_transit`): the Ariadne's Clew algorithm posed
   on the transit problem with the core's own pieces: SEARCH is
   ``clew_ros.core.search._local_search`` minimising the joint-space distance
@@ -94,20 +97,67 @@ def ompl_unavailable_reason() -> str | None:
     return None
 
 
-def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_rad: float) -> list[dict]:
-    """RRTConnect on each problem; one record per problem."""
+class ProjectValidity:
+    """The project's validity test (:func:`clew_ros.core.collision.is_valid`) as OMPL's checkers see it.
+
+    ``state(q)``: one configuration (a batch of 1). ``motion(a, b)``: the
+    straight segment sampled every ``step_rad`` (joint-space L2, both ends
+    included), all samples tested in one batched ``is_valid`` call; this is
+    how the project's test is meant to be used, and what OMPL's default
+    discrete motion validator would do one state at a time. With
+    ``checker="loop"`` both use :class:`~benchmarks.throughput.PerStateChecker`
+    (a plain shapely loop, same answers) one state at a time instead.
+    """
+
+    def __init__(self, world: World, step_rad: float, checker: str = "is_valid") -> None:
+        self.world = world
+        self.pose = np.asarray(world.object.initial, float)[None]
+        self.step = step_rad
+        self.loop = PerStateChecker(world, world.object.initial) if checker == "loop" else None
+        self.states = 0  # configurations tested
+        self.calls = 0  # calls into the validity test
+
+    def state(self, q: np.ndarray) -> bool:
+        self.states += 1
+        self.calls += 1
+        if self.loop is not None:
+            return self.loop(q)
+        return bool(is_valid(self.world, q[None], self.pose)[0])
+
+    def motion(self, a: np.ndarray, b: np.ndarray) -> bool:
+        count = max(1, int(np.ceil(np.linalg.norm(b - a) / self.step)))
+        samples = a + (np.arange(count + 1)[:, None] / count) * (b - a)
+        if self.loop is not None:
+            for q in samples:
+                self.states += 1
+                self.calls += 1
+                if not self.loop(q):
+                    return False
+            return True
+        self.states += len(samples)
+        self.calls += 1
+        return bool(is_valid(self.world, samples, self.pose).all())
+
+
+def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_rad: float,
+               checker: str = "is_valid") -> list[dict]:
+    """RRTConnect (OMPL 2.x nanobind bindings) on each problem; one record per problem."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
 
     ou.setLogLevel(ou.LOG_NONE)
     n = world.robot.dof
-    checker = PerStateChecker(world, world.object.initial)
-    calls = [0]
+    test = ProjectValidity(world, step_rad, checker)
 
-    def valid(state) -> bool:
-        calls[0] += 1
-        return checker(state[0:n])
+    def vector(state) -> np.ndarray:
+        return np.fromiter((state[i] for i in range(n)), dtype=float, count=n)
+
+    class MotionValidator(ob.MotionValidator):
+        """Straight joint-space segments checked by one batched call (see :class:`ProjectValidity`)."""
+
+        def checkMotion(self, s1, s2) -> bool:  # OMPL's name; RRTConnect uses this overload only
+            return test.motion(vector(s1), vector(s2))
 
     records = []
     for q_start, q_goal in problems:
@@ -118,25 +168,28 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
             bounds.setHigh(i, float(world.robot.joint_upper[i]))
         space.setBounds(bounds)
         setup = og.SimpleSetup(space)
-        setup.setStateValidityChecker(valid)
+        setup.setStateValidityChecker(lambda state: test.state(vector(state)))
         information = setup.getSpaceInformation()
+        # used by the default motion validator (not installed) and by path interpolation
         information.setStateValidityCheckingResolution(step_rad / space.getMaximumExtent())
+        validator = MotionValidator(information)
+        information.setMotionValidator(validator)
         start, goal = space.allocState(), space.allocState()
         for i in range(n):
             start[i] = float(q_start[i])
             goal[i] = float(q_goal[i])
         setup.setStartAndGoalStates(start, goal)
         setup.setPlanner(og.RRTConnect(information))
-        calls[0] = 0
+        test.states = test.calls = 0
         started, cpu_started = time.perf_counter(), time.process_time()
         setup.solve(time_limit_s)
         wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
         success = bool(setup.haveExactSolutionPath())
-        record = {"success": success, "wall_s": wall, "cpu_s": cpu, "checks": calls[0], "valid": None,
-                  "waypoints": 0}
+        record = {"success": success, "wall_s": wall, "cpu_s": cpu, "checks": test.states, "calls": test.calls,
+                  "valid": None, "waypoints": 0}
         if success:
             path = setup.getSolutionPath()
-            waypoints = np.array([[s[i] for i in range(n)] for s in path.getStates()])
+            waypoints = np.array([vector(s) for s in path.getStates()])
             record.update(valid=path_is_valid(world, waypoints), waypoints=len(waypoints))
         records.append(record)
     return records
@@ -187,11 +240,11 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
         # EXPLORE: a landmark as far as possible from the others
         starts = np.array(landmarks)
 
-        def decode(population: np.ndarray):
+        def decode(population: np.ndarray, starts: np.ndarray = starts):
             index = np.clip(population[:, 0].astype(int), 0, len(landmarks) - 1)
             return index, ctx.manhattan(starts[index], population[:, 1:].reshape(-1, k, n), **mode)
 
-        def evaluate(population: np.ndarray) -> np.ndarray:
+        def evaluate(population: np.ndarray, starts: np.ndarray = starts) -> np.ndarray:
             _, paths = decode(population)
             ctx.counters.evaluations += len(population)
             return -np.min(np.linalg.norm(paths.final[:, None] - starts[None], axis=2), axis=1)
@@ -221,7 +274,8 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
     }
 
 
-def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: float, with_ompl: bool = True) -> dict:
+def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: float, with_ompl: bool = True,
+             checker: str = "is_valid") -> dict:
     matches = select(all_worlds(), name)
     if len(matches) != 1:
         raise SystemExit(f"peer: expected one world named {name!r}, found {len(matches)}")
@@ -229,9 +283,9 @@ def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: fl
     problems = transit_problems(world, count, seed)
     reason = ompl_unavailable_reason() if with_ompl else "skipped (--no-ompl)"
     out = {"world": world.name, "problems": len(problems), "time_limit_s": time_limit_s, "step_rad": step_rad,
-           "ompl_available": reason is None, "ompl_reason": reason}
+           "ompl_available": reason is None, "ompl_reason": reason, "ompl_checker": checker}
     out["project"] = [project_transit(world, a, b, time_limit_s, seed + i) for i, (a, b) in enumerate(problems)]
-    out["ompl"] = solve_ompl(world, problems, time_limit_s, step_rad) if reason is None else None
+    out["ompl"] = solve_ompl(world, problems, time_limit_s, step_rad, checker) if reason is None else None
     return out
 
 
@@ -243,9 +297,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--step-rad", type=float, default=0.002,
                         help="OMPL motion-check step, joint-space L2 (rad); default the contract's 0.002")
+    parser.add_argument("--checker", choices=("is_valid", "loop"), default="is_valid",
+                        help="OMPL's validity test: the project's is_valid (states one by one, motions batched; "
+                             "default) or the per-state shapely loop of benchmarks.throughput")
     parser.add_argument("--no-ompl", action="store_true")
     args = parser.parse_args(argv)
-    result = run_peer(args.world, args.problems, args.time_limit, args.seed, args.step_rad, not args.no_ompl)
+    result = run_peer(args.world, args.problems, args.time_limit, args.seed, args.step_rad, not args.no_ompl,
+                      args.checker)
     sys.stdout.write(json.dumps(result) + "\n")
     sys.stdout.flush()
     os._exit(0)  # skip interpreter teardown: nanobind (ompl 2.x) prints leak warnings at exit

@@ -42,13 +42,29 @@ def profile_run(name: str, seed: int, time_limit_s: float, top: int = 15) -> dic
     profile.disable()
     root = os.path.dirname(os.path.dirname(os.path.abspath(sys.modules["numpy"].__file__))) + os.sep
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-    total = sum(row[2] for row in pstats.Stats(profile).stats.values())  # sum of tottime (s)
+    raw = pstats.Stats(profile).stats
+    total = sum(row[2] for row in raw.values())  # sum of tottime (s)
+    by_file: dict[str, float] = {}
+    for (filename, _line, function), row in raw.items():
+        if filename == "~":  # built-ins and C functions: grouped by library
+            key = next((f"{lib} (C)" for lib in ("numpy", "shapely") if lib in function), "other built-ins (C)")
+        else:
+            key = filename.replace(root, "").replace(here, "")
+            parts = key.split(os.sep)
+            if parts[0] in ("numpy", "shapely"):
+                key = f"{parts[0]} (Python)"
+            elif "python3" in key:
+                key = "Python standard library"
+        by_file[key] = by_file.get(key, 0.0) + row[2]
+    ranked = sorted(by_file.items(), key=lambda item: -item[1])[:top]
     return {
         "world": bench.name,
         "seed": seed,
+        "time_limit_s": time_limit_s,
         "outcome": result.outcome.name,
         "stats": result.stats,
         "profiled_s": total,
+        "by_file": [(name, seconds, seconds / total if total else 0.0) for name, seconds in ranked],
         "cumulative": _table(profile, "cumulative", top, root).replace(here, ""),
         "tottime": _table(profile, "tottime", top, root).replace(here, ""),
     }

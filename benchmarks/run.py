@@ -1,18 +1,23 @@
-"""The benchmark suite: ``python -m benchmarks.run [--quick] [--seeds N] [--out DIR] [--only PATTERN]``.
+"""The benchmark suite: ``python -m benchmarks.run [--quick] [--out DIR] [--doc docs/benchmarks.md] ...``.
 
-Run from the repository root with the package's venv. Steps, each in
+Run from the repository root with the package's venv (the ``bench`` extra
+adds OMPL and matplotlib: ``pip install -e '.[bench]'``). Steps, each in
 subprocesses of its own so that memory figures belong to one world:
 
 1. planner runs: every selected world (``config/*.yaml`` and the generated
-   families of :mod:`benchmarks.families`), N seeds each, one worker process
-   per world (:mod:`benchmarks.worker`), per-run time limit = the world's
-   ``planner.time_limit`` (generated worlds: 30 s) unless ``--time-limit``;
+   families of :mod:`benchmarks.families`), N seeds each (default 20), one
+   worker process per world (:mod:`benchmarks.worker`), ``--jobs`` worlds at
+   once (default 2); per-run time limit: the world's ``planner.time_limit``
+   capped at 5 s (``--full-limits``: uncapped; ``--time-limit S``: S for all);
 2. collision throughput on figure1 and obstacles_32 (:mod:`benchmarks.throughput`);
 3. the OMPL peer on transit sub-problems (:mod:`benchmarks.peer`);
 4. a cProfile of one figure1 run (:mod:`benchmarks.profile`);
 
 then prints a table and writes ``DIR/benchmarks.json``, ``DIR/benchmarks.csv``,
-``DIR/benchmarks_scaling.png`` and ``DIR/profile_figure1.txt``. See docs/benchmarks.md.
+``DIR/benchmarks.md`` (the report in Markdown), ``DIR/benchmarks_scaling.png``
+and ``DIR/profile_figure1.txt``. ``--doc PATH`` also puts the Markdown report
+between the ``<!-- benchmarks:begin -->`` / ``<!-- benchmarks:end -->`` markers
+of PATH and copies the plot next to it. See docs/benchmarks.md.
 """
 
 from __future__ import annotations
@@ -22,11 +27,14 @@ import concurrent.futures
 import csv
 import hashlib
 import json
+import math
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import time
+from collections import Counter
 from importlib import metadata
 from pathlib import Path
 
@@ -37,17 +45,24 @@ from benchmarks.plot import plot_scaling
 
 ROOT = Path(os.path.abspath(__file__)).parents[1]
 
-#: Worlds of --quick: a fast one, the default one, a generated one.
-QUICK_WORLDS = "single_transfer,figure1,obstacles_8"
+#: Worlds of --quick: a fast one, the default one, one of each generated family (obstacles_2 = joints_3).
+QUICK_WORLDS = "single_transfer,figure1,joints_3,obstacles_2,obstacles_8"
 #: Worlds of the peer comparison by default: one or two of each kind.
 PEER_WORLDS = "figure1,arm5_regrasp,unreachable,joints_7,joints_10,obstacles_32"
 THROUGHPUT_WORLDS = ("figure1", "obstacles_32")
+#: Default per-run cap (s) on a world's own time limit: 20 seeds x 12 worlds fit in 10 min on 2 cores.
+LIMIT_CAP_S = 5.0
+QUICK_LIMIT_S = 3.0
+#: Default time limit (s) of the profiled figure1 run (figure1's own limit is 60 s).
+PROFILE_LIMIT_S = 30.0
+DOC_BEGIN = "<!-- benchmarks:begin -->"
+DOC_END = "<!-- benchmarks:end -->"
 
 COLUMNS = [
     "world", "family", "joints", "obstacles", "same_as", "seeds", "time_limit_s", "success_rate", "median_s", "p90_s",
     "median_success_s", "median_cpu_s", "p90_cpu_s", "landmarks_median", "evaluations_median",
     "collision_checks_median", "checks_per_s", "checks_per_cpu_s",
-    "grasps_median", "valid_plans", "peak_rss_mb", "rss_growth_mb",
+    "grasps_median", "valid_plans", "outcomes", "peak_rss_mb", "rss_growth_mb",
     "peer_problems", "project_success_rate", "ompl_success_rate", "project_median_s", "ompl_median_s",
     "time_ratio_project_over_ompl", "project_median_cpu_s", "ompl_median_cpu_s", "cpu_ratio_project_over_ompl",
     "peer_note",
@@ -66,7 +81,7 @@ def _child(module: str, *args: str, timeout: float) -> dict:
     """Run ``python -m module args`` and return the JSON object it prints (or an error record)."""
     command = [sys.executable, "-m", module, *args]
     try:
-        done = subprocess.run(command, cwd=ROOT, env=_environment(), capture_output=True, text=True,
+        done = subprocess.run(command, check=False, cwd=ROOT, env=_environment(), capture_output=True, text=True,
                               timeout=timeout)
     except subprocess.TimeoutExpired:
         return {"error": f"{' '.join(command[2:])}: no answer within {timeout:.0f} s"}
@@ -170,6 +185,8 @@ def _summarise_world(world: BenchWorld, record: dict, same_as: str | None) -> di
         checks_per_cpu_s=checks / sum(cpus) if sum(cpus) > 0 else None,
         grasps_median=_median([r["grasps"] for r in successes]),
         valid_plans=f"{sum(validated)}/{len(validated)}" if validated else "",
+        outcomes=" ".join(f"{name}:{count}" for name, count in
+                          sorted(Counter(r["outcome"] for r in runs).items(), key=lambda item: -item[1])),
         peak_rss_mb=record["peak_rss_mb"],
         rss_growth_mb=record["peak_rss_mb"] - record["rss_before_mb"],
     )
@@ -198,41 +215,85 @@ def _summarise_peer(record: dict) -> dict:
     out["cpu_ratio_project_over_ompl"] = (out["project_median_cpu_s"] / out["ompl_median_cpu_s"]
                                           if out["ompl_median_cpu_s"] else None)
     both = [(p["wall_s"], o["wall_s"]) for p, o in zip(project, ompl) if p["success"] and o["success"]]
-    out["peer_note"] = (f"both solved {len(both)}; median per-problem ratio "
-                        f"{np.median([p / o for p, o in both]):.2f}" if both else "no problem solved by both")
+    out["peer_both_solved"] = len(both)
+    out["peer_median_problem_ratio"] = float(np.median([p / o for p, o in both])) if both else None
+    valid = {name: (sum(bool(r["valid"]) for r in runs if r["success"]), sum(r["success"] for r in runs))
+             for name, runs in (("project", project), ("ompl", ompl))}
+    out["peer_note"] = ((f"both solved {len(both)}, median per-problem ratio "
+                         f"{out['peer_median_problem_ratio']:.2f}" if both else "no problem solved by both")
+                        + f"; paths valid at 0.002 rad: project {valid['project'][0]}/{valid['project'][1]}, "
+                          f"OMPL {valid['ompl'][0]}/{valid['ompl'][1]}; OMPL checker "
+                          f"{record.get('ompl_checker', 'is_valid')}")
     return out
+
+
 
 
 def _format(value, digits: int = 2) -> str:
     if value is None or value == "":
         return "-"
     if isinstance(value, float):
-        return f"{value:.{digits}f}" if abs(value) < 1e5 else f"{value:.3g}"
+        if math.isnan(value):
+            return "nan"
+        return f"{value:,.{digits}f}" if abs(value) < 1e5 else f"{value:,.0f}"
+    if isinstance(value, int):
+        return f"{value:,}"
     return str(value)
 
 
+def _percent(value) -> str:
+    return f"{100 * value:.0f}%" if isinstance(value, float) else ("-" if value in (None, "") else str(value))
+
+
+_SHORT = {"TIME_LIMIT": "limit", "NO_PATH_AT_RESOLUTION": "no path", "GOAL_OUT_OF_REACH": "out of reach",
+          "INTERNAL_ERROR": "error"}
+
+
+def _failures(outcomes: str) -> str:
+    """``"TIME_LIMIT:9 SUCCEEDED:11"`` -> ``"9 limit"``."""
+    parts = [item.rpartition(":") for item in outcomes.split()]
+    text = ", ".join(f"{count} {_SHORT.get(name, name.lower())}" for name, _, count in parts if name != "SUCCEEDED")
+    return text or "-"
+
+
+#: The printed (and Markdown) table: header, cell of a row.
+TABLE = [
+    ("world", lambda r: r["world"] + (f" (={r['same_as']})" if r["same_as"] else "")),
+    ("n", lambda r: str(r["joints"])),
+    ("obs", lambda r: str(r["obstacles"])),
+    ("seeds", lambda r: str(r["seeds"])),
+    ("limit s", lambda r: _format(r["time_limit_s"], 0)),
+    ("success", lambda r: _percent(r["success_rate"])),
+    ("median s", lambda r: _format(r["median_s"])),
+    ("p90 s", lambda r: _format(r["p90_s"])),
+    ("median ok s", lambda r: _format(r["median_success_s"])),
+    ("median CPU s", lambda r: _format(r["median_cpu_s"])),
+    ("landmarks", lambda r: _format(r["landmarks_median"], 0)),
+    ("GA evals", lambda r: _format(r["evaluations_median"], 0)),
+    ("checks", lambda r: _format(r["collision_checks_median"], 0)),
+    ("checks/s", lambda r: _format(r["checks_per_s"], 0)),
+    ("checks/CPU s", lambda r: _format(r["checks_per_cpu_s"], 0)),
+    ("peak RSS MB", lambda r: _format(r["peak_rss_mb"], 0)),
+    ("valid", lambda r: r["valid_plans"] or "-"),
+    ("failures", lambda r: _failures(r["outcomes"])),
+    ("peer success proj/OMPL", lambda r: (f"{_percent(r['project_success_rate'])}/{_percent(r['ompl_success_rate'])}"
+                                          if r.get("peer_problems") else "-")),
+    ("peer time proj/OMPL", lambda r: (f"x{_format(r.get('time_ratio_project_over_ompl'))}"
+                                       if r.get("peer_problems") and isinstance(
+                                           r.get("time_ratio_project_over_ompl"), float) else
+                                       ("n/a" if r.get("peer_problems") else "-"))),
+]
+
+
+def _cells(row: dict) -> list[str]:
+    if row.get("error"):
+        return [row["world"], str(row["joints"]), str(row["obstacles"]), "error"] + ["-"] * (len(TABLE) - 4)
+    return [cell(row) for _, cell in TABLE]
+
+
 def print_table(rows: list[dict], file=sys.stdout) -> None:
-    header = ["world", "n", "obs", "seeds", "limit", "success", "median s", "p90 s", "cpu s", "landmarks", "evals",
-              "intervals", "intervals/cpu s", "RSS MB", "peer proj/ompl"]
-    lines = [header]
-    for r in rows:
-        if r.get("error"):
-            lines.append([r["world"], str(r["joints"]), str(r["obstacles"])] + ["error"] + [""] * 11)
-            continue
-        peer = "-"
-        if r.get("peer_problems"):
-            o = r.get("ompl_success_rate")
-            ompl = f"{100 * o:.0f}%" if isinstance(o, float) else "n/a"
-            ratio = r.get("time_ratio_project_over_ompl")
-            peer = f"{100 * r['project_success_rate']:.0f}%/{ompl} x{_format(ratio)}"
-        lines.append([r["world"] + (f" (={r['same_as']})" if r["same_as"] else ""), str(r["joints"]),
-                      str(r["obstacles"]), str(r["seeds"]), _format(r["time_limit_s"], 0),
-                      f"{100 * r['success_rate']:.0f}%", _format(r["median_s"]), _format(r["p90_s"]),
-                      _format(r["median_cpu_s"]), _format(r["landmarks_median"], 0),
-                      _format(r["evaluations_median"], 0), _format(r["collision_checks_median"], 0),
-                      _format(r["checks_per_cpu_s"], 0),
-                      _format(r["peak_rss_mb"], 0), peer])
-    widths = [max(len(line[i]) for line in lines) for i in range(len(header))]
+    lines = [[h for h, _ in TABLE]] + [_cells(r) for r in rows]
+    widths = [max(len(line[i]) for line in lines) for i in range(len(TABLE))]
     for index, line in enumerate(lines):
         print("  ".join(cell.ljust(w) if i == 0 else cell.rjust(w) for i, (cell, w) in enumerate(zip(line, widths))),
               file=file)
@@ -240,25 +301,160 @@ def print_table(rows: list[dict], file=sys.stdout) -> None:
             print("  ".join("-" * w for w in widths), file=file)
 
 
+def _markdown_table(header: list[str], rows: list[list[str]], left: tuple[str, ...] = ("note",)) -> str:
+    """A Markdown table; the first column and those named in ``left`` left-aligned, the others right-aligned."""
+    align = ["---" if i == 0 or h in left else "--:" for i, h in enumerate(header)]
+    return "\n".join("| " + " | ".join(cells) + " |" for cells in [header, align] + rows)
+
+
+def throughput_line(name: str, t: dict) -> str:
+    if "error" in t:
+        return f"throughput {name}: {t['error']}"
+    iv = t["intervals"]
+    return (f"throughput {name}: batched is_valid {t['batched']['per_s']:,.0f}/s, per-config shapely loop "
+            f"{t['loop']['per_s']:,.0f}/s (batched x{t['ratio_batched_over_loop']:.1f}), is_valid batch of 1 "
+            f"{t['batch1']['per_s']:,.0f}/s; agree {t['agree']}/{t['configs']}; free intervals/s transit "
+            f"{iv['transit_b24']['per_s']:,.0f} (batch 24) {iv['transit_b1024']['per_s']:,.0f} (1024), "
+            f"transfer {iv['transfer_b24']['per_s']:,.0f} / {iv['transfer_b1024']['per_s']:,.0f}")
+
+
+def markdown_report(report: dict, plot_name: str | None) -> str:
+    """The report as Markdown: machine, command, tables, plot, profile (what docs/benchmarks.md holds)."""
+    m, code = report["machine"], report["code"]
+    out = [(f"Generated by `{report['command']}` on {report['started']} in {report['total_wall_s'] / 60:.1f} min "
+            f"(planner runs {report['planner_wall_s'] / 60:.1f} min)."), ""]
+    out += ["| machine | |", "|---|---|",
+            f"| CPU | {m['cpu_model']}, {m['nproc']} cores (`os.cpu_count()`) |",
+            f"| load average (1 min) at start / end | {m['loadavg_start'][0]:.2f} / {m['loadavg_end'][0]:.2f} |",
+            f"| Python | {m['python']} ({m['platform']}) |",
+            f"| numpy / shapely / GEOS | {m['numpy']} / {m['shapely']} / {m['geos']} |",
+            f"| ompl / matplotlib | {m['ompl'] or 'not installed'} / {m['matplotlib'] or 'not installed'} |",
+            (f"| code | git {code['git_head']}{' + uncommitted core changes' if code['core_dirty'] else ''}, "
+             f"`clew_ros/core` sha256 {code['core_sha256']} |"), ""]
+    rows = report["rows"]
+    out += ["### Planner runs", "",
+            ("Per world: seeds, per-run wall-clock limit, success rate, median and p90 wall time of all runs "
+             "(a failed run counts at the limit), median wall time of the successful runs, median CPU time; "
+             "medians of landmarks, GA evaluations and collision checks (free intervals: one configuration, "
+             "one joint swept); checks per wall and per CPU second (all runs); peak RSS of the world's worker; "
+             "plans passing `validate_plan`; the failed runs by outcome (limit: `TIME_LIMIT`, no path: "
+             "`NO_PATH_AT_RESOLUTION`); and, for the peer worlds, the transit comparison (success rates, "
+             "ratio of median wall times project / OMPL)."), "",
+            _markdown_table([h for h, _ in TABLE], [_cells(r) for r in rows]), ""]
+    if plot_name:
+        out += [f"![median time against joints and obstacles]({plot_name})", ""]
+    throughput = report.get("throughput") or {}
+    if throughput:
+        out += ["### Collision throughput (one core, CPU time)", "",
+                ("Random configurations within the joint limits, object at its start pose. *batched*: "
+                 "`clew_ros.core.collision.is_valid` on chunks of 10,000 configurations; *loop*: "
+                 "`benchmarks.throughput.PerStateChecker`, a Python loop over the configurations testing "
+                 "each link against prepared shapely geometry; *batch of 1*: `is_valid` called once per "
+                 "configuration; *free intervals*: `clew_ros.core.manhattan.free_intervals`, the test the "
+                 "planner actually uses, per configuration and joint."), ""]
+        header = ["world", "configs", "valid", "batched /s", "loop /s", "batched / loop", "batch of 1 /s",
+                  "agree", "intervals/s transit b24", "b1024", "transfer b24", "b1024"]
+        lines = []
+        for name, t in throughput.items():
+            if "error" in t:
+                lines.append([name, "error"] + ["-"] * (len(header) - 2))
+                continue
+            iv = t["intervals"]
+            lines.append([name, f"{t['configs']:,}", f"{100 * t['valid_fraction']:.0f}%",
+                          f"{t['batched']['per_s']:,.0f}", f"{t['loop']['per_s']:,.0f}",
+                          f"x{t['ratio_batched_over_loop']:.2f}", f"{t['batch1']['per_s']:,.0f}",
+                          f"{t['agree']:,}/{t['configs']:,}"]
+                         + [f"{iv[k]['per_s']:,.0f}" for k in ("transit_b24", "transit_b1024", "transfer_b24",
+                                                               "transfer_b1024")])
+        out += [_markdown_table(header, lines), ""]
+    peer = report.get("peer") or {}
+    if peer:
+        settings = next((p for p in peer.values() if "error" not in p), {})
+        out += ["### Peer: OMPL RRTConnect on transit sub-problems", "",
+                (f"{settings.get('problems', '-')} sub-problems per world (random valid start and goal "
+                 f"configurations at least 1 rad apart, object at rest), {settings.get('time_limit_s', '-')} s "
+                 f"per problem and planner. OMPL {m['ompl'] or 'not installed'}: RRTConnect, states checked by "
+                 f"the project's `is_valid`, motions every {settings.get('step_rad', '-')} rad by one batched "
+                 "`is_valid` call. Project: SEARCH (GA over Manhattan paths with free intervals, then "
+                 "refinement) towards the goal configuration, EXPLORE landmarks when it fails. "
+                 "Times are medians over all problems (failures at the limit)."), ""]
+        header = ["world", "problems", "project success", "OMPL success", "project median s", "OMPL median s",
+                  "ratio project/OMPL", "project median CPU s", "OMPL median CPU s", "note"]
+        lines = []
+        for name in peer:
+            r = next(row for row in rows if row["world"] == name)
+            lines.append([name, _format(r.get("peer_problems")), _percent(r.get("project_success_rate")),
+                          _percent(r.get("ompl_success_rate")), _format(r.get("project_median_s"), 3),
+                          _format(r.get("ompl_median_s"), 3), _format(r.get("time_ratio_project_over_ompl")),
+                          _format(r.get("project_median_cpu_s"), 3), _format(r.get("ompl_median_cpu_s"), 3),
+                          r.get("peer_note", "")])
+        out += [_markdown_table(header, lines), ""]
+    prof = report.get("profile")
+    if prof and "error" not in prof:
+        stats = prof["stats"]
+        out += ["### Profile of one figure1 run", "",
+                (f"`python -m benchmarks.profile figure1 --seed {prof['seed']} --time-limit {prof['time_limit_s']:g}`"
+                 f": {prof['outcome']} in {stats.get('time_s', float('nan')):.2f} s "
+                 f"(under cProfile), {stats.get('landmarks')} landmarks, {stats.get('evaluations'):,} GA evaluations, "
+                 f"{stats.get('collision_checks'):,} free intervals. Own time by file (share of the profiled "
+                 f"{prof['profiled_s']:.1f} s):"), "",
+                _markdown_table(["own time in", "s", "share"],
+                                [[f"`{f}`", f"{s:.2f}", f"{100 * share:.0f}%"] for f, s, share in prof["by_file"]]),
+                "", "Top functions by own time:", "", "```", prof["tottime"], "```", "",
+                "Top functions by cumulative time:", "", "```", prof["cumulative"], "```", ""]
+    elif prof:
+        out += ["### Profile of one figure1 run", "", f"error: {prof['error']}", ""]
+    return "\n".join(out)
+
+
+def update_doc(doc: Path, markdown: str, plot: Path | None) -> None:
+    """Put ``markdown`` between the markers of ``doc`` (appended when missing) and copy the plot next to it."""
+    text = doc.read_text() if doc.exists() else ""
+    block = f"{DOC_BEGIN}\n{markdown.rstrip()}\n{DOC_END}"
+    if DOC_BEGIN in text and DOC_END in text:
+        text = text[:text.index(DOC_BEGIN)] + block + text[text.index(DOC_END) + len(DOC_END):]
+    else:
+        text = text.rstrip() + ("\n\n" if text else "") + block + "\n"
+    doc.write_text(text)
+    if plot is not None and plot.resolve() != (doc.parent / plot.name).resolve():
+        shutil.copyfile(plot, doc.parent / plot.name)
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true",
-                        help=f"2 seeds on {QUICK_WORLDS}, 5 s limit, small throughput and peer samples")
+                        help=f"2 seeds on {QUICK_WORLDS}, {QUICK_LIMIT_S:g} s limit, small throughput, peer and "
+                             "profile samples (the CI smoke test; about 40 s)")
     parser.add_argument("--seeds", type=int, default=None, help="seeds per world (default 20; --quick 2)")
     parser.add_argument("--seeds-for", action="append", default=[], metavar="WORLD=N",
                         help="seeds for one world, e.g. figure1=20 (repeatable)")
     parser.add_argument("--out", type=Path, default=Path("bench_out"), help="output directory (default bench_out)")
+    parser.add_argument("--doc", type=Path, default=None,
+                        help="also write the Markdown report into this file between its markers, and copy the "
+                             "plot next to it (e.g. docs/benchmarks.md)")
+    parser.add_argument("--render", type=Path, default=None, metavar="JSON",
+                        help="plan nothing: re-write table, CSV, Markdown, plot (and --doc) from a saved "
+                             "benchmarks.json with this version of the summary code")
     parser.add_argument("--only", default=None, help="worlds to run: glob(s), comma-separated (e.g. 'joints_*')")
     parser.add_argument("--time-limit", type=float, default=None, help="per-run limit (s) for every world")
-    parser.add_argument("--jobs", type=int, default=1,
-                        help="worlds planned (and peer worlds compared) at once; default 1. 2 on a 2-core "
-                             "machine halves the wall time, at some cost in per-run timing")
+    parser.add_argument("--full-limits", action="store_true",
+                        help=f"each world's own planner.time_limit (default: capped at {LIMIT_CAP_S:g} s)")
+    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
+                        help="worlds planned (and peer worlds compared) at once; default min(2, cores). "
+                             "1 gives steadier per-run times and twice the wall time")
     parser.add_argument("--peer-only", default=None, help=f"worlds of the OMPL comparison (default {PEER_WORLDS})")
-    parser.add_argument("--peer-problems", type=int, default=None, help="transit sub-problems per world (default 20)")
+    parser.add_argument("--peer-problems", type=int, default=None,
+                        help="transit sub-problems per world (default 20; --quick 3)")
     parser.add_argument("--peer-time-limit", type=float, default=None,
-                        help="per sub-problem and planner (default 10 s)")
+                        help="per sub-problem and planner (default 5 s; --quick 2 s)")
     parser.add_argument("--peer-step-rad", type=float, default=0.002, help="OMPL motion-check step (rad, L2)")
-    parser.add_argument("--throughput-configs", type=int, default=None, help="random configurations (default 100000)")
+    parser.add_argument("--peer-checker", choices=("is_valid", "loop"), default="is_valid",
+                        help="OMPL's validity test: the project's is_valid (default) or the per-state shapely loop")
+    parser.add_argument("--throughput-configs", type=int, default=None,
+                        help="random configurations (default 100000; --quick 2000)")
+    parser.add_argument("--profile-time-limit", type=float, default=None,
+                        help=f"time limit of the profiled figure1 run (default {PROFILE_LIMIT_S:g} s; --quick "
+                             f"{QUICK_LIMIT_S:g} s)")
     parser.add_argument("--no-peer", action="store_true")
     parser.add_argument("--no-throughput", action="store_true")
     parser.add_argument("--no-profile", action="store_true")
@@ -267,7 +463,10 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = _parser().parse_args(argv)
+    if args.render:
+        return render(args.render, args.out, args.doc)
     quick = args.quick
     seeds = args.seeds if args.seeds is not None else (2 if quick else 20)
     seeds_for = {}
@@ -278,12 +477,20 @@ def main(argv: list[str] | None = None) -> int:
     if not worlds:
         print(f"benchmarks.run: no world matches --only {args.only!r}", file=sys.stderr)
         return 2
-    limits = {w.name: args.time_limit or (min(w.time_limit_s, 5.0) if quick else w.time_limit_s) for w in worlds}
+
+    def limit_of(world: BenchWorld) -> float:
+        if args.time_limit:
+            return args.time_limit
+        if args.full_limits:
+            return world.time_limit_s
+        return min(world.time_limit_s, QUICK_LIMIT_S if quick else LIMIT_CAP_S)
+
+    limits = {w.name: limit_of(w) for w in worlds}
     same = _dedupe(worlds, limits)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     started = time.monotonic()
-    report: dict = {"command": " ".join(["python -m benchmarks.run"] + (argv if argv is not None else sys.argv[1:])),
+    report: dict = {"command": " ".join(["python -m benchmarks.run"] + argv),
                     "machine": _machine(), "code": _provenance(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
 
     # 1. planner runs, one worker process per distinct world
@@ -308,13 +515,14 @@ def main(argv: list[str] | None = None) -> int:
     report["planner"] = planner
     report["planner_wall_s"] = time.monotonic() - started
 
-    # 2. collision throughput
+    # 2. collision throughput (one process at a time: figures per core)
     throughput = {}
     if not args.no_throughput:
-        configs = args.throughput_configs or (5_000 if quick else 100_000)
+        configs = args.throughput_configs or (2_000 if quick else 100_000)
         for name in THROUGHPUT_WORLDS:
             t0 = time.monotonic()
-            throughput[name] = _child("benchmarks.throughput", name, "--configs", str(configs), timeout=1200)
+            throughput[name] = _child("benchmarks.throughput", name, "--configs", str(configs),
+                                      *(["--interval-budget", "2000"] if quick else []), timeout=1200)
             print(f"throughput {name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
     report["throughput"] = throughput
 
@@ -322,13 +530,14 @@ def main(argv: list[str] | None = None) -> int:
     peer = {}
     if not args.no_peer:
         problems = args.peer_problems or (3 if quick else 20)
-        peer_limit = args.peer_time_limit or (2.0 if quick else 10.0)
-        chosen = select(worlds, args.peer_only or ("figure1" if quick else PEER_WORLDS))
+        peer_limit = args.peer_time_limit or (2.0 if quick else 5.0)
+        chosen = select(all_worlds(), args.peer_only or ("figure1" if quick else PEER_WORLDS))
+        chosen = [w for w in chosen if w.name in limits]  # only worlds of this run get a row
 
         def compare(world: BenchWorld) -> tuple[str, dict]:
             t0 = time.monotonic()
             record = _child("benchmarks.peer", world.name, "--problems", str(problems), "--time-limit",
-                            str(peer_limit), "--step-rad", str(args.peer_step_rad),
+                            str(peer_limit), "--step-rad", str(args.peer_step_rad), "--checker", args.peer_checker,
                             timeout=problems * 2 * (peer_limit + 5) + 120)
             print(f"peer {world.name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
             return world.name, record
@@ -337,16 +546,20 @@ def main(argv: list[str] | None = None) -> int:
             peer = dict(pool.map(compare, chosen))
     report["peer"] = peer
 
-    # 4. profile
-    if not args.no_profile and not quick and select(worlds, "figure1"):
+    # 4. profile of one figure1 run (alone on the machine, as far as this suite goes)
+    if not args.no_profile and "figure1" in limits:
         t0 = time.monotonic()
-        prof = _child("benchmarks.profile", "figure1", "--seed", "0", "--time-limit", str(limits["figure1"]),
-                      timeout=limits["figure1"] * 3 + 60)
+        limit = args.profile_time_limit or (QUICK_LIMIT_S if quick else PROFILE_LIMIT_S)
+        prof = _child("benchmarks.profile", "figure1", "--seed", "0", "--time-limit", str(limit),
+                      timeout=limit * 4 + 60)
         report["profile"] = prof
         if "error" not in prof:
             (out / "profile_figure1.txt").write_text(
-                f"cProfile of figure1, seed 0: {prof['outcome']}, {prof['stats']}\n\n"
-                f"Top by cumulative time:\n{prof['cumulative']}\n\nTop by own time (tottime):\n{prof['tottime']}\n")
+                f"cProfile of figure1, seed 0, limit {limit:g} s: {prof['outcome']}, {prof['stats']}\n\n"
+                f"Own time by file:\n" + "\n".join(f"{s:8.2f} s {100 * share:4.0f}%  {f}"
+                                                   for f, s, share in prof["by_file"])
+                + f"\n\nTop by cumulative time:\n{prof['cumulative']}\n\nTop by own time (tottime):\n"
+                  f"{prof['tottime']}\n")
         print(f"profile figure1: {time.monotonic() - t0:.0f} s", file=sys.stderr)
 
     # summary
@@ -363,33 +576,54 @@ def main(argv: list[str] | None = None) -> int:
     report["machine"]["loadavg_end"] = os.getloadavg()
     report["total_wall_s"] = time.monotonic() - started
 
+    return write_outputs(report, out, args.doc)
+
+
+def write_outputs(report: dict, out: Path, doc: Path | None) -> int:
+    """Write JSON, CSV, Markdown, plot (and ``doc``) of ``report``, print the table; 1 when anything failed."""
+    rows, throughput, peer = report["rows"], report.get("throughput") or {}, report.get("peer") or {}
+    out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(report, indent=1, default=str) + "\n")
     with open(out / "benchmarks.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
         writer.writeheader()
         for row in rows:
             writer.writerow({c: ("" if row.get(c) is None else row.get(c)) for c in COLUMNS})
-    plot = plot_scaling([r for r in rows if not r.get("error") and r.get("median_s") is not None],
-                        out / "benchmarks_scaling.png")
+    plot = plot_scaling([r for r in rows if not r.get("error")], out / "benchmarks_scaling.png")
+    markdown = markdown_report(report, plot.name if plot else None)
+    (out / "benchmarks.md").write_text(markdown + "\n")
+    if doc:
+        update_doc(doc, markdown, plot)
 
     print_table(rows)
     for name, t in throughput.items():
-        if "error" in t:
-            print(f"throughput {name}: {t['error']}")
-            continue
-        iv = t["intervals"]
-        print(f"throughput {name}: batched is_valid {t['batched']['per_s']:,.0f}/s, per-config loop "
-              f"{t['loop']['per_s']:,.0f}/s (x{t['ratio_batched_over_loop']:.1f}), is_valid batch of 1 "
-              f"{t['batch1']['per_s']:,.0f}/s; agree {t['agree']}/{t['configs']}; free intervals/s transit "
-              f"{iv['transit_b24']['per_s']:,.0f} (batch 24) {iv['transit_b1024']['per_s']:,.0f} (1024), "
-              f"transfer {iv['transfer_b24']['per_s']:,.0f} / {iv['transfer_b1024']['per_s']:,.0f}")
-    errors = [r for r in rows if r.get("error")] + [{"world": k, "error": v["error"]} for k, v in peer.items()
-                                                    if "error" in v]
+        print(throughput_line(name, t))
+    errors = ([r for r in rows if r.get("error")]
+              + [{"world": k, "error": v["error"]} for k, v in {**peer, **throughput}.items() if "error" in v]
+              + ([{"world": "profile", "error": report["profile"]["error"]}]
+                 if "error" in (report.get("profile") or {}) else []))
     for r in errors:
         print(f"error {r['world']}: {r['error']}", file=sys.stderr)
-    print(f"wrote {out / 'benchmarks.json'}, {out / 'benchmarks.csv'}"
-          + (f", {plot}" if plot else "") + f" in {report['total_wall_s']:.0f} s")
+    print(f"wrote {out / 'benchmarks.json'}, .csv, .md" + (f", {plot}" if plot else "")
+          + (f" and {doc}" if doc else "") + f" (suite run: {report['total_wall_s']:.0f} s)")
     return 1 if errors else 0
+
+
+def render(path: Path, out: Path, doc: Path | None) -> int:
+    """Re-summarise and re-write the outputs of a saved ``benchmarks.json`` (no planning)."""
+    report = json.loads(Path(path).read_text())
+    worlds = {w.name: w for w in all_worlds()}
+    rows = []
+    for old in report["rows"]:
+        world, same_as = worlds[old["world"]], old.get("same_as") or None
+        row = _summarise_world(world, report["planner"].get(same_as or world.name, {"error": "not run"}), same_as)
+        if world.name in report.get("peer", {}):
+            row.update(_summarise_peer(report["peer"][world.name]))
+        else:
+            row.update(peer_problems=None, peer_note=old.get("peer_note", ""))
+        rows.append(row)
+    report["rows"] = rows
+    return write_outputs(report, out, doc)
 
 
 if __name__ == "__main__":

@@ -111,7 +111,7 @@ def _rate(count: int, seconds: float) -> float:
     return count / seconds if seconds > 0 else float("nan")
 
 
-def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000) -> dict:
+def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, interval_budget: int = 20_000) -> dict:
     """The throughput figures of the module docstring for ``world``."""
     rng = np.random.default_rng(seed)
     q = random_configurations(world, configs, rng)
@@ -143,7 +143,7 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000) -> d
         for batch in (24, 1024):
             total = 0
             started = time.process_time()
-            budget = max(4 * batch, 20_000 // world.robot.dof)
+            budget = max(4 * batch, interval_budget // world.robot.dof)
             for start in range(0, max(len(sample), 1), batch):
                 rows = sample[start:start + batch]
                 if not len(rows) or total >= budget:
@@ -172,12 +172,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("world")
     parser.add_argument("--configs", type=int, default=100_000)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--interval-budget", type=int, default=20_000,
+                        help="free intervals per (mode, batch size) measurement, about")
     args = parser.parse_args(argv)
     matches = select(all_worlds(), args.world)
     if len(matches) != 1:
         raise SystemExit(f"throughput: expected one world named {args.world!r}, found {len(matches)}")
     world = world_from_parameters(matches[0].parameters)
-    json.dump(measure(world, args.configs, args.seed), sys.stdout)
+    json.dump(measure(world, args.configs, args.seed, interval_budget=args.interval_budget), sys.stdout)
     print()
     return 0
 

@@ -290,6 +290,25 @@ def test_clew_plan_failures_carry_a_code_and_the_time_limit_holds(tmp_path: Path
         assert document["code"] in stderr
 
 
+@pytest.mark.parametrize("links, obstacles", [(MAX_LINKS, 0), (2, 5000)], ids=["max_links", "5000_obstacles"])
+def test_the_time_limit_holds_on_big_worlds(links: int, obstacles: int) -> None:
+    """The longest piece of work between two looks at the clock is bounded: the planner stops
+    within limit + 0.2 s even when one genetic-algorithm evaluation is expensive."""
+    from clew_ros.core.clew import plan
+
+    tree = read_parameter_file(ROOT / "test" / "worlds" / "node_quick.yaml")
+    if links > 2:
+        tree["world"]["robot"].update(link_lengths=[1.7 / links] * links, joint_lower=[-3.0] * links,
+                                      joint_upper=[3.0] * links, initial=[0.0] * links)
+    if obstacles:
+        tree["world"]["obstacle_names"], tree["world"]["obstacles"] = many_obstacles(obstacles)
+    limit = 1.0
+    result = plan(world_from_parameters(tree), PlannerSettings(time_limit=limit, seed=0))
+    print(f"\n{links} links, {obstacles} obstacles, time limit {limit} s: {result.outcome.name} after "
+          f"{result.stats['time_s']:.3f} s")
+    assert result.stats["time_s"] <= limit + 0.2, result.stats
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT], ids=["SIGINT"])  # SIGTERM takes the same handler
 def test_clew_plan_signal_cancels_and_writes_the_plan_file(tmp_path: Path, sig: int) -> None:
     ring = ROOT / "config" / "unreachable.yaml"

@@ -190,7 +190,7 @@ def _radii(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 #: Pairs x configurations handled per numpy pass: bounds the memory of huge worlds.
-_CHUNK = 1 << 16
+_CHUNK = 1 << 14
 
 
 def _contact_angles(world: World, body: _Body, margin: float,

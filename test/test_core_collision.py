@@ -4,9 +4,10 @@ import copy
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from clew_ros.core.collision import explain_invalid, is_valid
-from clew_ros.core.world import read_parameter_file, world_from_parameters
+from clew_ros.core.world import load_world, read_parameter_file, world_from_parameters
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"
 
@@ -86,3 +87,20 @@ def test_batch_matches_single_explanations():
     singles = [explain_invalid(w, c, w.object.initial) is None for c in q]
     assert batch.tolist() == singles
     assert 0 < batch.sum() < len(q)
+
+
+@pytest.mark.parametrize("name", ["figure1", "arm3_regrasp", "arm5_regrasp", "unreachable"])
+def test_broad_phase_never_changes_the_answer(name):
+    # the batched test skips shapely where bounding boxes cannot meet: it must agree with the
+    # per-configuration explanation everywhere, object poses included (near links and obstacles)
+    w = load_world(CONFIG / f"{name}.yaml")
+    rng = np.random.default_rng(11)
+    n = 400
+    q = rng.uniform(w.robot.joint_lower, w.robot.joint_upper, (n, w.robot.dof))
+    xmin, ymin, xmax, ymax = w.bounds
+    poses = np.column_stack([rng.uniform(xmin, xmax, n), rng.uniform(ymin, ymax, n), rng.uniform(-np.pi, np.pi, n)])
+    poses[: n // 2] = w.object.initial
+    batch = is_valid(w, q, poses)
+    singles = [explain_invalid(w, c, p) is None for c, p in zip(q, poses)]
+    assert batch.tolist() == singles
+    assert 0 < batch.sum() < n

@@ -36,12 +36,18 @@ class Scene:
     shrunk_edges: np.ndarray  # (Es, 2, 2) object frame
     link_radius: float
     adjacent_pairs: np.ndarray  # (P, 2) non-adjacent link pairs (a, b), b >= a + 2
+    obstacle_boxes: np.ndarray  # (O, 2, 2) [low, high] corners of each obstacle
+
+    def obstacle_geometry(self, index: np.ndarray) -> np.ndarray:
+        """Prepared obstacle polygons by index; ``-1`` gives the union of all of them."""
+        return np.where(index >= 0, self.obstacle_polygons[np.maximum(index, 0)], self.obstacle_union)
 
 
 @lru_cache(maxsize=64)
 def scene_of(world: World) -> Scene:
     """The prepared static geometry of ``world`` (cached per world object)."""
     polygons = np.array([shapely.Polygon(o.vertices) for o in world.obstacles], dtype=object)
+    shapely.prepare(polygons)
     union = shapely.union_all(polygons) if len(polygons) else shapely.GeometryCollection()
     shapely.prepare(union)
     edges = (np.concatenate([polygon_edges(o.vertices) for o in world.obstacles])
@@ -53,8 +59,31 @@ def scene_of(world: World) -> Scene:
     pairs = np.array([(a, b) for a in range(n) for b in range(a + 2, n)], dtype=int).reshape(-1, 2)
     if not world.robot.self_collision:
         pairs = pairs[:0]
+    boxes = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)] for o in world.obstacles]).reshape(-1, 2, 2)
     return Scene(edges, union, polygons, polygon_edges(world.object.polygon), parts, shrunk_edges,
-                 world.robot.link_width / 2.0, pairs)
+                 world.robot.link_width / 2.0, pairs, boxes)
+
+
+#: Largest boxes x obstacles comparison done per call; beyond it one box around all obstacles.
+_BOX_PAIRS = 1 << 22
+
+
+def _box_pairs(low: np.ndarray, high: np.ndarray, boxes: np.ndarray, pad: float) -> tuple[np.ndarray, ...]:
+    """Broad phase: indices ``(*box index, obstacle)`` of the boxes ``[low, high]`` ``(..., 2)``, grown
+    by ``pad``, that meet obstacle boxes ``boxes`` ``(O, 2, 2)`` (closed: touching meets). A pair
+    left out cannot touch; obstacle ``-1`` stands for all of them (huge worlds: one box around all)."""
+    if not len(boxes):
+        return tuple(np.zeros(0, int) for _ in range(low.ndim))
+    low, high = low - pad, high + pad
+    everything = low[..., 0].size * len(boxes) > _BOX_PAIRS
+    if everything:
+        boxes = np.array([[boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)]])
+    meet = low[..., 0, None] <= boxes[:, 1, 0]  # (..., O), one axis at a time: no size-2 reductions
+    meet &= high[..., 0, None] >= boxes[:, 0, 0]
+    meet &= low[..., 1, None] <= boxes[:, 1, 1]
+    meet &= high[..., 1, None] >= boxes[:, 0, 1]
+    found = np.nonzero(meet)
+    return (*found[:-1], np.full_like(found[-1], -1)) if everything else found
 
 
 def _inside_bounds(bounds: np.ndarray, points: np.ndarray, inset: float) -> np.ndarray:
@@ -77,11 +106,16 @@ def _near(a, b, distance: float) -> np.ndarray:
 def is_placement_valid(world: World, object_poses: np.ndarray) -> np.ndarray:
     """Object inside bounds and outside every obstacle, per pose ``(N, 3)`` → ``(N,)``."""
     object_poses = np.atleast_2d(object_poses)
-    scene = scene_of(world)
     vertices = transform_points(object_poses, world.object.polygon)
     ok = _inside_bounds(world.bounds, vertices, 0.0)
     if len(world.obstacles):
-        ok &= ~shapely.intersects(shapely.polygons(vertices), scene.obstacle_union)
+        scene = scene_of(world)
+        conf, obstacle = _box_pairs(vertices.min(axis=1), vertices.max(axis=1), scene.obstacle_boxes, 0.0)
+        keep = ok[conf]
+        conf, obstacle = conf[keep], obstacle[keep]
+        if len(conf):
+            hit = shapely.intersects(shapely.polygons(vertices[conf]), scene.obstacle_geometry(obstacle))
+            ok[conf[hit]] = False
     return ok
 
 
@@ -90,6 +124,8 @@ def is_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.ndarra
 
     Returns a boolean array ``(N,)``. The object pose is where the object is,
     carried or resting; the test is the same for transit and transfer.
+    Bounding boxes in numpy pick the (configuration, link) pairs that could
+    touch something; only those go to shapely's exact test.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     object_poses = np.broadcast_to(np.asarray(object_poses, dtype=float), (len(q), 3))
@@ -97,15 +133,37 @@ def is_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.ndarra
     points = joint_positions(world.robot, q)
     r = scene.link_radius
     ok = _inside_bounds(world.bounds, points, r) & is_placement_valid(world, object_poses)
-    lines = _link_lines(points)
+    low = np.minimum(points[:, :-1], points[:, 1:])  # (N, n, 2) each link's box
+    high = np.maximum(points[:, :-1], points[:, 1:])
     if len(world.obstacles):
-        ok &= ~np.any(_near(lines, scene.obstacle_union, r), axis=1)
+        conf, link, obstacle = _box_pairs(low, high, scene.obstacle_boxes, r)
+        keep = ok[conf]
+        conf, link, obstacle = conf[keep], link[keep], obstacle[keep]
+        if len(conf):
+            hit = _near(_lines(points, conf, link), scene.obstacle_geometry(obstacle), r)
+            ok[conf[hit]] = False
     for part in scene.shrunk_parts:
-        shrunk = shapely.polygons(transform_points(object_poses, part))
-        ok &= ~np.any(shapely.intersects(lines, shrunk[:, None]), axis=1)
+        ring = transform_points(object_poses, part)  # (N, V, 2)
+        ring_low, ring_high = ring.min(axis=1), ring.max(axis=1)
+        meet = (low[..., 0] <= ring_high[:, None, 0]) & (high[..., 0] >= ring_low[:, None, 0])  # (N, n)
+        meet &= (low[..., 1] <= ring_high[:, None, 1]) & (high[..., 1] >= ring_low[:, None, 1])
+        conf, link = np.nonzero(ok[:, None] & meet)
+        if len(conf):
+            hit = shapely.intersects(_lines(points, conf, link), shapely.polygons(ring[conf]))
+            ok[conf[hit]] = False
     for a, b in scene.adjacent_pairs:
-        ok &= ~_near(lines[:, a], lines[:, b], 2 * r)
+        gap = np.maximum(low[:, a] - high[:, b], low[:, b] - high[:, a])  # (N, 2) box gap per axis
+        meet = np.maximum(gap[:, 0], gap[:, 1]) <= 2 * r
+        (conf,) = np.nonzero(ok & meet)
+        if len(conf):
+            hit = _near(_lines(points, conf, a), _lines(points, conf, b), 2 * r)
+            ok[conf[hit]] = False
     return ok
+
+
+def _lines(points: np.ndarray, conf: np.ndarray, link: np.ndarray | int) -> np.ndarray:
+    """LineStrings of links ``link`` of configurations ``conf`` (joint positions ``points`` ``(N, n + 1, 2)``)."""
+    return shapely.linestrings(np.stack([points[conf, link], points[conf, link + 1]], axis=1))
 
 
 def explain_placement(world: World, object_pose: np.ndarray) -> str | None:

@@ -42,3 +42,69 @@ def test_goal_within_reach_accepts_poses_the_arm_can_hold_and_refuses_far_ones()
     assert all(goal_within_reach(world, grasp_rel, pose) for pose in held)
     far = world.robot.base + 3.0 * float(world.robot.link_lengths.sum())
     assert not goal_within_reach(world, grasp_rel, np.array([far[0], far[1], 0.0]))
+
+
+def test_approach_cells_keep_every_angle_the_arm_holds_a_grasp_with():
+    from clew_ros.core.kinematics import wrap_angle
+    from clew_ros.core.reach import APPROACH_CELLS, approach_cells
+
+    world = load_world(CONFIG / "arm3_regrasp.yaml")
+    rng = np.random.default_rng(2)
+    grasp = 0
+    point = world.object.grasps[grasp]
+    refused = 0
+    for _ in range(300):
+        q = rng.uniform(-np.pi, np.pi, world.robot.dof)
+        tip = tip_poses(world.robot, q[None])[0]
+        psi = rng.uniform(-np.pi, np.pi)  # the last link's direction in the object frame
+        theta = tip[2] - psi
+        c, s = np.cos(theta), np.sin(theta)
+        pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
+        cells = approach_cells(world, pose, grasp)
+        cell = int(np.floor(wrap_angle(np.array([psi]))[0] % (2 * np.pi) / (2 * np.pi) * APPROACH_CELLS))
+        assert cells[cell % APPROACH_CELLS], (q, psi)
+        # with a spread, nearby orientations of the object keep the cell too
+        assert approach_cells(world, pose + [0.0, 0.0, 0.2], grasp, angle_spread=0.25)[cell % APPROACH_CELLS]
+        refused += int(np.sum(~cells))
+    assert refused > 0, "the bound should refuse some approach angles"
+
+
+def test_two_link_grasps_finds_the_configuration_that_holds_a_grasp():
+    from clew_ros.core.collision import is_valid
+    from clew_ros.core.kinematics import transform_points
+    from clew_ros.core.reach import two_link_grasps
+
+    world = load_world(CONFIG / "figure1.yaml")
+    rng = np.random.default_rng(4)
+    grasp = 1
+    point = world.object.grasps[grasp]
+    found = empty = 0
+    for _ in range(200):
+        q = rng.uniform(world.robot.joint_lower, world.robot.joint_upper)
+        tip = tip_poses(world.robot, q[None])[0]
+        theta = rng.uniform(-np.pi, np.pi)
+        c, s = np.cos(theta), np.sin(theta)
+        pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
+        holds = two_link_grasps(world, pose, grasp)
+        target = transform_points(pose, point[None])[0]
+        assert np.all(np.linalg.norm(tip_poses(world.robot, holds)[:, :2] - target, axis=1)
+                      <= 0.5 * world.grasp_tolerance + 1e-9)
+        if len(holds):
+            assert is_valid(world, holds, pose[None]).all()
+            found += 1
+        if is_valid(world, q[None], pose[None])[0]:
+            assert len(holds), (q, pose)  # a valid holding configuration exists: never refused
+        else:
+            empty += int(not len(holds))
+    assert found > 0 and empty > 0
+
+
+def test_approach_excess_is_zero_in_allowed_cells_and_grows_outside():
+    from clew_ros.core.reach import APPROACH_CELLS, approach_excess
+
+    cells = np.zeros(APPROACH_CELLS, bool)
+    cells[:APPROACH_CELLS // 4] = True  # psi in [0, pi/2)
+    excess = approach_excess(cells)
+    assert np.allclose(excess(np.array([0.1, 0.7, 1.4])), 0.0)
+    far = excess(np.array([np.pi / 2 + 0.2, np.pi / 2 + 0.5, -0.3]))
+    np.testing.assert_allclose(far, [0.2, 0.5, 0.3], atol=2 * np.pi / APPROACH_CELLS)

@@ -11,6 +11,7 @@ import numpy as np
 from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.kinematics import transform_points
+from clew_ros.core.reach import approach_cells
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree, Segment, append_path
@@ -148,7 +149,12 @@ def _search(ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landma
     for grasp in grasps:
         if ctx.termination():
             break
-        candidate = explorer.candidate(landmark.id, grasp)
+        approach = None
+        if grasp != landmark.grasp:
+            approach = _regrasp_approaches(ctx.world, landmark.object_pose, grasp, goal)
+            if not approach.any():
+                continue  # no approach angle holds this grasp both here and at the goal: spare the transit
+        candidate = explorer.candidate(landmark.id, grasp, approach)
         if candidate is None:
             continue
         result = search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
@@ -158,6 +164,16 @@ def _search(ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landma
         if result.success:
             break
     return closest
+
+
+def _regrasp_approaches(world: World, object_pose: np.ndarray, grasp: int, goal: np.ndarray) -> np.ndarray:
+    """Approach cells that could hold ``grasp`` with the object at ``object_pose`` and at the goal (a
+    rigid grasp keeps its approach during the transfer): a regrasp in place can end at the goal only
+    with one of them."""
+    here = approach_cells(world, object_pose, grasp)
+    there = approach_cells(world, goal, grasp, angle_spread=world.goal_angle_tolerance,
+                           position_slack=world.goal_tolerance)
+    return here & there
 
 
 def _worth_chaining(ctx: PlanningContext, landmark, found: _Found, goal: np.ndarray) -> bool:

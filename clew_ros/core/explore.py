@@ -39,6 +39,11 @@ class Exploration:
     distance: float
 
 
+def _approach_cell(grasp_rel: np.ndarray, cells: int) -> int:
+    """The approach cell of a grasp: the last link's direction in the object frame is ``-grasp_rel[2]``."""
+    return int(np.mod(-grasp_rel[2], 2.0 * np.pi) / (2.0 * np.pi) * cells) % cells
+
+
 class Explorer:
     """EXPLORE with its transit cache, for one planning run."""
 
@@ -46,19 +51,40 @@ class Explorer:
         self.ctx = ctx
         self.tree = tree
         self._transits: dict[tuple[int, int], _Candidate | None] = {}
+        self._aimed: dict[tuple[int, int], _Candidate | None] = {}  # SEARCH's transits with an approach
 
-    def candidate(self, landmark_id: int, grasp: int) -> _Candidate | None:
-        """The single manipulation path's transit part from a landmark to a grasp (cached)."""
+    def candidate(self, landmark_id: int, grasp: int, approach: np.ndarray | None = None) -> _Candidate | None:
+        """The single manipulation path's transit part from a landmark to a grasp (cached).
+
+        With ``approach`` (allowed cells of the approach angle, SEARCH's
+        regrasp towards the goal) a cached transit is used only if its
+        approach is allowed; otherwise a transit aiming at them is searched
+        once, and kept for EXPLORE if the pair had no transit yet.
+        """
         key = (landmark_id, grasp)
-        if key not in self._transits:
-            landmark = self.tree[landmark_id]
-            if landmark.grasp == grasp:
-                self._transits[key] = _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
-            else:
-                result = search_transit(self.ctx, landmark.joints, landmark.object_pose, grasp)
-                self._transits[key] = (_Candidate(landmark_id, grasp, result.waypoints[-1], result.grasp_rel,
-                                                  result.waypoints) if result.success else None)
-        return self._transits[key]
+        landmark = self.tree[landmark_id]
+        if landmark.grasp == grasp:
+            return self._transits.setdefault(key, _Candidate(landmark_id, grasp, landmark.joints,
+                                                             landmark.grasp_rel, None))
+        if approach is None:
+            if key not in self._transits:
+                self._transits[key] = self._transit(landmark, grasp, None)
+            return self._transits[key]
+        cached = self._transits.get(key)
+        if cached is not None and approach[_approach_cell(cached.grasp_rel, len(approach))]:
+            return cached
+        if key in self._aimed:
+            return self._aimed[key]
+        found = self._aimed[key] = self._transit(landmark, grasp, approach)
+        if found is not None and cached is None:
+            self._transits[key] = found
+        return found
+
+    def _transit(self, landmark, grasp: int, approach: np.ndarray | None) -> _Candidate | None:
+        result = search_transit(self.ctx, landmark.joints, landmark.object_pose, grasp, approach)
+        if not result.success:
+            return None
+        return _Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
 
     def explore(self) -> Exploration | None:
         """Place one new landmark; ``None`` when no candidate transit succeeded."""

@@ -9,12 +9,15 @@ much as a successful one (it runs every generation before giving up).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
-from clew_ros.core.kinematics import compose, relative
+from clew_ros.core.collision import is_valid
+from clew_ros.core.kinematics import compose, relative, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["within_reach", "goal_within_reach"]
+__all__ = ["within_reach", "goal_within_reach", "approach_cells", "approach_excess", "APPROACH_CELLS", "two_link_grasps"]
 
 
 def within_reach(world: World, point: np.ndarray, slack: float = 0.0, lengths: np.ndarray | None = None) -> bool:
@@ -45,3 +48,98 @@ def goal_within_reach(world: World, grasp_rel: np.ndarray, goal: np.ndarray) -> 
     tips = compose(poses, relative(grasp_rel, np.zeros(3)))[:, :2]  # end effector in the object frame
     slack = world.goal_tolerance + world.grasp_tolerance
     return any(within_reach(world, tip, slack) for tip in tips)
+
+
+#: Cells of the approach angle (last link's direction in the object's frame), see :func:`approach_cells`.
+APPROACH_CELLS = 720
+
+
+def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_spread: float = 0.0,
+                   position_slack: float = 0.0) -> np.ndarray:
+    """Which approach angles could hold grasp ``grasp`` of the object at ``object_pose``.
+
+    Held rigidly, the last link keeps one direction ``psi`` in the object's
+    frame. For each of :data:`APPROACH_CELLS` cells of ``psi`` (cell ``i``
+    centred on ``(i + 0.5) 2 pi / cells``), ``False`` means that no direction
+    in the cell puts the last joint inside the annulus the other links sweep,
+    for any object orientation within ``angle_spread`` of ``object_pose`` and
+    any position within ``position_slack`` (plus the grasp tolerance):
+    the grasp cannot be held that way there. Obstacles and joint limits are
+    ignored, so ``True`` promises nothing.
+    """
+    robot = world.robot
+    cells = APPROACH_CELLS
+    if robot.dof < 2:
+        return np.ones(cells, bool)
+    last = float(robot.link_lengths[-1])
+    rest = robot.link_lengths[:-1]
+    inner = max(0.0, 2.0 * float(rest.max()) - float(rest.sum()))
+    outer = float(rest.sum())
+    grasp_point = np.asarray(world.object.grasps[grasp], float)
+    x, y, theta = np.asarray(object_pose, float)
+    c, s = np.cos(theta), np.sin(theta)
+    point = np.array([x + c * grasp_point[0] - s * grasp_point[1], y + s * grasp_point[0] + c * grasp_point[1]])
+    v = point - robot.base
+    distance = float(np.hypot(*v))
+    spread = min(float(angle_spread), np.pi)
+    half = np.pi / cells + spread  # half-width of the absolute directions a cell stands for
+    psi = (np.arange(cells) + 0.5) * 2.0 * np.pi / cells
+    # the last joint is at point - last * u, u = dir(theta + psi): |joint - base|^2 =
+    # distance^2 + last^2 - 2 last distance cos(angle(u, v)), extreme at the cell's extreme angles
+    delta = np.abs((theta + psi - np.arctan2(v[1], v[0]) + np.pi) % (2.0 * np.pi) - np.pi)
+    squared = distance ** 2 + last ** 2
+    near = np.sqrt(np.maximum(squared - 2.0 * last * distance * np.cos(np.maximum(0.0, delta - half)), 0.0))
+    far = np.sqrt(np.maximum(squared - 2.0 * last * distance * np.cos(np.minimum(np.pi, delta + half)), 0.0))
+    # the grasp point itself moves with the orientation spread (chord <= arc) and the slack
+    slack = float(np.hypot(*grasp_point)) * spread + position_slack + world.grasp_tolerance + 1e-9
+    return (far >= inner - slack) & (near <= outer + slack)
+
+
+def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """``psi -> angle (rad)`` from approach angles ``psi`` to the nearest allowed cell of ``cells``
+    (0 inside one), piecewise linear between cell centres so that it has a slope to follow."""
+    count = len(cells)
+    centres = (np.arange(count) + 0.5) * 2.0 * np.pi / count
+    allowed = centres[cells]
+    gap = np.abs((centres[:, None] - allowed[None] + np.pi) % (2.0 * np.pi) - np.pi)
+    distance = np.min(gap, axis=1) if len(allowed) else np.full(count, np.pi)
+    distance = np.maximum(distance - np.pi / count, 0.0)  # a cell counts from its edge
+    xp = np.concatenate([centres[-1:] - 2.0 * np.pi, centres, centres[:1] + 2.0 * np.pi])
+    fp = np.concatenate([distance[-1:], distance, distance[:1]])
+
+    def excess(psi: np.ndarray) -> np.ndarray:
+        return np.interp(np.mod(psi, 2.0 * np.pi), xp, fp)
+
+    return excess
+
+
+def two_link_grasps(world: World, object_pose: np.ndarray, grasp: int, probes: int = 8) -> np.ndarray:
+    """Two-joint arms: the configurations ``(m, 2)`` that hold grasp ``grasp`` of the object resting
+    at ``object_pose``, valid and within the joint limits.
+
+    A two-link arm reaches a point with at most two configurations (elbow one
+    way or the other), so SEARCH_TRANSIT can only end near one of them. The
+    grasp point and ``probes`` points around it at half the grasp tolerance
+    (how close a transit must end) are solved; an empty answer means no
+    transit can succeed.
+    """
+    robot = world.robot
+    l1, l2 = (float(v) for v in robot.link_lengths)
+    centre = transform_points(np.asarray(object_pose, float), np.asarray(world.object.grasps[grasp], float)[None])[0]
+    ring = np.linspace(0.0, 2.0 * np.pi, probes, endpoint=False)
+    points = np.vstack([centre, centre + 0.5 * world.grasp_tolerance * np.column_stack([np.cos(ring), np.sin(ring)])])
+    v = points - robot.base
+    cos_elbow = (np.sum(v * v, axis=1) - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)
+    reachable = np.abs(cos_elbow) <= 1.0
+    v, cos_elbow = v[reachable], cos_elbow[reachable]
+    elbow = np.arccos(np.clip(cos_elbow, -1.0, 1.0))
+    q2 = np.concatenate([elbow, -elbow])
+    q1 = np.tile(np.arctan2(v[:, 1], v[:, 0]), 2) - np.arctan2(l2 * np.sin(q2), l1 + l2 * np.cos(q2))
+    q = np.column_stack([q1, q2])
+    # each joint to its representative within the limits, if any (limits may span more than a turn)
+    lower, upper = robot.joint_lower, robot.joint_upper
+    q = lower + np.mod(q - lower, 2.0 * np.pi)
+    q = q[np.all(q <= upper, axis=1)]
+    if not len(q):
+        return q
+    return q[is_valid(world, q, np.asarray(object_pose, float)[None])]

@@ -18,7 +18,7 @@ import numpy as np
 from clew_ros.core.genetic import minimize
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, run_manhattan, single_moves
-from clew_ros.core.reach import goal_within_reach, within_reach
+from clew_ros.core.reach import approach_excess, goal_within_reach, two_link_grasps, within_reach
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
@@ -131,25 +131,51 @@ def _refine(ctx: PlanningContext, q: np.ndarray, error: Callable[[np.ndarray], n
     return np.array(waypoints)
 
 
-def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray, grasp: int) -> PathResult:
-    """SEARCH_TRANSIT: move the arm, object at rest, until its tip holds ``grasp``."""
+def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray, grasp: int,
+                   approach: np.ndarray | None = None) -> PathResult:
+    """SEARCH_TRANSIT: move the arm, object at rest, until its tip holds ``grasp``.
+
+    ``approach`` (cells of :func:`clew_ros.core.reach.approach_cells`) restricts
+    the last link's direction in the object's frame: the residual gains the
+    angle to the nearest allowed cell, times the last link's length.
+    """
     world = ctx.world
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
     accept = 0.25 * world.grasp_tolerance
     mode = {"object_poses": np.asarray(object_pose, float)[None]}
+    excess = approach_excess(approach) if approach is not None else None
+    last = float(world.robot.link_lengths[-1])
 
     def tip_error(q: np.ndarray) -> np.ndarray:
-        return tip_poses(world.robot, q)[:, :2] - target
+        tips = tip_poses(world.robot, q)
+        if excess is None:
+            return tips[:, :2] - target
+        return np.column_stack([tips[:, :2] - target, last * excess(tips[:, 2] - object_pose[2])])
 
     def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
         return np.linalg.norm(tip_error(q), axis=1)
 
-    if not within_reach(world, target[0]):
+    if not within_reach(world, target[0]) or not _may_hold(world, object_pose, grasp, approach):
         return PathResult(False, np.asarray(q0, float)[None], float(objective(np.asarray(q0, float)[None], None)[0]))
     waypoints, distance = _local_search(ctx, q0, objective, tip_error, accept, mode)
     success = distance <= 0.5 * world.grasp_tolerance
     grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], object_pose) if success else None
     return PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
+
+
+def _may_hold(world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None) -> bool:
+    """Necessary for a transit to ``grasp``: some allowed approach; for two joints, a valid configuration
+    holding the grasp (with an allowed approach)."""
+    if approach is not None and not approach.any():
+        return False
+    if world.robot.dof != 2:
+        return True
+    holds = two_link_grasps(world, object_pose, grasp)
+    if approach is None or not len(holds):
+        return bool(len(holds))
+    psi = np.mod(tip_poses(world.robot, holds)[:, 2] - object_pose[2], 2.0 * np.pi)
+    cells = (psi / (2.0 * np.pi) * len(approach)).astype(int) % len(approach)
+    return bool(np.any(approach[cells]))
 
 
 def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:

@@ -108,3 +108,25 @@ def test_approach_excess_is_zero_in_allowed_cells_and_grows_outside():
     assert np.allclose(excess(np.array([0.1, 0.7, 1.4])), 0.0)
     far = excess(np.array([np.pi / 2 + 0.2, np.pi / 2 + 0.5, -0.3]))
     np.testing.assert_allclose(far, [0.2, 0.5, 0.3], atol=2 * np.pi / APPROACH_CELLS)
+
+
+def test_carry_cells_keep_every_approach_that_holds_the_object_there():
+    from clew_ros.core.reach import APPROACH_CELLS, carry_cells
+
+    world = load_world(CONFIG / "figure1.yaml")
+    rng = np.random.default_rng(5)
+    refused = 0
+    for grasp, point in enumerate(world.object.grasps):
+        for _ in range(200):
+            q = rng.uniform(-np.pi, np.pi, world.robot.dof)
+            tip = tip_poses(world.robot, q[None])[0]
+            psi = rng.uniform(0.0, 2.0 * np.pi)
+            theta = tip[2] - psi
+            c, s = np.cos(theta), np.sin(theta)
+            pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
+            cells = carry_cells(world, pose, grasp)
+            assert cells[int(psi / (2.0 * np.pi) * APPROACH_CELLS) % APPROACH_CELLS], (grasp, q, psi)
+            refused += int(np.sum(~cells))
+    # figure1's goal lies beyond the bare arm's reach: only in-line approaches carry the bar there
+    goal_cells = carry_cells(world, world.object.goal, 1)
+    assert 0 < goal_cells.sum() < APPROACH_CELLS / 2

@@ -11,7 +11,7 @@ import numpy as np
 from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.kinematics import transform_points
-from clew_ros.core.reach import approach_cells
+from clew_ros.core.reach import approach_cells, carry_cells
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree, Segment, append_path
@@ -173,7 +173,7 @@ def _regrasp_approaches(world: World, object_pose: np.ndarray, grasp: int, goal:
     here = approach_cells(world, object_pose, grasp)
     there = approach_cells(world, goal, grasp, angle_spread=world.goal_angle_tolerance,
                            position_slack=world.goal_tolerance)
-    return here & there
+    return here & there & carry_cells(world, goal, grasp)
 
 
 def _worth_chaining(ctx: PlanningContext, landmark, found: _Found, goal: np.ndarray) -> bool:

@@ -17,7 +17,7 @@ from clew_ros.core.collision import is_valid
 from clew_ros.core.kinematics import compose, relative, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["within_reach", "goal_within_reach", "approach_cells", "approach_excess", "APPROACH_CELLS", "two_link_grasps"]
+__all__ = ["within_reach", "goal_within_reach", "approach_cells", "approach_excess", "APPROACH_CELLS", "two_link_grasps", "carry_cells"]
 
 
 def within_reach(world: World, point: np.ndarray, slack: float = 0.0, lengths: np.ndarray | None = None) -> bool:
@@ -143,3 +143,28 @@ def two_link_grasps(world: World, object_pose: np.ndarray, grasp: int, probes: i
     if not len(q):
         return q
     return q[is_valid(world, q, np.asarray(object_pose, float)[None])]
+
+
+def carry_cells(world: World, goal: np.ndarray, grasp: int) -> np.ndarray:
+    """Which approach angles could carry the object, held by ``grasp``, to the goal position.
+
+    Held with approach ``psi`` the object's origin is a fixed point of the last
+    link's frame, ``last * x - R(-psi) grasp``: the chain ending there must
+    reach the goal position (within ``goal_tolerance``), whatever the goal
+    orientation. Per cell of :data:`APPROACH_CELLS`, loosened by what the
+    origin moves within the cell; obstacles and joint limits ignored.
+    """
+    robot = world.robot
+    cells = APPROACH_CELLS
+    grasp_point = np.asarray(world.object.grasps[grasp], float)
+    psi = (np.arange(cells) + 0.5) * 2.0 * np.pi / cells
+    c, s = np.cos(-psi), np.sin(-psi)
+    last = float(robot.link_lengths[-1])
+    virtual = np.hypot(last - (c * grasp_point[0] - s * grasp_point[1]), -(s * grasp_point[0] + c * grasp_point[1]))
+    rest = np.asarray(robot.link_lengths[:-1], float)
+    longest_rest = float(rest.max()) if len(rest) else 0.0
+    total = float(rest.sum()) + virtual
+    inner = np.maximum(0.0, 2.0 * np.maximum(longest_rest, virtual) - total)
+    distance = float(np.hypot(*(np.asarray(goal[:2], float) - robot.base)))
+    slack = float(np.hypot(*grasp_point)) * np.pi / cells + world.goal_tolerance + world.grasp_tolerance + 1e-9
+    return (distance >= inner - slack) & (distance <= total + slack)

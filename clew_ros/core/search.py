@@ -137,25 +137,34 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
 
     ``approach`` (cells of :func:`clew_ros.core.reach.approach_cells`) restricts
     the last link's direction in the object's frame: the residual gains the
-    angle to the nearest allowed cell, times the last link's length.
+    angle to the nearest allowed cell, times the last link's length. For a
+    two-joint arm whose valid holding configurations all bend the elbow one
+    way, the residual also gains how far the elbow bends the other way.
     """
     world = ctx.world
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
     accept = 0.25 * world.grasp_tolerance
     mode = {"object_poses": np.asarray(object_pose, float)[None]}
+    holds = _holding_configurations(world, object_pose, grasp, approach)
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
+    bends = np.unique(np.sign(holds[:, 1])) if holds is not None else np.zeros(0)
+    elbow = float(bends[0]) if len(bends) == 1 and bends[0] != 0 else None
 
     def tip_error(q: np.ndarray) -> np.ndarray:
         tips = tip_poses(world.robot, q)
-        if excess is None:
-            return tips[:, :2] - target
-        return np.column_stack([tips[:, :2] - target, last * excess(tips[:, 2] - object_pose[2])])
+        terms = [tips[:, :2] - target]
+        if excess is not None:
+            terms.append(last * excess(tips[:, 2] - object_pose[2])[:, None])
+        if elbow is not None:
+            terms.append(last * np.maximum(0.0, -elbow * q[:, 1])[:, None])
+        return np.concatenate(terms, axis=1)
 
     def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
         return np.linalg.norm(tip_error(q), axis=1)
 
-    if not within_reach(world, target[0]) or not _may_hold(world, object_pose, grasp, approach):
+    hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
+    if hopeless or not within_reach(world, target[0]):
         return PathResult(False, np.asarray(q0, float)[None], float(objective(np.asarray(q0, float)[None], None)[0]))
     waypoints, distance = _local_search(ctx, q0, objective, tip_error, accept, mode)
     success = distance <= 0.5 * world.grasp_tolerance
@@ -163,19 +172,18 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
     return PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
 
 
-def _may_hold(world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None) -> bool:
-    """Necessary for a transit to ``grasp``: some allowed approach; for two joints, a valid configuration
-    holding the grasp (with an allowed approach)."""
-    if approach is not None and not approach.any():
-        return False
+def _holding_configurations(world: World, object_pose: np.ndarray, grasp: int,
+                            approach: np.ndarray | None) -> np.ndarray | None:
+    """Two-joint arms: the valid configurations holding ``grasp`` (with an allowed approach), which
+    a transit can only end near; ``None`` for other arms (not solved)."""
     if world.robot.dof != 2:
-        return True
+        return None
     holds = two_link_grasps(world, object_pose, grasp)
     if approach is None or not len(holds):
-        return bool(len(holds))
+        return holds
     psi = np.mod(tip_poses(world.robot, holds)[:, 2] - object_pose[2], 2.0 * np.pi)
     cells = (psi / (2.0 * np.pi) * len(approach)).astype(int) % len(approach)
-    return bool(np.any(approach[cells]))
+    return holds[approach[cells]]
 
 
 def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:

@@ -31,10 +31,11 @@ def joint_positions(robot: Robot, q: np.ndarray) -> np.ndarray:
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     phi = np.cumsum(q, axis=1)
-    steps = np.stack([np.cos(phi), np.sin(phi)], axis=-1) * robot.link_lengths[None, :, None]
     points = np.empty((q.shape[0], q.shape[1] + 1, 2))
     points[:, 0] = robot.base
-    np.cumsum(steps, axis=1, out=points[:, 1:])
+    # filled in place: the planner calls this on small batches, where np.stack's overhead shows
+    np.cumsum(np.cos(phi) * robot.link_lengths, axis=1, out=points[:, 1:, 0])
+    np.cumsum(np.sin(phi) * robot.link_lengths, axis=1, out=points[:, 1:, 1])
     points[:, 1:] += robot.base
     return points
 
@@ -56,9 +57,12 @@ def compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
-    y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
-    return np.stack([x, y, a[..., 2] + b[..., 2]], axis=-1)
+    shape = np.broadcast_shapes(a.shape, b.shape)
+    out = np.empty(shape)
+    out[..., 0] = a[..., 0] + c * b[..., 0] - s * b[..., 1]
+    out[..., 1] = a[..., 1] + s * b[..., 0] + c * b[..., 1]
+    out[..., 2] = a[..., 2] + b[..., 2]
+    return out
 
 
 def relative(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -76,6 +80,7 @@ def transform_points(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
     pose = np.asarray(pose, dtype=float)
     c = np.cos(pose[..., 2])[..., None]
     s = np.sin(pose[..., 2])[..., None]
-    x = pose[..., 0, None] + c * points[:, 0] - s * points[:, 1]
-    y = pose[..., 1, None] + s * points[:, 0] + c * points[:, 1]
-    return np.stack([x, y], axis=-1)
+    out = np.empty(pose.shape[:-1] + points.shape)
+    out[..., 0] = pose[..., 0, None] + c * points[:, 0] - s * points[:, 1]
+    out[..., 1] = pose[..., 1, None] + s * points[:, 0] + c * points[:, 1]
+    return out

@@ -93,7 +93,9 @@ def _body(world: World, q: np.ndarray, joint: int, object_poses: np.ndarray | No
     scene = scene_of(world)
     pts = joint_positions(world.robot, q)
     batch = len(q)
-    links = np.stack([pts[:, :-1], pts[:, 1:]], axis=2)  # (B, n, 2, 2)
+    links = np.empty((batch, pts.shape[1] - 1, 2, 2))  # (B, n, 2, 2)
+    links[:, :, 0] = pts[:, :-1]
+    links[:, :, 1] = pts[:, 1:]
     obstacles = np.broadcast_to(scene.obstacle_edges[None], (batch,) + scene.obstacle_edges.shape)
     transfer = grasp_rel is not None
     insets = _pair_offsets(world, joint, transfer)[1]
@@ -125,7 +127,7 @@ def _angle(v: np.ndarray) -> np.ndarray:
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.einsum("...i,...i->...", a, b)
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]  # einsum's call costs more on small arrays
 
 
 def _circle_stadium(rho: np.ndarray, e1: np.ndarray, e2: np.ndarray, offset: np.ndarray) -> np.ndarray:
@@ -140,7 +142,10 @@ def _circle_stadium(rho: np.ndarray, e1: np.ndarray, e2: np.ndarray, offset: np.
     length2 = _dot(d, d)
     has_length = length2 > 0
     safe_length2 = np.where(has_length, length2, 1.0)
-    normal = np.stack([-d[..., 1], d[..., 0]], axis=-1) / np.sqrt(safe_length2)[..., None]
+    normal = np.empty_like(d)
+    scale = 1.0 / np.sqrt(safe_length2)
+    normal[..., 0] = -d[..., 1] * scale
+    normal[..., 1] = d[..., 0] * scale
     rho2 = rho * rho
     out = []
     for side in (1.0, -1.0):
@@ -157,11 +162,11 @@ def _circle_stadium(rho: np.ndarray, e1: np.ndarray, e2: np.ndarray, offset: np.
         denominator = 2.0 * rho * e
         cos_beta = (rho2 + e * e - offset * offset) / np.where(denominator > 0, denominator, 1.0)
         ok = (np.abs(cos_beta) <= 1.0) & (denominator > 0) & (offset > 0)
-        beta = np.arccos(np.clip(cos_beta, -1.0, 1.0))
+        beta = np.arccos(np.minimum(np.maximum(cos_beta, -1.0), 1.0))
         base = _angle(end)
         out.append(np.where(ok, base + beta, np.nan))
         out.append(np.where(ok, base - beta, np.nan))
-    return np.stack(out)
+    return np.array(out)
 
 
 @lru_cache(maxsize=256)
@@ -184,7 +189,7 @@ def _checked_pairs(world: World, joint: int, transfer: bool) -> tuple[np.ndarray
 def _radii(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For segments ``(B, C, 2, 2)`` relative to the pivot: their end points' distances ``(B, C, 2)``,
     and the nearest and farthest distance ``(B, C)`` of each segment from the pivot."""
-    rho = np.sqrt(np.einsum("bcei,bcei->bce", segments, segments))
+    rho = np.sqrt(segments[..., 0] * segments[..., 0] + segments[..., 1] * segments[..., 1])
     near = point_segment_distance(np.zeros(2), segments[:, :, 0], segments[:, :, 1])
     return rho, near, np.maximum(rho[..., 0], rho[..., 1])
 
@@ -249,13 +254,13 @@ def _contact_angles(world: World, body: _Body, margin: float,
         c = (bound - pivot[:, axis, None]) / safe_rho
         ok = (np.abs(c) <= 1.0) & (rho > 0)
         if axis == 0:
-            base = np.arccos(np.clip(c, -1.0, 1.0))
+            base = np.arccos(np.minimum(np.maximum(c, -1.0), 1.0))
             roots = (base, -base)
         else:
-            base = np.arcsin(np.clip(c, -1.0, 1.0))
+            base = np.arcsin(np.minimum(np.maximum(c, -1.0), 1.0))
             roots = (base, np.pi - base)
         candidates.extend(np.where(ok, root - alpha, np.nan) for root in roots)
-    phi_parts.append(np.stack(candidates).reshape(8, -1))
+    phi_parts.append(np.array(candidates).reshape(8, -1))
     index_parts.append(np.repeat(np.arange(batch), rel.shape[1]))
     return _nearest(batch, np.concatenate(index_parts), np.concatenate(phi_parts, axis=1))
 
@@ -292,8 +297,8 @@ def free_intervals(world: World, q: np.ndarray, joint: int, *, object_poses: np.
     if counters is not None:
         counters.clearance_checks += len(q)
     robot = world.robot
-    upper = np.clip(robot.joint_upper[joint] - q[:, joint], 0.0, MAX_MOVE_RAD)
-    lower = np.clip(robot.joint_lower[joint] - q[:, joint], -MAX_MOVE_RAD, 0.0)
+    upper = np.minimum(np.maximum(robot.joint_upper[joint] - q[:, joint], 0.0), MAX_MOVE_RAD)
+    lower = np.minimum(np.maximum(robot.joint_lower[joint] - q[:, joint], -MAX_MOVE_RAD), 0.0)
     high = np.minimum(upper, np.maximum(hi - BACKOFF_RAD, 0.0))
     low = np.maximum(lower, np.minimum(lo + BACKOFF_RAD, 0.0))
     return low, high

@@ -23,6 +23,9 @@ __all__ = ["Progress", "PlanResult", "plan"]
 #: (put down there) becomes a landmark and SEARCH runs again from it, at most
 #: this many times in a row: a regrasp where the carried object got stuck.
 SEARCH_CHAIN = 2
+#: EXPLORE rounds in a row without a single transit (failed pairs retried each time) before
+#: NO_PATH_AT_RESOLUTION: the transit search is local and stochastic, one miss proves little.
+EXPLORE_ATTEMPTS = 8
 
 
 @dataclass(frozen=True)
@@ -92,10 +95,12 @@ def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: n
                 if reason is not None:
                     continue
                 failures += 1
-                if failures >= 3:
+                explorer.forget_failures()
+                if failures >= EXPLORE_ATTEMPTS:
                     return finish(Outcome.NO_PATH_AT_RESOLUTION, "no grasp of the object can be reached from any "
                                   f"of the {len(tree)} landmarks")
                 continue
+            failures = 0
             landmark = tree.add(**exploration.fields)
             found = _search(ctx, explorer, tree, landmark, goal)
             best = min(best, found.distance)

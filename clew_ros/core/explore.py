@@ -80,6 +80,11 @@ class Explorer:
             self._transits[key] = found
         return found
 
+    def forget_failures(self) -> None:
+        """Drop the failed transits from the cache, so that EXPLORE tries those pairs again (the GA is
+        stochastic: a transit that failed once may succeed with other draws)."""
+        self._transits = {key: found for key, found in self._transits.items() if found is not None}
+
     def _transit(self, landmark, grasp: int, approach: np.ndarray | None) -> _Candidate | None:
         result = search_transit(self.ctx, landmark.joints, landmark.object_pose, grasp, approach)
         if not result.success:

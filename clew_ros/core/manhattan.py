@@ -244,24 +244,32 @@ def _contact_angles(world: World, body: _Body, margin: float,
         phi_parts.append(np.where(forward, phi, -phi))
         index_parts.append(b)
     xmin, ymin, xmax, ymax = world.bounds
-    rel = body.points - pivot[:, None, :]
-    rho = np.linalg.norm(rel, axis=-1)
-    alpha = _angle(rel)
-    safe_rho = np.where(rho > 0, rho, 1.0)
-    limit = body.insets + margin
-    candidates = []
-    for axis, bound in ((0, xmin + limit), (0, xmax - limit), (1, ymin + limit), (1, ymax - limit)):
-        c = (bound - pivot[:, axis, None]) / safe_rho
-        ok = (np.abs(c) <= 1.0) & (rho > 0)
-        if axis == 0:
-            base = np.arccos(np.minimum(np.maximum(c, -1.0), 1.0))
-            roots = (base, -base)
-        else:
-            base = np.arcsin(np.minimum(np.maximum(c, -1.0), 1.0))
-            roots = (base, np.pi - base)
-        candidates.extend(np.where(ok, root - alpha, np.nan) for root in roots)
-    phi_parts.append(np.array(candidates).reshape(8, -1))
-    index_parts.append(np.repeat(np.arange(batch), rel.shape[1]))
+    rel = body.points - pivot[:, None, :]  # (B, P, 2)
+    rho = np.sqrt(rel[..., 0] * rel[..., 0] + rel[..., 1] * rel[..., 1])
+    limit = body.insets + margin  # (P,)
+    # only points whose circle about the pivot reaches a bound can cross it
+    px, py = pivot[:, 0, None], pivot[:, 1, None]
+    b, p = np.nonzero((px - rho <= xmin + limit) | (px + rho >= xmax - limit)
+                      | (py - rho <= ymin + limit) | (py + rho >= ymax - limit))
+    if len(b):
+        rho, rel, limit = rho[b, p], rel[b, p], limit[p]
+        alpha = _angle(rel)
+        safe_rho = np.where(rho > 0, rho, 1.0)
+        candidates = []
+        for axis, bound in ((0, xmin + limit), (0, xmax - limit), (1, ymin + limit), (1, ymax - limit)):
+            c = (bound - pivot[b, axis]) / safe_rho
+            ok = (np.abs(c) <= 1.0) & (rho > 0)
+            if axis == 0:
+                base = np.arccos(np.minimum(np.maximum(c, -1.0), 1.0))
+                roots = (base, -base)
+            else:
+                base = np.arcsin(np.minimum(np.maximum(c, -1.0), 1.0))
+                roots = (base, np.pi - base)
+            candidates.extend(np.where(ok, root - alpha, np.nan) for root in roots)
+        phi_parts.append(np.array(candidates))
+        index_parts.append(b)
+    if not phi_parts:
+        return np.full(batch, np.inf), np.full(batch, -np.inf)
     return _nearest(batch, np.concatenate(index_parts), np.concatenate(phi_parts, axis=1))
 
 

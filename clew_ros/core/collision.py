@@ -68,12 +68,19 @@ def scene_of(world: World) -> Scene:
 _BOX_PAIRS = 1 << 22
 
 
+def _box_rounding(boxes: np.ndarray) -> float:
+    """Extra padding that covers rounding: GEOS compares ``gap <= r`` where the boxes compare
+    ``high + r >= low``, and the two can differ in the last bit."""
+    return 1e-9 * (1.0 + float(np.abs(boxes).max())) if len(boxes) else 0.0
+
+
 def _box_pairs(low: np.ndarray, high: np.ndarray, boxes: np.ndarray, pad: float) -> tuple[np.ndarray, ...]:
     """Broad phase: indices ``(*box index, obstacle)`` of the boxes ``[low, high]`` ``(..., 2)``, grown
     by ``pad``, that meet obstacle boxes ``boxes`` ``(O, 2, 2)`` (closed: touching meets). A pair
     left out cannot touch; obstacle ``-1`` stands for all of them (huge worlds: one box around all)."""
     if not len(boxes):
         return tuple(np.zeros(0, int) for _ in range(low.ndim))
+    pad = pad + _box_rounding(boxes)
     low, high = low - pad, high + pad
     everything = low[..., 0].size * len(boxes) > _BOX_PAIRS
     if everything:
@@ -153,7 +160,7 @@ def is_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.ndarra
             ok[conf[hit]] = False
     for a, b in scene.adjacent_pairs:
         gap = np.maximum(low[:, a] - high[:, b], low[:, b] - high[:, a])  # (N, 2) box gap per axis
-        meet = np.maximum(gap[:, 0], gap[:, 1]) <= 2 * r
+        meet = np.maximum(gap[:, 0], gap[:, 1]) <= 2 * r + 1e-9 * (1.0 + float(np.abs(world.bounds).max()))
         (conf,) = np.nonzero(ok & meet)
         if len(conf):
             hit = _near(_lines(points, conf, a), _lines(points, conf, b), 2 * r)

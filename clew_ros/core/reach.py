@@ -2,7 +2,8 @@
 
 Each function answers "could this possibly succeed?" from geometry alone,
 ignoring joint limits and everything it cannot bound: ``False`` means a search
-would fail whatever it tried, ``True`` means nothing. SEARCH_TRANSIT and
+would fail whatever it tried, ``True`` means nothing. (:func:`two_link_grasps`
+is the exception: it samples, and uses the limits and the validity test.) SEARCH_TRANSIT and
 SEARCH_TRANSFER ask them first, because a search that cannot succeed costs as
 much as a successful one (it runs every generation before giving up).
 """
@@ -96,8 +97,9 @@ def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_s
 
 
 def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """``psi -> angle (rad)`` from approach angles ``psi`` to the nearest allowed cell of ``cells``
-    (0 inside one), piecewise linear between cell centres so that it has a slope to follow."""
+    """``psi -> angle (rad)`` from approach angles ``psi`` to the nearest allowed cell of ``cells``:
+    piecewise linear between cell centres so that it has a slope to follow, 0 between the centres
+    of allowed cells and at most half a cell's width inside the edge cells of an allowed run."""
     count = len(cells)
     centres = (np.arange(count) + 0.5) * 2.0 * np.pi / count
     allowed = centres[cells]
@@ -113,21 +115,26 @@ def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     return excess
 
 
-def two_link_grasps(world: World, object_pose: np.ndarray, grasp: int, probes: int = 8) -> np.ndarray:
+def two_link_grasps(world: World, object_pose: np.ndarray, grasp: int, probes: int = 12) -> np.ndarray:
     """Two-joint arms: the configurations ``(m, 2)`` that hold grasp ``grasp`` of the object resting
     at ``object_pose``, valid and within the joint limits.
 
     A two-link arm reaches a point with at most two configurations (elbow one
     way or the other), so SEARCH_TRANSIT can only end near one of them. The
-    grasp point and ``probes`` points around it at half the grasp tolerance
-    (how close a transit must end) are solved; an empty answer means no
-    transit can succeed.
+    grasp point and two rings of ``probes`` points around it, at a quarter
+    and half the grasp tolerance (how close a transit must end), are solved.
+    Unlike the other functions here this is a sampled test, not a bound: an
+    empty answer means no transit can end at those points, so a transit that
+    could only end between them (a sliver of free space thinner than the
+    probes' spacing, or an elbow limit met just there) is given up.
     """
     robot = world.robot
     l1, l2 = (float(v) for v in robot.link_lengths)
     centre = transform_points(np.asarray(object_pose, float), np.asarray(world.object.grasps[grasp], float)[None])[0]
     ring = np.linspace(0.0, 2.0 * np.pi, probes, endpoint=False)
-    points = np.vstack([centre, centre + 0.5 * world.grasp_tolerance * np.column_stack([np.cos(ring), np.sin(ring)])])
+    circle = np.column_stack([np.cos(ring), np.sin(ring)])
+    tolerance = world.grasp_tolerance
+    points = np.vstack([centre, centre + 0.25 * tolerance * circle, centre + 0.5 * tolerance * circle])
     v = points - robot.base
     cos_elbow = (np.sum(v * v, axis=1) - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)
     reachable = np.abs(cos_elbow) <= 1.0

@@ -148,7 +148,7 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
     holds = _holding_configurations(world, object_pose, grasp, approach)
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
-    bends = np.unique(np.sign(holds[:, 1])) if holds is not None else np.zeros(0)
+    bends = np.unique(np.sign(wrap_angle(holds[:, 1]))) if holds is not None else np.zeros(0)
     elbow = float(bends[0]) if len(bends) == 1 and bends[0] != 0 else None
 
     def tip_error(q: np.ndarray) -> np.ndarray:
@@ -157,7 +157,7 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
         if excess is not None:
             terms.append(last * excess(tips[:, 2] - object_pose[2])[:, None])
         if elbow is not None:
-            terms.append(last * np.maximum(0.0, -elbow * q[:, 1])[:, None])
+            terms.append(last * np.maximum(0.0, -elbow * wrap_angle(q[:, 1]))[:, None])
         return np.concatenate(terms, axis=1)
 
     def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:

@@ -120,6 +120,7 @@ def _edges_at(poses: np.ndarray, local_edges: np.ndarray) -> np.ndarray:
 
 
 _TWO_PI = 2.0 * np.pi
+_SIGNS = np.array([1.0, -1.0])  # the two roots of a pair
 
 
 def _angle(v: np.ndarray) -> np.ndarray:
@@ -147,43 +148,47 @@ def _circle_stadium(rho: np.ndarray, e1: np.ndarray, e2: np.ndarray, offset: np.
     normal[..., 0] = -d[..., 1] * scale
     normal[..., 1] = d[..., 0] * scale
     rho2 = rho * rho
-    out = []
-    for side in (1.0, -1.0):
-        a = e1 + side * offset[..., None] * normal
-        ad = _dot(a, d)
-        disc = ad * ad - length2 * (_dot(a, a) - rho2)
-        root = np.sqrt(np.maximum(disc, 0.0))
-        for sign in (1.0, -1.0):
-            t = (-ad + sign * root) / safe_length2
-            ok = (disc >= 0) & (t >= 0) & (t <= 1) & has_length
-            out.append(np.where(ok, _angle(a + t[..., None] * d), np.nan))
-    for end in (e1, e2):
-        e = np.sqrt(_dot(end, end))
-        denominator = 2.0 * rho * e
-        cos_beta = (rho2 + e * e - offset * offset) / np.where(denominator > 0, denominator, 1.0)
-        ok = (np.abs(cos_beta) <= 1.0) & (denominator > 0) & (offset > 0)
-        beta = np.arccos(np.minimum(np.maximum(cos_beta, -1.0), 1.0))
-        base = _angle(end)
-        out.append(np.where(ok, base + beta, np.nan))
-        out.append(np.where(ok, base - beta, np.nan))
-    return np.array(out)
+    # both offset lines and both roots at once: axes (side, sign, ...), few numpy calls on small arrays
+    shift = offset[..., None] * normal
+    a = np.stack([e1 + shift, e1 - shift])  # (2, ..., 2)
+    ad = _dot(a, d)
+    disc = ad * ad - length2 * (_dot(a, a) - rho2)
+    root = np.sqrt(np.maximum(disc, 0.0))
+    signs = _SIGNS.reshape((2,) + (1,) * rho.ndim)
+    t = (-ad[:, None] + signs * root[:, None]) / safe_length2  # (2, 2, ...)
+    ok = (disc >= 0)[:, None] & (t >= 0) & (t <= 1) & has_length
+    lines = np.where(ok, _angle(a[:, None] + t[..., None] * d), np.nan)
+    ends = np.stack([e1, e2])  # (2, ..., 2)
+    e = np.sqrt(_dot(ends, ends))
+    denominator = 2.0 * rho * e
+    cos_beta = (rho2 + e * e - offset * offset) / np.where(denominator > 0, denominator, 1.0)
+    ok = (np.abs(cos_beta) <= 1.0) & (denominator > 0) & (offset > 0)
+    beta = np.arccos(np.minimum(np.maximum(cos_beta, -1.0), 1.0))
+    base = _angle(ends)
+    circles = np.where(ok[:, None], base[:, None] + signs * beta[:, None], np.nan)  # (2, 2, ...)
+    return np.concatenate([lines.reshape((4,) + lines.shape[2:]), circles.reshape((4,) + circles.shape[2:])])
 
 
 @lru_cache(maxsize=256)
 def _checked_pairs(world: World, joint: int, transfer: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The pairs a free interval checks, both ways round, and the moving points' insets.
+    """The pairs a free interval checks, both ways round.
 
-    Returns ``ends_moving (Q,)`` (whether the pair's end points belong to the
-    moving piece), ``moving (Q,)``, ``static (Q,)`` (indices into the moving and
-    static pieces) and ``offsets (Q,)`` (distance to keep, m), where every
-    pair of :func:`_pair_offsets` appears twice: end points of the moving
-    piece against the static one's stadium, and the other way round.
+    Pieces are indexed moving first, then static (as :func:`_contact_angles`
+    stacks them). Returns ``ends (Q,)``, the piece whose end points meet the
+    stadium of piece ``other (Q,)``, ``turn (Q,)``, +1 when the end points
+    turn with the joint (a moving piece's) and -1 when the stadium does, and
+    ``offsets (Q,)`` (distance to keep, m). Every pair of
+    :func:`_pair_offsets` appears twice: end points of the moving piece
+    against the static one's stadium, and the other way round.
     """
-    offsets, insets = _pair_offsets(world, joint, transfer)
+    offsets, _insets = _pair_offsets(world, joint, transfer)
     moving, static = np.nonzero(~np.isnan(offsets))
     keep = offsets[moving, static]
-    ends_moving = np.concatenate([np.ones(len(moving), bool), np.zeros(len(moving), bool)])
-    return ends_moving, np.tile(moving, 2), np.tile(static, 2), np.tile(keep, 2)
+    static = static + offsets.shape[0]
+    ends = np.concatenate([moving, static])
+    other = np.concatenate([static, moving])
+    turn = np.concatenate([np.ones(len(moving)), -np.ones(len(moving))])
+    return ends, other, turn, np.tile(keep, 2)
 
 
 def _radii(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -212,36 +217,30 @@ def _contact_angles(world: World, body: _Body, margin: float,
     """
     pivot = body.pivot
     batch = len(pivot)
-    m_rel = body.moving - pivot[:, None, None, :]  # (B, M, 2, 2)
-    s_rel = body.static - pivot[:, None, None, :]  # (B, S, 2, 2)
-    m_rho, m_near, m_far = _radii(m_rel)
-    s_rho, s_near, s_far = _radii(s_rel)
-    ends_moving, moving, static, offsets = body.pairs
+    pieces = np.concatenate([body.moving, body.static], axis=1) - pivot[:, None, None, :]  # (B, M + S, 2, 2)
+    piece_rho, piece_near, piece_far = _radii(pieces)
+    ends, other, turn, offsets = body.pairs
     index_parts, phi_parts = [], []
     step = max(1, _CHUNK // max(batch, 1))
     for first in range(0, len(offsets), step):
         if first and should_stop is not None and should_stop():
             return np.zeros(batch), np.zeros(batch)
         chunk = slice(first, first + step)
-        flip, mi, si, keep = ends_moving[chunk], moving[chunk], static[chunk], offsets[chunk]
+        ei, oi, keep = ends[chunk], other[chunk], offsets[chunk]
         # annulus test: the end point's circle about the pivot must reach the other segment's annulus
-        rho = np.where(flip[None, :, None], m_rho[:, mi], s_rho[:, si])  # (B, Q, 2)
-        near = np.where(flip[None], s_near[:, si], m_near[:, mi])[..., None]  # (B, Q, 1)
-        far = np.where(flip[None], s_far[:, si], m_far[:, mi])[..., None]
+        rho = piece_rho[:, ei]  # (B, Q, 2)
         reach = (keep + margin)[None, :, None]
-        hit = (rho >= near - reach) & (rho <= far + reach)
+        hit = (rho >= piece_near[:, oi, None] - reach) & (rho <= piece_far[:, oi, None] + reach)
         b, q, e = np.nonzero(hit)
         if not len(b):
             continue
-        forward = flip[q]
-        mq, sq = mi[q], si[q]
-        point = np.where(forward[:, None], m_rel[b, mq, e], s_rel[b, sq, e])
-        e1 = np.where(forward[:, None], s_rel[b, sq, 0], m_rel[b, mq, 0])
-        e2 = np.where(forward[:, None], s_rel[b, sq, 1], m_rel[b, mq, 1])
+        point = pieces[b, ei[q], e]
+        segment = pieces[b, oi[q]]  # (K, 2, 2)
+        e1, e2 = segment[:, 0], segment[:, 1]
         keep = keep[q]
         keep = keep + np.where(point_segment_distance(point, e1, e2) > keep + 1.5 * margin, margin, 0.0)
         phi = _circle_stadium(rho[b, q, e], e1, e2, keep) - _angle(point)  # (8, K)
-        phi_parts.append(np.where(forward, phi, -phi))
+        phi_parts.append(phi * turn[chunk][q])
         index_parts.append(b)
     xmin, ymin, xmax, ymax = world.bounds
     rel = body.points - pivot[:, None, :]  # (B, P, 2)

@@ -103,7 +103,10 @@ def _body(world: World, q: np.ndarray, joint: int, object_poses: np.ndarray | No
     static = [obstacles, links[:, :joint]]
     points = [pts[:, joint + 1:]]
     if transfer:
-        object_pose = compose(tip_poses(world.robot, q), grasp_rel)
+        tips = np.empty((batch, 3))  # tip_poses without computing the chain again
+        tips[:, :2] = pts[:, -1]
+        tips[:, 2] = q.sum(axis=1)
+        object_pose = compose(tips, grasp_rel)
         object_edges = _edges_at(object_pose, scene.object_edges)
         moving += [object_edges, _edges_at(object_pose, scene.shrunk_edges)]
         points.append(object_edges[:, :, 0])

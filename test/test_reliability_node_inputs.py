@@ -225,6 +225,19 @@ def test_goal_pose_refused_at_once(node: Session, code: str) -> None:
     node.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == code, 2.0)
 
 
+def test_a_goal_sent_as_soon_as_an_outcome_is_seen_is_accepted(node: Session) -> None:
+    """The outcome event means "send the next one": the next goal is never refused BUSY because the
+    previous run's worker is still tidying up (CI once saw that)."""
+    publisher = goal_publisher(node)
+    goal = np.array(QUICK_REFUSALS["GOAL_OUT_OF_REACH"])
+    for _ in range(10):
+        mark = len(node.events.messages)
+        publisher.publish(messages.goal_pose_stamped(goal, 0))
+        first, _ = wait_event(node, mark, lambda e: e["event"] == "accepted" or e.get("code") == "BUSY", 5.0)
+        assert first["event"] == "accepted", first
+        wait_event(node, mark, lambda e: e["run_id"] == first["run_id"] and e["event"] == "aborted", 5.0)
+
+
 def test_plan_refused_at_once_with_its_code_in_the_answer(node: Session) -> None:
     """~/plan to an out-of-reach world.object.goal: the service answer carries the code within 0.5 s."""
     goal = list(QUICK_REFUSALS["GOAL_OUT_OF_REACH"])

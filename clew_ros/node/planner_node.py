@@ -601,6 +601,10 @@ class PlannerNode(Node):
         if outcome is not Outcome.SUCCEEDED:
             # no playback follows: the recording is complete before the answer goes out
             self._close_recording(run)
+        with self._lock:
+            # from here a new request is served (a playback is stopped for it), never refused BUSY:
+            # whoever saw the outcome may send the next goal at once
+            run.phase = "playback" if outcome is Outcome.SUCCEEDED and run.track is not None else "finished"
         run.outcome_sent = True
         if outcome is Outcome.SUCCEEDED and run.recorder is not None:
             # the recording closes after the playback; fold a write error met so far into the answer

@@ -13,12 +13,17 @@ from clew_ros.core.world import load_world
 CONFIG = Path(__file__).resolve().parents[1] / "config"
 
 
-def test_explore_beats_random_single_manipulation_paths():
-    world = load_world(CONFIG / "single_transfer.yaml")
-    settings = PlannerSettings(seed=3)
-    ctx = PlanningContext(world, settings, np.random.default_rng(3), Termination(60))
+def _explorer(name: str, seed: int) -> tuple[Explorer, PlanningContext, LandmarkTree]:
+    """An Explorer on ``config/<name>.yaml`` with the root landmark only."""
+    world = load_world(CONFIG / f"{name}.yaml")
+    ctx = PlanningContext(world, PlannerSettings(seed=seed), np.random.default_rng(seed), Termination(60))
     tree = LandmarkTree(world.robot.initial, world.object.initial)
-    explorer = Explorer(ctx, tree)
+    return Explorer(ctx, tree), ctx, tree
+
+
+def test_explore_beats_random_single_manipulation_paths():
+    explorer, ctx, tree = _explorer("single_transfer", 3)
+    world, settings = ctx.world, ctx.settings
     exploration = explorer.explore()
     assert exploration is not None
     landmark = tree.add(**exploration.fields)
@@ -48,9 +53,6 @@ def test_explore_beats_random_single_manipulation_paths():
 def test_a_transit_missed_once_is_tried_again_before_giving_up():
     # obstacles_32 (benchmarks): from the start placement every grasp's transit can miss on the first
     # draw; the planner used to answer NO_PATH_AT_RESOLUTION after about 1 s for seeds 1 and 2
-    import sys
-
-    sys.path.insert(0, str(CONFIG.parent))
     from benchmarks.families import obstacles_world
     from clew_ros.core.clew import plan
     from clew_ros.core.world import world_from_parameters
@@ -62,12 +64,8 @@ def test_a_transit_missed_once_is_tried_again_before_giving_up():
 
 
 def test_forget_failures_keeps_only_found_transits():
-    world = load_world(CONFIG / "figure1.yaml")
-    settings = PlannerSettings(seed=0)
-    ctx = PlanningContext(world, settings, np.random.default_rng(0), Termination(60))
-    tree = LandmarkTree(world.robot.initial, world.object.initial)
-    explorer = Explorer(ctx, tree)
-    found = [explorer.candidate(0, grasp) for grasp in range(len(world.object.grasps))]
+    explorer, ctx, _tree = _explorer("figure1", 0)
+    found = [explorer.candidate(0, grasp) for grasp in range(len(ctx.world.object.grasps))]
     assert any(c is None for c in found) and any(c is not None for c in found)
     explorer.forget_failures()
     assert set(explorer._transits) == {(0, g) for g, c in enumerate(found) if c is not None}

@@ -68,10 +68,10 @@ def scene_of(world: World) -> Scene:
 _BOX_PAIRS = 1 << 22
 
 
-def _box_rounding(boxes: np.ndarray) -> float:
-    """Extra padding that covers rounding: GEOS compares ``gap <= r`` where the boxes compare
-    ``high + r >= low``, and the two can differ in the last bit."""
-    return 1e-9 * (1.0 + float(np.abs(boxes).max())) if len(boxes) else 0.0
+def _box_rounding(coordinates: np.ndarray) -> float:
+    """Extra padding that covers rounding for ``coordinates`` of this size: GEOS compares
+    ``gap <= r`` where the boxes compare ``high + r >= low``, and the two can differ in the last bit."""
+    return 1e-9 * (1.0 + float(np.abs(coordinates).max())) if np.size(coordinates) else 0.0
 
 
 def _box_pairs(low: np.ndarray, high: np.ndarray, boxes: np.ndarray, pad: float) -> tuple[np.ndarray, ...]:
@@ -160,7 +160,7 @@ def is_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.ndarra
             ok[conf[hit]] = False
     for a, b in scene.adjacent_pairs:
         gap = np.maximum(low[:, a] - high[:, b], low[:, b] - high[:, a])  # (N, 2) box gap per axis
-        meet = np.maximum(gap[:, 0], gap[:, 1]) <= 2 * r + 1e-9 * (1.0 + float(np.abs(world.bounds).max()))
+        meet = np.maximum(gap[:, 0], gap[:, 1]) <= 2 * r + _box_rounding(world.bounds)
         (conf,) = np.nonzero(ok & meet)
         if len(conf):
             hit = _near(_lines(points, conf, a), _lines(points, conf, b), 2 * r)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.genetic import minimize
+from clew_ros.core.reach import approach_cell
 from clew_ros.core.search import PlanningContext, search_transit
 from clew_ros.core.tree import LandmarkTree, landmark_features
 
@@ -37,11 +38,6 @@ class Exploration:
 
     fields: dict
     distance: float
-
-
-def _approach_cell(grasp_rel: np.ndarray, cells: int) -> int:
-    """The approach cell of a grasp: the last link's direction in the object frame is ``-grasp_rel[2]``."""
-    return int(np.mod(-grasp_rel[2], 2.0 * np.pi) / (2.0 * np.pi) * cells) % cells
 
 
 class Explorer:
@@ -71,7 +67,8 @@ class Explorer:
                 self._transits[key] = self._transit(landmark, grasp, None)
             return self._transits[key]
         cached = self._transits.get(key)
-        if cached is not None and approach[_approach_cell(cached.grasp_rel, len(approach))]:
+        # the last link's direction in the object frame is -grasp_rel[2]
+        if cached is not None and approach[approach_cell(-cached.grasp_rel[2], len(approach))]:
             return cached
         if key in self._aimed:
             return self._aimed[key]

@@ -18,7 +18,8 @@ from clew_ros.core.collision import is_valid
 from clew_ros.core.kinematics import compose, relative, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["within_reach", "goal_within_reach", "approach_cells", "approach_excess", "APPROACH_CELLS", "two_link_grasps", "carry_cells"]
+__all__ = ["within_reach", "goal_within_reach", "APPROACH_CELLS", "approach_cell", "approach_cells", "carry_cells",
+           "approach_excess", "two_link_grasps"]
 
 
 def within_reach(world: World, point: np.ndarray, slack: float = 0.0, lengths: np.ndarray | None = None) -> bool:
@@ -55,6 +56,16 @@ def goal_within_reach(world: World, grasp_rel: np.ndarray, goal: np.ndarray) -> 
 APPROACH_CELLS = 720
 
 
+def _cell_centres(cells: int = APPROACH_CELLS) -> np.ndarray:
+    """Approach angle at the centre of each cell: cell ``i`` is centred on ``(i + 0.5) 2 pi / cells``."""
+    return (np.arange(cells) + 0.5) * 2.0 * np.pi / cells
+
+
+def approach_cell(psi: np.ndarray | float, cells: int = APPROACH_CELLS) -> np.ndarray:
+    """Index of the cell holding approach angle ``psi`` (rad, any turn)."""
+    return (np.mod(psi, 2.0 * np.pi) / (2.0 * np.pi) * cells).astype(int) % cells
+
+
 def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_spread: float = 0.0,
                    position_slack: float = 0.0) -> np.ndarray:
     """Which approach angles could hold grasp ``grasp`` of the object at ``object_pose``.
@@ -77,14 +88,12 @@ def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_s
     inner = max(0.0, 2.0 * float(rest.max()) - float(rest.sum()))
     outer = float(rest.sum())
     grasp_point = np.asarray(world.object.grasps[grasp], float)
-    x, y, theta = np.asarray(object_pose, float)
-    c, s = np.cos(theta), np.sin(theta)
-    point = np.array([x + c * grasp_point[0] - s * grasp_point[1], y + s * grasp_point[0] + c * grasp_point[1]])
-    v = point - robot.base
+    theta = float(object_pose[2])
+    v = transform_points(np.asarray(object_pose, float), grasp_point[None])[0] - robot.base
     distance = float(np.hypot(*v))
     spread = min(float(angle_spread), np.pi)
     half = np.pi / cells + spread  # half-width of the absolute directions a cell stands for
-    psi = (np.arange(cells) + 0.5) * 2.0 * np.pi / cells
+    psi = _cell_centres(cells)
     # the last joint is at point - last * u, u = dir(theta + psi): |joint - base|^2 =
     # distance^2 + last^2 - 2 last distance cos(angle(u, v)), extreme at the cell's extreme angles
     delta = np.abs((theta + psi - np.arctan2(v[1], v[0]) + np.pi) % (2.0 * np.pi) - np.pi)
@@ -101,7 +110,7 @@ def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     piecewise linear between cell centres so that it has a slope to follow, 0 between the centres
     of allowed cells and at most half a cell's width inside the edge cells of an allowed run."""
     count = len(cells)
-    centres = (np.arange(count) + 0.5) * 2.0 * np.pi / count
+    centres = _cell_centres(count)
     allowed = centres[cells]
     gap = np.abs((centres[:, None] - allowed[None] + np.pi) % (2.0 * np.pi) - np.pi)
     distance = np.min(gap, axis=1) if len(allowed) else np.full(count, np.pi)
@@ -164,7 +173,7 @@ def carry_cells(world: World, goal: np.ndarray, grasp: int) -> np.ndarray:
     robot = world.robot
     cells = APPROACH_CELLS
     grasp_point = np.asarray(world.object.grasps[grasp], float)
-    psi = (np.arange(cells) + 0.5) * 2.0 * np.pi / cells
+    psi = _cell_centres(cells)
     c, s = np.cos(-psi), np.sin(-psi)
     last = float(robot.link_lengths[-1])
     virtual = np.hypot(last - (c * grasp_point[0] - s * grasp_point[1]), -(s * grasp_point[0] + c * grasp_point[1]))

@@ -18,7 +18,7 @@ import numpy as np
 from clew_ros.core.genetic import minimize
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, run_manhattan, single_moves
-from clew_ros.core.reach import approach_excess, goal_within_reach, two_link_grasps, within_reach
+from clew_ros.core.reach import approach_cell, approach_excess, goal_within_reach, two_link_grasps, within_reach
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
@@ -181,9 +181,8 @@ def _holding_configurations(world: World, object_pose: np.ndarray, grasp: int,
     holds = two_link_grasps(world, object_pose, grasp)
     if approach is None or not len(holds):
         return holds
-    psi = np.mod(tip_poses(world.robot, holds)[:, 2] - object_pose[2], 2.0 * np.pi)
-    cells = (psi / (2.0 * np.pi) * len(approach)).astype(int) % len(approach)
-    return holds[approach[cells]]
+    psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]
+    return holds[approach[approach_cell(psi, len(approach))]]
 
 
 def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:

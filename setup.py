@@ -28,6 +28,7 @@ setup(
     python_requires=">=3.10",
     install_requires=[
         "numpy>=1.26",
+        "numba>=0.59",  # the compiled planning kernel (clew_ros/core/kernel.py)
         "shapely>=2.0",
         "pyyaml>=6.0",
         "mcap>=1.2",

@@ -16,6 +16,7 @@ import time
 
 from benchmarks.families import all_worlds, select
 from clew_ros.core.clew import plan
+from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import plan_to_dict, validate_plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import world_from_parameters
@@ -32,6 +33,7 @@ def run_world(name: str, seeds: list[int], time_limit_s: float, validate: bool =
         raise SystemExit(f"worker: expected one world named {name!r}, found {len(matches)}")
     bench = matches[0]
     world = world_from_parameters(bench.parameters)
+    warm_up_s = warm_up()  # compile or load the kernel first, as clew_plan and the node do
     base_rss = _maxrss_mb()
     runs = []
     for seed in seeds:
@@ -54,7 +56,7 @@ def run_world(name: str, seeds: list[int], time_limit_s: float, validate: bool =
         if validate and result.success:
             record["valid"] = not validate_plan(world, plan_to_dict(world, result))
         runs.append(record)
-    return {"world": bench.name, "time_limit_s": time_limit_s, "runs": runs,
+    return {"world": bench.name, "time_limit_s": time_limit_s, "runs": runs, "warm_up_s": warm_up_s,
             "rss_before_mb": base_rss, "peak_rss_mb": _maxrss_mb()}
 
 

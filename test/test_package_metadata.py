@@ -27,12 +27,13 @@ REQUIRED_EXEC_DEPENDS = {
     "diagnostic_msgs",
     "action_msgs",
     "python3-numpy",
+    "python3-numba",
     "python3-shapely",
     "python3-yaml",
 }
 
 #: Python modules clew_ros imports -> their rosdep key (ROS packages are their own key).
-ROSDEP_KEYS = {"numpy": "python3-numpy", "shapely": "python3-shapely", "yaml": "python3-yaml", "PIL": "python3-pil"}
+ROSDEP_KEYS = {"numpy": "python3-numpy", "numba": "python3-numba", "shapely": "python3-shapely", "yaml": "python3-yaml", "PIL": "python3-pil"}
 #: Imported, but with no rosdep key (setup.py's install_requires), or optional (imported under try).
 NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags"}
 

@@ -55,6 +55,7 @@ from visualization_msgs.msg import MarkerArray
 
 from clew_ros.core.clew import Progress, plan
 from clew_ros.core.errors import ParameterError
+from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import plan_to_dict, validate_plan
 from clew_ros.core.settings import Outcome, Termination
 from clew_ros.core.tree import LandmarkTree
@@ -159,6 +160,10 @@ class PlannerNode(Node):
         self._recorder_api: tuple[Any, str] | None = None
         self._pending_world_change = False  # set by on_set, republished by post_set
         self._config = self._declare_parameters()
+        # compile the planning kernel (or load numba's cache) now, so that no plan pays for it
+        warm_up_s = warm_up()
+        if warm_up_s > 1.0:
+            self.get_logger().info(f"planning kernel compiled in {warm_up_s:.1f} s (cached for the next start)")
 
         self._pubs = {
             "status": self.create_publisher(GoalStatusArray, "~/status", LATCHED_QOS),

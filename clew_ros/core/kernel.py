@@ -1,0 +1,445 @@
+"""The compiled kernel: free intervals and Manhattan decoding over whole batches (numba).
+
+What :mod:`clew_ros.core.manhattan` describes is computed here, one compiled
+call per batch: forward kinematics, the closed-form free interval of the
+moving joint (contact angles of everything that turns with it against
+everything that does not, after Lozano-Perez 1987), bouncing, and the whole
+Manhattan path of every individual of a population. The world is packed
+once into plain arrays (:func:`packed`); the kernels take arrays, not
+objects, and release the GIL.
+
+Free interval of joint ``j`` at configuration ``q``. When ``j`` turns, links
+``j..n-1`` (and in transfer the carried object) turn rigidly about
+``p_j``. Two segments kept ``offset`` apart first touch where an end point of
+one, moving on its circle about the pivot, meets the *stadium* (the segment
+inflated by ``offset``) of the other: circle-line and circle-circle
+intersections. The pairs, each checked both ways round:
+
+* moving link vs obstacle edge: link radius ``r``;
+* moving link vs static link (two or more apart, ``self_collision``): ``2 r``;
+* transit: moving link vs the resting object shrunk by ``grasp_tolerance``: 0;
+* transfer: object edge vs obstacle edge: 0; shrunk object vs static link: 0.
+
+An end point closer than ``offset + 1.5 margin`` is kept only ``offset``
+away (it starts there), otherwise ``offset + margin``. Moving joints and,
+in transfer, the object's vertices stay inside the bounds (inset ``r`` and
+0, plus the margin). The nearest contact each way, the joint limits and
+``2 pi`` bound the interval, backed off by :data:`BACKOFF_RAD`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numba
+import numpy as np
+
+from clew_ros.core.collision import scene_of
+from clew_ros.core.world import World
+
+__all__ = ["PackedWorld", "packed", "decode", "intervals", "bounce_array", "warm_up", "MAX_MOVE_RAD", "BACKOFF_RAD"]
+
+#: Largest move of one joint in one Manhattan move (rad), as in the paper.
+MAX_MOVE_RAD = 2.0 * math.pi
+#: Free intervals stop this far (rad) short of the first contact.
+BACKOFF_RAD = 1e-6
+_TWO_PI = 2.0 * math.pi
+#: A contact closer than this to the current angle (rad) is where the start touches, not a crossing.
+_AT_START = 1e-12
+
+_jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+
+
+@dataclass(frozen=True, eq=False)
+class PackedWorld:
+    """A world's geometry as contiguous float64 arrays, the kernel's only view of it."""
+
+    base: np.ndarray  # (2,)
+    lengths: np.ndarray  # (n,)
+    lower: np.ndarray  # (n,)
+    upper: np.ndarray  # (n,)
+    link_radius: float
+    self_collision: bool
+    bounds: np.ndarray  # (4,) xmin, ymin, xmax, ymax
+    obstacle_edges: np.ndarray  # (E, 2, 2)
+    object_edges: np.ndarray  # (V, 2, 2) object frame
+    shrunk_edges: np.ndarray  # (Es, 2, 2) object frame
+
+    @property
+    def pairs_per_move(self) -> int:
+        """Rough count of piece pairs one free interval checks (for splitting huge batches)."""
+        n = len(self.lengths)
+        e = len(self.obstacle_edges)
+        return 1 + n * (e + n + len(self.shrunk_edges)) + len(self.object_edges) * e
+
+    def arguments(self) -> tuple:
+        return (self.base, self.lengths, self.lower, self.upper, self.link_radius, self.self_collision,
+                self.bounds, self.obstacle_edges, self.object_edges, self.shrunk_edges)
+
+
+def _contiguous(array: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    return np.array(array, dtype=np.float64, order="C").reshape(shape)  # a writable copy: one signature
+
+
+def _arg(array: np.ndarray) -> np.ndarray:
+    """``array`` as the kernels take it: C-contiguous, writable float64 (numba compiles one version per
+    layout and write flag, so read-only or strided arrays would compile again)."""
+    return np.require(array, np.float64, ("C", "W"))
+
+
+@lru_cache(maxsize=64)
+def packed(world: World) -> PackedWorld:
+    """``world`` packed for the kernel (once per world object)."""
+    scene = scene_of(world)
+    robot = world.robot
+    n = robot.dof
+    return PackedWorld(_contiguous(robot.base, (2,)), _contiguous(robot.link_lengths, (n,)),
+                       _contiguous(robot.joint_lower, (n,)), _contiguous(robot.joint_upper, (n,)),
+                       float(scene.link_radius), bool(robot.self_collision), _contiguous(world.bounds, (4,)),
+                       _contiguous(scene.obstacle_edges, (-1, 2, 2)), _contiguous(scene.object_edges, (-1, 2, 2)),
+                       _contiguous(scene.shrunk_edges, (-1, 2, 2)))
+
+
+# --------------------------------------------------------------------------- scalar pieces
+
+
+@_jit
+def _bounce(x: float, low: float, high: float) -> float:
+    """Fold ``x`` into ``[low, high]`` with a triangular wave of period ``2 (high - low)``."""
+    width = high - low
+    if not width > 0.0:
+        return low
+    period = 2.0 * width
+    u = (x - low) - period * math.floor((x - low) / period)
+    folded = low + (u if u <= width else period - u)
+    return min(max(folded, low), high)
+
+
+@_jit
+def _nearest(phi: float, best: np.ndarray) -> None:
+    """Fold a candidate rotation ``phi`` (rad, any turn) into ``(0, 2 pi]`` and keep the nearest
+    contact each way: ``best[0]`` the smallest (turning up), ``best[1]`` the largest (turning down)."""
+    if phi != phi:
+        return
+    phi -= _TWO_PI * math.floor(phi / _TWO_PI)
+    if phi < _AT_START:
+        return
+    if phi < best[0]:
+        best[0] = phi
+    if phi > best[1]:
+        best[1] = phi
+
+
+@_jit
+def _point_segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
+    abx, aby = bx - ax, by - ay
+    apx, apy = px - ax, py - ay
+    length2 = abx * abx + aby * aby
+    t = (apx * abx + apy * aby) / length2 if length2 > 0.0 else 0.0
+    t = min(max(t, 0.0), 1.0)
+    dx, dy = apx - t * abx, apy - t * aby
+    return math.sqrt(dx * dx + dy * dy)
+
+
+@_jit
+def _point_meets_stadium(px: float, py: float, ax: float, ay: float, bx: float, by: float,
+                         keep: float, margin: float, turn: float, best: np.ndarray) -> None:
+    """Rotation angles (times ``turn``) at which point ``p``, turning about the origin, meets the
+    boundary of the stadium of radius ``keep`` (+ ``margin`` if it starts clear of it) around
+    segment ``[a, b]``; all relative to the pivot."""
+    rho = math.sqrt(px * px + py * py)
+    ra = math.sqrt(ax * ax + ay * ay)
+    rb = math.sqrt(bx * bx + by * by)
+    near = _point_segment_distance(0.0, 0.0, ax, ay, bx, by)
+    reach = keep + margin
+    if rho < near - reach or rho > max(ra, rb) + reach:
+        return  # the point's circle misses the stadium's annulus about the pivot
+    if _point_segment_distance(px, py, ax, ay, bx, by) > keep + 1.5 * margin:
+        keep += margin
+    start = math.atan2(py, px)
+    rho2 = rho * rho
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    if length2 > 0.0:
+        scale = keep / math.sqrt(length2)
+        nx, ny = -dy * scale, dx * scale
+        for side in (1.0, -1.0):  # the two offset lines
+            lx, ly = ax + side * nx, ay + side * ny
+            ad = lx * dx + ly * dy
+            disc = ad * ad - length2 * (lx * lx + ly * ly - rho2)
+            if disc >= 0.0:
+                root = math.sqrt(disc)
+                for sign in (1.0, -1.0):
+                    t = (-ad + sign * root) / length2
+                    if 0.0 <= t <= 1.0:
+                        _nearest(turn * (math.atan2(ly + t * dy, lx + t * dx) - start), best)
+    if keep > 0.0:
+        for ex, ey, e in ((ax, ay, ra), (bx, by, rb)):  # the two end circles
+            denominator = 2.0 * rho * e
+            if denominator > 0.0:
+                cos_beta = (rho2 + e * e - keep * keep) / denominator
+                if abs(cos_beta) <= 1.0:
+                    beta = math.acos(cos_beta)
+                    base = math.atan2(ey, ex) - start
+                    _nearest(turn * (base + beta), best)
+                    _nearest(turn * (base - beta), best)
+
+
+@_jit
+def _pair(moving: np.ndarray, i: int, static: np.ndarray, s: int, keep: float, margin: float,
+          best: np.ndarray) -> None:
+    """Segment ``moving[i]`` turning against ``static[s]`` (both ``(., 2, 2)`` relative to the pivot):
+    the moving end points against the static stadium, and the static end points against the
+    moving stadium (turning the other way)."""
+    ax, ay, bx, by = moving[i, 0, 0], moving[i, 0, 1], moving[i, 1, 0], moving[i, 1, 1]
+    cx, cy, dx, dy = static[s, 0, 0], static[s, 0, 1], static[s, 1, 0], static[s, 1, 1]
+    _point_meets_stadium(ax, ay, cx, cy, dx, dy, keep, margin, 1.0, best)
+    _point_meets_stadium(bx, by, cx, cy, dx, dy, keep, margin, 1.0, best)
+    _point_meets_stadium(cx, cy, ax, ay, bx, by, keep, margin, -1.0, best)
+    _point_meets_stadium(dx, dy, ax, ay, bx, by, keep, margin, -1.0, best)
+
+
+@_jit
+def _annulus(segments: np.ndarray, radii: np.ndarray) -> None:
+    """Nearest and farthest distance ``radii (C, 2)`` of each segment ``(C, 2, 2)`` from the origin."""
+    for c in range(segments.shape[0]):
+        ax, ay, bx, by = segments[c, 0, 0], segments[c, 0, 1], segments[c, 1, 0], segments[c, 1, 1]
+        radii[c, 0] = _point_segment_distance(0.0, 0.0, ax, ay, bx, by)
+        radii[c, 1] = max(math.sqrt(ax * ax + ay * ay), math.sqrt(bx * bx + by * by))
+
+
+@_jit
+def _pieces(moving: np.ndarray, m_radii: np.ndarray, static: np.ndarray, s_radii: np.ndarray,
+            s_first: int, s_last: int, keep: float, margin: float, best: np.ndarray) -> None:
+    """Every moving piece against static pieces ``s_first .. s_last - 1``, kept ``keep`` apart.
+    A pair whose annuli about the pivot (grown by the clearance) do not overlap cannot meet."""
+    reach = keep + margin
+    for i in range(moving.shape[0]):
+        low, high = m_radii[i, 0] - reach, m_radii[i, 1] + reach
+        for s in range(s_first, s_last):
+            if s_radii[s, 1] < low or s_radii[s, 0] > high:
+                continue
+            _pair(moving, i, static, s, keep, margin, best)
+
+
+@_jit
+def _place(edges: np.ndarray, x: float, y: float, theta: float, px: float, py: float, out: np.ndarray) -> None:
+    """``edges`` (object frame) at pose ``(x, y, theta)``, relative to the pivot ``p``, into ``out``."""
+    c, s = math.cos(theta), math.sin(theta)
+    for e in range(edges.shape[0]):
+        for v in range(2):
+            ex, ey = edges[e, v, 0], edges[e, v, 1]
+            out[e, v, 0] = x + c * ex - s * ey - px
+            out[e, v, 1] = y + s * ex + c * ey - py
+
+
+@_jit
+def _bound_crossings(px: float, py: float, rx: float, ry: float, limit: float, bounds: np.ndarray,
+                     best: np.ndarray) -> None:
+    """Rotations at which the point ``p + r`` (turning about ``p``) reaches a bound moved in by ``limit``."""
+    rho = math.sqrt(rx * rx + ry * ry)
+    if not rho > 0.0:
+        return
+    xmin, ymin, xmax, ymax = bounds[0] + limit, bounds[1] + limit, bounds[2] - limit, bounds[3] - limit
+    if px - rho > xmin and px + rho < xmax and py - rho > ymin and py + rho < ymax:
+        return  # its circle reaches no bound
+    alpha = math.atan2(ry, rx)
+    for bound in (xmin, xmax):
+        c = (bound - px) / rho
+        if abs(c) <= 1.0:
+            base = math.acos(c)
+            _nearest(base - alpha, best)
+            _nearest(-base - alpha, best)
+    for bound in (ymin, ymax):
+        c = (bound - py) / rho
+        if abs(c) <= 1.0:
+            base = math.asin(c)
+            _nearest(base - alpha, best)
+            _nearest(math.pi - base - alpha, best)
+
+
+# --------------------------------------------------------------------------- one free interval
+
+
+@_jit
+def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margin: float,
+              base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
+              self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
+              shrunk_edges: np.ndarray, scratch: tuple) -> tuple[float, float]:
+    """Free interval ``(low <= 0, high >= 0)`` of ``joint`` at configuration ``q`` ``(n,)``.
+
+    ``pose``: the resting object's pose (transit) or its pose in the end-effector frame
+    (transfer). ``scratch`` holds the work arrays of :func:`_scratch`.
+    """
+    links, link_radii, obstacle_rel, obstacle_radii, object_rel, object_radii, shrunk_rel, shrunk_radii, best = \
+        scratch
+    n = lengths.shape[0]
+    # forward kinematics, relative to the pivot p_joint
+    x, y, phi = base[0], base[1], 0.0
+    px, py = x, y
+    for i in range(n):
+        if i == joint:
+            px, py = x, y
+        phi += q[i]
+        nx, ny = x + lengths[i] * math.cos(phi), y + lengths[i] * math.sin(phi)
+        links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1] = x, y, nx, ny
+        x, y = nx, ny
+    tip_x, tip_y, tip_theta = x, y, phi
+    for i in range(n):
+        for v in range(2):
+            links[i, v, 0] -= px
+            links[i, v, 1] -= py
+    _annulus(links, link_radii)
+    for e in range(obstacles.shape[0]):
+        for v in range(2):
+            obstacle_rel[e, v, 0] = obstacles[e, v, 0] - px
+            obstacle_rel[e, v, 1] = obstacles[e, v, 1] - py
+    _annulus(obstacle_rel, obstacle_radii)
+    if transfer:  # the object's pose: the tip's frame composed with the grasp
+        c, s = math.cos(tip_theta), math.sin(tip_theta)
+        ox, oy, otheta = tip_x + c * pose[0] - s * pose[1], tip_y + s * pose[0] + c * pose[1], tip_theta + pose[2]
+    else:
+        ox, oy, otheta = pose[0], pose[1], pose[2]
+    _place(shrunk_edges, ox, oy, otheta, px, py, shrunk_rel)
+    _annulus(shrunk_rel, shrunk_radii)
+    best[0], best[1] = math.inf, -math.inf
+    moving_links = links[joint:]
+    moving_radii = link_radii[joint:]
+    n_obstacles = obstacles.shape[0]
+    _pieces(moving_links, moving_radii, obstacle_rel, obstacle_radii, 0, n_obstacles, r, margin, best)
+    if self_collision:
+        for i in range(joint, n):
+            if i - 2 >= 0:
+                _pieces(links[i:i + 1], link_radii[i:i + 1], links, link_radii, 0, min(joint, i - 1),
+                        2.0 * r, margin, best)
+    if transfer:
+        _place(object_edges, ox, oy, otheta, px, py, object_rel)
+        _annulus(object_rel, object_radii)
+        _pieces(object_rel, object_radii, obstacle_rel, obstacle_radii, 0, n_obstacles, 0.0, margin, best)
+        _pieces(shrunk_rel, shrunk_radii, links, link_radii, 0, joint, 0.0, margin, best)
+    else:
+        _pieces(moving_links, moving_radii, shrunk_rel, shrunk_radii, 0, shrunk_rel.shape[0], 0.0, margin, best)
+    # the moving joints (inset r) and the carried object's vertices (inset 0) stay inside the bounds
+    for i in range(joint, n):
+        _bound_crossings(px, py, links[i, 1, 0], links[i, 1, 1], r + margin, bounds, best)
+    if transfer:
+        for e in range(object_rel.shape[0]):
+            _bound_crossings(px, py, object_rel[e, 0, 0], object_rel[e, 0, 1], margin, bounds, best)
+    hi = best[0]
+    lo = best[1] - _TWO_PI  # -inf when nothing was met
+    up = min(max(upper[joint] - q[joint], 0.0), MAX_MOVE_RAD)
+    down = min(max(lower[joint] - q[joint], -MAX_MOVE_RAD), 0.0)
+    return max(down, min(lo + BACKOFF_RAD, 0.0)), min(up, max(hi - BACKOFF_RAD, 0.0))
+
+
+@_jit
+def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple:
+    return (np.empty((n, 2, 2)), np.empty((n, 2)), np.empty((n_obstacles, 2, 2)), np.empty((n_obstacles, 2)),
+            np.empty((n_object, 2, 2)), np.empty((n_object, 2)), np.empty((n_shrunk, 2, 2)),
+            np.empty((n_shrunk, 2)), np.empty(2))
+
+
+# --------------------------------------------------------------------------- batches
+
+
+@_jit
+def _decode(waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool, poses: np.ndarray,
+            margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
+            self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
+            shrunk_edges: np.ndarray) -> None:
+    """Fill columns ``first .. last - 1`` (>= 1) of ``waypoints`` ``(B, k n + 1, n)`` from column
+    ``first - 1``: move ``c`` turns joint ``(c - 1) mod n`` by gene ``(c - 1)`` bounced into its
+    free interval. ``poses`` ``(B, 3)`` per individual."""
+    n = lengths.shape[0]
+    scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
+    q = np.empty(n)
+    for b in range(waypoints.shape[0]):
+        for j in range(n):
+            q[j] = waypoints[b, first - 1, j]
+        for column in range(first, last):
+            k, joint = (column - 1) // n, (column - 1) % n
+            low, high = _interval(q, joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
+                                  self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
+            q[joint] += _bounce(genes[b, k, joint], low, high)
+            for j in range(n):
+                waypoints[b, column, j] = q[j]
+
+
+@_jit
+def _intervals(q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray, margin: float, out: np.ndarray,
+               base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
+               self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
+               shrunk_edges: np.ndarray) -> None:
+    """Free intervals ``out (B, 2)`` of ``joint`` for configurations ``q (B, n)``."""
+    scratch = _scratch(lengths.shape[0], obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
+    for b in range(q.shape[0]):
+        out[b, 0], out[b, 1] = _interval(q[b], joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
+                                         self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
+
+
+@_jit
+def _bounce_all(x: np.ndarray, low: np.ndarray, high: np.ndarray, out: np.ndarray) -> None:
+    for i in range(x.shape[0]):
+        out[i] = _bounce(x[i], low[i], high[i])
+
+
+# --------------------------------------------------------------------------- Python entry points
+
+
+def _poses(poses: np.ndarray, batch: int) -> np.ndarray:
+    poses = np.asarray(poses, dtype=np.float64)
+    return _arg(poses) if poses.shape == (batch, 3) else np.array(np.broadcast_to(poses, (batch, 3)))
+
+
+def decode(world: PackedWorld, waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
+           poses: np.ndarray, margin: float) -> None:
+    """Compiled: columns ``first .. last - 1`` of ``waypoints`` (C-contiguous float64, filled in place)."""
+    _decode(waypoints, _arg(genes), first, last, transfer,
+            _poses(poses, len(waypoints)), float(margin), *world.arguments())
+
+
+def intervals(world: PackedWorld, q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray,
+              margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """Compiled: free intervals ``(low, high)`` of ``joint`` for configurations ``q (B, n)``."""
+    q = _arg(np.atleast_2d(q))
+    out = np.empty((len(q), 2))
+    _intervals(q, int(joint), transfer, _poses(poses, len(q)), float(margin), out, *world.arguments())
+    return out[:, 0], out[:, 1]
+
+
+def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """Compiled :func:`_bounce` over arrays of one shape."""
+    x, low, high = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (x, low, high)))
+    out = np.empty(x.shape)
+    _bounce_all(_arg(x).reshape(-1), _arg(low).reshape(-1), _arg(high).reshape(-1), out.reshape(-1))
+    return out
+
+
+_WARM = False
+
+
+def warm_up() -> float:
+    """Compile every kernel (or load them from numba's on-disk cache) before the first plan.
+
+    Returns the seconds it took. numba caches next to this module when the
+    package directory is writable, else in a per-user cache directory
+    (``NUMBA_CACHE_DIR`` overrides both).
+    """
+    global _WARM
+    import time
+
+    start = time.perf_counter()
+    if not _WARM:
+        world = PackedWorld(np.zeros(2), np.ones(2), -np.pi * np.ones(2), np.pi * np.ones(2), 0.01, True,
+                            np.array([-3.0, -3.0, 3.0, 3.0]), np.array([[[1.0, 1.0], [1.2, 1.0]]]),
+                            np.array([[[0.1, 0.0], [0.0, 0.1]]]), np.zeros((0, 2, 2)))
+        waypoints = np.zeros((1, 3, 2))
+        genes = np.zeros((1, 1, 2))
+        for transfer in (False, True):
+            decode(world, waypoints, genes, 1, 3, transfer, np.zeros(3), 1e-3)
+            intervals(world, waypoints[:, 0], 0, transfer, np.zeros(3), 1e-3)
+        bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
+        _WARM = True
+    return time.perf_counter() - start

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from clew_ros.core.collision import is_placement_valid, is_valid
+from clew_ros.core.collision import exactly_valid, is_placement_valid, is_valid
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.manhattan import MAX_MOVE_RAD, free_intervals, run_manhattan
 from clew_ros.core.world import world_from_parameters
@@ -215,3 +215,33 @@ def test_the_cache_falls_back_to_a_user_directory_when_the_package_is_read_only(
     assert any("kernel" in path.name for path in cached), [str(p) for p in cached]
     first, second = (int(line.split()[-1]) for line in lines if line)
     assert first == 0 and second > 0  # the second process loaded what the first compiled
+
+
+@pytest.mark.parametrize("case", CASES, ids=[f"seed{c[0]}_{c[1]}joints" for c in CASES])
+def test_the_compiled_first_pass_never_changes_the_validity_test(case):
+    """``is_valid`` (compiled first pass, shapely for the doubtful) agrees with shapely alone on random
+    configurations and object poses, and on configurations that touch: turned to the very end of
+    their free interval (1e-6 rad short of contact) and past it by 1e-9 rad."""
+    seed, joints, obstacles, width, limit, self_collision = case
+    world, rng = random_world(seed, joints=joints, obstacles=obstacles, width=width, limit=limit,
+                              self_collision=self_collision)
+    q = rng.uniform(world.robot.joint_lower, world.robot.joint_upper, (3000, joints))
+    poses = rng.uniform((-2.4, -2.4, -np.pi), (2.4, 2.4, np.pi), (3000, 3))
+    poses[::2] = compose(tip_poses(world.robot, q[::2]), np.array([0.12, 0.0, 0.3]))  # carried
+    fast = is_valid(world, q, poses)
+    assert np.array_equal(fast, exactly_valid(world, q, poses))
+    assert fast.sum() > 30  # the fast path had valid configurations to clear
+    touching = []
+    starts = q[fast][:40]
+    for start, pose in zip(starts, poses[fast][:40], strict=True):
+        for joint in range(joints):
+            low, high = free_intervals(world, start[None], joint, object_poses=pose[None], margin_m=0.0)
+            for end, push in ((high[0], 1e-6 + 1e-9), (low[0], -1e-6 - 1e-9), (high[0], 0.0)):
+                moved = start.copy()
+                moved[joint] += end + push
+                touching.append((moved, pose))
+    q_touch = np.array([t[0] for t in touching])
+    pose_touch = np.array([t[1] for t in touching])
+    fast = is_valid(world, q_touch, pose_touch)
+    assert np.array_equal(fast, exactly_valid(world, q_touch, pose_touch))
+    assert (~fast).any()  # some of them really touch

@@ -5,8 +5,11 @@ Two views of the same static geometry, prepared once per world (:func:`scene_of`
 * exact tests with shapely 2 ufuncs on arrays of geometries (:func:`is_valid`,
   :func:`explain_invalid`), used for validation, world checks and the plan
   validator; touching counts as collision, exactly as the contract says;
-* edge arrays used by :mod:`clew_ros.core.manhattan` to compute clearances in
-  numpy when it sweeps a joint.
+* the same geometry packed into plain arrays for the compiled kernel
+  (:func:`packed_world`, :mod:`clew_ros.core.kernel`): free intervals, and a
+  first pass of :func:`is_valid` that clears every configuration valid beyond
+  doubt, so that only the doubtful ones (invalid, touching, or within rounding
+  of a threshold) reach shapely.
 """
 
 from __future__ import annotations
@@ -18,10 +21,11 @@ import numpy as np
 import shapely
 
 from clew_ros.core.geometry import polygon_edges
+from clew_ros.core.kernel import PackedWorld, clearly_valid
 from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["Scene", "scene_of", "is_valid", "explain_invalid", "explain_placement", "is_placement_valid"]
+__all__ = ["Scene", "scene_of", "packed_world", "is_valid", "explain_invalid", "explain_placement", "is_placement_valid"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,6 +66,29 @@ def scene_of(world: World) -> Scene:
     boxes = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)] for o in world.obstacles]).reshape(-1, 2, 2)
     return Scene(edges, union, polygons, polygon_edges(world.object.polygon), parts, shrunk_edges,
                  world.robot.link_width / 2.0, pairs, boxes)
+
+
+def _contiguous(array: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    return np.array(array, dtype=np.float64, order="C").reshape(shape)  # a writable copy: one kernel signature
+
+
+@lru_cache(maxsize=64)
+def packed_world(world: World) -> PackedWorld:
+    """``world``'s geometry packed into arrays for the compiled kernel (once per world object)."""
+    scene = scene_of(world)
+    robot = world.robot
+    n = robot.dof
+    obstacle_starts = np.cumsum([0] + [len(o.vertices) for o in world.obstacles]).astype(np.int64)
+    boxes = np.array([[*o.vertices.min(axis=0), *o.vertices.max(axis=0)] for o in world.obstacles])
+    shrunk_starts = np.cumsum([0] + [len(part) for part in scene.shrunk_parts]).astype(np.int64)
+    scale = max([float(np.abs(world.bounds).max()), robot.reach + float(np.abs(robot.base).max())]
+                + [float(np.abs(o.vertices).max()) for o in world.obstacles])
+    return PackedWorld(_contiguous(robot.base, (2,)), _contiguous(robot.link_lengths, (n,)),
+                       _contiguous(robot.joint_lower, (n,)), _contiguous(robot.joint_upper, (n,)),
+                       float(scene.link_radius), bool(robot.self_collision), _contiguous(world.bounds, (4,)),
+                       _contiguous(scene.obstacle_edges, (-1, 2, 2)), _contiguous(scene.object_edges, (-1, 2, 2)),
+                       _contiguous(scene.shrunk_edges, (-1, 2, 2)), obstacle_starts, _contiguous(boxes, (-1, 4)),
+                       shrunk_starts, 1e-9 * (1.0 + scale))
 
 
 #: Largest boxes x obstacles comparison done per call; beyond it one box around all obstacles.
@@ -131,9 +158,22 @@ def is_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.ndarra
 
     Returns a boolean array ``(N,)``. The object pose is where the object is,
     carried or resting; the test is the same for transit and transfer.
-    Bounding boxes in numpy pick the (configuration, link) pairs that could
-    touch something; only those go to shapely's exact test.
+    The compiled first pass (:func:`clew_ros.core.kernel.clearly_valid`)
+    clears the configurations valid beyond doubt; the others go to the exact
+    test of :func:`exactly_valid`.
     """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    object_poses = np.broadcast_to(np.asarray(object_poses, dtype=float), (len(q), 3))
+    ok = clearly_valid(packed_world(world), q, object_poses)
+    doubtful = np.flatnonzero(~ok)
+    if len(doubtful):
+        ok[doubtful] = exactly_valid(world, q[doubtful], object_poses[doubtful])
+    return ok
+
+
+def exactly_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.ndarray:
+    """:func:`is_valid` with shapely alone: bounding boxes in numpy pick the (configuration, link)
+    pairs that could touch something; only those go to shapely's exact test (GEOS)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     object_poses = np.broadcast_to(np.asarray(object_poses, dtype=float), (len(q), 3))
     scene = scene_of(world)

@@ -5,8 +5,9 @@ call per batch: forward kinematics, the closed-form free interval of the
 moving joint (contact angles of everything that turns with it against
 everything that does not, after Lozano-Perez 1987), bouncing, and the whole
 Manhattan path of every individual of a population. The world is packed
-once into plain arrays (:func:`packed`); the kernels take arrays, not
-objects, and release the GIL.
+once into plain arrays (:func:`clew_ros.core.collision.packed_world`); the
+kernels take arrays, not objects, and release the GIL. :func:`clearly_valid`
+is the compiled first pass of the validity test.
 
 Free interval of joint ``j`` at configuration ``q``. When ``j`` turns, links
 ``j..n-1`` (and in transfer the carried object) turn rigidly about
@@ -31,15 +32,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numba
 import numpy as np
 
-from clew_ros.core.collision import scene_of
-from clew_ros.core.world import World
-
-__all__ = ["PackedWorld", "packed", "decode", "intervals", "bounce_array", "warm_up", "MAX_MOVE_RAD", "BACKOFF_RAD"]
+__all__ = ["PackedWorld", "decode", "intervals", "bounce_array", "clearly_valid", "warm_up",
+           "MAX_MOVE_RAD", "BACKOFF_RAD"]
 
 #: Largest move of one joint in one Manhattan move (rad), as in the paper.
 MAX_MOVE_RAD = 2.0 * math.pi
@@ -66,6 +64,10 @@ class PackedWorld:
     obstacle_edges: np.ndarray  # (E, 2, 2)
     object_edges: np.ndarray  # (V, 2, 2) object frame
     shrunk_edges: np.ndarray  # (Es, 2, 2) object frame
+    obstacle_starts: np.ndarray  # (O + 1,) int64: obstacle o's edges are obstacle_edges[starts[o]:starts[o + 1]]
+    obstacle_boxes: np.ndarray  # (O, 4) xmin, ymin, xmax, ymax
+    shrunk_starts: np.ndarray  # (parts + 1,) int64, the shrunk object's rings in shrunk_edges
+    rounding: float  # distances within this of a threshold are left to the exact test (m)
 
     @property
     def pairs_per_move(self) -> int:
@@ -78,28 +80,16 @@ class PackedWorld:
         return (self.base, self.lengths, self.lower, self.upper, self.link_radius, self.self_collision,
                 self.bounds, self.obstacle_edges, self.object_edges, self.shrunk_edges)
 
-
-def _contiguous(array: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    return np.array(array, dtype=np.float64, order="C").reshape(shape)  # a writable copy: one signature
+    def validity_arguments(self) -> tuple:
+        return (self.base, self.lengths, self.link_radius, self.self_collision, self.bounds, self.obstacle_edges,
+                self.obstacle_starts, self.obstacle_boxes, self.object_edges, self.shrunk_edges, self.shrunk_starts,
+                self.rounding)
 
 
 def _arg(array: np.ndarray) -> np.ndarray:
     """``array`` as the kernels take it: C-contiguous, writable float64 (numba compiles one version per
     layout and write flag, so read-only or strided arrays would compile again)."""
     return np.require(array, np.float64, ("C", "W"))
-
-
-@lru_cache(maxsize=64)
-def packed(world: World) -> PackedWorld:
-    """``world`` packed for the kernel (once per world object)."""
-    scene = scene_of(world)
-    robot = world.robot
-    n = robot.dof
-    return PackedWorld(_contiguous(robot.base, (2,)), _contiguous(robot.link_lengths, (n,)),
-                       _contiguous(robot.joint_lower, (n,)), _contiguous(robot.joint_upper, (n,)),
-                       float(scene.link_radius), bool(robot.self_collision), _contiguous(world.bounds, (4,)),
-                       _contiguous(scene.obstacle_edges, (-1, 2, 2)), _contiguous(scene.object_edges, (-1, 2, 2)),
-                       _contiguous(scene.shrunk_edges, (-1, 2, 2)))
 
 
 # --------------------------------------------------------------------------- scalar pieces
@@ -385,6 +375,124 @@ def _bounce_all(x: np.ndarray, low: np.ndarray, high: np.ndarray, out: np.ndarra
         out[i] = _bounce(x[i], low[i], high[i])
 
 
+# --------------------------------------------------------------------------- validity
+
+
+@_jit
+def _crosses(ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float) -> bool:
+    """Whether segments ``[a, b]`` and ``[c, d]`` cross at a point inside both (orientations differ)."""
+    o1 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    o2 = (bx - ax) * (dy - ay) - (by - ay) * (dx - ax)
+    o3 = (dx - cx) * (ay - cy) - (dy - cy) * (ax - cx)
+    o4 = (dx - cx) * (by - cy) - (dy - cy) * (bx - cx)
+    return o1 * o2 < 0.0 and o3 * o4 < 0.0
+
+
+@_jit
+def _segments_apart(ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float,
+                    gap: float) -> bool:
+    """Whether segments ``[a, b]`` and ``[c, d]`` are farther apart than ``gap``."""
+    if _crosses(ax, ay, bx, by, cx, cy, dx, dy):
+        return False
+    return (_point_segment_distance(ax, ay, cx, cy, dx, dy) > gap and _point_segment_distance(bx, by, cx, cy, dx, dy) > gap
+            and _point_segment_distance(cx, cy, ax, ay, bx, by) > gap
+            and _point_segment_distance(dx, dy, ax, ay, bx, by) > gap)
+
+
+@_jit
+def _inside_ring(px: float, py: float, edges: np.ndarray, first: int, last: int) -> bool:
+    """Point in the polygon bounded by ``edges[first:last]`` (crossing number; the point must not be
+    on the boundary, which the callers have ruled out)."""
+    inside = False
+    for e in range(first, last):
+        ax, ay, bx, by = edges[e, 0, 0], edges[e, 0, 1], edges[e, 1, 0], edges[e, 1, 1]
+        if (ay > py) != (by > py):
+            if px < ax + (py - ay) * (bx - ax) / (by - ay):
+                inside = not inside
+    return inside
+
+
+@_jit
+def _segment_clear_of_ring(ax: float, ay: float, bx: float, by: float, edges: np.ndarray, first: int, last: int,
+                           gap: float) -> bool:
+    """Segment ``[a, b]`` farther than ``gap`` from the polygon ``edges[first:last]`` and not inside it."""
+    for e in range(first, last):
+        if not _segments_apart(ax, ay, bx, by, edges[e, 0, 0], edges[e, 0, 1], edges[e, 1, 0], edges[e, 1, 1], gap):
+            return False
+    return not _inside_ring(ax, ay, edges, first, last)
+
+
+@_jit
+def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.ndarray, lengths: np.ndarray,
+                   r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
+                   obstacle_starts: np.ndarray, boxes: np.ndarray, object_edges: np.ndarray,
+                   shrunk_edges: np.ndarray, shrunk_starts: np.ndarray, eps: float) -> None:
+    """``out[b]``: configuration ``q[b]`` with the object at ``poses[b]`` passes the validity test of
+    interface.md section 1 with every distance at least ``eps`` past its threshold. False means
+    "not sure": the exact test decides (touching, within rounding, or invalid)."""
+    n = lengths.shape[0]
+    links = np.empty((n, 2, 2))
+    shape = np.empty((object_edges.shape[0], 2, 2))
+    shrunk = np.empty((shrunk_edges.shape[0], 2, 2))
+    xmin, ymin, xmax, ymax = bounds[0], bounds[1], bounds[2], bounds[3]
+    for b in range(q.shape[0]):
+        out[b] = False
+        x, y, phi = base[0], base[1], 0.0
+        inside = xmin + r + eps < x < xmax - r - eps and ymin + r + eps < y < ymax - r - eps
+        for i in range(n):
+            phi += q[b, i]
+            nx, ny = x + lengths[i] * math.cos(phi), y + lengths[i] * math.sin(phi)
+            links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1] = x, y, nx, ny
+            x, y = nx, ny
+            inside = inside and xmin + r + eps < x < xmax - r - eps and ymin + r + eps < y < ymax - r - eps
+        if not inside:
+            continue
+        _place(object_edges, poses[b, 0], poses[b, 1], poses[b, 2], 0.0, 0.0, shape)
+        _place(shrunk_edges, poses[b, 0], poses[b, 1], poses[b, 2], 0.0, 0.0, shrunk)
+        ok = True
+        for e in range(shape.shape[0]):  # the object inside the bounds
+            vx, vy = shape[e, 0, 0], shape[e, 0, 1]
+            if not (xmin + eps < vx < xmax - eps and ymin + eps < vy < ymax - eps):
+                ok = False
+        for o in range(boxes.shape[0]):
+            if not ok:
+                break
+            first, last = obstacle_starts[o], obstacle_starts[o + 1]
+            lx, ly, hx, hy = boxes[o, 0] - r - eps, boxes[o, 1] - r - eps, boxes[o, 2] + r + eps, boxes[o, 3] + r + eps
+            for i in range(n):  # links kept r away from the obstacle
+                ax, ay, bx, by = links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1]
+                if max(ax, bx) < lx or min(ax, bx) > hx or max(ay, by) < ly or min(ay, by) > hy:
+                    continue
+                if not _segment_clear_of_ring(ax, ay, bx, by, obstacles, first, last, r + eps):
+                    ok = False
+                    break
+            if not ok:
+                break
+            for e in range(shape.shape[0]):  # the object off the obstacle: boundaries apart, neither inside
+                if not _segment_clear_of_ring(shape[e, 0, 0], shape[e, 0, 1], shape[e, 1, 0], shape[e, 1, 1],
+                                              obstacles, first, last, eps):
+                    ok = False
+                    break
+            if ok and _inside_ring(obstacles[first, 0, 0], obstacles[first, 0, 1], shape, 0, shape.shape[0]):
+                ok = False
+        for part in range(shrunk_starts.shape[0] - 1):  # links out of the object shrunk by the tolerance
+            if not ok:
+                break
+            for i in range(n):
+                if not _segment_clear_of_ring(links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1], shrunk,
+                                              shrunk_starts[part], shrunk_starts[part + 1], eps):
+                    ok = False
+                    break
+        if ok and self_collision:
+            for a in range(n):
+                for c in range(a + 2, n):
+                    if not _segments_apart(links[a, 0, 0], links[a, 0, 1], links[a, 1, 0], links[a, 1, 1],
+                                           links[c, 0, 0], links[c, 0, 1], links[c, 1, 0], links[c, 1, 1],
+                                           2.0 * r + eps):
+                        ok = False
+        out[b] = ok
+
+
 # --------------------------------------------------------------------------- Python entry points
 
 
@@ -407,6 +515,15 @@ def intervals(world: PackedWorld, q: np.ndarray, joint: int, transfer: bool, pos
     out = np.empty((len(q), 2))
     _intervals(q, int(joint), transfer, _poses(poses, len(q)), float(margin), out, *world.arguments())
     return out[:, 0], out[:, 1]
+
+
+def clearly_valid(world: PackedWorld, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """Compiled: which configurations ``q (B, n)`` (object at ``poses``) are valid beyond doubt; the
+    others (invalid, touching, or within rounding of a threshold) need the exact test."""
+    q = _arg(np.atleast_2d(q))
+    out = np.empty(len(q), dtype=np.bool_)
+    _clearly_valid(q, _poses(poses, len(q)), out, *world.validity_arguments())
+    return out
 
 
 def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -434,12 +551,14 @@ def warm_up() -> float:
     if not _WARM:
         world = PackedWorld(np.zeros(2), np.ones(2), -np.pi * np.ones(2), np.pi * np.ones(2), 0.01, True,
                             np.array([-3.0, -3.0, 3.0, 3.0]), np.array([[[1.0, 1.0], [1.2, 1.0]]]),
-                            np.array([[[0.1, 0.0], [0.0, 0.1]]]), np.zeros((0, 2, 2)))
+                            np.array([[[0.1, 0.0], [0.0, 0.1]]]), np.zeros((0, 2, 2)), np.array([0, 1]),
+                            np.array([[1.0, 1.0, 1.2, 1.0]]), np.array([0]), 1e-9)
         waypoints = np.zeros((1, 3, 2))
         genes = np.zeros((1, 1, 2))
         for transfer in (False, True):
             decode(world, waypoints, genes, 1, 3, transfer, np.zeros(3), 1e-3)
             intervals(world, waypoints[:, 0], 0, transfer, np.zeros(3), 1e-3)
         bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
+        clearly_valid(world, waypoints[:, 0], np.zeros(3))
         _WARM = True
     return time.perf_counter() - start

@@ -23,6 +23,7 @@ from typing import Callable
 import numpy as np
 
 from clew_ros.core import kernel
+from clew_ros.core.collision import packed_world
 from clew_ros.core.kernel import BACKOFF_RAD, MAX_MOVE_RAD
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.world import World
@@ -64,7 +65,7 @@ def free_intervals(world: World, q: np.ndarray, joint: int, *, object_poses: np.
     """
     q = np.atleast_2d(q)
     transfer, poses = _mode(object_poses, grasp_rel)
-    packed = kernel.packed(world)
+    packed = packed_world(world)
     step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)
     if len(q) <= step:  # the usual case: one call
         low, high = kernel.intervals(packed, q, joint, transfer, poses, margin_m)
@@ -125,7 +126,7 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
     batch, order, n = genes.shape
     transfer, poses = _mode(object_poses, grasp_rel)
     poses = np.array(np.broadcast_to(np.asarray(poses, dtype=float), (batch, 3)))
-    packed = kernel.packed(world)
+    packed = packed_world(world)
     columns = order * n + 1
     waypoints = np.empty((batch, columns, n))
     waypoints[:, 0] = q0

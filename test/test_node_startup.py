@@ -222,3 +222,24 @@ def test_a_stop_signal_at_any_moment_of_start_up_exits_0(tmp_path: Path) -> None
         output = node.output()
         assert code == 0, output
         assert "Traceback" not in output and "Fatal Python error" not in output, output
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads handlers from /proc")
+def test_a_stop_signal_while_the_kernel_compiles_exits_0_at_once(tmp_path: Path) -> None:
+    # the first start after an install compiles the planning kernel for several seconds (here: an
+    # empty numba cache); Ctrl-C then must not wait for the compiler
+    import signal
+    import time
+
+    node = NodeProcess(tmp_path / "node.log", QUICK, {"record.enabled": False},
+                       env={"NUMBA_CACHE_DIR": str(tmp_path / "empty_cache")})
+    deadline = time.monotonic() + START_TIMEOUT_S
+    while not _catches(node.proc.pid, signal.SIGTERM) and time.monotonic() < deadline:  # main() took them
+        time.sleep(0.005)
+    assert node.proc.poll() is None, node.output()
+    started = time.monotonic()
+    code = node.stop(signal.SIGINT, timeout_s=5.0)
+    output = node.output()
+    assert code == 0, output
+    assert "serving world" not in output  # it was still compiling
+    assert time.monotonic() - started < 5.0

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["PackedWorld", "decode", "intervals", "bounce_array", "clearly_valid", "warm_up",
+__all__ = ["PackedWorld", "decode", "intervals", "bounce_array", "clearly_valid", "chain", "warm_up",
            "MAX_MOVE_RAD", "BACKOFF_RAD"]
 
 #: Largest move of one joint in one Manhattan move (rad), as in the paper.
@@ -134,17 +134,15 @@ def _point_segment_distance(px: float, py: float, ax: float, ay: float, bx: floa
 
 
 @_jit
-def _point_meets_stadium(px: float, py: float, ax: float, ay: float, bx: float, by: float,
-                         keep: float, margin: float, turn: float, best: np.ndarray) -> None:
-    """Rotation angles (times ``turn``) at which point ``p``, turning about the origin, meets the
-    boundary of the stadium of radius ``keep`` (+ ``margin`` if it starts clear of it) around
-    segment ``[a, b]``; all relative to the pivot."""
-    rho = math.sqrt(px * px + py * py)
-    ra = math.sqrt(ax * ax + ay * ay)
-    rb = math.sqrt(bx * bx + by * by)
-    near = _point_segment_distance(0.0, 0.0, ax, ay, bx, by)
+def _point_meets_stadium(px: float, py: float, rho: float, ax: float, ay: float, bx: float, by: float,
+                         ra: float, rb: float, near: float, far: float, keep: float, margin: float, turn: float,
+                         best: np.ndarray) -> None:
+    """Rotation angles (times ``turn``) at which point ``p`` (at distance ``rho`` from the pivot),
+    turning about the pivot, meets the boundary of the stadium of radius ``keep`` (+ ``margin`` if it
+    starts clear of it) around segment ``[a, b]`` (end points at ``ra``, ``rb``; nearest and farthest
+    points at ``near``, ``far``); all relative to the pivot."""
     reach = keep + margin
-    if rho < near - reach or rho > max(ra, rb) + reach:
+    if rho < near - reach or rho > far + reach:
         return  # the point's circle misses the stadium's annulus about the pivot
     if _point_segment_distance(px, py, ax, ay, bx, by) > keep + 1.5 * margin:
         keep += margin
@@ -178,26 +176,31 @@ def _point_meets_stadium(px: float, py: float, ax: float, ay: float, bx: float, 
 
 
 @_jit
-def _pair(moving: np.ndarray, i: int, static: np.ndarray, s: int, keep: float, margin: float,
-          best: np.ndarray) -> None:
-    """Segment ``moving[i]`` turning against ``static[s]`` (both ``(., 2, 2)`` relative to the pivot):
-    the moving end points against the static stadium, and the static end points against the
-    moving stadium (turning the other way)."""
+def _pair(moving: np.ndarray, m: np.ndarray, i: int, static: np.ndarray, t: np.ndarray, s: int, keep: float,
+          margin: float, best: np.ndarray) -> None:
+    """Segment ``moving[i]`` turning against ``static[s]`` (both ``(., 2, 2)`` relative to the pivot,
+    radii ``m``, ``t`` from :func:`_annulus`): the moving end points against the static stadium,
+    and the static end points against the moving stadium (turning the other way)."""
     ax, ay, bx, by = moving[i, 0, 0], moving[i, 0, 1], moving[i, 1, 0], moving[i, 1, 1]
     cx, cy, dx, dy = static[s, 0, 0], static[s, 0, 1], static[s, 1, 0], static[s, 1, 1]
-    _point_meets_stadium(ax, ay, cx, cy, dx, dy, keep, margin, 1.0, best)
-    _point_meets_stadium(bx, by, cx, cy, dx, dy, keep, margin, 1.0, best)
-    _point_meets_stadium(cx, cy, ax, ay, bx, by, keep, margin, -1.0, best)
-    _point_meets_stadium(dx, dy, ax, ay, bx, by, keep, margin, -1.0, best)
+    ra, rb, rc, rd = m[i, 2], m[i, 3], t[s, 2], t[s, 3]
+    _point_meets_stadium(ax, ay, ra, cx, cy, dx, dy, rc, rd, t[s, 0], t[s, 1], keep, margin, 1.0, best)
+    _point_meets_stadium(bx, by, rb, cx, cy, dx, dy, rc, rd, t[s, 0], t[s, 1], keep, margin, 1.0, best)
+    _point_meets_stadium(cx, cy, rc, ax, ay, bx, by, ra, rb, m[i, 0], m[i, 1], keep, margin, -1.0, best)
+    _point_meets_stadium(dx, dy, rd, ax, ay, bx, by, ra, rb, m[i, 0], m[i, 1], keep, margin, -1.0, best)
 
 
 @_jit
 def _annulus(segments: np.ndarray, radii: np.ndarray) -> None:
-    """Nearest and farthest distance ``radii (C, 2)`` of each segment ``(C, 2, 2)`` from the origin."""
+    """For each segment ``(C, 2, 2)`` relative to the origin, ``radii (C, 4)``: its nearest and farthest
+    distance from the origin, and its end points' distances."""
     for c in range(segments.shape[0]):
         ax, ay, bx, by = segments[c, 0, 0], segments[c, 0, 1], segments[c, 1, 0], segments[c, 1, 1]
+        ra, rb = math.sqrt(ax * ax + ay * ay), math.sqrt(bx * bx + by * by)
         radii[c, 0] = _point_segment_distance(0.0, 0.0, ax, ay, bx, by)
-        radii[c, 1] = max(math.sqrt(ax * ax + ay * ay), math.sqrt(bx * bx + by * by))
+        radii[c, 1] = max(ra, rb)
+        radii[c, 2] = ra
+        radii[c, 3] = rb
 
 
 @_jit
@@ -211,7 +214,7 @@ def _pieces(moving: np.ndarray, m_radii: np.ndarray, static: np.ndarray, s_radii
         for s in range(s_first, s_last):
             if s_radii[s, 1] < low or s_radii[s, 0] > high:
                 continue
-            _pair(moving, i, static, s, keep, margin, best)
+            _pair(moving, m_radii, i, static, s_radii, s, keep, margin, best)
 
 
 @_jit
@@ -326,9 +329,9 @@ def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margi
 
 @_jit
 def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple:
-    return (np.empty((n, 2, 2)), np.empty((n, 2)), np.empty((n_obstacles, 2, 2)), np.empty((n_obstacles, 2)),
-            np.empty((n_object, 2, 2)), np.empty((n_object, 2)), np.empty((n_shrunk, 2, 2)),
-            np.empty((n_shrunk, 2)), np.empty(2))
+    return (np.empty((n, 2, 2)), np.empty((n, 4)), np.empty((n_obstacles, 2, 2)), np.empty((n_obstacles, 4)),
+            np.empty((n_object, 2, 2)), np.empty((n_object, 4)), np.empty((n_shrunk, 2, 2)),
+            np.empty((n_shrunk, 4)), np.empty(2))
 
 
 # --------------------------------------------------------------------------- batches
@@ -493,6 +496,23 @@ def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.n
         out[b] = ok
 
 
+# --------------------------------------------------------------------------- kinematics
+
+
+@_jit
+def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndarray, tips: np.ndarray) -> None:
+    """Joint positions ``points (B, n + 1, 2)`` and end-effector frames ``tips (B, 3)`` of ``q (B, n)``."""
+    for b in range(q.shape[0]):
+        x, y, phi = base[0], base[1], 0.0
+        points[b, 0, 0], points[b, 0, 1] = x, y
+        for i in range(lengths.shape[0]):
+            phi += q[b, i]
+            x += lengths[i] * math.cos(phi)
+            y += lengths[i] * math.sin(phi)
+            points[b, i + 1, 0], points[b, i + 1, 1] = x, y
+        tips[b, 0], tips[b, 1], tips[b, 2] = x, y, phi
+
+
 # --------------------------------------------------------------------------- Python entry points
 
 
@@ -526,6 +546,15 @@ def clearly_valid(world: PackedWorld, q: np.ndarray, poses: np.ndarray) -> np.nd
     return out
 
 
+def chain(base: np.ndarray, lengths: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Compiled forward kinematics: joint positions ``(B, n + 1, 2)`` and tip frames ``(B, 3)``."""
+    q = _arg(q)
+    points = np.empty((len(q), len(lengths) + 1, 2))
+    tips = np.empty((len(q), 3))
+    _chain(q, base, lengths, points, tips)
+    return points, tips
+
+
 def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """Compiled :func:`_bounce` over arrays of one shape."""
     x, low, high = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (x, low, high)))
@@ -534,31 +563,32 @@ def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray
     return out
 
 
-_WARM = False
+_WARMED_IN_S: list[float] = []  # how long the first warm-up took, once it is done
 
 
 def warm_up() -> float:
     """Compile every kernel (or load them from numba's on-disk cache) before the first plan.
 
-    Returns the seconds it took. numba caches next to this module when the
-    package directory is writable, else in a per-user cache directory
-    (``NUMBA_CACHE_DIR`` overrides both).
+    Returns the seconds the first call took (later calls do nothing). numba
+    caches next to this module when the package directory is writable, else
+    in a per-user cache directory (``NUMBA_CACHE_DIR`` overrides both).
     """
-    global _WARM
+    if _WARMED_IN_S:
+        return _WARMED_IN_S[0]
     import time
 
     start = time.perf_counter()
-    if not _WARM:
-        world = PackedWorld(np.zeros(2), np.ones(2), -np.pi * np.ones(2), np.pi * np.ones(2), 0.01, True,
-                            np.array([-3.0, -3.0, 3.0, 3.0]), np.array([[[1.0, 1.0], [1.2, 1.0]]]),
-                            np.array([[[0.1, 0.0], [0.0, 0.1]]]), np.zeros((0, 2, 2)), np.array([0, 1]),
-                            np.array([[1.0, 1.0, 1.2, 1.0]]), np.array([0]), 1e-9)
-        waypoints = np.zeros((1, 3, 2))
-        genes = np.zeros((1, 1, 2))
-        for transfer in (False, True):
-            decode(world, waypoints, genes, 1, 3, transfer, np.zeros(3), 1e-3)
-            intervals(world, waypoints[:, 0], 0, transfer, np.zeros(3), 1e-3)
-        bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
-        clearly_valid(world, waypoints[:, 0], np.zeros(3))
-        _WARM = True
-    return time.perf_counter() - start
+    world = PackedWorld(np.zeros(2), np.ones(2), -np.pi * np.ones(2), np.pi * np.ones(2), 0.01, True,
+                        np.array([-3.0, -3.0, 3.0, 3.0]), np.array([[[1.0, 1.0], [1.2, 1.0]]]),
+                        np.array([[[0.1, 0.0], [0.0, 0.1]]]), np.zeros((0, 2, 2)), np.array([0, 1]),
+                        np.array([[1.0, 1.0, 1.2, 1.0]]), np.array([0]), 1e-9)
+    waypoints = np.zeros((1, 3, 2))
+    genes = np.zeros((1, 1, 2))
+    for transfer in (False, True):
+        decode(world, waypoints, genes, 1, 3, transfer, np.zeros(3), 1e-3)
+        intervals(world, waypoints[:, 0], 0, transfer, np.zeros(3), 1e-3)
+    bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
+    clearly_valid(world, waypoints[:, 0], np.zeros(3))
+    chain(world.base, world.lengths, waypoints[:, 0])
+    _WARMED_IN_S.append(time.perf_counter() - start)
+    return _WARMED_IN_S[0]

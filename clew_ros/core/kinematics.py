@@ -1,4 +1,5 @@
-"""Forward kinematics of the planar chain and planar pose algebra, over batches.
+"""Forward kinematics of the planar chain (compiled, :func:`clew_ros.core.kernel.chain`) and planar
+pose algebra, over batches.
 
 Configurations are ``(N, n)`` arrays of joint angles (rad); poses are ``(..., 3)``
 arrays ``(x, y, theta)``.
@@ -6,8 +7,11 @@ arrays ``(x, y, theta)``.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
+from clew_ros.core import kernel
 from clew_ros.core.world import Robot
 
 __all__ = [
@@ -29,22 +33,24 @@ def joint_positions(robot: Robot, q: np.ndarray) -> np.ndarray:
     >>> joint_positions(r, np.array([[np.pi / 2, -np.pi / 2]])).round(6).tolist()
     [[[0.0, 0.0], [0.0, 1.0], [1.0, 1.0]]]
     """
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    phi = np.cumsum(q, axis=1)
-    points = np.empty((q.shape[0], q.shape[1] + 1, 2))
-    points[:, 0] = robot.base
-    # filled in place: the planner calls this on small batches, where np.stack's overhead shows
-    np.cumsum(np.cos(phi) * robot.link_lengths, axis=1, out=points[:, 1:, 0])
-    np.cumsum(np.sin(phi) * robot.link_lengths, axis=1, out=points[:, 1:, 1])
-    points[:, 1:] += robot.base
-    return points
+    return _chain(robot, q)[0]
 
 
 def tip_poses(robot: Robot, q: np.ndarray) -> np.ndarray:
     """End-effector frames ``(x, y, phi_n)``, shape ``(N, 3)``."""
+    return _chain(robot, q)[1]
+
+
+def _chain(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    points = joint_positions(robot, q)
-    return np.concatenate([points[:, -1], q.sum(axis=1, keepdims=True)], axis=1)
+    base, lengths = _arrays(robot)
+    return kernel.chain(base, lengths, q)
+
+
+@lru_cache(maxsize=256)
+def _arrays(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """The robot's base and link lengths as the kernel takes them (writable contiguous copies)."""
+    return np.array(robot.base, dtype=float), np.array(robot.link_lengths, dtype=float)
 
 
 def wrap_angle(angle: np.ndarray | float) -> np.ndarray:

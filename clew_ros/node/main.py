@@ -17,6 +17,7 @@ thread may still be building the node, a race that can end in a crash.
 from __future__ import annotations
 
 import faulthandler
+import os
 import signal
 import sys
 import threading
@@ -25,6 +26,7 @@ import rclpy
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
+from clew_ros.core.kernel import warm_up
 from clew_ros.node.planner_node import PlannerNode, StartupError
 
 EXIT_OK = 0
@@ -43,7 +45,19 @@ def main(argv: list[str] | None = None) -> int:
     faulthandler.enable()  # a crash in a native library prints the Python stacks, not just "-11"
     faulthandler.register(signal.SIGUSR1, all_threads=True)  # `kill -USR1 PID`: where is it stuck?
     stop = threading.Event()
-    previous = {sig: signal.signal(sig, lambda _signum, _frame: stop.set()) for sig in STOP_SIGNALS}
+    warming = [True]
+
+    def on_stop(_signum: int, _frame: object) -> None:
+        stop.set()
+        if warming[0]:  # nothing started yet (no ROS context, no run, no recording): nothing to tidy up
+            os._exit(EXIT_OK)
+
+    previous = {sig: signal.signal(sig, on_stop) for sig in STOP_SIGNALS}
+    # compile the planning kernel (or load numba's cache) before anything else, so no plan pays for
+    # it; the first start after an install compiles for several seconds, and a stop signal meanwhile
+    # exits at once
+    warm_up()
+    warming[0] = False
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     try:
         try:

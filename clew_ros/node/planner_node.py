@@ -160,7 +160,8 @@ class PlannerNode(Node):
         self._recorder_api: tuple[Any, str] | None = None
         self._pending_world_change = False  # set by on_set, republished by post_set
         self._config = self._declare_parameters()
-        # compile the planning kernel (or load numba's cache) now, so that no plan pays for it
+        # the planning kernel is compiled (or loaded from numba's cache) before any plan: main() did
+        # it before creating the node; a node built in another program does it here
         warm_up_s = warm_up()
         if warm_up_s > 1.0:
             self.get_logger().info(f"planning kernel compiled in {warm_up_s:.1f} s (cached for the next start)")

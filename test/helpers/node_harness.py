@@ -54,7 +54,7 @@ class NodeProcess:
     """``clew_planner`` in a subprocess; output goes to ``log``."""
 
     def __init__(self, log: Path, params_file: Path | None = None, parameters: dict[str, Any] | None = None,
-                 namespace: str | None = None) -> None:
+                 namespace: str | None = None, env: dict[str, str] | None = None) -> None:
         self.namespace = namespace if namespace is not None else f"/t{uuid.uuid4().hex[:12]}"
         self.name = f"{self.namespace}/clew_planner" if self.namespace != "/" else "/clew_planner"
         command = [sys.executable, "-m", "clew_ros.node.main", "--ros-args", "-r", f"__ns:={self.namespace}"]
@@ -68,7 +68,7 @@ class NodeProcess:
         self.log = log
         self._log_file = log.open("wb")
         self.proc = subprocess.Popen(command, stdout=self._log_file, stderr=subprocess.STDOUT,
-                                     env=os.environ.copy())  # LOCALHOST discovery, ROS_DOMAIN_ID from conftest
+                                     env={**os.environ, **(env or {})})  # LOCALHOST discovery, ROS_DOMAIN_ID
 
     def output(self) -> str:
         if not self._log_file.closed:

@@ -69,3 +69,37 @@ def test_forget_failures_keeps_only_found_transits():
     assert any(c is None for c in found) and any(c is not None for c in found)
     explorer.forget_failures()
     assert set(explorer._transits) == {(0, g) for g, c in enumerate(found) if c is not None}
+
+
+def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp(monkeypatch):
+    """EXPLORE's new (landmark, grasp) pairs go to SEARCH_TRANSIT as one batch of islands: every
+    found transit ends with the tip on its grasp point, moves validly, and starts at the landmark."""
+    from clew_ros.core import explore, search
+    from clew_ros.core.collision import is_valid
+    from clew_ros.core.kinematics import tip_poses, transform_points
+    from clew_ros.core.plan import CHECK_STEP_RAD
+
+    explorer, ctx, tree = _explorer("arm3_regrasp", 1)
+    batches = []
+    real = search.search_transits
+
+    def spy(context, requests):
+        batches.append(len(requests))
+        return real(context, requests)
+
+    monkeypatch.setattr(explore, "search_transits", spy)
+    assert explorer.explore() is not None
+    world = ctx.world
+    assert batches and max(batches) >= 2  # several transits in one batch
+    found = [c for c in explorer._transits.values() if c is not None and c.transit is not None]
+    assert found
+    for candidate in found:
+        landmark = tree[candidate.parent]
+        np.testing.assert_allclose(candidate.transit[0], landmark.joints)
+        tip = tip_poses(world.robot, candidate.start[None])[0, :2]
+        grasp = transform_points(landmark.object_pose, world.object.grasps[candidate.grasp][None])[0]
+        assert np.linalg.norm(tip - grasp) <= world.grasp_tolerance
+        for a, b in zip(candidate.transit[:-1], candidate.transit[1:], strict=True):
+            steps = max(1, int(np.ceil(np.abs(b - a).max() / CHECK_STEP_RAD)))
+            qs = a + np.linspace(0, 1, steps + 1)[:, None] * (b - a)
+            assert is_valid(world, qs, landmark.object_pose[None]).all()

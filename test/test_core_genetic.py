@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from clew_ros.core.genetic import GeneticSettings, minimize
+from clew_ros.core.genetic import GeneticSettings, minimize, minimize_islands
 
 
 def sphere(population):
@@ -47,3 +47,33 @@ def test_category_gene_stays_in_range():
     values = np.concatenate(seen)
     assert np.all((values >= 0) & (values < 4)) and np.all(values == np.round(values))
     assert result.genes[0] == 2
+
+
+def test_islands_solve_their_own_problems_in_one_batch_and_stop_on_their_own():
+    """Three islands, each its own optimum; each evaluate call gets the running islands' individuals
+    together; an island that reaches its target stops while the others go on."""
+    optima = np.array([[1.0, -2.0], [3.0, 0.5], [-4.0, 4.0]])
+    calls = []
+
+    def evaluate(population, islands):
+        calls.append(islands.copy())
+        return np.sum((population - optima[islands][:, None, :]) ** 2, axis=2)
+
+    rng = np.random.default_rng(3)
+    initial = rng.uniform(-5, 5, (3, 24, 2))
+    targets = np.array([1e9, -np.inf, -np.inf])  # island 0 is done at once
+    settings = GeneticSettings(population=24, generations=40, stall_generations=40)
+    results = minimize_islands(evaluate, initial, rng, settings, targets=targets)
+    assert results[0].generations == 0 and results[1].generations == results[2].generations == 40
+    for optimum, result in zip(optima[1:], results[1:], strict=True):
+        assert np.linalg.norm(result.genes - optimum) < 0.1
+    assert all(list(c) == [1, 2] for c in calls[1:]) and list(calls[0]) == [0, 1, 2]
+
+
+def test_one_island_is_the_plain_genetic_algorithm():
+    """:func:`minimize` is one island: the same draws give the same individuals."""
+    rng_a, rng_b = np.random.default_rng(9), np.random.default_rng(9)
+    initial = np.random.default_rng(1).uniform(-5, 5, (20, 3))
+    plain = minimize(sphere, initial, rng_a, GeneticSettings(generations=15))
+    island = minimize_islands(lambda p, _i: sphere(p[0])[None], initial[None], rng_b, GeneticSettings(generations=15))
+    np.testing.assert_array_equal(plain.population, island[0].population)

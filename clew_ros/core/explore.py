@@ -6,7 +6,8 @@ SEARCH_TRANSIT (or ``L_i``'s own grasp, kept without a transit), and the genes
 of a transfer Manhattan path. The genetic algorithm maximises the distance
 from the transfer's end to the nearest landmark, evaluating the transfers of a
 whole population in one batch (each individual has its own start and grasp).
-Transits are computed once per (landmark, grasp) pair and cached.
+Transits are computed once per (landmark, grasp) pair and cached; the new
+pairs of one step are searched together, one island of a batch each.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import numpy as np
 
 from clew_ros.core.genetic import minimize
 from clew_ros.core.reach import approach_cell
-from clew_ros.core.search import PlanningContext, search_transit
+from clew_ros.core.search import PlanningContext, search_transit, search_transits
 from clew_ros.core.tree import LandmarkTree, landmark_features
 
 __all__ = ["Explorer", "Exploration"]
@@ -83,7 +84,19 @@ class Explorer:
         self._transits = {key: found for key, found in self._transits.items() if found is not None}
 
     def _transit(self, landmark, grasp: int, approach: np.ndarray | None) -> _Candidate | None:
-        result = search_transit(self.ctx, landmark.joints, landmark.object_pose, grasp, approach)
+        return self._candidate_of(landmark, grasp, search_transit(self.ctx, landmark.joints, landmark.object_pose,
+                                                                  grasp, approach))
+
+    def _search_transits(self, pairs: list[tuple[int, int]]) -> None:
+        """The transits of (landmark, grasp) ``pairs`` not yet cached, searched together (one island
+        each) and cached."""
+        pairs = [(i, g) for i, g in pairs if self.tree[i].grasp != g]
+        requests = [(self.tree[i].joints, self.tree[i].object_pose, g, None) for i, g in pairs]
+        for (i, g), result in zip(pairs, search_transits(self.ctx, requests), strict=True):
+            self._transits[(i, g)] = self._candidate_of(self.tree[i], g, result)
+
+    @staticmethod
+    def _candidate_of(landmark, grasp: int, result) -> _Candidate | None:
         if not result.success:
             return None
         return _Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
@@ -101,13 +114,10 @@ class Explorer:
         chosen = [fresh[i] for i in order[:wanted]]
         # previously successful pairs stay in the pool, newest landmarks first
         chosen += sorted(known, key=lambda p: -p[0])[: max(0, 2 * wanted - len(chosen))]
-        candidates = []
-        for landmark_id, grasp in chosen:
-            if ctx.termination():
-                return None
-            candidate = self.candidate(landmark_id, grasp)
-            if candidate is not None:
-                candidates.append(candidate)
+        self._search_transits([p for p in chosen if p not in self._transits])
+        if ctx.termination():
+            return None
+        candidates = [c for c in (self.candidate(landmark_id, grasp) for landmark_id, grasp in chosen) if c is not None]
         if not candidates:
             return None
 

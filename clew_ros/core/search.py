@@ -15,14 +15,14 @@ from typing import Callable
 
 import numpy as np
 
-from clew_ros.core.genetic import minimize
+from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, run_manhattan, single_moves
 from clew_ros.core.reach import approach_cell, approach_excess, goal_within_reach, two_link_grasps, within_reach
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
-__all__ = ["PlanningContext", "PathResult", "search_transit", "search_transfer", "goal_error"]
+__all__ = ["PlanningContext", "PathResult", "search_transit", "search_transits", "search_transfer", "goal_error"]
 
 
 @dataclass
@@ -39,11 +39,13 @@ class PlanningContext:
         return run_manhattan(self.world, q0, genes, margin_m=self.settings.clearance, counters=self.counters,
                              should_stop=self.termination, **mode)
 
-    def initial_genes(self, count: int) -> np.ndarray:
-        """Random Manhattan genes ``(count, k, n)``; the first individual stays put."""
+    def initial_genes(self, count: int, islands: int | None = None) -> np.ndarray:
+        """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``); the first individual
+        (of each island) stays put."""
         n = self.world.robot.dof
-        genes = self.rng.normal(0.0, 1.2, size=(count, self.settings.manhattan_order, n))
-        genes[0] = 0.0
+        shape = (count, self.settings.manhattan_order, n)
+        genes = self.rng.normal(0.0, 1.2, size=shape if islands is None else (islands, *shape))
+        genes[..., 0, :, :] = 0.0
         return genes
 
 
@@ -56,43 +58,78 @@ class PathResult:
     object_pose: np.ndarray | None = None  # transfer: where the object ends
 
 
-def _local_search(ctx: PlanningContext, q0: np.ndarray, objective: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                  error: Callable[[np.ndarray], np.ndarray], accept: float, mode: dict) -> tuple[np.ndarray, float]:
-    """Shared do-while loop of SEARCH: GA rounds from the best end point, then refinement.
+@dataclass
+class _Job:
+    """One local search: from ``q0``, minimise ``objective(final_q, object_poses)``; refinement drives
+    ``error(q)`` ``(B, m)`` below ``accept``. ``pose``: the resting object's pose (transit) or its
+    pose in the end-effector frame (transfer), as ``mode`` says."""
 
-    ``objective(final_q, object_poses)`` is minimised; ``error(q)`` ``(B, m)`` is
-    the residual that refinement drives to zero. Returns waypoints and the final
-    objective.
+    q0: np.ndarray
+    objective: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    error: Callable[[np.ndarray], np.ndarray]
+    accept: float
+    mode: dict
+
+    @property
+    def pose(self) -> np.ndarray:
+        return next(iter(self.mode.values()))[0]
+
+
+def _local_search(ctx: PlanningContext, jobs: list[_Job]) -> list[tuple[np.ndarray, float]]:
+    """SEARCH's do-while loop for independent jobs at once: GA rounds from each job's best end point
+    (the jobs' populations are islands of one batch, :func:`minimize_islands`), then refinement.
+
+    All jobs are transits or all are transfers. Returns each job's waypoints and final objective.
     """
     n = ctx.world.robot.dof
     k = ctx.settings.manhattan_order
-    q = np.asarray(q0, dtype=float)
-    waypoints = [q[None]]
-    best = float(objective(q[None], _object_at(ctx, q[None], mode))[0])
+    size = ctx.settings.population
+    key = next(iter(jobs[0].mode))  # "object_poses" (transit) or "grasp_rel" (transfer)
+    poses = np.array([job.pose for job in jobs])
+    q = np.array([np.asarray(job.q0, dtype=float) for job in jobs])
+    waypoints: list[list[np.ndarray]] = [[row[None].copy()] for row in q]
+    best = np.array([float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0])
+                     for i, job in enumerate(jobs)])
     refine_radius = 0.15 * ctx.world.robot.reach
+    searching = np.arange(len(jobs))
     for _ in range(ctx.settings.search_rounds):
-        if best <= refine_radius * 0.2 or ctx.termination():
+        searching = searching[best[searching] > refine_radius * 0.2]
+        if not len(searching) or ctx.termination():
             break
+        starts = q[searching]
 
-        def evaluate(population: np.ndarray) -> np.ndarray:
-            paths = ctx.manhattan(q, population.reshape(-1, k, n), **mode)
-            ctx.counters.evaluations += len(population)
-            return objective(paths.final, paths.object_poses)
+        def evaluate(population: np.ndarray, islands: np.ndarray) -> np.ndarray:
+            count, children = population.shape[:2]
+            paths = ctx.manhattan(np.repeat(starts[islands], children, axis=0), population.reshape(-1, k, n),
+                                  **{key: np.repeat(poses[searching[islands]], children, axis=0)})
+            ctx.counters.evaluations += count * children
+            finals = paths.final.reshape(count, children, n)
+            ends = paths.object_poses.reshape(count, children, 3)
+            return np.array([jobs[searching[island]].objective(finals[a], ends[a]) for a, island in enumerate(islands)])
 
-        result = minimize(evaluate, ctx.initial_genes(ctx.settings.population).reshape(-1, k * n), ctx.rng,
-                          ctx.settings.genetic, target=refine_radius * 0.2, should_stop=ctx.termination)
-        if result.fitness >= best - 1e-4:
-            break  # local minimum: the end point did not move closer
-        path = ctx.manhattan(q, result.genes.reshape(1, k, n), **mode)
-        waypoints.append(path.waypoints[0, 1:])
-        q = path.final[0]
-        best = float(objective(q[None], _object_at(ctx, q[None], mode))[0])
-    if best <= refine_radius:
-        refined = _refine(ctx, q, error, accept, mode)
-        waypoints.append(refined[1:])
-        q = refined[-1]
-        best = float(objective(q[None], _object_at(ctx, q[None], mode))[0])
-    return np.concatenate(waypoints), best
+        initial = ctx.initial_genes(size, islands=len(searching)).reshape(len(searching), size, k * n)
+        results = minimize_islands(evaluate, initial, ctx.rng, ctx.settings.genetic,
+                                   targets=np.full(len(searching), refine_radius * 0.2), should_stop=ctx.termination)
+        moved = np.array([result.fitness < best[i] - 1e-4 for i, result in zip(searching, results, strict=True)],
+                         dtype=bool)  # else a local minimum: the end point did not move closer
+        if not moved.any():
+            break
+        genes = np.array([result.genes for result in results])[moved].reshape(-1, k, n)
+        searching = searching[moved]
+        paths = ctx.manhattan(q[searching], genes, **{key: poses[searching]})
+        for row, i in enumerate(searching):
+            waypoints[i].append(paths.waypoints[row, 1:])
+            q[i] = paths.final[row]
+            best[i] = float(jobs[i].objective(q[i][None], _object_at(ctx, q[i][None], jobs[i].mode))[0])
+    answers = []
+    for i, job in enumerate(jobs):
+        if best[i] <= refine_radius:
+            refined = _refine(ctx, q[i], job.error, job.accept, job.mode)
+            waypoints[i].append(refined[1:])
+            q[i] = refined[-1]
+            best[i] = float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0])
+        answers.append((np.concatenate(waypoints[i]), float(best[i])))
+    return answers
 
 
 def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict) -> np.ndarray:
@@ -141,10 +178,35 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
     two-joint arm whose valid holding configurations all bend the elbow one
     way, the residual also gains how far the elbow bends the other way.
     """
+    return search_transits(ctx, [(q0, object_pose, grasp, approach)])[0]
+
+
+def search_transits(ctx: PlanningContext, requests: list[tuple]) -> list[PathResult]:
+    """:func:`search_transit` for independent requests ``(q0, object_pose, grasp, approach)`` at once:
+    their genetic algorithms run as islands of one batch."""
     world = ctx.world
+    results: list[PathResult | None] = []
+    jobs, slots = [], []
+    for q0, object_pose, grasp, approach in requests:
+        job = _transit_job(world, np.asarray(q0, float), np.asarray(object_pose, float), grasp, approach)
+        if isinstance(job, PathResult):
+            results.append(job)
+        else:
+            slots.append(len(results))
+            results.append(None)
+            jobs.append(job)
+    if jobs:
+        for slot, job, (waypoints, distance) in zip(slots, jobs, _local_search(ctx, jobs), strict=True):
+            success = distance <= 0.5 * world.grasp_tolerance
+            grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
+            results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
+    return results
+
+
+def _transit_job(world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: int,
+                 approach: np.ndarray | None) -> _Job | PathResult:
+    """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
-    accept = 0.25 * world.grasp_tolerance
-    mode = {"object_poses": np.asarray(object_pose, float)[None]}
     holds = _holding_configurations(world, object_pose, grasp, approach)
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
@@ -165,11 +227,8 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
 
     hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
     if hopeless or not within_reach(world, target[0]):
-        return PathResult(False, np.asarray(q0, float)[None], float(objective(np.asarray(q0, float)[None], None)[0]))
-    waypoints, distance = _local_search(ctx, q0, objective, tip_error, accept, mode)
-    success = distance <= 0.5 * world.grasp_tolerance
-    grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], object_pose) if success else None
-    return PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
+        return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
+    return _Job(q0, objective, tip_error, 0.25 * world.grasp_tolerance, {"object_poses": object_pose[None]})
 
 
 def _holding_configurations(world: World, object_pose: np.ndarray, grasp: int,
@@ -216,7 +275,7 @@ def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray,
         start_pose = compose(tip_poses(world.robot, np.asarray(q0, float)[None]), mode["grasp_rel"])
         return PathResult(False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]),
                           object_pose=start_pose[0])
-    waypoints, distance = _local_search(ctx, q0, objective, error, accept, mode)
+    [(waypoints, distance)] = _local_search(ctx, [_Job(np.asarray(q0, float), objective, error, accept, mode)])
     final_pose = compose(tip_poses(world.robot, waypoints[-1:]), mode["grasp_rel"])[0]
     success = goal_reached(world, final_pose, goal) and distance <= 0.5 * world.goal_tolerance
     return PathResult(success, waypoints, distance, object_pose=final_pose)

@@ -315,7 +315,9 @@ def throughput_line(name: str, t: dict) -> str:
             f"{t['loop']['per_s']:,.0f}/s (batched x{t['ratio_batched_over_loop']:.1f}), is_valid batch of 1 "
             f"{t['batch1']['per_s']:,.0f}/s; agree {t['agree']}/{t['configs']}; free intervals/s transit "
             f"{iv['transit_b24']['per_s']:,.0f} (batch 24) {iv['transit_b1024']['per_s']:,.0f} (1024), "
-            f"transfer {iv['transfer_b24']['per_s']:,.0f} / {iv['transfer_b1024']['per_s']:,.0f}")
+            f"transfer {iv['transfer_b24']['per_s']:,.0f} / {iv['transfer_b1024']['per_s']:,.0f}; decoded by a "
+            f"population of 24: transit {iv['transit_decode24']['per_s']:,.0f}, "
+            f"transfer {iv['transfer_decode24']['per_s']:,.0f}")
 
 
 def markdown_report(report: dict, plot_name: str | None) -> str:
@@ -351,9 +353,12 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
                  "`benchmarks.throughput.PerStateChecker`, a Python loop over the configurations testing "
                  "each link against prepared shapely geometry; *batch of 1*: `is_valid` called once per "
                  "configuration; *free intervals*: `clew_ros.core.manhattan.free_intervals`, the test the "
-                 "planner actually uses, per configuration and joint."), ""]
+                 "planner actually uses, per configuration and joint, called for one joint of a batch of 24 "
+                 "or 1024 configurations; *decoded 24*: the same intervals as the planner computes them, "
+                 "a population of 24 decoding its Manhattan paths of order 2 (24 x 2 x n intervals) in one "
+                 "`run_manhattan` call."), ""]
         header = ["world", "configs", "valid", "batched /s", "loop /s", "batched / loop", "batch of 1 /s",
-                  "agree", "intervals/s transit b24", "b1024", "transfer b24", "b1024"]
+                  "agree", "intervals/s transit b24", "b1024", "decoded 24", "transfer b24", "b1024", "decoded 24"]
         lines = []
         for name, t in throughput.items():
             if "error" in t:
@@ -364,8 +369,9 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
                           f"{t['batched']['per_s']:,.0f}", f"{t['loop']['per_s']:,.0f}",
                           f"x{t['ratio_batched_over_loop']:.2f}", f"{t['batch1']['per_s']:,.0f}",
                           f"{t['agree']:,}/{t['configs']:,}"]
-                         + [f"{iv[k]['per_s']:,.0f}" for k in ("transit_b24", "transit_b1024", "transfer_b24",
-                                                               "transfer_b1024")])
+                         + [f"{iv[k]['per_s']:,.0f}" if k in iv else "-"
+                            for k in ("transit_b24", "transit_b1024", "transit_decode24", "transfer_b24",
+                                      "transfer_b1024", "transfer_decode24")])
         out += [_markdown_table(header, lines), ""]
     peer = report.get("peer") or {}
     if peer:

@@ -35,7 +35,7 @@ import shapely.affinity
 from benchmarks.families import all_worlds, select
 from clew_ros.core.collision import is_valid
 from clew_ros.core.kinematics import compose, tip_poses, transform_points
-from clew_ros.core.manhattan import free_intervals
+from clew_ros.core.manhattan import free_intervals, run_manhattan
 from clew_ros.core.world import World, world_from_parameters
 
 __all__ = ["PerStateChecker", "random_configurations", "measure"]
@@ -153,6 +153,17 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
                     total += len(rows)
             seconds = time.process_time() - started
             intervals[f"{mode}_b{batch}"] = {"intervals": total, "seconds": seconds, "per_s": _rate(total, seconds)}
+        # as the planner computes them: a population of 24 decodes its Manhattan paths (order 2) in one call
+        genes = rng.normal(0.0, 1.2, (24, 2, world.robot.dof))
+        total, started = 0, time.process_time()
+        for start in range(0, max(len(sample), 1), 24):
+            rows = sample[start:start + 24]
+            if len(rows) < 24 or total >= 10 * interval_budget:
+                break
+            run_manhattan(world, rows, genes, **kwargs)
+            total += genes.size
+        seconds = time.process_time() - started
+        intervals[f"{mode}_decode24"] = {"intervals": total, "seconds": seconds, "per_s": _rate(total, seconds)}
     return {
         "world": world.name,
         "configs": configs,

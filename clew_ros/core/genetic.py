@@ -78,16 +78,23 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
     elite_count = settings.elite
     children_count = size - elite_count
     alpha = 0.3
+    rows_all = np.arange(islands)[:, None]
+    limit = settings.stall_generations
     for _generation in range(settings.generations):
-        running = everyone[(best_fitness > targets) & (stall < settings.stall_generations)]
-        if not len(running) or should_stop():
+        go = (best_fitness > targets) & (stall < limit)
+        every = bool(go.all())  # the usual case: slices (views), not copies
+        if not (every or go.any()) or should_stop():
             break
+        running = everyone if every else everyone[go]
+        pick = slice(None) if every else running
         count = len(running)
-        order = np.argsort(fitness[running], axis=1, kind="stable")[:, :elite_count]
-        elite = np.take_along_axis(population[running], order[:, :, None], axis=1)
-        parents = _tournament(fitness[running], rng, 2 * children_count, settings.tournament)
-        mothers = np.take_along_axis(population[running], parents[:, :children_count, None], axis=1)
-        fathers = np.take_along_axis(population[running], parents[:, children_count:, None], axis=1)
+        pool, scores = population[pick], fitness[pick]
+        rows = rows_all[:count]
+        order = np.argsort(scores, axis=1, kind="stable")[:, :elite_count]
+        elite = pool[rows, order]
+        parents = _tournament(scores, rng, 2 * children_count, settings.tournament)
+        mothers = pool[rows, parents[:, :children_count]]
+        fathers = pool[rows, parents[:, children_count:]]
         u = rng.uniform(-alpha, 1 + alpha, size=(count, children_count, dims))
         children = mothers + u * (fathers - mothers)
         keep = rng.random((count, children_count)) >= settings.crossover_rate
@@ -95,19 +102,22 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
         mutate = rng.random((count, children_count, dims)) < settings.mutation_rate
         children += mutate * rng.normal(0.0, settings.mutation_scale, size=(count, children_count, dims))
         if categories:
-            pick = rng.random((count, children_count)) < 0.5
-            children[..., 0] = np.where(pick, mothers[..., 0], fathers[..., 0])
+            chosen = rng.random((count, children_count)) < 0.5
+            children[..., 0] = np.where(chosen, mothers[..., 0], fathers[..., 0])
             redraw = rng.random((count, children_count)) < settings.mutation_rate
             children[redraw, 0] = rng.integers(0, categories, size=int(redraw.sum()))
         child_fitness = np.asarray(evaluate(children, running), dtype=float).reshape(count, children_count)
-        evaluations[running] += children_count
-        generations[running] += 1
-        population[running] = np.concatenate([elite, children], axis=1)
-        fitness[running] = np.concatenate([np.take_along_axis(fitness[running], order, axis=1), child_fitness],
-                                          axis=1)
-        improved = fitness[running].min(axis=1) < best_fitness[running] - 1e-12
-        best_fitness[running] = np.where(improved, fitness[running].min(axis=1), best_fitness[running])
-        stall[running] = np.where(improved, 0, stall[running] + 1)
+        elite_fitness = scores[rows, order]
+        population[pick, :elite_count] = elite
+        population[pick, elite_count:] = children
+        fitness[pick, :elite_count] = elite_fitness
+        fitness[pick, elite_count:] = child_fitness
+        evaluations[pick] += children_count
+        generations[pick] += 1
+        lowest = np.minimum(elite_fitness.min(axis=1), child_fitness.min(axis=1))
+        improved = lowest < best_fitness[pick] - 1e-12
+        best_fitness[pick] = np.where(improved, lowest, best_fitness[pick])
+        stall[pick] = (stall[pick] + 1) * ~improved
     best = np.argmin(fitness, axis=1)
     return [GeneticResult(population[i, best[i]].copy(), float(fitness[i, best[i]]), int(evaluations[i]),
                           int(generations[i]), population[i], fitness[i]) for i in range(islands)]
@@ -116,5 +126,6 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
 def _tournament(fitness: np.ndarray, rng: np.random.Generator, count: int, size: int) -> np.ndarray:
     """``count`` winners per island of tournaments of ``size`` over ``fitness (I, P)``: indices ``(I, count)``."""
     contenders = rng.integers(0, fitness.shape[1], size=(fitness.shape[0], count, size))
-    scores = fitness[np.arange(fitness.shape[0])[:, None, None], contenders]
-    return np.take_along_axis(contenders, np.argmin(scores, axis=2)[:, :, None], axis=2)[:, :, 0]
+    rows = np.arange(fitness.shape[0])[:, None]
+    scores = fitness[rows[:, :, None], contenders]
+    return contenders[rows, np.arange(count)[None, :], np.argmin(scores, axis=2)]

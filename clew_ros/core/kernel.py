@@ -89,7 +89,10 @@ class PackedWorld:
 def _arg(array: np.ndarray) -> np.ndarray:
     """``array`` as the kernels take it: C-contiguous, writable float64 (numba compiles one version per
     layout and write flag, so read-only or strided arrays would compile again)."""
-    return np.require(array, np.float64, ("C", "W"))
+    if (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.flags.c_contiguous
+            and array.flags.writeable):
+        return array
+    return np.array(array, dtype=np.float64, order="C")
 
 
 # --------------------------------------------------------------------------- scalar pieces

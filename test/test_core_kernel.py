@@ -245,3 +245,24 @@ def test_the_compiled_first_pass_never_changes_the_validity_test(case):
     fast = is_valid(world, q_touch, pose_touch)
     assert np.array_equal(fast, exactly_valid(world, q_touch, pose_touch))
     assert (~fast).any()  # some of them really touch
+
+
+def test_the_same_seed_gives_the_same_plan_on_one_thread_and_on_all():
+    """``planner.threads`` spreads a population over threads; every individual is decoded alone, so
+    the plan is the same whatever the number of threads."""
+    from clew_ros.core.clew import plan
+    from clew_ros.core.kernel import available_threads
+    from clew_ros.core.plan import dumps_plan, plan_to_dict
+    from clew_ros.core.settings import PlannerSettings
+    from clew_ros.core.world import load_world
+
+    assert available_threads() >= 1
+    world = load_world(ROOT / "config" / "arm3_regrasp.yaml")
+    documents = []
+    for threads in (1, 0, 3):
+        result = plan(world, PlannerSettings(seed=2, time_limit=60.0, threads=threads))
+        assert result.success, result.message
+        document = plan_to_dict(world, result)
+        document["stats"].pop("time_s")
+        documents.append(dumps_plan(document))
+    assert documents[0] == documents[1] == documents[2]

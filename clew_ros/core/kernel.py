@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["PackedWorld", "decode", "intervals", "bounce_array", "clearly_valid", "chain", "warm_up",
+__all__ = ["PackedWorld", "decode", "available_threads", "intervals", "bounce_array", "clearly_valid", "chain", "warm_up",
            "MAX_MOVE_RAD", "BACKOFF_RAD"]
 
 #: Largest move of one joint in one Manhattan move (rad), as in the paper.
@@ -48,6 +48,10 @@ _TWO_PI = 2.0 * math.pi
 _AT_START = 1e-12
 
 _jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+# Parallel kernels may be launched from several threads at once (several planners in one process):
+# only a thread-safe layer (TBB or OpenMP) allows it; without one the kernels run on one thread.
+if numba.config.THREADING_LAYER == "default":
+    numba.config.THREADING_LAYER = "threadsafe"
 
 
 @dataclass(frozen=True, eq=False)
@@ -363,6 +367,28 @@ def _decode(waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, tra
                 waypoints[b, column, j] = q[j]
 
 
+@numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def _decode_parallel(waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
+                     poses: np.ndarray, margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray,
+                     upper: np.ndarray, r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
+                     object_edges: np.ndarray, shrunk_edges: np.ndarray) -> None:
+    """:func:`_decode` with the individuals spread over threads (each computed alone: the same
+    numbers whatever the number of threads)."""
+    n = lengths.shape[0]
+    for b in numba.prange(waypoints.shape[0]):
+        scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
+        q = np.empty(n)
+        for j in range(n):
+            q[j] = waypoints[b, first - 1, j]
+        for column in range(first, last):
+            k, joint = (column - 1) // n, (column - 1) % n
+            low, high = _interval(q, joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
+                                  self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
+            q[joint] += _bounce(genes[b, k, joint], low, high)
+            for j in range(n):
+                waypoints[b, column, j] = q[j]
+
+
 @_jit
 def _intervals(q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray, margin: float, out: np.ndarray,
                base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
@@ -524,11 +550,37 @@ def _poses(poses: np.ndarray, batch: int) -> np.ndarray:
     return _arg(poses) if poses.shape == (batch, 3) else np.array(np.broadcast_to(poses, (batch, 3)))
 
 
+def available_threads() -> int:
+    """Threads the parallel kernel may use here: numba's thread count when a thread-safe threading
+    layer (TBB or OpenMP) loads, else 1."""
+    if not _PARALLEL:
+        try:
+            _decode_parallel(np.zeros((1, 2, 1)), np.zeros((1, 1, 1)), 1, 2, False, np.zeros((1, 3)), 0.0,
+                             np.zeros(2), np.ones(1), -np.ones(1), np.ones(1), 0.0, False,
+                             np.array([-9.0, -9.0, 9.0, 9.0]), np.zeros((0, 2, 2)), np.zeros((0, 2, 2)),
+                             np.zeros((0, 2, 2)))
+            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS))
+        except (ValueError, RuntimeError, ImportError):  # no thread-safe threading layer
+            _PARALLEL.append(1)
+    return _PARALLEL[0]
+
+
+_PARALLEL: list[int] = []
+
+
 def decode(world: PackedWorld, waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
-           poses: np.ndarray, margin: float) -> None:
-    """Compiled: columns ``first .. last - 1`` of ``waypoints`` (C-contiguous float64, filled in place)."""
-    _decode(waypoints, _arg(genes), first, last, transfer,
-            _poses(poses, len(waypoints)), float(margin), *world.arguments())
+           poses: np.ndarray, margin: float, threads: int = 1) -> None:
+    """Compiled: columns ``first .. last - 1`` of ``waypoints`` (C-contiguous float64, filled in place),
+    on ``threads`` threads (0: all); every individual is computed alone, so the numbers do not depend
+    on the number of threads."""
+    threads = min(threads or available_threads(), available_threads(), len(waypoints))
+    arguments = (waypoints, _arg(genes), first, last, transfer, _poses(poses, len(waypoints)), float(margin),
+                 *world.arguments())
+    if threads > 1:
+        numba.set_num_threads(threads)  # for this calling thread only
+        _decode_parallel(*arguments)
+    else:
+        _decode(*arguments)
 
 
 def intervals(world: PackedWorld, q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray,
@@ -589,6 +641,7 @@ def warm_up() -> float:
     genes = np.zeros((1, 1, 2))
     for transfer in (False, True):
         decode(world, waypoints, genes, 1, 3, transfer, np.zeros(3), 1e-3)
+        decode(world, waypoints, genes, 1, 3, transfer, np.zeros(3), 1e-3, threads=0)
         intervals(world, waypoints[:, 0], 0, transfer, np.zeros(3), 1e-3)
     bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
     clearly_valid(world, waypoints[:, 0], np.zeros(3))

@@ -111,7 +111,7 @@ class ManhattanPaths:
 def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_poses: np.ndarray | None = None,
                   grasp_rel: np.ndarray | None = None, margin_m: float = 1e-3,
                   counters: Counters | None = None,
-                  should_stop: Callable[[], bool] | None = None) -> ManhattanPaths:
+                  should_stop: Callable[[], bool] | None = None, threads: int = 1) -> ManhattanPaths:
     """Decode genes ``(B, k, n)`` into collision-free Manhattan paths from ``q0`` ``(B, n)``.
 
     Transit when ``object_poses`` is given (the object rests there), transfer
@@ -120,7 +120,8 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
     take long: then it is decoded move by move (and individuals in chunks),
     asking ``should_stop`` between calls. Once it says so, the remaining moves
     are skipped (the paths stay where they are, still collision-free), so a
-    time limit or a cancel is honoured within one call.
+    time limit or a cancel is honoured within one call. ``threads`` (0: all
+    cores) spreads the individuals over threads; the paths do not depend on it.
     """
     genes = np.asarray(genes, dtype=float)
     batch, order, n = genes.shape
@@ -132,7 +133,7 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
     waypoints[:, 0] = q0
     per_move = packed.pairs_per_move * batch
     if should_stop is None or per_move * (columns - 1) <= PAIRS_PER_CALL:
-        kernel.decode(packed, waypoints, genes, 1, columns, transfer, poses, margin_m)
+        kernel.decode(packed, waypoints, genes, 1, columns, transfer, poses, margin_m, threads)
     else:
         step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)
         for column in range(1, columns):
@@ -143,7 +144,7 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
                     break
                 rows = slice(first, first + step)
                 kernel.decode(packed, waypoints[rows], genes[rows], column, column + 1, transfer, poses[rows],
-                              margin_m)
+                              margin_m, threads)
             else:
                 continue
             break

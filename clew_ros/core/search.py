@@ -37,7 +37,7 @@ class PlanningContext:
 
     def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode) -> "np.ndarray":
         return run_manhattan(self.world, q0, genes, margin_m=self.settings.clearance, counters=self.counters,
-                             should_stop=self.termination, **mode)
+                             should_stop=self.termination, threads=self.settings.threads, **mode)
 
     def initial_genes(self, count: int, islands: int | None = None) -> np.ndarray:
         """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``); the first individual

@@ -48,6 +48,8 @@ PLANNER_PARAMETERS: dict[str, tuple[type, Any, str, tuple | None]] = {
     "search_rounds": (int, 3, "Rounds of SEARCH's do-while loop before it gives up.", (1, 100)),
     "joint_weight": (float, 0.1, "Weight (m/rad) of the joint angles in the landmark distance.", (0.0, 10.0)),
     "max_sweep_steps": (int, 48, "Conservative-advancement steps per free-interval side.", (2, 10000)),
+    "threads": (int, 0, "Threads that decode a population's Manhattan paths (0: all cores); the plan does not "
+                "depend on it.", (0, 1024)),
 }
 
 
@@ -66,6 +68,7 @@ class PlannerSettings:
     search_rounds: int = 3
     joint_weight: float = 0.1
     max_sweep_steps: int = 48
+    threads: int = 0
 
     @property
     def genetic(self) -> GeneticSettings:

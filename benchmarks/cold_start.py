@@ -9,6 +9,10 @@ first plan against the second.
 * ``first_plan_s`` / ``second_plan_s``: in one fresh process, after the warm-up that ``clew_plan``
   and the node do before their first plan, figure1 planned twice with the same seed (the same
   work): what the first plan still pays for (preparing the world's geometry, Python's own caches).
+* ``node_first_plan_s`` / ``node_second_plan_s`` (when rclpy is installed): the node
+  ``clew_planner`` started fresh on its default world, ``~/plan`` called twice, the planning
+  time each answer reports. DDS stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``,
+  a domain of its own unless ``ROS_DOMAIN_ID`` is set).
 
     python -m benchmarks.cold_start [--world config/figure1.yaml] [--seed 0]
 
@@ -20,6 +24,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
+import signal
 import subprocess
 import sys
 import tempfile
@@ -62,6 +68,38 @@ def _python(code: str, *args: str, env: dict[str, str] | None = None) -> list[st
     return done.stdout.split()
 
 
+def node_first_and_second() -> dict:
+    """The node's first and second plan (seconds, as its ``~/plan`` answers report them)."""
+    try:
+        import rclpy  # noqa: F401
+    except ImportError:
+        return {"node": "rclpy not installed"}
+    namespace = f"/cold_start_{os.getpid()}"
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_STATIC_PEERS": "",
+           "ROS_DOMAIN_ID": os.environ.get("ROS_DOMAIN_ID", str(os.getpid() % 90 + 10))}
+    node = subprocess.Popen([sys.executable, "-m", "clew_ros.node.main", "--ros-args", "-r", f"__ns:={namespace}",
+                             "-p", "record.enabled:=false"], cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    times = []
+    try:
+        for _ in range(2):
+            done = subprocess.run([sys.executable, "-m", "clew_ros.node.call_plan", "--node",
+                                   f"{namespace}/clew_planner", "--timeout", "120"], cwd=ROOT, env=env,
+                                  capture_output=True, text=True, timeout=300)
+            found = re.search(r"; time ([0-9.]+) s", done.stdout)
+            if not found:
+                return {"node": f"no planning time in the answer: {done.stdout.strip()[:200]}"}
+            times.append(float(found.group(1)))
+    finally:
+        node.send_signal(signal.SIGINT)
+        try:
+            node.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            node.kill()
+    return {"node_first_plan_s": times[0], "node_second_plan_s": times[1],
+            "node_first_over_second": times[0] / times[1] if times[1] > 0 else None}
+
+
 def measure(world: Path, seed: int = 0) -> dict:
     with tempfile.TemporaryDirectory(prefix="clew_numba_cache_") as cache:
         env = {"NUMBA_CACHE_DIR": cache}
@@ -75,7 +113,7 @@ def measure(world: Path, seed: int = 0) -> dict:
     return {"compile_s": compile_s, "compile_process_wall_s": compile_wall, "load_s": load_s,
             "load_process_wall_s": load_wall, "import_s": imported, "world": str(world), "seed": seed,
             "first_plan_s": float(first), "second_plan_s": float(second),
-            "first_over_second": float(first) / float(second), "outcome": outcome}
+            "first_over_second": float(first) / float(second), "outcome": outcome, **node_first_and_second()}
 
 
 def main(argv: list[str] | None = None) -> int:

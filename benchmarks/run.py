@@ -33,6 +33,7 @@ import platform
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from collections import Counter
 from importlib import metadata
@@ -77,11 +78,15 @@ def _environment() -> dict[str, str]:
     return env
 
 
-def _child(module: str, *args: str, timeout: float) -> dict:
-    """Run ``python -m module args`` and return the JSON object it prints (or an error record)."""
+def _child(module: str, *args: str, timeout: float, tree: Path = ROOT) -> dict:
+    """Run ``python -m module args`` in the checkout ``tree`` (default this one) and return the JSON
+    object it prints (or an error record)."""
     command = [sys.executable, "-m", module, *args]
+    env = _environment()
+    if tree != ROOT:  # the baseline's own package and benchmarks first on the path
+        env["PYTHONPATH"] = os.pathsep.join([str(tree)] + env["PYTHONPATH"].split(os.pathsep)[1:])
     try:
-        done = subprocess.run(command, check=False, cwd=ROOT, env=_environment(), capture_output=True, text=True,
+        done = subprocess.run(command, check=False, cwd=tree, env=env, capture_output=True, text=True,
                               timeout=timeout)
     except subprocess.TimeoutExpired:
         return {"error": f"{' '.join(command[2:])}: no answer within {timeout:.0f} s"}
@@ -90,6 +95,18 @@ def _child(module: str, *args: str, timeout: float) -> dict:
         tail = done.stderr.strip().splitlines()[-3:]
         return {"error": f"{' '.join(command[2:])}: exit {done.returncode}: {' | '.join(tail)}"}
     return json.loads(lines[-1])
+
+
+def _git(*args: str) -> str:
+    return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
+
+
+def _export(revision: str) -> Path:
+    """The files of git revision ``revision`` in a new temporary directory (``git archive``)."""
+    tree = Path(tempfile.mkdtemp(prefix="clew_baseline_"))
+    archive = subprocess.run(["git", "archive", "--format=tar", revision], cwd=ROOT, capture_output=True, check=True)
+    subprocess.run(["tar", "-x", "-C", str(tree)], input=archive.stdout, check=True)
+    return tree
 
 
 def _machine() -> dict:
@@ -345,6 +362,8 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
             _markdown_table([h for h, _ in TABLE], [_cells(r) for r in rows]), ""]
     if plot_name:
         out += [f"![median time against joints and obstacles]({plot_name})", ""]
+    if report.get("baseline", {}).get("rows"):
+        out += [before_after(report), ""]
     throughput = report.get("throughput") or {}
     if throughput:
         out += ["### Collision throughput (one core, CPU time)", "",
@@ -373,6 +392,26 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
                             for k in ("transit_b24", "transit_b1024", "transit_decode24", "transfer_b24",
                                       "transfer_b1024", "transfer_decode24")])
         out += [_markdown_table(header, lines), ""]
+    cold = report.get("cold_start") or {}
+    if cold and "error" not in cold:
+        out += ["### Cold start (`python -m benchmarks.cold_start`)", "",
+                ("The compiled kernel's cost at start, each in a fresh process: compiling it with an empty "
+                 "numba cache (the first start after an install), loading it from the cache (every later "
+                 "start), and, after that warm-up, figure1 seed 0 planned twice in one process (what the "
+                 "first plan still pays)."), "",
+                _markdown_table(["compile s", "load from cache s", "import s", "first plan s", "second plan s",
+                                 "first / second"],
+                                [[f"{cold['compile_s']:.1f}", f"{cold['load_s']:.2f}", f"{cold['import_s']:.2f}",
+                                  f"{cold['first_plan_s']:.3f}", f"{cold['second_plan_s']:.3f}",
+                                  f"{cold['first_over_second']:.2f}"]]), ""]
+        if "node_first_plan_s" in cold:
+            out += [(f"The node `clew_planner` on its default world, `~/plan` called twice after a fresh start: "
+                     f"first plan {cold['node_first_plan_s']:.3f} s, second {cold['node_second_plan_s']:.3f} s "
+                     f"(first / second {cold['node_first_over_second']:.2f})."), ""]
+        elif "node" in cold:
+            out += [f"The node's first and second plan: not measured ({cold['node']}).", ""]
+    elif cold:
+        out += ["### Cold start", "", f"error: {cold['error']}", ""]
     peer = report.get("peer") or {}
     if peer:
         settings = next((p for p in peer.values() if "error" not in p), {})
@@ -445,7 +484,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--time-limit", type=float, default=None, help="per-run limit (s) for every world")
     parser.add_argument("--full-limits", action="store_true",
                         help=f"each world's own planner.time_limit (default: capped at {LIMIT_CAP_S:g} s)")
-    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
+    parser.add_argument("--baseline", default=None, metavar="REV",
+                        help="also plan every world with the code of git revision REV (exported to a temporary "
+                             "directory), world by world alternating with this code, and report before/after")
+    parser.add_argument("--jobs", type=int, default=1,
                         help="worlds planned (and peer worlds compared) at once; default min(2, cores). "
                              "1 gives steadier per-run times and twice the wall time")
     parser.add_argument("--peer-only", default=None, help=f"worlds of the OMPL comparison (default {PEER_WORLDS})")
@@ -463,6 +505,7 @@ def _parser() -> argparse.ArgumentParser:
                              f"{QUICK_LIMIT_S:g} s)")
     parser.add_argument("--no-peer", action="store_true")
     parser.add_argument("--no-throughput", action="store_true")
+    parser.add_argument("--no-cold-start", action="store_true", help="skip benchmarks.cold_start (--quick skips it)")
     parser.add_argument("--no-profile", action="store_true")
     parser.add_argument("--no-validate", action="store_true", help="skip validate_plan on successful plans")
     return parser
@@ -505,21 +548,37 @@ def main(argv: list[str] | None = None) -> int:
     to_run.sort(key=lambda w: -seeds_for.get(w.name, seeds) * limits[w.name])
     print(f"planner: {len(to_run)} world(s), {seeds} seed(s) each, jobs {args.jobs}", file=sys.stderr)
 
+    baseline_tree = _export(args.baseline) if args.baseline else None
+    baseline: dict = {}
+
     def work(world: BenchWorld) -> tuple[str, dict]:
         count = seeds_for.get(world.name, seeds)
         limit = limits[world.name]
-        t0 = time.monotonic()
         flags = ["--no-validate"] if args.no_validate else []
-        record = _child("benchmarks.worker", world.name, "--seeds", str(count), "--time-limit", str(limit), *flags,
-                        timeout=count * (limit * 1.5 + 30) + 120)
-        record["loadavg_end"] = os.getloadavg()
-        print(f"  {world.name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
-        return world.name, record
+        trees = [("", ROOT)] + ([(f" (baseline {args.baseline})", baseline_tree)] if baseline_tree else [])
+        records = []
+        for label, tree in trees:  # this code, then the baseline's, on the same world back to back
+            t0 = time.monotonic()
+            record = _child("benchmarks.worker", world.name, "--seeds", str(count), "--time-limit", str(limit),
+                            *flags, timeout=count * (limit * 1.5 + 30) + 120, tree=tree)
+            record["loadavg_end"] = os.getloadavg()
+            print(f"  {world.name}{label}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
+            records.append(record)
+        if baseline_tree:
+            baseline[world.name] = records[1]
+        return world.name, records[0]
 
-    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        planner = dict(pool.map(work, to_run))
+    try:
+        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+            planner = dict(pool.map(work, to_run))
+    finally:
+        if baseline_tree:
+            shutil.rmtree(baseline_tree, ignore_errors=True)
     report["planner"] = planner
     report["planner_wall_s"] = time.monotonic() - started
+    if baseline_tree:
+        report["baseline"] = {"revision": args.baseline, "commit": _git("rev-parse", "--short", args.baseline),
+                              "planner": baseline}
 
     # 2. collision throughput (one process at a time: figures per core)
     throughput = {}
@@ -531,6 +590,12 @@ def main(argv: list[str] | None = None) -> int:
                                       *(["--interval-budget", "2000"] if quick else []), timeout=1200)
             print(f"throughput {name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
     report["throughput"] = throughput
+
+    # 2b. cold start: compiling the kernel, loading it from the cache, first plan against second
+    if not (args.no_cold_start or quick):
+        t0 = time.monotonic()
+        report["cold_start"] = _child("benchmarks.cold_start", timeout=900)
+        print(f"cold start: {time.monotonic() - t0:.0f} s", file=sys.stderr)
 
     # 3. peer comparison
     peer = {}
@@ -579,6 +644,8 @@ def main(argv: list[str] | None = None) -> int:
             row.update(peer_problems=None, peer_note="peer not run" if args.no_peer else "not in the peer selection")
         rows.append(row)
     report["rows"] = rows
+    if "baseline" in report:
+        report["baseline"]["rows"] = _baseline_rows(worlds, same, report["baseline"]["planner"])
     report["machine"]["loadavg_end"] = os.getloadavg()
     report["total_wall_s"] = time.monotonic() - started
 
@@ -629,7 +696,41 @@ def render(path: Path, out: Path, doc: Path | None) -> int:
             row.update(peer_problems=None, peer_note=old.get("peer_note", ""))
         rows.append(row)
     report["rows"] = rows
+    if "baseline" in report:
+        same = {r["world"]: r["same_as"] for r in rows if r.get("same_as")}
+        report["baseline"]["rows"] = _baseline_rows([worlds[r["world"]] for r in rows], same,
+                                                    report["baseline"]["planner"])
     return write_outputs(report, out, doc)
+
+
+def _baseline_rows(worlds: list[BenchWorld], same: dict, planner: dict) -> list[dict]:
+    return [_summarise_world(world, planner.get(same.get(world.name, world.name), {"error": "not run"}),
+                             same.get(world.name)) for world in worlds]
+
+
+def before_after(report: dict) -> str:
+    """Markdown: the baseline's planner runs next to this code's, world by world."""
+    base = report["baseline"]
+    before = {r["world"]: r for r in base["rows"]}
+    lines = []
+    for row in report["rows"]:
+        old = before.get(row["world"], {})
+        if row.get("same_as"):
+            continue
+        ratio = (old.get("median_s") / row["median_s"]
+                 if isinstance(old.get("median_s"), float) and isinstance(row.get("median_s"), float)
+                 and row["median_s"] > 0 else None)
+        lines.append([row["world"], f"{_percent(old.get('success_rate'))} → {_percent(row.get('success_rate'))}",
+                      f"{_format(old.get('median_s'))} → {_format(row.get('median_s'))}",
+                      f"x{ratio:.1f}" if ratio else "-",
+                      f"{_format(old.get('p90_s'))} → {_format(row.get('p90_s'))}",
+                      f"{_format(old.get('landmarks_median'), 0)} → {_format(row.get('landmarks_median'), 0)}",
+                      f"{_format(old.get('checks_per_cpu_s'), 0)} → {_format(row.get('checks_per_cpu_s'), 0)}"])
+    header = ["world", "success", "median s", "median before / after", "p90 s", "landmarks", "checks/CPU s"]
+    return "\n".join([f"### Before and after: baseline {base['revision']} (git {base['commit']}) → this code", "",
+                      ("The same worlds, seeds and limits, each world planned by the baseline's code right after "
+                       "this code's, in the same run (`--baseline`). Failed runs count at the limit."), "",
+                      _markdown_table(header, lines), ""])
 
 
 if __name__ == "__main__":

@@ -20,7 +20,7 @@ limits, seeded, kept when both ends are valid and at least 1 rad apart).
   an exact solution within the time limit. No path simplification.
 * **Project** (:func:`project_transit`): the Ariadne's Clew algorithm posed
   on the transit problem with the core's own pieces: SEARCH is
-  ``clew_ros.core.search._local_search`` minimising the joint-space distance
+  ``clew_ros.core.search.local_search`` minimising the joint-space distance
   to ``q_goal`` over Manhattan paths (the same GA, bouncing, free intervals
   and damped least-squares refinement that SEARCH_TRANSIT uses, only the
   objective differs: SEARCH_TRANSIT minimises the tip's distance to a grasp
@@ -51,7 +51,7 @@ from benchmarks.families import all_worlds, select
 from benchmarks.throughput import PerStateChecker, random_configurations
 from clew_ros.core.collision import is_valid
 from clew_ros.core.genetic import minimize
-from clew_ros.core.search import PlanningContext, _local_search
+from clew_ros.core.search import PlanningContext, SearchJob, local_search
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World, world_from_parameters
 
@@ -198,7 +198,7 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
 def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_limit_s: float, seed: int,
                     settings: PlannerSettings | None = None) -> dict:
     """The Ariadne's Clew algorithm on one transit problem (see the module docstring)."""
-    settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s)
+    settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s, threads=1)  # one core, as OMPL
     termination = Termination(time_limit_s)
     ctx = PlanningContext(world, settings, np.random.default_rng(seed), termination)
     mode = {"object_poses": np.asarray(world.object.initial, float)[None]}
@@ -222,8 +222,8 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
     searched_from_start = None
     waypoints = landmarks[0][None]
     while True:
-        tail, distance = _local_search(ctx, landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD,
-                                       mode)
+        [(tail, distance)] = local_search(ctx, [SearchJob(landmarks[-1], objective, error,
+                                                          0.1 * weight * GOAL_TOLERANCE_RAD, mode)])
         distance /= weight  # rad
         if searched_from_start is None:
             searched_from_start = bool(distance <= GOAL_TOLERANCE_RAD)

@@ -22,7 +22,7 @@ from clew_ros.core.reach import approach_cell, approach_excess, goal_within_reac
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
-__all__ = ["PlanningContext", "PathResult", "search_transit", "search_transits", "search_transfer", "goal_error"]
+__all__ = ["PlanningContext", "PathResult", "SearchJob", "local_search", "search_transit", "search_transits", "search_transfer", "goal_error"]
 
 
 @dataclass
@@ -59,7 +59,7 @@ class PathResult:
 
 
 @dataclass
-class _Job:
+class SearchJob:
     """One local search: from ``q0``, minimise ``objective(final_q, object_poses)``; refinement drives
     ``error(q)`` ``(B, m)`` below ``accept``. ``pose``: the resting object's pose (transit) or its
     pose in the end-effector frame (transfer), as ``mode`` says."""
@@ -75,7 +75,7 @@ class _Job:
         return next(iter(self.mode.values()))[0]
 
 
-def _local_search(ctx: PlanningContext, jobs: list[_Job]) -> list[tuple[np.ndarray, float]]:
+def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.ndarray, float]]:
     """SEARCH's do-while loop for independent jobs at once: GA rounds from each job's best end point
     (the jobs' populations are islands of one batch, :func:`minimize_islands`), then refinement.
 
@@ -196,7 +196,7 @@ def search_transits(ctx: PlanningContext, requests: list[tuple]) -> list[PathRes
             results.append(None)
             jobs.append(job)
     if jobs:
-        for slot, job, (waypoints, distance) in zip(slots, jobs, _local_search(ctx, jobs), strict=True):
+        for slot, job, (waypoints, distance) in zip(slots, jobs, local_search(ctx, jobs), strict=True):
             success = distance <= 0.5 * world.grasp_tolerance
             grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
             results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
@@ -204,7 +204,7 @@ def search_transits(ctx: PlanningContext, requests: list[tuple]) -> list[PathRes
 
 
 def _transit_job(world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: int,
-                 approach: np.ndarray | None) -> _Job | PathResult:
+                 approach: np.ndarray | None) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
     holds = _holding_configurations(world, object_pose, grasp, approach)
@@ -228,7 +228,7 @@ def _transit_job(world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: i
     hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
     if hopeless or not within_reach(world, target[0]):
         return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
-    return _Job(q0, objective, tip_error, 0.25 * world.grasp_tolerance, {"object_poses": object_pose[None]})
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, {"object_poses": object_pose[None]})
 
 
 def _holding_configurations(world: World, object_pose: np.ndarray, grasp: int,
@@ -275,7 +275,7 @@ def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray,
         start_pose = compose(tip_poses(world.robot, np.asarray(q0, float)[None]), mode["grasp_rel"])
         return PathResult(False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]),
                           object_pose=start_pose[0])
-    [(waypoints, distance)] = _local_search(ctx, [_Job(np.asarray(q0, float), objective, error, accept, mode)])
+    [(waypoints, distance)] = local_search(ctx, [SearchJob(np.asarray(q0, float), objective, error, accept, mode)])
     final_pose = compose(tip_poses(world.robot, waypoints[-1:]), mode["grasp_rel"])[0]
     success = goal_reached(world, final_pose, goal) and distance <= 0.5 * world.goal_tolerance
     return PathResult(success, waypoints, distance, object_pose=final_pose)

@@ -488,8 +488,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="also plan every world with the code of git revision REV (exported to a temporary "
                              "directory), world by world alternating with this code, and report before/after")
     parser.add_argument("--jobs", type=int, default=1,
-                        help="worlds planned (and peer worlds compared) at once; default min(2, cores). "
-                             "1 gives steadier per-run times and twice the wall time")
+                        help="worlds planned (and peer worlds compared) at once; default 1: the planner's kernel "
+                             "uses every core (planner.threads 0), and one world at a time gives steadier times")
     parser.add_argument("--peer-only", default=None, help=f"worlds of the OMPL comparison (default {PEER_WORLDS})")
     parser.add_argument("--peer-problems", type=int, default=None,
                         help="transit sub-problems per world (default 20; --quick 3)")

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from clew_ros.core.collision import exactly_valid, is_placement_valid, is_valid
-from clew_ros.core.kinematics import compose, tip_poses
+from clew_ros.core.kinematics import compose, joint_positions, tip_poses, transform_points
 from clew_ros.core.manhattan import MAX_MOVE_RAD, free_intervals, run_manhattan
 from clew_ros.core.world import world_from_parameters
 
@@ -266,3 +266,44 @@ def test_the_same_seed_gives_the_same_plan_on_one_thread_and_on_all():
         document["stats"].pop("time_s")
         documents.append(dumps_plan(document))
     assert documents[0] == documents[1] == documents[2]
+
+
+@pytest.mark.parametrize("mode", ["transit", "transfer"])
+def test_a_start_within_the_clearance_of_a_bound_never_crosses_it(mode):
+    """A point that starts between ``bound - inset - margin`` and ``bound - inset`` is kept from
+    getting closer (not pushed out): the interval must not turn it through the bound."""
+    rng = np.random.default_rng(4)
+    world = world_from_parameters({"world": {
+        "name": "near_bound", "bounds": [-2.0, -2.0, 1.0, 2.0],
+        "robot": {"base": [0.0, 0.0], "link_lengths": [0.6, 0.4], "link_width": 0.02,
+                  "joint_lower": [-3.0, -3.0], "joint_upper": [3.0, 3.0], "initial": [0.0, 0.5]},
+        "obstacle_names": [], "obstacles": {},
+        "object": {"polygon": [-0.05, -0.05, 0.05, -0.05, 0.05, 0.05, -0.05, 0.05], "initial": [-1.5, 1.5, 0.0],
+                   "goal": [-1.5, 1.5, 0.0], "grasps": [0.05, 0.0]},
+    }}, check_collisions=False)
+    margin = 1e-3
+    rel = np.array([0.05, 0.0, 0.0])
+    if mode == "transit":  # the straight arm's tip: x within the last mm before the bound inset by r
+        kwargs = {"object_poses": world.object.initial[None]}
+        poses_of = lambda qs: np.broadcast_to(world.object.initial, (len(qs), 3))  # noqa: E731
+        nearest = lambda qs: joint_positions(world.robot, qs)[:, -1, 0]  # noqa: E731
+        band = (0.99 - margin, 0.99)
+    else:  # the carried object's vertices: the largest x within the last mm before the bound
+        kwargs = {"grasp_rel": rel[None]}
+        poses_of = lambda qs: compose(tip_poses(world.robot, qs), rel)  # noqa: E731
+        nearest = lambda qs: transform_points(poses_of(qs), world.object.polygon)[..., 0].max(axis=1)  # noqa: E731
+        band = (1.0 - margin, 1.0)
+    q = np.zeros((200_000, 2))
+    q[:, 0] = rng.uniform(-1.2, 0.0, len(q))
+    q = q[(nearest(q) > band[0]) & (nearest(q) < band[1])][:20]
+    checked = 0
+    for start in q:
+        if not is_valid(world, start[None], poses_of(start[None]))[0]:
+            continue
+        checked += 1
+        low, high = free_intervals(world, start[None], 0, margin_m=margin, **kwargs)
+        angles = np.linspace(low[0], high[0], 4001)
+        moved = np.repeat(start[None], len(angles), axis=0)
+        moved[:, 0] += angles
+        assert is_valid(world, moved, poses_of(moved)).all(), (start.tolist(), low[0], high[0])
+    assert checked >= 10

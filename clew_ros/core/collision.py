@@ -79,7 +79,7 @@ def packed_world(world: World) -> PackedWorld:
     robot = world.robot
     n = robot.dof
     obstacle_starts = np.cumsum([0] + [len(o.vertices) for o in world.obstacles]).astype(np.int64)
-    boxes = np.array([[*o.vertices.min(axis=0), *o.vertices.max(axis=0)] for o in world.obstacles])
+    boxes = scene.obstacle_boxes.reshape(-1, 4)  # (O, 2, 2) [low, high] as xmin, ymin, xmax, ymax
     shrunk_starts = np.cumsum([0] + [len(part) for part in scene.shrunk_parts]).astype(np.int64)
     scale = max([float(np.abs(world.bounds).max()), robot.reach + float(np.abs(robot.base).max())]
                 + [float(np.abs(o.vertices).max()) for o in world.obstacles])

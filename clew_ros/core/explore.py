@@ -18,7 +18,7 @@ import numpy as np
 
 from clew_ros.core.genetic import minimize
 from clew_ros.core.reach import approach_cell
-from clew_ros.core.search import PlanningContext, search_transit, search_transits
+from clew_ros.core.search import PlanningContext, search_transits
 from clew_ros.core.tree import LandmarkTree, landmark_features
 
 __all__ = ["Explorer", "Exploration"]
@@ -84,22 +84,21 @@ class Explorer:
         self._transits = {key: found for key, found in self._transits.items() if found is not None}
 
     def _transit(self, landmark, grasp: int, approach: np.ndarray | None) -> _Candidate | None:
-        return self._candidate_of(landmark, grasp, search_transit(self.ctx, landmark.joints, landmark.object_pose,
-                                                                  grasp, approach))
+        return self._transits_to([(landmark, grasp)], approach)[0]
 
     def _search_transits(self, pairs: list[tuple[int, int]]) -> None:
         """The transits of (landmark, grasp) ``pairs`` not yet cached, searched together (one island
         each) and cached."""
         pairs = [(i, g) for i, g in pairs if self.tree[i].grasp != g]
-        requests = [(self.tree[i].joints, self.tree[i].object_pose, g, None) for i, g in pairs]
-        for (i, g), result in zip(pairs, search_transits(self.ctx, requests), strict=True):
-            self._transits[(i, g)] = self._candidate_of(self.tree[i], g, result)
+        found = self._transits_to([(self.tree[i], g) for i, g in pairs], None)
+        self._transits.update(zip(pairs, found, strict=True))
 
-    @staticmethod
-    def _candidate_of(landmark, grasp: int, result) -> _Candidate | None:
-        if not result.success:
-            return None
-        return _Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
+    def _transits_to(self, pairs: list, approach: np.ndarray | None) -> list[_Candidate | None]:
+        """SEARCH_TRANSIT from each landmark to its grasp, all at once: the candidates, None where it failed."""
+        results = search_transits(self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach)
+                                             for landmark, grasp in pairs])
+        return [_Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
+                if result.success else None for (landmark, grasp), result in zip(pairs, results, strict=True)]
 
     def explore(self) -> Exploration | None:
         """Place one new landmark; ``None`` when no candidate transit succeeded."""

@@ -68,11 +68,13 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
     ``should_stop()`` is true."""
     population = np.array(initial, dtype=float)
     islands, size, dims = population.shape
+    if not 0 <= settings.elite < size:
+        raise ValueError(f"elite: expected 0 <= elite < population ({size}), got {settings.elite}")
     targets = np.full(islands, -np.inf) if targets is None else np.broadcast_to(targets, (islands,))
     everyone = np.arange(islands)
     fitness = np.asarray(evaluate(population, everyone), dtype=float).reshape(islands, size)
     evaluations = np.full(islands, size)
-    best_fitness = fitness.min(axis=1)
+    best_fitness = np.fmin.reduce(fitness, axis=1)  # NaN (a failed evaluation) never counts as best
     stall = np.zeros(islands, dtype=int)
     generations = np.zeros(islands, dtype=int)
     elite_count = settings.elite
@@ -81,7 +83,7 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
     rows_all = np.arange(islands)[:, None]
     limit = settings.stall_generations
     for _generation in range(settings.generations):
-        go = (best_fitness > targets) & (stall < limit)
+        go = ~(best_fitness <= targets) & (stall < limit)
         every = bool(go.all())  # the usual case: slices (views), not copies
         if not (every or go.any()) or should_stop():
             break
@@ -114,7 +116,7 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
         fitness[pick, elite_count:] = child_fitness
         evaluations[pick] += children_count
         generations[pick] += 1
-        lowest = np.minimum(elite_fitness.min(axis=1), child_fitness.min(axis=1))
+        lowest = np.fmin.reduce(fitness[pick], axis=1)
         improved = lowest < best_fitness[pick] - 1e-12
         best_fitness[pick] = np.where(improved, lowest, best_fitness[pick])
         stall[pick] = (stall[pick] + 1) * ~improved

@@ -22,7 +22,8 @@ intersections. The pairs, each checked both ways round:
 * transfer: object edge vs obstacle edge: 0; shrunk object vs static link: 0.
 
 An end point closer than ``offset + 1.5 margin`` is kept only ``offset``
-away (it starts there), otherwise ``offset + margin``. Moving joints and,
+away (it starts there), otherwise ``offset + margin``; the same for a point
+and a bound. Moving joints and,
 in transfer, the object's vertices stay inside the bounds (inset ``r`` and
 0, plus the margin). The nearest contact each way, the joint limits and
 ``2 pi`` bound the interval, backed off by :data:`BACKOFF_RAD`.
@@ -50,6 +51,7 @@ _AT_START = 1e-12
 _jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 # Parallel kernels may be launched from several threads at once (several planners in one process):
 # only a thread-safe layer (TBB or OpenMP) allows it; without one the kernels run on one thread.
+# GNU OpenMP is not fork-safe: start other processes with subprocess (fork + exec) or "spawn".
 if numba.config.THREADING_LAYER == "default":
     numba.config.THREADING_LAYER = "threadsafe"
 
@@ -127,6 +129,19 @@ def _nearest(phi: float, best: np.ndarray) -> None:
         best[0] = phi
     if phi > best[1]:
         best[1] = phi
+
+
+@_jit
+def _forward(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, links: np.ndarray) -> tuple[float, float, float]:
+    """Forward kinematics of configuration ``q (n,)``: the links as segments ``links (n, 2, 2)``
+    (world frame), and the end-effector frame ``(x, y, theta)``."""
+    x, y, phi = base[0], base[1], 0.0
+    for i in range(lengths.shape[0]):
+        phi += q[i]
+        nx, ny = x + lengths[i] * math.cos(phi), y + lengths[i] * math.sin(phi)
+        links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1] = x, y, nx, ny
+        x, y = nx, ny
+    return x, y, phi
 
 
 @_jit
@@ -236,13 +251,20 @@ def _place(edges: np.ndarray, x: float, y: float, theta: float, px: float, py: f
 
 
 @_jit
-def _bound_crossings(px: float, py: float, rx: float, ry: float, limit: float, bounds: np.ndarray,
+def _bound_crossings(px: float, py: float, rx: float, ry: float, inset: float, margin: float, bounds: np.ndarray,
                      best: np.ndarray) -> None:
-    """Rotations at which the point ``p + r`` (turning about ``p``) reaches a bound moved in by ``limit``."""
+    """Rotations at which the point ``p + r`` (turning about ``p``) reaches a bound moved in by
+    ``inset + margin``, or by ``inset`` alone for a bound it starts closer to than ``inset + 1.5 margin``
+    (as for the stadiums: it is kept from getting closer than it starts, not pushed out)."""
     rho = math.sqrt(rx * rx + ry * ry)
     if not rho > 0.0:
         return
-    xmin, ymin, xmax, ymax = bounds[0] + limit, bounds[1] + limit, bounds[2] - limit, bounds[3] - limit
+    x, y = px + rx, py + ry
+    near = inset + 1.5 * margin
+    xmin = bounds[0] + inset + (margin if x - bounds[0] > near else 0.0)
+    ymin = bounds[1] + inset + (margin if y - bounds[1] > near else 0.0)
+    xmax = bounds[2] - inset - (margin if bounds[2] - x > near else 0.0)
+    ymax = bounds[3] - inset - (margin if bounds[3] - y > near else 0.0)
     if px - rho > xmin and px + rho < xmax and py - rho > ymin and py + rho < ymax:
         return  # its circle reaches no bound
     alpha = math.atan2(ry, rx)
@@ -276,17 +298,8 @@ def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margi
     links, link_radii, obstacle_rel, obstacle_radii, object_rel, object_radii, shrunk_rel, shrunk_radii, best = \
         scratch
     n = lengths.shape[0]
-    # forward kinematics, relative to the pivot p_joint
-    x, y, phi = base[0], base[1], 0.0
-    px, py = x, y
-    for i in range(n):
-        if i == joint:
-            px, py = x, y
-        phi += q[i]
-        nx, ny = x + lengths[i] * math.cos(phi), y + lengths[i] * math.sin(phi)
-        links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1] = x, y, nx, ny
-        x, y = nx, ny
-    tip_x, tip_y, tip_theta = x, y, phi
+    tip_x, tip_y, tip_theta = _forward(q, base, lengths, links)
+    px, py = links[joint, 0, 0], links[joint, 0, 1]  # the pivot p_joint: everything relative to it
     for i in range(n):
         for v in range(2):
             links[i, v, 0] -= px
@@ -323,10 +336,10 @@ def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margi
         _pieces(moving_links, moving_radii, shrunk_rel, shrunk_radii, 0, shrunk_rel.shape[0], 0.0, margin, best)
     # the moving joints (inset r) and the carried object's vertices (inset 0) stay inside the bounds
     for i in range(joint, n):
-        _bound_crossings(px, py, links[i, 1, 0], links[i, 1, 1], r + margin, bounds, best)
+        _bound_crossings(px, py, links[i, 1, 0], links[i, 1, 1], r, margin, bounds, best)
     if transfer:
         for e in range(object_rel.shape[0]):
-            _bound_crossings(px, py, object_rel[e, 0, 0], object_rel[e, 0, 1], margin, bounds, best)
+            _bound_crossings(px, py, object_rel[e, 0, 0], object_rel[e, 0, 1], 0.0, margin, bounds, best)
     hi = best[0]
     lo = best[1] - _TWO_PI  # -inf when nothing was met
     up = min(max(upper[joint] - q[joint], 0.0), MAX_MOVE_RAD)
@@ -345,26 +358,38 @@ def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple:
 
 
 @_jit
+def _decode_one(b: int, waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
+                poses: np.ndarray, margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray,
+                upper: np.ndarray, r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
+                object_edges: np.ndarray, shrunk_edges: np.ndarray, scratch: tuple, q: np.ndarray) -> None:
+    """Individual ``b``: fill columns ``first .. last - 1`` (>= 1) of ``waypoints[b]`` from column
+    ``first - 1``: move ``c`` turns joint ``(c - 1) mod n`` by gene ``(c - 1)`` bounced into its free
+    interval."""
+    n = lengths.shape[0]
+    for j in range(n):
+        q[j] = waypoints[b, first - 1, j]
+    for column in range(first, last):
+        k, joint = (column - 1) // n, (column - 1) % n
+        low, high = _interval(q, joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
+                              self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
+        q[joint] += _bounce(genes[b, k, joint], low, high)
+        for j in range(n):
+            waypoints[b, column, j] = q[j]
+
+
+@_jit
 def _decode(waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool, poses: np.ndarray,
             margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
             self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
             shrunk_edges: np.ndarray) -> None:
-    """Fill columns ``first .. last - 1`` (>= 1) of ``waypoints`` ``(B, k n + 1, n)`` from column
-    ``first - 1``: move ``c`` turns joint ``(c - 1) mod n`` by gene ``(c - 1)`` bounced into its
-    free interval. ``poses`` ``(B, 3)`` per individual."""
+    """Columns ``first .. last - 1`` of every individual of ``waypoints`` ``(B, k n + 1, n)`` (genes
+    ``(B, k, n)``, ``poses`` ``(B, 3)`` per individual), one after the other."""
     n = lengths.shape[0]
     scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
     q = np.empty(n)
     for b in range(waypoints.shape[0]):
-        for j in range(n):
-            q[j] = waypoints[b, first - 1, j]
-        for column in range(first, last):
-            k, joint = (column - 1) // n, (column - 1) % n
-            low, high = _interval(q, joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
-                                  self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
-            q[joint] += _bounce(genes[b, k, joint], low, high)
-            for j in range(n):
-                waypoints[b, column, j] = q[j]
+        _decode_one(b, waypoints, genes, first, last, transfer, poses, margin, base, lengths, lower, upper, r,
+                    self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch, q)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
@@ -372,21 +397,13 @@ def _decode_parallel(waypoints: np.ndarray, genes: np.ndarray, first: int, last:
                      poses: np.ndarray, margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray,
                      upper: np.ndarray, r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
                      object_edges: np.ndarray, shrunk_edges: np.ndarray) -> None:
-    """:func:`_decode` with the individuals spread over threads (each computed alone: the same
-    numbers whatever the number of threads)."""
+    """:func:`_decode` with the individuals spread over threads (each computed alone, with work arrays
+    of its own: the same numbers whatever the number of threads)."""
     n = lengths.shape[0]
     for b in numba.prange(waypoints.shape[0]):
         scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
-        q = np.empty(n)
-        for j in range(n):
-            q[j] = waypoints[b, first - 1, j]
-        for column in range(first, last):
-            k, joint = (column - 1) // n, (column - 1) % n
-            low, high = _interval(q, joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
-                                  self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
-            q[joint] += _bounce(genes[b, k, joint], low, high)
-            for j in range(n):
-                waypoints[b, column, j] = q[j]
+        _decode_one(b, waypoints, genes, first, last, transfer, poses, margin, base, lengths, lower, upper, r,
+                    self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch, np.empty(n))
 
 
 @_jit
@@ -469,14 +486,12 @@ def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.n
     xmin, ymin, xmax, ymax = bounds[0], bounds[1], bounds[2], bounds[3]
     for b in range(q.shape[0]):
         out[b] = False
-        x, y, phi = base[0], base[1], 0.0
-        inside = xmin + r + eps < x < xmax - r - eps and ymin + r + eps < y < ymax - r - eps
+        _forward(q[b], base, lengths, links)
+        inside = True
         for i in range(n):
-            phi += q[b, i]
-            nx, ny = x + lengths[i] * math.cos(phi), y + lengths[i] * math.sin(phi)
-            links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1] = x, y, nx, ny
-            x, y = nx, ny
-            inside = inside and xmin + r + eps < x < xmax - r - eps and ymin + r + eps < y < ymax - r - eps
+            for v in range(2):
+                x, y = links[i, v, 0], links[i, v, 1]
+                inside = inside and xmin + r + eps < x < xmax - r - eps and ymin + r + eps < y < ymax - r - eps
         if not inside:
             continue
         _place(object_edges, poses[b, 0], poses[b, 1], poses[b, 2], 0.0, 0.0, shape)
@@ -531,15 +546,12 @@ def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.n
 @_jit
 def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndarray, tips: np.ndarray) -> None:
     """Joint positions ``points (B, n + 1, 2)`` and end-effector frames ``tips (B, 3)`` of ``q (B, n)``."""
+    links = np.empty((lengths.shape[0], 2, 2))
     for b in range(q.shape[0]):
-        x, y, phi = base[0], base[1], 0.0
-        points[b, 0, 0], points[b, 0, 1] = x, y
+        tips[b, 0], tips[b, 1], tips[b, 2] = _forward(q[b], base, lengths, links)
+        points[b, 0, 0], points[b, 0, 1] = base[0], base[1]
         for i in range(lengths.shape[0]):
-            phi += q[b, i]
-            x += lengths[i] * math.cos(phi)
-            y += lengths[i] * math.sin(phi)
-            points[b, i + 1, 0], points[b, i + 1, 1] = x, y
-        tips[b, 0], tips[b, 1], tips[b, 2] = x, y, phi
+            points[b, i + 1, 0], points[b, i + 1, 1] = links[i, 1, 0], links[i, 1, 1]
 
 
 # --------------------------------------------------------------------------- Python entry points
@@ -559,7 +571,9 @@ def available_threads() -> int:
                              np.zeros(2), np.ones(1), -np.ones(1), np.ones(1), 0.0, False,
                              np.array([-9.0, -9.0, 9.0, 9.0]), np.zeros((0, 2, 2)), np.zeros((0, 2, 2)),
                              np.zeros((0, 2, 2)))
-            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS))
+            # the workqueue layer (chosen by a user's NUMBA_THREADING_LAYER) aborts on concurrent launches
+            safe = numba.threading_layer() in ("tbb", "omp")
+            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS) if safe else 1)
         except (ValueError, RuntimeError, ImportError):  # no thread-safe threading layer
             _PARALLEL.append(1)
     return _PARALLEL[0]
@@ -573,7 +587,8 @@ def decode(world: PackedWorld, waypoints: np.ndarray, genes: np.ndarray, first: 
     """Compiled: columns ``first .. last - 1`` of ``waypoints`` (C-contiguous float64, filled in place),
     on ``threads`` threads (0: all); every individual is computed alone, so the numbers do not depend
     on the number of threads."""
-    threads = min(threads or available_threads(), available_threads(), len(waypoints))
+    if threads != 1:
+        threads = min(threads or available_threads(), available_threads(), len(waypoints))
     arguments = (waypoints, _arg(genes), first, last, transfer, _poses(poses, len(waypoints)), float(margin),
                  *world.arguments())
     if threads > 1:

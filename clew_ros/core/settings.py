@@ -47,7 +47,8 @@ PLANNER_PARAMETERS: dict[str, tuple[type, Any, str, tuple | None]] = {
     "explore_candidates": (int, 4, "Landmark/grasp pairs (m1) tried per EXPLORE step.", (1, 1000)),
     "search_rounds": (int, 3, "Rounds of SEARCH's do-while loop before it gives up.", (1, 100)),
     "joint_weight": (float, 0.1, "Weight (m/rad) of the joint angles in the landmark distance.", (0.0, 10.0)),
-    "max_sweep_steps": (int, 48, "Conservative-advancement steps per free-interval side.", (2, 10000)),
+    "max_sweep_steps": (int, 48, "Unused: free intervals are closed-form; kept so that parameter files that set it "
+                        "still load.", (2, 10000)),
     "threads": (int, 0, "Threads that decode a population's Manhattan paths (0: all cores); the plan does not "
                 "depend on it.", (0, 1024)),
 }

@@ -53,12 +53,17 @@ def main(argv: list[str] | None = None) -> int:
             os._exit(EXIT_OK)
 
     previous = {sig: signal.signal(sig, on_stop) for sig in STOP_SIGNALS}
-    # compile the planning kernel (or load numba's cache) before anything else, so no plan pays for
-    # it; the first start after an install compiles for several seconds, and a stop signal meanwhile
-    # exits at once
-    warm_up()
-    warming[0] = False
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        # compile the planning kernel (or load numba's cache) before anything else, so no plan pays
+        # for it; the first start after an install compiles for several seconds, and a stop signal
+        # meanwhile exits as soon as Python gets control back (between two compiler passes)
+        warm_up()
+        warming[0] = False
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except BaseException:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        raise
     try:
         try:
             node = PlannerNode()

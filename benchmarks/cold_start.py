@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--world", type=Path, default=ROOT / "config" / "figure1.yaml")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
-    print(json.dumps(measure(args.world, args.seed), indent=1))
+    print(json.dumps(measure(args.world, args.seed)))  # one line: benchmarks.run reads the last line
     return 0
 
 

@@ -94,7 +94,10 @@ def _child(module: str, *args: str, timeout: float, tree: Path = ROOT) -> dict:
     if done.returncode != 0 or not lines:
         tail = done.stderr.strip().splitlines()[-3:]
         return {"error": f"{' '.join(command[2:])}: exit {done.returncode}: {' | '.join(tail)}"}
-    return json.loads(lines[-1])
+    try:
+        return json.loads(lines[-1])
+    except json.JSONDecodeError as error:
+        return {"error": f"{' '.join(command[2:])}: unreadable output ({error})"}
 
 
 def _git(*args: str) -> str:

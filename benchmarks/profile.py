@@ -16,6 +16,7 @@ import sys
 
 from benchmarks.families import all_worlds, select
 from clew_ros.core.clew import plan
+from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import world_from_parameters
 
@@ -36,6 +37,7 @@ def profile_run(name: str, seed: int, time_limit_s: float, top: int = 15) -> dic
     bench = matches[0]
     world = world_from_parameters(bench.parameters)
     settings = PlannerSettings.from_parameters(bench.parameters, seed=seed, time_limit=time_limit_s)
+    warm_up()  # as clew_plan and the node do: loading the compiled kernel is not part of a plan
     profile = cProfile.Profile()
     profile.enable()
     result = plan(world, settings)

@@ -160,7 +160,7 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
             rows = sample[start:start + 24]
             if len(rows) < 24 or total >= 10 * interval_budget:
                 break
-            run_manhattan(world, rows, genes, **kwargs)
+            run_manhattan(world, rows, genes, threads=1, **kwargs)  # one core, as every figure here
             total += genes.size
         seconds = time.process_time() - started
         intervals[f"{mode}_decode24"] = {"intervals": total, "seconds": seconds, "per_s": _rate(total, seconds)}

@@ -107,8 +107,10 @@ def goal_pose_run(session: Session) -> str:
 
 def assert_next_plan_works(session: Session) -> None:
     """A goal pose outside the ring succeeds; its playback is then stopped (not needed here)."""
+    before = {id(m) for m in session.joint_states.messages}
     run_id = goal_pose_run(session)
     session.status.wait_for(status_is(run_id, GoalStatus.STATUS_SUCCEEDED), 30.0)
+    playback_started(session, before)
     response, _, _ = cancel(session)  # stops the playback
     assert response.success and "stopped the playback" in response.message, response.message
 
@@ -164,10 +166,17 @@ def test_cancel_during_explore(ring: Session) -> None:
     assert_next_plan_works(ring)
 
 
+def playback_started(session: Session, before: set[int]) -> None:
+    """Wait for a ``~/joint_states`` message not among ``before`` (ids of the messages seen before the
+    run was sent): this run's playback is running (older messages belong to earlier playbacks)."""
+    session.joint_states.wait_for(lambda m: id(m) not in before, 10.0)
+
+
 def test_cancel_during_playback(ring: Session) -> None:
+    before = {id(m) for m in ring.joint_states.messages}
     run_id = goal_pose_run(ring)
     ring.status.wait_for(status_is(run_id, GoalStatus.STATUS_SUCCEEDED), 30.0)
-    ring.joint_states.wait_for(lambda m: True, 5.0)  # the playback is running
+    playback_started(ring, before)
     response, sent, answered = cancel(ring)
     stopped_at = received_at(ring.feedback, lambda m: kv(m).get("run_id") == run_id
                              and kv(m).get("phase") == "playback_stopped", 5.0)

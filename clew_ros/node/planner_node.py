@@ -636,9 +636,12 @@ class PlannerNode(Node):
     def _play_back(self, run: Run) -> None:
         """Publish ``~/joint_states``, ``~/object_pose`` and grasp events along ``run.track``, in time."""
         with self._lock:
-            if run.stop_playback.is_set():
-                return
+            stopped_before_start = run.stop_playback.is_set()
             run.phase = "playback"
+        if stopped_before_start:  # a cancel or a new request came between the outcome and the first sample
+            self._publish_feedback(run, "playback_stopped")
+            self.get_logger().info(f"run {run.hex}: playback stopped before it started")
+            return
         track: Track = run.track
         events = track.events()
         next_event = 0

@@ -18,11 +18,12 @@ import pytest
 
 from clew_ros.core.collision import exactly_valid, is_placement_valid, is_valid
 from clew_ros.core.kinematics import compose, joint_positions, tip_poses, transform_points
-from clew_ros.core.manhattan import MAX_MOVE_RAD, free_intervals, run_manhattan
+from clew_ros.core.manhattan import free_intervals, run_manhattan
 from clew_ros.core.world import world_from_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
-SWEEP = np.arange(-6.3, 6.3 + 1e-9, 1e-3)
+sys.path.insert(0, str(Path(__file__).parent / "helpers"))
+from sweep import sweep_interval  # noqa: E402
 
 
 def random_world(seed: int, *, joints: int, obstacles: int, width: float, limit: float, self_collision: bool):
@@ -53,20 +54,6 @@ def random_world(seed: int, *, joints: int, obstacles: int, width: float, limit:
                    "grasps": polygon[0].tolist()},
     }}
     return world_from_parameters(parameters, check_collisions=False), rng
-
-
-def sweep_interval(world, q, joint, poses_of):
-    """The valid interval around 0 found by testing every 1 mrad (joint limits included)."""
-    qs = np.repeat(q[None], len(SWEEP), axis=0)
-    qs[:, joint] += SWEEP
-    ok = (qs[:, joint] >= world.robot.joint_lower[joint]) & (qs[:, joint] <= world.robot.joint_upper[joint])
-    ok &= is_valid(world, qs, poses_of(qs))
-    zero = int(np.argmin(np.abs(SWEEP)))
-    assert ok[zero]
-    bad = np.flatnonzero(~ok)
-    low = bad[bad < zero].max() + 1 if (bad < zero).any() else 0
-    high = bad[bad > zero].min() - 1 if (bad > zero).any() else len(SWEEP) - 1
-    return max(SWEEP[low], -MAX_MOVE_RAD), min(SWEEP[high], MAX_MOVE_RAD)  # one move turns at most a full turn
 
 
 def valid_configurations(world, rng, count, poses_of, tries=20000):

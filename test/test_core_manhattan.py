@@ -1,5 +1,6 @@
 """Free intervals against brute-force sweeps; bouncing; decoded paths are valid."""
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -12,24 +13,8 @@ from clew_ros.core.plan import CHECK_STEP_RAD
 from clew_ros.core.world import load_world
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"
-
-
-def _sweep_interval(world, q, joint, poses_of):
-    """The valid interval around 0 found by testing every 1 mrad of the joint's range."""
-    angles = np.arange(-6.3, 6.3 + 1e-9, 1e-3)
-    qs = np.repeat(q[None], len(angles), axis=0)
-    qs[:, joint] += angles
-    ok = (qs[:, joint] >= world.robot.joint_lower[joint]) & (qs[:, joint] <= world.robot.joint_upper[joint])
-    ok &= is_valid(world, qs, poses_of(qs))
-    zero = int(np.argmin(np.abs(angles)))
-    assert ok[zero]
-    low = zero
-    while low > 0 and ok[low - 1]:
-        low -= 1
-    high = zero
-    while high < len(angles) - 1 and ok[high + 1]:
-        high += 1
-    return angles[low], angles[high]
+sys.path.insert(0, str(Path(__file__).parent / "helpers"))
+from sweep import sweep_interval  # noqa: E402
 
 
 @pytest.mark.parametrize("name", ["single_transfer", "arm3_regrasp"])
@@ -55,7 +40,7 @@ def test_free_intervals_match_brute_force(name, mode):
         checked += 1
         for joint in range(world.robot.dof):
             low, high = free_intervals(world, q[None], joint, margin_m=0.0, **kwargs)
-            brute_low, brute_high = _sweep_interval(world, q, joint, poses_of)
+            brute_low, brute_high = sweep_interval(world, q, joint, poses_of)
             assert low[0] == pytest.approx(brute_low, abs=2e-3)
             assert high[0] == pytest.approx(brute_high, abs=2e-3)
     assert checked == 4

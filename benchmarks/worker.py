@@ -17,7 +17,7 @@ import time
 from benchmarks.families import all_worlds, select
 from clew_ros.core.clew import plan
 from clew_ros.core.kernel import warm_up
-from clew_ros.core.plan import plan_to_dict, validate_plan
+from clew_ros.core.plan import checked_plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import world_from_parameters
 
@@ -54,7 +54,7 @@ def run_world(name: str, seeds: list[int], time_limit_s: float, validate: bool =
             "valid": None,
         }
         if validate and result.success:
-            record["valid"] = not validate_plan(world, plan_to_dict(world, result))
+            record["valid"] = checked_plan(world, result).success
         runs.append(record)
     return {"world": bench.name, "time_limit_s": time_limit_s, "runs": runs, "warm_up_s": warm_up_s,
             "rss_before_mb": base_rss, "peak_rss_mb": _maxrss_mb()}

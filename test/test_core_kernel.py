@@ -239,7 +239,7 @@ def test_the_same_seed_gives_the_same_plan_on_one_thread_and_on_all():
     the plan is the same whatever the number of threads."""
     from clew_ros.core.clew import plan
     from clew_ros.core.kernel import available_threads
-    from clew_ros.core.plan import dumps_plan, plan_to_dict
+    from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
     from clew_ros.core.world import load_world
 
@@ -249,9 +249,9 @@ def test_the_same_seed_gives_the_same_plan_on_one_thread_and_on_all():
     for threads in (1, 0, 3):
         result = plan(world, PlannerSettings(seed=2, time_limit=60.0, threads=threads))
         assert result.success, result.message
-        document = plan_to_dict(world, result)
+        document = Plan.from_result(world, result).to_dict()
         document["stats"].pop("time_s")
-        documents.append(dumps_plan(document))
+        documents.append(Plan.from_dict(document).to_json())
     assert documents[0] == documents[1] == documents[2]
 
 

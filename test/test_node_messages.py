@@ -19,7 +19,7 @@ from trajectory_msgs.msg import JointTrajectory  # noqa: E402
 from visualization_msgs.msg import Marker  # noqa: E402
 
 from clew_ros.core.clew import plan  # noqa: E402
-from clew_ros.core.plan import plan_to_dict, validate_plan  # noqa: E402
+from clew_ros.core.plan import Plan, validate_plan  # noqa: E402
 from clew_ros.core.settings import PlannerSettings  # noqa: E402
 from clew_ros.core.tree import LandmarkTree  # noqa: E402
 from clew_ros.core.world import load_world, world_from_parameters  # noqa: E402
@@ -36,10 +36,10 @@ def quick():
 
 
 @pytest.fixture(scope="module")
-def quick_plan(quick) -> dict:
+def quick_plan(quick) -> Plan:
     result = plan(quick, PlannerSettings(seed=0, time_limit=20.0))
     assert result.success, result.message
-    return plan_to_dict(quick, result)
+    return Plan.from_result(quick, result)
 
 
 def test_trajectory_round_trips_to_a_valid_plan(quick, quick_plan) -> None:
@@ -49,19 +49,18 @@ def test_trajectory_round_trips_to_a_valid_plan(quick, quick_plan) -> None:
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (5, 123)
     rebuilt = trajectory_to_plan(quick, msg, strict=True)
     assert validate_plan(quick, rebuilt) == []
-    assert [(s["kind"], s["grasp"]) for s in rebuilt["segments"]] == \
-        [(s["kind"], s["grasp"]) for s in quick_plan["segments"]]
-    for a, b in zip(rebuilt["segments"], quick_plan["segments"]):
-        assert np.allclose(a["waypoints"], b["waypoints"], atol=0, rtol=0)
-    assert np.allclose(rebuilt["final_object_pose"], quick_plan["final_object_pose"], atol=1e-9)
+    assert [(s.kind, s.grasp) for s in rebuilt.segments] == [(s.kind, s.grasp) for s in quick_plan.segments]
+    for a, b in zip(rebuilt.segments, quick_plan.segments, strict=True):
+        assert np.allclose(a.waypoints, b.waypoints, atol=0, rtol=0)
+    assert np.allclose(rebuilt.final_object_pose, quick_plan.final_object_pose, atol=1e-9)
 
 
 def test_trajectory_points_hold_the_contract(quick, quick_plan) -> None:
     msg = messages.joint_trajectory(track_from_plan(quick, quick_plan), 0)
     assert msg.joint_names == ["joint_1", "joint_2", "gripper"]
-    waypoints = [w for s in quick_plan["segments"] for w in s["waypoints"]]
+    waypoints = [w.tolist() for s in quick_plan.segments for w in s.waypoints]
     assert [list(p.positions[:2]) for p in msg.points] == waypoints
-    gripper = [1.0 if s["kind"] == "transfer" else 0.0 for s in quick_plan["segments"] for _ in s["waypoints"]]
+    gripper = [1.0 if s.kind == "transfer" else 0.0 for s in quick_plan.segments for _ in s.waypoints]
     assert [p.positions[2] for p in msg.points] == gripper
     times = [p.time_from_start.sec * 10**9 + p.time_from_start.nanosec for p in msg.points]
     assert all(b > a for a, b in itertools.pairwise(times))

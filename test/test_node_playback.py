@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from clew_ros.core.kinematics import compose, relative, tip_poses
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.core.world import load_world
 from clew_ros.node.playback import MIN_STEP_NS, track_from_plan
 
@@ -19,13 +20,16 @@ def world():
     return load_world(QUICK)
 
 
-def hand_plan(q0, q1, q2, q3, grasp=2) -> dict:
+def plan_of(*segments: PlanSegment) -> Plan:
+    return Plan(world="node_quick", joint_names=("joint_1", "joint_2"), success=bool(segments), message="by hand",
+                segments=segments)
+
+
+def hand_plan(q0, q1, q2, q3, grasp=2) -> Plan:
     """transit q0 -> q1, transfer (grasp) q1 -> q2, transit q2 -> q3."""
-    return {"segments": [
-        {"kind": "transit", "grasp": None, "waypoints": [q0, q1]},
-        {"kind": "transfer", "grasp": grasp, "waypoints": [q1, q2]},
-        {"kind": "transit", "grasp": None, "waypoints": [q2, q3]},
-    ]}
+    return plan_of(PlanSegment("transit", None, np.array([q0, q1], float)),
+                   PlanSegment("transfer", grasp, np.array([q1, q2], float)),
+                   PlanSegment("transit", None, np.array([q2, q3], float)))
 
 
 def test_times_follow_joint_speed_and_dwell(world) -> None:
@@ -40,7 +44,7 @@ def test_times_follow_joint_speed_and_dwell(world) -> None:
 
 
 def test_nearly_equal_points_still_get_increasing_times(world) -> None:
-    plan = {"segments": [{"kind": "transit", "grasp": None, "waypoints": [[0.0, 0.0], [1e-12, 0.0], [0.0, 0.0]]}]}
+    plan = plan_of(PlanSegment("transit", None, np.array([[0.0, 0.0], [1e-12, 0.0], [0.0, 0.0]])))
     track = track_from_plan(world, plan)
     assert np.all(np.diff(track.times_ns) == MIN_STEP_NS)
 
@@ -59,10 +63,8 @@ def test_grasp_events_follow_the_transfer_segments(world) -> None:
 
 
 def test_a_start_that_already_holds_a_grasp(world) -> None:
-    plan = {"segments": [
-        {"kind": "transit", "grasp": None, "waypoints": [[0.0, 0.0]]},
-        {"kind": "transfer", "grasp": 0, "waypoints": [[0.0, 0.0], [0.3, 0.0]]},
-    ]}
+    plan = plan_of(PlanSegment("transit", None, np.array([[0.0, 0.0]])),
+                   PlanSegment("transfer", 0, np.array([[0.0, 0.0], [0.3, 0.0]])))
     track = track_from_plan(world, plan, grasp_dwell_s=0.2)
     assert [(e.kind, e.grasp, e.time_s) for e in track.events()] == [("grasp", 0, pytest.approx(0.2))]
 
@@ -90,6 +92,6 @@ def test_samples_move_the_object_with_the_end_effector(world) -> None:
 
 def test_a_plan_without_segments_has_no_track(world) -> None:
     with pytest.raises(ValueError, match="without segments"):
-        track_from_plan(world, {"segments": []})
+        track_from_plan(world, plan_of())
     with pytest.raises(ValueError):
         track_from_plan(world, hand_plan([0, 0], [0, 0], [0, 0], [0, 0]), joint_speed_rad_s=0.0)

@@ -100,7 +100,7 @@ def test_world_alone(tmp_path: Path) -> None:
 def test_recording(recording: Path, tmp_path: Path) -> None:
     scene = scene_from_recording(recording)
     plan = quick_plan()
-    assert [(s["kind"], s["grasp"]) for s in scene.plan["segments"]] == [(s["kind"], s["grasp"]) for s in plan["segments"]]
+    assert [(s.kind, s.grasp) for s in scene.plan.segments] == [(s["kind"], s["grasp"]) for s in plan["segments"]]
     assert len(scene.landmarks.nodes) == len(plan["landmarks"])
     assert "succeeded" in scene.title
     for suffix in ("png", "svg", "gif"):

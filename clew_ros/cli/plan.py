@@ -20,7 +20,7 @@ from pathlib import Path
 from clew_ros.core.clew import PlanResult, Progress, plan
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.kernel import warm_up
-from clew_ros.core.plan import dumps_plan, plan_to_dict, validate_plan
+from clew_ros.core.plan import Plan, checked_plan
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import read_parameter_file, world_from_parameters
@@ -98,12 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     restore = _cancel_on_signals(cancel)
     try:
         result = plan(world, settings, termination=Termination(settings.time_limit, cancel), progress=progress)
-        document = plan_to_dict(world, result)
-        if result.success:
-            problems = validate_plan(world, document)
-            if problems:  # a bug: never hand out a plan that fails the validator
-                document.update(success=False, code="INTERNAL_ERROR", segments=[], final_object_pose=None,
-                                message="internal error: the plan failed validation: " + "; ".join(problems[:3]))
+        planned = checked_plan(world, result)
     except KeyboardInterrupt:  # a second signal
         print("clew_plan: aborted; no plan file written", file=sys.stderr)
         return EXIT_ABORTED
@@ -111,21 +106,19 @@ def main(argv: list[str] | None = None) -> int:
         result = PlanResult(Outcome.INTERNAL_ERROR, f"internal error: {error!r}", [], None,
                             LandmarkTree(world.robot.initial, world.object.initial),
                             {"time_s": round(time.monotonic() - started, 4), "seed": settings.seed})
-        document = plan_to_dict(world, result)
+        planned = Plan.from_result(world, result)
     finally:
         restore()
         progress.close()
     try:
-        args.output.parent.mkdir(parents=True, exist_ok=True)
-        args.output.write_text(dumps_plan(document))
+        planned.write(args.output)
     except OSError as error:
         print(f"clew_plan: cannot write --output {args.output}: {error.strerror}", file=sys.stderr)
         return 2
     elapsed = time.monotonic() - started
-    outcome = document["code"]
-    print(f"clew_plan: {outcome}: {document['message'].splitlines()[0]} ({elapsed:.2f} s, "
+    print(f"clew_plan: {planned.code}: {planned.message.splitlines()[0]} ({elapsed:.2f} s, "
           f"{len(result.tree)} landmarks) -> {args.output}", file=sys.stderr)
-    return 0 if document["success"] else 1
+    return 0 if planned.success else 1
 
 
 if __name__ == "__main__":

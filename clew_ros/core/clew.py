@@ -14,7 +14,7 @@ from clew_ros.core.kinematics import transform_points
 from clew_ros.core.reach import approach_cells, carry_cells
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.core.tree import LandmarkTree, Segment, append_path
+from clew_ros.core.tree import LandmarkTree, Segment, append_step
 from clew_ros.core.world import World
 
 __all__ = ["Progress", "PlanResult", "plan"]
@@ -116,10 +116,7 @@ def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: n
                 progress(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
                 segments = tree.history_of(landmark.id)
-                if found.transit is not None:
-                    append_path(segments, "transit", None, found.transit)
-                    segments.append(Segment("transfer", found.grasp, [segments[-1].waypoints[-1]]))
-                append_path(segments, "transfer", found.grasp, found.transfer)
+                append_step(segments, found.grasp, found.transit, found.transfer)
                 return finish(Outcome.SUCCEEDED, f"plan found with {len(tree)} landmarks, "
                               f"{sum(s.kind == 'transfer' for s in segments)} grasp(s)",
                               segments, found.object_pose)

@@ -1,9 +1,19 @@
-"""The plan file (``clew-plan/1``, ``interface.md`` section 2) and its validator."""
+"""The plan (``clew-plan/1``, ``interface.md`` section 2): one type, one reader, one writer, its replay and validator.
+
+:class:`Plan` is what every consumer takes: the validator, the node's
+playback, the recording rebuilt from a trajectory, the renderer. It is
+written and read only here (:meth:`Plan.to_json` / :meth:`Plan.from_json`),
+and :func:`replay` is the one place that carries the object through a plan
+(the object rests during a transit; during a transfer it keeps its pose
+relative to the tip where the transfer starts).
+"""
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -12,104 +22,305 @@ import numpy as np
 from clew_ros.core.clew import PlanResult
 from clew_ros.core.collision import explain_invalid, is_valid
 from clew_ros.core.errors import PlanFileError
-from clew_ros.core.kinematics import compose, relative, tip_poses, wrap_angle
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
+from clew_ros.core.settings import Outcome
 from clew_ros.core.world import World
 
-__all__ = ["FORMAT", "CHECK_STEP_RAD", "plan_to_dict", "dumps_plan", "read_plan", "validate_plan", "replay"]
+__all__ = [
+    "FORMAT", "CHECK_STEP_RAD", "Plan", "PlanSegment", "PlanLandmark", "SegmentMotion",
+    "replay", "validate_plan", "checked_plan",
+]
 
 FORMAT = "clew-plan/1"
 #: Largest joint step (rad) between two checked configurations.
 CHECK_STEP_RAD = 0.002
+#: The segment kinds, in the order a plan alternates them.
+KINDS = ("transit", "transfer")
 
 
-def _round(values) -> list[float]:
-    return [float(v) for v in np.asarray(values, dtype=float).ravel()]
-
-
-def plan_to_dict(world: World, result: PlanResult) -> dict[str, Any]:
-    """The plan file as a JSON-ready dict."""
-    tree = result.tree
-    landmarks = [{
-        "id": lm.id,
-        "parent": lm.parent,
-        "joints": _round(lm.joints),
-        "object_pose": _round(lm.object_pose),
-        "grasp": lm.grasp,
-    } for lm in tree]
-    return {
-        "format": FORMAT,
-        "world": world.name,
-        "success": result.success,
-        "message": result.message,
-        "code": result.outcome.name,
-        "joint_names": world.robot.joint_names,
-        "segments": [{"kind": s.kind, "grasp": s.grasp, "waypoints": [_round(w) for w in s.waypoints]}
-                     for s in result.segments] if result.success else [],
-        "final_object_pose": _round(result.final_object_pose) if result.success else None,
-        "landmarks": landmarks,
-        "stats": dict(result.stats),
-    }
-
-
-def dumps_plan(plan: dict) -> str:
-    """Serialise a plan dict deterministically."""
-    return json.dumps(plan, indent=1, sort_keys=False) + "\n"
-
-
-def read_plan(path: str | Path) -> dict:
+def _array(values: Any, what: str, shape: tuple[int | None, ...]) -> np.ndarray:
+    """A read-only float array of ``shape`` (``None``: any length), or :class:`PlanFileError` naming ``what``."""
     try:
-        plan = json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as error:
-        raise PlanFileError(f"{path}: cannot read the plan ({error})") from None
-    if not isinstance(plan, dict) or plan.get("format") != FORMAT:
-        raise PlanFileError(f"{path}: expected a JSON object with format {FORMAT!r}")
-    return plan
+        array = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        raise PlanFileError(f"{what}: expected numbers, got {values!r:.80}") from None
+    if array.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, array.shape, strict=True)):
+        wanted = " x ".join("N" if s is None else str(s) for s in shape)
+        raise PlanFileError(f"{what}: expected an array of shape {wanted}, got shape {array.shape}")
+    array.setflags(write=False)
+    return array
 
 
-def _pieces(waypoints: np.ndarray, step_rad: float) -> np.ndarray:
+def _floats(array: np.ndarray) -> list[Any]:
+    """Nested lists of Python floats (JSON-ready)."""
+    return array.tolist()
+
+
+def _optional_int(value: Any, what: str) -> int | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise PlanFileError(f"{what}: expected an integer or null, got {value!r:.80}")
+    return value
+
+
+@dataclass(frozen=True, eq=False)
+class PlanSegment:
+    """A transit (``grasp`` None) or a transfer holding ``grasp``; ``waypoints`` (M, n) rad."""
+
+    kind: str
+    grasp: int | None
+    waypoints: np.ndarray
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "grasp": self.grasp, "waypoints": _floats(self.waypoints)}
+
+    @classmethod
+    def from_dict(cls, data: Any, what: str) -> PlanSegment:
+        if not isinstance(data, Mapping):
+            raise PlanFileError(f"{what}: expected an object with kind, grasp and waypoints")
+        kind = data.get("kind")
+        if kind not in KINDS:
+            raise PlanFileError(f"{what}.kind: expected one of {list(KINDS)}, got {kind!r:.80}")
+        return cls(kind, _optional_int(data.get("grasp"), f"{what}.grasp"),
+                   _array(data.get("waypoints"), f"{what}.waypoints", (None, None)))
+
+
+@dataclass(frozen=True, eq=False)
+class PlanLandmark:
+    """A landmark as the plan lists it: ``joints`` (n,) rad, ``object_pose`` (3,), the held ``grasp``."""
+
+    id: int
+    parent: int | None
+    joints: np.ndarray
+    object_pose: np.ndarray
+    grasp: int | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"id": self.id, "parent": self.parent, "joints": _floats(self.joints),
+                "object_pose": _floats(self.object_pose), "grasp": self.grasp}
+
+    @classmethod
+    def from_dict(cls, data: Any, what: str) -> PlanLandmark:
+        if not isinstance(data, Mapping):
+            raise PlanFileError(f"{what}: expected an object with id, parent, joints, object_pose and grasp")
+        identifier = _optional_int(data.get("id"), f"{what}.id")
+        if identifier is None:
+            raise PlanFileError(f"{what}.id: expected an integer")
+        return cls(identifier, _optional_int(data.get("parent"), f"{what}.parent"),
+                   _array(data.get("joints"), f"{what}.joints", (None,)),
+                   _array(data.get("object_pose"), f"{what}.object_pose", (3,)),
+                   _optional_int(data.get("grasp"), f"{what}.grasp"))
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A plan file's content.
+
+    ``code`` is the run's outcome name (``SUCCEEDED``, ``TIME_LIMIT``, ...;
+    ``None`` for a plan rebuilt from a recorded trajectory, which has none);
+    ``success`` is true exactly when the plan has segments to follow. A
+    failed plan has no segments and no ``final_object_pose``.
+    """
+
+    world: str
+    joint_names: tuple[str, ...]
+    success: bool
+    message: str
+    code: str | None = None
+    segments: tuple[PlanSegment, ...] = ()
+    final_object_pose: np.ndarray | None = None
+    landmarks: tuple[PlanLandmark, ...] = ()
+    stats: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def outcome(self) -> Outcome | None:
+        """The :class:`Outcome` named by ``code`` (``None`` when the plan has no code)."""
+        return None if self.code is None else Outcome[self.code]
+
+    @property
+    def grasp_count(self) -> int:
+        """How many times the arm takes the object (transfer segments)."""
+        return sum(segment.kind == "transfer" for segment in self.segments)
+
+    @classmethod
+    def from_result(cls, world: World, result: PlanResult) -> Plan:
+        """The plan of a planner run in ``world``."""
+        landmarks = tuple(PlanLandmark(lm.id, lm.parent, _frozen(lm.joints), _frozen(lm.object_pose), lm.grasp)
+                          for lm in result.tree)
+        segments = tuple(PlanSegment(s.kind, s.grasp, _frozen(s.waypoints)) for s in result.segments)
+        return cls(world=world.name, joint_names=tuple(world.robot.joint_names), success=result.success,
+                   message=result.message, code=result.outcome.name,
+                   segments=segments if result.success else (),
+                   final_object_pose=_frozen(result.final_object_pose) if result.success else None,
+                   landmarks=landmarks, stats=dict(result.stats))
+
+    def failed(self, outcome: Outcome, message: str) -> Plan:
+        """This plan turned into a failure: ``outcome``, ``message``, no segments (landmarks and stats kept)."""
+        return replace(self, success=False, code=outcome.name, message=message, segments=(), final_object_pose=None)
+
+    # -- the file: one writer, one reader -------------------------------------------------------------
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plan file as a JSON-ready dict, keys in the file's order."""
+        document: dict[str, Any] = {"format": FORMAT, "world": self.world, "success": self.success,
+                                    "message": self.message}
+        if self.code is not None:
+            document["code"] = self.code
+        document.update({
+            "joint_names": list(self.joint_names),
+            "segments": [segment.to_dict() for segment in self.segments],
+            "final_object_pose": None if self.final_object_pose is None else _floats(self.final_object_pose),
+            "landmarks": [landmark.to_dict() for landmark in self.landmarks],
+            "stats": dict(self.stats),
+        })
+        return document
+
+    def to_json(self) -> str:
+        """The plan file's text (deterministic: same plan, same bytes)."""
+        return json.dumps(self.to_dict(), indent=1, sort_keys=False) + "\n"
+
+    def write(self, path: str | Path) -> Path:
+        """Write the plan file to ``path`` (its folder is created); returns the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(self.to_json())
+        return path
+
+    @classmethod
+    def from_dict(cls, data: Any, *, source: str = "plan") -> Plan:
+        """A plan from a parsed plan file; :class:`PlanFileError` names the field at fault."""
+        if not isinstance(data, Mapping) or data.get("format") != FORMAT:
+            raise PlanFileError(f"{source}: expected a JSON object with format {FORMAT!r}")
+        success = data.get("success")
+        if not isinstance(success, bool):
+            raise PlanFileError(f"{source}: success: expected true or false, got {success!r:.80}")
+        world = data.get("world")
+        if not isinstance(world, str):
+            raise PlanFileError(f"{source}: world: expected the world's name, got {world!r:.80}")
+        names = data.get("joint_names")
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            raise PlanFileError(f"{source}: joint_names: expected a list of names, got {names!r:.80}")
+        code = data.get("code")
+        if code is not None and code not in Outcome.__members__:
+            raise PlanFileError(f"{source}: code: expected one of {list(Outcome.__members__)}, got {code!r:.80}")
+        segments = data.get("segments")
+        landmarks = data.get("landmarks", [])
+        stats = data.get("stats", {})
+        if not isinstance(segments, list):
+            raise PlanFileError(f"{source}: segments: expected a list")
+        if not isinstance(landmarks, list):
+            raise PlanFileError(f"{source}: landmarks: expected a list")
+        if not isinstance(stats, Mapping):
+            raise PlanFileError(f"{source}: stats: expected an object")
+        final = data.get("final_object_pose")
+        return cls(
+            world=world, joint_names=tuple(names), success=success, message=str(data.get("message", "")), code=code,
+            segments=tuple(PlanSegment.from_dict(s, f"{source}: segments[{i}]") for i, s in enumerate(segments)),
+            final_object_pose=None if final is None else _array(final, f"{source}: final_object_pose", (3,)),
+            landmarks=tuple(PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]") for i, lm in enumerate(landmarks)),
+            stats=dict(stats))
+
+    @classmethod
+    def from_json(cls, text: str, *, source: str = "plan") -> Plan:
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise PlanFileError(f"{source}: cannot read the plan ({error})") from None
+        return cls.from_dict(data, source=source)
+
+    @classmethod
+    def read(cls, path: str | Path) -> Plan:
+        """Read a plan file; :class:`PlanFileError` says what is wrong with it."""
+        try:
+            text = Path(path).read_text()
+        except OSError as error:
+            raise PlanFileError(f"{path}: cannot read the plan ({error})") from None
+        return cls.from_json(text, source=str(path))
+
+
+def _frozen(values: Any) -> np.ndarray:
+    array = np.array(values, dtype=float)
+    array.setflags(write=False)
+    return array
+
+
+# -- replay: the one place that carries the object through a plan ----------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SegmentMotion:
+    """One segment replayed: ``configurations`` (M, n) rad and the object's pose at each (M, 3).
+
+    ``grasp_rel`` is the held object's pose in the end-effector frame during
+    a transfer (``None`` during a transit, when the object rests).
+    """
+
+    index: int
+    kind: str
+    grasp: int | None
+    configurations: np.ndarray
+    object_poses: np.ndarray
+    grasp_rel: np.ndarray | None
+
+
+def interpolate(waypoints: np.ndarray, step_rad: float) -> np.ndarray:
     """Configurations along straight joint-space pieces, at most ``step_rad`` apart per joint."""
     out = [waypoints[:1]]
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
-        count = max(1, int(math.ceil(np.max(np.abs(b - a)) / step_rad)))
+    for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
+        count = max(1, math.ceil(np.max(np.abs(b - a)) / step_rad))
         t = np.arange(1, count + 1)[:, None] / count
         out.append(a + t * (b - a))
     return np.concatenate(out)
 
 
-def replay(world: World, plan: dict, step_rad: float = CHECK_STEP_RAD):
-    """Yield ``(kind, grasp, configurations (M, n), object_poses (M, 3))`` for each segment."""
+def replay(world: World, plan: Plan, step_rad: float | None = CHECK_STEP_RAD) -> Iterator[SegmentMotion]:
+    """The plan's segments with the object carried along, from ``world.object.initial``.
+
+    ``step_rad``: the configurations are the straight pieces between
+    waypoints sampled at most this far apart per joint; ``None``: the
+    waypoints themselves.
+    """
     pose = np.asarray(world.object.initial, dtype=float)
-    for segment in plan["segments"]:
-        waypoints = np.asarray(segment["waypoints"], dtype=float)
-        configurations = _pieces(waypoints, step_rad)
-        if segment["kind"] == "transfer":
+    for index, segment in enumerate(plan.segments):
+        waypoints = np.asarray(segment.waypoints, dtype=float)
+        configurations = waypoints if step_rad is None else interpolate(waypoints, step_rad)
+        grasp_rel = None
+        if segment.kind == "transfer":
             grasp_rel = relative(tip_poses(world.robot, waypoints[:1])[0], pose)
             poses = compose(tip_poses(world.robot, configurations), grasp_rel)
             pose = poses[-1]
         else:
             poses = np.broadcast_to(pose, (len(configurations), 3))
-        yield segment["kind"], segment.get("grasp"), configurations, poses
+        yield SegmentMotion(index, segment.kind, segment.grasp, configurations, poses, grasp_rel)
 
 
-def validate_plan(world: World, plan: dict, step_rad: float = CHECK_STEP_RAD) -> list[str]:
-    """Check a plan against a world exactly as section 2 states; returns the problems found (empty: valid)."""
-    problems: list[str] = []
-    try:
-        _check_structure(world, plan, problems)
-    except (KeyError, TypeError, ValueError) as error:
-        return [f"malformed plan: {error!r}"]
-    if problems or not plan["success"]:
+# -- validation ------------------------------------------------------------------------------------------
+
+
+def validate_plan(world: World, plan: Plan | Mapping[str, Any], step_rad: float = CHECK_STEP_RAD) -> list[str]:
+    """Check a plan against a world exactly as section 2 states; returns the problems found (empty: valid).
+
+    ``plan`` may also be a parsed plan file (a dict): a malformed one gives
+    one problem naming the field at fault.
+    """
+    if not isinstance(plan, Plan):
+        try:
+            plan = Plan.from_dict(plan)
+        except PlanFileError as error:
+            return [f"malformed plan: {error}"]
+    problems = _structure_problems(world, plan)
+    if problems or not plan.success:
         return problems
     last_pose = np.asarray(world.object.initial, float)
-    object_poses = None
-    for index, (kind, grasp, configurations, poses) in enumerate(replay(world, plan, step_rad)):
+    for motion in replay(world, plan, step_rad):
+        index, kind, configurations, poses = motion.index, motion.kind, motion.configurations, motion.object_poses
         if kind == "transfer":
-            first = configurations[0]
-            held = transform_points_one(last_pose, world.object.grasps[grasp])
-            tip = tip_poses(world.robot, first[None])[0, :2]
+            held = transform_points(last_pose, world.object.grasps[motion.grasp][None])[0]
+            tip = tip_poses(world.robot, configurations[:1])[0, :2]
             if np.linalg.norm(tip - held) > world.grasp_tolerance:
-                problems.append(f"segment {index}: the tip is {np.linalg.norm(tip - held):.6f} m from grasp {grasp} "
-                                f"(more than world.grasp_tolerance {world.grasp_tolerance})")
+                problems.append(f"segment {index}: the tip is {np.linalg.norm(tip - held):.6f} m from grasp "
+                                f"{motion.grasp} (more than world.grasp_tolerance {world.grasp_tolerance})")
         valid = is_valid(world, configurations, poses)
         if not valid.all():
             bad = int(np.flatnonzero(~valid)[0])
@@ -117,10 +328,9 @@ def validate_plan(world: World, plan: dict, step_rad: float = CHECK_STEP_RAD) ->
             problems.append(f"segment {index} ({kind}): configuration {np.round(configurations[bad], 6).tolist()} "
                             f"is invalid: {reason}")
         last_pose = poses[-1]
-        object_poses = poses
-    if object_poses is None:
-        return problems + ["a successful plan has no segments"]
-    final = np.asarray(plan["final_object_pose"], float)
+    final = plan.final_object_pose
+    if final is None:
+        return [*problems, "a successful plan has a final_object_pose"]
     if np.max(np.abs(np.r_[final[:2] - last_pose[:2], wrap_angle(final[2] - last_pose[2])])) > 1e-4:
         problems.append(f"final_object_pose {final.tolist()} differs from the replayed {last_pose.tolist()}")
     goal = world.object.goal
@@ -134,50 +344,66 @@ def validate_plan(world: World, plan: dict, step_rad: float = CHECK_STEP_RAD) ->
     return problems
 
 
-def transform_points_one(pose: np.ndarray, point: np.ndarray) -> np.ndarray:
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    return np.array([pose[0] + c * point[0] - s * point[1], pose[1] + s * point[0] + c * point[1]])
-
-
-def _check_structure(world: World, plan: dict, problems: list[str]) -> None:
-    n = world.robot.dof
-    if plan.get("format") != FORMAT:
-        problems.append(f"format: expected {FORMAT!r}")
-    if plan.get("world") != world.name:
-        problems.append(f"world: expected {world.name!r}, got {plan.get('world')!r}")
-    if plan.get("joint_names") != world.robot.joint_names:
+def _structure_problems(world: World, plan: Plan) -> list[str]:
+    """What section 2 says of the plan's shape, before any configuration is checked."""
+    problems = []
+    if plan.world != world.name:
+        problems.append(f"world: expected {world.name!r}, got {plan.world!r}")
+    if list(plan.joint_names) != world.robot.joint_names:
         problems.append(f"joint_names: expected {world.robot.joint_names}")
-    if not plan["success"]:
-        if plan["segments"] or plan["final_object_pose"] is not None:
+    if not plan.success:
+        if plan.segments or plan.final_object_pose is not None:
             problems.append("a failed plan must have no segments and a null final_object_pose")
-        return
-    segments = plan["segments"]
-    if not segments or segments[0]["kind"] != "transit":
-        problems.append("a plan starts with a transit segment")
-        return
-    previous_end = np.asarray(world.robot.initial, float)
+        return problems
+    segments = plan.segments
+    if not segments:
+        return [*problems, "a successful plan has no segments"]
+    if segments[0].kind != "transit":
+        return [*problems, "a plan starts with a transit segment"]
+    return problems + _segment_problems(world, segments)
+
+
+def _segment_problems(world: World, segments: Sequence[PlanSegment]) -> list[str]:
+    problems = []
+    robot, grasps = world.robot, len(world.object.grasps)
+    previous_end = np.asarray(robot.initial, float)
     for index, segment in enumerate(segments):
-        kind = segment["kind"]
-        waypoints = np.asarray(segment["waypoints"], float)
-        if kind not in ("transit", "transfer"):
-            problems.append(f"segment {index}: unknown kind {kind!r}")
-            continue
-        if index and kind == segments[index - 1]["kind"]:
+        kind, waypoints, grasp = segment.kind, segment.waypoints, segment.grasp
+        if index and kind == segments[index - 1].kind:
             problems.append(f"segment {index}: kinds must alternate")
-        if waypoints.ndim != 2 or waypoints.shape[1] != n or len(waypoints) < 1:
-            problems.append(f"segment {index}: expected waypoints of {n} joints")
+        if waypoints.shape[1] != robot.dof or len(waypoints) < 1:
+            problems.append(f"segment {index}: expected waypoints of {robot.dof} joints")
             continue
         if not np.all(np.isfinite(waypoints)):
             problems.append(f"segment {index}: waypoints must be finite")
             continue
-        if np.any(waypoints < world.robot.joint_lower - 1e-9) or np.any(waypoints > world.robot.joint_upper + 1e-9):
+        if np.any(waypoints < robot.joint_lower - 1e-9) or np.any(waypoints > robot.joint_upper + 1e-9):
             problems.append(f"segment {index}: a waypoint leaves the joint limits")
-        grasp = segment.get("grasp")
-        if kind == "transfer" and (not isinstance(grasp, int) or not 0 <= grasp < len(world.object.grasps)):
-            problems.append(f"segment {index}: transfer needs a grasp index in [0, {len(world.object.grasps)})")
+        if kind == "transfer" and (grasp is None or not 0 <= grasp < grasps):
+            problems.append(f"segment {index}: transfer needs a grasp index in [0, {grasps})")
         if kind == "transit" and grasp is not None:
             problems.append(f"segment {index}: transit has grasp null")
         if np.max(np.abs(waypoints[0] - previous_end)) > 1e-6:
             what = "robot.initial" if index == 0 else "the end of the previous segment"
             problems.append(f"segment {index}: starts at {waypoints[0].tolist()}, not at {what}")
         previous_end = waypoints[-1]
+    return problems
+
+
+# -- never hand out an invalid plan ---------------------------------------------------------------------
+
+
+def checked_plan(world: World, result: PlanResult) -> Plan:
+    """The plan of a planner run, validated: a success whose plan fails :func:`validate_plan` becomes
+    ``INTERNAL_ERROR`` with no segments (a bug in the planner; never hand out an invalid plan).
+
+    The one place the command line, the node and the benchmarks turn a result into a plan.
+    """
+    plan = Plan.from_result(world, result)
+    if not plan.success:
+        return plan
+    problems = validate_plan(world, plan)
+    if not problems:
+        return plan
+    return plan.failed(Outcome.INTERNAL_ERROR,
+                       "internal error: the plan failed validation: " + "; ".join(problems[:3]))

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Landmark", "LandmarkTree", "Segment", "append_path"]
+__all__ = ["Landmark", "LandmarkTree", "Segment", "append_path", "append_step"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,6 +54,17 @@ def append_path(segments: list[Segment], kind: str, grasp: int | None, waypoints
             last.waypoints.append(np.asarray(point, dtype=float))
 
 
+def append_step(segments: list[Segment], grasp: int | None, transit: np.ndarray | None,
+                transfer: np.ndarray | None) -> None:
+    """Append one manipulation path: a transit to ``grasp`` (``transit`` None: the held grasp is kept)
+    then the transfer holding it."""
+    if transit is not None:
+        append_path(segments, "transit", None, transit)
+        # a regrasp of the same grasp index is a new grasp: force a new segment
+        segments.append(Segment("transfer", grasp, [segments[-1].waypoints[-1]]))
+    append_path(segments, "transfer", grasp, transfer)
+
+
 class LandmarkTree:
     """Landmarks indexed by id, with their parent links."""
 
@@ -90,11 +101,7 @@ class LandmarkTree:
         root = self.landmarks[0]
         segments = [Segment("transit", None, [root.joints.copy()])]
         for landmark in self.lineage(landmark_id)[1:]:
-            if landmark.transit is not None:
-                append_path(segments, "transit", None, landmark.transit)
-                # a regrasp of the same grasp index is a new grasp: force a new segment
-                segments.append(Segment("transfer", landmark.grasp, [segments[-1].waypoints[-1]]))
-            append_path(segments, "transfer", landmark.grasp, landmark.transfer)
+            append_step(segments, landmark.grasp, landmark.transit, landmark.transfer)
         return segments
 
     def features(self, joint_weight: float, object_radius: float) -> np.ndarray:

@@ -1,7 +1,7 @@
 """The one place where core values become ROS 2 messages, and back.
 
 Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
-plan dicts, :class:`~clew_ros.node.playback.Track`) and a stamp, and returns
+plans, :class:`~clew_ros.node.playback.Track`) and a stamp, and returns
 a standard message, or the reverse (a ``~/goal_pose``; a ``~/trajectory``
 becomes a plan again with :func:`clew_ros.recording.trajectory_to_plan`).
 The node calls these and nothing else to build what it publishes

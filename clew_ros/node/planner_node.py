@@ -56,7 +56,7 @@ from visualization_msgs.msg import MarkerArray
 from clew_ros.core.clew import Progress, plan
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.kernel import warm_up
-from clew_ros.core.plan import plan_to_dict, validate_plan
+from clew_ros.core.plan import checked_plan
 from clew_ros.core.settings import Outcome, Termination
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import World
@@ -566,14 +566,11 @@ class PlannerNode(Node):
         stats = dict(result.stats)
         if outcome is Outcome.SUCCEEDED:
             world = run.world  # validated against the run's goal
-            plan_dict = plan_to_dict(world, result)
-            problems = validate_plan(world, plan_dict)
-            if problems:
-                outcome = Outcome.INTERNAL_ERROR
-                message = ("the planner returned a plan that fails validation, not published: "
-                           + "; ".join(problems[:3]))
+            planned = checked_plan(world, result)
+            if not planned.success:  # it failed validation: not published
+                outcome, message = Outcome.INTERNAL_ERROR, planned.message
             else:
-                run.track = track_from_plan(world, plan_dict, joint_speed_rad_s=config.node.joint_speed_rad_s,
+                run.track = track_from_plan(world, planned, joint_speed_rad_s=config.node.joint_speed_rad_s,
                                             grasp_dwell_s=config.node.grasp_dwell_s)
         self._finish(run, outcome, message, stats)
 

@@ -1,6 +1,6 @@
 """The timed form of a plan: trajectory points, grasp events and playback samples.
 
-Pure NumPy over the plan dict (``clew-plan/1``) and the core's kinematics;
+Pure NumPy over the core's :class:`~clew_ros.core.plan.Plan` and kinematics;
 no rclpy, so it is tested without a ROS graph. ``messages`` turns a
 :class:`Track` into a ``JointTrajectory``; the node samples it in time to
 publish ``~/joint_states`` and ``~/object_pose``.
@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.kinematics import compose, relative, tip_poses
+from clew_ros.core.kinematics import compose, tip_poses
+from clew_ros.core.plan import Plan, replay
 from clew_ros.core.world import World
 
 __all__ = ["GRIPPER_JOINT", "MIN_STEP_NS", "GripperEvent", "Track", "track_from_plan"]
@@ -108,16 +109,15 @@ class Track:
         return q, float(self.gripper[k]), pose
 
 
-def track_from_plan(world: World, plan: dict, *, joint_speed_rad_s: float = 1.0,
+def track_from_plan(world: World, plan: Plan, *, joint_speed_rad_s: float = 1.0,
                     grasp_dwell_s: float = 0.2) -> Track:
-    """Time a successful plan dict (its ``segments``) for ``world``.
+    """Time a successful plan (its ``segments``) for ``world``.
 
     Raises ``ValueError`` for a plan without segments.
     """
     if joint_speed_rad_s <= 0 or grasp_dwell_s <= 0:
         raise ValueError("joint_speed_rad_s and grasp_dwell_s must be > 0")
-    segments = plan.get("segments") or []
-    if not segments:
+    if not plan.segments:
         raise ValueError("a plan without segments has no trajectory")
     robot = world.robot
 
@@ -127,23 +127,14 @@ def track_from_plan(world: World, plan: dict, *, joint_speed_rad_s: float = 1.0,
     positions, gripper, seg_index, poses = [], [], [], []
     grasps: list[int | None] = []
     grasp_rel: list[np.ndarray | None] = []
-    rest = np.asarray(world.object.initial, dtype=float)
-    for index, segment in enumerate(segments):
-        waypoints = np.asarray(segment["waypoints"], dtype=float)
-        transfer = segment["kind"] == "transfer"
-        grasps.append(segment.get("grasp") if transfer else None)
-        if transfer:
-            rel = relative(tips(waypoints[:1])[0], rest)
-            seg_poses = compose(tips(waypoints), rel)
-            rest = seg_poses[-1]
-        else:
-            rel = None
-            seg_poses = np.broadcast_to(rest, (len(waypoints), 3))
-        grasp_rel.append(rel)
-        positions.extend(waypoints)
-        gripper.extend([1.0 if transfer else 0.0] * len(waypoints))
-        seg_index.extend([index] * len(waypoints))
-        poses.extend(np.array(seg_poses))
+    for motion in replay(world, plan, step_rad=None):
+        transfer = motion.kind == "transfer"
+        grasps.append(motion.grasp if transfer else None)
+        grasp_rel.append(motion.grasp_rel)
+        positions.extend(motion.configurations)
+        gripper.extend([1.0 if transfer else 0.0] * len(motion.configurations))
+        seg_index.extend([motion.index] * len(motion.configurations))
+        poses.extend(np.array(motion.object_poses))
 
     positions_a = np.array(positions)
     gripper_a = np.array(gripper)

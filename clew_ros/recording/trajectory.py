@@ -1,4 +1,4 @@
-"""Rebuild a ``clew-plan/1`` plan from a recorded ``~/trajectory`` (interface.md section 3).
+"""Rebuild a plan (``clew-plan/1``) from a recorded ``~/trajectory`` (interface.md section 3).
 
 The trajectory's points are the plan's waypoints in order; ``gripper`` is 1.0
 on every point of a transfer segment and 0.0 on transit points, so a grasp or
@@ -10,11 +10,14 @@ point nearest to the tip where the transfer starts.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.kinematics import tip_poses, transform_points
+from clew_ros.core.plan import Plan, PlanSegment, replay
 from clew_ros.core.world import World
 
 __all__ = ["GRIPPER_JOINT", "trajectory_to_plan"]
@@ -40,8 +43,8 @@ def _segments_of(points: np.ndarray, gripper: np.ndarray) -> list[tuple[str, lis
 
 
 def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] | None = None,
-                       message: str = "rebuilt from the recorded trajectory", strict: bool = False) -> dict[str, Any]:
-    """The plan dict (``clew-plan/1``) that a ``JointTrajectory`` plays.
+                       message: str = "rebuilt from the recorded trajectory", strict: bool = False) -> Plan:
+    """The :class:`~clew_ros.core.plan.Plan` that a ``JointTrajectory`` plays.
 
     Parameters
     ----------
@@ -65,9 +68,10 @@ def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] |
 
     Returns
     -------
-    dict
-        A plan with ``success`` true when the trajectory has points; its
-        ``landmarks`` list is empty (the trajectory does not hold the tree).
+    Plan
+        A plan with ``success`` true when the trajectory has points, no
+        ``code`` (the trajectory does not say it) and no ``landmarks`` (nor
+        does it hold the tree).
     """
     names = list(trajectory.joint_names)
     robot_names = list(world.robot.joint_names)
@@ -80,42 +84,26 @@ def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] |
     columns = [names.index(j) for j in robot_names] if all(j in names for j in robot_names) else list(range(n))
     gripper_column = names.index(GRIPPER_JOINT) if GRIPPER_JOINT in names else None
     rows = [list(p.positions) for p in trajectory.points]
-    plan: dict[str, Any] = {
-        "format": "clew-plan/1",
-        "world": world.name,
-        "success": False,
-        "message": message,
-        "joint_names": robot_names,
-        "segments": [],
-        "final_object_pose": None,
-        "landmarks": [],
-        "stats": {},
-    }
     if not rows:
-        plan["message"] = "the recorded trajectory has no points"
-        return plan
+        return Plan(world=world.name, joint_names=tuple(robot_names), success=False,
+                    message="the recorded trajectory has no points")
     positions = np.asarray(rows, dtype=float)
     points = positions[:, columns]
     gripper = positions[:, gripper_column] if gripper_column is not None else np.zeros(len(points))
-    segments = _segments_of(points, gripper)
+    segments = [PlanSegment(kind, None, np.asarray(waypoints)) for kind, waypoints in _segments_of(points, gripper)]
+    rebuilt = Plan(world=world.name, joint_names=tuple(robot_names), success=True, message=message,
+                   segments=tuple(segments))
 
-    transfers = sum(kind == "transfer" for kind, _ in segments)
-    given = list(grasps) if grasps is not None and len(grasps) == transfers else None
-    pose = np.asarray(world.object.initial, dtype=float)
-    out = []
-    transfer_index = 0
-    for kind, waypoints in segments:
-        array = np.asarray(waypoints)
-        grasp = None
-        if kind == "transfer":
-            tip = tip_poses(world.robot, array[:1])[0]
-            if given is not None:
-                grasp = int(given[transfer_index])
-            else:
-                held = transform_points(pose, world.object.grasps)
-                grasp = int(np.argmin(np.linalg.norm(held - tip[:2], axis=1)))
-            transfer_index += 1
-            pose = compose(tip_poses(world.robot, array[-1:])[0], relative(tip, pose))
-        out.append({"kind": kind, "grasp": grasp, "waypoints": [[float(v) for v in w] for w in array]})
-    plan.update(success=True, segments=out, final_object_pose=[float(v) for v in pose])
-    return plan
+    # the object's replay does not depend on the grasp indices: it gives where each transfer takes the object
+    transfers = [motion for motion in replay(world, rebuilt, step_rad=None) if motion.kind == "transfer"]
+    given = list(grasps) if grasps is not None and len(grasps) == len(transfers) else None
+    for number, motion in enumerate(transfers):
+        if given is not None:
+            grasp = int(given[number])
+        else:
+            tip = tip_poses(world.robot, motion.configurations[:1])[0]
+            held = transform_points(motion.object_poses[0], world.object.grasps)
+            grasp = int(np.argmin(np.linalg.norm(held - tip[:2], axis=1)))
+        segments[motion.index] = replace(segments[motion.index], grasp=grasp)
+    final = transfers[-1].object_poses[-1] if transfers else np.asarray(world.object.initial, dtype=float)
+    return replace(rebuilt, segments=tuple(segments), final_object_pose=np.array(final))

@@ -216,9 +216,8 @@ class Canvas:
 
 def _summary(scene: Scene) -> str:
     parts = [scene.title]
-    if scene.plan:
-        segments = scene.plan.get("segments", [])
-        parts.append(f"{len(segments)} segments, {scene.grasp_count} grasp(s)")
+    if scene.plan is not None:
+        parts.append(f"{len(scene.plan.segments)} segments, {scene.grasp_count} grasp(s)")
     if scene.landmarks is not None:
         parts.append(f"{len(scene.landmarks.nodes)} landmarks")
     parts += scene.notes

@@ -11,13 +11,14 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import yaml
 
-from clew_ros.core.errors import ClewError
-from clew_ros.core.plan import replay
+from clew_ros.core.errors import ClewError, PlanFileError
+from clew_ros.core.plan import Plan, PlanLandmark, replay
 from clew_ros.core.world import World, load_world, world_from_parameters
 from clew_ros.render.errors import RenderError
 
@@ -34,16 +35,16 @@ class LandmarkGraph:
     root: int | None = 0
 
     @classmethod
-    def from_plan(cls, world: World, landmarks: list[dict]) -> "LandmarkGraph | None":
+    def from_plan(cls, world: World, landmarks: Sequence[PlanLandmark]) -> "LandmarkGraph | None":
         """Nodes where the object rests at each landmark (as the node's markers draw them); parent -> child edges."""
         del world  # the positions are in the landmarks themselves
         if not landmarks:
             return None
-        tips = np.array([lm["object_pose"][:2] for lm in landmarks], dtype=float)
-        index = {lm["id"]: i for i, lm in enumerate(landmarks)}
-        edges = [(tips[index[lm["parent"]]], tips[i]) for i, lm in enumerate(landmarks)
-                 if lm.get("parent") is not None and lm["parent"] in index]
-        root = next((i for i, lm in enumerate(landmarks) if lm.get("parent") is None), None)
+        tips = np.array([lm.object_pose[:2] for lm in landmarks], dtype=float)
+        index = {lm.id: i for i, lm in enumerate(landmarks)}
+        edges = [(tips[index[lm.parent]], tips[i]) for i, lm in enumerate(landmarks)
+                 if lm.parent is not None and lm.parent in index]
+        root = next((i for i, lm in enumerate(landmarks) if lm.parent is None), None)
         return cls(tips, np.array(edges, dtype=float).reshape(-1, 2, 2), root)
 
 
@@ -85,21 +86,22 @@ class Motion:
 @dataclass
 class Scene:
     world: World
-    plan: dict | None = None
+    plan: Plan | None = None
     landmarks: LandmarkGraph | None = None
     title: str = ""
     notes: list[str] = field(default_factory=list)
 
     def motion(self, step_rad: float = 0.01) -> Motion | None:
         """The plan replayed at ``step_rad`` (rad per joint between rows), or ``None`` without a plan."""
-        if not self.plan or not self.plan.get("segments"):
+        if self.plan is None or not self.plan.segments:
             return None
         configurations, poses, held, segment, events = [], [], [], [], []
         row = 0
         previous_grasp = -1
         try:
-            for index, (kind, grasp, q, p) in enumerate(replay(self.world, self.plan, step_rad)):
-                grasp_now = int(grasp) if kind == "transfer" and grasp is not None else -1
+            for step in replay(self.world, self.plan, step_rad):
+                index, q, p = step.index, step.configurations, step.object_poses
+                grasp_now = int(step.grasp) if step.kind == "transfer" and step.grasp is not None else -1
                 if grasp_now != previous_grasp:
                     if previous_grasp >= 0:
                         events.append((row, "ungrasp", previous_grasp))
@@ -118,9 +120,7 @@ class Scene:
 
     @property
     def grasp_count(self) -> int:
-        if not self.plan:
-            return 0
-        return sum(s.get("kind") == "transfer" for s in self.plan.get("segments", []))
+        return 0 if self.plan is None else self.plan.grasp_count
 
 
 # --------------------------------------------------------------------------- builders
@@ -164,22 +164,20 @@ def scene_from_world(world: World) -> Scene:
     return Scene(world, title=f"world {world.name}")
 
 
-def scene_from_plan(world: World, plan: dict) -> Scene:
-    if plan.get("world") not in (None, world.name):
-        raise RenderError(f"the plan is for world {plan.get('world')!r}, not {world.name!r}")
-    outcome = "plan found" if plan.get("success") else f"no plan: {plan.get('message', '')}"
-    return Scene(world, plan if plan.get("success") else None, LandmarkGraph.from_plan(world, plan.get("landmarks", [])),
+def scene_from_plan(world: World, plan: Plan) -> Scene:
+    if plan.world != world.name:
+        raise RenderError(f"the plan is for world {plan.world!r}, not {world.name!r}")
+    outcome = "plan found" if plan.success else f"no plan: {plan.message}"
+    return Scene(world, plan if plan.success else None, LandmarkGraph.from_plan(world, plan.landmarks),
                  title=f"{world.name}: {outcome}")
 
 
-def read_plan_file(path: str | Path) -> dict:
+def read_plan_file(path: str | Path) -> Plan:
+    """:meth:`Plan.read`, its error as a :class:`RenderError`."""
     try:
-        plan = json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as error:
-        raise RenderError(f"{path}: cannot read the plan ({error})") from None
-    if not isinstance(plan, dict) or plan.get("format") != "clew-plan/1":
-        raise RenderError(f"{path}: expected a JSON object with format 'clew-plan/1'")
-    return plan
+        return Plan.read(path)
+    except PlanFileError as error:
+        raise RenderError(str(error)) from None
 
 
 def _topic(recording: Any, suffix: str) -> str | None:

@@ -22,13 +22,13 @@ def quick_world():
 
 @functools.lru_cache(maxsize=1)
 def quick_plan() -> dict:
-    """A successful plan (``clew-plan/1`` dict) for the quick world; raises if the core finds none."""
+    """A successful plan for the quick world, as its plan file holds it (a dict); raises if the core finds none."""
     from clew_ros.core.clew import plan
-    from clew_ros.core.plan import plan_to_dict
+    from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
 
     world = quick_world()
     result = plan(world, PlannerSettings(seed=0, time_limit=TIME_LIMIT_S))
     if not result.success:
         raise RuntimeError(f"the core found no plan for {WORLD_PATH.name}: {result.message}")
-    return plan_to_dict(world, result)
+    return Plan.from_result(world, result).to_dict()

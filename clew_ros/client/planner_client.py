@@ -1,0 +1,342 @@
+"""``PlannerClient``: send goals to a running ``clew_planner`` from your own rclpy node and follow them.
+
+Only the planner's standard interface is used (interface.md section 3): a
+goal is a ``~/goal_pose`` message whose header stamp identifies it; the
+planner echoes that stamp (``goal_stamp_ns``) in the ``accepted`` event of
+the run it starts, or in the ``aborted`` event that refuses it (``BUSY``, a
+goal outside the world, ...). From then on ``~/status``, ``~/feedback`` and
+``~/events`` are matched by run id, and a successful run's plan is rebuilt
+from ``~/trajectory``. Nothing is parsed out of human-readable text.
+
+Where each call may be made
+---------------------------
+- In a script, with a node that no executor spins: :meth:`RunHandle.wait`
+  and :meth:`PlannerClient.wait_for_planner` spin the node themselves (with
+  the client's own single-threaded executor) until they return.
+- In a node spun by your executor: :meth:`PlannerClient.send_goal`,
+  :meth:`RunHandle.cancel`, :meth:`RunHandle.add_done_callback` and reading
+  the handle never block and are safe in any callback. :meth:`RunHandle.wait`
+  blocks, so call it from a thread of your own, or from a callback of a
+  ``MultiThreadedExecutor`` (the client's subscriptions are in their own
+  reentrant callback group); called from the thread of a
+  ``SingleThreadedExecutor`` that spins the node it would never return, so it
+  raises ``RuntimeError`` instead.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import yaml
+from action_msgs.msg import GoalStatus, GoalStatusArray
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from rcl_interfaces.srv import GetParameters
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.node import Node
+from std_msgs.msg import String
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from clew_ros.client.run import (
+    Feedback,
+    PlannerNotFoundError,
+    RunHandle,
+    RunResult,
+    RunStatus,
+    RunTimeoutError,
+)
+from clew_ros.core.errors import ClewError
+from clew_ros.core.settings import Outcome
+from clew_ros.core.world import World, world_from_parameters
+from clew_ros.node import messages
+from clew_ros.node.qos import EVENTS_QOS, GOAL_QOS, LATCHED_QOS, STREAM_QOS
+from clew_ros.recording.trajectory import trajectory_to_plan
+
+__all__ = ["PlannerClient"]
+
+_STATUS = {GoalStatus.STATUS_ACCEPTED: RunStatus.ACCEPTED, GoalStatus.STATUS_EXECUTING: RunStatus.EXECUTING}
+_OUTCOME_EVENTS = ("succeeded", "aborted", "canceled")
+
+
+class PlannerClient:
+    """Follow runs of the planner ``planner`` (its node name with namespace) from ``node``.
+
+    Example (a script)::
+
+        rclpy.init()
+        node = rclpy.create_node("my_client")
+        client = PlannerClient(node)
+        client.wait_for_planner(timeout_s=10.0)
+        result = client.send_goal((0.6, 1.1, 0.0)).wait(timeout_s=60.0)
+        if result.succeeded:
+            print(len(result.plan.segments), "segments;", result.plan.grasp_count, "grasps")
+        else:
+            print(result.outcome.name, result.message)   # BUSY, TIME_LIMIT, GOAL_IN_COLLISION, ...
+    """
+
+    def __init__(self, node: Node, planner: str = "/clew_planner") -> None:
+        self._node = node
+        self.planner = planner.rstrip("/") or "/clew_planner"
+        self._group = ReentrantCallbackGroup()
+        self._changed = threading.Condition()
+        self._lock = threading.Lock()
+        self._pending: dict[int, RunHandle] = {}  # goal stamp (ns) -> handle not answered yet
+        self._runs: dict[str, RunHandle] = {}  # run id -> handle
+        self._trajectories: list[JointTrajectory] = []  # the last few received, newest last
+        self._trajectory_count = 0  # how many were received
+        self._world_text: str | None = None
+        self._status_seen = False
+        self._callback_threads: set[int] = set()
+        self._own_executor: SingleThreadedExecutor | None = None
+        self._last_stamp_ns = 0
+        name = self.planner
+        group = self._group
+        self._goal_pub = node.create_publisher(PoseStamped, f"{name}/goal_pose", GOAL_QOS, callback_group=group)
+        self._subscriptions = [
+            node.create_subscription(String, f"{name}/events", self._on_event, EVENTS_QOS, callback_group=group),
+            node.create_subscription(GoalStatusArray, f"{name}/status", self._on_status, LATCHED_QOS,
+                                     callback_group=group),
+            node.create_subscription(DiagnosticStatus, f"{name}/feedback", self._on_feedback, STREAM_QOS,
+                                     callback_group=group),
+            node.create_subscription(JointTrajectory, f"{name}/trajectory", self._on_trajectory, LATCHED_QOS,
+                                     callback_group=group),
+            node.create_subscription(String, f"{name}/world_yaml", self._on_world_yaml, LATCHED_QOS,
+                                     callback_group=group),
+        ]
+        self._cancel = node.create_client(Trigger, f"{name}/cancel", callback_group=group)
+        self._parameters = node.create_client(GetParameters, f"{name}/get_parameters", callback_group=group)
+
+    # -- the planner ---------------------------------------------------------------------------------
+
+    def planner_ready(self) -> bool:
+        """Whether the planner is there: it listens on ``~/goal_pose``, and its ``~/events`` and
+        latched ``~/status`` reach this node (never blocks)."""
+        return (self._goal_pub.get_subscription_count() > 0 and self._subscriptions[0].get_publisher_count() > 0
+                and self._status_seen)
+
+    def wait_for_planner(self, timeout_s: float | None = 10.0) -> None:
+        """Wait until :meth:`planner_ready`; raises :class:`PlannerNotFoundError` after ``timeout_s``."""
+        if not self._wait_until(self.planner_ready, timeout_s):
+            raise PlannerNotFoundError(f"no planner at {self.planner} within {timeout_s} s (is clew_planner running, "
+                                       "with the same ROS_DOMAIN_ID?)")
+
+    def default_goal(self, timeout_s: float | None = 10.0) -> tuple[float, float, float]:
+        """The planner's ``world.object.goal`` parameter (through its standard ``get_parameters`` service)."""
+        if not self._parameters.wait_for_service(timeout_sec=timeout_s):
+            raise PlannerNotFoundError(f"{self.planner}/get_parameters did not answer within {timeout_s} s")
+        future = self._parameters.call_async(GetParameters.Request(names=["world.object.goal"]))
+        if not self._wait_until(future.done, timeout_s):
+            raise RunTimeoutError(f"{self.planner}/get_parameters did not answer within {timeout_s} s")
+        values = future.result().values
+        goal = list(values[0].double_array_value) if values else []
+        if len(goal) != 3:
+            raise PlannerNotFoundError(f"{self.planner} has no world.object.goal parameter of three numbers")
+        return (goal[0], goal[1], goal[2])
+
+    # -- goals ---------------------------------------------------------------------------------------
+
+    def send_goal(self, goal: Sequence[float] | PoseStamped | None = None, *,
+                  on_feedback: Callable[[RunHandle, Feedback], None] | None = None) -> RunHandle:
+        """Send a goal; returns its handle at once.
+
+        ``goal``: the object's goal placement ``(x, y, yaw)`` in frame ``world``
+        (or a ``PoseStamped`` in that frame); ``None``: the planner's own
+        ``world.object.goal`` (asked with :meth:`default_goal`, which waits for
+        the parameter service). ``on_feedback(handle, feedback)`` is called on
+        each ``~/feedback`` of the run. Raises :class:`PlannerNotFoundError`
+        when :meth:`planner_ready` is false (call :meth:`wait_for_planner` first).
+        """
+        if not self.planner_ready():
+            raise PlannerNotFoundError(f"no planner at {self.planner} yet: call wait_for_planner() first")
+        if goal is None:
+            goal = self.default_goal()
+        with self._lock:
+            stamp_ns = max(self._node.get_clock().now().nanoseconds, self._last_stamp_ns + 1)
+            self._last_stamp_ns = stamp_ns
+        if isinstance(goal, PoseStamped):
+            msg = goal
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 10**9)
+            yaw = 2.0 * math.atan2(msg.pose.orientation.z, msg.pose.orientation.w)
+            target = (msg.pose.position.x, msg.pose.position.y, yaw)
+        else:
+            values = [float(v) for v in goal]
+            if len(values) != 3:
+                raise ValueError(f"goal: expected (x, y, yaw), got {goal!r}")
+            target = (values[0], values[1], values[2])
+            msg = messages.goal_pose_stamped(np.array(target), stamp_ns)
+        handle = RunHandle(self, target, stamp_ns, on_feedback)
+        with self._lock:
+            self._pending[stamp_ns] = handle
+        self._goal_pub.publish(msg)
+        return handle
+
+    def plan(self, goal: Sequence[float] | PoseStamped | None = None, *, timeout_s: float | None = None) -> RunResult:
+        """:meth:`send_goal` then :meth:`RunHandle.wait` (scripts)."""
+        return self.send_goal(goal).wait(timeout_s)
+
+    def destroy(self) -> None:
+        """Remove the client's publisher, subscriptions and service clients from the node."""
+        node = self._node
+        node.destroy_publisher(self._goal_pub)
+        for subscription in self._subscriptions:
+            node.destroy_subscription(subscription)
+        node.destroy_client(self._cancel)
+        node.destroy_client(self._parameters)
+        if self._own_executor is not None:
+            self._own_executor.remove_node(node)
+            self._own_executor.shutdown()
+            self._own_executor = None
+
+    # -- waiting -------------------------------------------------------------------------------------
+
+    def _wait_until(self, predicate: Callable[[], bool], timeout_s: float | None) -> bool:
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+
+        def left() -> float:
+            return 0.1 if deadline is None else min(0.1, deadline - time.monotonic())
+
+        executor = self._node.executor
+        if executor is None or executor is self._own_executor:
+            if self._own_executor is None:
+                self._own_executor = SingleThreadedExecutor(context=self._node.context)
+                self._own_executor.add_node(self._node)
+            while not predicate():
+                if left() <= 0:
+                    return False
+                self._own_executor.spin_once(timeout_sec=left())
+            return True
+        if threading.get_ident() in self._callback_threads and not isinstance(executor, MultiThreadedExecutor):
+            raise RuntimeError("waiting here would block the executor that must deliver the answer: in a node "
+                               "spun by a SingleThreadedExecutor use RunHandle.add_done_callback, or wait "
+                               "from another thread")
+        with self._changed:
+            while not predicate():
+                if left() <= 0:
+                    return False
+                self._changed.wait(timeout=left())
+        return True
+
+    def _notify(self) -> None:
+        self._callback_threads.add(threading.get_ident())
+        with self._changed:
+            self._changed.notify_all()
+
+    # -- what the planner says -------------------------------------------------------------------------
+
+    def _on_event(self, msg: String) -> None:
+        try:
+            event = json.loads(msg.data)
+        except ValueError:
+            return
+        if not isinstance(event, dict):
+            return
+        kind, run_id = event.get("event"), event.get("run_id")
+        stamp = event.get("goal_stamp_ns")
+        with self._lock:
+            handle = self._pending.pop(stamp, None) if isinstance(stamp, int) else None
+            if handle is not None and isinstance(run_id, str):
+                self._runs[run_id] = handle
+            elif isinstance(run_id, str):
+                handle = self._runs.get(run_id)
+        if handle is not None:
+            if kind == "accepted":
+                handle._accepted(run_id)
+                handle.recording = (event.get("recording_path"), str(event.get("recording", "")))
+                handle.trajectories_before = self._trajectory_count
+            elif kind in _OUTCOME_EVENTS:
+                if handle.run_id is None:
+                    handle._accepted(run_id)  # refused: the refusal has its own run id
+                self._finish(handle, event)
+        self._notify()
+
+    def _finish(self, handle: RunHandle, event: dict[str, Any]) -> None:
+        code = event.get("code")
+        outcome = Outcome[code] if code in Outcome.__members__ else Outcome.INTERNAL_ERROR
+        path, note = handle.recording
+        result = RunResult(run_id=str(event.get("run_id")), outcome=outcome, message=str(event.get("message", "")),
+                           landmarks=int(event.get("landmarks") or 0), time_s=float(event.get("time_s") or 0.0),
+                           recording=path, recording_note=note)
+        if outcome is Outcome.SUCCEEDED:
+            handle.outcome_event = result  # completed when its trajectory is here
+            self._complete_success(handle)
+        else:
+            handle._finish(result)
+
+    def _complete_success(self, handle: RunHandle) -> None:
+        result = handle.outcome_event
+        if result is None or handle.done():
+            return
+        trajectory = self._trajectory_of(handle)
+        world = self._world()
+        if trajectory is None or world is None:
+            return
+        plan = trajectory_to_plan(world, trajectory, message=result.message)
+        handle._finish(dataclasses.replace(result, plan=plan, trajectory=trajectory))
+
+    def _trajectory_of(self, handle: RunHandle) -> JointTrajectory | None:
+        """The run's ``~/trajectory``: the first one received after the run was accepted (the planner runs
+        one plan at a time and publishes it when the run ends)."""
+        with self._lock:
+            index = handle.trajectories_before - (self._trajectory_count - len(self._trajectories))
+            return self._trajectories[index] if 0 <= index < len(self._trajectories) else None
+
+    def _world(self) -> World | None:
+        if self._world_text is None:
+            return None
+        try:
+            document = yaml.safe_load(self._world_text)
+            parameters = next(iter(document.values()))["ros__parameters"]
+            return world_from_parameters(parameters, check_collisions=False)
+        except (ClewError, yaml.YAMLError, AttributeError, KeyError, StopIteration, TypeError):
+            return None
+
+    def _on_status(self, msg: GoalStatusArray) -> None:
+        self._status_seen = True
+        with self._lock:
+            runs = dict(self._runs)
+        for entry in msg.status_list:
+            handle = runs.get(bytes(entry.goal_info.goal_id.uuid).hex())
+            if handle is not None and entry.status in _STATUS:
+                handle._set_status(_STATUS[entry.status])
+        self._notify()
+
+    def _on_feedback(self, msg: DiagnosticStatus) -> None:
+        values = {kv.key: kv.value for kv in msg.values}
+        with self._lock:
+            handle = self._runs.get(values.get("run_id", ""))
+        if handle is not None:
+            try:
+                feedback = Feedback(values.get("phase", msg.message), int(values.get("landmarks", "0")),
+                                    float(values.get("best_distance", "inf")), float(values.get("elapsed", "0")))
+            except ValueError:
+                return
+            if feedback.phase == "planning":
+                handle._set_status(RunStatus.EXECUTING)
+            handle._set_feedback(feedback)
+        self._notify()
+
+    def _on_trajectory(self, msg: JointTrajectory) -> None:
+        with self._lock:
+            self._trajectories = [*self._trajectories[-7:], msg]
+            self._trajectory_count += 1
+            waiting = [h for h in self._runs.values() if h.outcome_event is not None and not h.done()]
+        for handle in waiting:
+            self._complete_success(handle)
+        self._notify()
+
+    def _on_world_yaml(self, msg: String) -> None:
+        self._world_text = msg.data
+        self._notify()
+
+    def _request_cancel(self, handle: RunHandle) -> None:
+        del handle  # ~/cancel cancels the planner's current run, which is this one while it is not done
+        self._cancel.call_async(Trigger.Request())

@@ -32,7 +32,8 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _is_recording(path: Path) -> bool:
-    return path.suffix == ".mcap" or (path.is_dir() and (any(path.glob("*.mcap")) or (path / "metadata.yaml").is_file()))
+    return path.suffix == ".mcap" or (
+        path.is_dir() and (any(path.glob("*.mcap")) or (path / "metadata.yaml").is_file()))
 
 
 def main(argv: list[str] | None = None) -> int:

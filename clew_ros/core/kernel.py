@@ -37,8 +37,18 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["PackedWorld", "decode", "available_threads", "intervals", "bounce_array", "clearly_valid", "chain", "warm_up",
-           "MAX_MOVE_RAD", "BACKOFF_RAD"]
+__all__ = [
+    "BACKOFF_RAD",
+    "MAX_MOVE_RAD",
+    "PackedWorld",
+    "available_threads",
+    "bounce_array",
+    "chain",
+    "clearly_valid",
+    "decode",
+    "intervals",
+    "warm_up",
+]
 
 #: Largest move of one joint in one Manhattan move (rad), as in the paper.
 MAX_MOVE_RAD = 2.0 * math.pi
@@ -52,8 +62,19 @@ _jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 # Parallel kernels may be launched from several threads at once (several planners in one process):
 # only a thread-safe layer (TBB or OpenMP) allows it; without one the kernels run on one thread.
 # GNU OpenMP is not fork-safe: start other processes with subprocess (fork + exec) or "spawn".
-if numba.config.THREADING_LAYER == "default":
-    numba.config.THREADING_LAYER = "threadsafe"
+# (numba.config sets its attributes from the environment at run time: mypy cannot see them.)
+if numba.config.THREADING_LAYER == "default":  # type: ignore[attr-defined]
+    numba.config.THREADING_LAYER = "threadsafe"  # type: ignore[attr-defined]
+
+#: :meth:`PackedWorld.arguments`: the world in the order the interval and decode kernels take it.
+_WorldArguments = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray
+]
+#: :meth:`PackedWorld.validity_arguments`: the world in the order :func:`_clearly_valid` takes it.
+_ValidityArguments = tuple[
+    np.ndarray, np.ndarray, float, bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+    np.ndarray, float,
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,11 +103,11 @@ class PackedWorld:
         e = len(self.obstacle_edges)
         return 1 + n * (e + n + len(self.shrunk_edges)) + len(self.object_edges) * e
 
-    def arguments(self) -> tuple:
+    def arguments(self) -> _WorldArguments:
         return (self.base, self.lengths, self.lower, self.upper, self.link_radius, self.self_collision,
                 self.bounds, self.obstacle_edges, self.object_edges, self.shrunk_edges)
 
-    def validity_arguments(self) -> tuple:
+    def validity_arguments(self) -> _ValidityArguments:
         return (self.base, self.lengths, self.link_radius, self.self_collision, self.bounds, self.obstacle_edges,
                 self.obstacle_starts, self.obstacle_boxes, self.object_edges, self.shrunk_edges, self.shrunk_starts,
                 self.rounding)
@@ -120,14 +141,14 @@ def _bounce(x: float, low: float, high: float) -> float:
 def _nearest(phi: float, best: np.ndarray) -> None:
     """Fold a candidate rotation ``phi`` (rad, any turn) into ``(0, 2 pi]`` and keep the nearest
     contact each way: ``best[0]`` the smallest (turning up), ``best[1]`` the largest (turning down)."""
-    if phi != phi:
+    if phi != phi:  # noqa: PLR0124 - NaN, as the compiled kernel has always tested it
         return
     phi -= _TWO_PI * math.floor(phi / _TWO_PI)
     if phi < _AT_START:
         return
-    if phi < best[0]:
+    if phi < best[0]:  # noqa: PLR1730 - the kernel's float code stays as written (same seed, same plan)
         best[0] = phi
-    if phi > best[1]:
+    if phi > best[1]:  # noqa: PLR1730
         best[1] = phi
 
 
@@ -286,10 +307,11 @@ def _bound_crossings(px: float, py: float, rx: float, ry: float, inset: float, m
 
 
 @_jit
-def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margin: float,
-              base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
-              self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
-              shrunk_edges: np.ndarray, scratch: tuple) -> tuple[float, float]:
+def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair kind, commented step by step
+        q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margin: float,
+        base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
+        self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
+        shrunk_edges: np.ndarray, scratch: tuple[np.ndarray, ...]) -> tuple[float, float]:
     """Free interval ``(low <= 0, high >= 0)`` of ``joint`` at configuration ``q`` ``(n,)``.
 
     ``pose``: the resting object's pose (transit) or its pose in the end-effector frame
@@ -348,7 +370,7 @@ def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margi
 
 
 @_jit
-def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple:
+def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple[np.ndarray, ...]:
     return (np.empty((n, 2, 2)), np.empty((n, 4)), np.empty((n_obstacles, 2, 2)), np.empty((n_obstacles, 4)),
             np.empty((n_object, 2, 2)), np.empty((n_object, 4)), np.empty((n_shrunk, 2, 2)),
             np.empty((n_shrunk, 4)), np.empty(2))
@@ -361,7 +383,8 @@ def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple:
 def _decode_one(b: int, waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
                 poses: np.ndarray, margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray,
                 upper: np.ndarray, r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
-                object_edges: np.ndarray, shrunk_edges: np.ndarray, scratch: tuple, q: np.ndarray) -> None:
+                object_edges: np.ndarray, shrunk_edges: np.ndarray, scratch: tuple[np.ndarray, ...],
+                q: np.ndarray) -> None:
     """Individual ``b``: fill columns ``first .. last - 1`` (>= 1) of ``waypoints[b]`` from column
     ``first - 1``: move ``c`` turns joint ``(c - 1) mod n`` by gene ``(c - 1)`` bounced into its free
     interval."""
@@ -443,7 +466,8 @@ def _segments_apart(ax: float, ay: float, bx: float, by: float, cx: float, cy: f
     """Whether segments ``[a, b]`` and ``[c, d]`` are farther apart than ``gap``."""
     if _crosses(ax, ay, bx, by, cx, cy, dx, dy):
         return False
-    return (_point_segment_distance(ax, ay, cx, cy, dx, dy) > gap and _point_segment_distance(bx, by, cx, cy, dx, dy) > gap
+    return (_point_segment_distance(ax, ay, cx, cy, dx, dy) > gap
+            and _point_segment_distance(bx, by, cx, cy, dx, dy) > gap
             and _point_segment_distance(cx, cy, ax, ay, bx, by) > gap
             and _point_segment_distance(dx, dy, ax, ay, bx, by) > gap)
 
@@ -455,9 +479,8 @@ def _inside_ring(px: float, py: float, edges: np.ndarray, first: int, last: int)
     inside = False
     for e in range(first, last):
         ax, ay, bx, by = edges[e, 0, 0], edges[e, 0, 1], edges[e, 1, 0], edges[e, 1, 1]
-        if (ay > py) != (by > py):
-            if px < ax + (py - ay) * (bx - ax) / (by - ay):
-                inside = not inside
+        if (ay > py) != (by > py) and px < ax + (py - ay) * (bx - ax) / (by - ay):
+            inside = not inside
     return inside
 
 
@@ -472,10 +495,11 @@ def _segment_clear_of_ring(ax: float, ay: float, bx: float, by: float, edges: np
 
 
 @_jit
-def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.ndarray, lengths: np.ndarray,
-                   r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
-                   obstacle_starts: np.ndarray, boxes: np.ndarray, object_edges: np.ndarray,
-                   shrunk_edges: np.ndarray, shrunk_starts: np.ndarray, eps: float) -> None:
+def _clearly_valid(  # noqa: C901, PLR0912 - one compiled pass per configuration, leaving at the first doubt
+        q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.ndarray, lengths: np.ndarray,
+        r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
+        obstacle_starts: np.ndarray, boxes: np.ndarray, object_edges: np.ndarray,
+        shrunk_edges: np.ndarray, shrunk_starts: np.ndarray, eps: float) -> None:
     """``out[b]``: configuration ``q[b]`` with the object at ``poses[b]`` passes the validity test of
     interface.md section 1 with every distance at least ``eps`` past its threshold. False means
     "not sure": the exact test decides (touching, within rounding, or invalid)."""
@@ -572,8 +596,8 @@ def available_threads() -> int:
                              np.array([-9.0, -9.0, 9.0, 9.0]), np.zeros((0, 2, 2)), np.zeros((0, 2, 2)),
                              np.zeros((0, 2, 2)))
             # the workqueue layer (chosen by a user's NUMBA_THREADING_LAYER) aborts on concurrent launches
-            safe = numba.threading_layer() in ("tbb", "omp")
-            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS) if safe else 1)
+            safe = numba.threading_layer() in ("tbb", "omp")  # type: ignore[attr-defined]
+            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS) if safe else 1)  # type: ignore[attr-defined]
         except (ValueError, RuntimeError, ImportError):  # no thread-safe threading layer
             _PARALLEL.append(1)
     return _PARALLEL[0]

@@ -17,8 +17,9 @@ which is what the plan validator checks at 0.002 rad.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any
 
 import numpy as np
 
@@ -28,8 +29,16 @@ from clew_ros.core.kernel import BACKOFF_RAD, MAX_MOVE_RAD
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.world import World
 
-__all__ = ["Counters", "free_intervals", "bounce", "ManhattanPaths", "run_manhattan", "single_moves",
-           "MAX_MOVE_RAD", "BACKOFF_RAD"]
+__all__ = [
+    "BACKOFF_RAD",
+    "MAX_MOVE_RAD",
+    "Counters",
+    "ManhattanPaths",
+    "bounce",
+    "free_intervals",
+    "run_manhattan",
+    "single_moves",
+]
 
 #: Piece pairs (configurations x pairs per free interval) one kernel call may check: beyond it the
 #: batch is split so that ``should_stop`` is asked often enough on huge worlds (cancel within 100 ms).
@@ -45,9 +54,11 @@ class Counters:
 
 
 def _mode(object_poses: np.ndarray | None, grasp_rel: np.ndarray | None) -> tuple[bool, np.ndarray]:
-    if (object_poses is None) == (grasp_rel is None):
-        raise ValueError("give exactly one of object_poses (transit) and grasp_rel (transfer)")
-    return (False, object_poses) if grasp_rel is None else (True, grasp_rel)
+    if object_poses is not None and grasp_rel is None:
+        return False, object_poses
+    if grasp_rel is not None and object_poses is None:
+        return True, grasp_rel
+    raise ValueError("give exactly one of object_poses (transit) and grasp_rel (transfer)")
 
 
 def free_intervals(world: World, q: np.ndarray, joint: int, *, object_poses: np.ndarray | None = None,
@@ -155,7 +166,7 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
     return ManhattanPaths(waypoints, final_poses)
 
 
-def single_moves(world: World, q: np.ndarray, moves: np.ndarray, **kwargs) -> np.ndarray:
+def single_moves(world: World, q: np.ndarray, moves: np.ndarray, **kwargs: Any) -> np.ndarray:
     """Apply joint moves ``moves`` ``(n,)`` one joint at a time, each clamped to its free interval.
 
     Returns the waypoints ``(n + 1, n)`` of the (collision-free) Manhattan path.

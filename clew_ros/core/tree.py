@@ -10,7 +10,9 @@ recorder and the renderer.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -68,10 +70,10 @@ class LandmarkTree:
     def __getitem__(self, index: int) -> Landmark:
         return self.landmarks[index]
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Landmark]:
         return iter(self.landmarks)
 
-    def add(self, **fields) -> Landmark:
+    def add(self, **fields: Any) -> Landmark:
         landmark = Landmark(id=len(self.landmarks), **fields)
         self.landmarks.append(landmark)
         return landmark

@@ -45,7 +45,7 @@ class _Walker:
         if not fields:  # empty messages hold one uint8
             self.offset += 1
             return
-        for name, slot_type in zip(fields, types):
+        for name, slot_type in zip(fields, types, strict=True):  # both generated from the same .msg
             self.value(getattr(msg, name), slot_type)
 
     def value(self, value: Any, slot_type: Any) -> None:
@@ -85,7 +85,7 @@ def tidy_cdr(msg: Any, data: bytes) -> bytes:
     walker = _Walker()
     try:
         walker.message(msg)
-    except (NotImplementedError, AttributeError, KeyError, TypeError, ImportError):
+    except (NotImplementedError, AttributeError, KeyError, TypeError, ValueError, ImportError):
         return data
     end = 4 + walker.offset
     if end > len(data):

@@ -18,12 +18,13 @@ import json
 import os
 import re
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from clew_ros.recording.errors import RecordingError
 
-__all__ = ["DELIMITER", "message_type_name", "message_definition", "type_description_hash", "message_class"]
+__all__ = ["DELIMITER", "message_class", "message_definition", "message_type_name", "type_description_hash"]
 
 #: The line that separates definitions in a ``ros2msg`` full text.
 DELIMITER = "=" * 80 + "\n"
@@ -63,13 +64,14 @@ def message_class(type_name: str) -> type:
     package, namespace, name = _split(type_name)
     try:
         module = importlib.import_module(f"{package}.{namespace}")
-        return getattr(module, name)
+        message: type = getattr(module, name)
+        return message
     except (ImportError, AttributeError):
         raise RecordingError(f"message type {type_name} is not installed (cannot import "
                              f"{package}.{namespace}.{name})") from None
 
 
-def _share_candidates(package: str):
+def _share_candidates(package: str) -> Iterator[Path]:
     for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
         if prefix:
             yield Path(prefix) / "share" / package
@@ -83,7 +85,7 @@ def _share_candidates(package: str):
             yield parent / "share" / package
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _interface_file(package: str, namespace: str, name: str, suffix: str) -> Path | None:
     for share in _share_candidates(package):
         path = share / namespace / f"{name}{suffix}"
@@ -92,7 +94,7 @@ def _interface_file(package: str, namespace: str, name: str, suffix: str) -> Pat
     return None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _msg_text(type_name: str) -> str:
     package, namespace, name = _split(type_name)
     path = _interface_file(package, namespace, name, ".msg")
@@ -112,7 +114,7 @@ def _dependencies(text: str, package: str) -> list[str]:
     return sorted(found)  # std::set order, as rosbag2
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def message_definition(type_name: str) -> str:
     """The ``ros2msg`` full text of ``type_name`` (``pkg/msg/Type``), as rosbag2 writes it.
 
@@ -147,7 +149,7 @@ def message_definition(type_name: str) -> str:
         return text
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def type_description_hash(type_name: str) -> str:
     """The ``RIHS01_...`` type hash from the installed ``<Type>.json``, or ``''`` when unknown."""
     try:

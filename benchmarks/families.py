@@ -24,7 +24,6 @@ from __future__ import annotations
 import copy
 import fnmatch
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,10 +33,21 @@ import yaml
 
 from clew_ros.core.world import read_parameter_file, world_from_parameters
 
-__all__ = ["BenchWorld", "CONFIG_DIR", "JOINT_COUNTS", "OBSTACLE_COUNTS", "config_worlds", "joints_world",
-           "obstacles_world", "generated_worlds", "all_worlds", "select", "write_world"]
+__all__ = [
+    "CONFIG_DIR",
+    "JOINT_COUNTS",
+    "OBSTACLE_COUNTS",
+    "BenchWorld",
+    "all_worlds",
+    "config_worlds",
+    "generated_worlds",
+    "joints_world",
+    "obstacles_world",
+    "select",
+    "write_world",
+]
 
-CONFIG_DIR = Path(os.path.abspath(__file__)).parents[1] / "config"  # the checkout this file is in
+CONFIG_DIR = Path(__file__).absolute().parents[1] / "config"  # the checkout this file is in
 JOINT_COUNTS = (2, 3, 5, 7, 10)
 OBSTACLE_COUNTS = (2, 8, 32)
 #: Time limit (s) of generated worlds: the 7-joint criterion is 30 s.

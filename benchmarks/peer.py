@@ -40,6 +40,7 @@ at 0.002 rad per joint (the contract's validator step).
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import sys
@@ -55,7 +56,7 @@ from clew_ros.core.search import PlanningContext, SearchJob, local_search
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World, world_from_parameters
 
-__all__ = ["transit_problems", "solve_ompl", "project_transit", "path_is_valid", "ompl_unavailable_reason"]
+__all__ = ["ompl_unavailable_reason", "path_is_valid", "project_transit", "solve_ompl", "transit_problems"]
 
 GOAL_TOLERANCE_RAD = 1e-3
 CHECK_STEP_RAD = 0.002
@@ -69,7 +70,7 @@ def transit_problems(world: World, count: int, seed: int, min_distance_rad: floa
     for _ in range(1000):
         q = random_configurations(world, 256, rng)
         q = q[is_valid(world, q, pose[None])]
-        for a, b in zip(q[0::2], q[1::2]):
+        for a, b in zip(q[0::2], q[1::2], strict=False):  # an odd count leaves the last one out
             if np.linalg.norm(a - b) >= min_distance_rad:
                 problems.append((a, b))
             if len(problems) == count:
@@ -80,7 +81,7 @@ def transit_problems(world: World, count: int, seed: int, min_distance_rad: floa
 def path_is_valid(world: World, waypoints: np.ndarray, step_rad: float = CHECK_STEP_RAD) -> bool:
     """Every configuration along the straight pieces, at most ``step_rad`` apart per joint, is valid."""
     pieces = [waypoints[:1]]
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
         count = max(1, int(np.ceil(np.max(np.abs(b - a)) / step_rad)))
         pieces.append(a + (np.arange(1, count + 1)[:, None] / count) * (b - a))
     configurations = np.concatenate(pieces)
@@ -156,7 +157,7 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
     class MotionValidator(ob.MotionValidator):
         """Straight joint-space segments checked by one batched call (see :class:`ProjectValidity`)."""
 
-        def checkMotion(self, s1, s2) -> bool:  # OMPL's name; RRTConnect uses this overload only
+        def checkMotion(self, s1, s2) -> bool:  # noqa: N802 - OMPL's name; RRTConnect uses this overload only
             return test.motion(vector(s1), vector(s2))
 
     records = []
@@ -195,7 +196,7 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
     return records
 
 
-def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_limit_s: float, seed: int,
+def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_limit_s: float, seed: int, *,
                     settings: PlannerSettings | None = None) -> dict:
     """The Ariadne's Clew algorithm on one transit problem (see the module docstring)."""
     settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s, threads=1)  # one core, as OMPL
@@ -228,11 +229,7 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
         if searched_from_start is None:
             searched_from_start = bool(distance <= GOAL_TOLERANCE_RAD)
         if distance <= GOAL_TOLERANCE_RAD:
-            chain, index = [], len(landmarks) - 1
-            while index is not None:
-                chain.append(arrivals[index])
-                index = parents[index]
-            waypoints = np.concatenate(chain[::-1] + [tail[1:]])
+            waypoints = np.concatenate([*_lineage(arrivals, parents, len(landmarks) - 1), tail[1:]])
             success = True
             break
         if termination():
@@ -274,7 +271,17 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
     }
 
 
-def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: float, with_ompl: bool = True,
+def _lineage(arrivals: list[np.ndarray], parents: list[int | None], last: int) -> list[np.ndarray]:
+    """The waypoints from the start to landmark ``last``: each landmark's arrival from its parent, in order."""
+    chain = []
+    index: int | None = last
+    while index is not None:
+        chain.append(arrivals[index])
+        index = parents[index]
+    return chain[::-1]
+
+
+def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: float, *, with_ompl: bool = True,
              checker: str = "is_valid") -> dict:
     matches = select(all_worlds(), name)
     if len(matches) != 1:
@@ -302,8 +309,8 @@ def main(argv: list[str] | None = None) -> int:
                              "default) or the per-state shapely loop of benchmarks.throughput")
     parser.add_argument("--no-ompl", action="store_true")
     args = parser.parse_args(argv)
-    result = run_peer(args.world, args.problems, args.time_limit, args.seed, args.step_rad, not args.no_ompl,
-                      args.checker)
+    result = run_peer(args.world, args.problems, args.time_limit, args.seed, args.step_rad,
+                      with_ompl=not args.no_ompl, checker=args.checker)
     sys.stdout.write(json.dumps(result) + "\n")
     sys.stdout.flush()
     os._exit(0)  # skip interpreter teardown: nanobind (ompl 2.x) prints leak warnings at exit

@@ -44,7 +44,7 @@ import numpy as np
 from benchmarks.families import BenchWorld, all_worlds, select
 from benchmarks.plot import plot_scaling
 
-ROOT = Path(os.path.abspath(__file__)).parents[1]
+ROOT = Path(__file__).absolute().parents[1]
 
 #: Worlds of --quick: a fast one, the default one, one of each generated family (obstacles_2 = joints_3).
 QUICK_WORLDS = "single_transfer,figure1,joints_3,obstacles_2,obstacles_8"
@@ -84,7 +84,7 @@ def _child(module: str, *args: str, timeout: float, tree: Path = ROOT) -> dict:
     command = [sys.executable, "-m", module, *args]
     env = _environment()
     if tree != ROOT:  # the baseline's own package and benchmarks first on the path
-        env["PYTHONPATH"] = os.pathsep.join([str(tree)] + env["PYTHONPATH"].split(os.pathsep)[1:])
+        env["PYTHONPATH"] = os.pathsep.join([str(tree), *env["PYTHONPATH"].split(os.pathsep)[1:]])
     try:
         done = subprocess.run(command, check=False, cwd=tree, env=env, capture_output=True, text=True,
                               timeout=timeout)
@@ -121,7 +121,7 @@ def _machine() -> dict:
                 break
     except OSError:
         pass
-    versions = {}
+    versions: dict[str, str | None] = {}
     for name in ("numpy", "shapely", "ompl", "matplotlib"):
         try:
             versions[name] = metadata.version(name)
@@ -142,7 +142,8 @@ def _provenance() -> dict:
     digest = hashlib.sha256()
     for path in sorted((package / "core").glob("*.py")):
         digest.update(path.name.encode() + path.read_bytes())
-    out = {"clew_ros": str(package), "core_sha256": digest.hexdigest()[:16], "git_head": None, "core_dirty": None}
+    out: dict[str, str | bool | None] = {"clew_ros": str(package), "core_sha256": digest.hexdigest()[:16],
+                                         "git_head": None, "core_dirty": None}
     try:
         out["git_head"] = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=package, capture_output=True,
                                          text=True, check=True).stdout.strip()
@@ -234,7 +235,7 @@ def _summarise_peer(record: dict) -> dict:
     out["ompl_median_cpu_s"] = _median([r["cpu_s"] for r in ompl])
     out["cpu_ratio_project_over_ompl"] = (out["project_median_cpu_s"] / out["ompl_median_cpu_s"]
                                           if out["ompl_median_cpu_s"] else None)
-    both = [(p["wall_s"], o["wall_s"]) for p, o in zip(project, ompl) if p["success"] and o["success"]]
+    both = [(p["wall_s"], o["wall_s"]) for p, o in zip(project, ompl, strict=True) if p["success"] and o["success"]]
     out["peer_both_solved"] = len(both)
     out["peer_median_problem_ratio"] = float(np.median([p / o for p, o in both])) if both else None
     valid = {name: (sum(bool(r["valid"]) for r in runs if r["success"]), sum(r["success"] for r in runs))
@@ -315,8 +316,8 @@ def print_table(rows: list[dict], file=sys.stdout) -> None:
     lines = [[h for h, _ in TABLE]] + [_cells(r) for r in rows]
     widths = [max(len(line[i]) for line in lines) for i in range(len(TABLE))]
     for index, line in enumerate(lines):
-        print("  ".join(cell.ljust(w) if i == 0 else cell.rjust(w) for i, (cell, w) in enumerate(zip(line, widths))),
-              file=file)
+        cells = enumerate(zip(line, widths, strict=True))
+        print("  ".join(cell.ljust(w) if i == 0 else cell.rjust(w) for i, (cell, w) in cells), file=file)
         if index == 0:
             print("  ".join("-" * w for w in widths), file=file)
 
@@ -324,7 +325,7 @@ def print_table(rows: list[dict], file=sys.stdout) -> None:
 def _markdown_table(header: list[str], rows: list[list[str]], left: tuple[str, ...] = ("note",)) -> str:
     """A Markdown table; the first column and those named in ``left`` left-aligned, the others right-aligned."""
     align = ["---" if i == 0 or h in left else "--:" for i, h in enumerate(header)]
-    return "\n".join("| " + " | ".join(cells) + " |" for cells in [header, align] + rows)
+    return "\n".join("| " + " | ".join(cells) + " |" for cells in [header, align, *rows])
 
 
 def throughput_line(name: str, t: dict) -> str:
@@ -367,7 +368,15 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
         out += [f"![median time against joints and obstacles]({plot_name})", ""]
     if report.get("baseline", {}).get("rows"):
         out += [before_after(report), ""]
-    throughput = report.get("throughput") or {}
+    out += _throughput_section(report.get("throughput") or {})
+    out += _cold_start_section(report.get("cold_start") or {})
+    out += _peer_section(report.get("peer") or {}, rows, m)
+    out += _profile_section(report.get("profile"))
+    return "\n".join(out)
+
+
+def _throughput_section(throughput: dict) -> list[str]:
+    out: list[str] = []
     if throughput:
         out += ["### Collision throughput (one core, CPU time)", "",
                 ("Random configurations within the joint limits, object at its start pose. *batched*: "
@@ -395,7 +404,11 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
                             for k in ("transit_b24", "transit_b1024", "transit_decode24", "transfer_b24",
                                       "transfer_b1024", "transfer_decode24")])
         out += [_markdown_table(header, lines), ""]
-    cold = report.get("cold_start") or {}
+    return out
+
+
+def _cold_start_section(cold: dict) -> list[str]:
+    out: list[str] = []
     if cold and "error" not in cold:
         out += ["### Cold start (`python -m benchmarks.cold_start`)", "",
                 ("The compiled kernel's cost at start, each in a fresh process: compiling it with an empty "
@@ -415,9 +428,13 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
             out += [f"The node's first and second plan: not measured ({cold['node']}).", ""]
     elif cold:
         out += ["### Cold start", "", f"error: {cold['error']}", ""]
-    peer = report.get("peer") or {}
+    return out
+
+
+def _peer_section(peer: dict, rows: list[dict], m: dict) -> list[str]:
+    out: list[str] = []
     if peer:
-        settings = next((p for p in peer.values() if "error" not in p), {})
+        settings: dict = next((p for p in peer.values() if "error" not in p), {})
         out += ["### Peer: OMPL RRTConnect on transit sub-problems", "",
                 (f"{settings.get('problems', '-')} sub-problems per world (random valid start and goal "
                  f"configurations at least 1 rad apart, object at rest), {settings.get('time_limit_s', '-')} s "
@@ -437,7 +454,11 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
                           _format(r.get("project_median_cpu_s"), 3), _format(r.get("ompl_median_cpu_s"), 3),
                           r.get("peer_note", "")])
         out += [_markdown_table(header, lines), ""]
-    prof = report.get("profile")
+    return out
+
+
+def _profile_section(prof: dict | None) -> list[str]:
+    out: list[str] = []
     if prof and "error" not in prof:
         stats = prof["stats"]
         out += ["### Profile of one figure1 run", "",
@@ -452,7 +473,7 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
                 "Top functions by cumulative time:", "", "```", prof["cumulative"], "```", ""]
     elif prof:
         out += ["### Profile of one figure1 run", "", f"error: {prof['error']}", ""]
-    return "\n".join(out)
+    return out
 
 
 def update_doc(doc: Path, markdown: str, plot: Path | None) -> None:
@@ -520,35 +541,82 @@ def main(argv: list[str] | None = None) -> int:
     if args.render:
         return render(args.render, args.out, args.doc)
     quick = args.quick
-    seeds = args.seeds if args.seeds is not None else (2 if quick else 20)
-    seeds_for = {}
-    for item in args.seeds_for:
-        name, _, count = item.partition("=")
-        seeds_for[name] = int(count)
     worlds = select(all_worlds(), args.only or (QUICK_WORLDS if quick else None))
     if not worlds:
         print(f"benchmarks.run: no world matches --only {args.only!r}", file=sys.stderr)
         return 2
-
-    def limit_of(world: BenchWorld) -> float:
-        if args.time_limit:
-            return args.time_limit
-        if args.full_limits:
-            return world.time_limit_s
-        return min(world.time_limit_s, QUICK_LIMIT_S if quick else LIMIT_CAP_S)
-
-    limits = {w.name: limit_of(w) for w in worlds}
+    limits = {w.name: _time_limit(args, w) for w in worlds}
     same = _dedupe(worlds, limits)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     started = time.monotonic()
-    report: dict = {"command": " ".join(["python -m benchmarks.run"] + argv),
+    report: dict = {"command": " ".join(["python -m benchmarks.run", *argv]),
                     "machine": _machine(), "code": _provenance(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
 
     # 1. planner runs, one worker process per distinct world
-    to_run = [w for w in worlds if w.name not in same]
+    planner, baseline = _planner_runs(args, [w for w in worlds if w.name not in same], limits)
+    report["planner"] = planner
+    report["planner_wall_s"] = time.monotonic() - started
+    if baseline is not None:
+        report["baseline"] = {"revision": args.baseline, "commit": _git("rev-parse", "--short", args.baseline),
+                              "planner": baseline}
+
+    # 2. collision throughput (one process at a time: figures per core)
+    report["throughput"] = {} if args.no_throughput else _throughput_runs(args)
+
+    # 2b. cold start: compiling the kernel, loading it from the cache, first plan against second
+    if not (args.no_cold_start or quick):
+        t0 = time.monotonic()
+        report["cold_start"] = _child("benchmarks.cold_start", timeout=900)
+        print(f"cold start: {time.monotonic() - t0:.0f} s", file=sys.stderr)
+
+    # 3. peer comparison
+    peer = {} if args.no_peer else _peer_runs(args, limits)
+    report["peer"] = peer
+
+    # 4. profile of one figure1 run (alone on the machine, as far as this suite goes)
+    if not args.no_profile and "figure1" in limits:
+        report["profile"] = _profile_run(args, out)
+
+    # summary
+    rows = []
+    for world in worlds:
+        source = same.get(world.name, world.name)
+        row = _summarise_world(world, planner.get(source, {"error": "not run"}), same.get(world.name))
+        if world.name in peer:
+            row.update(_summarise_peer(peer[world.name]))
+        else:
+            row.update(peer_problems=None, peer_note="peer not run" if args.no_peer else "not in the peer selection")
+        rows.append(row)
+    report["rows"] = rows
+    if "baseline" in report:
+        report["baseline"]["rows"] = _baseline_rows(worlds, same, report["baseline"]["planner"])
+    report["machine"]["loadavg_end"] = os.getloadavg()
+    report["total_wall_s"] = time.monotonic() - started
+
+    return write_outputs(report, out, args.doc)
+
+
+def _time_limit(args: argparse.Namespace, world: BenchWorld) -> float:
+    """The per-run time limit (s) of ``world``: ``--time-limit``, its own, or its own capped."""
+    if args.time_limit:
+        return args.time_limit
+    if args.full_limits:
+        return world.time_limit_s
+    return min(world.time_limit_s, QUICK_LIMIT_S if args.quick else LIMIT_CAP_S)
+
+
+def _planner_runs(args: argparse.Namespace, to_run: list[BenchWorld],
+                  limits: dict[str, float]) -> tuple[dict, dict | None]:
+    """Plan every world of ``to_run`` (each in a worker process, ``--jobs`` at once): the records by world,
+    and with ``--baseline`` the baseline code's records by world (else ``None``)."""
+    seeds = args.seeds if args.seeds is not None else (2 if args.quick else 20)
+    seeds_for = {}
+    for item in args.seeds_for:
+        name, _, count = item.partition("=")
+        seeds_for[name] = int(count)
     # longest first (seeds x limit), so that --jobs 2 packs well
-    to_run.sort(key=lambda w: -seeds_for.get(w.name, seeds) * limits[w.name])
+    to_run = sorted(to_run, key=lambda w: -seeds_for.get(w.name, seeds) * limits[w.name])
     print(f"planner: {len(to_run)} world(s), {seeds} seed(s) each, jobs {args.jobs}", file=sys.stderr)
 
     baseline_tree = _export(args.baseline) if args.baseline else None
@@ -577,82 +645,55 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if baseline_tree:
             shutil.rmtree(baseline_tree, ignore_errors=True)
-    report["planner"] = planner
-    report["planner_wall_s"] = time.monotonic() - started
-    if baseline_tree:
-        report["baseline"] = {"revision": args.baseline, "commit": _git("rev-parse", "--short", args.baseline),
-                              "planner": baseline}
+    return planner, (baseline if baseline_tree else None)
 
-    # 2. collision throughput (one process at a time: figures per core)
+
+def _throughput_runs(args: argparse.Namespace) -> dict:
+    """Collision throughput on :data:`THROUGHPUT_WORLDS`, one process at a time."""
     throughput = {}
-    if not args.no_throughput:
-        configs = args.throughput_configs or (2_000 if quick else 100_000)
-        for name in THROUGHPUT_WORLDS:
-            t0 = time.monotonic()
-            throughput[name] = _child("benchmarks.throughput", name, "--configs", str(configs),
-                                      *(["--interval-budget", "2000"] if quick else []), timeout=1200)
-            print(f"throughput {name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
-    report["throughput"] = throughput
-
-    # 2b. cold start: compiling the kernel, loading it from the cache, first plan against second
-    if not (args.no_cold_start or quick):
+    configs = args.throughput_configs or (2_000 if args.quick else 100_000)
+    for name in THROUGHPUT_WORLDS:
         t0 = time.monotonic()
-        report["cold_start"] = _child("benchmarks.cold_start", timeout=900)
-        print(f"cold start: {time.monotonic() - t0:.0f} s", file=sys.stderr)
+        throughput[name] = _child("benchmarks.throughput", name, "--configs", str(configs),
+                                  *(["--interval-budget", "2000"] if args.quick else []), timeout=1200)
+        print(f"throughput {name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
+    return throughput
 
-    # 3. peer comparison
-    peer = {}
-    if not args.no_peer:
-        problems = args.peer_problems or (3 if quick else 20)
-        peer_limit = args.peer_time_limit or (2.0 if quick else 5.0)
-        chosen = select(all_worlds(), args.peer_only or ("figure1" if quick else PEER_WORLDS))
-        chosen = [w for w in chosen if w.name in limits]  # only worlds of this run get a row
 
-        def compare(world: BenchWorld) -> tuple[str, dict]:
-            t0 = time.monotonic()
-            record = _child("benchmarks.peer", world.name, "--problems", str(problems), "--time-limit",
-                            str(peer_limit), "--step-rad", str(args.peer_step_rad), "--checker", args.peer_checker,
-                            timeout=problems * 2 * (peer_limit + 5) + 120)
-            print(f"peer {world.name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
-            return world.name, record
+def _peer_runs(args: argparse.Namespace, limits: dict[str, float]) -> dict:
+    """The OMPL comparison on the peer worlds of this run, ``--jobs`` at once."""
+    problems = args.peer_problems or (3 if args.quick else 20)
+    peer_limit = args.peer_time_limit or (2.0 if args.quick else 5.0)
+    chosen = select(all_worlds(), args.peer_only or ("figure1" if args.quick else PEER_WORLDS))
+    chosen = [w for w in chosen if w.name in limits]  # only worlds of this run get a row
 
-        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-            peer = dict(pool.map(compare, chosen))
-    report["peer"] = peer
-
-    # 4. profile of one figure1 run (alone on the machine, as far as this suite goes)
-    if not args.no_profile and "figure1" in limits:
+    def compare(world: BenchWorld) -> tuple[str, dict]:
         t0 = time.monotonic()
-        limit = args.profile_time_limit or (QUICK_LIMIT_S if quick else PROFILE_LIMIT_S)
-        prof = _child("benchmarks.profile", "figure1", "--seed", "0", "--time-limit", str(limit),
-                      timeout=limit * 4 + 60)
-        report["profile"] = prof
-        if "error" not in prof:
-            (out / "profile_figure1.txt").write_text(
-                f"cProfile of figure1, seed 0, limit {limit:g} s: {prof['outcome']}, {prof['stats']}\n\n"
-                f"Own time by file:\n" + "\n".join(f"{s:8.2f} s {100 * share:4.0f}%  {f}"
-                                                   for f, s, share in prof["by_file"])
-                + f"\n\nTop by cumulative time:\n{prof['cumulative']}\n\nTop by own time (tottime):\n"
-                  f"{prof['tottime']}\n")
-        print(f"profile figure1: {time.monotonic() - t0:.0f} s", file=sys.stderr)
+        record = _child("benchmarks.peer", world.name, "--problems", str(problems), "--time-limit",
+                        str(peer_limit), "--step-rad", str(args.peer_step_rad), "--checker", args.peer_checker,
+                        timeout=problems * 2 * (peer_limit + 5) + 120)
+        print(f"peer {world.name}: {time.monotonic() - t0:.0f} s", file=sys.stderr)
+        return world.name, record
 
-    # summary
-    rows = []
-    for world in worlds:
-        source = same.get(world.name, world.name)
-        row = _summarise_world(world, planner.get(source, {"error": "not run"}), same.get(world.name))
-        if world.name in peer:
-            row.update(_summarise_peer(peer[world.name]))
-        else:
-            row.update(peer_problems=None, peer_note="peer not run" if args.no_peer else "not in the peer selection")
-        rows.append(row)
-    report["rows"] = rows
-    if "baseline" in report:
-        report["baseline"]["rows"] = _baseline_rows(worlds, same, report["baseline"]["planner"])
-    report["machine"]["loadavg_end"] = os.getloadavg()
-    report["total_wall_s"] = time.monotonic() - started
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        return dict(pool.map(compare, chosen))
 
-    return write_outputs(report, out, args.doc)
+
+def _profile_run(args: argparse.Namespace, out: Path) -> dict:
+    """cProfile of one figure1 run; its summary also goes to ``out/profile_figure1.txt``."""
+    t0 = time.monotonic()
+    limit = args.profile_time_limit or (QUICK_LIMIT_S if args.quick else PROFILE_LIMIT_S)
+    prof = _child("benchmarks.profile", "figure1", "--seed", "0", "--time-limit", str(limit),
+                  timeout=limit * 4 + 60)
+    if "error" not in prof:
+        (out / "profile_figure1.txt").write_text(
+            f"cProfile of figure1, seed 0, limit {limit:g} s: {prof['outcome']}, {prof['stats']}\n\n"
+            f"Own time by file:\n" + "\n".join(f"{s:8.2f} s {100 * share:4.0f}%  {f}"
+                                               for f, s, share in prof["by_file"])
+            + f"\n\nTop by cumulative time:\n{prof['cumulative']}\n\nTop by own time (tottime):\n"
+              f"{prof['tottime']}\n")
+    print(f"profile figure1: {time.monotonic() - t0:.0f} s", file=sys.stderr)
+    return prof
 
 
 def write_outputs(report: dict, out: Path, doc: Path | None) -> int:
@@ -660,7 +701,7 @@ def write_outputs(report: dict, out: Path, doc: Path | None) -> int:
     rows, throughput, peer = report["rows"], report.get("throughput") or {}, report.get("peer") or {}
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(report, indent=1, default=str) + "\n")
-    with open(out / "benchmarks.csv", "w", newline="") as handle:
+    with (out / "benchmarks.csv").open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
         writer.writeheader()
         for row in rows:

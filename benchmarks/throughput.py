@@ -27,6 +27,7 @@ import json
 import math
 import sys
 import time
+from typing import Any
 
 import numpy as np
 import shapely
@@ -38,7 +39,7 @@ from clew_ros.core.kinematics import compose, tip_poses, transform_points
 from clew_ros.core.manhattan import free_intervals, run_manhattan
 from clew_ros.core.world import World, world_from_parameters
 
-__all__ = ["PerStateChecker", "random_configurations", "measure"]
+__all__ = ["PerStateChecker", "measure", "random_configurations"]
 
 
 class PerStateChecker:
@@ -81,7 +82,7 @@ class PerStateChecker:
         x, y = self.base
         phi = 0.0
         points = [(x, y)]
-        for angle, length in zip(q, self.lengths):
+        for angle, length in zip(q, self.lengths, strict=True):
             phi += angle
             x += length * math.cos(phi)
             y += length * math.sin(phi)
@@ -138,8 +139,9 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
     grasp_rel = np.array([-world.object.grasps[0][0], -world.object.grasps[0][1], 0.0])
     carried = compose(tip_poses(world.robot, q), grasp_rel)
     transfer_q = q[is_valid(world, q, carried)]
-    for mode, sample, kwargs in (("transit", valid_q, {"object_poses": pose[None]}),
-                                 ("transfer", transfer_q, {"grasp_rel": grasp_rel[None]})):
+    modes: list[tuple[str, np.ndarray, dict[str, Any]]] = [("transit", valid_q, {"object_poses": pose[None]}),
+                                                           ("transfer", transfer_q, {"grasp_rel": grasp_rel[None]})]
+    for mode, sample, kwargs in modes:
         for batch in (24, 1024):
             total = 0
             started = time.process_time()

@@ -127,8 +127,10 @@ def _scattered_boxes(parameters: dict, count: int) -> list[list[float]]:
     from clew_ros.core.kinematics import joint_positions, transform_points
 
     arm = shapely.LineString(joint_positions(world.robot, world.robot.initial[None])[0])
-    placements = [shapely.Polygon(transform_points(pose, world.object.polygon))
-                  for pose in (world.object.initial, world.object.goal)]
+    placements = [
+        shapely.Polygon(transform_points(pose, world.object.polygon))
+        for pose in (world.object.initial, world.object.goal)
+    ]
     taken = [shapely.Polygon(o.vertices) for o in world.obstacles]
     base = shapely.Point(world.robot.base).buffer(0.45)
     xmin, ymin, xmax, ymax = world.bounds
@@ -140,8 +142,12 @@ def _scattered_boxes(parameters: dict, count: int) -> list[list[float]]:
         x, y = rng.uniform([xmin + 0.15, ymin + 0.15], [xmax - 0.15, ymax - 0.15])
         flat = _box(float(x), float(y))
         box = shapely.Polygon(np.reshape(flat, (-1, 2)))
-        if (box.distance(arm) < 0.15 or box.distance(base) < 0.1
-                or min(box.distance(p) for p in placements) < 0.3 or min(box.distance(t) for t in taken) < 0.1):
+        if (
+            box.distance(arm) < 0.15
+            or box.distance(base) < 0.1
+            or min(box.distance(p) for p in placements) < 0.3
+            or min(box.distance(t) for t in taken) < 0.1
+        ):
             continue
         boxes.append(flat)
         taken.append(box)

@@ -85,8 +85,12 @@ def path_is_valid(world: World, waypoints: np.ndarray, step_rad: float = CHECK_S
         count = max(1, int(np.ceil(np.max(np.abs(b - a)) / step_rad)))
         pieces.append(a + (np.arange(1, count + 1)[:, None] / count) * (b - a))
     configurations = np.concatenate(pieces)
-    valid = np.concatenate([is_valid(world, configurations[i:i + 20_000], world.object.initial[None])
-                            for i in range(0, len(configurations), 20_000)])
+    valid = np.concatenate(
+        [
+            is_valid(world, configurations[i : i + 20_000], world.object.initial[None])
+            for i in range(0, len(configurations), 20_000)
+        ]
+    )
     return bool(valid.all())
 
 
@@ -140,8 +144,9 @@ class ProjectValidity:
         return bool(is_valid(self.world, samples, self.pose).all())
 
 
-def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_rad: float,
-               checker: str = "is_valid") -> list[dict]:
+def solve_ompl(
+    world: World, problems: list[tuple], time_limit_s: float, step_rad: float, checker: str = "is_valid"
+) -> list[dict]:
     """RRTConnect (OMPL 2.x nanobind bindings) on each problem; one record per problem."""
     from ompl import base as ob
     from ompl import geometric as og
@@ -186,8 +191,15 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
         setup.solve(time_limit_s)
         wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
         success = bool(setup.haveExactSolutionPath())
-        record = {"success": success, "wall_s": wall, "cpu_s": cpu, "checks": test.states, "calls": test.calls,
-                  "valid": None, "waypoints": 0}
+        record = {
+            "success": success,
+            "wall_s": wall,
+            "cpu_s": cpu,
+            "checks": test.states,
+            "calls": test.calls,
+            "valid": None,
+            "waypoints": 0,
+        }
         if success:
             path = setup.getSolutionPath()
             waypoints = np.array([vector(s) for s in path.getStates()])
@@ -196,8 +208,15 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
     return records
 
 
-def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_limit_s: float, seed: int, *,
-                    settings: PlannerSettings | None = None) -> dict:
+def project_transit(
+    world: World,
+    q_start: np.ndarray,
+    q_goal: np.ndarray,
+    time_limit_s: float,
+    seed: int,
+    *,
+    settings: PlannerSettings | None = None,
+) -> dict:
     """The Ariadne's Clew algorithm on one transit problem (see the module docstring)."""
     settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s, threads=1)  # one core, as OMPL
     termination = Termination(time_limit_s)
@@ -223,8 +242,9 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
     searched_from_start = None
     waypoints = landmarks[0][None]
     while True:
-        [(tail, distance)] = local_search(ctx, [SearchJob(landmarks[-1], objective, error,
-                                                          0.1 * weight * GOAL_TOLERANCE_RAD, mode)])
+        [(tail, distance)] = local_search(
+            ctx, [SearchJob(landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD, mode)]
+        )
         distance /= weight  # rad
         if searched_from_start is None:
             searched_from_start = bool(distance <= GOAL_TOLERANCE_RAD)
@@ -249,8 +269,9 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
         initial = np.empty((settings.population, 1 + k * n))
         initial[:, 0] = ctx.rng.integers(0, len(landmarks), size=settings.population)
         initial[:, 1:] = ctx.initial_genes(settings.population).reshape(settings.population, -1)
-        result = minimize(evaluate, initial, ctx.rng, settings.genetic, categories=len(landmarks),
-                          should_stop=termination)
+        result = minimize(
+            evaluate, initial, ctx.rng, settings.genetic, categories=len(landmarks), should_stop=termination
+        )
         index, path = decode(result.genes[None])
         landmarks.append(path.final[0].copy())
         parents.append(int(index[0]))
@@ -281,16 +302,31 @@ def _lineage(arrivals: list[np.ndarray], parents: list[int | None], last: int) -
     return chain[::-1]
 
 
-def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: float, *, with_ompl: bool = True,
-             checker: str = "is_valid") -> dict:
+def run_peer(
+    name: str,
+    count: int,
+    time_limit_s: float,
+    seed: int,
+    step_rad: float,
+    *,
+    with_ompl: bool = True,
+    checker: str = "is_valid",
+) -> dict:
     matches = select(all_worlds(), name)
     if len(matches) != 1:
         raise SystemExit(f"peer: expected one world named {name!r}, found {len(matches)}")
     world = world_from_parameters(matches[0].parameters)
     problems = transit_problems(world, count, seed)
     reason = ompl_unavailable_reason() if with_ompl else "skipped (--no-ompl)"
-    out = {"world": world.name, "problems": len(problems), "time_limit_s": time_limit_s, "step_rad": step_rad,
-           "ompl_available": reason is None, "ompl_reason": reason, "ompl_checker": checker}
+    out = {
+        "world": world.name,
+        "problems": len(problems),
+        "time_limit_s": time_limit_s,
+        "step_rad": step_rad,
+        "ompl_available": reason is None,
+        "ompl_reason": reason,
+        "ompl_checker": checker,
+    }
     out["project"] = [project_transit(world, a, b, time_limit_s, seed + i) for i, (a, b) in enumerate(problems)]
     out["ompl"] = solve_ompl(world, problems, time_limit_s, step_rad, checker) if reason is None else None
     return out
@@ -302,15 +338,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--problems", type=int, default=20)
     parser.add_argument("--time-limit", type=float, default=10.0, help="per problem and planner (s)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--step-rad", type=float, default=0.002,
-                        help="OMPL motion-check step, joint-space L2 (rad); default the contract's 0.002")
-    parser.add_argument("--checker", choices=("is_valid", "loop"), default="is_valid",
-                        help="OMPL's validity test: the project's is_valid (states one by one, motions batched; "
-                             "default) or the per-state shapely loop of benchmarks.throughput")
+    parser.add_argument(
+        "--step-rad",
+        type=float,
+        default=0.002,
+        help="OMPL motion-check step, joint-space L2 (rad); default the contract's 0.002",
+    )
+    parser.add_argument(
+        "--checker",
+        choices=("is_valid", "loop"),
+        default="is_valid",
+        help="OMPL's validity test: the project's is_valid (states one by one, motions batched; "
+        "default) or the per-state shapely loop of benchmarks.throughput",
+    )
     parser.add_argument("--no-ompl", action="store_true")
     args = parser.parse_args(argv)
-    result = run_peer(args.world, args.problems, args.time_limit, args.seed, args.step_rad,
-                      with_ompl=not args.no_ompl, checker=args.checker)
+    result = run_peer(
+        args.world,
+        args.problems,
+        args.time_limit,
+        args.seed,
+        args.step_rad,
+        with_ompl=not args.no_ompl,
+        checker=args.checker,
+    )
     sys.stdout.write(json.dumps(result) + "\n")
     sys.stdout.flush()
     os._exit(0)  # skip interpreter teardown: nanobind (ompl 2.x) prints leak warnings at exit

@@ -7,8 +7,10 @@ from typing import Any
 
 __all__ = ["plot_scaling"]
 
-PANELS = (("joints", "number of joints (joints_N: figure1's task, 1.7 m arm split in N links)"),
-          ("obstacles", "number of obstacles (obstacles_M: joints_3 + M - 2 boxes)"))
+PANELS = (
+    ("joints", "number of joints (joints_N: figure1's task, 1.7 m arm split in N links)"),
+    ("obstacles", "number of obstacles (obstacles_M: joints_3 + M - 2 boxes)"),
+)
 
 
 def plot_scaling(rows: list[dict], path: Path) -> Path | None:
@@ -50,8 +52,7 @@ def _panel(axis: Any, family: str, label: str, group: list[dict]) -> None:
     axis.set_xlabel(label, fontsize=9)
     axis.set_ylabel("time per run (s)")
     if not group:
-        axis.text(0.5, 0.5, f"no {family}_* world in this run", ha="center", va="center",
-                  transform=axis.transAxes)
+        axis.text(0.5, 0.5, f"no {family}_* world in this run", ha="center", va="center", transform=axis.transAxes)
         axis.set_xticks([])
         axis.set_yticks([])
         return
@@ -63,13 +64,17 @@ def _panel(axis: Any, family: str, label: str, group: list[dict]) -> None:
     if ok:
         axis.plot(*zip(*ok, strict=True), "D", color="tab:green", alpha=0.8, label="median wall, successful runs")
     for r in group:
-        axis.annotate(f"{100 * r['success_rate']:.0f}%", (r[family], r["median_s"]), textcoords="offset points",
-                      xytext=(4, 6), fontsize=8)
+        axis.annotate(
+            f"{100 * r['success_rate']:.0f}%",
+            (r[family], r["median_s"]),
+            textcoords="offset points",
+            xytext=(4, 6),
+            fontsize=8,
+        )
     limits = sorted({r["time_limit_s"] for r in group})
     for limit in limits:
         axis.axhline(limit, color="grey", linewidth=0.8, linestyle=":")
-    values = [v for r in group for v in (r["median_s"], r["p90_s"], r["median_cpu_s"],
-                                         r.get("median_success_s")) if v]
+    values = [v for r in group for v in (r["median_s"], r["p90_s"], r["median_cpu_s"], r.get("median_success_s")) if v]
     axis.set_yscale("log")
     axis.set_ylim(min(values + limits) / 2, max(values + limits) * 2)
     axis.yaxis.set_major_formatter(plain)
@@ -80,10 +85,12 @@ def _panel(axis: Any, family: str, label: str, group: list[dict]) -> None:
     axis.set_xticks(x)
     axis.xaxis.set_major_formatter(plain)
     axis.xaxis.set_minor_formatter(NullFormatter())
-    axis.set_xlim(min(x) / 1.3 if family == "obstacles" else min(x) - 0.5,
-                  max(x) * 1.3 if family == "obstacles" else max(x) + 0.5)
+    axis.set_xlim(
+        min(x) / 1.3 if family == "obstacles" else min(x) - 0.5, max(x) * 1.3 if family == "obstacles" else max(x) + 0.5
+    )
     seeds = sorted({r["seeds"] for r in group})
-    axis.set_title(f"{family}: {'/'.join(map(str, seeds))} seeds per world; % = success; "
-                   f"dotted = time limit", fontsize=9)
+    axis.set_title(
+        f"{family}: {'/'.join(map(str, seeds))} seeds per world; % = success; dotted = time limit", fontsize=9
+    )
     axis.grid(True, which="both", alpha=0.3)
     axis.legend(fontsize=7, loc="lower right")

@@ -63,8 +63,9 @@ class Explorer:
         key = (landmark_id, grasp)
         landmark = self.tree[landmark_id]
         if landmark.grasp == grasp and landmark.grasp_rel is not None:  # (every landmark but the root holds one)
-            return self._transits.setdefault(key, _Candidate(landmark_id, grasp, landmark.joints,
-                                                             landmark.grasp_rel, None))
+            return self._transits.setdefault(
+                key, _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
+            )
         if approach is None:
             if key not in self._transits:
                 self._transits[key] = self._transit(landmark, grasp, None)
@@ -97,11 +98,15 @@ class Explorer:
 
     def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: np.ndarray | None) -> list[_Candidate | None]:
         """SEARCH_TRANSIT from each landmark to its grasp, all at once: the candidates, None where it failed."""
-        results = search_transits(self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach)
-                                             for landmark, grasp in pairs])
-        return [_Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
-                if result.success and result.grasp_rel is not None else None
-                for (landmark, grasp), result in zip(pairs, results, strict=True)]
+        results = search_transits(
+            self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach) for landmark, grasp in pairs]
+        )
+        return [
+            _Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
+            if result.success and result.grasp_rel is not None
+            else None
+            for (landmark, grasp), result in zip(pairs, results, strict=True)
+        ]
 
     def explore(self) -> Exploration | None:
         """Place one new landmark; ``None`` when no candidate transit succeeded."""
@@ -137,8 +142,7 @@ class Explorer:
         def evaluate(population: np.ndarray) -> np.ndarray:
             _, paths = decode(population)
             ctx.counters.evaluations += len(population)
-            ends = landmark_features(paths.final, paths.object_poses, ctx.settings.joint_weight,
-                                     world.object.radius)
+            ends = landmark_features(paths.final, paths.object_poses, ctx.settings.joint_weight, world.object.radius)
             nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - features[None], axis=2), axis=1)
             return -nearest
 
@@ -146,8 +150,9 @@ class Explorer:
         initial = np.empty((size, 1 + k * n))
         initial[:, 0] = ctx.rng.integers(0, len(candidates), size=size)
         initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
-        result = minimize(evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(candidates),
-                          should_stop=ctx.termination)
+        result = minimize(
+            evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(candidates), should_stop=ctx.termination
+        )
         index, paths = decode(result.genes[None])
         chosen_candidate = candidates[int(index[0])]
         fields = {

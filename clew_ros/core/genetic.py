@@ -43,9 +43,16 @@ class GeneticResult:
     population_fitness: np.ndarray  # (P,)
 
 
-def minimize(evaluate: Callable[[np.ndarray], np.ndarray], initial: np.ndarray, rng: np.random.Generator,
-             settings: GeneticSettings = GeneticSettings(), *, target: float = -np.inf,
-             categories: int = 0, should_stop: Callable[[], bool] = lambda: False) -> GeneticResult:
+def minimize(
+    evaluate: Callable[[np.ndarray], np.ndarray],
+    initial: np.ndarray,
+    rng: np.random.Generator,
+    settings: GeneticSettings = GeneticSettings(),
+    *,
+    target: float = -np.inf,
+    categories: int = 0,
+    should_stop: Callable[[], bool] = lambda: False,
+) -> GeneticResult:
     """Minimise ``evaluate`` starting from the population ``initial`` ``(P, D)``.
 
     Stops after ``settings.generations`` generations, when the best fitness is
@@ -54,15 +61,27 @@ def minimize(evaluate: Callable[[np.ndarray], np.ndarray], initial: np.ndarray, 
     integer in ``[0, categories)``. One island of :func:`minimize_islands`
     (the same draws, the same result).
     """
-    return minimize_islands(lambda population, _islands: evaluate(population[0])[None],
-                            np.asarray(initial, dtype=float)[None], rng, settings, targets=np.array([target]),
-                            categories=categories, should_stop=should_stop)[0]
+    return minimize_islands(
+        lambda population, _islands: evaluate(population[0])[None],
+        np.asarray(initial, dtype=float)[None],
+        rng,
+        settings,
+        targets=np.array([target]),
+        categories=categories,
+        should_stop=should_stop,
+    )[0]
 
 
-def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], initial: np.ndarray,
-                     rng: np.random.Generator, settings: GeneticSettings = GeneticSettings(), *,
-                     targets: np.ndarray | None = None, categories: int = 0,
-                     should_stop: Callable[[], bool] = lambda: False) -> list[GeneticResult]:
+def minimize_islands(
+    evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    initial: np.ndarray,
+    rng: np.random.Generator,
+    settings: GeneticSettings = GeneticSettings(),
+    *,
+    targets: np.ndarray | None = None,
+    categories: int = 0,
+    should_stop: Callable[[], bool] = lambda: False,
+) -> list[GeneticResult]:
     """Minimise ``I`` independent problems at once, one population (island) each: ``initial`` is
     ``(I, P, D)``; ``evaluate(population (A, C, D), islands (A,))`` returns the fitness ``(A, C)`` of
     the islands still running, so that their individuals are evaluated in one batch (the parallel
@@ -110,12 +129,22 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
         best_fitness[pick] = np.where(improved, lowest, best_fitness[pick])
         stall[pick] = (stall[pick] + 1) * ~improved
     best = np.argmin(fitness, axis=1)
-    return [GeneticResult(population[i, best[i]].copy(), float(fitness[i, best[i]]), int(evaluations[i]),
-                          int(generations[i]), population[i], fitness[i]) for i in range(islands)]
+    return [
+        GeneticResult(
+            population[i, best[i]].copy(),
+            float(fitness[i, best[i]]),
+            int(evaluations[i]),
+            int(generations[i]),
+            population[i],
+            fitness[i],
+        )
+        for i in range(islands)
+    ]
 
 
-def _children(pool: np.ndarray, scores: np.ndarray, rng: np.random.Generator, settings: GeneticSettings,
-              categories: int) -> np.ndarray:
+def _children(
+    pool: np.ndarray, scores: np.ndarray, rng: np.random.Generator, settings: GeneticSettings, categories: int
+) -> np.ndarray:
     """The ``P - elite`` children ``(I, P - elite, D)`` of each island of ``pool (I, P, D)`` (fitness
     ``scores (I, P)``): tournament selection, blend crossover, Gaussian mutation; with ``categories``,
     gene 0 comes from either parent or is redrawn."""

@@ -61,10 +61,17 @@ def _mode(object_poses: np.ndarray | None, grasp_rel: np.ndarray | None) -> tupl
     raise ValueError("give exactly one of object_poses (transit) and grasp_rel (transfer)")
 
 
-def free_intervals(world: World, q: np.ndarray, joint: int, *, object_poses: np.ndarray | None = None,
-                   grasp_rel: np.ndarray | None = None, margin_m: float = 1e-3,
-                   counters: Counters | None = None,
-                   should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray]:
+def free_intervals(
+    world: World,
+    q: np.ndarray,
+    joint: int,
+    *,
+    object_poses: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    margin_m: float = 1e-3,
+    counters: Counters | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Free interval ``[dmin, dmax]`` (rad) of ``joint`` for each configuration of ``q`` ``(B, n)``.
 
     Transit: give the resting object's poses ``object_poses`` ``(B, 3)``.
@@ -119,10 +126,18 @@ class ManhattanPaths:
         return self.waypoints[:, -1]
 
 
-def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_poses: np.ndarray | None = None,
-                  grasp_rel: np.ndarray | None = None, margin_m: float = 1e-3,
-                  counters: Counters | None = None,
-                  should_stop: Callable[[], bool] | None = None, threads: int = 1) -> ManhattanPaths:
+def run_manhattan(
+    world: World,
+    q0: np.ndarray,
+    genes: np.ndarray,
+    *,
+    object_poses: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    margin_m: float = 1e-3,
+    counters: Counters | None = None,
+    should_stop: Callable[[], bool] | None = None,
+    threads: int = 1,
+) -> ManhattanPaths:
     """Decode genes ``(B, k, n)`` into collision-free Manhattan paths from ``q0`` ``(B, n)``.
 
     Transit when ``object_poses`` is given (the object rests there), transfer
@@ -150,12 +165,13 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
         for column in range(1, columns):
             for first in range(0, batch, step):
                 if should_stop():
-                    waypoints[first:, column:] = waypoints[first:, column - 1:column]
-                    waypoints[:first, column + 1:] = waypoints[:first, column:column + 1]
+                    waypoints[first:, column:] = waypoints[first:, column - 1 : column]
+                    waypoints[:first, column + 1 :] = waypoints[:first, column : column + 1]
                     break
                 rows = slice(first, first + step)
-                kernel.decode(packed, waypoints[rows], genes[rows], column, column + 1, transfer, poses[rows],
-                              margin_m, threads)
+                kernel.decode(
+                    packed, waypoints[rows], genes[rows], column, column + 1, transfer, poses[rows], margin_m, threads
+                )
             else:
                 continue
             break

@@ -74,8 +74,9 @@ def approach_cell(psi: np.ndarray | float, cells: int = APPROACH_CELLS) -> np.nd
     return (np.mod(psi, 2.0 * np.pi) / (2.0 * np.pi) * cells).astype(int) % cells
 
 
-def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_spread: float = 0.0,
-                   position_slack: float = 0.0) -> np.ndarray:
+def approach_cells(
+    world: World, object_pose: np.ndarray, grasp: int, *, angle_spread: float = 0.0, position_slack: float = 0.0
+) -> np.ndarray:
     """Which approach angles could hold grasp ``grasp`` of the object at ``object_pose``.
 
     Held rigidly, the last link keeps one direction ``psi`` in the object's
@@ -105,7 +106,7 @@ def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_s
     # the last joint is at point - last * u, u = dir(theta + psi): |joint - base|^2 =
     # distance^2 + last^2 - 2 last distance cos(angle(u, v)), extreme at the cell's extreme angles
     delta = np.abs((theta + psi - np.arctan2(v[1], v[0]) + np.pi) % (2.0 * np.pi) - np.pi)
-    squared = distance ** 2 + last ** 2
+    squared = distance**2 + last**2
     near = np.sqrt(np.maximum(squared - 2.0 * last * distance * np.cos(np.maximum(0.0, delta - half)), 0.0))
     far = np.sqrt(np.maximum(squared - 2.0 * last * distance * np.cos(np.minimum(np.pi, delta + half)), 0.0))
     # the grasp point itself moves with the orientation spread (chord <= arc) and the slack

@@ -31,8 +31,24 @@ DELIMITER = "=" * 80 + "\n"
 
 # Same pattern and primitive set as rosbag2's parse_msg_dependencies.
 _FIELD_TYPE = re.compile(r"(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+")
-_PRIMITIVES = frozenset({"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16",
-                         "int32", "uint32", "int64", "uint64", "string"})
+_PRIMITIVES = frozenset(
+    {
+        "bool",
+        "byte",
+        "char",
+        "float32",
+        "float64",
+        "int8",
+        "uint8",
+        "int16",
+        "uint16",
+        "int32",
+        "uint32",
+        "int64",
+        "uint64",
+        "string",
+    }
+)
 _TYPE_NAME = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)/(?:([A-Za-z][A-Za-z0-9_]*)/)?([A-Za-z][A-Za-z0-9_]*)$")
 _MAX_DEPTH = 50
 
@@ -67,8 +83,9 @@ def message_class(type_name: str) -> type:
         message: type = getattr(module, name)
         return message
     except (ImportError, AttributeError):
-        raise RecordingError(f"message type {type_name} is not installed (cannot import "
-                             f"{package}.{namespace}.{name})") from None
+        raise RecordingError(
+            f"message type {type_name} is not installed (cannot import {package}.{namespace}.{name})"
+        ) from None
 
 
 def _share_candidates(package: str) -> Iterator[Path]:
@@ -99,8 +116,10 @@ def _msg_text(type_name: str) -> str:
     package, namespace, name = _split(type_name)
     path = _interface_file(package, namespace, name, ".msg")
     if path is None:
-        raise RecordingError(f"no .msg file for {type_name} (looked for share/{package}/{namespace}/{name}.msg "
-                             "under AMENT_PREFIX_PATH and the Python prefix)")
+        raise RecordingError(
+            f"no .msg file for {type_name} (looked for share/{package}/{namespace}/{name}.msg "
+            "under AMENT_PREFIX_PATH and the Python prefix)"
+        )
     return path.read_text()
 
 

@@ -149,8 +149,9 @@ class Recording:
         if channel is None:
             return
         schema = self.schemas.get(channel.schema_id)
-        self._messages.append(RecordedMessage(channel.topic, schema.name if schema else "", record.log_time,
-                                              bytes(record.data)))
+        self._messages.append(
+            RecordedMessage(channel.topic, schema.name if schema else "", record.log_time, bytes(record.data))
+        )
 
     # ------------------------------------------------------------------ contents
 
@@ -193,8 +194,10 @@ class Recording:
             schema = self.schemas.get(channel.schema_id)
             decoder = DecoderFactory().decoder_for(channel.message_encoding, schema)
             if decoder is None:
-                raise RecordingError(f"{self.mcap_path}: cannot decode {topic} "
-                                     f"({channel.message_encoding!r} with schema {schema.name if schema else None})")
+                raise RecordingError(
+                    f"{self.mcap_path}: cannot decode {topic} "
+                    f"({channel.message_encoding!r} with schema {schema.name if schema else None})"
+                )
             self._decoders[channel.id] = decoder
         return [decoder(m.data) for m in self._messages if m.topic == topic]
 
@@ -225,17 +228,26 @@ def recover_recording(path: str | Path) -> Path:
         with temporary.open("wb") as stream:
             writer = Writer(stream)
             writer.start(profile="ros2", library="clew_ros recover_recording")
-            schema_ids = {sid: writer.register_schema(s.name, s.encoding, s.data)
-                          for sid, s in recording.schemas.items()}
+            schema_ids = {
+                sid: writer.register_schema(s.name, s.encoding, s.data) for sid, s in recording.schemas.items()
+            }
             channel_ids = {}
             for channel in recording.channels.values():
                 if channel.topic not in channel_ids:
                     channel_ids[channel.topic] = writer.register_channel(
-                        channel.topic, channel.message_encoding, schema_ids.get(channel.schema_id, 0),
-                        dict(channel.metadata))
+                        channel.topic,
+                        channel.message_encoding,
+                        schema_ids.get(channel.schema_id, 0),
+                        dict(channel.metadata),
+                    )
             for sequence, message in enumerate(recording.messages()):
-                writer.add_message(channel_ids[message.topic], log_time=message.log_time_ns,
-                                   data=message.data, publish_time=message.log_time_ns, sequence=sequence)
+                writer.add_message(
+                    channel_ids[message.topic],
+                    log_time=message.log_time_ns,
+                    data=message.data,
+                    publish_time=message.log_time_ns,
+                    sequence=sequence,
+                )
             writer.finish()  # type: ignore[no-untyped-call]  # (mcap leaves finish() unannotated)
         if not recording.complete:
             target.replace(target.with_name(target.name + ".truncated"))
@@ -250,9 +262,19 @@ def recover_recording(path: str | Path) -> Path:
         custom = {**recording.bag_metadata["custom_data"], **custom}
     information = bag_metadata(
         target.name,
-        [{"name": t.name, "type": t.type_name, "offered_qos_profiles": t.offered_qos_profiles,
-          "type_description_hash": t.type_description_hash, "message_count": t.message_count}
-         for t in topics.values()],
-        start, end - start, custom_data=custom)
+        [
+            {
+                "name": t.name,
+                "type": t.type_name,
+                "offered_qos_profiles": t.offered_qos_profiles,
+                "type_description_hash": t.type_description_hash,
+                "message_count": t.message_count,
+            }
+            for t in topics.values()
+        ],
+        start,
+        end - start,
+        custom_data=custom,
+    )
     write_bag_metadata(directory, information)
     return directory

@@ -45,6 +45,9 @@ setup(
         "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10"],
         # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
         "bench": ["ompl>=2.0", "matplotlib>=3.8"],
+        # make lint (and .ci/run): the checks configured in pyproject.toml. ruff's minor is capped: a new
+        # minor release turns on new rules of the selected families, which would fail CI with no code change.
+        "lint": ["ruff>=0.17.6,<0.18", "mypy>=2.4", "types-PyYAML>=6.0", "types-shapely>=2.1"],
     },
     zip_safe=True,
     entry_points={

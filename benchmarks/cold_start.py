@@ -63,8 +63,15 @@ print(times[0], times[1], result.outcome.name)
 
 
 def _python(code: str, *args: str, env: dict[str, str] | None = None) -> list[str]:
-    done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, cwd=ROOT,
-                          env={**os.environ, **(env or {})}, check=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, "-c", code, *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, **(env or {})},
+        check=True,
+        timeout=600,
+    )
     return done.stdout.split()
 
 
@@ -75,17 +82,48 @@ def node_first_and_second() -> dict:
     except ImportError:
         return {"node": "rclpy not installed"}
     namespace = f"/cold_start_{os.getpid()}"
-    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_STATIC_PEERS": "",
-           "ROS_DOMAIN_ID": os.environ.get("ROS_DOMAIN_ID", str(os.getpid() % 90 + 10))}
-    node = subprocess.Popen([sys.executable, "-m", "clew_ros.node.main", "--ros-args", "-r", f"__ns:={namespace}",
-                             "-p", "record.enabled:=false"], cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    env = {
+        **os.environ,
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+        "ROS_STATIC_PEERS": "",
+        "ROS_DOMAIN_ID": os.environ.get("ROS_DOMAIN_ID", str(os.getpid() % 90 + 10)),
+    }
+    node = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "clew_ros.node.main",
+            "--ros-args",
+            "-r",
+            f"__ns:={namespace}",
+            "-p",
+            "record.enabled:=false",
+        ],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     times = []
     try:
         for _ in range(2):
-            done = subprocess.run([sys.executable, "-m", "clew_ros.node.call_plan", "--node",
-                                   f"{namespace}/clew_planner", "--timeout", "120"], cwd=ROOT, env=env,
-                                  capture_output=True, text=True, timeout=300)
+            done = subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "clew_ros.node.call_plan",
+                    "--node",
+                    f"{namespace}/clew_planner",
+                    "--timeout",
+                    "120",
+                ],
+                cwd=ROOT,
+                env=env,
+                capture_output=True,
+                text=True,
+                timeout=300,
+                check=False,
+            )
             found = re.search(r"; time ([0-9.]+) s", done.stdout)
             if not found:
                 return {"node": f"no planning time in the answer: {done.stdout.strip()[:200]}"}
@@ -96,8 +134,11 @@ def node_first_and_second() -> dict:
             node.wait(timeout=30)
         except subprocess.TimeoutExpired:
             node.kill()
-    return {"node_first_plan_s": times[0], "node_second_plan_s": times[1],
-            "node_first_over_second": times[0] / times[1] if times[1] > 0 else None}
+    return {
+        "node_first_plan_s": times[0],
+        "node_second_plan_s": times[1],
+        "node_first_over_second": times[0] / times[1] if times[1] > 0 else None,
+    }
 
 
 def measure(world: Path, seed: int = 0) -> dict:
@@ -110,10 +151,20 @@ def measure(world: Path, seed: int = 0) -> dict:
         _imported, load_s = (float(v) for v in _python(_WARM, env=env))
         load_wall = time.perf_counter() - started
         first, second, outcome = _python(_TWICE, str(world), str(seed), env=env)
-    return {"compile_s": compile_s, "compile_process_wall_s": compile_wall, "load_s": load_s,
-            "load_process_wall_s": load_wall, "import_s": imported, "world": str(world), "seed": seed,
-            "first_plan_s": float(first), "second_plan_s": float(second),
-            "first_over_second": float(first) / float(second), "outcome": outcome, **node_first_and_second()}
+    return {
+        "compile_s": compile_s,
+        "compile_process_wall_s": compile_wall,
+        "load_s": load_s,
+        "load_process_wall_s": load_wall,
+        "import_s": imported,
+        "world": str(world),
+        "seed": seed,
+        "first_plan_s": float(first),
+        "second_plan_s": float(second),
+        "first_over_second": float(first) / float(second),
+        "outcome": outcome,
+        **node_first_and_second(),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:

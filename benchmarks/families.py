@@ -24,7 +24,6 @@ from __future__ import annotations
 import copy
 import fnmatch
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,10 +33,21 @@ import yaml
 
 from clew_ros.core.world import read_parameter_file, world_from_parameters
 
-__all__ = ["BenchWorld", "CONFIG_DIR", "JOINT_COUNTS", "OBSTACLE_COUNTS", "config_worlds", "joints_world",
-           "obstacles_world", "generated_worlds", "all_worlds", "select", "write_world"]
+__all__ = [
+    "CONFIG_DIR",
+    "JOINT_COUNTS",
+    "OBSTACLE_COUNTS",
+    "BenchWorld",
+    "all_worlds",
+    "config_worlds",
+    "generated_worlds",
+    "joints_world",
+    "obstacles_world",
+    "select",
+    "write_world",
+]
 
-CONFIG_DIR = Path(os.path.abspath(__file__)).parents[1] / "config"  # the checkout this file is in
+CONFIG_DIR = Path(__file__).absolute().parents[1] / "config"  # the checkout this file is in
 JOINT_COUNTS = (2, 3, 5, 7, 10)
 OBSTACLE_COUNTS = (2, 8, 32)
 #: Time limit (s) of generated worlds: the 7-joint criterion is 30 s.
@@ -117,8 +127,10 @@ def _scattered_boxes(parameters: dict, count: int) -> list[list[float]]:
     from clew_ros.core.kinematics import joint_positions, transform_points
 
     arm = shapely.LineString(joint_positions(world.robot, world.robot.initial[None])[0])
-    placements = [shapely.Polygon(transform_points(pose, world.object.polygon))
-                  for pose in (world.object.initial, world.object.goal)]
+    placements = [
+        shapely.Polygon(transform_points(pose, world.object.polygon))
+        for pose in (world.object.initial, world.object.goal)
+    ]
     taken = [shapely.Polygon(o.vertices) for o in world.obstacles]
     base = shapely.Point(world.robot.base).buffer(0.45)
     xmin, ymin, xmax, ymax = world.bounds
@@ -130,8 +142,12 @@ def _scattered_boxes(parameters: dict, count: int) -> list[list[float]]:
         x, y = rng.uniform([xmin + 0.15, ymin + 0.15], [xmax - 0.15, ymax - 0.15])
         flat = _box(float(x), float(y))
         box = shapely.Polygon(np.reshape(flat, (-1, 2)))
-        if (box.distance(arm) < 0.15 or box.distance(base) < 0.1
-                or min(box.distance(p) for p in placements) < 0.3 or min(box.distance(t) for t in taken) < 0.1):
+        if (
+            box.distance(arm) < 0.15
+            or box.distance(base) < 0.1
+            or min(box.distance(p) for p in placements) < 0.3
+            or min(box.distance(t) for t in taken) < 0.1
+        ):
             continue
         boxes.append(flat)
         taken.append(box)

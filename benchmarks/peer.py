@@ -40,6 +40,7 @@ at 0.002 rad per joint (the contract's validator step).
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import sys
@@ -55,7 +56,7 @@ from clew_ros.core.search import PlanningContext, SearchJob, local_search
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World, world_from_parameters
 
-__all__ = ["transit_problems", "solve_ompl", "project_transit", "path_is_valid", "ompl_unavailable_reason"]
+__all__ = ["ompl_unavailable_reason", "path_is_valid", "project_transit", "solve_ompl", "transit_problems"]
 
 GOAL_TOLERANCE_RAD = 1e-3
 CHECK_STEP_RAD = 0.002
@@ -69,7 +70,7 @@ def transit_problems(world: World, count: int, seed: int, min_distance_rad: floa
     for _ in range(1000):
         q = random_configurations(world, 256, rng)
         q = q[is_valid(world, q, pose[None])]
-        for a, b in zip(q[0::2], q[1::2]):
+        for a, b in zip(q[0::2], q[1::2], strict=False):  # an odd count leaves the last one out
             if np.linalg.norm(a - b) >= min_distance_rad:
                 problems.append((a, b))
             if len(problems) == count:
@@ -80,12 +81,16 @@ def transit_problems(world: World, count: int, seed: int, min_distance_rad: floa
 def path_is_valid(world: World, waypoints: np.ndarray, step_rad: float = CHECK_STEP_RAD) -> bool:
     """Every configuration along the straight pieces, at most ``step_rad`` apart per joint, is valid."""
     pieces = [waypoints[:1]]
-    for a, b in zip(waypoints[:-1], waypoints[1:]):
+    for a, b in itertools.pairwise(waypoints):
         count = max(1, int(np.ceil(np.max(np.abs(b - a)) / step_rad)))
         pieces.append(a + (np.arange(1, count + 1)[:, None] / count) * (b - a))
     configurations = np.concatenate(pieces)
-    valid = np.concatenate([is_valid(world, configurations[i:i + 20_000], world.object.initial[None])
-                            for i in range(0, len(configurations), 20_000)])
+    valid = np.concatenate(
+        [
+            is_valid(world, configurations[i : i + 20_000], world.object.initial[None])
+            for i in range(0, len(configurations), 20_000)
+        ]
+    )
     return bool(valid.all())
 
 
@@ -139,8 +144,9 @@ class ProjectValidity:
         return bool(is_valid(self.world, samples, self.pose).all())
 
 
-def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_rad: float,
-               checker: str = "is_valid") -> list[dict]:
+def solve_ompl(
+    world: World, problems: list[tuple], time_limit_s: float, step_rad: float, checker: str = "is_valid"
+) -> list[dict]:
     """RRTConnect (OMPL 2.x nanobind bindings) on each problem; one record per problem."""
     from ompl import base as ob
     from ompl import geometric as og
@@ -156,7 +162,7 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
     class MotionValidator(ob.MotionValidator):
         """Straight joint-space segments checked by one batched call (see :class:`ProjectValidity`)."""
 
-        def checkMotion(self, s1, s2) -> bool:  # OMPL's name; RRTConnect uses this overload only
+        def checkMotion(self, s1, s2) -> bool:  # noqa: N802 - OMPL's name; RRTConnect uses this overload only
             return test.motion(vector(s1), vector(s2))
 
     records = []
@@ -185,8 +191,15 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
         setup.solve(time_limit_s)
         wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
         success = bool(setup.haveExactSolutionPath())
-        record = {"success": success, "wall_s": wall, "cpu_s": cpu, "checks": test.states, "calls": test.calls,
-                  "valid": None, "waypoints": 0}
+        record = {
+            "success": success,
+            "wall_s": wall,
+            "cpu_s": cpu,
+            "checks": test.states,
+            "calls": test.calls,
+            "valid": None,
+            "waypoints": 0,
+        }
         if success:
             path = setup.getSolutionPath()
             waypoints = np.array([vector(s) for s in path.getStates()])
@@ -195,8 +208,15 @@ def solve_ompl(world: World, problems: list[tuple], time_limit_s: float, step_ra
     return records
 
 
-def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_limit_s: float, seed: int,
-                    settings: PlannerSettings | None = None) -> dict:
+def project_transit(
+    world: World,
+    q_start: np.ndarray,
+    q_goal: np.ndarray,
+    time_limit_s: float,
+    seed: int,
+    *,
+    settings: PlannerSettings | None = None,
+) -> dict:
     """The Ariadne's Clew algorithm on one transit problem (see the module docstring)."""
     settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s, threads=1)  # one core, as OMPL
     termination = Termination(time_limit_s)
@@ -222,17 +242,14 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
     searched_from_start = None
     waypoints = landmarks[0][None]
     while True:
-        [(tail, distance)] = local_search(ctx, [SearchJob(landmarks[-1], objective, error,
-                                                          0.1 * weight * GOAL_TOLERANCE_RAD, mode)])
+        [(tail, distance)] = local_search(
+            ctx, [SearchJob(landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD, mode)]
+        )
         distance /= weight  # rad
         if searched_from_start is None:
             searched_from_start = bool(distance <= GOAL_TOLERANCE_RAD)
         if distance <= GOAL_TOLERANCE_RAD:
-            chain, index = [], len(landmarks) - 1
-            while index is not None:
-                chain.append(arrivals[index])
-                index = parents[index]
-            waypoints = np.concatenate(chain[::-1] + [tail[1:]])
+            waypoints = np.concatenate([*_lineage(arrivals, parents, len(landmarks) - 1), tail[1:]])
             success = True
             break
         if termination():
@@ -252,8 +269,9 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
         initial = np.empty((settings.population, 1 + k * n))
         initial[:, 0] = ctx.rng.integers(0, len(landmarks), size=settings.population)
         initial[:, 1:] = ctx.initial_genes(settings.population).reshape(settings.population, -1)
-        result = minimize(evaluate, initial, ctx.rng, settings.genetic, categories=len(landmarks),
-                          should_stop=termination)
+        result = minimize(
+            evaluate, initial, ctx.rng, settings.genetic, categories=len(landmarks), should_stop=termination
+        )
         index, path = decode(result.genes[None])
         landmarks.append(path.final[0].copy())
         parents.append(int(index[0]))
@@ -274,16 +292,41 @@ def project_transit(world: World, q_start: np.ndarray, q_goal: np.ndarray, time_
     }
 
 
-def run_peer(name: str, count: int, time_limit_s: float, seed: int, step_rad: float, with_ompl: bool = True,
-             checker: str = "is_valid") -> dict:
+def _lineage(arrivals: list[np.ndarray], parents: list[int | None], last: int) -> list[np.ndarray]:
+    """The waypoints from the start to landmark ``last``: each landmark's arrival from its parent, in order."""
+    chain = []
+    index: int | None = last
+    while index is not None:
+        chain.append(arrivals[index])
+        index = parents[index]
+    return chain[::-1]
+
+
+def run_peer(
+    name: str,
+    count: int,
+    time_limit_s: float,
+    seed: int,
+    step_rad: float,
+    *,
+    with_ompl: bool = True,
+    checker: str = "is_valid",
+) -> dict:
     matches = select(all_worlds(), name)
     if len(matches) != 1:
         raise SystemExit(f"peer: expected one world named {name!r}, found {len(matches)}")
     world = world_from_parameters(matches[0].parameters)
     problems = transit_problems(world, count, seed)
     reason = ompl_unavailable_reason() if with_ompl else "skipped (--no-ompl)"
-    out = {"world": world.name, "problems": len(problems), "time_limit_s": time_limit_s, "step_rad": step_rad,
-           "ompl_available": reason is None, "ompl_reason": reason, "ompl_checker": checker}
+    out = {
+        "world": world.name,
+        "problems": len(problems),
+        "time_limit_s": time_limit_s,
+        "step_rad": step_rad,
+        "ompl_available": reason is None,
+        "ompl_reason": reason,
+        "ompl_checker": checker,
+    }
     out["project"] = [project_transit(world, a, b, time_limit_s, seed + i) for i, (a, b) in enumerate(problems)]
     out["ompl"] = solve_ompl(world, problems, time_limit_s, step_rad, checker) if reason is None else None
     return out
@@ -295,15 +338,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--problems", type=int, default=20)
     parser.add_argument("--time-limit", type=float, default=10.0, help="per problem and planner (s)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--step-rad", type=float, default=0.002,
-                        help="OMPL motion-check step, joint-space L2 (rad); default the contract's 0.002")
-    parser.add_argument("--checker", choices=("is_valid", "loop"), default="is_valid",
-                        help="OMPL's validity test: the project's is_valid (states one by one, motions batched; "
-                             "default) or the per-state shapely loop of benchmarks.throughput")
+    parser.add_argument(
+        "--step-rad",
+        type=float,
+        default=0.002,
+        help="OMPL motion-check step, joint-space L2 (rad); default the contract's 0.002",
+    )
+    parser.add_argument(
+        "--checker",
+        choices=("is_valid", "loop"),
+        default="is_valid",
+        help="OMPL's validity test: the project's is_valid (states one by one, motions batched; "
+        "default) or the per-state shapely loop of benchmarks.throughput",
+    )
     parser.add_argument("--no-ompl", action="store_true")
     args = parser.parse_args(argv)
-    result = run_peer(args.world, args.problems, args.time_limit, args.seed, args.step_rad, not args.no_ompl,
-                      args.checker)
+    result = run_peer(
+        args.world,
+        args.problems,
+        args.time_limit,
+        args.seed,
+        args.step_rad,
+        with_ompl=not args.no_ompl,
+        checker=args.checker,
+    )
     sys.stdout.write(json.dumps(result) + "\n")
     sys.stdout.flush()
     os._exit(0)  # skip interpreter teardown: nanobind (ompl 2.x) prints leak warnings at exit

@@ -13,6 +13,7 @@ import json
 import os
 import pstats
 import sys
+from pathlib import Path
 
 from benchmarks.families import all_worlds, select
 from clew_ros.core.clew import plan
@@ -42,9 +43,9 @@ def profile_run(name: str, seed: int, time_limit_s: float, top: int = 15) -> dic
     profile.enable()
     result = plan(world, settings)
     profile.disable()
-    root = os.path.dirname(os.path.dirname(os.path.abspath(sys.modules["numpy"].__file__))) + os.sep
-    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-    raw = pstats.Stats(profile).stats
+    root = str(Path(sys.modules["numpy"].__file__ or "").absolute().parents[1]) + os.sep
+    here = str(Path(__file__).absolute().parents[1]) + os.sep
+    raw = pstats.Stats(profile).stats  # type: ignore[attr-defined]  # (undocumented, not in typeshed)
     total = sum(row[2] for row in raw.values())  # sum of tottime (s)
     by_file: dict[str, float] = {}
     for (filename, _line, function), row in raw.items():
@@ -52,7 +53,7 @@ def profile_run(name: str, seed: int, time_limit_s: float, top: int = 15) -> dic
             key = next((f"{lib} (C)" for lib in ("numpy", "shapely") if lib in function), "other built-ins (C)")
         else:
             key = filename.replace(root, "").replace(here, "")
-            parts = key.split(os.sep)
+            parts = Path(key).parts
             if parts[0] in ("numpy", "shapely"):
                 key = f"{parts[0]} (Python)"
             elif "python3" in key:

@@ -27,6 +27,7 @@ import json
 import math
 import sys
 import time
+from typing import Any
 
 import numpy as np
 import shapely
@@ -38,7 +39,7 @@ from clew_ros.core.kinematics import compose, tip_poses, transform_points
 from clew_ros.core.manhattan import free_intervals, run_manhattan
 from clew_ros.core.world import World, world_from_parameters
 
-__all__ = ["PerStateChecker", "random_configurations", "measure"]
+__all__ = ["PerStateChecker", "measure", "random_configurations"]
 
 
 class PerStateChecker:
@@ -70,7 +71,8 @@ class PerStateChecker:
             self.object_ok = False
         shrunk = shapely.Polygon(world.object.polygon).buffer(-world.grasp_tolerance, join_style="mitre")
         self.shrunk = shapely.affinity.affine_transform(
-            shrunk, [math.cos(pose[2]), -math.sin(pose[2]), math.sin(pose[2]), math.cos(pose[2]), pose[0], pose[1]])
+            shrunk, [math.cos(pose[2]), -math.sin(pose[2]), math.sin(pose[2]), math.cos(pose[2]), pose[0], pose[1]]
+        )
         shapely.prepare(self.shrunk)
         n = world.robot.dof
         self.pairs = [(a, b) for a in range(n) for b in range(a + 2, n)] if world.robot.self_collision else []
@@ -81,23 +83,24 @@ class PerStateChecker:
         x, y = self.base
         phi = 0.0
         points = [(x, y)]
-        for angle, length in zip(q, self.lengths):
+        for angle, length in zip(q, self.lengths, strict=True):
             phi += angle
             x += length * math.cos(phi)
             y += length * math.sin(phi)
             if not (self.low[0] <= x <= self.high[0] and self.low[1] <= y <= self.high[1]):
                 return False
             points.append((x, y))
-        lines = [shapely.LineString(points[i:i + 2]) for i in range(len(self.lengths))]
+        lines = [shapely.LineString(points[i : i + 2]) for i in range(len(self.lengths))]
         r = self.radius
         for line in lines:
-            if self.obstacles is not None and (self.obstacles.dwithin(line, r) if r > 0
-                                               else self.obstacles.intersects(line)):
+            if self.obstacles is not None and (
+                self.obstacles.dwithin(line, r) if r > 0 else self.obstacles.intersects(line)
+            ):
                 return False
             if self.shrunk.intersects(line):
                 return False
         for a, b in self.pairs:
-            if (lines[a].dwithin(lines[b], 2 * r) if r > 0 else lines[a].intersects(lines[b])):
+            if lines[a].dwithin(lines[b], 2 * r) if r > 0 else lines[a].intersects(lines[b]):
                 return False
         return True
 
@@ -119,7 +122,7 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
     is_valid(world, q[:100], pose[None])  # warm-up: the scene is prepared once per world
 
     started = time.process_time()
-    batched = np.concatenate([is_valid(world, q[i:i + chunk], pose[None]) for i in range(0, configs, chunk)])
+    batched = np.concatenate([is_valid(world, q[i : i + chunk], pose[None]) for i in range(0, configs, chunk)])
     batched_s = time.process_time() - started
 
     single_count = min(configs, 2_000)
@@ -138,14 +141,17 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
     grasp_rel = np.array([-world.object.grasps[0][0], -world.object.grasps[0][1], 0.0])
     carried = compose(tip_poses(world.robot, q), grasp_rel)
     transfer_q = q[is_valid(world, q, carried)]
-    for mode, sample, kwargs in (("transit", valid_q, {"object_poses": pose[None]}),
-                                 ("transfer", transfer_q, {"grasp_rel": grasp_rel[None]})):
+    modes: list[tuple[str, np.ndarray, dict[str, Any]]] = [
+        ("transit", valid_q, {"object_poses": pose[None]}),
+        ("transfer", transfer_q, {"grasp_rel": grasp_rel[None]}),
+    ]
+    for mode, sample, kwargs in modes:
         for batch in (24, 1024):
             total = 0
             started = time.process_time()
             budget = max(4 * batch, interval_budget // world.robot.dof)
             for start in range(0, max(len(sample), 1), batch):
-                rows = sample[start:start + batch]
+                rows = sample[start : start + batch]
                 if not len(rows) or total >= budget:
                     break
                 for joint in range(world.robot.dof):
@@ -157,7 +163,7 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
         genes = rng.normal(0.0, 1.2, (24, 2, world.robot.dof))
         total, started = 0, time.process_time()
         for start in range(0, max(len(sample), 1), 24):
-            rows = sample[start:start + 24]
+            rows = sample[start : start + 24]
             if len(rows) < 24 or total >= 10 * interval_budget:
                 break
             run_manhattan(world, rows, genes, threads=1, **kwargs)  # one core, as every figure here
@@ -183,8 +189,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("world")
     parser.add_argument("--configs", type=int, default=100_000)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--interval-budget", type=int, default=20_000,
-                        help="free intervals per (mode, batch size) measurement, about")
+    parser.add_argument(
+        "--interval-budget", type=int, default=20_000, help="free intervals per (mode, batch size) measurement, about"
+    )
     args = parser.parse_args(argv)
     matches = select(all_worlds(), args.world)
     if len(matches) != 1:

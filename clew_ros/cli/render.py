@@ -26,13 +26,16 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("input", metavar="INPUT", help="recording directory or .mcap, plan JSON, or world YAML")
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="output file: .png, .gif or .svg")
     parser.add_argument("--world", metavar="WORLD.yaml", help="world parameter file (needed for a plan JSON)")
-    parser.add_argument("--size", type=int, default=None, metavar="PX",
-                        help="picture width in pixels (default 800; 600 for GIF)")
+    parser.add_argument(
+        "--size", type=int, default=None, metavar="PX", help="picture width in pixels (default 800; 600 for GIF)"
+    )
     return parser
 
 
 def _is_recording(path: Path) -> bool:
-    return path.suffix == ".mcap" or (path.is_dir() and (any(path.glob("*.mcap")) or (path / "metadata.yaml").is_file()))
+    return path.suffix == ".mcap" or (
+        path.is_dir() and (any(path.glob("*.mcap")) or (path / "metadata.yaml").is_file())
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -50,8 +53,10 @@ def main(argv: list[str] | None = None) -> int:
     output = Path(args.output)
     suffix = output.suffix.lower()
     if suffix not in FORMATS:
-        print(f"clew_render: --output: expected a file ending in {', '.join(FORMATS)}, got {output.name!r}",
-              file=sys.stderr)
+        print(
+            f"clew_render: --output: expected a file ending in {', '.join(FORMATS)}, got {output.name!r}",
+            file=sys.stderr,
+        )
         return EXIT_INVALID
     if args.size is not None and not 64 <= args.size <= 8192:
         print(f"clew_render: --size: expected 64 to 8192 pixels, got {args.size}", file=sys.stderr)
@@ -72,8 +77,7 @@ def main(argv: list[str] | None = None) -> int:
                 raise RenderError("give the world either as INPUT or with --world, not both")
             scene = scene_from_world(load_world_file(source))
         else:
-            raise RenderError(f"{source}: expected a recording directory, an .mcap file, a plan .json "
-                              "or a world .yaml")
+            raise RenderError(f"{source}: expected a recording directory, an .mcap file, a plan .json or a world .yaml")
         render = {".png": render_png, ".gif": render_gif, ".svg": render_svg}[suffix]
         render(scene, output, size)
     except RenderError as error:

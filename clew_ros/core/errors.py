@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["ClewError", "ParameterError", "WorldError", "PlanFileError"]
+__all__ = ["ClewError", "ParameterError", "PlanFileError", "WorldError"]
 
 
 class ClewError(Exception):

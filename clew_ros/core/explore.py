@@ -13,15 +13,17 @@ pairs of one step are searched together, one island of a batch each.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from clew_ros.core.genetic import minimize
+from clew_ros.core.manhattan import ManhattanPaths
 from clew_ros.core.reach import approach_cell
 from clew_ros.core.search import PlanningContext, search_transits
-from clew_ros.core.tree import LandmarkTree, landmark_features
+from clew_ros.core.tree import Landmark, LandmarkTree, landmark_features
 
-__all__ = ["Explorer", "Exploration"]
+__all__ = ["Exploration", "Explorer"]
 
 
 @dataclass
@@ -37,7 +39,7 @@ class _Candidate:
 class Exploration:
     """One EXPLORE step's result: the new landmark's fields and its distance to the others."""
 
-    fields: dict
+    fields: dict[str, Any]  # LandmarkTree.add's keywords
     distance: float
 
 
@@ -60,9 +62,10 @@ class Explorer:
         """
         key = (landmark_id, grasp)
         landmark = self.tree[landmark_id]
-        if landmark.grasp == grasp:
-            return self._transits.setdefault(key, _Candidate(landmark_id, grasp, landmark.joints,
-                                                             landmark.grasp_rel, None))
+        if landmark.grasp == grasp and landmark.grasp_rel is not None:  # (every landmark but the root holds one)
+            return self._transits.setdefault(
+                key, _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
+            )
         if approach is None:
             if key not in self._transits:
                 self._transits[key] = self._transit(landmark, grasp, None)
@@ -83,7 +86,7 @@ class Explorer:
         stochastic: a transit that failed once may succeed with other draws)."""
         self._transits = {key: found for key, found in self._transits.items() if found is not None}
 
-    def _transit(self, landmark, grasp: int, approach: np.ndarray | None) -> _Candidate | None:
+    def _transit(self, landmark: Landmark, grasp: int, approach: np.ndarray | None) -> _Candidate | None:
         return self._transits_to([(landmark, grasp)], approach)[0]
 
     def _search_transits(self, pairs: list[tuple[int, int]]) -> None:
@@ -93,12 +96,17 @@ class Explorer:
         found = self._transits_to([(self.tree[i], g) for i, g in pairs], None)
         self._transits.update(zip(pairs, found, strict=True))
 
-    def _transits_to(self, pairs: list, approach: np.ndarray | None) -> list[_Candidate | None]:
+    def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: np.ndarray | None) -> list[_Candidate | None]:
         """SEARCH_TRANSIT from each landmark to its grasp, all at once: the candidates, None where it failed."""
-        results = search_transits(self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach)
-                                             for landmark, grasp in pairs])
-        return [_Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
-                if result.success else None for (landmark, grasp), result in zip(pairs, results, strict=True)]
+        results = search_transits(
+            self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach) for landmark, grasp in pairs]
+        )
+        return [
+            _Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
+            if result.success and result.grasp_rel is not None
+            else None
+            for (landmark, grasp), result in zip(pairs, results, strict=True)
+        ]
 
     def explore(self) -> Exploration | None:
         """Place one new landmark; ``None`` when no candidate transit succeeded."""
@@ -126,7 +134,7 @@ class Explorer:
         rels = np.array([c.grasp_rel for c in candidates])
         features = self.tree.features(ctx.settings.joint_weight, world.object.radius)
 
-        def decode(population: np.ndarray):
+        def decode(population: np.ndarray) -> tuple[np.ndarray, ManhattanPaths]:
             index = np.clip(population[:, 0].astype(int), 0, len(candidates) - 1)
             genes = population[:, 1:].reshape(-1, k, n)
             return index, ctx.manhattan(starts[index], genes, grasp_rel=rels[index])
@@ -134,26 +142,26 @@ class Explorer:
         def evaluate(population: np.ndarray) -> np.ndarray:
             _, paths = decode(population)
             ctx.counters.evaluations += len(population)
-            ends = landmark_features(paths.final, paths.object_poses, ctx.settings.joint_weight,
-                                     world.object.radius)
-            nearest = np.min(np.linalg.norm(ends[:, None] - features[None], axis=2), axis=1)
+            ends = landmark_features(paths.final, paths.object_poses, ctx.settings.joint_weight, world.object.radius)
+            nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - features[None], axis=2), axis=1)
             return -nearest
 
         size = ctx.settings.population
         initial = np.empty((size, 1 + k * n))
         initial[:, 0] = ctx.rng.integers(0, len(candidates), size=size)
         initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
-        result = minimize(evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(candidates),
-                          should_stop=ctx.termination)
+        result = minimize(
+            evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(candidates), should_stop=ctx.termination
+        )
         index, paths = decode(result.genes[None])
         chosen_candidate = candidates[int(index[0])]
-        fields = dict(
-            parent=chosen_candidate.parent,
-            joints=paths.final[0].copy(),
-            object_pose=paths.object_poses[0].copy(),
-            grasp=chosen_candidate.grasp,
-            grasp_rel=chosen_candidate.grasp_rel,
-            transit=chosen_candidate.transit,
-            transfer=np.concatenate([chosen_candidate.start[None], paths.waypoints[0, 1:]]),
-        )
+        fields = {
+            "parent": chosen_candidate.parent,
+            "joints": paths.final[0].copy(),
+            "object_pose": paths.object_poses[0].copy(),
+            "grasp": chosen_candidate.grasp,
+            "grasp_rel": chosen_candidate.grasp_rel,
+            "transit": chosen_candidate.transit,
+            "transfer": np.concatenate([chosen_candidate.start[None], paths.waypoints[0, 1:]]),
+        }
         return Exploration(fields, -result.fitness)

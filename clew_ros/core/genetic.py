@@ -8,12 +8,15 @@ choice of landmark and grasp), mutated by re-drawing it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
-__all__ = ["GeneticSettings", "GeneticResult", "minimize"]
+__all__ = ["GeneticResult", "GeneticSettings", "minimize"]
+
+#: Blend (BLX-alpha) crossover: a child gene is drawn from the parents' interval widened by alpha each way.
+_BLEND_ALPHA = 0.3
 
 
 @dataclass(frozen=True)
@@ -40,9 +43,16 @@ class GeneticResult:
     population_fitness: np.ndarray  # (P,)
 
 
-def minimize(evaluate: Callable[[np.ndarray], np.ndarray], initial: np.ndarray, rng: np.random.Generator,
-             settings: GeneticSettings = GeneticSettings(), *, target: float = -np.inf,
-             categories: int = 0, should_stop: Callable[[], bool] = lambda: False) -> GeneticResult:
+def minimize(
+    evaluate: Callable[[np.ndarray], np.ndarray],
+    initial: np.ndarray,
+    rng: np.random.Generator,
+    settings: GeneticSettings = GeneticSettings(),
+    *,
+    target: float = -np.inf,
+    categories: int = 0,
+    should_stop: Callable[[], bool] = lambda: False,
+) -> GeneticResult:
     """Minimise ``evaluate`` starting from the population ``initial`` ``(P, D)``.
 
     Stops after ``settings.generations`` generations, when the best fitness is
@@ -51,15 +61,27 @@ def minimize(evaluate: Callable[[np.ndarray], np.ndarray], initial: np.ndarray, 
     integer in ``[0, categories)``. One island of :func:`minimize_islands`
     (the same draws, the same result).
     """
-    return minimize_islands(lambda population, _islands: evaluate(population[0])[None],
-                            np.asarray(initial, dtype=float)[None], rng, settings, targets=np.array([target]),
-                            categories=categories, should_stop=should_stop)[0]
+    return minimize_islands(
+        lambda population, _islands: evaluate(population[0])[None],
+        np.asarray(initial, dtype=float)[None],
+        rng,
+        settings,
+        targets=np.array([target]),
+        categories=categories,
+        should_stop=should_stop,
+    )[0]
 
 
-def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], initial: np.ndarray,
-                     rng: np.random.Generator, settings: GeneticSettings = GeneticSettings(), *,
-                     targets: np.ndarray | None = None, categories: int = 0,
-                     should_stop: Callable[[], bool] = lambda: False) -> list[GeneticResult]:
+def minimize_islands(
+    evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    initial: np.ndarray,
+    rng: np.random.Generator,
+    settings: GeneticSettings = GeneticSettings(),
+    *,
+    targets: np.ndarray | None = None,
+    categories: int = 0,
+    should_stop: Callable[[], bool] = lambda: False,
+) -> list[GeneticResult]:
     """Minimise ``I`` independent problems at once, one population (island) each: ``initial`` is
     ``(I, P, D)``; ``evaluate(population (A, C, D), islands (A,))`` returns the fitness ``(A, C)`` of
     the islands still running, so that their individuals are evaluated in one batch (the parallel
@@ -67,7 +89,7 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
     (its ``targets`` entry reached, or stalled); all stop after ``settings.generations`` or when
     ``should_stop()`` is true."""
     population = np.array(initial, dtype=float)
-    islands, size, dims = population.shape
+    islands, size, _dims = population.shape  # (I, P, D)
     if not 0 <= settings.elite < size:
         raise ValueError(f"elite: expected 0 <= elite < population ({size}), got {settings.elite}")
     targets = np.full(islands, -np.inf) if targets is None else np.broadcast_to(targets, (islands,))
@@ -79,7 +101,6 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
     generations = np.zeros(islands, dtype=int)
     elite_count = settings.elite
     children_count = size - elite_count
-    alpha = 0.3
     rows_all = np.arange(islands)[:, None]
     limit = settings.stall_generations
     for _generation in range(settings.generations):
@@ -94,20 +115,7 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
         rows = rows_all[:count]
         order = np.argsort(scores, axis=1, kind="stable")[:, :elite_count]
         elite = pool[rows, order]
-        parents = _tournament(scores, rng, 2 * children_count, settings.tournament)
-        mothers = pool[rows, parents[:, :children_count]]
-        fathers = pool[rows, parents[:, children_count:]]
-        u = rng.uniform(-alpha, 1 + alpha, size=(count, children_count, dims))
-        children = mothers + u * (fathers - mothers)
-        keep = rng.random((count, children_count)) >= settings.crossover_rate
-        children[keep] = mothers[keep]
-        mutate = rng.random((count, children_count, dims)) < settings.mutation_rate
-        children += mutate * rng.normal(0.0, settings.mutation_scale, size=(count, children_count, dims))
-        if categories:
-            chosen = rng.random((count, children_count)) < 0.5
-            children[..., 0] = np.where(chosen, mothers[..., 0], fathers[..., 0])
-            redraw = rng.random((count, children_count)) < settings.mutation_rate
-            children[redraw, 0] = rng.integers(0, categories, size=int(redraw.sum()))
+        children = _children(pool, scores, rng, settings, categories)
         child_fitness = np.asarray(evaluate(children, running), dtype=float).reshape(count, children_count)
         elite_fitness = scores[rows, order]
         population[pick, :elite_count] = elite
@@ -121,8 +129,43 @@ def minimize_islands(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], i
         best_fitness[pick] = np.where(improved, lowest, best_fitness[pick])
         stall[pick] = (stall[pick] + 1) * ~improved
     best = np.argmin(fitness, axis=1)
-    return [GeneticResult(population[i, best[i]].copy(), float(fitness[i, best[i]]), int(evaluations[i]),
-                          int(generations[i]), population[i], fitness[i]) for i in range(islands)]
+    return [
+        GeneticResult(
+            population[i, best[i]].copy(),
+            float(fitness[i, best[i]]),
+            int(evaluations[i]),
+            int(generations[i]),
+            population[i],
+            fitness[i],
+        )
+        for i in range(islands)
+    ]
+
+
+def _children(
+    pool: np.ndarray, scores: np.ndarray, rng: np.random.Generator, settings: GeneticSettings, categories: int
+) -> np.ndarray:
+    """The ``P - elite`` children ``(I, P - elite, D)`` of each island of ``pool (I, P, D)`` (fitness
+    ``scores (I, P)``): tournament selection, blend crossover, Gaussian mutation; with ``categories``,
+    gene 0 comes from either parent or is redrawn."""
+    count, size, dims = pool.shape
+    children_count = size - settings.elite
+    rows = np.arange(count)[:, None]
+    parents = _tournament(scores, rng, 2 * children_count, settings.tournament)
+    mothers = pool[rows, parents[:, :children_count]]
+    fathers = pool[rows, parents[:, children_count:]]
+    u = rng.uniform(-_BLEND_ALPHA, 1 + _BLEND_ALPHA, size=(count, children_count, dims))
+    children: np.ndarray = mothers + u * (fathers - mothers)
+    keep = rng.random((count, children_count)) >= settings.crossover_rate
+    children[keep] = mothers[keep]
+    mutate = rng.random((count, children_count, dims)) < settings.mutation_rate
+    children += mutate * rng.normal(0.0, settings.mutation_scale, size=(count, children_count, dims))
+    if categories:
+        chosen = rng.random((count, children_count)) < 0.5
+        children[..., 0] = np.where(chosen, mothers[..., 0], fathers[..., 0])
+        redraw = rng.random((count, children_count)) < settings.mutation_rate
+        children[redraw, 0] = rng.integers(0, categories, size=int(redraw.sum()))
+    return children
 
 
 def _tournament(fitness: np.ndarray, rng: np.random.Generator, count: int, size: int) -> np.ndarray:
@@ -130,4 +173,5 @@ def _tournament(fitness: np.ndarray, rng: np.random.Generator, count: int, size:
     contenders = rng.integers(0, fitness.shape[1], size=(fitness.shape[0], count, size))
     rows = np.arange(fitness.shape[0])[:, None]
     scores = fitness[rows[:, :, None], contenders]
-    return contenders[rows, np.arange(count)[None, :], np.argmin(scores, axis=2)]
+    winners: np.ndarray = contenders[rows, np.arange(count)[None, :], np.argmin(scores, axis=2)]
+    return winners

@@ -7,16 +7,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["polygon_edges", "point_segment_distance", "segment_distance"]
+__all__ = ["point_segment_distance", "polygon_edges", "segment_distance"]
 
 
 def polygon_edges(vertices: np.ndarray) -> np.ndarray:
     """Closed ring ``(..., V, 2)`` as edges ``(..., V, 2, 2)``."""
-    return np.stack([vertices, np.roll(vertices, -1, axis=-2)], axis=-2)
+    edges: np.ndarray = np.stack([vertices, np.roll(vertices, -1, axis=-2)], axis=-2)
+    return edges
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    cross: np.ndarray = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return cross
 
 
 def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -27,7 +29,8 @@ def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     t = (apx * abx + apy * aby) / np.where(denominator > 0, denominator, 1.0)
     t = np.minimum(np.maximum(t, 0.0), 1.0)  # np.clip costs more on the small arrays of the planner
     dx, dy = apx - t * abx, apy - t * aby
-    return np.sqrt(dx * dx + dy * dy)
+    distance: np.ndarray = np.sqrt(dx * dx + dy * dy)
+    return distance
 
 
 def segment_distance(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray:

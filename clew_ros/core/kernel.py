@@ -37,8 +37,18 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["PackedWorld", "decode", "available_threads", "intervals", "bounce_array", "clearly_valid", "chain", "warm_up",
-           "MAX_MOVE_RAD", "BACKOFF_RAD"]
+__all__ = [
+    "BACKOFF_RAD",
+    "MAX_MOVE_RAD",
+    "PackedWorld",
+    "available_threads",
+    "bounce_array",
+    "chain",
+    "clearly_valid",
+    "decode",
+    "intervals",
+    "warm_up",
+]
 
 #: Largest move of one joint in one Manhattan move (rad), as in the paper.
 MAX_MOVE_RAD = 2.0 * math.pi
@@ -52,8 +62,29 @@ _jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 # Parallel kernels may be launched from several threads at once (several planners in one process):
 # only a thread-safe layer (TBB or OpenMP) allows it; without one the kernels run on one thread.
 # GNU OpenMP is not fork-safe: start other processes with subprocess (fork + exec) or "spawn".
-if numba.config.THREADING_LAYER == "default":
-    numba.config.THREADING_LAYER = "threadsafe"
+# (numba.config sets its attributes from the environment at run time: mypy cannot see them.)
+if numba.config.THREADING_LAYER == "default":  # type: ignore[attr-defined]
+    numba.config.THREADING_LAYER = "threadsafe"  # type: ignore[attr-defined]
+
+#: :meth:`PackedWorld.arguments`: the world in the order the interval and decode kernels take it.
+_WorldArguments = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray
+]
+#: :meth:`PackedWorld.validity_arguments`: the world in the order :func:`_clearly_valid` takes it.
+_ValidityArguments = tuple[
+    np.ndarray,
+    np.ndarray,
+    float,
+    bool,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    float,
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,21 +113,46 @@ class PackedWorld:
         e = len(self.obstacle_edges)
         return 1 + n * (e + n + len(self.shrunk_edges)) + len(self.object_edges) * e
 
-    def arguments(self) -> tuple:
-        return (self.base, self.lengths, self.lower, self.upper, self.link_radius, self.self_collision,
-                self.bounds, self.obstacle_edges, self.object_edges, self.shrunk_edges)
+    def arguments(self) -> _WorldArguments:
+        return (
+            self.base,
+            self.lengths,
+            self.lower,
+            self.upper,
+            self.link_radius,
+            self.self_collision,
+            self.bounds,
+            self.obstacle_edges,
+            self.object_edges,
+            self.shrunk_edges,
+        )
 
-    def validity_arguments(self) -> tuple:
-        return (self.base, self.lengths, self.link_radius, self.self_collision, self.bounds, self.obstacle_edges,
-                self.obstacle_starts, self.obstacle_boxes, self.object_edges, self.shrunk_edges, self.shrunk_starts,
-                self.rounding)
+    def validity_arguments(self) -> _ValidityArguments:
+        return (
+            self.base,
+            self.lengths,
+            self.link_radius,
+            self.self_collision,
+            self.bounds,
+            self.obstacle_edges,
+            self.obstacle_starts,
+            self.obstacle_boxes,
+            self.object_edges,
+            self.shrunk_edges,
+            self.shrunk_starts,
+            self.rounding,
+        )
 
 
 def _arg(array: np.ndarray) -> np.ndarray:
     """``array`` as the kernels take it: C-contiguous, writable float64 (numba compiles one version per
     layout and write flag, so read-only or strided arrays would compile again)."""
-    if (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.flags.c_contiguous
-            and array.flags.writeable):
+    if (
+        isinstance(array, np.ndarray)
+        and array.dtype == np.float64
+        and array.flags.c_contiguous
+        and array.flags.writeable
+    ):
         return array
     return np.array(array, dtype=np.float64, order="C")
 
@@ -120,14 +176,14 @@ def _bounce(x: float, low: float, high: float) -> float:
 def _nearest(phi: float, best: np.ndarray) -> None:
     """Fold a candidate rotation ``phi`` (rad, any turn) into ``(0, 2 pi]`` and keep the nearest
     contact each way: ``best[0]`` the smallest (turning up), ``best[1]`` the largest (turning down)."""
-    if phi != phi:
+    if phi != phi:  # noqa: PLR0124 - NaN, as the compiled kernel has always tested it
         return
     phi -= _TWO_PI * math.floor(phi / _TWO_PI)
     if phi < _AT_START:
         return
-    if phi < best[0]:
+    if phi < best[0]:  # noqa: PLR1730 - the kernel's float code stays as written (same seed, same plan)
         best[0] = phi
-    if phi > best[1]:
+    if phi > best[1]:  # noqa: PLR1730
         best[1] = phi
 
 
@@ -156,9 +212,23 @@ def _point_segment_distance(px: float, py: float, ax: float, ay: float, bx: floa
 
 
 @_jit
-def _point_meets_stadium(px: float, py: float, rho: float, ax: float, ay: float, bx: float, by: float,
-                         ra: float, rb: float, near: float, far: float, keep: float, margin: float, turn: float,
-                         best: np.ndarray) -> None:
+def _point_meets_stadium(
+    px: float,
+    py: float,
+    rho: float,
+    ax: float,
+    ay: float,
+    bx: float,
+    by: float,
+    ra: float,
+    rb: float,
+    near: float,
+    far: float,
+    keep: float,
+    margin: float,
+    turn: float,
+    best: np.ndarray,
+) -> None:
     """Rotation angles (times ``turn``) at which point ``p`` (at distance ``rho`` from the pivot),
     turning about the pivot, meets the boundary of the stadium of radius ``keep`` (+ ``margin`` if it
     starts clear of it) around segment ``[a, b]`` (end points at ``ra``, ``rb``; nearest and farthest
@@ -198,8 +268,17 @@ def _point_meets_stadium(px: float, py: float, rho: float, ax: float, ay: float,
 
 
 @_jit
-def _pair(moving: np.ndarray, m: np.ndarray, i: int, static: np.ndarray, t: np.ndarray, s: int, keep: float,
-          margin: float, best: np.ndarray) -> None:
+def _pair(
+    moving: np.ndarray,
+    m: np.ndarray,
+    i: int,
+    static: np.ndarray,
+    t: np.ndarray,
+    s: int,
+    keep: float,
+    margin: float,
+    best: np.ndarray,
+) -> None:
     """Segment ``moving[i]`` turning against ``static[s]`` (both ``(., 2, 2)`` relative to the pivot,
     radii ``m``, ``t`` from :func:`_annulus`): the moving end points against the static stadium,
     and the static end points against the moving stadium (turning the other way)."""
@@ -226,8 +305,17 @@ def _annulus(segments: np.ndarray, radii: np.ndarray) -> None:
 
 
 @_jit
-def _pieces(moving: np.ndarray, m_radii: np.ndarray, static: np.ndarray, s_radii: np.ndarray,
-            s_first: int, s_last: int, keep: float, margin: float, best: np.ndarray) -> None:
+def _pieces(
+    moving: np.ndarray,
+    m_radii: np.ndarray,
+    static: np.ndarray,
+    s_radii: np.ndarray,
+    s_first: int,
+    s_last: int,
+    keep: float,
+    margin: float,
+    best: np.ndarray,
+) -> None:
     """Every moving piece against static pieces ``s_first .. s_last - 1``, kept ``keep`` apart.
     A pair whose annuli about the pivot (grown by the clearance) do not overlap cannot meet."""
     reach = keep + margin
@@ -251,8 +339,9 @@ def _place(edges: np.ndarray, x: float, y: float, theta: float, px: float, py: f
 
 
 @_jit
-def _bound_crossings(px: float, py: float, rx: float, ry: float, inset: float, margin: float, bounds: np.ndarray,
-                     best: np.ndarray) -> None:
+def _bound_crossings(
+    px: float, py: float, rx: float, ry: float, inset: float, margin: float, bounds: np.ndarray, best: np.ndarray
+) -> None:
     """Rotations at which the point ``p + r`` (turning about ``p``) reaches a bound moved in by
     ``inset + margin``, or by ``inset`` alone for a bound it starts closer to than ``inset + 1.5 margin``
     (as for the stadiums: it is kept from getting closer than it starts, not pushed out)."""
@@ -286,17 +375,30 @@ def _bound_crossings(px: float, py: float, rx: float, ry: float, inset: float, m
 
 
 @_jit
-def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margin: float,
-              base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
-              self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
-              shrunk_edges: np.ndarray, scratch: tuple) -> tuple[float, float]:
+def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair kind, commented step by step
+    q: np.ndarray,
+    joint: int,
+    transfer: bool,
+    pose: np.ndarray,
+    margin: float,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    scratch: tuple[np.ndarray, ...],
+) -> tuple[float, float]:
     """Free interval ``(low <= 0, high >= 0)`` of ``joint`` at configuration ``q`` ``(n,)``.
 
     ``pose``: the resting object's pose (transit) or its pose in the end-effector frame
     (transfer). ``scratch`` holds the work arrays of :func:`_scratch`.
     """
-    links, link_radii, obstacle_rel, obstacle_radii, object_rel, object_radii, shrunk_rel, shrunk_radii, best = \
-        scratch
+    links, link_radii, obstacle_rel, obstacle_radii, object_rel, object_radii, shrunk_rel, shrunk_radii, best = scratch
     n = lengths.shape[0]
     tip_x, tip_y, tip_theta = _forward(q, base, lengths, links)
     px, py = links[joint, 0, 0], links[joint, 0, 1]  # the pivot p_joint: everything relative to it
@@ -325,8 +427,17 @@ def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margi
     if self_collision:
         for i in range(joint, n):
             if i - 2 >= 0:
-                _pieces(links[i:i + 1], link_radii[i:i + 1], links, link_radii, 0, min(joint, i - 1),
-                        2.0 * r, margin, best)
+                _pieces(
+                    links[i : i + 1],
+                    link_radii[i : i + 1],
+                    links,
+                    link_radii,
+                    0,
+                    min(joint, i - 1),
+                    2.0 * r,
+                    margin,
+                    best,
+                )
     if transfer:
         _place(object_edges, ox, oy, otheta, px, py, object_rel)
         _annulus(object_rel, object_radii)
@@ -348,20 +459,46 @@ def _interval(q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margi
 
 
 @_jit
-def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple:
-    return (np.empty((n, 2, 2)), np.empty((n, 4)), np.empty((n_obstacles, 2, 2)), np.empty((n_obstacles, 4)),
-            np.empty((n_object, 2, 2)), np.empty((n_object, 4)), np.empty((n_shrunk, 2, 2)),
-            np.empty((n_shrunk, 4)), np.empty(2))
+def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple[np.ndarray, ...]:
+    return (
+        np.empty((n, 2, 2)),
+        np.empty((n, 4)),
+        np.empty((n_obstacles, 2, 2)),
+        np.empty((n_obstacles, 4)),
+        np.empty((n_object, 2, 2)),
+        np.empty((n_object, 4)),
+        np.empty((n_shrunk, 2, 2)),
+        np.empty((n_shrunk, 4)),
+        np.empty(2),
+    )
 
 
 # --------------------------------------------------------------------------- batches
 
 
 @_jit
-def _decode_one(b: int, waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
-                poses: np.ndarray, margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray,
-                upper: np.ndarray, r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
-                object_edges: np.ndarray, shrunk_edges: np.ndarray, scratch: tuple, q: np.ndarray) -> None:
+def _decode_one(
+    b: int,
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    scratch: tuple[np.ndarray, ...],
+    q: np.ndarray,
+) -> None:
     """Individual ``b``: fill columns ``first .. last - 1`` (>= 1) of ``waypoints[b]`` from column
     ``first - 1``: move ``c`` turns joint ``(c - 1) mod n`` by gene ``(c - 1)`` bounced into its free
     interval."""
@@ -370,52 +507,168 @@ def _decode_one(b: int, waypoints: np.ndarray, genes: np.ndarray, first: int, la
         q[j] = waypoints[b, first - 1, j]
     for column in range(first, last):
         k, joint = (column - 1) // n, (column - 1) % n
-        low, high = _interval(q, joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
-                              self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
+        low, high = _interval(
+            q,
+            joint,
+            transfer,
+            poses[b],
+            margin,
+            base,
+            lengths,
+            lower,
+            upper,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            object_edges,
+            shrunk_edges,
+            scratch,
+        )
         q[joint] += _bounce(genes[b, k, joint], low, high)
         for j in range(n):
             waypoints[b, column, j] = q[j]
 
 
 @_jit
-def _decode(waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool, poses: np.ndarray,
-            margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
-            self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
-            shrunk_edges: np.ndarray) -> None:
+def _decode(
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+) -> None:
     """Columns ``first .. last - 1`` of every individual of ``waypoints`` ``(B, k n + 1, n)`` (genes
     ``(B, k, n)``, ``poses`` ``(B, 3)`` per individual), one after the other."""
     n = lengths.shape[0]
     scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
     q = np.empty(n)
     for b in range(waypoints.shape[0]):
-        _decode_one(b, waypoints, genes, first, last, transfer, poses, margin, base, lengths, lower, upper, r,
-                    self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch, q)
+        _decode_one(
+            b,
+            waypoints,
+            genes,
+            first,
+            last,
+            transfer,
+            poses,
+            margin,
+            base,
+            lengths,
+            lower,
+            upper,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            object_edges,
+            shrunk_edges,
+            scratch,
+            q,
+        )
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-def _decode_parallel(waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
-                     poses: np.ndarray, margin: float, base: np.ndarray, lengths: np.ndarray, lower: np.ndarray,
-                     upper: np.ndarray, r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
-                     object_edges: np.ndarray, shrunk_edges: np.ndarray) -> None:
+def _decode_parallel(
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+) -> None:
     """:func:`_decode` with the individuals spread over threads (each computed alone, with work arrays
     of its own: the same numbers whatever the number of threads)."""
     n = lengths.shape[0]
     for b in numba.prange(waypoints.shape[0]):
         scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
-        _decode_one(b, waypoints, genes, first, last, transfer, poses, margin, base, lengths, lower, upper, r,
-                    self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch, np.empty(n))
+        _decode_one(
+            b,
+            waypoints,
+            genes,
+            first,
+            last,
+            transfer,
+            poses,
+            margin,
+            base,
+            lengths,
+            lower,
+            upper,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            object_edges,
+            shrunk_edges,
+            scratch,
+            np.empty(n),
+        )
 
 
 @_jit
-def _intervals(q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray, margin: float, out: np.ndarray,
-               base: np.ndarray, lengths: np.ndarray, lower: np.ndarray, upper: np.ndarray, r: float,
-               self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray, object_edges: np.ndarray,
-               shrunk_edges: np.ndarray) -> None:
+def _intervals(
+    q: np.ndarray,
+    joint: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    out: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+) -> None:
     """Free intervals ``out (B, 2)`` of ``joint`` for configurations ``q (B, n)``."""
     scratch = _scratch(lengths.shape[0], obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
     for b in range(q.shape[0]):
-        out[b, 0], out[b, 1] = _interval(q[b], joint, transfer, poses[b], margin, base, lengths, lower, upper, r,
-                                         self_collision, bounds, obstacles, object_edges, shrunk_edges, scratch)
+        out[b, 0], out[b, 1] = _interval(
+            q[b],
+            joint,
+            transfer,
+            poses[b],
+            margin,
+            base,
+            lengths,
+            lower,
+            upper,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            object_edges,
+            shrunk_edges,
+            scratch,
+        )
 
 
 @_jit
@@ -438,14 +691,18 @@ def _crosses(ax: float, ay: float, bx: float, by: float, cx: float, cy: float, d
 
 
 @_jit
-def _segments_apart(ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float,
-                    gap: float) -> bool:
+def _segments_apart(
+    ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float, gap: float
+) -> bool:
     """Whether segments ``[a, b]`` and ``[c, d]`` are farther apart than ``gap``."""
     if _crosses(ax, ay, bx, by, cx, cy, dx, dy):
         return False
-    return (_point_segment_distance(ax, ay, cx, cy, dx, dy) > gap and _point_segment_distance(bx, by, cx, cy, dx, dy) > gap
-            and _point_segment_distance(cx, cy, ax, ay, bx, by) > gap
-            and _point_segment_distance(dx, dy, ax, ay, bx, by) > gap)
+    return (
+        _point_segment_distance(ax, ay, cx, cy, dx, dy) > gap
+        and _point_segment_distance(bx, by, cx, cy, dx, dy) > gap
+        and _point_segment_distance(cx, cy, ax, ay, bx, by) > gap
+        and _point_segment_distance(dx, dy, ax, ay, bx, by) > gap
+    )
 
 
 @_jit
@@ -455,15 +712,15 @@ def _inside_ring(px: float, py: float, edges: np.ndarray, first: int, last: int)
     inside = False
     for e in range(first, last):
         ax, ay, bx, by = edges[e, 0, 0], edges[e, 0, 1], edges[e, 1, 0], edges[e, 1, 1]
-        if (ay > py) != (by > py):
-            if px < ax + (py - ay) * (bx - ax) / (by - ay):
-                inside = not inside
+        if (ay > py) != (by > py) and px < ax + (py - ay) * (bx - ax) / (by - ay):
+            inside = not inside
     return inside
 
 
 @_jit
-def _segment_clear_of_ring(ax: float, ay: float, bx: float, by: float, edges: np.ndarray, first: int, last: int,
-                           gap: float) -> bool:
+def _segment_clear_of_ring(
+    ax: float, ay: float, bx: float, by: float, edges: np.ndarray, first: int, last: int, gap: float
+) -> bool:
     """Segment ``[a, b]`` farther than ``gap`` from the polygon ``edges[first:last]`` and not inside it."""
     for e in range(first, last):
         if not _segments_apart(ax, ay, bx, by, edges[e, 0, 0], edges[e, 0, 1], edges[e, 1, 0], edges[e, 1, 1], gap):
@@ -472,10 +729,23 @@ def _segment_clear_of_ring(ax: float, ay: float, bx: float, by: float, edges: np
 
 
 @_jit
-def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.ndarray, lengths: np.ndarray,
-                   r: float, self_collision: bool, bounds: np.ndarray, obstacles: np.ndarray,
-                   obstacle_starts: np.ndarray, boxes: np.ndarray, object_edges: np.ndarray,
-                   shrunk_edges: np.ndarray, shrunk_starts: np.ndarray, eps: float) -> None:
+def _clearly_valid(  # noqa: C901, PLR0912 - one compiled pass per configuration, leaving at the first doubt
+    q: np.ndarray,
+    poses: np.ndarray,
+    out: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    obstacle_starts: np.ndarray,
+    boxes: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    shrunk_starts: np.ndarray,
+    eps: float,
+) -> None:
     """``out[b]``: configuration ``q[b]`` with the object at ``poses[b]`` passes the validity test of
     interface.md section 1 with every distance at least ``eps`` past its threshold. False means
     "not sure": the exact test decides (touching, within rounding, or invalid)."""
@@ -516,8 +786,9 @@ def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.n
             if not ok:
                 break
             for e in range(shape.shape[0]):  # the object off the obstacle: boundaries apart, neither inside
-                if not _segment_clear_of_ring(shape[e, 0, 0], shape[e, 0, 1], shape[e, 1, 0], shape[e, 1, 1],
-                                              obstacles, first, last, eps):
+                if not _segment_clear_of_ring(
+                    shape[e, 0, 0], shape[e, 0, 1], shape[e, 1, 0], shape[e, 1, 1], obstacles, first, last, eps
+                ):
                     ok = False
                     break
             if ok and _inside_ring(obstacles[first, 0, 0], obstacles[first, 0, 1], shape, 0, shape.shape[0]):
@@ -526,16 +797,32 @@ def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, base: np.n
             if not ok:
                 break
             for i in range(n):
-                if not _segment_clear_of_ring(links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1], shrunk,
-                                              shrunk_starts[part], shrunk_starts[part + 1], eps):
+                if not _segment_clear_of_ring(
+                    links[i, 0, 0],
+                    links[i, 0, 1],
+                    links[i, 1, 0],
+                    links[i, 1, 1],
+                    shrunk,
+                    shrunk_starts[part],
+                    shrunk_starts[part + 1],
+                    eps,
+                ):
                     ok = False
                     break
         if ok and self_collision:
             for a in range(n):
                 for c in range(a + 2, n):
-                    if not _segments_apart(links[a, 0, 0], links[a, 0, 1], links[a, 1, 0], links[a, 1, 1],
-                                           links[c, 0, 0], links[c, 0, 1], links[c, 1, 0], links[c, 1, 1],
-                                           2.0 * r + eps):
+                    if not _segments_apart(
+                        links[a, 0, 0],
+                        links[a, 0, 1],
+                        links[a, 1, 0],
+                        links[a, 1, 1],
+                        links[c, 0, 0],
+                        links[c, 0, 1],
+                        links[c, 1, 0],
+                        links[c, 1, 1],
+                        2.0 * r + eps,
+                    ):
                         ok = False
         out[b] = ok
 
@@ -567,13 +854,28 @@ def available_threads() -> int:
     layer (TBB or OpenMP) loads, else 1."""
     if not _PARALLEL:
         try:
-            _decode_parallel(np.zeros((1, 2, 1)), np.zeros((1, 1, 1)), 1, 2, False, np.zeros((1, 3)), 0.0,
-                             np.zeros(2), np.ones(1), -np.ones(1), np.ones(1), 0.0, False,
-                             np.array([-9.0, -9.0, 9.0, 9.0]), np.zeros((0, 2, 2)), np.zeros((0, 2, 2)),
-                             np.zeros((0, 2, 2)))
+            _decode_parallel(
+                np.zeros((1, 2, 1)),
+                np.zeros((1, 1, 1)),
+                1,
+                2,
+                False,
+                np.zeros((1, 3)),
+                0.0,
+                np.zeros(2),
+                np.ones(1),
+                -np.ones(1),
+                np.ones(1),
+                0.0,
+                False,
+                np.array([-9.0, -9.0, 9.0, 9.0]),
+                np.zeros((0, 2, 2)),
+                np.zeros((0, 2, 2)),
+                np.zeros((0, 2, 2)),
+            )
             # the workqueue layer (chosen by a user's NUMBA_THREADING_LAYER) aborts on concurrent launches
-            safe = numba.threading_layer() in ("tbb", "omp")
-            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS) if safe else 1)
+            safe = numba.threading_layer() in ("tbb", "omp")  # type: ignore[attr-defined]
+            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS) if safe else 1)  # type: ignore[attr-defined]
         except (ValueError, RuntimeError, ImportError):  # no thread-safe threading layer
             _PARALLEL.append(1)
     return _PARALLEL[0]
@@ -582,15 +884,32 @@ def available_threads() -> int:
 _PARALLEL: list[int] = []
 
 
-def decode(world: PackedWorld, waypoints: np.ndarray, genes: np.ndarray, first: int, last: int, transfer: bool,
-           poses: np.ndarray, margin: float, threads: int = 1) -> None:
+def decode(
+    world: PackedWorld,
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    threads: int = 1,
+) -> None:
     """Compiled: columns ``first .. last - 1`` of ``waypoints`` (C-contiguous float64, filled in place),
     on ``threads`` threads (0: all); every individual is computed alone, so the numbers do not depend
     on the number of threads."""
     if threads != 1:
         threads = min(threads or available_threads(), available_threads(), len(waypoints))
-    arguments = (waypoints, _arg(genes), first, last, transfer, _poses(poses, len(waypoints)), float(margin),
-                 *world.arguments())
+    arguments = (
+        waypoints,
+        _arg(genes),
+        first,
+        last,
+        transfer,
+        _poses(poses, len(waypoints)),
+        float(margin),
+        *world.arguments(),
+    )
     if threads > 1:
         numba.set_num_threads(threads)  # for this calling thread only
         _decode_parallel(*arguments)
@@ -598,8 +917,9 @@ def decode(world: PackedWorld, waypoints: np.ndarray, genes: np.ndarray, first: 
         _decode(*arguments)
 
 
-def intervals(world: PackedWorld, q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray,
-              margin: float) -> tuple[np.ndarray, np.ndarray]:
+def intervals(
+    world: PackedWorld, q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray, margin: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Compiled: free intervals ``(low, high)`` of ``joint`` for configurations ``q (B, n)``."""
     q = _arg(np.atleast_2d(q))
     out = np.empty((len(q), 2))
@@ -648,10 +968,22 @@ def warm_up() -> float:
     import time
 
     start = time.perf_counter()
-    world = PackedWorld(np.zeros(2), np.ones(2), -np.pi * np.ones(2), np.pi * np.ones(2), 0.01, True,
-                        np.array([-3.0, -3.0, 3.0, 3.0]), np.array([[[1.0, 1.0], [1.2, 1.0]]]),
-                        np.array([[[0.1, 0.0], [0.0, 0.1]]]), np.zeros((0, 2, 2)), np.array([0, 1]),
-                        np.array([[1.0, 1.0, 1.2, 1.0]]), np.array([0]), 1e-9)
+    world = PackedWorld(
+        np.zeros(2),
+        np.ones(2),
+        -np.pi * np.ones(2),
+        np.pi * np.ones(2),
+        0.01,
+        True,
+        np.array([-3.0, -3.0, 3.0, 3.0]),
+        np.array([[[1.0, 1.0], [1.2, 1.0]]]),
+        np.array([[[0.1, 0.0], [0.0, 0.1]]]),
+        np.zeros((0, 2, 2)),
+        np.array([0, 1]),
+        np.array([[1.0, 1.0, 1.2, 1.0]]),
+        np.array([0]),
+        1e-9,
+    )
     waypoints = np.zeros((1, 3, 2))
     genes = np.zeros((1, 1, 2))
     for transfer in (False, True):

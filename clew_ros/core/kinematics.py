@@ -15,10 +15,10 @@ from clew_ros.core import kernel
 from clew_ros.core.world import Robot
 
 __all__ = [
-    "joint_positions",
-    "tip_poses",
     "compose",
+    "joint_positions",
     "relative",
+    "tip_poses",
     "transform_points",
     "wrap_angle",
 ]

@@ -17,8 +17,9 @@ which is what the plan validator checks at 0.002 rad.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any
 
 import numpy as np
 
@@ -28,8 +29,16 @@ from clew_ros.core.kernel import BACKOFF_RAD, MAX_MOVE_RAD
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.world import World
 
-__all__ = ["Counters", "free_intervals", "bounce", "ManhattanPaths", "run_manhattan", "single_moves",
-           "MAX_MOVE_RAD", "BACKOFF_RAD"]
+__all__ = [
+    "BACKOFF_RAD",
+    "MAX_MOVE_RAD",
+    "Counters",
+    "ManhattanPaths",
+    "bounce",
+    "free_intervals",
+    "run_manhattan",
+    "single_moves",
+]
 
 #: Piece pairs (configurations x pairs per free interval) one kernel call may check: beyond it the
 #: batch is split so that ``should_stop`` is asked often enough on huge worlds (cancel within 100 ms).
@@ -45,15 +54,24 @@ class Counters:
 
 
 def _mode(object_poses: np.ndarray | None, grasp_rel: np.ndarray | None) -> tuple[bool, np.ndarray]:
-    if (object_poses is None) == (grasp_rel is None):
-        raise ValueError("give exactly one of object_poses (transit) and grasp_rel (transfer)")
-    return (False, object_poses) if grasp_rel is None else (True, grasp_rel)
+    if object_poses is not None and grasp_rel is None:
+        return False, object_poses
+    if grasp_rel is not None and object_poses is None:
+        return True, grasp_rel
+    raise ValueError("give exactly one of object_poses (transit) and grasp_rel (transfer)")
 
 
-def free_intervals(world: World, q: np.ndarray, joint: int, *, object_poses: np.ndarray | None = None,
-                   grasp_rel: np.ndarray | None = None, margin_m: float = 1e-3,
-                   counters: Counters | None = None,
-                   should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray]:
+def free_intervals(
+    world: World,
+    q: np.ndarray,
+    joint: int,
+    *,
+    object_poses: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    margin_m: float = 1e-3,
+    counters: Counters | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Free interval ``[dmin, dmax]`` (rad) of ``joint`` for each configuration of ``q`` ``(B, n)``.
 
     Transit: give the resting object's poses ``object_poses`` ``(B, 3)``.
@@ -108,10 +126,18 @@ class ManhattanPaths:
         return self.waypoints[:, -1]
 
 
-def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_poses: np.ndarray | None = None,
-                  grasp_rel: np.ndarray | None = None, margin_m: float = 1e-3,
-                  counters: Counters | None = None,
-                  should_stop: Callable[[], bool] | None = None, threads: int = 1) -> ManhattanPaths:
+def run_manhattan(
+    world: World,
+    q0: np.ndarray,
+    genes: np.ndarray,
+    *,
+    object_poses: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    margin_m: float = 1e-3,
+    counters: Counters | None = None,
+    should_stop: Callable[[], bool] | None = None,
+    threads: int = 1,
+) -> ManhattanPaths:
     """Decode genes ``(B, k, n)`` into collision-free Manhattan paths from ``q0`` ``(B, n)``.
 
     Transit when ``object_poses`` is given (the object rests there), transfer
@@ -139,12 +165,13 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
         for column in range(1, columns):
             for first in range(0, batch, step):
                 if should_stop():
-                    waypoints[first:, column:] = waypoints[first:, column - 1:column]
-                    waypoints[:first, column + 1:] = waypoints[:first, column:column + 1]
+                    waypoints[first:, column:] = waypoints[first:, column - 1 : column]
+                    waypoints[:first, column + 1 :] = waypoints[:first, column : column + 1]
                     break
                 rows = slice(first, first + step)
-                kernel.decode(packed, waypoints[rows], genes[rows], column, column + 1, transfer, poses[rows],
-                              margin_m, threads)
+                kernel.decode(
+                    packed, waypoints[rows], genes[rows], column, column + 1, transfer, poses[rows], margin_m, threads
+                )
             else:
                 continue
             break
@@ -155,7 +182,7 @@ def run_manhattan(world: World, q0: np.ndarray, genes: np.ndarray, *, object_pos
     return ManhattanPaths(waypoints, final_poses)
 
 
-def single_moves(world: World, q: np.ndarray, moves: np.ndarray, **kwargs) -> np.ndarray:
+def single_moves(world: World, q: np.ndarray, moves: np.ndarray, **kwargs: Any) -> np.ndarray:
     """Apply joint moves ``moves`` ``(n,)`` one joint at a time, each clamped to its free interval.
 
     Returns the waypoints ``(n + 1, n)`` of the (collision-free) Manhattan path.

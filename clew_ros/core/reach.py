@@ -18,8 +18,16 @@ from clew_ros.core.collision import is_valid
 from clew_ros.core.kinematics import compose, relative, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["within_reach", "goal_within_reach", "APPROACH_CELLS", "approach_cell", "approach_cells", "carry_cells",
-           "approach_excess", "two_link_grasps"]
+__all__ = [
+    "APPROACH_CELLS",
+    "approach_cell",
+    "approach_cells",
+    "approach_excess",
+    "carry_cells",
+    "goal_within_reach",
+    "two_link_grasps",
+    "within_reach",
+]
 
 
 def within_reach(world: World, point: np.ndarray, slack: float = 0.0, lengths: np.ndarray | None = None) -> bool:
@@ -66,8 +74,9 @@ def approach_cell(psi: np.ndarray | float, cells: int = APPROACH_CELLS) -> np.nd
     return (np.mod(psi, 2.0 * np.pi) / (2.0 * np.pi) * cells).astype(int) % cells
 
 
-def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_spread: float = 0.0,
-                   position_slack: float = 0.0) -> np.ndarray:
+def approach_cells(
+    world: World, object_pose: np.ndarray, grasp: int, *, angle_spread: float = 0.0, position_slack: float = 0.0
+) -> np.ndarray:
     """Which approach angles could hold grasp ``grasp`` of the object at ``object_pose``.
 
     Held rigidly, the last link keeps one direction ``psi`` in the object's
@@ -97,12 +106,13 @@ def approach_cells(world: World, object_pose: np.ndarray, grasp: int, *, angle_s
     # the last joint is at point - last * u, u = dir(theta + psi): |joint - base|^2 =
     # distance^2 + last^2 - 2 last distance cos(angle(u, v)), extreme at the cell's extreme angles
     delta = np.abs((theta + psi - np.arctan2(v[1], v[0]) + np.pi) % (2.0 * np.pi) - np.pi)
-    squared = distance ** 2 + last ** 2
+    squared = distance**2 + last**2
     near = np.sqrt(np.maximum(squared - 2.0 * last * distance * np.cos(np.maximum(0.0, delta - half)), 0.0))
     far = np.sqrt(np.maximum(squared - 2.0 * last * distance * np.cos(np.minimum(np.pi, delta + half)), 0.0))
     # the grasp point itself moves with the orientation spread (chord <= arc) and the slack
     slack = float(np.hypot(*grasp_point)) * spread + position_slack + world.grasp_tolerance + 1e-9
-    return (far >= inner - slack) & (near <= outer + slack)
+    holdable: np.ndarray = (far >= inner - slack) & (near <= outer + slack)
+    return holdable
 
 
 def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
@@ -119,7 +129,8 @@ def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     fp = np.concatenate([distance[-1:], distance, distance[:1]])
 
     def excess(psi: np.ndarray) -> np.ndarray:
-        return np.interp(np.mod(psi, 2.0 * np.pi), xp, fp)
+        angle: np.ndarray = np.interp(np.mod(psi, 2.0 * np.pi), xp, fp)
+        return angle
 
     return excess
 
@@ -151,14 +162,15 @@ def two_link_grasps(world: World, object_pose: np.ndarray, grasp: int, probes: i
     elbow = np.arccos(np.clip(cos_elbow, -1.0, 1.0))
     q2 = np.concatenate([elbow, -elbow])
     q1 = np.tile(np.arctan2(v[:, 1], v[:, 0]), 2) - np.arctan2(l2 * np.sin(q2), l1 + l2 * np.cos(q2))
-    q = np.column_stack([q1, q2])
+    q: np.ndarray = np.column_stack([q1, q2])
     # each joint to its representative within the limits, if any (limits may span more than a turn)
     lower, upper = robot.joint_lower, robot.joint_upper
     q = lower + np.mod(q - lower, 2.0 * np.pi)
     q = q[np.all(q <= upper, axis=1)]
     if not len(q):
         return q
-    return q[is_valid(world, q, np.asarray(object_pose, float)[None])]
+    valid: np.ndarray = q[is_valid(world, q, np.asarray(object_pose, float)[None])]
+    return valid
 
 
 def carry_cells(world: World, goal: np.ndarray, grasp: int) -> np.ndarray:
@@ -183,4 +195,5 @@ def carry_cells(world: World, goal: np.ndarray, grasp: int) -> np.ndarray:
     inner = np.maximum(0.0, 2.0 * np.maximum(longest_rest, virtual) - total)
     distance = float(np.hypot(*(np.asarray(goal[:2], float) - robot.base)))
     slack = float(np.hypot(*grasp_point)) * np.pi / cells + world.goal_tolerance + world.grasp_tolerance + 1e-9
-    return (distance >= inner - slack) & (distance <= total + slack)
+    carriable: np.ndarray = (distance >= inner - slack) & (distance <= total + slack)
+    return carriable

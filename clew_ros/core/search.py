@@ -10,19 +10,33 @@ free intervals. No inverse kinematics anywhere, so redundant arms work alike.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
 from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
-from clew_ros.core.manhattan import Counters, run_manhattan, single_moves
+from clew_ros.core.manhattan import Counters, ManhattanPaths, run_manhattan, single_moves
 from clew_ros.core.reach import approach_cell, approach_excess, goal_within_reach, two_link_grasps, within_reach
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
-__all__ = ["PlanningContext", "PathResult", "SearchJob", "local_search", "search_transit", "search_transits", "search_transfer", "goal_error"]
+__all__ = [
+    "PathResult",
+    "PlanningContext",
+    "SearchJob",
+    "TransitRequest",
+    "goal_error",
+    "local_search",
+    "search_transfer",
+    "search_transit",
+    "search_transits",
+]
+
+#: One SEARCH_TRANSIT request: start joints ``(n,)``, the resting object's pose ``(3,)``, the grasp's index
+#: and the allowed approach cells (or ``None``), see :func:`search_transit`.
+TransitRequest = tuple[np.ndarray, np.ndarray, int, np.ndarray | None]
 
 
 @dataclass
@@ -35,9 +49,17 @@ class PlanningContext:
     termination: Termination = field(default_factory=Termination)
     counters: Counters = field(default_factory=Counters)
 
-    def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode) -> "np.ndarray":
-        return run_manhattan(self.world, q0, genes, margin_m=self.settings.clearance, counters=self.counters,
-                             should_stop=self.termination, threads=self.settings.threads, **mode)
+    def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
+        return run_manhattan(
+            self.world,
+            q0,
+            genes,
+            margin_m=self.settings.clearance,
+            counters=self.counters,
+            should_stop=self.termination,
+            threads=self.settings.threads,
+            **mode,
+        )
 
     def initial_genes(self, count: int, islands: int | None = None) -> np.ndarray:
         """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``); the first individual
@@ -68,11 +90,12 @@ class SearchJob:
     objective: Callable[[np.ndarray, np.ndarray], np.ndarray]
     error: Callable[[np.ndarray], np.ndarray]
     accept: float
-    mode: dict
+    mode: dict[str, np.ndarray]  # {"object_poses": (1, 3)} (transit) or {"grasp_rel": (1, 3)} (transfer)
 
     @property
     def pose(self) -> np.ndarray:
-        return next(iter(self.mode.values()))[0]
+        pose: np.ndarray = next(iter(self.mode.values()))[0]
+        return pose
 
 
 def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.ndarray, float]]:
@@ -88,8 +111,9 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     poses = np.array([job.pose for job in jobs])
     q = np.array([np.asarray(job.q0, dtype=float) for job in jobs])
     waypoints: list[list[np.ndarray]] = [[row[None].copy()] for row in q]
-    best = np.array([float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0])
-                     for i, job in enumerate(jobs)])
+    best = np.array(
+        [float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0]) for i, job in enumerate(jobs)]
+    )
     refine_radius = 0.15 * ctx.world.robot.reach
     searching = np.arange(len(jobs))
     for _ in range(ctx.settings.search_rounds):
@@ -98,20 +122,36 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
             break
         starts = q[searching]
 
-        def evaluate(population: np.ndarray, islands: np.ndarray) -> np.ndarray:
+        def evaluate(
+            population: np.ndarray,
+            islands: np.ndarray,
+            *,
+            starts: np.ndarray = starts,
+            searching: np.ndarray = searching,
+        ) -> np.ndarray:  # this round's starts and jobs
             count, children = population.shape[:2]
-            paths = ctx.manhattan(np.repeat(starts[islands], children, axis=0), population.reshape(-1, k, n),
-                                  **{key: np.repeat(poses[searching[islands]], children, axis=0)})
+            paths = ctx.manhattan(
+                np.repeat(starts[islands], children, axis=0),
+                population.reshape(-1, k, n),
+                **{key: np.repeat(poses[searching[islands]], children, axis=0)},
+            )
             ctx.counters.evaluations += count * children
             finals = paths.final.reshape(count, children, n)
             ends = paths.object_poses.reshape(count, children, 3)
             return np.array([jobs[searching[island]].objective(finals[a], ends[a]) for a, island in enumerate(islands)])
 
         initial = ctx.initial_genes(size, islands=len(searching)).reshape(len(searching), size, k * n)
-        results = minimize_islands(evaluate, initial, ctx.rng, ctx.settings.genetic,
-                                   targets=np.full(len(searching), refine_radius * 0.2), should_stop=ctx.termination)
-        moved = np.array([result.fitness < best[i] - 1e-4 for i, result in zip(searching, results, strict=True)],
-                         dtype=bool)  # else a local minimum: the end point did not move closer
+        results = minimize_islands(
+            evaluate,
+            initial,
+            ctx.rng,
+            ctx.settings.genetic,
+            targets=np.full(len(searching), refine_radius * 0.2),
+            should_stop=ctx.termination,
+        )
+        moved = np.array(
+            [result.fitness < best[i] - 1e-4 for i, result in zip(searching, results, strict=True)], dtype=bool
+        )  # else a local minimum: the end point did not move closer
         if not moved.any():
             break
         genes = np.array([result.genes for result in results])[moved].reshape(-1, k, n)
@@ -132,14 +172,21 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     return answers
 
 
-def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict) -> np.ndarray:
+def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict[str, np.ndarray]) -> np.ndarray:
     if mode.get("grasp_rel") is None:
         return np.broadcast_to(mode["object_poses"], (len(q), 3))
     return compose(tip_poses(ctx.world.robot, q), mode["grasp_rel"])
 
 
-def _refine(ctx: PlanningContext, q: np.ndarray, error: Callable[[np.ndarray], np.ndarray], accept: float,
-            mode: dict, iterations: int = 30) -> np.ndarray:
+def _refine(
+    ctx: PlanningContext,
+    q: np.ndarray,
+    error: Callable[[np.ndarray], np.ndarray],
+    accept: float,
+    mode: dict[str, np.ndarray],
+    *,
+    iterations: int = 30,
+) -> np.ndarray:
     """Damped least squares on ``error``, moved one joint at a time within free intervals."""
     n = len(q)
     waypoints = [q.copy()]
@@ -156,8 +203,7 @@ def _refine(ctx: PlanningContext, q: np.ndarray, error: Callable[[np.ndarray], n
         largest = np.max(np.abs(step))
         if largest > 0.3:
             step *= 0.3 / largest
-        moved = single_moves(ctx.world, q, step, margin_m=ctx.settings.clearance, counters=ctx.counters,
-                             **mode)
+        moved = single_moves(ctx.world, q, step, margin_m=ctx.settings.clearance, counters=ctx.counters, **mode)
         if len(moved) < 2 or np.max(np.abs(moved[-1] - q)) < 1e-10:
             break
         waypoints.extend(moved[1:])
@@ -168,8 +214,9 @@ def _refine(ctx: PlanningContext, q: np.ndarray, error: Callable[[np.ndarray], n
     return np.array(waypoints)
 
 
-def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray, grasp: int,
-                   approach: np.ndarray | None = None) -> PathResult:
+def search_transit(
+    ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None = None
+) -> PathResult:
     """SEARCH_TRANSIT: move the arm, object at rest, until its tip holds ``grasp``.
 
     ``approach`` (cells of :func:`clew_ros.core.reach.approach_cells`) restricts
@@ -181,7 +228,7 @@ def search_transit(ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray
     return search_transits(ctx, [(q0, object_pose, grasp, approach)])[0]
 
 
-def search_transits(ctx: PlanningContext, requests: list[tuple]) -> list[PathResult]:
+def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
     """:func:`search_transit` for independent requests ``(q0, object_pose, grasp, approach)`` at once:
     their genetic algorithms run as islands of one batch."""
     world = ctx.world
@@ -200,11 +247,12 @@ def search_transits(ctx: PlanningContext, requests: list[tuple]) -> list[PathRes
             success = distance <= 0.5 * world.grasp_tolerance
             grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
             results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
-    return results
+    return [result for result in results if result is not None]  # every slot is filled by now
 
 
-def _transit_job(world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: int,
-                 approach: np.ndarray | None) -> SearchJob | PathResult:
+def _transit_job(
+    world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None
+) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
     holds = _holding_configurations(world, object_pose, grasp, approach)
@@ -222,8 +270,9 @@ def _transit_job(world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: i
             terms.append(last * np.maximum(0.0, -elbow * wrap_angle(q[:, 1]))[:, None])
         return np.concatenate(terms, axis=1)
 
-    def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
-        return np.linalg.norm(tip_error(q), axis=1)
+    def objective(q: np.ndarray, _poses: np.ndarray | None) -> np.ndarray:
+        distance: np.ndarray = np.linalg.norm(tip_error(q), axis=1)
+        return distance
 
     hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
     if hopeless or not within_reach(world, target[0]):
@@ -231,8 +280,9 @@ def _transit_job(world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: i
     return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, {"object_poses": object_pose[None]})
 
 
-def _holding_configurations(world: World, object_pose: np.ndarray, grasp: int,
-                            approach: np.ndarray | None) -> np.ndarray | None:
+def _holding_configurations(
+    world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None
+) -> np.ndarray | None:
     """Two-joint arms: the valid configurations holding ``grasp`` (with an allowed approach), which
     a transit can only end near; ``None`` for other arms (not solved)."""
     if world.robot.dof != 2:
@@ -241,7 +291,8 @@ def _holding_configurations(world: World, object_pose: np.ndarray, grasp: int,
     if approach is None or not len(holds):
         return holds
     psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]
-    return holds[approach[approach_cell(psi, len(approach))]]
+    allowed: np.ndarray = holds[approach[approach_cell(psi, len(approach))]]
+    return allowed
 
 
 def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
@@ -267,14 +318,16 @@ def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray,
     def error(q: np.ndarray) -> np.ndarray:
         return goal_error(world, compose(tip_poses(world.robot, q), mode["grasp_rel"]), goal)
 
-    def objective(_q: np.ndarray, poses: np.ndarray) -> np.ndarray:
-        return np.linalg.norm(goal_error(world, poses, goal), axis=1)
+    def objective(_q: np.ndarray | None, poses: np.ndarray) -> np.ndarray:
+        distance: np.ndarray = np.linalg.norm(goal_error(world, poses, goal), axis=1)
+        return distance
 
     accept = 0.25 * world.goal_tolerance
     if not goal_within_reach(world, grasp_rel, goal):
         start_pose = compose(tip_poses(world.robot, np.asarray(q0, float)[None]), mode["grasp_rel"])
-        return PathResult(False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]),
-                          object_pose=start_pose[0])
+        return PathResult(
+            False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]), object_pose=start_pose[0]
+        )
     [(waypoints, distance)] = local_search(ctx, [SearchJob(np.asarray(q0, float), objective, error, accept, mode)])
     final_pose = compose(tip_poses(world.robot, waypoints[-1:]), mode["grasp_rel"])[0]
     success = goal_reached(world, final_pose, goal) and distance <= 0.5 * world.goal_tolerance

@@ -10,7 +10,9 @@ recorder and the renderer.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -69,8 +71,9 @@ class LandmarkTree:
     """Landmarks indexed by id, with their parent links."""
 
     def __init__(self, root_joints: np.ndarray, root_object_pose: np.ndarray) -> None:
-        root = Landmark(0, None, np.asarray(root_joints, float), np.asarray(root_object_pose, float),
-                        None, None, None, None)
+        root = Landmark(
+            0, None, np.asarray(root_joints, float), np.asarray(root_object_pose, float), None, None, None, None
+        )
         self.landmarks: list[Landmark] = [root]
 
     def __len__(self) -> int:
@@ -79,10 +82,10 @@ class LandmarkTree:
     def __getitem__(self, index: int) -> Landmark:
         return self.landmarks[index]
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Landmark]:
         return iter(self.landmarks)
 
-    def add(self, **fields) -> Landmark:
+    def add(self, **fields: Any) -> Landmark:
         landmark = Landmark(id=len(self.landmarks), **fields)
         self.landmarks.append(landmark)
         return landmark
@@ -106,20 +109,28 @@ class LandmarkTree:
 
     def features(self, joint_weight: float, object_radius: float) -> np.ndarray:
         """Points ``(L, 4 + n)`` whose Euclidean distances are the landmark distances."""
-        return landmark_features(np.array([lm.joints for lm in self.landmarks]),
-                                 np.array([lm.object_pose for lm in self.landmarks]), joint_weight, object_radius)
+        return landmark_features(
+            np.array([lm.joints for lm in self.landmarks]),
+            np.array([lm.object_pose for lm in self.landmarks]),
+            joint_weight,
+            object_radius,
+        )
 
 
-def landmark_features(joints: np.ndarray, object_poses: np.ndarray, joint_weight: float,
-                      object_radius: float) -> np.ndarray:
+def landmark_features(
+    joints: np.ndarray, object_poses: np.ndarray, joint_weight: float, object_radius: float
+) -> np.ndarray:
     """Embedding of (joints, object pose) where Euclidean distance is the landmark distance.
 
     Object position (m), orientation as a chord on a circle of the object's
     radius (m), joints weighted by ``joint_weight`` (m/rad).
     """
     theta = object_poses[:, 2]
-    return np.concatenate([
-        object_poses[:, :2],
-        object_radius * np.stack([np.cos(theta), np.sin(theta)], axis=1),
-        joint_weight * joints,
-    ], axis=1)
+    return np.concatenate(
+        [
+            object_poses[:, :2],
+            object_radius * np.stack([np.cos(theta), np.sin(theta)], axis=1),
+            joint_weight * joints,
+        ],
+        axis=1,
+    )

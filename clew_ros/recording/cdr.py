@@ -15,10 +15,21 @@ from typing import Any
 __all__ = ["tidy_cdr"]
 
 _SIZES = {
-    "boolean": 1, "octet": 1, "char": 1, "uint8": 1, "int8": 1,
-    "int16": 2, "uint16": 2, "wchar": 2,
-    "int32": 4, "uint32": 4, "float": 4,
-    "int64": 8, "uint64": 8, "double": 8, "long double": 16,
+    "boolean": 1,
+    "octet": 1,
+    "char": 1,
+    "uint8": 1,
+    "int8": 1,
+    "int16": 2,
+    "uint16": 2,
+    "wchar": 2,
+    "int32": 4,
+    "uint32": 4,
+    "float": 4,
+    "int64": 8,
+    "uint64": 8,
+    "double": 8,
+    "long double": 16,
 }
 
 
@@ -45,7 +56,7 @@ class _Walker:
         if not fields:  # empty messages hold one uint8
             self.offset += 1
             return
-        for name, slot_type in zip(fields, types):
+        for name, slot_type in zip(fields, types, strict=True):  # both generated from the same .msg
             self.value(getattr(msg, name), slot_type)
 
     def value(self, value: Any, slot_type: Any) -> None:
@@ -85,12 +96,12 @@ def tidy_cdr(msg: Any, data: bytes) -> bytes:
     walker = _Walker()
     try:
         walker.message(msg)
-    except (NotImplementedError, AttributeError, KeyError, TypeError, ImportError):
+    except (NotImplementedError, AttributeError, KeyError, TypeError, ValueError, ImportError):
         return data
     end = 4 + walker.offset
     if end > len(data):
         return data
     out = bytearray(data[:end]) + bytes((-end) % 4)  # DDS payloads end on a 4-byte boundary
     for start, gap in walker.padding:
-        out[4 + start:4 + start + gap] = bytes(gap)
+        out[4 + start : 4 + start + gap] = bytes(gap)
     return bytes(out)

@@ -18,20 +18,37 @@ import json
 import os
 import re
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from clew_ros.recording.errors import RecordingError
 
-__all__ = ["DELIMITER", "message_type_name", "message_definition", "type_description_hash", "message_class"]
+__all__ = ["DELIMITER", "message_class", "message_definition", "message_type_name", "type_description_hash"]
 
 #: The line that separates definitions in a ``ros2msg`` full text.
 DELIMITER = "=" * 80 + "\n"
 
 # Same pattern and primitive set as rosbag2's parse_msg_dependencies.
 _FIELD_TYPE = re.compile(r"(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+")
-_PRIMITIVES = frozenset({"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16",
-                         "int32", "uint32", "int64", "uint64", "string"})
+_PRIMITIVES = frozenset(
+    {
+        "bool",
+        "byte",
+        "char",
+        "float32",
+        "float64",
+        "int8",
+        "uint8",
+        "int16",
+        "uint16",
+        "int32",
+        "uint32",
+        "int64",
+        "uint64",
+        "string",
+    }
+)
 _TYPE_NAME = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)/(?:([A-Za-z][A-Za-z0-9_]*)/)?([A-Za-z][A-Za-z0-9_]*)$")
 _MAX_DEPTH = 50
 
@@ -63,13 +80,15 @@ def message_class(type_name: str) -> type:
     package, namespace, name = _split(type_name)
     try:
         module = importlib.import_module(f"{package}.{namespace}")
-        return getattr(module, name)
+        message: type = getattr(module, name)
+        return message
     except (ImportError, AttributeError):
-        raise RecordingError(f"message type {type_name} is not installed (cannot import "
-                             f"{package}.{namespace}.{name})") from None
+        raise RecordingError(
+            f"message type {type_name} is not installed (cannot import {package}.{namespace}.{name})"
+        ) from None
 
 
-def _share_candidates(package: str):
+def _share_candidates(package: str) -> Iterator[Path]:
     for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
         if prefix:
             yield Path(prefix) / "share" / package
@@ -83,7 +102,7 @@ def _share_candidates(package: str):
             yield parent / "share" / package
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _interface_file(package: str, namespace: str, name: str, suffix: str) -> Path | None:
     for share in _share_candidates(package):
         path = share / namespace / f"{name}{suffix}"
@@ -92,13 +111,15 @@ def _interface_file(package: str, namespace: str, name: str, suffix: str) -> Pat
     return None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _msg_text(type_name: str) -> str:
     package, namespace, name = _split(type_name)
     path = _interface_file(package, namespace, name, ".msg")
     if path is None:
-        raise RecordingError(f"no .msg file for {type_name} (looked for share/{package}/{namespace}/{name}.msg "
-                             "under AMENT_PREFIX_PATH and the Python prefix)")
+        raise RecordingError(
+            f"no .msg file for {type_name} (looked for share/{package}/{namespace}/{name}.msg "
+            "under AMENT_PREFIX_PATH and the Python prefix)"
+        )
     return path.read_text()
 
 
@@ -112,7 +133,7 @@ def _dependencies(text: str, package: str) -> list[str]:
     return sorted(found)  # std::set order, as rosbag2
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def message_definition(type_name: str) -> str:
     """The ``ros2msg`` full text of ``type_name`` (``pkg/msg/Type``), as rosbag2 writes it.
 
@@ -147,7 +168,7 @@ def message_definition(type_name: str) -> str:
         return text
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def type_description_hash(type_name: str) -> str:
     """The ``RIHS01_...`` type hash from the installed ``<Type>.json``, or ``''`` when unknown."""
     try:

@@ -11,16 +11,17 @@ accept it.
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, BinaryIO
 
 import yaml
 
 from clew_ros.recording.errors import RecordingError
 from clew_ros.recording.recorder import bag_metadata, default_offered_qos, write_bag_metadata
 
-__all__ = ["TopicInfo", "RecordedMessage", "Recording", "find_mcap", "recover_recording"]
+__all__ = ["RecordedMessage", "Recording", "TopicInfo", "find_mcap", "recover_recording"]
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,7 @@ def find_mcap(path: str | Path) -> Path:
     if metadata.is_file():
         try:
             info = yaml.safe_load(metadata.read_text())["rosbag2_bagfile_information"]
-            names = [n for n in info.get("relative_file_paths", []) if str(n).endswith(".mcap")]
+            names: list[str] = [n for n in info.get("relative_file_paths", []) if str(n).endswith(".mcap")]
         except (OSError, yaml.YAMLError, KeyError, TypeError) as error:
             raise RecordingError(f"{metadata} is not rosbag2 metadata ({error})") from None
         if len(names) == 1 and (path / names[0]).is_file():
@@ -72,12 +73,17 @@ def find_mcap(path: str | Path) -> Path:
     return files[0]
 
 
+def _yaml_or_none(text: str) -> Any:
+    """``text`` parsed as YAML, or ``None`` if it is not YAML."""
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError:
+        return None
+
+
 def _qos_list(text: str | None, topic: str) -> list[dict[str, Any]]:
     if text:
-        try:
-            value = yaml.safe_load(text)
-        except yaml.YAMLError:
-            value = None
+        value = _yaml_or_none(text)
         if isinstance(value, list) and all(isinstance(v, dict) for v in value):
             return value
     return [default_offered_qos(topic)]
@@ -91,10 +97,6 @@ class Recording:
     """
 
     def __init__(self, path: str | Path) -> None:
-        from mcap.exceptions import InvalidMagic, McapError
-        from mcap.records import Channel, Footer, Header, Message, Metadata, Schema
-        from mcap.stream_reader import StreamReader
-
         self.path = Path(path)
         self.mcap_path = find_mcap(self.path)
         self.complete = False
@@ -106,40 +108,50 @@ class Recording:
             stream = self.mcap_path.open("rb")
         except OSError as error:
             raise RecordingError(f"cannot read {self.mcap_path}: {error.strerror}") from None
-        started = False
         with stream:
-            try:
-                for record in StreamReader(stream).records:
-                    started = True
-                    if isinstance(record, Message):
-                        channel = self.channels.get(record.channel_id)
-                        if channel is None:
-                            continue
-                        schema = self.schemas.get(channel.schema_id)
-                        self._messages.append(RecordedMessage(channel.topic, schema.name if schema else "",
-                                                              record.log_time, bytes(record.data)))
-                    elif isinstance(record, Schema):
-                        self.schemas[record.id] = record
-                    elif isinstance(record, Channel):
-                        self.channels[record.id] = record
-                    elif isinstance(record, Metadata) and record.name == "rosbag2":
-                        try:
-                            self.bag_metadata = yaml.safe_load(record.metadata.get("serialized_metadata", ""))
-                        except yaml.YAMLError:
-                            self.bag_metadata = None
-                    elif isinstance(record, Footer):
-                        self.complete = True
-                    elif isinstance(record, Header) and record.profile not in ("ros2", ""):
-                        raise RecordingError(f"{self.mcap_path} has MCAP profile {record.profile!r}, not 'ros2'")
-            except InvalidMagic:
-                if not started:
-                    raise RecordingError(f"{self.mcap_path} is not an MCAP file") from None
-            except (McapError, struct.error, EOFError, ValueError):
-                if not started:
-                    raise RecordingError(f"{self.mcap_path} is empty or cut before its header") from None
-                # cut short: keep what was read up to the last complete record
+            self._read(stream)
         self._messages.sort(key=lambda m: m.log_time_ns)  # stable: file order within equal times
         self._decoders: dict[int, Callable[[bytes], Any]] = {}
+
+    def _read(self, stream: BinaryIO) -> None:
+        """Every record of ``stream``, up to its end or, cut short, up to the last complete record."""
+        from mcap.exceptions import InvalidMagic, McapError
+        from mcap.records import Channel, Footer, Header, Message, Metadata, Schema
+        from mcap.stream_reader import StreamReader
+
+        started = False
+        try:
+            for record in StreamReader(stream).records:
+                started = True
+                if isinstance(record, Message):
+                    self._add_message(record)
+                elif isinstance(record, Schema):
+                    self.schemas[record.id] = record
+                elif isinstance(record, Channel):
+                    self.channels[record.id] = record
+                elif isinstance(record, Metadata) and record.name == "rosbag2":
+                    self.bag_metadata = _yaml_or_none(record.metadata.get("serialized_metadata", ""))
+                elif isinstance(record, Footer):
+                    self.complete = True
+                elif isinstance(record, Header) and record.profile not in ("ros2", ""):
+                    raise RecordingError(f"{self.mcap_path} has MCAP profile {record.profile!r}, not 'ros2'")
+        except InvalidMagic:
+            if not started:
+                raise RecordingError(f"{self.mcap_path} is not an MCAP file") from None
+        except (McapError, struct.error, EOFError, ValueError):
+            if not started:
+                raise RecordingError(f"{self.mcap_path} is empty or cut before its header") from None
+            # cut short: keep what was read up to the last complete record
+
+    def _add_message(self, record: Any) -> None:
+        """An MCAP message record, kept if its channel came before it."""
+        channel = self.channels.get(record.channel_id)
+        if channel is None:
+            return
+        schema = self.schemas.get(channel.schema_id)
+        self._messages.append(
+            RecordedMessage(channel.topic, schema.name if schema else "", record.log_time, bytes(record.data))
+        )
 
     # ------------------------------------------------------------------ contents
 
@@ -182,8 +194,10 @@ class Recording:
             schema = self.schemas.get(channel.schema_id)
             decoder = DecoderFactory().decoder_for(channel.message_encoding, schema)
             if decoder is None:
-                raise RecordingError(f"{self.mcap_path}: cannot decode {topic} "
-                                     f"({channel.message_encoding!r} with schema {schema.name if schema else None})")
+                raise RecordingError(
+                    f"{self.mcap_path}: cannot decode {topic} "
+                    f"({channel.message_encoding!r} with schema {schema.name if schema else None})"
+                )
             self._decoders[channel.id] = decoder
         return [decoder(m.data) for m in self._messages if m.topic == topic]
 
@@ -214,18 +228,27 @@ def recover_recording(path: str | Path) -> Path:
         with temporary.open("wb") as stream:
             writer = Writer(stream)
             writer.start(profile="ros2", library="clew_ros recover_recording")
-            schema_ids = {sid: writer.register_schema(s.name, s.encoding, s.data)
-                          for sid, s in recording.schemas.items()}
+            schema_ids = {
+                sid: writer.register_schema(s.name, s.encoding, s.data) for sid, s in recording.schemas.items()
+            }
             channel_ids = {}
             for channel in recording.channels.values():
                 if channel.topic not in channel_ids:
                     channel_ids[channel.topic] = writer.register_channel(
-                        channel.topic, channel.message_encoding, schema_ids.get(channel.schema_id, 0),
-                        dict(channel.metadata))
+                        channel.topic,
+                        channel.message_encoding,
+                        schema_ids.get(channel.schema_id, 0),
+                        dict(channel.metadata),
+                    )
             for sequence, message in enumerate(recording.messages()):
-                writer.add_message(channel_ids[message.topic], log_time=message.log_time_ns,
-                                   data=message.data, publish_time=message.log_time_ns, sequence=sequence)
-            writer.finish()
+                writer.add_message(
+                    channel_ids[message.topic],
+                    log_time=message.log_time_ns,
+                    data=message.data,
+                    publish_time=message.log_time_ns,
+                    sequence=sequence,
+                )
+            writer.finish()  # type: ignore[no-untyped-call]  # (mcap leaves finish() unannotated)
         if not recording.complete:
             target.replace(target.with_name(target.name + ".truncated"))
         temporary.replace(target)
@@ -239,9 +262,19 @@ def recover_recording(path: str | Path) -> Path:
         custom = {**recording.bag_metadata["custom_data"], **custom}
     information = bag_metadata(
         target.name,
-        [{"name": t.name, "type": t.type_name, "offered_qos_profiles": t.offered_qos_profiles,
-          "type_description_hash": t.type_description_hash, "message_count": t.message_count}
-         for t in topics.values()],
-        start, end - start, custom_data=custom)
+        [
+            {
+                "name": t.name,
+                "type": t.type_name,
+                "offered_qos_profiles": t.offered_qos_profiles,
+                "type_description_hash": t.type_description_hash,
+                "message_count": t.message_count,
+            }
+            for t in topics.values()
+        ],
+        start,
+        end - start,
+        custom_data=custom,
+    )
     write_bag_metadata(directory, information)
     return directory

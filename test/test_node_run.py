@@ -129,3 +129,11 @@ def test_status_table_keeps_the_last_runs_in_order() -> None:
     assert table.entries() == [(ids[3], 3, GoalStatus.STATUS_ACCEPTED), (ids[4], 4, GoalStatus.STATUS_ACCEPTED),
                                (ids[2], 2, GoalStatus.STATUS_SUCCEEDED)]
     assert len(table) == 3
+
+
+def test_a_fault_before_planning_still_ends_the_run(config) -> None:
+    run = Run("plan", None, config, accepted_ns=0)
+    run.conclude(Outcome.INTERNAL_ERROR, "internal error in the node: ...", 0.0)  # the worker failed at once
+    assert run.status == GoalStatus.STATUS_ABORTED
+    run.outcome_published()
+    assert run.phase is Phase.FINISHED and not run.is_busy

@@ -164,11 +164,9 @@ class Run:
     @property
     def status(self) -> int:
         """The run's ``GoalStatus`` code for ``~/status``."""
-        if self._phase is Phase.ACCEPTED:
-            return GoalStatus.STATUS_ACCEPTED
-        if self.outcome is None:
-            return GoalStatus.STATUS_EXECUTING
-        return outcome_status(self.outcome)
+        if self.outcome is not None:
+            return outcome_status(self.outcome)
+        return GoalStatus.STATUS_ACCEPTED if self._phase is Phase.ACCEPTED else GoalStatus.STATUS_EXECUTING
 
     def termination(self) -> Termination:
         """The planner's stop condition: the run's time limit or its cancel."""

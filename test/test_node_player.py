@@ -7,8 +7,8 @@ import time
 
 import numpy as np
 
-from clew_ros.node.player import play
 from clew_ros.node.playback import GripperEvent
+from clew_ros.node.player import play
 
 
 class Line:

@@ -57,7 +57,7 @@ def test_a_success_goes_through_every_phase(config) -> None:
     assert run.phase is Phase.FINISHED and run.wait_finished(0.0)
 
 
-@pytest.mark.parametrize("outcome, status", [(Outcome.TIME_LIMIT, GoalStatus.STATUS_ABORTED),
+@pytest.mark.parametrize(("outcome", "status"), [(Outcome.TIME_LIMIT, GoalStatus.STATUS_ABORTED),
                                              (Outcome.INTERNAL_ERROR, GoalStatus.STATUS_ABORTED),
                                              (Outcome.CANCELED, GoalStatus.STATUS_CANCELED)])
 def test_without_a_plan_the_run_finishes_at_its_outcome(config, outcome: Outcome, status: int) -> None:

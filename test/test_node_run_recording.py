@@ -109,7 +109,7 @@ class FailingRecorder:
         return self.path
 
 
-@pytest.mark.parametrize("raise_on, reason", [
+@pytest.mark.parametrize(("raise_on", "reason"), [
     ("", "cannot write (writing a chunk): No space left on device"),
     ("write", "write to /t failed: disk full"),
 ])

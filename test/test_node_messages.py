@@ -117,11 +117,17 @@ def test_world_markers() -> None:
     assert np.allclose(np.mean([[p.x, p.y] for p in outline.points[:-1]], axis=0), [0.5, 0.5])
 
 
-def test_concave_obstacles_are_filled_inside_only() -> None:
+def test_concave_obstacles_are_filled_inside_only(quick) -> None:
+    import dataclasses
+
     import shapely
 
+    from clew_ros.core.world import Obstacle
+
     u_shape = np.array([[0, 0], [3, 0], [3, 3], [2, 3], [2, 1], [1, 1], [1, 3], [0, 3]], dtype=float)
-    points = messages._triangles(u_shape)
+    world = dataclasses.replace(quick, obstacles=(Obstacle("u", u_shape),))
+    filled = next(m for m in messages.world_markers(world, 0).markers if m.ns == "obstacles")
+    points = filled.points
     assert len(points) % 3 == 0
     area = sum(shapely.Polygon([(p.x, p.y) for p in points[i:i + 3]]).area for i in range(0, len(points), 3))
     assert area == pytest.approx(shapely.Polygon(u_shape).area)

@@ -112,7 +112,7 @@ def test_plan_succeeds_and_publishes_the_run(quick: Session, quick_world, tmp_pa
     assert "succeeded" in kinds and "aborted" not in kinds
     succeeded = next(e for e in events if e["event"] == "succeeded")
     assert succeeded["code"] == "SUCCEEDED" and succeeded["message"]
-    transfers = [s["grasp"] for s in plan["segments"] if s["kind"] == "transfer"]
+    transfers = [s.grasp for s in plan.segments if s.kind == "transfer"]
     assert [e["grasp"] for e in events if e["event"] == "grasp"] == transfers
     grasp_times = [e["time"] for e in events if e["event"] in ("grasp", "ungrasp")]
     assert grasp_times == sorted(grasp_times) and all(0 < t <= times[-1] for t in grasp_times)

@@ -113,10 +113,10 @@ def test_runs_go_on_without_a_recording(monkeypatch: pytest.MonkeyPatch, tmp_pat
     try:
         node = PlannerNode(context=context, parameter_overrides=overrides)
         try:
-            run, refusal = node._start_run("plan", None)
+            run, refusal = node.request_plan("plan")
             assert run is not None, refusal
-            assert run.done.wait(30.0), "no outcome within 30 s"
-            text = node._result_text(run)
+            assert run.wait_outcome(30.0), "no outcome within 30 s"
+            text = run.result_text()
             assert "SUCCEEDED" in text and expected in text, text
         finally:
             node.shutdown_runs()

@@ -230,7 +230,10 @@ def test_every_run_had_exactly_one_outcome(ring: Session) -> None:
 
 @pytest.fixture()
 def local_node(tmp_path: Path):
-    """A PlannerNode in this process (own context, no executor): its methods are called directly."""
+    """A PlannerNode in this process (own context, no executor), recording to ``tmp_path / "recordings"``.
+
+    Its public entry points (``request_plan``, ``cancel``) are called directly.
+    """
     from rclpy.parameter import Parameter
 
     from clew_ros.node.planner_node import PlannerNode
@@ -241,7 +244,6 @@ def local_node(tmp_path: Path):
     values.update({"record.directory": str(tmp_path / "recordings"), "trajectory.joint_speed": 50.0})
     overrides = [Parameter(name, value=value) for name, value in values.items()]
     node = PlannerNode(context=context, parameter_overrides=overrides, namespace=f"/rel{id(tmp_path) % 10**6}")
-    node.recordings = tmp_path / "recordings"
     try:
         yield node
     finally:
@@ -250,33 +252,39 @@ def local_node(tmp_path: Path):
         context.try_shutdown()
 
 
-def test_cancel_before_the_worker_started(local_node) -> None:
+def test_cancel_before_the_worker_started(local_node, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from clew_ros.node.run import Phase
+    from clew_ros.node.worker import RunWorker
+
     node = local_node
-    original = node._work
+    original = RunWorker.execute
     held = threading.Event()
 
-    def work_after_cancel(run) -> None:  # the worker's first act waits for the cancel request
+    def execute_after_cancel(worker: RunWorker, run) -> None:  # the worker's first act waits for the cancel
         held.set()
-        run.cancel.wait(timeout=10.0)
-        original(run)
+        deadline = time.monotonic() + 10.0
+        while not run.is_cancel_requested and time.monotonic() < deadline:
+            time.sleep(0.005)
+        original(worker, run)
 
-    node._work = work_after_cancel
-    run, refusal = node._start_run("plan", None)
+    monkeypatch.setattr(RunWorker, "execute", execute_after_cancel)
+    run, refusal = node.request_plan("plan")
     assert run is not None, refusal
     assert held.wait(5.0)
+    assert run.phase is Phase.ACCEPTED  # accepted, its planning not begun
     sent = time.monotonic()
-    response = node._on_cancel(Trigger.Request(), Trigger.Response())
+    success, message = node.cancel()
     latency = time.monotonic() - sent
     MEASURED["before_worker_answer"] = latency
     print(f"\ncancel before the worker started: answered in {1000 * latency:.0f} ms")
-    assert response.success and f"canceled run {run.hex}" in response.message, response.message
-    assert run.outcome is Outcome.CANCELED and run.done.is_set()
+    assert success and f"canceled run {run.hex}" in message, message
+    assert run.outcome is Outcome.CANCELED and run.wait_outcome(0.0)
     assert latency < CANCEL_BOUND_S
-    assert run.finished.wait(5.0)
-    assert (node.recordings / run.hex / "metadata.yaml").is_file()
+    assert run.wait_finished(5.0)
+    assert (tmp_path / "recordings" / run.hex / "metadata.yaml").is_file()
 
-    node._work = original  # the next plan works
-    following, refusal = node._start_run("plan", None)
+    monkeypatch.setattr(RunWorker, "execute", original)  # the next plan works
+    following, refusal = node.request_plan("plan")
     assert following is not None, refusal
-    assert following.done.wait(20.0) and following.outcome is Outcome.SUCCEEDED, following.message
-    assert following.finished.wait(10.0)
+    assert following.wait_outcome(20.0) and following.outcome is Outcome.SUCCEEDED, following.message
+    assert following.wait_finished(10.0)

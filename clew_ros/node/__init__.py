@@ -1,7 +1,12 @@
 """The ROS 2 node ``clew_planner`` that serves the planner (see interface.md §3).
 
 - ``main``: the ``clew_planner`` entry point (executor, signals, exit codes).
-- ``planner_node``: the node: services, topics, runs, the worker thread.
+- ``planner_node``: the node: parameters, callbacks, the one-run-at-a-time policy.
+- ``run``: one run's handle (its phase, cancel, outcome, recording) and the ``~/status`` table.
+- ``worker``: one run's life in its thread: plan, check, publish the outcome, play back.
+- ``player``: plays a timed plan back in real time (no rclpy).
+- ``publishing``: the node's topics and QoS; every message also goes to the run's recording.
+- ``run_recording``: a run's recording as the node uses it (nothing when recording is off).
 - ``parameters``: parameter names, defaults, descriptors and checks.
 - ``messages``: the one module that turns core values into ROS messages and back.
 - ``playback``: the timed plan (trajectory times, grasp events, samples); no rclpy.

@@ -6,12 +6,15 @@ file ``<run id>_0.mcap``: schema encoding ``ros2msg`` with the full dependency
 text, message encoding ``cdr``. Foxglove, ``ros2 bag``, ``rosbags`` and the
 ``mcap`` readers open it.
 
-- :class:`RunRecorder` writes a run from the node without ever blocking it.
+- :class:`RunRecorder` writes a run from the node without ever blocking it
+  (the node holds it through :mod:`clew_ros.node.run_recording`, which
+  records nothing when recording is off or cannot be done).
 - :class:`Recording` reads one back (also one cut short by a killed writer);
   :func:`recover_recording` rewrites such a file whole.
 - :func:`trajectory_to_plan` rebuilds the plan from a recorded trajectory.
 
-Importing this package needs no rclpy; :class:`RunRecorder` does.
+Importing this package needs no rclpy; :class:`RunRecorder` needs rclpy
+and ``mcap`` (without ``mcap`` the node plans but does not record).
 """
 
 from clew_ros.recording.errors import RecordingError

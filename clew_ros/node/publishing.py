@@ -1,0 +1,157 @@
+"""What the node publishes: its topics and their QoS, each message also written to a run's recording.
+
+:class:`Publishing` owns the node's publishers and the ``~/status`` table
+(:class:`~clew_ros.node.run.StatusTable`). Every ``publish`` takes the
+:class:`~clew_ros.node.run_recording.RunRecording` the message belongs to (a
+run's, or :data:`~clew_ros.node.run_recording.NO_RECORDING`) and records the
+message there before publishing it. The messages themselves come from
+:mod:`clew_ros.node.messages`.
+
+``~/status`` and ``~/feedback`` are built and published under one lock, so
+that the latched ``~/status`` never ends on an older snapshot and no
+``planning`` feedback follows a run's outcome.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import uuid
+from typing import Any
+
+from action_msgs.msg import GoalStatus, GoalStatusArray
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from trajectory_msgs.msg import JointTrajectory
+from visualization_msgs.msg import MarkerArray
+
+from clew_ros.core.settings import Outcome, PlannerSettings
+from clew_ros.core.world import World
+from clew_ros.node import messages
+from clew_ros.node.run import Phase, Run, StatusTable
+from clew_ros.node.run_recording import RunRecording
+
+__all__ = ["EVENTS_QOS", "GOAL_QOS", "LATCHED_QOS", "STREAM_QOS", "TOPICS", "Publishing"]
+
+#: Latched topics: a late subscriber gets the last message.
+LATCHED_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+STREAM_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.VOLATILE)
+#: ~/goal_pose: a burst of goals is queued, not dropped; each is answered (a run, or a BUSY refusal).
+GOAL_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+EVENTS_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.VOLATILE)
+
+#: The node's published topics (``~/<name>``): message type and QoS.
+TOPICS: dict[str, tuple[type, QoSProfile]] = {
+    "status": (GoalStatusArray, LATCHED_QOS),
+    "feedback": (DiagnosticStatus, STREAM_QOS),
+    "trajectory": (JointTrajectory, LATCHED_QOS),
+    "joint_states": (JointState, STREAM_QOS),
+    "object_pose": (PoseStamped, STREAM_QOS),
+    "events": (String, EVENTS_QOS),
+    "landmarks": (MarkerArray, LATCHED_QOS),
+    "world_markers": (MarkerArray, LATCHED_QOS),
+    "world_yaml": (String, LATCHED_QOS),
+}
+
+
+class Publishing:
+    """The publishers of ``node`` (:data:`TOPICS`) and its ``~/status`` table.
+
+    ``closing`` is set when the node shuts down: a publish that fails then
+    (the context is gone) is not logged.
+    """
+
+    def __init__(self, node: Node, closing: threading.Event) -> None:
+        self._clock = node.get_clock()
+        self._logger = node.get_logger()
+        self._node_name = node.get_name()
+        self._closing = closing
+        self._publishers = {name: node.create_publisher(msg_type, f"~/{name}", qos)
+                            for name, (msg_type, qos) in TOPICS.items()}
+        self._statuses = StatusTable()
+        self._order = threading.Lock()  # ~/status and ~/feedback: see the module docstring
+
+    def now_ns(self) -> int:
+        """The node's clock (ns)."""
+        return self._clock.now().nanoseconds
+
+    def publish(self, name: str, msg: Any, recording: RunRecording) -> None:
+        """Record ``msg`` in ``recording``, then publish it on ``~/<name>``; never raises."""
+        publisher = self._publishers[name]
+        recording.write(publisher.topic_name, msg, self.now_ns())
+        try:
+            publisher.publish(msg)
+        except Exception as error:  # noqa: BLE001 - the context is gone while shutting down
+            if not self._closing.is_set():
+                self._logger.error(f"cannot publish on {publisher.topic_name}: {error}")
+
+    def world(self, world: World, planner: PlannerSettings, recording: RunRecording) -> None:
+        """``~/world_yaml`` and ``~/world_markers`` of a problem."""
+        self.publish("world_yaml", messages.world_yaml_message(world, planner, self._node_name), recording)
+        self.publish("world_markers", messages.world_markers(world, self.now_ns()), recording)
+
+    def event(self, run_id: uuid.UUID, event: str, recording: RunRecording, /, at_s: float | None = None,
+              **fields: Any) -> None:
+        """One ``~/events`` message; ``time`` is ``at_s`` if given (grasp events), else wall-clock seconds.
+
+        ``fields`` go into the message (``recording=`` among them: the text of the run's recording).
+        """
+        self.publish("events", messages.event_message(run_id, event, time.time() if at_s is None else at_s,
+                                                      **fields), recording)
+
+    def feedback(self, run: Run, phase: str) -> None:
+        """``~/feedback`` of ``run`` with ``phase``."""
+        self.publish("feedback", messages.feedback_status(
+            run.id, landmarks=run.landmarks, best_distance=run.best_distance,
+            elapsed_s=time.monotonic() - run.start_s, phase=phase), run.recording)
+
+    def refusal(self, code: Outcome, message: str, source: str, recording: RunRecording) -> str:
+        """A request that does not become a run: a UUID of its own, status aborted, an ``aborted`` event.
+
+        Returns ``run <id>: <CODE>: <message>``.
+        """
+        run_id = uuid.uuid4()
+        self.set_status(run_id, self.now_ns(), GoalStatus.STATUS_ABORTED)
+        self.publish_status(recording)
+        self.event(run_id, "aborted", recording, code=code.name, code_value=code.value, message=message,
+                   source=source)
+        return f"run {run_id.hex}: {code.name}: {message}"
+
+    # ------------------------------------------------------------------ ~/status (with feedback, in order)
+
+    def set_status(self, run_id: uuid.UUID, stamp_ns: int, status: int) -> None:
+        """Enter a run's status in the table (published by the next :meth:`publish_status`)."""
+        with self._order:
+            self._statuses.set(run_id, stamp_ns, status)
+
+    def publish_status(self, recording: RunRecording) -> None:
+        """``~/status``: every run of the table."""
+        with self._order:
+            self._publish_status(recording)
+
+    def planning_progress(self, run: Run) -> None:
+        """While ``run`` plans: ``~/feedback`` (``planning``) and ``~/status``."""
+        with self._order:
+            if run.phase is Phase.PLANNING:
+                self.feedback(run, Phase.PLANNING.value)
+                self._publish_status(run.recording)
+
+    def outcome(self, run: Run) -> None:
+        """``run``'s outcome on ``~/feedback`` (its code as ``phase``) and ``~/status``."""
+        if run.outcome is None:
+            raise ValueError(f"run {run.hex} has no outcome yet")
+        with self._order:
+            self.feedback(run, run.outcome.name)
+            self._statuses.set(run.id, run.accepted_ns, run.status)
+            self._publish_status(run.recording)
+
+    def _publish_status(self, recording: RunRecording) -> None:
+        self.publish("status", messages.goal_status_array(self._statuses.entries(), self.now_ns()), recording)

@@ -1,0 +1,68 @@
+"""Playing a timed plan back in real time: samples, gripper events, stop (no ROS graph)."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+
+from clew_ros.node.playback import GripperEvent
+from clew_ros.node.player import play
+
+
+class Line:
+    """A track of ``duration_s`` whose one joint equals the time, with a grasp and an ungrasp."""
+
+    def __init__(self, duration_s: float) -> None:
+        self.duration_s = duration_s
+        self._events = [GripperEvent("grasp", 2, 0.3 * duration_s, 1), GripperEvent("ungrasp", 2, 0.6 * duration_s, 2)]
+
+    def events(self) -> list[GripperEvent]:
+        return list(self._events)
+
+    def sample(self, t_s: float) -> tuple[np.ndarray, float, np.ndarray]:
+        t = min(max(t_s, 0.0), self.duration_s)
+        return np.array([t]), float(0.3 * self.duration_s <= t < 0.6 * self.duration_s), np.zeros(3)
+
+
+def recorded(duration_s: float, rate_hz: float, stop: threading.Event):
+    samples, events = [], []
+    end = play(Line(duration_s), rate_hz, wait_stop=stop.wait,
+               on_sample=lambda q, gripper, pose: samples.append((time.monotonic(), float(q[0]), gripper)),
+               on_event=lambda e: events.append((len(samples), e)))
+    return end, samples, events
+
+
+def test_plays_in_time_to_the_last_point() -> None:
+    start = time.monotonic()
+    end, samples, events = recorded(0.5, 20.0, threading.Event())
+    took = time.monotonic() - start
+    assert not end.stopped and end.phase == "playback_done" and end.at_s == 0.5
+    assert 0.5 <= took < 1.5
+    assert samples[-1][1] == 0.5  # the last sample is the last point
+    assert 9 <= len(samples) <= 13  # 20 Hz over 0.5 s, the first at 0 and the last at the end
+    times = [q for _, q, _ in samples]
+    assert times == sorted(times)
+    # each event once, in order, right after the first sample at or past its time
+    assert [e.kind for _, e in events] == ["grasp", "ungrasp"]
+    for count, event in events:
+        assert samples[count - 1][1] >= event.time_s and (count < 2 or samples[count - 2][1] < event.time_s)
+
+
+def test_a_stop_ends_it_within_a_period() -> None:
+    stop = threading.Event()
+    threading.Timer(0.2, stop.set).start()
+    start = time.monotonic()
+    end, samples, events = recorded(10.0, 20.0, stop)
+    assert end.stopped and end.phase == "playback_stopped" and 0.1 < end.at_s < 0.5
+    assert time.monotonic() - start < 1.0
+    assert samples[-1][1] < 0.5 and not events  # the grasp (at 3 s) was not reached
+
+
+def test_a_stop_before_the_start_sends_nothing() -> None:
+    stop = threading.Event()
+    stop.set()
+    end, samples, events = recorded(1.0, 20.0, stop)
+    assert end.stopped and end.at_s is None and end.phase == "playback_stopped"
+    assert not samples and not events

@@ -30,6 +30,7 @@ import json
 import math
 import threading
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -65,6 +66,9 @@ __all__ = ["PlannerClient"]
 
 _STATUS = {GoalStatus.STATUS_ACCEPTED: RunStatus.ACCEPTED, GoalStatus.STATUS_EXECUTING: RunStatus.EXECUTING}
 _OUTCOME_EVENTS = ("succeeded", "aborted", "canceled")
+#: The executors made to spin scripts' nodes (one per node, shared by its clients), each with a lock so that
+#: one thread at a time spins it.
+_SCRIPT_EXECUTORS: weakref.WeakKeyDictionary[SingleThreadedExecutor, threading.Lock] = weakref.WeakKeyDictionary()
 
 
 class PlannerClient:
@@ -96,7 +100,6 @@ class PlannerClient:
         self._world_text: str | None = None
         self._status_seen = False
         self._callback_threads: set[int] = set()
-        self._own_executor: SingleThreadedExecutor | None = None
         self._last_stamp_ns = 0
         name = self.planner
         group = self._group
@@ -191,10 +194,6 @@ class PlannerClient:
             node.destroy_subscription(subscription)
         node.destroy_client(self._cancel)
         node.destroy_client(self._parameters)
-        if self._own_executor is not None:
-            self._own_executor.remove_node(node)
-            self._own_executor.shutdown()
-            self._own_executor = None
 
     # -- waiting -------------------------------------------------------------------------------------
 
@@ -205,14 +204,18 @@ class PlannerClient:
             return 0.1 if deadline is None else min(0.1, deadline - time.monotonic())
 
         executor = self._node.executor
-        if executor is None or executor is self._own_executor:
-            if self._own_executor is None:
-                self._own_executor = SingleThreadedExecutor(context=self._node.context)
-                self._own_executor.add_node(self._node)
+        if executor is None or executor in _SCRIPT_EXECUTORS:
+            # a script's node that nobody spins: spin it here, with one executor per node for all its clients
+            if executor is None:
+                executor = SingleThreadedExecutor(context=self._node.context)
+                _SCRIPT_EXECUTORS[executor] = threading.Lock()
+                executor.add_node(self._node)
+            spinning = _SCRIPT_EXECUTORS[executor]
             while not predicate():
                 if left() <= 0:
                     return False
-                self._own_executor.spin_once(timeout_sec=left())
+                with spinning:
+                    executor.spin_once(timeout_sec=max(0.0, left()))
             return True
         if threading.get_ident() in self._callback_threads and not isinstance(executor, MultiThreadedExecutor):
             raise RuntimeError("waiting here would block the executor that must deliver the answer: in a node "

@@ -25,7 +25,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.executors import SingleThreadedExecutor
 from std_srvs.srv import Trigger
 
-from clew_ros.node.publishing import STREAM_QOS
+from clew_ros.node.qos import STREAM_QOS
 
 EXIT_SUCCESS, EXIT_NO_PLAN, EXIT_NO_ANSWER = 0, 1, 2
 RUN_ID = re.compile(r"run ([0-9a-f]{32})")

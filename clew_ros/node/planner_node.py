@@ -46,7 +46,8 @@ from clew_ros.node.parameters import (
     initial_values,
     plain_value,
 )
-from clew_ros.node.publishing import GOAL_QOS, Publishing
+from clew_ros.node.publishing import Publishing
+from clew_ros.node.qos import GOAL_QOS
 from clew_ros.node.run import CancelKind, Run, Source
 from clew_ros.node.run_recording import NO_RECORDING, Recordings
 from clew_ros.node.worker import RunWorker
@@ -117,8 +118,12 @@ class PlannerNode(Node):
         with self._lock:
             return self._run
 
-    def request_plan(self, source: Source = "plan", goal: np.ndarray | None = None) -> tuple[Run | None, str]:
+    def request_plan(self, source: Source = "plan", goal: np.ndarray | None = None,
+                     goal_stamp_ns: int | None = None) -> tuple[Run | None, str]:
         """Start a run to ``goal`` (``(x, y, theta)``; ``None``: ``world.object.goal``), or refuse it.
+
+        ``goal_stamp_ns``, the stamp of the ``~/goal_pose`` that asks, is echoed
+        in the run's ``accepted`` event or in the refusal's ``aborted`` event.
 
         Returns ``(run, "")`` once the run's start is out (status accepted,
         ``accepted`` event) and its worker runs, or ``(None, why)`` when a run
@@ -126,6 +131,10 @@ class PlannerNode(Node):
         aborted and an ``aborted`` event) or the node shuts down. A playback
         in progress is stopped for the new run.
         """
+        concluding = self.current_run
+        if concluding is not None and concluding.outcome is not None:
+            # its outcome is being published: whoever saw it may send the next goal at once, never refused BUSY
+            concluding.wait_outcome(START_WAIT_S)
         with self._lock:  # the policy: one run at a time; never queued
             previous = self._run
             if self._closing.is_set():
@@ -136,11 +145,11 @@ class PlannerNode(Node):
                            "requests are not queued; cancel it with ~/cancel or wait")
             else:
                 refusal = None
-                run = self._run = Run(source, goal, self._config, self._out.now_ns())
+                run = self._run = Run(source, goal, self._config, self._out.now_ns(), goal_stamp_ns)
                 if previous is not None:
                     previous.stop_playback()
         if refusal is not None:
-            return None, self._refuse(Outcome.BUSY, refusal, source)
+            return None, self._refuse(Outcome.BUSY, refusal, source, goal_stamp_ns)
         self._worker.start(run, previous)
         return run, ""
 
@@ -178,11 +187,11 @@ class PlannerNode(Node):
         if not run.wait_finished(timeout_s):
             self.get_logger().error(f"run {run.hex}: the worker did not stop within {timeout_s} s")
 
-    def _refuse(self, code: Outcome, message: str, source: Source) -> str:
+    def _refuse(self, code: Outcome, message: str, source: Source, goal_stamp_ns: int | None = None) -> str:
         """Publish a refused request (a UUID of its own, status aborted, an aborted event); its text."""
         current = self.current_run  # recorded in the current run's recording, after that run's start
         recording = current.recording if current is not None and current.wait_started(START_WAIT_S) else NO_RECORDING
-        text = self._out.refusal(code, message, source, recording)
+        text = self._out.refusal(code, message, source, recording, goal_stamp_ns)
         self.get_logger().warning(text)
         return text
 
@@ -208,12 +217,13 @@ class PlannerNode(Node):
     def _on_goal_pose(self, msg: PoseStamped) -> None:
         with self._lock:
             world = self._config.world
+        stamp_ns = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         try:
             goal = messages.goal_from_pose_stamped(msg, world)
         except messages.GoalPoseError as error:
-            self._refuse(Outcome.INVALID_WORLD, f"refused: {error}", "goal_pose")
+            self._refuse(Outcome.INVALID_WORLD, f"refused: {error}", "goal_pose", stamp_ns)
             return
-        self.request_plan("goal_pose", goal)
+        self.request_plan("goal_pose", goal, stamp_ns)
 
     def _on_timer(self) -> None:
         run = self.current_run

@@ -23,7 +23,7 @@ from action_msgs.msg import GoalStatus, GoalStatusArray
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
@@ -32,21 +32,11 @@ from visualization_msgs.msg import MarkerArray
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.core.world import World
 from clew_ros.node import messages
+from clew_ros.node.qos import EVENTS_QOS, LATCHED_QOS, STREAM_QOS
 from clew_ros.node.run import Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
 
-__all__ = ["EVENTS_QOS", "GOAL_QOS", "LATCHED_QOS", "STREAM_QOS", "TOPICS", "Publishing"]
-
-#: Latched topics: a late subscriber gets the last message.
-LATCHED_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
-STREAM_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.VOLATILE)
-#: ~/goal_pose: a burst of goals is queued, not dropped; each is answered (a run, or a BUSY refusal).
-GOAL_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.VOLATILE)
-EVENTS_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.VOLATILE)
+__all__ = ["TOPICS", "Publishing"]
 
 #: The node's published topics (``~/<name>``): message type and QoS.
 TOPICS: dict[str, tuple[type, QoSProfile]] = {
@@ -113,16 +103,19 @@ class Publishing:
             run.id, landmarks=run.landmarks, best_distance=run.best_distance,
             elapsed_s=time.monotonic() - run.start_s, phase=phase), run.recording)
 
-    def refusal(self, code: Outcome, message: str, source: str, recording: RunRecording) -> str:
-        """A request that does not become a run: a UUID of its own, status aborted, an ``aborted`` event.
+    def refusal(self, code: Outcome, message: str, source: str, recording: RunRecording,
+                goal_stamp_ns: int | None = None) -> str:
+        """A request that does not become a run: a UUID of its own, status aborted, an ``aborted`` event
+        (with the request's ``goal_stamp_ns``, if any).
 
         Returns ``run <id>: <CODE>: <message>``.
         """
         run_id = uuid.uuid4()
         self.set_status(run_id, self.now_ns(), GoalStatus.STATUS_ABORTED)
         self.publish_status(recording)
+        request = {} if goal_stamp_ns is None else {"goal_stamp_ns": goal_stamp_ns}
         self.event(run_id, "aborted", recording, code=code.name, code_value=code.value, message=message,
-                   source=source)
+                   source=source, **request)
         return f"run {run_id.hex}: {code.name}: {message}"
 
     # ------------------------------------------------------------------ ~/status (with feedback, in order)

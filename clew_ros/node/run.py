@@ -100,10 +100,15 @@ class Run:
         The parameters the run plans with (taken when it is accepted).
     accepted_ns:
         When it was accepted (ns, the node's clock): the stamp of its status.
+    goal_stamp_ns:
+        The header stamp of the ``~/goal_pose`` message that asked for it (ns);
+        echoed in its ``accepted`` event so that a client knows its run.
     """
 
-    def __init__(self, source: Source, goal: np.ndarray | None, config: Configuration, accepted_ns: int) -> None:
+    def __init__(self, source: Source, goal: np.ndarray | None, config: Configuration, accepted_ns: int,
+                 goal_stamp_ns: int | None = None) -> None:
         self.id = uuid.uuid4()
+        self.goal_stamp_ns = goal_stamp_ns
         self.source: Source = source
         self.goal = np.array(config.world.object.goal if goal is None else goal, dtype=float)
         self.config = config

@@ -31,8 +31,14 @@ __all__ = ["NO_RECORDING", "BagRecording", "Recordings", "RunRecording"]
 class RunRecording:
     """A recording that records nothing; ``text`` says so (or is empty)."""
 
-    def __init__(self, text: str = "") -> None:
+    def __init__(self, text: str = "", path: str | None = None) -> None:
         self._text = text
+        self._path = path
+
+    @property
+    def path(self) -> str | None:
+        """The run's rosbag2 directory (``None``: the run is not recorded)."""
+        return self._path
 
     @property
     def text(self) -> str:
@@ -65,7 +71,7 @@ class BagRecording(RunRecording):
     """
 
     def __init__(self, recorder: RunRecorder, on_failure: Callable[[str], None]) -> None:
-        super().__init__(f"recording {recorder.path}")
+        super().__init__(f"recording {recorder.path}", str(recorder.path))
         self._recorder: RunRecorder | None = recorder
         self._on_failure = on_failure
         self._failure_lock = threading.Lock()

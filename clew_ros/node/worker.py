@@ -80,8 +80,10 @@ class RunWorker:
         now = out.now_ns()
         run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now)
         out.publish_status(run.recording)
+        request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}
         out.event(run.id, "accepted", run.recording, source=run.source, world=config.world.name,
-                  goal=run.goal.tolist(), seed=config.planner.seed, recording=run.recording.text)
+                  goal=run.goal.tolist(), seed=config.planner.seed, recording=run.recording.text,
+                  recording_path=run.recording.path, **request)
         self._logger.info(f"run {run.hex} accepted ({run.source}): goal {np.round(run.goal, 4).tolist()}, "
                           f"{run.recording.text}")
 

@@ -13,7 +13,8 @@ from PIL import Image, ImageSequence
 
 from clew_ros.cli.render import main as clew_render
 from clew_ros.render import scene_from_recording
-from clew_ros.render.view import COLORS, View
+from clew_ros.render.shapes import COLORS
+from clew_ros.render.view import View
 
 sys.path.insert(0, str(Path(__file__).parent / "helpers"))
 from rec_plan import WORLD_PATH, quick_plan, quick_world  # noqa: E402

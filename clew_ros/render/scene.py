@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -22,8 +22,15 @@ from clew_ros.core.plan import Plan, PlanLandmark, replay
 from clew_ros.core.world import World, load_world, world_from_parameters
 from clew_ros.render.errors import RenderError
 
-__all__ = ["LandmarkGraph", "Motion", "Scene", "world_from_yaml_text", "scene_from_world", "scene_from_plan",
-           "scene_from_recording"]
+__all__ = [
+    "LandmarkGraph",
+    "Motion",
+    "Scene",
+    "scene_from_plan",
+    "scene_from_recording",
+    "scene_from_world",
+    "world_from_yaml_text",
+]
 
 
 @dataclass(frozen=True)
@@ -35,7 +42,7 @@ class LandmarkGraph:
     root: int | None = 0
 
     @classmethod
-    def from_plan(cls, world: World, landmarks: Sequence[PlanLandmark]) -> "LandmarkGraph | None":
+    def from_plan(cls, world: World, landmarks: Sequence[PlanLandmark]) -> LandmarkGraph | None:
         """Nodes where the object rests at each landmark (as the node's markers draw them); parent -> child edges."""
         del world  # the positions are in the landmarks themselves
         if not landmarks:
@@ -82,9 +89,16 @@ class Motion:
             rows.update({max(0, row - 1), row} if before_events else {row})
         return sorted(rows)
 
+    def rest_poses(self) -> list[np.ndarray]:
+        """Where the object is put down (after each ungrasp), in order."""
+        return [self.object_poses[row] for row, kind, _grasp in self.events if kind == "ungrasp"]
+
 
 @dataclass
 class Scene:
+    """What one picture shows: a world, a plan to draw along (``None``: the arm at its start), the landmark tree,
+    a title and notes for the caption."""
+
     world: World
     plan: Plan | None = None
     landmarks: LandmarkGraph | None = None

@@ -18,8 +18,10 @@ from PIL import Image
 
 from clew_ros.core.plan import Plan
 from clew_ros.render import (
+    LandmarkGraph,
     draw_animation,
     draw_still,
+    landmarks_from_events,
     scene_from_plan,
     scene_from_world,
 )
@@ -177,3 +179,26 @@ def test_no_private_names_cross_modules() -> None:
         if module.startswith("clew_ros") and name.startswith("_")
     ]
     assert crossing == []
+
+
+@pytest.mark.parametrize("root", ["announced", "from the world"])
+def test_landmark_tree_from_events(root: str) -> None:
+    """The tree of the events is the plan's; the node does not announce the root: then it comes from the world."""
+    plan, world = quick_plan(), quick_world()
+    events = [
+        {"run_id": "f" * 32, "event": "landmark", "time": 1.0 + i, **landmark}
+        for i, landmark in enumerate(plan["landmarks"])
+        if root == "announced" or landmark["parent"] is not None
+    ]
+    noise = [{"event": "accepted"}, {"event": "landmark", "landmark": 0}, {"event": "landmark", "id": 99}]
+    landmarks = landmarks_from_events(noise + events, world)
+    assert [lm.id for lm in landmarks] == [lm["id"] for lm in plan["landmarks"]]
+    assert landmarks[0].object_pose.tolist() == list(world.object.initial)
+    from_events = LandmarkGraph.from_landmarks(landmarks)
+    from_plan = scene_from_plan(world, Plan.from_dict(plan)).landmarks
+    np.testing.assert_array_equal(from_events.nodes, from_plan.nodes)
+    np.testing.assert_array_equal(from_events.edges, from_plan.edges)
+    assert from_events.root == from_plan.root
+    moved = {**events[-1], "object_pose": [9.0, 9.0, 0.0]}  # a later event for the same id replaces it
+    assert landmarks_from_events([*events, moved], world)[-1].object_pose.tolist() == [9.0, 9.0, 0.0]
+    assert landmarks_from_events(noise, world) == ()

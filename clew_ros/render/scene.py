@@ -1,17 +1,17 @@
 """What a picture shows: the world, optionally a plan and a landmark tree.
 
 A :class:`Scene` is built from a world alone, a world and a plan, or a
-recording (which holds the world YAML, the trajectory, the events and the
-landmark markers). :meth:`Scene.motion` replays the plan with the core.
+recording (which holds the world YAML, the trajectory and the events, the
+``landmark`` events among them). :meth:`Scene.motion` replays the plan with
+the core (:func:`clew_ros.core.plan.replay`).
 """
 
 from __future__ import annotations
 
 import json
-import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -22,8 +22,19 @@ from clew_ros.core.plan import Plan, PlanLandmark, replay
 from clew_ros.core.world import World, load_world, world_from_parameters
 from clew_ros.render.errors import RenderError
 
-__all__ = ["LandmarkGraph", "Motion", "Scene", "world_from_yaml_text", "scene_from_world", "scene_from_plan",
-           "scene_from_recording"]
+__all__ = [
+    "LandmarkGraph",
+    "Motion",
+    "Scene",
+    "landmarks_from_events",
+    "load_world_file",
+    "read_plan_file",
+    "root_landmark",
+    "scene_from_plan",
+    "scene_from_recording",
+    "scene_from_world",
+    "world_from_yaml_text",
+]
 
 
 @dataclass(frozen=True)
@@ -35,15 +46,18 @@ class LandmarkGraph:
     root: int | None = 0
 
     @classmethod
-    def from_plan(cls, world: World, landmarks: Sequence[PlanLandmark]) -> "LandmarkGraph | None":
-        """Nodes where the object rests at each landmark (as the node's markers draw them); parent -> child edges."""
-        del world  # the positions are in the landmarks themselves
+    def from_landmarks(cls, landmarks: Sequence[PlanLandmark]) -> LandmarkGraph | None:
+        """Nodes where the object rests at each landmark (as the node's markers draw them), parent -> child edges;
+        ``None`` without landmarks."""
         if not landmarks:
             return None
         tips = np.array([lm.object_pose[:2] for lm in landmarks], dtype=float)
         index = {lm.id: i for i, lm in enumerate(landmarks)}
-        edges = [(tips[index[lm.parent]], tips[i]) for i, lm in enumerate(landmarks)
-                 if lm.parent is not None and lm.parent in index]
+        edges = [
+            (tips[index[lm.parent]], tips[i])
+            for i, lm in enumerate(landmarks)
+            if lm.parent is not None and lm.parent in index
+        ]
         root = next((i for i, lm in enumerate(landmarks) if lm.parent is None), None)
         return cls(tips, np.array(edges, dtype=float).reshape(-1, 2, 2), root)
 
@@ -82,9 +96,16 @@ class Motion:
             rows.update({max(0, row - 1), row} if before_events else {row})
         return sorted(rows)
 
+    def rest_poses(self) -> list[np.ndarray]:
+        """Where the object is put down (after each ungrasp), in order."""
+        return [self.object_poses[row] for row, kind, _grasp in self.events if kind == "ungrasp"]
+
 
 @dataclass
 class Scene:
+    """What one picture shows: a world, a plan to draw along (``None``: the arm at its start), the landmark tree,
+    a title and notes for the caption."""
+
     world: World
     plan: Plan | None = None
     landmarks: LandmarkGraph | None = None
@@ -115,8 +136,9 @@ class Scene:
                 row += len(q)
         except (KeyError, TypeError, ValueError, IndexError) as error:
             raise RenderError(f"the plan cannot be replayed in world {self.world.name!r}: {error!r}") from None
-        return Motion(np.concatenate(configurations), np.concatenate(poses), np.concatenate(held),
-                      np.concatenate(segment), events)
+        return Motion(
+            np.concatenate(configurations), np.concatenate(poses), np.concatenate(held), np.concatenate(segment), events
+        )
 
     @property
     def grasp_count(self) -> int:
@@ -168,8 +190,12 @@ def scene_from_plan(world: World, plan: Plan) -> Scene:
     if plan.world != world.name:
         raise RenderError(f"the plan is for world {plan.world!r}, not {world.name!r}")
     outcome = "plan found" if plan.success else f"no plan: {plan.message}"
-    return Scene(world, plan if plan.success else None, LandmarkGraph.from_plan(world, plan.landmarks),
-                 title=f"{world.name}: {outcome}")
+    return Scene(
+        world,
+        plan if plan.success else None,
+        LandmarkGraph.from_landmarks(plan.landmarks),
+        title=f"{world.name}: {outcome}",
+    )
 
 
 def read_plan_file(path: str | Path) -> Plan:
@@ -185,54 +211,57 @@ def _topic(recording: Any, suffix: str) -> str | None:
     return names[0] if names else None
 
 
-def _marker_points(marker: Any) -> tuple[list[np.ndarray], list[tuple[np.ndarray, np.ndarray]]]:
-    """Nodes and edges that one marker draws, in the world frame (x, y)."""
-    position = marker.pose.position
-    q = marker.pose.orientation
-    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-    c, s = math.cos(yaw), math.sin(yaw)
-
-    def world(point: Any) -> np.ndarray:
-        return np.array([position.x + c * point.x - s * point.y, position.y + s * point.x + c * point.y])
-
-    points = [world(p) for p in marker.points]
-    kind = marker.type
-    if kind in (6, 7, 8):  # CUBE_LIST, SPHERE_LIST, POINTS
-        return points, []
-    if kind in (1, 2, 3):  # CUBE, SPHERE, CYLINDER
-        return [np.array([position.x, position.y])], []
-    if kind == 5:  # LINE_LIST
-        return [], [(points[i], points[i + 1]) for i in range(0, len(points) - 1, 2)]
-    if kind == 4:  # LINE_STRIP
-        return [], list(zip(points[:-1], points[1:]))
-    return [], []
+ROOT_ID = 0
+"""Id of the root landmark of every run (:class:`clew_ros.core.tree.LandmarkTree`)."""
 
 
-def landmarks_from_markers(arrays: list[Any]) -> LandmarkGraph | None:
-    """The landmark tree drawn by a sequence of ``MarkerArray`` messages (later markers replace earlier ones)."""
-    current: dict[tuple[str, int], Any] = {}
-    for array in arrays:
-        for marker in array.markers:
-            if marker.action == 3:  # DELETEALL: every marker so far, whatever its namespace
-                current = {}
-            elif marker.action == 2:  # DELETE
-                current.pop((marker.ns, marker.id), None)
-            else:
-                current[(marker.ns, marker.id)] = marker
-    nodes: list[np.ndarray] = []
-    edges: list[tuple[np.ndarray, np.ndarray]] = []
-    for marker in current.values():
-        more_nodes, more_edges = _marker_points(marker)
-        nodes += more_nodes
-        edges += more_edges
-    if not nodes and not edges:
-        return None
-    return LandmarkGraph(np.array(nodes, dtype=float).reshape(-1, 2), np.array(edges, dtype=float).reshape(-1, 2, 2),
-                         0 if nodes else None)
+def root_landmark(world: World) -> PlanLandmark:
+    """The landmark every run starts from: the arm at ``robot.initial``, the object at ``object.initial``."""
+    return PlanLandmark(
+        ROOT_ID, None, np.array(world.robot.initial, dtype=float), np.array(world.object.initial, dtype=float), None
+    )
+
+
+def landmarks_from_events(events: Sequence[Mapping[str, Any]], world: World) -> tuple[PlanLandmark, ...]:
+    """The landmark tree of a run in ``world`` from its ``landmark`` events (``id``, ``parent``, ``grasp``,
+    ``object_pose``, ``joints``), in the order first announced; a later event for the same id replaces the earlier.
+
+    The node announces every landmark but the root, which it publishes only as a
+    marker: when the events name no root, :func:`root_landmark` comes first.
+    Events that lack those fields (or are not ``landmark`` events) are passed
+    over; without any landmark event there is no tree (an empty tuple).
+    """
+    found: dict[int, PlanLandmark] = {}
+    for event in events:
+        if event.get("event") != "landmark":
+            continue
+        try:
+            landmark = PlanLandmark.from_dict(event, "landmark event")
+        except PlanFileError:
+            continue
+        found[landmark.id] = landmark
+    if not found or any(landmark.parent is None for landmark in found.values()) or ROOT_ID in found:
+        return tuple(found.values())
+    return (root_landmark(world), *found.values())
+
+
+def _events(recording: Any) -> list[dict[str, Any]]:
+    """The JSON objects recorded on ``~/events``, in order (messages that are not one are passed over)."""
+    topic = _topic(recording, "events")
+    events = []
+    for message in recording.decoded(topic) if topic else []:
+        try:
+            event = json.loads(message.data)
+        except (ValueError, TypeError):
+            continue
+        if isinstance(event, dict):
+            events.append(event)
+    return events
 
 
 def scene_from_recording(path: str | Path, world: World | None = None) -> Scene:
-    """The scene of a recorded run: world, plan rebuilt from the trajectory, landmark markers."""
+    """The scene of a recorded run: its world, the plan rebuilt from ``~/trajectory`` and the landmark tree of its
+    ``landmark`` events (none without such events)."""
     from clew_ros.recording import Recording, RecordingError, trajectory_to_plan
 
     try:
@@ -246,15 +275,7 @@ def scene_from_recording(path: str | Path, world: World | None = None) -> Scene:
         if message is None:
             raise RenderError(f"{path}: the recording holds no ~/world_yaml message; pass --world WORLD.yaml")
         world = world_from_yaml_text(message.data, source=f"{path} ({topic})")
-    events = []
-    topic = _topic(recording, "events")
-    for message in recording.decoded(topic) if topic else []:
-        try:
-            event = json.loads(message.data)
-        except (ValueError, TypeError):
-            continue
-        if isinstance(event, dict):
-            events.append(event)
+    events = _events(recording)
     grasps = [int(e["grasp"]) for e in events if e.get("event") == "grasp" and isinstance(e.get("grasp"), int)]
     outcome = next((e for e in reversed(events) if e.get("event") in ("succeeded", "aborted", "canceled")), None)
     plan = None
@@ -262,8 +283,7 @@ def scene_from_recording(path: str | Path, world: World | None = None) -> Scene:
     trajectory = recording.last(topic) if topic else None
     if trajectory is not None and len(trajectory.points):
         plan = trajectory_to_plan(world, trajectory, grasps=grasps or None)
-    topic = _topic(recording, "landmarks")
-    landmarks = landmarks_from_markers(recording.decoded(topic)) if topic else None
+    landmarks = LandmarkGraph.from_landmarks(landmarks_from_events(events, world))
     run = Path(path).name
     state = outcome["event"] if outcome else ("plan recorded" if plan else "no plan recorded")
     return Scene(world, plan, landmarks, title=f"{world.name}: run {run[:8]} {state}", notes=notes)

@@ -1,4 +1,4 @@
-"""World-to-picture mapping, colours and the geometry every output draws."""
+"""World-to-pixel mapping and the world geometry a picture shows (arm, object)."""
 
 from __future__ import annotations
 
@@ -9,44 +9,7 @@ import numpy as np
 from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["View", "COLORS", "LEGEND", "arm_points", "object_outline", "rest_poses"]
-
-#: RGB colours shared by the PNG, GIF and SVG outputs.
-COLORS = {
-    "background": (255, 255, 255),
-    "field": (248, 248, 244),
-    "field_edge": (80, 80, 80),
-    "obstacle": (106, 109, 120),
-    "obstacle_edge": (55, 57, 64),
-    "start": (45, 95, 200),
-    "goal": (20, 150, 70),
-    "grasp": (200, 40, 150),
-    "tree_edge": (150, 100, 200),
-    "tree_node": (115, 60, 175),
-    "transit": (80, 130, 210),
-    "transfer": (235, 125, 25),
-    "arm": (45, 45, 52),
-    "joint": (255, 255, 255),
-    "open": (40, 170, 80),
-    "closed": (215, 45, 45),
-    "object_rest": (110, 150, 225),
-    "object_held": (240, 155, 50),
-    "text": (30, 30, 30),
-    "muted": (110, 110, 110),
-}
-
-#: Legend entries: (label, colour key, style) with style one of box, dashed, dot, line.
-LEGEND = [
-    ("start", "start", "box"),
-    ("goal", "goal", "dashed"),
-    ("obstacle", "obstacle", "fill"),
-    ("grasps", "grasp", "dot"),
-    ("landmark tree", "tree_node", "dot"),
-    ("transit", "transit", "line"),
-    ("transfer", "transfer", "line"),
-    ("gripper open", "open", "dot"),
-    ("holding", "closed", "dot"),
-]
+__all__ = ["View", "arm_points", "object_outline"]
 
 
 @dataclass(frozen=True)
@@ -61,15 +24,15 @@ class View:
     height: int  # of the map area
 
     @classmethod
-    def fit(cls, world: World, size: int) -> "View":
+    def fit(cls, world: World, size: int) -> View:
         """The world's bounds (plus a little room) fitted into ``size`` pixels on the long side."""
         xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
         pad = 0.03 * max(xmax - xmin, ymax - ymin)
         xmin, ymin, xmax, ymax = xmin - pad, ymin - pad, xmax + pad, ymax + pad
         margin = max(4, size // 80)
         scale = (size - 2 * margin) / max(xmax - xmin, ymax - ymin)
-        width = int(round(2 * margin + (xmax - xmin) * scale))
-        height = int(round(2 * margin + (ymax - ymin) * scale))
+        width = round(2 * margin + (xmax - xmin) * scale)
+        height = round(2 * margin + (ymax - ymin) * scale)
         return cls(xmin, ymax, scale, margin, width, height)
 
     def px(self, points: np.ndarray) -> np.ndarray:
@@ -80,19 +43,16 @@ class View:
         return np.stack([x, y], axis=-1)
 
     def length(self, metres: float) -> float:
+        """``metres`` in pixels."""
         return metres * self.scale
 
 
 def arm_points(world: World, q: np.ndarray) -> np.ndarray:
     """Base, joints and tip of the arm at ``q``: ``(n + 1, 2)``."""
-    return joint_positions(world.robot, np.asarray(q, dtype=float)[None])[0]
+    points: np.ndarray = joint_positions(world.robot, np.asarray(q, dtype=float)[None])[0]
+    return points
 
 
 def object_outline(world: World, pose: np.ndarray) -> np.ndarray:
     """The object's polygon at ``pose``: ``(V, 2)``."""
     return transform_points(np.asarray(pose, dtype=float), world.object.polygon)
-
-
-def rest_poses(motion) -> list[np.ndarray]:
-    """Where the object is put down along a motion (after each ungrasp)."""
-    return [motion.object_poses[row] for row, kind, _grasp in motion.events if kind == "ungrasp"]

@@ -85,7 +85,7 @@ def quick(tmp_path_factory, node) -> Iterator[Planner]:
 @pytest.fixture(scope="module")
 def ring(tmp_path_factory, node) -> Iterator[Planner]:
     yield from _start(tmp_path_factory.mktemp("ring"), "ring", "node_ring.yaml", node,
-                      **{"planner.time_limit": 2.0})
+                      **{"planner.time_limit": 4.0})
 
 
 def test_a_goal_is_planned_and_the_result_is_typed(quick: Planner) -> None:
@@ -123,7 +123,7 @@ def test_hopeless_goals_end_with_their_own_code(quick: Planner, goal, outcome) -
 def test_busy_cancel_time_limit_and_timeout_on_a_planner_that_keeps_planning(ring: Planner) -> None:
     client = ring.client
     first = client.send_goal()
-    wait_until(lambda: first.status is RunStatus.EXECUTING, 30.0, "the first run executing")
+    assert client.wait_until(lambda: first.status is RunStatus.EXECUTING, 30.0)
     with pytest.raises(RunTimeoutError):
         first.wait(timeout_s=0.2)
     busy = client.send_goal().wait(RESULT_TIMEOUT_S)
@@ -140,7 +140,7 @@ def test_two_planners_are_followed_at_once(quick: Planner, ring: Planner) -> Non
     long = ring.client.send_goal()
     short = quick.client.send_goal(QUICK_GOAL)
     assert short.wait(RESULT_TIMEOUT_S).outcome is Outcome.SUCCEEDED
-    assert not long.done()  # the ring planner is still at work (its limit is 2 s)
+    assert not long.done()  # the ring planner is still at work (its limit is 4 s)
     assert long.wait(RESULT_TIMEOUT_S).outcome is Outcome.TIME_LIMIT
     assert short.run_id != long.run_id
 

@@ -197,6 +197,11 @@ class PlannerClient:
 
     # -- waiting -------------------------------------------------------------------------------------
 
+    def wait_until(self, predicate: Callable[[], bool], timeout_s: float | None) -> bool:
+        """Wait until ``predicate()`` is true (e.g. ``lambda: handle.status is RunStatus.EXECUTING``), at most
+        ``timeout_s``; ``False`` when the time is up. Spins a script's node as :meth:`RunHandle.wait` does."""
+        return self._wait_until(predicate, timeout_s)
+
     def _wait_until(self, predicate: Callable[[], bool], timeout_s: float | None) -> bool:
         deadline = None if timeout_s is None else time.monotonic() + timeout_s
 

@@ -35,11 +35,7 @@ from typing import Any
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
 from clew_ros.core.errors import ParameterError, WorldError
-from clew_ros.core.settings import (
-    PLANNER_PARAMETERS,
-    PlannerSettings,
-    check_planner_parameter,
-)
+from clew_ros.core.settings import PLANNER_PARAMETERS, PlannerSettings
 from clew_ros.core.world import World, read_parameter_file, world_from_parameters
 
 __all__ = [
@@ -276,15 +272,6 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
         joint_speed_rad_s=node["trajectory.joint_speed"],
         grasp_dwell_s=node["trajectory.grasp_dwell"],
     ))
-
-
-def check_one(name: str, value: Any) -> None:
-    """Check a single parameter on its own (type and range); the world as a whole is checked elsewhere."""
-    _check_known(name)
-    if name.startswith("planner."):
-        check_planner_parameter(name[len("planner."):], plain_value(value))
-    elif not name.startswith("world."):
-        _check_node_parameter(name, plain_value(value))
 
 
 # --------------------------------------------------------------------------- descriptors

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -25,6 +26,8 @@ from clew_ros.node.parameters import (  # noqa: E402
 )
 
 WORLDS = Path(__file__).parent / "worlds"
+#: Every descriptor as the node declared it before the parameter specification (issue 12) was introduced.
+DESCRIPTORS_BEFORE = Path(__file__).parent / "data" / "parameter_descriptors.json"
 
 
 def file_values(name: str) -> dict:
@@ -114,6 +117,23 @@ def test_descriptors() -> None:
     assert descriptor_for("world.obstacles.anything").description
     assert descriptor_for("playback.rate").floating_point_range[0].to_value == 1000.0
     assert descriptor_for("record.directory").description
+
+
+def test_descriptors_are_unchanged() -> None:
+    """Every parameter keeps its descriptor: description, constraints text, ranges, dynamic typing."""
+    saved = json.loads(DESCRIPTORS_BEFORE.read_text(encoding="utf-8"))
+    assert {name for name in initial_values({}) if not name.startswith("world.obstacles.")} <= set(saved)
+    for name, expected in saved.items():
+        d = descriptor_for(name)
+        assert {
+            "description": d.description,
+            "additional_constraints": d.additional_constraints,
+            "type": d.type,
+            "read_only": d.read_only,
+            "dynamic_typing": d.dynamic_typing,
+            "floating_point_range": [[r.from_value, r.to_value, r.step] for r in d.floating_point_range],
+            "integer_range": [[r.from_value, r.to_value, r.step] for r in d.integer_range],
+        } == expected, name
 
 
 def test_record_directory_expands_home(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

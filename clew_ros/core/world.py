@@ -1,8 +1,13 @@
-"""The world: robot, obstacles and movable object, loaded from the parameter file.
+"""The world: robot, obstacles and movable object, parsed from the parameter file.
 
 The parameter file is the ROS 2 parameter YAML of ``interface.md`` section 1.
-Loading validates everything and returns immutable objects; any fault raises
-:class:`~clew_ros.core.errors.WorldError` naming the parameter at fault.
+Parsing checks every value and the rules that tie keys together, and returns
+immutable objects; any fault raises :class:`~clew_ros.core.errors.WorldError`
+naming the parameter at fault.
+
+Parsing is pure: it does no collision check. Whether the start and the goal
+are valid placements (section 1's validity test) is checked by
+:func:`clew_ros.core.collision.check_start_and_goal`.
 """
 
 from __future__ import annotations
@@ -258,22 +263,23 @@ def _bool(tree: Mapping, key: str, prefix: str, default: bool) -> bool:
     return value
 
 
-def world_from_parameters(parameters: Mapping[str, Any], *, check_collisions: bool = True) -> World:
-    """Build and validate a :class:`World` from a ``ros__parameters`` tree.
+def world_from_parameters(parameters: Mapping[str, Any]) -> World:
+    """Parse a :class:`World` from a ``ros__parameters`` tree, checking every value.
 
-    ``parameters`` holds a ``world`` key (other keys are ignored). With
-    ``check_collisions`` the initial configuration and the object's start and
-    goal placements are checked against section 1's validity test.
+    ``parameters`` holds a ``world`` key (other keys are ignored). Raises
+    :class:`~clew_ros.core.errors.WorldError` naming the parameter at fault.
+    The start and goal placements are not checked for collisions here: see
+    :func:`clew_ros.core.collision.check_start_and_goal`.
     """
     if not isinstance(parameters, Mapping):
         raise WorldError("ros__parameters", f"expected a mapping, got {_short(parameters)}")
     tree = parameters.get("world")
     if not isinstance(tree, Mapping):
         raise WorldError("world", f"expected a mapping of world parameters, got {_short(tree)}")
-    return _world_from_tree(tree, check_collisions=check_collisions)
+    return _world_from_tree(tree)
 
 
-def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
+def _world_from_tree(tree: Mapping) -> World:
     p = "world"
     name = tree.get("name", "world")
     if not isinstance(name, str) or not name:
@@ -354,7 +360,7 @@ def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
         grasps=_frozen(grasps),
     )
 
-    world = World(
+    return World(
         name=name,
         bounds=_frozen(bounds),
         robot=robot,
@@ -365,23 +371,6 @@ def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
         goal_angle_tolerance=_number(tree, "goal_angle_tolerance", p, math.pi, non_negative=True),
         parameters=_plain(tree),
     )
-    if check_collisions:
-        _check_start_and_goal(world)
-    return world
-
-
-def _check_start_and_goal(world: World) -> None:
-    from clew_ros.core.collision import explain_invalid, explain_placement  # local: collision needs World
-
-    reason = explain_placement(world, world.object.initial)
-    if reason:
-        raise WorldError("world.object.initial", f"expected a collision-free placement, but {reason}")
-    reason = explain_placement(world, world.object.goal)
-    if reason:
-        raise WorldError("world.object.goal", f"expected a collision-free placement, but {reason}")
-    reason = explain_invalid(world, world.robot.initial, world.object.initial)
-    if reason:
-        raise WorldError("world.robot.initial", f"expected a valid start configuration, but {reason}")
 
 
 def _plain(value: Any) -> Any:
@@ -392,9 +381,10 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def load_world(path: str | Path, *, check_collisions: bool = True) -> World:
-    """Read and validate the world of a parameter file."""
-    return world_from_parameters(read_parameter_file(path), check_collisions=check_collisions)
+def load_world(path: str | Path) -> World:
+    """Read, parse and check the world of a parameter file (no collision check: see
+    :func:`clew_ros.core.collision.check_start_and_goal`)."""
+    return world_from_parameters(read_parameter_file(path))
 
 
 def world_to_parameters(world: World) -> dict:

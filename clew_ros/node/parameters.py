@@ -4,7 +4,8 @@ Three families, all with descriptors (``ros2 param describe`` shows them):
 
 - ``world.*``: the world of interface.md §1; ``world.obstacles.<name>`` for
   each name in ``world.obstacle_names``. Validated by the core
-  (:func:`~clew_ros.core.world.world_from_parameters`), so every refusal
+  (:func:`~clew_ros.core.world.world_from_parameters`, then
+  :func:`~clew_ros.core.collision.check_start_and_goal`), so every refusal
   names the parameter at fault.
 - ``planner.*``: :data:`~clew_ros.core.settings.PLANNER_PARAMETERS`,
   validated by :func:`~clew_ros.core.settings.check_planner_parameter`.
@@ -34,6 +35,7 @@ from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
+from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.settings import PLANNER_PARAMETERS, PlannerSettings
 from clew_ros.core.world import World, read_parameter_file, world_from_parameters
@@ -260,7 +262,8 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
     values = {k: plain_value(v) for k, v in values.items() if k.startswith(OWN_PREFIXES)}
     for name in values:
         _check_known(name)
-    world = world_from_parameters(_world_tree(values, listed_obstacles_only=listed_obstacles_only))
+    world_tree = _world_tree(values, listed_obstacles_only=listed_obstacles_only)
+    world = check_start_and_goal(world_from_parameters(world_tree))
     planner_tree = {k[len("planner."):]: v for k, v in values.items() if k.startswith("planner.") and v is not None}
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
     node = {name: _check_node_parameter(name, values.get(name, default))

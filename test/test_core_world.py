@@ -8,7 +8,15 @@ import pytest
 
 from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import WorldError
-from clew_ros.core.world import World, load_world, read_parameter_file, world_from_parameters, world_to_parameters
+from clew_ros.core.parameters import WORLD_PARAMETERS
+from clew_ros.core.world import (
+    Robot,
+    World,
+    load_world,
+    read_parameter_file,
+    world_from_parameters,
+    world_to_parameters,
+)
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"
 WORLDS = sorted(CONFIG.glob("*.yaml"))
@@ -151,6 +159,34 @@ def test_defaults_apply_when_keys_are_absent():
     assert world.goal_tolerance == 0.02
     assert world.goal_angle_tolerance == pytest.approx(math.pi)
     assert world.robot.link_width == 0.0 and world.robot.self_collision is True
+    tree["world"].pop("name")
+    assert world_from_parameters(tree).name == "world"
+
+
+def test_the_defaults_are_the_specified_ones():
+    """World and Robot take their defaults from the parameter specification, as the parser does."""
+    defaults = {key: spec.default for key, spec in WORLD_PARAMETERS.items() if not spec.required}
+    assert defaults == {"name": "world", "robot.link_width": 0.0, "robot.self_collision": True,
+                        "obstacle_names": None, "grasp_tolerance": 0.005, "goal_tolerance": 0.02,
+                        "goal_angle_tolerance": math.pi}
+    world = load_world(CONFIG / "figure1.yaml")
+    robot = Robot(world.robot.base, world.robot.link_lengths, world.robot.joint_lower, world.robot.joint_upper,
+                  world.robot.initial)
+    assert (robot.link_width, robot.self_collision) == (defaults["robot.link_width"],
+                                                       defaults["robot.self_collision"])
+    bare = World(world.name, world.bounds, robot, (), world.object)
+    assert (bare.grasp_tolerance, bare.goal_tolerance, bare.goal_angle_tolerance) == (
+        defaults["grasp_tolerance"], defaults["goal_tolerance"], defaults["goal_angle_tolerance"])
+
+
+def test_every_required_key_is_refused_when_absent():
+    for spec in WORLD_PARAMETERS.values():
+        if not spec.required:
+            continue
+        tree = base_tree()
+        _set(tree, spec.name, _DELETE)
+        with pytest.raises(WorldError, match=rf"^{spec.name}: is required"):
+            world_from_parameters(tree)
 
 
 def test_world_without_obstacles_and_wildcard_key(tmp_path):

@@ -1,9 +1,10 @@
-"""The parameter specification (clew_ros.core.parameters): tables and the one checker."""
+"""The parameter specification (clew_ros.core.parameters): tables, the one checker, the README tables."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import fields
+from pathlib import Path
 
 import pytest
 
@@ -17,10 +18,42 @@ from clew_ros.core.parameters import (
     ParameterSpec,
     ParameterType,
     check_value,
+    main,
+    markdown_tables,
+    update_markdown,
 )
 from clew_ros.core.settings import PlannerSettings
 
+README = Path(__file__).resolve().parents[1] / "README.md"
 TABLES = (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS)
+
+
+def test_readme_tables_are_generated_from_the_specification() -> None:
+    """README.md holds the tables markdown_tables() makes; after a change to the specification run
+    ``python -m clew_ros.core.parameters --update README.md``."""
+    text = README.read_text(encoding="utf-8")
+    assert update_markdown(text) == text, "run: python -m clew_ros.core.parameters --update README.md"
+    for name, table in markdown_tables().items():
+        assert table in text, name
+    for table in TABLES:
+        for spec in table.values():
+            assert f"| `{spec.name}` |" in text, spec.name
+
+
+def test_the_update_and_check_commands(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    stale = README.read_text(encoding="utf-8").replace("| `planner.seed` | integer | `0` |",
+                                                       "| `planner.seed` | integer | `7` |")
+    path = tmp_path / "README.md"
+    path.write_text(stale, encoding="utf-8")
+    assert main(["--check", str(path)]) == 1
+    assert main(["--update", str(path)]) == 0
+    assert main(["--check", str(path)]) == 0
+    assert path.read_text(encoding="utf-8") == README.read_text(encoding="utf-8")
+    (tmp_path / "none.md").write_text("no tables here\n", encoding="utf-8")
+    assert main(["--check", str(tmp_path / "none.md")]) == 2
+    assert "no generated table" in capsys.readouterr().err
+    assert main([]) == 0
+    assert "| `world.obstacles.<name>` |" in capsys.readouterr().out
 
 
 def test_tables_are_well_formed() -> None:

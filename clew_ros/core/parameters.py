@@ -13,8 +13,12 @@ Derived from these tables: the defaults of
 :class:`~clew_ros.core.settings.PlannerSettings`,
 :class:`~clew_ros.core.world.World`, :class:`~clew_ros.core.world.Robot` and
 ``clew_ros.node.parameters.NodeSettings``; the defaults and required keys of
-the world parser; the checks of scalar parameters (:func:`check_value`); and
-the ROS 2 parameter descriptors (``clew_ros.node.parameters.descriptor_for``).
+the world parser; the checks of scalar parameters (:func:`check_value`); the
+ROS 2 parameter descriptors (``clew_ros.node.parameters.descriptor_for``);
+and the parameter tables of README.md (:func:`markdown_tables`)::
+
+    python -m clew_ros.core.parameters             # print the tables
+    python -m clew_ros.core.parameters --update README.md
 
 The ``world.*`` lists, polygons and the rules that tie several keys together
 are checked by the world parser (:mod:`clew_ros.core.world`). Pure data and
@@ -23,10 +27,14 @@ checks: no ROS, no numpy.
 
 from __future__ import annotations
 
+import argparse
 import enum
 import math
+import re
+import sys
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from clew_ros.core.errors import ParameterError, short_repr
@@ -41,6 +49,8 @@ __all__ = [
     "PLANNER_PARAMETERS",
     "NODE_PARAMETERS",
     "check_value",
+    "markdown_tables",
+    "update_markdown",
 ]
 
 
@@ -245,3 +255,95 @@ def check_value(spec: ParameterSpec, value: Any) -> Any:
     elif converted is None or converted != converted or not limits[0] <= converted <= limits[1]:
         raise ParameterError(spec.name, f"expected a value in [{limits[0]}, {limits[1]}], got {short_repr(value)}")
     return converted
+
+
+# --------------------------------------------------------------------------- README tables
+
+_BEGIN = "<!-- BEGIN generated parameter table: {} (python -m clew_ros.core.parameters --update README.md) -->"
+_END = "<!-- END generated parameter table: {} -->"
+
+
+def _cell(value: Any) -> str:
+    """A default or a limit as README shows it (``pi`` for math.pi, YAML's ``true``/``false``)."""
+    if value is REQUIRED:
+        return "required"
+    if value is None:
+        return "none"
+    if isinstance(value, bool):
+        return f"`{str(value).lower()}`"
+    if isinstance(value, float) and value == math.pi:
+        return "`pi`"
+    return f"`{value}`"
+
+
+def _rows(specs: Iterable[ParameterSpec], *, ranges: bool) -> list[str]:
+    rows = []
+    for spec in specs:
+        cells = [f"`{spec.name}`", spec.type.value, _cell(spec.default), spec.unit]
+        if ranges:
+            cells.append(f"[{spec.limits[0]}, {spec.limits[1]}]" if spec.limits else "")
+        cells.append(spec.description.replace("|", "\\|").replace("<", "\\<"))  # literal, not HTML
+        rows.append("| " + " | ".join(cells) + " |")
+    return rows
+
+
+def markdown_tables() -> dict[str, str]:
+    """The README tables, by name (``world``, ``planner``, ``node``): Markdown, one line per parameter."""
+    world_header = ["| name | type | default | unit | meaning |", "|---|---|---|---|---|"]
+    ranged_header = ["| name | type | default | unit | range | meaning |", "|---|---|---|---|---|---|"]
+    world = list(WORLD_PARAMETERS.values())
+    names = [i for i, spec in enumerate(world) if spec.name == "world.obstacle_names"]
+    world.insert(names[0] + 1, OBSTACLE_PARAMETER)
+    return {
+        "world": "\n".join(world_header + _rows(world, ranges=False)),
+        "planner": "\n".join(ranged_header + _rows(PLANNER_PARAMETERS.values(), ranges=True)),
+        "node": "\n".join(ranged_header + _rows(NODE_PARAMETERS.values(), ranges=True)),
+    }
+
+
+def update_markdown(text: str) -> str:
+    """``text`` (README.md) with each generated table between its markers replaced by :func:`markdown_tables`.
+
+    Raises :class:`ValueError` when a table's markers are missing.
+    """
+    for name, table in markdown_tables().items():
+        begin, end = _BEGIN.format(name), _END.format(name)
+        match = re.search(re.escape(begin) + r"\n.*?" + re.escape(end), text, re.DOTALL)
+        if match is None:
+            raise ValueError(f"no generated table '{name}': expected a line {begin!r}, the table, then {end!r}")
+        text = f"{text[:match.start()]}{begin}\n{table}\n{end}{text[match.end():]}"
+    return text
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m clew_ros.core.parameters",
+                                     description="Print the parameter tables, or rewrite them in a Markdown file.")
+    parser.add_argument("--update", metavar="FILE", type=Path,
+                        help="rewrite the generated tables of FILE (README.md) in place")
+    parser.add_argument("--check", metavar="FILE", type=Path,
+                        help="exit 1 when the generated tables of FILE are out of date")
+    args = parser.parse_args(argv)
+    if args.update is None and args.check is None:
+        for name, table in markdown_tables().items():
+            print(f"{_BEGIN.format(name)}\n{table}\n{_END.format(name)}\n")
+        return 0
+    path = args.update or args.check
+    text = path.read_text(encoding="utf-8")
+    try:
+        updated = update_markdown(text)
+    except ValueError as error:
+        print(f"{path}: {error}", file=sys.stderr)
+        return 2
+    if args.check is not None:
+        if updated != text:
+            print(f"{path}: the parameter tables are out of date; run "
+                  f"python -m clew_ros.core.parameters --update {path}", file=sys.stderr)
+            return 1
+        return 0
+    if updated != text:
+        path.write_text(updated, encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -50,9 +50,10 @@ import sys, time
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.clew import plan
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.world import load_world
 warm_up()
-world = load_world(sys.argv[1])
+world = check_start_and_goal(load_world(sys.argv[1]))
 times = []
 for _ in range(2):
     t = time.perf_counter()

@@ -50,7 +50,7 @@ import numpy as np
 
 from benchmarks.families import all_worlds, select
 from benchmarks.throughput import PerStateChecker, random_configurations
-from clew_ros.core.collision import is_valid
+from clew_ros.core.collision import check_start_and_goal, is_valid
 from clew_ros.core.genetic import minimize
 from clew_ros.core.search import PlanningContext, SearchJob, local_search
 from clew_ros.core.settings import PlannerSettings, Termination
@@ -315,7 +315,7 @@ def run_peer(
     matches = select(all_worlds(), name)
     if len(matches) != 1:
         raise SystemExit(f"peer: expected one world named {name!r}, found {len(matches)}")
-    world = world_from_parameters(matches[0].parameters)
+    world = check_start_and_goal(world_from_parameters(matches[0].parameters))
     problems = transit_problems(world, count, seed)
     reason = ompl_unavailable_reason() if with_ompl else "skipped (--no-ompl)"
     out = {

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from benchmarks.families import all_worlds, select
 from clew_ros.core.clew import plan
+from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import world_from_parameters
@@ -36,7 +37,7 @@ def profile_run(name: str, seed: int, time_limit_s: float, top: int = 15) -> dic
     if len(matches) != 1:
         raise SystemExit(f"profile: expected one world named {name!r}, found {len(matches)}")
     bench = matches[0]
-    world = world_from_parameters(bench.parameters)
+    world = check_start_and_goal(world_from_parameters(bench.parameters))
     settings = PlannerSettings.from_parameters(bench.parameters, seed=seed, time_limit=time_limit_s)
     warm_up()  # as clew_plan and the node do: loading the compiled kernel is not part of a plan
     profile = cProfile.Profile()

@@ -34,7 +34,7 @@ import shapely
 import shapely.affinity
 
 from benchmarks.families import all_worlds, select
-from clew_ros.core.collision import is_valid
+from clew_ros.core.collision import check_start_and_goal, is_valid
 from clew_ros.core.kinematics import compose, tip_poses, transform_points
 from clew_ros.core.manhattan import free_intervals, run_manhattan
 from clew_ros.core.world import World, world_from_parameters
@@ -196,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
     matches = select(all_worlds(), args.world)
     if len(matches) != 1:
         raise SystemExit(f"throughput: expected one world named {args.world!r}, found {len(matches)}")
-    world = world_from_parameters(matches[0].parameters)
+    world = check_start_and_goal(world_from_parameters(matches[0].parameters))
     json.dump(measure(world, args.configs, args.seed, interval_budget=args.interval_budget), sys.stdout)
     print()
     return 0

@@ -16,6 +16,7 @@ import time
 
 from benchmarks.families import all_worlds, select
 from clew_ros.core.clew import plan
+from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import checked_plan
 from clew_ros.core.settings import PlannerSettings
@@ -32,7 +33,7 @@ def run_world(name: str, seeds: list[int], time_limit_s: float, validate: bool =
     if len(matches) != 1:
         raise SystemExit(f"worker: expected one world named {name!r}, found {len(matches)}")
     bench = matches[0]
-    world = world_from_parameters(bench.parameters)
+    world = check_start_and_goal(world_from_parameters(bench.parameters))
     warm_up_s = warm_up()  # compile or load the kernel first, as clew_plan and the node do
     base_rss = _maxrss_mb()
     runs = []

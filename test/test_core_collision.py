@@ -15,7 +15,7 @@ CONFIG = Path(__file__).resolve().parents[1] / "config"
 def world(**robot_changes):
     tree = copy.deepcopy(read_parameter_file(CONFIG / "single_transfer.yaml"))
     tree["world"]["robot"].update(robot_changes)
-    return world_from_parameters(tree, check_collisions=False)
+    return world_from_parameters(tree)
 
 
 def test_touching_an_obstacle_counts_as_collision():
@@ -47,12 +47,12 @@ def test_bounds_are_closed():
 
 def test_self_collision_of_non_adjacent_links():
     tree = copy.deepcopy(read_parameter_file(CONFIG / "arm3_regrasp.yaml"))
-    w = world_from_parameters(tree, check_collisions=False)
+    w = world_from_parameters(tree)
     folded = np.array([[0.0, 2.7, 2.7]])  # link 3 folds back across link 1
     assert not is_valid(w, folded, w.object.initial)[0]
     assert "self-collision" in explain_invalid(w, folded[0], w.object.initial)
     tree["world"]["robot"]["self_collision"] = False
-    w_free = world_from_parameters(tree, check_collisions=False)
+    w_free = world_from_parameters(tree)
     assert is_valid(w_free, folded, w_free.object.initial)[0]
 
 
@@ -66,7 +66,7 @@ def test_link_may_touch_the_object_but_not_go_deeper_than_the_tolerance():
     touching = np.array([0.0, tip_y + half_height, 0.0])
     inside_by_half_tol = touching - [0.0, w.grasp_tolerance / 2, 0.0]
     inside_by_twice_tol = touching - [0.0, 2 * w.grasp_tolerance, 0.0]
-    w_big = world_from_parameters(_with_bounds(3.0), check_collisions=False)
+    w_big = world_from_parameters(_with_bounds(3.0))
     assert is_valid(w_big, q, touching)[0]
     assert is_valid(w_big, q, inside_by_half_tol)[0]
     assert not is_valid(w_big, q, inside_by_twice_tol)[0]

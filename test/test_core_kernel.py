@@ -53,7 +53,7 @@ def random_world(seed: int, *, joints: int, obstacles: int, width: float, limit:
         "object": {"polygon": polygon.ravel().tolist(), "initial": [0.0, -1.2, 0.3], "goal": [0.0, -1.2, 0.3],
                    "grasps": polygon[0].tolist()},
     }}
-    return world_from_parameters(parameters, check_collisions=False), rng
+    return world_from_parameters(parameters), rng
 
 
 def valid_configurations(world, rng, count, poses_of, tries=20000):
@@ -267,7 +267,7 @@ def test_a_start_within_the_clearance_of_a_bound_never_crosses_it(mode):
         "obstacle_names": [], "obstacles": {},
         "object": {"polygon": [-0.05, -0.05, 0.05, -0.05, 0.05, 0.05, -0.05, 0.05], "initial": [-1.5, 1.5, 0.0],
                    "goal": [-1.5, 1.5, 0.0], "grasps": [0.05, 0.0]},
-    }}, check_collisions=False)
+    }})
     margin = 1e-3
     rel = np.array([0.05, 0.0, 0.0])
     if mode == "transit":  # the straight arm's tip: x within the last mm before the bound inset by r

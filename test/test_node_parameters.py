@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -10,11 +11,10 @@ import pytest
 pytest.importorskip("rclpy")
 
 from clew_ros.core.errors import ParameterError, WorldError  # noqa: E402
-from clew_ros.core.settings import PLANNER_PARAMETERS  # noqa: E402
+from clew_ros.core.parameters import NODE_PARAMETERS, PLANNER_PARAMETERS, WORLD_PARAMETERS  # noqa: E402
 from clew_ros.core.world import read_parameter_file  # noqa: E402
+from clew_ros.node import parameters  # noqa: E402
 from clew_ros.node.parameters import (  # noqa: E402
-    NODE_PARAMETERS,
-    WORLD_PARAMETERS,
     NodeSettings,
     configuration_from_values,
     default_world_file,
@@ -25,6 +25,8 @@ from clew_ros.node.parameters import (  # noqa: E402
 )
 
 WORLDS = Path(__file__).parent / "worlds"
+#: Every descriptor as the node declared it before the parameter specification (issue 12) was introduced.
+DESCRIPTORS_BEFORE = Path(__file__).parent / "data" / "parameter_descriptors.json"
 
 
 def file_values(name: str) -> dict:
@@ -114,6 +116,63 @@ def test_descriptors() -> None:
     assert descriptor_for("world.obstacles.anything").description
     assert descriptor_for("playback.rate").floating_point_range[0].to_value == 1000.0
     assert descriptor_for("record.directory").description
+
+
+def test_descriptors_are_unchanged() -> None:
+    """Every parameter keeps its descriptor: description, constraints text, ranges, dynamic typing."""
+    saved = json.loads(DESCRIPTORS_BEFORE.read_text(encoding="utf-8"))
+    assert {name for name in initial_values({}) if not name.startswith("world.obstacles.")} <= set(saved)
+    for name, expected in saved.items():
+        d = descriptor_for(name)
+        assert {
+            "description": d.description,
+            "additional_constraints": d.additional_constraints,
+            "type": d.type,
+            "read_only": d.read_only,
+            "dynamic_typing": d.dynamic_typing,
+            "floating_point_range": [[r.from_value, r.to_value, r.step] for r in d.floating_point_range],
+            "integer_range": [[r.from_value, r.to_value, r.step] for r in d.integer_range],
+        } == expected, name
+
+
+def test_descriptors_follow_the_specification() -> None:
+    for table in (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS):
+        for spec in table.values():
+            d = descriptor_for(spec.name)
+            assert d.name == spec.name and d.description == spec.description and d.dynamic_typing
+            ranges = [(r.from_value, r.to_value) for r in (*d.integer_range, *d.floating_point_range)]
+            assert ranges == ([spec.limits] if spec.limits else []), spec.name
+
+
+def test_node_settings_take_the_specified_defaults() -> None:
+    assert NodeSettings() == NodeSettings(**{field: NODE_PARAMETERS[name].default
+                                             for field, name in parameters._FIELD_PARAMETERS.items()})
+    config = configuration_from_values(initial_values(file_values("node_quick.yaml")))
+    assert config.node == NodeSettings()
+
+
+CHECKER_CASES = [
+    ("record.enabled", "yes", "record.enabled: expected true or false, got 'yes'"),
+    ("record.directory", 5, "record.directory: expected a non-empty string, got 5"),
+    ("playback.rate", "fast", "playback.rate: expected a number, got 'fast'"),
+    ("playback.rate", 0.5, "playback.rate: expected a value in [1.0, 1000.0], got 0.5"),
+    ("trajectory.grasp_dwell", math.nan, "trajectory.grasp_dwell: expected a value in [0.001, 60.0], got nan"),
+    ("trajectory.joint_speed", 10**400, "trajectory.joint_speed: expected a value in [0.001, 1000.0], got "
+                                        + "1" + "0" * 76 + "..."),
+    ("trajectory.joint_speed", 10**5000, "trajectory.joint_speed: expected a value in [0.001, 1000.0], got "
+                                         "an integer of about 5000 digits"),
+    ("planner.seed", 1.5, "planner.seed: expected an integer, got 1.5"),
+]
+
+
+@pytest.mark.parametrize("name, value, message", CHECKER_CASES,
+                         ids=[f"{c[0]}-{i}" for i, c in enumerate(CHECKER_CASES)])
+def test_node_and_planner_values_share_one_checker(name: str, value, message: str) -> None:
+    values = initial_values(file_values("node_quick.yaml"))
+    values[name] = value
+    with pytest.raises(ParameterError) as error:
+        configuration_from_values(values)
+    assert str(error.value) == message
 
 
 def test_record_directory_expands_home(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

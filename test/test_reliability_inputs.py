@@ -32,6 +32,7 @@ from rel_worlds import (  # noqa: E402
     random_trees,
 )
 
+from clew_ros.core.collision import check_start_and_goal  # noqa: E402
 from clew_ros.core.errors import ParameterError, WorldError  # noqa: E402
 from clew_ros.core.settings import PlannerSettings  # noqa: E402
 from clew_ros.core.world import MAX_LINKS, World, read_parameter_file, world_from_parameters  # noqa: E402
@@ -47,7 +48,7 @@ def load(tree: dict) -> World | WorldError:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # shapely / numpy overflow chatter on huge values
         try:
-            return world_from_parameters(tree)
+            return check_start_and_goal(world_from_parameters(tree))
         except WorldError as error:
             return error
 
@@ -303,7 +304,7 @@ def test_the_time_limit_holds_on_big_worlds(links: int, obstacles: int) -> None:
     if obstacles:
         tree["world"]["obstacle_names"], tree["world"]["obstacles"] = many_obstacles(obstacles)
     limit = 1.0
-    result = plan(world_from_parameters(tree), PlannerSettings(time_limit=limit, seed=0))
+    result = plan(check_start_and_goal(world_from_parameters(tree)), PlannerSettings(time_limit=limit, seed=0))
     print(f"\n{links} links, {obstacles} obstacles, time limit {limit} s: {result.outcome.name} after "
           f"{result.stats['time_s']:.3f} s")
     assert result.stats["time_s"] <= limit + 0.2, result.stats

@@ -111,12 +111,12 @@ def bad_parameter(draw) -> tuple[str, object]:
                                                              ["block", "ghost"]]))
     if family == "planner":
         key = draw(st.sampled_from(sorted(PLANNER_PARAMETERS)))
-        kind = PLANNER_PARAMETERS[key][0]
+        kind = PLANNER_PARAMETERS[key].type.python_type
         bad = [-1, 2**62, math.nan, "x", True, [1, 2]] + ([1.5] if kind is int else [math.inf, 1e300])
         return f"planner.{key}", draw(st.sampled_from(bad))
     if family == "node":
         name = draw(st.sampled_from(sorted(NODE_PARAMETERS)))
-        kind = NODE_PARAMETERS[name][0]
+        kind = NODE_PARAMETERS[name].type.value
         bad = {"bool": ["yes", 1, [True]], "string": ["", 5, ["a"]]}.get(kind, [0.0, -1.0, math.nan, 1e9, "x"])
         return name, draw(st.sampled_from(bad))
     return draw(st.sampled_from(["world.colour", "world.robot.base.x", "world.obstacles.a.b", "planner.speed",

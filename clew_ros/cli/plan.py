@@ -18,6 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from clew_ros.core.clew import PlanResult, Progress, plan
+from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import Plan, checked_plan
@@ -86,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         parameters = read_parameter_file(args.world)
-        world = world_from_parameters(parameters)
+        world = check_start_and_goal(world_from_parameters(parameters))
         settings = PlannerSettings.from_parameters(parameters, seed=args.seed, time_limit=args.time_limit)
     except ParameterError as error:
         print(f"clew_plan: invalid input: {error}", file=sys.stderr)

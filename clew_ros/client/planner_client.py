@@ -303,7 +303,7 @@ class PlannerClient:
         try:
             document = yaml.safe_load(self._world_text)
             parameters = next(iter(document.values()))["ros__parameters"]
-            return world_from_parameters(parameters, check_collisions=False)
+            return world_from_parameters(parameters)
         except (ClewError, yaml.YAMLError, AttributeError, KeyError, StopIteration, TypeError):
             return None
 

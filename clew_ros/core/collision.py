@@ -3,8 +3,9 @@
 Two views of the same static geometry, prepared once per world (:func:`scene_of`):
 
 * exact tests with shapely 2 ufuncs on arrays of geometries (:func:`is_valid`,
-  :func:`explain_invalid`), used for validation, world checks and the plan
-  validator; touching counts as collision, exactly as the contract says;
+  :func:`explain_invalid`), used for validation, world checks
+  (:func:`check_start_and_goal`) and the plan validator; touching counts as
+  collision, exactly as the contract says;
 * the same geometry packed into plain arrays for the compiled kernel
   (:func:`packed_world`, :mod:`clew_ros.core.kernel`): free intervals, and a
   first pass of :func:`is_valid` that clears every configuration valid beyond
@@ -20,12 +21,22 @@ from functools import lru_cache
 import numpy as np
 import shapely
 
+from clew_ros.core.errors import WorldError
 from clew_ros.core.geometry import polygon_edges
 from clew_ros.core.kernel import PackedWorld, clearly_valid
 from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["Scene", "scene_of", "packed_world", "is_valid", "explain_invalid", "explain_placement", "is_placement_valid"]
+__all__ = [
+    "Scene",
+    "scene_of",
+    "packed_world",
+    "is_valid",
+    "explain_invalid",
+    "explain_placement",
+    "is_placement_valid",
+    "check_start_and_goal",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,3 +265,24 @@ def explain_invalid(world: World, q: np.ndarray, object_pose: np.ndarray) -> str
         if _near(lines[a], lines[b], 2 * r):
             return f"link {a + 1} hits link {b + 1} (self-collision)"
     return None
+
+
+def check_start_and_goal(world: World) -> World:
+    """``world`` when its start and goal are valid, else :class:`~clew_ros.core.errors.WorldError`.
+
+    Checks, in this order, that the object may rest at ``world.object.initial``
+    and at ``world.object.goal``, and that ``world.robot.initial`` with the
+    object at its start is a valid configuration (section 1); the error names
+    the parameter at fault and says what collides. Returns ``world`` so that
+    it chains: ``check_start_and_goal(world_from_parameters(tree))``.
+    """
+    reason = explain_placement(world, world.object.initial)
+    if reason:
+        raise WorldError("world.object.initial", f"expected a collision-free placement, but {reason}")
+    reason = explain_placement(world, world.object.goal)
+    if reason:
+        raise WorldError("world.object.goal", f"expected a collision-free placement, but {reason}")
+    reason = explain_invalid(world, world.robot.initial, world.object.initial)
+    if reason:
+        raise WorldError("world.robot.initial", f"expected a valid start configuration, but {reason}")
+    return world

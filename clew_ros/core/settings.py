@@ -1,4 +1,5 @@
-"""Planner settings (``planner.*`` parameters), outcomes and termination conditions."""
+"""Planner settings (``planner.*`` parameters, specified in :mod:`clew_ros.core.parameters`), outcomes and
+termination conditions."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from typing import Any, Mapping
 
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.genetic import GeneticSettings
+from clew_ros.core.parameters import PLANNER_PARAMETERS, check_value
 
 __all__ = ["PlannerSettings", "Outcome", "Termination", "PLANNER_PARAMETERS"]
 
@@ -33,43 +35,23 @@ class Outcome(enum.Enum):
         return self is Outcome.SUCCEEDED
 
 
-#: name -> (type, default, description, (min, max) or None)
-PLANNER_PARAMETERS: dict[str, tuple[type, Any, str, tuple | None]] = {
-    "seed": (int, 0, "Seed of the random generator; same seed, same plan.", (0, 2**31 - 1)),
-    "time_limit": (float, 30.0, "Seconds before the planner stops and reports TIME_LIMIT.", (0.01, 86400.0)),
-    "resolution": (float, 0.01, "EXPLORE stops with NO_PATH_AT_RESOLUTION when a new landmark is closer "
-                   "than this to the others (landmark-distance units, m).", (1e-6, 10.0)),
-    "clearance": (float, 0.001, "Clearance (m) every planned configuration keeps from what it could hit; "
-                  "bounds the motion between checks so plans stay valid at any finer check.", (1e-6, 0.1)),
-    "manhattan_order": (int, 2, "Order k of the Manhattan paths optimised (k single paths of n moves).", (1, 8)),
-    "population": (int, 24, "Genetic algorithm population size.", (4, 10000)),
-    "generations": (int, 12, "Genetic algorithm generations per optimisation.", (1, 10000)),
-    "explore_candidates": (int, 4, "Landmark/grasp pairs (m1) tried per EXPLORE step.", (1, 1000)),
-    "search_rounds": (int, 3, "Rounds of SEARCH's do-while loop before it gives up.", (1, 100)),
-    "joint_weight": (float, 0.1, "Weight (m/rad) of the joint angles in the landmark distance.", (0.0, 10.0)),
-    "max_sweep_steps": (int, 48, "Unused: free intervals are closed-form; kept so that parameter files that set it "
-                        "still load.", (2, 10000)),
-    "threads": (int, 0, "Threads that decode a population's Manhattan paths (0: all cores); the plan does not "
-                "depend on it.", (0, 1024)),
-}
-
-
 @dataclass(frozen=True)
 class PlannerSettings:
-    """Tuning of the planner; see :data:`PLANNER_PARAMETERS` for meanings and units."""
+    """Tuning of the planner: the ``planner.*`` parameters (:data:`PLANNER_PARAMETERS` gives each one's
+    default, unit, range and meaning)."""
 
-    seed: int = 0
-    time_limit: float = 30.0
-    resolution: float = 0.01
-    clearance: float = 0.001
-    manhattan_order: int = 2
-    population: int = 24
-    generations: int = 12
-    explore_candidates: int = 4
-    search_rounds: int = 3
-    joint_weight: float = 0.1
-    max_sweep_steps: int = 48
-    threads: int = 0
+    seed: int = PLANNER_PARAMETERS.default("seed")
+    time_limit: float = PLANNER_PARAMETERS.default("time_limit")
+    resolution: float = PLANNER_PARAMETERS.default("resolution")
+    clearance: float = PLANNER_PARAMETERS.default("clearance")
+    manhattan_order: int = PLANNER_PARAMETERS.default("manhattan_order")
+    population: int = PLANNER_PARAMETERS.default("population")
+    generations: int = PLANNER_PARAMETERS.default("generations")
+    explore_candidates: int = PLANNER_PARAMETERS.default("explore_candidates")
+    search_rounds: int = PLANNER_PARAMETERS.default("search_rounds")
+    joint_weight: float = PLANNER_PARAMETERS.default("joint_weight")
+    max_sweep_steps: int = PLANNER_PARAMETERS.default("max_sweep_steps")
+    threads: int = PLANNER_PARAMETERS.default("threads")
 
     @property
     def genetic(self) -> GeneticSettings:
@@ -77,7 +59,11 @@ class PlannerSettings:
 
     @classmethod
     def from_parameters(cls, parameters: Mapping[str, Any], **overrides: Any) -> "PlannerSettings":
-        """From a ``ros__parameters`` tree (its ``planner`` key); ``overrides`` win."""
+        """From a ``ros__parameters`` tree (its ``planner`` key); ``overrides`` win (``None`` ones are ignored).
+
+        Every value is checked by :func:`~clew_ros.core.parameters.check_value`;
+        raises :class:`ParameterError` naming the parameter at fault.
+        """
         tree = parameters.get("planner") or {}
         if not isinstance(tree, Mapping):
             raise ParameterError("planner", f"expected a mapping, got {tree!r}")
@@ -87,36 +73,12 @@ class PlannerSettings:
                 raise ParameterError(f"planner.{key}", f"unknown parameter; known: {', '.join(PLANNER_PARAMETERS)}")
             values[key] = value
         values.update({k: v for k, v in overrides.items() if v is not None})
-        return cls(**{k: check_planner_parameter(k, v) for k, v in values.items()})
+        return cls(**{k: check_value(PLANNER_PARAMETERS[k], v) for k, v in values.items()})
 
 
-def check_planner_parameter(name: str, value: Any) -> Any:
-    """Validate one ``planner.<name>`` value; returns it converted, raises :class:`ParameterError`."""
-    kind, _default, _description, limits = PLANNER_PARAMETERS[name]
-    full = f"planner.{name}"
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(full, f"expected {'an integer' if kind is int else 'a number'}, got {_short(value)}")
-    if kind is int and (isinstance(value, float) and not value.is_integer()):
-        raise ParameterError(full, f"expected an integer, got {value!r}")
-    try:
-        converted = kind(value)
-    except OverflowError:  # an integer too large for a float
-        converted = None
-    if converted is None or converted != converted or (limits and not limits[0] <= converted <= limits[1]):
-        raise ParameterError(full, f"expected a value in [{limits[0]}, {limits[1]}], got {_short(value)}")
-    return converted
-
-
-def _short(value: Any, limit: int = 60) -> str:
-    """``repr(value)`` cut to ``limit`` characters (a 400-digit integer is not a message)."""
-    try:
-        text = repr(value)
-    except ValueError:  # an integer of more digits than Python converts to text
-        return f"an integer of {value.bit_length()} bits"
-    return text if len(text) <= limit else text[:limit - 3] + "..."
-
-
-assert [f.name for f in fields(PlannerSettings)] == list(PLANNER_PARAMETERS)
+# Every planner.* parameter is a field of PlannerSettings, in the table's order, of the spec's type.
+assert [(f.name, f.type) for f in fields(PlannerSettings)] == [
+    (key, spec.type.python_type.__name__) for key, spec in PLANNER_PARAMETERS.items()]
 
 
 class Termination:

@@ -1,8 +1,14 @@
-"""The world: robot, obstacles and movable object, loaded from the parameter file.
+"""The world: robot, obstacles and movable object, parsed from the parameter file.
 
-The parameter file is the ROS 2 parameter YAML of ``interface.md`` section 1.
-Loading validates everything and returns immutable objects; any fault raises
+The parameter file is the ROS 2 parameter YAML of ``interface.md`` section 1;
+:data:`~clew_ros.core.parameters.WORLD_PARAMETERS` specifies its keys and
+defaults. Parsing checks every value and the rules that tie keys together,
+and returns immutable objects; any fault raises
 :class:`~clew_ros.core.errors.WorldError` naming the parameter at fault.
+
+Parsing is pure: it does no collision check. Whether the start and the goal
+are valid placements (section 1's validity test) is checked by
+:func:`clew_ros.core.collision.check_start_and_goal`.
 """
 
 from __future__ import annotations
@@ -17,7 +23,8 @@ import numpy as np
 import shapely
 import yaml
 
-from clew_ros.core.errors import WorldError
+from clew_ros.core.errors import WorldError, short_repr
+from clew_ros.core.parameters import REQUIRED, WORLD_PARAMETERS
 
 __all__ = [
     "Robot",
@@ -61,8 +68,8 @@ class Robot:
     joint_lower: np.ndarray  # (n,)
     joint_upper: np.ndarray  # (n,)
     initial: np.ndarray  # (n,)
-    link_width: float = 0.0
-    self_collision: bool = True
+    link_width: float = WORLD_PARAMETERS.default("robot.link_width")
+    self_collision: bool = WORLD_PARAMETERS.default("robot.self_collision")
 
     @property
     def dof(self) -> int:
@@ -106,9 +113,9 @@ class World:
     robot: Robot
     obstacles: tuple[Obstacle, ...]
     object: MovableObject
-    grasp_tolerance: float = 0.005
-    goal_tolerance: float = 0.02
-    goal_angle_tolerance: float = math.pi
+    grasp_tolerance: float = WORLD_PARAMETERS.default("grasp_tolerance")
+    goal_tolerance: float = WORLD_PARAMETERS.default("goal_tolerance")
+    goal_angle_tolerance: float = WORLD_PARAMETERS.default("goal_angle_tolerance")
     parameters: Mapping[str, Any] = field(default_factory=dict, repr=False)
     """The ``world`` parameter tree it was loaded from (for recordings)."""
 
@@ -156,15 +163,6 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
 
 
-def _short(value: Any, limit: int = 80) -> str:
-    """``repr(value)`` cut to ``limit`` characters (a 400-digit integer is not a message)."""
-    try:
-        text = repr(value)
-    except ValueError:  # an integer of more digits than Python converts
-        return f"an integer of about {value.bit_length() * 0.30103:.0f} digits"
-    return text if len(text) <= limit else text[:limit - 3] + "..."
-
-
 def _as_float(value: Any) -> float:
     """``float(value)``; an integer too large for a float becomes ``inf`` (refused as not finite)."""
     try:
@@ -179,14 +177,20 @@ def _check_magnitude(name: str, values: np.ndarray) -> None:
                          f"{float(values.flat[np.argmax(np.abs(values))]):.6g}")
 
 
-def _number(tree: Mapping, key: str, prefix: str, default: Any = None, *, positive: bool = False,
-            non_negative: bool = False) -> float:
+def _default(name: str) -> Any:
+    """What an absent ``world.*`` parameter ``name`` stands for: its default, or ``None`` when it is required
+    (or, like ``world.obstacle_names``, simply absent)."""
+    spec = WORLD_PARAMETERS.get(name.removeprefix("world."))
+    return None if spec is None or spec.default is REQUIRED else spec.default
+
+
+def _number(tree: Mapping, key: str, prefix: str, *, positive: bool = False, non_negative: bool = False) -> float:
     name = f"{prefix}.{key}"
-    value = tree.get(key, default)
+    value = tree.get(key, _default(name))
     if value is None:
         raise WorldError(name, "is required (a number)")
     if not _is_number(value):
-        raise WorldError(name, f"expected a number, got {_short(value)}")
+        raise WorldError(name, f"expected a number, got {short_repr(value)}")
     value = _as_float(value)
     if not math.isfinite(value):
         raise WorldError(name, f"expected a finite number, got {value}")
@@ -199,16 +203,16 @@ def _number(tree: Mapping, key: str, prefix: str, default: Any = None, *, positi
 
 
 def _numbers(tree: Mapping, key: str, prefix: str, *, length: int | None = None,
-             min_length: int = 1, even: bool = False, default: Any = None) -> np.ndarray:
+             min_length: int = 1, even: bool = False) -> np.ndarray:
     name = f"{prefix}.{key}"
-    value = tree.get(key, default)
+    value = tree.get(key, _default(name))
     if value is None:
         raise WorldError(name, "is required (a list of numbers)")
     if not isinstance(value, (list, tuple)):
-        raise WorldError(name, f"expected a list of numbers, got {_short(value)}")
+        raise WorldError(name, f"expected a list of numbers, got {short_repr(value)}")
     for item in value:
         if not _is_number(item):
-            raise WorldError(name, f"expected a list of numbers, got the item {_short(item)}")
+            raise WorldError(name, f"expected a list of numbers, got the item {short_repr(item)}")
     array = np.array([_as_float(item) for item in value], dtype=float)
     if not np.all(np.isfinite(array)):
         raise WorldError(name, "expected finite numbers, got NaN or inf")
@@ -247,53 +251,64 @@ def _mapping(tree: Mapping, key: str, prefix: str, *, required: bool = True) -> 
     if value is None and not required:
         return {}
     if not isinstance(value, Mapping):
-        raise WorldError(f"{prefix}.{key}", f"expected a mapping, got {_short(value)}")
+        raise WorldError(f"{prefix}.{key}", f"expected a mapping, got {short_repr(value)}")
     return value
 
 
-def _bool(tree: Mapping, key: str, prefix: str, default: bool) -> bool:
-    value = tree.get(key, default)
+def _bool(tree: Mapping, key: str, prefix: str) -> bool:
+    value = tree.get(key, _default(f"{prefix}.{key}"))
     if not isinstance(value, bool):
-        raise WorldError(f"{prefix}.{key}", f"expected true or false, got {_short(value)}")
+        raise WorldError(f"{prefix}.{key}", f"expected true or false, got {short_repr(value)}")
     return value
 
 
-def world_from_parameters(parameters: Mapping[str, Any], *, check_collisions: bool = True) -> World:
-    """Build and validate a :class:`World` from a ``ros__parameters`` tree.
+def world_from_parameters(parameters: Mapping[str, Any]) -> World:
+    """Parse a :class:`World` from a ``ros__parameters`` tree, checking every value.
 
-    ``parameters`` holds a ``world`` key (other keys are ignored). With
-    ``check_collisions`` the initial configuration and the object's start and
-    goal placements are checked against section 1's validity test.
+    ``parameters`` holds a ``world`` key (other keys are ignored). Raises
+    :class:`~clew_ros.core.errors.WorldError` naming the parameter at fault.
+    The start and goal placements are not checked for collisions here: see
+    :func:`clew_ros.core.collision.check_start_and_goal`.
     """
     if not isinstance(parameters, Mapping):
-        raise WorldError("ros__parameters", f"expected a mapping, got {_short(parameters)}")
+        raise WorldError("ros__parameters", f"expected a mapping, got {short_repr(parameters)}")
     tree = parameters.get("world")
     if not isinstance(tree, Mapping):
-        raise WorldError("world", f"expected a mapping of world parameters, got {_short(tree)}")
-    return _world_from_tree(tree, check_collisions=check_collisions)
-
-
-def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
-    p = "world"
-    name = tree.get("name", "world")
+        raise WorldError("world", f"expected a mapping of world parameters, got {short_repr(tree)}")
+    name = tree.get("name", _default("world.name"))
     if not isinstance(name, str) or not name:
-        raise WorldError("world.name", f"expected a non-empty string, got {_short(name)}")
-
-    bounds = _numbers(tree, "bounds", p, length=4)
+        raise WorldError("world.name", f"expected a non-empty string, got {short_repr(name)}")
+    bounds = _numbers(tree, "bounds", "world", length=4)
     if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
         raise WorldError("world.bounds", f"expected xmin < xmax and ymin < ymax, got {bounds.tolist()}")
+    robot = _robot(_mapping(tree, "robot", "world"))
+    obstacles = _obstacles(tree)
+    movable = _movable_object(_mapping(tree, "object", "world"))
+    return World(
+        name=name,
+        bounds=_frozen(bounds),
+        robot=robot,
+        obstacles=obstacles,
+        object=movable,
+        grasp_tolerance=_number(tree, "grasp_tolerance", "world", positive=True),
+        goal_tolerance=_number(tree, "goal_tolerance", "world", positive=True),
+        goal_angle_tolerance=_number(tree, "goal_angle_tolerance", "world", non_negative=True),
+        parameters=_plain(tree),
+    )
 
+
+def _robot(tree: Mapping[str, Any]) -> Robot:
+    """``world.robot``: the chain, its joint limits and its start within them."""
     rp = "world.robot"
-    robot_tree = _mapping(tree, "robot", p)
-    lengths = _numbers(robot_tree, "link_lengths", rp, min_length=2)
+    lengths = _numbers(tree, "link_lengths", rp, min_length=2)
     n = len(lengths)
     if n > MAX_LINKS:
         raise WorldError(f"{rp}.link_lengths", f"expected at most {MAX_LINKS} links, got {n}")
     if np.any(lengths <= 0):
         raise WorldError(f"{rp}.link_lengths", f"expected lengths > 0, got {lengths.tolist()}")
-    lower = _numbers(robot_tree, "joint_lower", rp)
-    upper = _numbers(robot_tree, "joint_upper", rp)
-    initial = _numbers(robot_tree, "initial", rp)
+    lower = _numbers(tree, "joint_lower", rp)
+    upper = _numbers(tree, "joint_upper", rp)
+    initial = _numbers(tree, "initial", rp)
     for key, array in (("joint_lower", lower), ("joint_upper", upper), ("initial", initial)):
         if len(array) != n:
             raise WorldError(f"{rp}.{key}", f"expected {n} values (one per link in link_lengths), got {len(array)}")
@@ -304,42 +319,48 @@ def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
         if not lower[i] <= initial[i] <= upper[i]:
             raise WorldError(f"{rp}.initial", f"expected joint_{i + 1} within [{lower[i]}, {upper[i]}], "
                              f"got {initial[i]}")
-    robot = Robot(
-        base=_frozen(_numbers(robot_tree, "base", rp, length=2)),
+    return Robot(
+        base=_frozen(_numbers(tree, "base", rp, length=2)),
         link_lengths=_frozen(lengths),
         joint_lower=_frozen(lower),
         joint_upper=_frozen(upper),
         initial=_frozen(initial),
-        link_width=_number(robot_tree, "link_width", rp, 0.0, non_negative=True),
-        self_collision=_bool(robot_tree, "self_collision", rp, True),
+        link_width=_number(tree, "link_width", rp, non_negative=True),
+        self_collision=_bool(tree, "self_collision", rp),
     )
 
-    obstacles = []
-    names = tree.get("obstacle_names")
+
+def _obstacles(tree: Mapping[str, Any]) -> tuple[Obstacle, ...]:
+    """``world.obstacles.<name>`` for each name of ``world.obstacle_names``, in that order."""
+    names = tree.get("obstacle_names", _default("world.obstacle_names"))
     obstacle_tree = tree.get("obstacles") or {}
     if not isinstance(obstacle_tree, Mapping):
         raise WorldError("world.obstacles",
-                         f"expected a mapping of name: [x0, y0, ...], got {_short(obstacle_tree)}")
+                         f"expected a mapping of name: [x0, y0, ...], got {short_repr(obstacle_tree)}")
     if names is None:
         names = []
     if not isinstance(names, (list, tuple)) or not all(isinstance(s, str) and s for s in names):
-        raise WorldError("world.obstacle_names", f"expected a list of non-empty strings, got {_short(names)}")
+        raise WorldError("world.obstacle_names", f"expected a list of non-empty strings, got {short_repr(names)}")
     if len(set(names)) != len(names):
         raise WorldError("world.obstacle_names", "expected unique names")
     for key in obstacle_tree:
         if key not in names:
             raise WorldError(f"world.obstacles.{key}",
-                             f"unknown obstacle: not listed in world.obstacle_names {_short(names, 200)}")
+                             f"unknown obstacle: not listed in world.obstacle_names {short_repr(names, 200)}")
+    obstacles = []
     for obstacle_name in names:
         if obstacle_name not in obstacle_tree:
             raise WorldError(f"world.obstacles.{obstacle_name}",
                              "is required: it is listed in world.obstacle_names")
         obstacles.append(Obstacle(obstacle_name, _frozen(_polygon(obstacle_tree, obstacle_name, "world.obstacles"))))
+    return tuple(obstacles)
 
+
+def _movable_object(tree: Mapping[str, Any]) -> MovableObject:
+    """``world.object``: its polygon, its grasps on the polygon's boundary, its start and goal poses."""
     op = "world.object"
-    object_tree = _mapping(tree, "object", p)
-    polygon = _polygon(object_tree, "polygon", op)
-    grasps = _numbers(object_tree, "grasps", op, min_length=2, even=True).reshape(-1, 2)
+    polygon = _polygon(tree, "polygon", op)
+    grasps = _numbers(tree, "grasps", op, min_length=2, even=True).reshape(-1, 2)
     boundary = shapely.Polygon(polygon).exterior
     distances = shapely.distance(boundary, shapely.points(grasps))
     for index, distance in enumerate(distances):
@@ -347,41 +368,12 @@ def _world_from_tree(tree: Mapping, *, check_collisions: bool) -> World:
             raise WorldError(f"{op}.grasps", f"expected every grasp on the object's boundary (within "
                              f"{GRASP_ON_BOUNDARY_TOLERANCE_M} m), but grasp {index} "
                              f"{grasps[index].tolist()} is {distance:.6g} m away")
-    movable = MovableObject(
+    return MovableObject(
         polygon=_frozen(polygon),
-        initial=_frozen(_numbers(object_tree, "initial", op, length=3)),
-        goal=_frozen(_numbers(object_tree, "goal", op, length=3)),
+        initial=_frozen(_numbers(tree, "initial", op, length=3)),
+        goal=_frozen(_numbers(tree, "goal", op, length=3)),
         grasps=_frozen(grasps),
     )
-
-    world = World(
-        name=name,
-        bounds=_frozen(bounds),
-        robot=robot,
-        obstacles=tuple(obstacles),
-        object=movable,
-        grasp_tolerance=_number(tree, "grasp_tolerance", p, 0.005, positive=True),
-        goal_tolerance=_number(tree, "goal_tolerance", p, 0.02, positive=True),
-        goal_angle_tolerance=_number(tree, "goal_angle_tolerance", p, math.pi, non_negative=True),
-        parameters=_plain(tree),
-    )
-    if check_collisions:
-        _check_start_and_goal(world)
-    return world
-
-
-def _check_start_and_goal(world: World) -> None:
-    from clew_ros.core.collision import explain_invalid, explain_placement  # local: collision needs World
-
-    reason = explain_placement(world, world.object.initial)
-    if reason:
-        raise WorldError("world.object.initial", f"expected a collision-free placement, but {reason}")
-    reason = explain_placement(world, world.object.goal)
-    if reason:
-        raise WorldError("world.object.goal", f"expected a collision-free placement, but {reason}")
-    reason = explain_invalid(world, world.robot.initial, world.object.initial)
-    if reason:
-        raise WorldError("world.robot.initial", f"expected a valid start configuration, but {reason}")
 
 
 def _plain(value: Any) -> Any:
@@ -392,9 +384,10 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def load_world(path: str | Path, *, check_collisions: bool = True) -> World:
-    """Read and validate the world of a parameter file."""
-    return world_from_parameters(read_parameter_file(path), check_collisions=check_collisions)
+def load_world(path: str | Path) -> World:
+    """Read, parse and check the world of a parameter file (no collision check: see
+    :func:`clew_ros.core.collision.check_start_and_goal`)."""
+    return world_from_parameters(read_parameter_file(path))
 
 
 def world_to_parameters(world: World) -> dict:

@@ -1,15 +1,21 @@
-"""The node's parameters: names, defaults, descriptors and validation.
+"""The node's parameters: start values, descriptors and validation.
 
-Three families, all with descriptors (``ros2 param describe`` shows them):
+The parameters are specified in :mod:`clew_ros.core.parameters` (name, type,
+default, unit, range, description); this module turns that specification
+into ROS 2 descriptors (``ros2 param describe`` shows them) and checks the
+values. Three families:
 
-- ``world.*``: the world of interface.md §1; ``world.obstacles.<name>`` for
-  each name in ``world.obstacle_names``. Validated by the core
-  (:func:`~clew_ros.core.world.world_from_parameters`), so every refusal
+- ``world.*``: :data:`~clew_ros.core.parameters.WORLD_PARAMETERS`, the world
+  of interface.md §1; ``world.obstacles.<name>`` for each name in
+  ``world.obstacle_names``. Checked by the core
+  (:func:`~clew_ros.core.world.world_from_parameters`, then
+  :func:`~clew_ros.core.collision.check_start_and_goal`), so every refusal
   names the parameter at fault.
-- ``planner.*``: :data:`~clew_ros.core.settings.PLANNER_PARAMETERS`,
-  validated by :func:`~clew_ros.core.settings.check_planner_parameter`.
-- the node's own: :data:`NODE_PARAMETERS` (``record.*``, ``playback.*``,
-  ``trajectory.*``).
+- ``planner.*``: :data:`~clew_ros.core.parameters.PLANNER_PARAMETERS`,
+  checked by :class:`~clew_ros.core.settings.PlannerSettings`.
+- the node's own: :data:`~clew_ros.core.parameters.NODE_PARAMETERS`
+  (``record.*``, ``playback.*``, ``trajectory.*``), checked here into
+  :class:`NodeSettings`.
 
 Every parameter is declared with ``dynamic_typing`` so that a YAML ``30``
 is as good as ``30.0``; the value is checked here instead, with a message of
@@ -25,21 +31,26 @@ interface.md §1 take their documented defaults).
 from __future__ import annotations
 
 import array
-import math
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
+from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import ParameterError, WorldError
-from clew_ros.core.settings import (
+from clew_ros.core.parameters import (
+    NODE_PARAMETERS,
+    OBSTACLE_PARAMETER,
     PLANNER_PARAMETERS,
-    PlannerSettings,
-    check_planner_parameter,
+    WORLD_PARAMETERS,
+    ParameterSpec,
+    ParameterType,
+    check_value,
 )
+from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import World, read_parameter_file, world_from_parameters
 
 __all__ = [
@@ -59,42 +70,6 @@ __all__ = [
 ]
 
 DEFAULT_WORLD_FILE = "figure1.yaml"
-REQUIRED = object()  # marks a world.* parameter without a default
-
-#: world.<key> -> (type, default or REQUIRED / None for "absent", description)
-WORLD_PARAMETERS: dict[str, tuple[str, Any, str]] = {
-    "name": ("string", "world", "Name of the world; plans and recordings carry it."),
-    "bounds": ("double[]", REQUIRED, "The workspace box [xmin, ymin, xmax, ymax] (m); touching its edge is inside."),
-    "robot.base": ("double[]", REQUIRED, "Position [x, y] of joint 1 (m)."),
-    "robot.link_lengths": ("double[]", REQUIRED, "Length of each link (m); n >= 2 links."),
-    "robot.link_width": ("double", 0.0, "Links are capsules of radius link_width / 2 (m); 0: segments."),
-    "robot.joint_lower": ("double[]", REQUIRED, "Lower joint limits (rad), one per link."),
-    "robot.joint_upper": ("double[]", REQUIRED, "Upper joint limits (rad), one per link."),
-    "robot.initial": ("double[]", REQUIRED, "Joint angles at the start (rad), one per link."),
-    "robot.self_collision": ("bool", True, "Check non-adjacent links against each other."),
-    "obstacle_names": ("string[]", None, ("Names of the obstacles; each needs world.obstacles.<name>. "
-                                          "Omit it for a world without obstacles.")),
-    "object.polygon": ("double[]", REQUIRED, "The object as a flat x0, y0, x1, y1, ... list in its own frame (m)."),
-    "object.initial": ("double[]", REQUIRED, "Start placement [x, y, theta] of the object (m, rad)."),
-    "object.goal": ("double[]", REQUIRED, "Goal placement [x, y, theta] of the object (m, rad); ~/plan plans to it."),
-    "object.grasps": ("double[]", REQUIRED, "Grasp points on the object's boundary, flat x0, y0, ... in its frame (m)."),
-    "grasp_tolerance": ("double", 0.005, "The tip holds a grasp when it is this close to it (m)."),
-    "goal_tolerance": ("double", 0.02, "Largest distance of the final object position from the goal (m)."),
-    "goal_angle_tolerance": ("double", math.pi, "Largest orientation error at the goal (rad); pi: any."),
-}
-OBSTACLE_DESCRIPTION = "Obstacle polygon as a flat x0, y0, x1, y1, ... list (m)."
-
-#: name -> (type, default, description, (min, max) or None)
-NODE_PARAMETERS: dict[str, tuple[str, Any, str, tuple | None]] = {
-    "record.enabled": ("bool", True, "Record every run as a rosbag2 directory <record.directory>/<run id>/.", None),
-    "record.directory": ("string", "~/.ros/clew_recordings",
-                         "Where runs are recorded; '~' and environment variables are expanded.", None),
-    "playback.rate": ("double", 20.0, "Rate (Hz) of ~/joint_states and ~/object_pose while a plan plays back.",
-                      (1.0, 1000.0)),
-    "trajectory.joint_speed": ("double", 1.0, ("Joint speed (rad/s) that times ~/trajectory: a move lasts "
-                                               "max |dq| / joint_speed."), (0.001, 1000.0)),
-    "trajectory.grasp_dwell": ("double", 0.2, "Time (s) a grasp or ungrasp takes in ~/trajectory.", (0.001, 60.0)),
-}
 
 #: The parameter prefixes the node owns and checks (others, e.g. use_sim_time, are rclpy's).
 OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.")
@@ -102,17 +77,29 @@ OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.")
 
 @dataclass(frozen=True)
 class NodeSettings:
-    """The node's own parameters, checked."""
+    """The node's own parameters, checked (defaults from :data:`~clew_ros.core.parameters.NODE_PARAMETERS`)."""
 
-    record_enabled: bool = True
-    record_directory: str = "~/.ros/clew_recordings"
-    playback_rate_hz: float = 20.0
-    joint_speed_rad_s: float = 1.0
-    grasp_dwell_s: float = 0.2
+    record_enabled: bool = NODE_PARAMETERS.default("record.enabled")
+    record_directory: str = NODE_PARAMETERS.default("record.directory")
+    playback_rate_hz: float = NODE_PARAMETERS.default("playback.rate")
+    joint_speed_rad_s: float = NODE_PARAMETERS.default("trajectory.joint_speed")
+    grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell")
 
     @property
     def record_path(self) -> Path:
         return Path(os.path.expandvars(os.path.expanduser(self.record_directory)))
+
+
+#: The parameter behind each field of :class:`NodeSettings` (every node parameter, once).
+_FIELD_PARAMETERS = {
+    "record_enabled": "record.enabled",
+    "record_directory": "record.directory",
+    "playback_rate_hz": "playback.rate",
+    "joint_speed_rad_s": "trajectory.joint_speed",
+    "grasp_dwell_s": "trajectory.grasp_dwell",
+}
+assert [f.name for f in fields(NodeSettings)] == list(_FIELD_PARAMETERS)
+assert sorted(_FIELD_PARAMETERS.values()) == sorted(NODE_PARAMETERS)
 
 
 @dataclass(frozen=True)
@@ -191,12 +178,9 @@ def initial_values(overrides: Mapping[str, Any], default_file: Path | None = Non
         path = default_world_file() if default_file is None else default_file
         tree = read_parameter_file(path)
         embedded = {k: v for k, v in flatten(tree).items() if k.startswith(("world.", "planner."))}
-    for key, (_kind, default, _description) in WORLD_PARAMETERS.items():
-        values[f"world.{key}"] = None if default is REQUIRED else default
-    for name, (_kind, default, _description, _limits) in PLANNER_PARAMETERS.items():
-        values[f"planner.{name}"] = default
-    for name, (_kind, default, _description, _limits) in NODE_PARAMETERS.items():
-        values[name] = default
+    for table in (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS):
+        for spec in table.values():
+            values[spec.name] = None if spec.required else spec.default
     values.update(embedded)
     values.update(overrides)
     return values
@@ -224,23 +208,6 @@ def _check_known(name: str) -> None:
         raise ParameterError(name, "unknown parameter; known: " + ", ".join(NODE_PARAMETERS))
 
 
-def _check_node_parameter(name: str, value: Any) -> Any:
-    kind, _default, _description, limits = NODE_PARAMETERS[name]
-    if kind == "bool":
-        if not isinstance(value, bool):
-            raise ParameterError(name, f"expected true or false, got {value!r}")
-        return value
-    if kind == "string":
-        if not isinstance(value, str) or not value:
-            raise ParameterError(name, f"expected a non-empty string, got {value!r}")
-        return value
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ParameterError(name, f"expected a number, got {value!r}")
-    if limits and not limits[0] <= value <= limits[1]:
-        raise ParameterError(name, f"expected a value in [{limits[0]}, {limits[1]}], got {value}")
-    return float(value)
-
-
 def _world_tree(values: Mapping[str, Any], *, listed_obstacles_only: bool) -> dict:
     world = {k: v for k, v in values.items() if k.startswith("world.")}
     if listed_obstacles_only:
@@ -264,58 +231,56 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
     values = {k: plain_value(v) for k, v in values.items() if k.startswith(OWN_PREFIXES)}
     for name in values:
         _check_known(name)
-    world = world_from_parameters(_world_tree(values, listed_obstacles_only=listed_obstacles_only))
+    world_tree = _world_tree(values, listed_obstacles_only=listed_obstacles_only)
+    world = check_start_and_goal(world_from_parameters(world_tree))
     planner_tree = {k[len("planner."):]: v for k, v in values.items() if k.startswith("planner.") and v is not None}
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
-    node = {name: _check_node_parameter(name, values.get(name, default))
-            for name, (_kind, default, _d, _l) in NODE_PARAMETERS.items()}
-    return Configuration(world, planner, NodeSettings(
-        record_enabled=node["record.enabled"],
-        record_directory=node["record.directory"],
-        playback_rate_hz=node["playback.rate"],
-        joint_speed_rad_s=node["trajectory.joint_speed"],
-        grasp_dwell_s=node["trajectory.grasp_dwell"],
-    ))
-
-
-def check_one(name: str, value: Any) -> None:
-    """Check a single parameter on its own (type and range); the world as a whole is checked elsewhere."""
-    _check_known(name)
-    if name.startswith("planner."):
-        check_planner_parameter(name[len("planner."):], plain_value(value))
-    elif not name.startswith("world."):
-        _check_node_parameter(name, plain_value(value))
+    node = {field: check_value(NODE_PARAMETERS[name], values.get(name, NODE_PARAMETERS[name].default))
+            for field, name in _FIELD_PARAMETERS.items()}
+    return Configuration(world, planner, NodeSettings(**node))
 
 
 # --------------------------------------------------------------------------- descriptors
 
 
 def descriptor_for(name: str) -> ParameterDescriptor:
-    """The descriptor a parameter is declared with: description, expected type, range."""
-    descriptor = ParameterDescriptor(name=name, dynamic_typing=True)
-    if name.startswith("world.obstacles."):
-        descriptor.description = OBSTACLE_DESCRIPTION
-        descriptor.additional_constraints = "list of numbers (an even count, at least 3 points)"
-    elif name.startswith("world."):
-        kind, default, description = WORLD_PARAMETERS[name[len("world."):]]
-        descriptor.description = description
-        required = "required" if default is REQUIRED else f"default {default!r}" if default is not None else "optional"
-        descriptor.additional_constraints = f"{kind}; {required}; a change is refused while a plan runs"
-    elif name.startswith("planner."):
-        kind, default, description, limits = PLANNER_PARAMETERS[name[len("planner."):]]
-        descriptor.description = description
-        descriptor.additional_constraints = f"{kind.__name__} in [{limits[0]}, {limits[1]}]; default {default}"
-        if kind is int:
-            descriptor.integer_range = [IntegerRange(from_value=int(limits[0]), to_value=int(limits[1]), step=1)]
+    """The descriptor a parameter is declared with: its spec's description, type and default, and range.
+
+    Every parameter is declared with ``dynamic_typing`` (a ``30`` is as good
+    as ``30.0``: the value is checked by this module, not by rclpy).
+    """
+    spec = _spec_of(name)
+    descriptor = ParameterDescriptor(name=name, dynamic_typing=True, description=spec.description,
+                                     additional_constraints=_constraints(spec))
+    if spec.limits is not None:
+        low, high = spec.limits
+        if spec.type is ParameterType.INTEGER:
+            descriptor.integer_range = [IntegerRange(from_value=int(low), to_value=int(high), step=1)]
         else:
-            descriptor.floating_point_range = [FloatingPointRange(from_value=float(limits[0]),
-                                                                  to_value=float(limits[1]), step=0.0)]
-    else:
-        kind, default, description, limits = NODE_PARAMETERS[name]
-        descriptor.description = description
-        descriptor.additional_constraints = f"{kind}; default {default!r}"
-        if limits:
-            descriptor.additional_constraints += f"; in [{limits[0]}, {limits[1]}]"
-            descriptor.floating_point_range = [FloatingPointRange(from_value=float(limits[0]),
-                                                                  to_value=float(limits[1]), step=0.0)]
+            descriptor.floating_point_range = [FloatingPointRange(from_value=float(low), to_value=float(high),
+                                                                  step=0.0)]
     return descriptor
+
+
+def _spec_of(name: str) -> ParameterSpec:
+    if name.startswith("world.obstacles."):
+        return OBSTACLE_PARAMETER
+    if name.startswith("world."):
+        return WORLD_PARAMETERS[name[len("world."):]]
+    if name.startswith("planner."):
+        return PLANNER_PARAMETERS[name[len("planner."):]]
+    return NODE_PARAMETERS[name]
+
+
+def _constraints(spec: ParameterSpec) -> str:
+    """The descriptor's ``additional_constraints``: type, default and range in words (one wording per family)."""
+    if spec is OBSTACLE_PARAMETER:
+        return "list of numbers (an even count, at least 3 points)"
+    if spec.name.startswith("world."):
+        given = "required" if spec.required else "optional" if spec.default is None else f"default {spec.default!r}"
+        return f"{spec.type.value}; {given}; a change is refused while a plan runs"
+    if spec.name.startswith("planner."):
+        assert spec.limits is not None
+        return f"{spec.type.python_type.__name__} in [{spec.limits[0]}, {spec.limits[1]}]; default {spec.default}"
+    text = f"{spec.type.value}; default {spec.default!r}"
+    return text if spec.limits is None else f"{text}; in [{spec.limits[0]}, {spec.limits[1]}]"

@@ -170,14 +170,14 @@ def world_from_yaml_text(text: str, *, source: str = "world YAML") -> World:
     if not isinstance(parameters, dict):
         raise RenderError(f"{source}: expected a 'clew_planner' or '/**' key with 'ros__parameters'")
     try:
-        return world_from_parameters(parameters, check_collisions=False)
+        return world_from_parameters(parameters)
     except ClewError as error:
         raise RenderError(f"{source}: {error}") from None
 
 
 def load_world_file(path: str | Path) -> World:
     try:
-        return load_world(path, check_collisions=False)
+        return load_world(path)
     except ClewError as error:
         raise RenderError(str(error)) from None
 

@@ -1,0 +1,132 @@
+"""The modules of ``clew_ros`` import each other without a cycle.
+
+Every module of the package is read with :mod:`ast` (nothing is imported):
+each ``import clew_ros.x`` / ``from clew_ros.x import y`` / relative import,
+at module level or inside a function, class, ``try`` or ``if`` (``if
+TYPE_CHECKING:`` included), is an edge from the importing module to the
+imported one (``from clew_ros.x import y`` goes to ``clew_ros.x.y`` when that
+is a module, else to ``clew_ros.x``). A package (``__init__.py``) is a node
+of its own whose edges are its own imports; importing ``clew_ros.x.y`` is not
+counted as importing the package ``clew_ros.x`` (Python runs the package's
+``__init__`` first, but a package importing its own submodules is no cycle of
+the design). A cycle is printed module by module.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = "clew_ros"
+ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+
+
+def module_names() -> dict[str, Path]:
+    """Dotted name -> file, for every module of the package."""
+    modules = {}
+    for path in sorted(ROOT.rglob("*.py")):
+        parts = path.relative_to(ROOT.parent).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        modules[".".join(parts)] = path
+    return modules
+
+
+def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    """The package modules ``name`` imports, anywhere in its file."""
+    is_package = path.name == "__init__.py"
+    package = name if is_package else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - (node.level - 1)]
+                source = ".".join(base + ([node.module] if node.module else []))
+            else:
+                source = node.module or ""
+            targets = [f"{source}.{alias.name}" if f"{source}.{alias.name}" in modules else source
+                       for alias in node.names]
+        else:
+            continue
+        for target in targets:
+            # the longest prefix that is a module of the package (``import numpy.linalg`` has none)
+            while target and target not in modules:
+                target = target.rpartition(".")[0]
+            if target.startswith(PACKAGE) and target != name:
+                found.add(target)
+    return found
+
+
+def import_graph() -> dict[str, set[str]]:
+    modules = module_names()
+    return {name: imports_of(name, path, modules) for name, path in modules.items()}
+
+
+def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One cycle of ``graph`` as ``[a, b, ..., a]``, or ``None``."""
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for child in sorted(graph.get(node, ())):
+            if state.get(child) == 1:
+                return stack[stack.index(child):] + [child]
+            if child not in state:
+                cycle = visit(child)
+                if cycle:
+                    return cycle
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state:
+            cycle = visit(node)
+            if cycle:
+                return cycle
+    return None
+
+
+def test_the_graph_is_read() -> None:
+    graph = import_graph()
+    assert "clew_ros.core.collision" in graph["clew_ros.core.clew"]
+    assert "clew_ros.core.world" in graph["clew_ros.core.collision"]
+    assert "clew_ros.core.kernel" in graph["clew_ros.core.collision"]
+
+
+def test_every_kind_of_import_is_an_edge(tmp_path: Path) -> None:
+    source = tmp_path / "m.py"
+    source.write_text(
+        "import clew_ros.core.kernel\n"
+        "from clew_ros.core import geometry\n"
+        "from clew_ros.core.world import World\n"
+        "from . import tree\n"
+        "from ..node import playback\n"
+        "import numpy.linalg\n"
+        "def late():\n"
+        "    from clew_ros.core.collision import is_valid\n"
+        "    if True:\n"
+        "        import clew_ros.core.plan as plan\n",
+        encoding="utf-8")
+    found = imports_of("clew_ros.core.m", source, module_names())
+    assert found == {"clew_ros.core.kernel", "clew_ros.core.geometry", "clew_ros.core.world", "clew_ros.core.tree",
+                     "clew_ros.node.playback", "clew_ros.core.collision", "clew_ros.core.plan"}
+
+
+def test_find_cycle_finds_one() -> None:
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": set()}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"b"}, "b": set()}) is None
+
+
+def test_no_import_cycle() -> None:
+    cycle = find_cycle(import_graph())
+    assert cycle is None, "import cycle: " + " -> ".join(cycle or [])
+
+
+def test_world_parsing_does_not_import_collision_checks() -> None:
+    assert "clew_ros.core.collision" not in import_graph()["clew_ros.core.world"]

@@ -1,0 +1,143 @@
+"""The parameter specification (clew_ros.core.parameters): tables, the one checker, the README tables."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import fields
+from pathlib import Path
+
+import pytest
+
+from clew_ros.core.errors import ParameterError, short_repr
+from clew_ros.core.parameters import (
+    NODE_PARAMETERS,
+    OBSTACLE_PARAMETER,
+    PLANNER_PARAMETERS,
+    REQUIRED,
+    WORLD_PARAMETERS,
+    ParameterSpec,
+    ParameterType,
+    check_value,
+    main,
+    markdown_tables,
+    update_markdown,
+)
+from clew_ros.core.settings import PlannerSettings
+
+README = Path(__file__).resolve().parents[2] / "README.md"
+TABLES = (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS)
+
+
+def test_readme_tables_are_generated_from_the_specification() -> None:
+    """README.md holds the tables markdown_tables() makes; after a change to the specification run
+    ``python -m clew_ros.core.parameters --update README.md``."""
+    text = README.read_text(encoding="utf-8")
+    assert update_markdown(text) == text, "run: python -m clew_ros.core.parameters --update README.md"
+    for name, table in markdown_tables().items():
+        assert table in text, name
+    for table in TABLES:
+        for spec in table.values():
+            assert f"| `{spec.name}` |" in text, spec.name
+
+
+def test_the_update_and_check_commands(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    stale = README.read_text(encoding="utf-8").replace("| `planner.seed` | integer | `0` |",
+                                                       "| `planner.seed` | integer | `7` |")
+    path = tmp_path / "README.md"
+    path.write_text(stale, encoding="utf-8")
+    assert main(["--check", str(path)]) == 1
+    assert main(["--update", str(path)]) == 0
+    assert main(["--check", str(path)]) == 0
+    assert path.read_text(encoding="utf-8") == README.read_text(encoding="utf-8")
+    (tmp_path / "none.md").write_text("no tables here\n", encoding="utf-8")
+    assert main(["--check", str(tmp_path / "none.md")]) == 2
+    assert "no generated table" in capsys.readouterr().err
+    assert main([]) == 0
+    assert "| `world.obstacles.<name>` |" in capsys.readouterr().out
+
+
+def test_tables_are_well_formed() -> None:
+    names = [spec.name for table in TABLES for spec in table.values()] + [OBSTACLE_PARAMETER.name]
+    assert len(names) == len(set(names))
+    for table in TABLES:
+        for key, spec in table.items():
+            assert spec.name == table.prefix + key
+            assert spec.description.endswith(".") and "\n" not in spec.description
+            if spec.type in (ParameterType.INTEGER, ParameterType.DOUBLE) and table is not WORLD_PARAMETERS:
+                assert spec.limits is not None, spec.name
+            if spec.required or spec.default is None:
+                continue
+            if spec.type in (ParameterType.DOUBLE_ARRAY, ParameterType.STRING_ARRAY):
+                continue
+            assert check_value(spec, spec.default) == spec.default, spec.name  # defaults pass their own check
+            assert type(check_value(spec, spec.default)) is spec.type.python_type
+
+
+def test_planner_settings_follow_the_table() -> None:
+    assert [f.name for f in fields(PlannerSettings)] == list(PLANNER_PARAMETERS)
+    defaults = PlannerSettings()
+    for key, spec in PLANNER_PARAMETERS.items():
+        assert getattr(defaults, key) == spec.default
+    assert PlannerSettings.from_parameters({}) == defaults
+    assert PlannerSettings.from_parameters({"planner": {"seed": 3.0, "time_limit": 2}}, seed=5) == PlannerSettings(
+        seed=5, time_limit=2.0)
+    with pytest.raises(ParameterError, match=r"^planner\.speed: unknown parameter; known: seed, time_limit"):
+        PlannerSettings.from_parameters({"planner": {"speed": 1}})
+
+
+def test_required_parameters_have_no_default() -> None:
+    assert WORLD_PARAMETERS["bounds"].required and WORLD_PARAMETERS["bounds"].default is REQUIRED
+    with pytest.raises(KeyError, match="world.bounds is required"):
+        WORLD_PARAMETERS.default("bounds")
+    assert WORLD_PARAMETERS.default("goal_angle_tolerance") == math.pi
+    assert WORLD_PARAMETERS.default("obstacle_names") is None
+
+
+SEED = PLANNER_PARAMETERS["seed"]
+LIMIT = PLANNER_PARAMETERS["time_limit"]
+UNBOUNDED = ParameterSpec("test.x", ParameterType.DOUBLE, 1.0, "Anything finite.")
+
+CHECKS = [
+    (SEED, 5, 5),
+    (SEED, 5.0, 5),
+    (SEED, 1.5, "planner.seed: expected an integer, got 1.5"),
+    (SEED, math.nan, "planner.seed: expected an integer, got nan"),
+    (SEED, True, "planner.seed: expected an integer, got True"),
+    (SEED, "3", "planner.seed: expected an integer, got '3'"),
+    (SEED, -1, "planner.seed: expected a value in [0, 2147483647], got -1"),
+    (SEED, 2**31, "planner.seed: expected a value in [0, 2147483647], got 2147483648"),
+    (LIMIT, 2, 2.0),
+    (LIMIT, math.inf, "planner.time_limit: expected a value in [0.01, 86400.0], got inf"),
+    (LIMIT, math.nan, "planner.time_limit: expected a value in [0.01, 86400.0], got nan"),
+    (LIMIT, [1.0], "planner.time_limit: expected a number, got [1.0]"),
+    (LIMIT, None, "planner.time_limit: expected a number, got None"),
+    (UNBOUNDED, -1e300, -1e300),
+    (UNBOUNDED, math.inf, "test.x: expected a finite number, got inf"),
+    (NODE_PARAMETERS["record.enabled"], False, False),
+    (NODE_PARAMETERS["record.enabled"], 1, "record.enabled: expected true or false, got 1"),
+    (NODE_PARAMETERS["record.directory"], "runs", "runs"),
+    (NODE_PARAMETERS["record.directory"], "", "record.directory: expected a non-empty string, got ''"),
+]
+
+
+@pytest.mark.parametrize("spec, value, expected", CHECKS, ids=[f"{c[0].name}={c[1]!r}" for c in CHECKS])
+def test_check_value(spec: ParameterSpec, value, expected) -> None:
+    if isinstance(expected, str) and expected.startswith(spec.name + ":"):
+        with pytest.raises(ParameterError) as caught:
+            check_value(spec, value)
+        assert str(caught.value) == expected and caught.value.parameter == spec.name
+    else:
+        result = check_value(spec, value)
+        assert result == expected and type(result) is type(expected)
+
+
+def test_arrays_are_the_world_parsers() -> None:
+    with pytest.raises(TypeError, match="world parser"):
+        check_value(WORLD_PARAMETERS["bounds"], [0.0, 0.0, 1.0, 1.0])
+
+
+def test_short_repr() -> None:
+    assert short_repr("abc") == "'abc'"
+    assert short_repr("a" * 200) == "'" + "a" * 76 + "..."
+    assert len(short_repr(list(range(100)), 20)) == 20
+    assert short_repr(10**5000) == "an integer of about 5000 digits"

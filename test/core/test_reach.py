@@ -1,0 +1,132 @@
+"""The reach bounds are necessary conditions: they refuse only what no arm pose can do."""
+
+from pathlib import Path
+
+import numpy as np
+
+from clew_ros.core.kinematics import compose, relative, tip_poses
+from clew_ros.core.reach import goal_within_reach, within_reach
+from clew_ros.core.world import load_world
+
+CONFIG = Path(__file__).resolve().parents[2] / "config"
+
+
+def test_within_reach_is_the_annulus_the_links_sweep():
+    world = load_world(CONFIG / "figure1.yaml")
+    lengths = world.robot.link_lengths
+    base = world.robot.base
+    outer = float(lengths.sum())
+    inner = max(0.0, 2.0 * float(lengths.max()) - outer)
+    direction = np.array([np.cos(0.3), np.sin(0.3)])
+    assert within_reach(world, base + 0.999 * outer * direction)
+    assert not within_reach(world, base + 1.001 * outer * direction)
+    assert within_reach(world, base + 1.001 * outer * direction, slack=0.01 * outer)
+    if inner > 0:
+        assert not within_reach(world, base + 0.5 * inner * direction)
+
+
+def test_every_tip_the_arm_reaches_is_within_reach():
+    world = load_world(CONFIG / "arm3_regrasp.yaml")
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-np.pi, np.pi, size=(500, world.robot.dof))
+    tips = tip_poses(world.robot, q)[:, :2]
+    assert all(within_reach(world, tip, slack=1e-9) for tip in tips)
+
+
+def test_goal_within_reach_accepts_poses_the_arm_can_hold_and_refuses_far_ones():
+    world = load_world(CONFIG / "figure1.yaml")
+    rng = np.random.default_rng(1)
+    grasp_rel = relative(np.zeros(3), np.array([0.02, 0.0, 0.0]))  # object just beyond the tip
+    q = rng.uniform(-np.pi, np.pi, size=(200, world.robot.dof))
+    held = compose(tip_poses(world.robot, q), grasp_rel)
+    assert all(goal_within_reach(world, grasp_rel, pose) for pose in held)
+    far = world.robot.base + 3.0 * float(world.robot.link_lengths.sum())
+    assert not goal_within_reach(world, grasp_rel, np.array([far[0], far[1], 0.0]))
+
+
+def test_approach_cells_keep_every_angle_the_arm_holds_a_grasp_with():
+    from clew_ros.core.kinematics import wrap_angle
+    from clew_ros.core.reach import APPROACH_CELLS, approach_cells
+
+    world = load_world(CONFIG / "arm3_regrasp.yaml")
+    rng = np.random.default_rng(2)
+    grasp = 0
+    point = world.object.grasps[grasp]
+    refused = 0
+    for _ in range(300):
+        q = rng.uniform(-np.pi, np.pi, world.robot.dof)
+        tip = tip_poses(world.robot, q[None])[0]
+        psi = rng.uniform(-np.pi, np.pi)  # the last link's direction in the object frame
+        theta = tip[2] - psi
+        c, s = np.cos(theta), np.sin(theta)
+        pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
+        cells = approach_cells(world, pose, grasp)
+        cell = int(np.floor(wrap_angle(np.array([psi]))[0] % (2 * np.pi) / (2 * np.pi) * APPROACH_CELLS))
+        assert cells[cell % APPROACH_CELLS], (q, psi)
+        # with a spread, nearby orientations of the object keep the cell too
+        assert approach_cells(world, pose + [0.0, 0.0, 0.2], grasp, angle_spread=0.25)[cell % APPROACH_CELLS]
+        refused += int(np.sum(~cells))
+    assert refused > 0, "the bound should refuse some approach angles"
+
+
+def test_two_link_grasps_finds_the_configuration_that_holds_a_grasp():
+    from clew_ros.core.collision import is_valid
+    from clew_ros.core.kinematics import transform_points
+    from clew_ros.core.reach import two_link_grasps
+
+    world = load_world(CONFIG / "figure1.yaml")
+    rng = np.random.default_rng(4)
+    grasp = 1
+    point = world.object.grasps[grasp]
+    found = empty = 0
+    for _ in range(200):
+        q = rng.uniform(world.robot.joint_lower, world.robot.joint_upper)
+        tip = tip_poses(world.robot, q[None])[0]
+        theta = rng.uniform(-np.pi, np.pi)
+        c, s = np.cos(theta), np.sin(theta)
+        pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
+        holds = two_link_grasps(world, pose, grasp)
+        target = transform_points(pose, point[None])[0]
+        assert np.all(np.linalg.norm(tip_poses(world.robot, holds)[:, :2] - target, axis=1)
+                      <= 0.5 * world.grasp_tolerance + 1e-9)
+        if len(holds):
+            assert is_valid(world, holds, pose[None]).all()
+            found += 1
+        if is_valid(world, q[None], pose[None])[0]:
+            assert len(holds), (q, pose)  # a valid holding configuration exists: never refused
+        else:
+            empty += int(not len(holds))
+    assert found > 0 and empty > 0
+
+
+def test_approach_excess_is_zero_in_allowed_cells_and_grows_outside():
+    from clew_ros.core.reach import APPROACH_CELLS, approach_excess
+
+    cells = np.zeros(APPROACH_CELLS, bool)
+    cells[:APPROACH_CELLS // 4] = True  # psi in [0, pi/2)
+    excess = approach_excess(cells)
+    assert np.allclose(excess(np.array([0.1, 0.7, 1.4])), 0.0)
+    far = excess(np.array([np.pi / 2 + 0.2, np.pi / 2 + 0.5, -0.3]))
+    np.testing.assert_allclose(far, [0.2, 0.5, 0.3], atol=2 * np.pi / APPROACH_CELLS)
+
+
+def test_carry_cells_keep_every_approach_that_holds_the_object_there():
+    from clew_ros.core.reach import APPROACH_CELLS, carry_cells
+
+    world = load_world(CONFIG / "figure1.yaml")
+    rng = np.random.default_rng(5)
+    refused = 0
+    for grasp, point in enumerate(world.object.grasps):
+        for _ in range(200):
+            q = rng.uniform(-np.pi, np.pi, world.robot.dof)
+            tip = tip_poses(world.robot, q[None])[0]
+            psi = rng.uniform(0.0, 2.0 * np.pi)
+            theta = tip[2] - psi
+            c, s = np.cos(theta), np.sin(theta)
+            pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
+            cells = carry_cells(world, pose, grasp)
+            assert cells[int(psi / (2.0 * np.pi) * APPROACH_CELLS) % APPROACH_CELLS], (grasp, q, psi)
+            refused += int(np.sum(~cells))
+    # figure1's goal lies beyond the bare arm's reach: only in-line approaches carry the bar there
+    goal_cells = carry_cells(world, world.object.goal, 1)
+    assert 0 < goal_cells.sum() < APPROACH_CELLS / 2

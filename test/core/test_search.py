@@ -1,0 +1,72 @@
+"""SEARCH_TRANSIT and SEARCH_TRANSFER (paper 1.3.2, 1.3.4) as local planners, checked by replaying their paths."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from clew_ros.core.collision import is_valid
+from clew_ros.core.kinematics import compose, tip_poses, transform_points
+from clew_ros.core.plan import interpolate
+from clew_ros.core.search import PlanningContext, goal_error, goal_reached, search_transfer, search_transit
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.world import load_world
+
+QUICK = Path(__file__).parents[1] / "worlds" / "node_quick.yaml"
+
+
+@pytest.fixture(scope="module")
+def world():
+    return load_world(QUICK)
+
+
+def context(world, seed: int = 0) -> PlanningContext:
+    return PlanningContext(world, PlannerSettings(seed=seed), np.random.default_rng(seed))
+
+
+def test_search_transit_reaches_a_grasp_without_touching_the_resting_object(world) -> None:
+    pose = world.object.initial
+    result = search_transit(context(world), world.robot.initial, pose, grasp=1)
+    assert result.success
+    target = transform_points(pose, world.object.grasps[1][None])[0]
+    tip = tip_poses(world.robot, result.waypoints[-1:])[0]
+    assert np.linalg.norm(tip[:2] - target) <= world.grasp_tolerance
+    assert np.allclose(compose(tip[None], result.grasp_rel[None])[0], pose)  # the held pose is where it rests
+    assert np.array_equal(result.waypoints[0], world.robot.initial)
+    assert np.all(np.count_nonzero(np.diff(result.waypoints, axis=0), axis=1) <= 1)  # Manhattan moves
+    configurations = interpolate(result.waypoints, 0.002)
+    assert is_valid(world, configurations, pose).all()
+
+
+def test_search_transfer_carries_the_object_to_the_goal(world) -> None:
+    ctx = context(world)
+    transit = search_transit(ctx, world.robot.initial, world.object.initial, grasp=1)
+    assert transit.success
+    goal = world.object.goal
+    result = search_transfer(ctx, transit.waypoints[-1], transit.grasp_rel, goal)
+    assert result.success and goal_reached(world, result.object_pose, goal)
+    configurations = interpolate(result.waypoints, 0.002)
+    poses = compose(tip_poses(world.robot, configurations), transit.grasp_rel[None])
+    assert is_valid(world, configurations, poses).all()
+    assert np.allclose(poses[-1], result.object_pose)
+
+
+def test_same_seed_same_path_and_an_unreachable_goal_fails_without_searching(world) -> None:
+    first = search_transit(context(world, 3), world.robot.initial, world.object.initial, grasp=0)
+    again = search_transit(context(world, 3), world.robot.initial, world.object.initial, grasp=0)
+    assert np.array_equal(first.waypoints, again.waypoints)
+    far = np.array([5.0, 5.0, 0.0])
+    ctx = context(world)
+    result = search_transfer(ctx, first.waypoints[-1], first.grasp_rel, far)
+    assert not result.success and len(result.waypoints) == 1 and ctx.counters.evaluations == 0
+
+
+def test_goal_error_is_zero_at_the_goal_and_counts_only_excess_angle(world) -> None:
+    goal = np.array([0.5, 0.5, 0.0])
+    assert np.allclose(goal_error(world, goal[None], goal), 0.0)
+    turned = goal + [0.0, 0.0, 0.5 * world.goal_angle_tolerance]
+    assert np.allclose(goal_error(world, turned[None], goal), 0.0)  # inside the angle slack
+    moved = goal + [0.03, -0.04, 0.0]
+    assert np.isclose(np.linalg.norm(goal_error(world, moved[None], goal)), 0.05)

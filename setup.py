@@ -9,9 +9,7 @@ package_name = "clew_ros"
 setup(
     name=package_name,
     version="0.1.0",
-    description=(
-        "Manipulation planning with the Ariadne's Clew Algorithm, served as a ROS 2 node."
-    ),
+    description=("Manipulation planning with the Ariadne's Clew Algorithm, served as a ROS 2 node."),
     maintainer="clew_ros maintainers",
     maintainer_email="clew-ros@example.com",
     license="Apache-2.0",

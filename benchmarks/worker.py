@@ -2,7 +2,8 @@
 
 Prints one JSON object on stdout: per-seed results (wall time and this
 process's CPU time: on a shared machine the CPU time is the steadier figure,
-the planner's time limit is wall time), and the process's peak resident memory (``ru_maxrss``) before and after planning, so memory figures
+the planner's time limit is wall time), and the process's peak resident
+memory (``ru_maxrss``) before and after planning, so memory figures
 belong to this world alone. :mod:`benchmarks.run` starts one per world.
 """
 
@@ -57,8 +58,14 @@ def run_world(name: str, seeds: list[int], time_limit_s: float, validate: bool =
         if validate and result.success:
             record["valid"] = checked_plan(world, result).success
         runs.append(record)
-    return {"world": bench.name, "time_limit_s": time_limit_s, "runs": runs, "warm_up_s": warm_up_s,
-            "rss_before_mb": base_rss, "peak_rss_mb": _maxrss_mb()}
+    return {
+        "world": bench.name,
+        "time_limit_s": time_limit_s,
+        "runs": runs,
+        "warm_up_s": warm_up_s,
+        "rss_before_mb": base_rss,
+        "peak_rss_mb": _maxrss_mb(),
+    }
 
 
 def main(argv: list[str] | None = None) -> int:

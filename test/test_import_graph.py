@@ -43,16 +43,18 @@ def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")
-                base = base[:len(base) - (node.level - 1)]
+                base = base[: len(base) - (node.level - 1)]
                 source = ".".join(base + ([node.module] if node.module else []))
             else:
                 source = node.module or ""
-            targets = [f"{source}.{alias.name}" if f"{source}.{alias.name}" in modules else source
-                       for alias in node.names]
+            targets = [
+                f"{source}.{alias.name}" if f"{source}.{alias.name}" in modules else source for alias in node.names
+            ]
         else:
             continue
-        for target in targets:
+        for imported in targets:
             # the longest prefix that is a module of the package (``import numpy.linalg`` has none)
+            target = imported
             while target and target not in modules:
                 target = target.rpartition(".")[0]
             if target.startswith(PACKAGE) and target != name:
@@ -75,7 +77,7 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
         stack.append(node)
         for child in sorted(graph.get(node, ())):
             if state.get(child) == 1:
-                return stack[stack.index(child):] + [child]
+                return [*stack[stack.index(child) :], child]
             if child not in state:
                 cycle = visit(child)
                 if cycle:
@@ -112,10 +114,18 @@ def test_every_kind_of_import_is_an_edge(tmp_path: Path) -> None:
         "    from clew_ros.core.collision import is_valid\n"
         "    if True:\n"
         "        import clew_ros.core.plan as plan\n",
-        encoding="utf-8")
+        encoding="utf-8",
+    )
     found = imports_of("clew_ros.core.m", source, module_names())
-    assert found == {"clew_ros.core.kernel", "clew_ros.core.geometry", "clew_ros.core.world", "clew_ros.core.tree",
-                     "clew_ros.node.playback", "clew_ros.core.collision", "clew_ros.core.plan"}
+    assert found == {
+        "clew_ros.core.kernel",
+        "clew_ros.core.geometry",
+        "clew_ros.core.world",
+        "clew_ros.core.tree",
+        "clew_ros.node.playback",
+        "clew_ros.core.collision",
+        "clew_ros.core.plan",
+    }
 
 
 def test_find_cycle_finds_one() -> None:

@@ -33,7 +33,13 @@ REQUIRED_EXEC_DEPENDS = {
 }
 
 #: Python modules clew_ros imports -> their rosdep key (ROS packages are their own key).
-ROSDEP_KEYS = {"numpy": "python3-numpy", "numba": "python3-numba", "shapely": "python3-shapely", "yaml": "python3-yaml", "PIL": "python3-pil"}
+ROSDEP_KEYS = {
+    "numpy": "python3-numpy",
+    "numba": "python3-numba",
+    "shapely": "python3-shapely",
+    "yaml": "python3-yaml",
+    "PIL": "python3-pil",
+}
 #: Imported, but with no rosdep key (setup.py's install_requires), or optional (imported under try).
 NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags"}
 
@@ -78,7 +84,7 @@ def test_package_xml_is_format_3_clew_ros(package_xml: ET.Element) -> None:
 
 def test_package_xml_depends(package_xml: ET.Element) -> None:
     exec_depends = {e.text for e in package_xml.findall("exec_depend")}
-    assert REQUIRED_EXEC_DEPENDS <= exec_depends
+    assert exec_depends >= REQUIRED_EXEC_DEPENDS
     assert "python3-pytest" in {e.text for e in package_xml.findall("test_depend")}
 
 
@@ -112,9 +118,7 @@ def test_package_xml_element_order(package_xml: ET.Element) -> None:
     assert tags[-1] == "export"
 
 
-def test_setup_py_matches_package_xml(
-    setup_kwargs: dict[str, Any], package_xml: ET.Element
-) -> None:
+def test_setup_py_matches_package_xml(setup_kwargs: dict[str, Any], package_xml: ET.Element) -> None:
     assert setup_kwargs["name"] == package_xml.findtext("name")
     assert setup_kwargs["version"] == package_xml.findtext("version")
     assert setup_kwargs["license"] == package_xml.findtext("license")
@@ -140,10 +144,10 @@ def test_setup_py_installs_config_worlds(tmp_path: Path) -> None:
 
 
 def test_setup_py_console_scripts(setup_kwargs: dict[str, Any]) -> None:
-    scripts = dict(
-        (name.strip(), target.strip())
+    scripts = {
+        name.strip(): target.strip()
         for name, target in (s.split("=") for s in setup_kwargs["entry_points"]["console_scripts"])
-    )
+    }
     assert scripts == CONSOLE_SCRIPTS
 
 

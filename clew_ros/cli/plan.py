@@ -51,8 +51,13 @@ class _ProgressLine:
             return
         self.shown = True
         end = "\r" if sys.stderr.isatty() else "\n"
-        print(f"clew_plan: {progress.elapsed:6.1f} s  landmarks {progress.landmarks:3d}  "
-              f"best goal distance {progress.best_distance:.4f} m", end=end, file=sys.stderr, flush=True)
+        print(
+            f"clew_plan: {progress.elapsed:6.1f} s  landmarks {progress.landmarks:3d}  "
+            f"best goal distance {progress.best_distance:.4f} m",
+            end=end,
+            file=sys.stderr,
+            flush=True,
+        )
 
     def close(self) -> None:
         if self.shown and sys.stderr.isatty():
@@ -64,6 +69,7 @@ def _cancel_on_signals(cancel: threading.Event) -> Callable[[], None]:
 
     Returns a function that restores the previous handlers. Outside the main thread it does nothing.
     """
+
     def handler(signum: int, _frame) -> None:
         if cancel.is_set():
             raise KeyboardInterrupt
@@ -80,6 +86,7 @@ def _cancel_on_signals(cancel: threading.Event) -> Callable[[], None]:
     def restore() -> None:
         for sig, old in previous.items():
             signal.signal(sig, old)
+
     return restore
 
 
@@ -104,9 +111,14 @@ def main(argv: list[str] | None = None) -> int:
         print("clew_plan: aborted; no plan file written", file=sys.stderr)
         return EXIT_ABORTED
     except Exception as error:  # noqa: BLE001 - a bug in the planner: reported in the plan file, exit 1
-        result = PlanResult(Outcome.INTERNAL_ERROR, f"internal error: {error!r}", [], None,
-                            LandmarkTree(world.robot.initial, world.object.initial),
-                            {"time_s": round(time.monotonic() - started, 4), "seed": settings.seed})
+        result = PlanResult(
+            Outcome.INTERNAL_ERROR,
+            f"internal error: {error!r}",
+            [],
+            None,
+            LandmarkTree(world.robot.initial, world.object.initial),
+            {"time_s": round(time.monotonic() - started, 4), "seed": settings.seed},
+        )
         planned = Plan.from_result(world, result)
     finally:
         restore()
@@ -117,8 +129,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"clew_plan: cannot write --output {args.output}: {error.strerror}", file=sys.stderr)
         return 2
     elapsed = time.monotonic() - started
-    print(f"clew_plan: {planned.code}: {planned.message.splitlines()[0]} ({elapsed:.2f} s, "
-          f"{len(result.tree)} landmarks) -> {args.output}", file=sys.stderr)
+    print(
+        f"clew_plan: {planned.code}: {planned.message.splitlines()[0]} ({elapsed:.2f} s, "
+        f"{len(result.tree)} landmarks) -> {args.output}",
+        file=sys.stderr,
+    )
     return 0 if planned.success else 1
 
 

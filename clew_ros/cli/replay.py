@@ -18,6 +18,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 EXIT_OK = 0
 EXIT_INVALID = 2
@@ -28,15 +29,30 @@ _MAX_LATCHED_DEPTH = 1000
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="clew_replay", description="Publish a recorded clew_planner run again.")
     parser.add_argument("recording", metavar="RECORDING", help="run directory or .mcap file")
-    parser.add_argument("--rate", type=float, default=1.0, metavar="R",
-                        help="playback speed factor (2: twice as fast; default 1)")
+    parser.add_argument(
+        "--rate", type=float, default=1.0, metavar="R", help="playback speed factor (2: twice as fast; default 1)"
+    )
     parser.add_argument("--loop", action="store_true", help="start again at the end, until stopped")
-    parser.add_argument("--prefix", default="", metavar="P",
-                        help="publish /T as P/T (e.g. --prefix /replay: /replay/clew_planner/status)")
-    parser.add_argument("--delay", type=float, default=0.5, metavar="S",
-                        help="seconds to wait after creating the publishers (discovery), default 0.5")
-    parser.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="S",
-                        help="before playing, wait up to S seconds until every topic has a subscriber")
+    parser.add_argument(
+        "--prefix",
+        default="",
+        metavar="P",
+        help="publish /T as P/T (e.g. --prefix /replay: /replay/clew_planner/status)",
+    )
+    parser.add_argument(
+        "--delay",
+        type=float,
+        default=0.5,
+        metavar="S",
+        help="seconds to wait after creating the publishers (discovery), default 0.5",
+    )
+    parser.add_argument(
+        "--wait-for-subscribers",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="before playing, wait up to S seconds until every topic has a subscriber",
+    )
     parser.add_argument("--topics", nargs="+", metavar="T", help="play only these (recorded) topics")
     return parser
 
@@ -52,86 +68,58 @@ def _qos(info, count: int):
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
     offered = info.offered_qos_profiles[0] if info.offered_qos_profiles else {}
-    reliability = (ReliabilityPolicy.BEST_EFFORT if str(offered.get("reliability")).lower() == "best_effort"
-                   else ReliabilityPolicy.RELIABLE)
+    reliability = (
+        ReliabilityPolicy.BEST_EFFORT
+        if str(offered.get("reliability")).lower() == "best_effort"
+        else ReliabilityPolicy.RELIABLE
+    )
     depth = int(offered.get("depth") or 10)
     if info.transient_local:
         # every latched message of the run reaches a late subscriber, as it did from the node
-        return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(depth, min(count, _MAX_LATCHED_DEPTH)),
-                          reliability=reliability, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(depth, 1), reliability=reliability,
-                      durability=DurabilityPolicy.VOLATILE)
+        return QoSProfile(
+            history=HistoryPolicy.KEEP_LAST,
+            depth=max(depth, min(count, _MAX_LATCHED_DEPTH)),
+            reliability=reliability,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        )
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=max(depth, 1),
+        reliability=reliability,
+        durability=DurabilityPolicy.VOLATILE,
+    )
+
+
+class _InvalidInputError(Exception):
+    """A command-line value or the recording is unusable: the message goes to stderr, exit 2."""
 
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    if not args.rate > 0:
-        print(f"clew_replay: --rate: expected a number > 0, got {args.rate}", file=sys.stderr)
-        return EXIT_INVALID
-    if args.delay < 0 or args.wait_for_subscribers < 0:
-        print("clew_replay: --delay and --wait-for-subscribers: expected seconds >= 0", file=sys.stderr)
-        return EXIT_INVALID
-
-    from clew_ros.recording import Recording, RecordingError
-    from clew_ros.recording.msgdefs import message_class
-
     try:
-        recording = Recording(Path(args.recording))
-        topics = recording.topics
-        if args.topics:
-            unknown = sorted(set(args.topics) - set(topics))
-            if unknown:
-                raise RecordingError(f"{args.recording} has no topic {', '.join(unknown)}; it has "
-                                     f"{', '.join(sorted(topics))}")
-        messages = recording.messages(args.topics)
-        if not messages:
-            raise RecordingError(f"{args.recording} holds no messages to play")
-        classes = {name: message_class(topics[name].type_name) for name in {m.topic for m in messages}}
-    except RecordingError as error:
+        _check_arguments(args)
+        recording, messages, classes = _load(args)
+    except _InvalidInputError as error:
         print(f"clew_replay: {error}", file=sys.stderr)
         return EXIT_INVALID
     if not recording.complete:
-        print(f"clew_replay: {recording.mcap_path} was cut short; playing its {len(messages)} readable messages",
-              file=sys.stderr)
+        print(
+            f"clew_replay: {recording.mcap_path} was cut short; playing its {len(messages)} readable messages",
+            file=sys.stderr,
+        )
 
     import rclpy
-    from rclpy.duration import Duration
     from rclpy.executors import ExternalShutdownException
-    from rclpy.validate_full_topic_name import validate_full_topic_name
 
     rclpy.init()
     node = None
     try:
         node = rclpy.create_node("clew_replay")
-        counts = {name: sum(m.topic == name for m in messages) for name in classes}
-        publishers = {}
-        for name, cls in classes.items():
-            target = _remap(args.prefix, name)
-            try:
-                validate_full_topic_name(target)
-            except Exception as error:  # noqa: BLE001 - rclpy raises its own InvalidTopicNameException
-                print(f"clew_replay: --prefix: {target!r} is not a valid topic name ({error})", file=sys.stderr)
-                return EXIT_INVALID
-            publishers[name] = node.create_publisher(cls, target, _qos(topics[name], counts[name]))
-        duration_s = (messages[-1].log_time_ns - messages[0].log_time_ns) / 1e9 / args.rate
-        print(f"clew_replay: {len(messages)} messages on {len(publishers)} topics, {duration_s:.2f} s at rate "
-              f"{args.rate:g}{' (looping)' if args.loop else ''}", flush=True)
-        if not _wait(args.delay):
-            return EXIT_OK
-        if args.wait_for_subscribers > 0:
-            deadline = time.monotonic() + args.wait_for_subscribers
-            while rclpy.ok() and time.monotonic() < deadline:
-                if all(p.get_subscription_count() > 0 for p in publishers.values()):
-                    break
-                time.sleep(_TICK_S)
-        while rclpy.ok():
-            if not _play(messages, publishers, args.rate):
-                break
-            if not args.loop:
-                break
-        for publisher in publishers.values():  # let reliable readers take the last messages
-            if rclpy.ok():
-                publisher.wait_for_all_acked(Duration(seconds=1.0))
+        publishers = _publishers(node, args.prefix, recording.topics, classes, messages)
+        _play_all(args, messages, publishers)
+    except _InvalidInputError as error:
+        print(f"clew_replay: {error}", file=sys.stderr)
+        return EXIT_INVALID
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
@@ -139,6 +127,78 @@ def main(argv: list[str] | None = None) -> int:
             node.destroy_node()
         rclpy.try_shutdown()
     return EXIT_OK
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    if not args.rate > 0:
+        raise _InvalidInputError(f"--rate: expected a number > 0, got {args.rate}")
+    if args.delay < 0 or args.wait_for_subscribers < 0:
+        raise _InvalidInputError("--delay and --wait-for-subscribers: expected seconds >= 0")
+
+
+def _load(args: argparse.Namespace) -> tuple[Any, list[Any], dict[str, Any]]:
+    """The recording, the messages to play (in log time order) and each topic's message class."""
+    from clew_ros.recording import Recording, RecordingError
+    from clew_ros.recording.msgdefs import message_class
+
+    try:
+        recording = Recording(Path(args.recording))
+        topics = recording.topics
+        unknown = sorted(set(args.topics or ()) - set(topics))
+        if unknown:
+            raise RecordingError(
+                f"{args.recording} has no topic {', '.join(unknown)}; it has {', '.join(sorted(topics))}"
+            )
+        messages = recording.messages(args.topics)
+        if not messages:
+            raise RecordingError(f"{args.recording} holds no messages to play")
+        classes = {name: message_class(topics[name].type_name) for name in {m.topic for m in messages}}
+    except RecordingError as error:
+        raise _InvalidInputError(str(error)) from None
+    return recording, messages, classes
+
+
+def _publishers(
+    node: Any, prefix: str, topics: dict[str, Any], classes: dict[str, Any], messages: list[Any]
+) -> dict[str, Any]:
+    """One publisher per played topic, under ``prefix``, with the QoS the topic was recorded with."""
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+
+    counts = {name: sum(m.topic == name for m in messages) for name in classes}
+    publishers = {}
+    for name, cls in classes.items():
+        target = _remap(prefix, name)
+        try:
+            validate_full_topic_name(target)
+        except Exception as error:  # noqa: BLE001 - rclpy raises its own InvalidTopicNameException
+            raise _InvalidInputError(f"--prefix: {target!r} is not a valid topic name ({error})") from None
+        publishers[name] = node.create_publisher(cls, target, _qos(topics[name], counts[name]))
+    return publishers
+
+
+def _play_all(args: argparse.Namespace, messages: list[Any], publishers: dict[str, Any]) -> None:
+    """Wait as asked, play (looping if asked), then let reliable readers take the last messages."""
+    import rclpy
+    from rclpy.duration import Duration
+
+    duration_s = (messages[-1].log_time_ns - messages[0].log_time_ns) / 1e9 / args.rate
+    print(
+        f"clew_replay: {len(messages)} messages on {len(publishers)} topics, {duration_s:.2f} s at rate "
+        f"{args.rate:g}{' (looping)' if args.loop else ''}",
+        flush=True,
+    )
+    if not _wait(args.delay):
+        return
+    deadline = time.monotonic() + args.wait_for_subscribers
+    while rclpy.ok() and time.monotonic() < deadline:
+        if all(p.get_subscription_count() > 0 for p in publishers.values()):
+            break
+        time.sleep(_TICK_S)
+    while rclpy.ok() and _play(messages, publishers, args.rate) and args.loop:
+        pass
+    for publisher in publishers.values():
+        if rclpy.ok():
+            publisher.wait_for_all_acked(Duration(seconds=1.0))
 
 
 def _wait(seconds: float) -> bool:

@@ -16,5 +16,12 @@ Which calls may block where: see :mod:`clew_ros.client.planner_client`.
 from clew_ros.client.planner_client import PlannerClient
 from clew_ros.client.run import Feedback, PlannerNotFoundError, RunHandle, RunResult, RunStatus, RunTimeoutError
 
-__all__ = ["PlannerClient", "RunHandle", "RunStatus", "Feedback", "RunResult", "PlannerNotFoundError",
-           "RunTimeoutError"]
+__all__ = [
+    "Feedback",
+    "PlannerClient",
+    "PlannerNotFoundError",
+    "RunHandle",
+    "RunResult",
+    "RunStatus",
+    "RunTimeoutError",
+]

@@ -106,14 +106,18 @@ class PlannerClient:
         self._goal_pub = node.create_publisher(PoseStamped, f"{name}/goal_pose", GOAL_QOS, callback_group=group)
         self._subscriptions = [
             node.create_subscription(String, f"{name}/events", self._on_event, EVENTS_QOS, callback_group=group),
-            node.create_subscription(GoalStatusArray, f"{name}/status", self._on_status, LATCHED_QOS,
-                                     callback_group=group),
-            node.create_subscription(DiagnosticStatus, f"{name}/feedback", self._on_feedback, STREAM_QOS,
-                                     callback_group=group),
-            node.create_subscription(JointTrajectory, f"{name}/trajectory", self._on_trajectory, LATCHED_QOS,
-                                     callback_group=group),
-            node.create_subscription(String, f"{name}/world_yaml", self._on_world_yaml, LATCHED_QOS,
-                                     callback_group=group),
+            node.create_subscription(
+                GoalStatusArray, f"{name}/status", self._on_status, LATCHED_QOS, callback_group=group
+            ),
+            node.create_subscription(
+                DiagnosticStatus, f"{name}/feedback", self._on_feedback, STREAM_QOS, callback_group=group
+            ),
+            node.create_subscription(
+                JointTrajectory, f"{name}/trajectory", self._on_trajectory, LATCHED_QOS, callback_group=group
+            ),
+            node.create_subscription(
+                String, f"{name}/world_yaml", self._on_world_yaml, LATCHED_QOS, callback_group=group
+            ),
         ]
         self._cancel = node.create_client(Trigger, f"{name}/cancel", callback_group=group)
         self._parameters = node.create_client(GetParameters, f"{name}/get_parameters", callback_group=group)
@@ -123,14 +127,19 @@ class PlannerClient:
     def planner_ready(self) -> bool:
         """Whether the planner is there: it listens on ``~/goal_pose``, and its ``~/events`` and
         latched ``~/status`` reach this node (never blocks)."""
-        return (self._goal_pub.get_subscription_count() > 0 and self._subscriptions[0].get_publisher_count() > 0
-                and self._status_seen)
+        return (
+            self._goal_pub.get_subscription_count() > 0
+            and self._subscriptions[0].get_publisher_count() > 0
+            and self._status_seen
+        )
 
     def wait_for_planner(self, timeout_s: float | None = 10.0) -> None:
         """Wait until :meth:`planner_ready`; raises :class:`PlannerNotFoundError` after ``timeout_s``."""
         if not self._wait_until(self.planner_ready, timeout_s):
-            raise PlannerNotFoundError(f"no planner at {self.planner} within {timeout_s} s (is clew_planner running, "
-                                       "with the same ROS_DOMAIN_ID?)")
+            raise PlannerNotFoundError(
+                f"no planner at {self.planner} within {timeout_s} s (is clew_planner running, "
+                "with the same ROS_DOMAIN_ID?)"
+            )
 
     def default_goal(self, timeout_s: float | None = 10.0) -> tuple[float, float, float]:
         """The planner's ``world.object.goal`` parameter (through its standard ``get_parameters`` service)."""
@@ -147,8 +156,12 @@ class PlannerClient:
 
     # -- goals ---------------------------------------------------------------------------------------
 
-    def send_goal(self, goal: Sequence[float] | PoseStamped | None = None, *,
-                  on_feedback: Callable[[RunHandle, Feedback], None] | None = None) -> RunHandle:
+    def send_goal(
+        self,
+        goal: Sequence[float] | PoseStamped | None = None,
+        *,
+        on_feedback: Callable[[RunHandle, Feedback], None] | None = None,
+    ) -> RunHandle:
         """Send a goal; returns its handle at once.
 
         ``goal``: the object's goal placement ``(x, y, yaw)`` in frame ``world``
@@ -215,7 +228,7 @@ class PlannerClient:
                 executor = SingleThreadedExecutor(context=self._node.context)
                 _SCRIPT_EXECUTORS[executor] = threading.Lock()
                 executor.add_node(self._node)
-            spinning = _SCRIPT_EXECUTORS[executor]
+            spinning = _SCRIPT_EXECUTORS[executor]  # type: ignore[index]  # one of ours: a SingleThreadedExecutor
             while not predicate():
                 if left() <= 0:
                     return False
@@ -223,9 +236,11 @@ class PlannerClient:
                     executor.spin_once(timeout_sec=max(0.0, left()))
             return True
         if threading.get_ident() in self._callback_threads and not isinstance(executor, MultiThreadedExecutor):
-            raise RuntimeError("waiting here would block the executor that must deliver the answer: in a node "
-                               "spun by a SingleThreadedExecutor use RunHandle.add_done_callback, or wait "
-                               "from another thread")
+            raise RuntimeError(
+                "waiting here would block the executor that must deliver the answer: in a node "
+                "spun by a SingleThreadedExecutor use RunHandle.add_done_callback, or wait "
+                "from another thread"
+            )
         with self._changed:
             while not predicate():
                 if left() <= 0:
@@ -248,36 +263,44 @@ class PlannerClient:
         if not isinstance(event, dict):
             return
         kind, run_id = event.get("event"), event.get("run_id")
+        if not isinstance(run_id, str):
+            return
         stamp = event.get("goal_stamp_ns")
         with self._lock:
             handle = self._pending.pop(stamp, None) if isinstance(stamp, int) else None
-            if handle is not None and isinstance(run_id, str):
+            if handle is not None:
                 self._runs[run_id] = handle
-            elif isinstance(run_id, str):
+            else:
                 handle = self._runs.get(run_id)
         if handle is not None:
             if kind == "accepted":
-                handle._accepted(run_id)
+                handle.mark_accepted(run_id)
                 handle.recording = (event.get("recording_path"), str(event.get("recording", "")))
                 handle.trajectories_before = self._trajectory_count
             elif kind in _OUTCOME_EVENTS:
                 if handle.run_id is None:
-                    handle._accepted(run_id)  # refused: the refusal has its own run id
+                    handle.mark_accepted(run_id)  # refused: the refusal has its own run id
                 self._finish(handle, event)
         self._notify()
 
     def _finish(self, handle: RunHandle, event: dict[str, Any]) -> None:
         code = event.get("code")
-        outcome = Outcome[code] if code in Outcome.__members__ else Outcome.INTERNAL_ERROR
+        outcome = Outcome[code] if isinstance(code, str) and code in Outcome.__members__ else Outcome.INTERNAL_ERROR
         path, note = handle.recording
-        result = RunResult(run_id=str(event.get("run_id")), outcome=outcome, message=str(event.get("message", "")),
-                           landmarks=int(event.get("landmarks") or 0), time_s=float(event.get("time_s") or 0.0),
-                           recording=path, recording_note=note)
+        result = RunResult(
+            run_id=str(event.get("run_id")),
+            outcome=outcome,
+            message=str(event.get("message", "")),
+            landmarks=int(event.get("landmarks") or 0),
+            time_s=float(event.get("time_s") or 0.0),
+            recording=path,
+            recording_note=note,
+        )
         if outcome is Outcome.SUCCEEDED:
             handle.outcome_event = result  # completed when its trajectory is here
             self._complete_success(handle)
         else:
-            handle._finish(result)
+            handle.finish(result)
 
     def _complete_success(self, handle: RunHandle) -> None:
         result = handle.outcome_event
@@ -288,7 +311,7 @@ class PlannerClient:
         if trajectory is None or world is None:
             return
         plan = trajectory_to_plan(world, trajectory, message=result.message)
-        handle._finish(dataclasses.replace(result, plan=plan, trajectory=trajectory))
+        handle.finish(dataclasses.replace(result, plan=plan, trajectory=trajectory))
 
     def _trajectory_of(self, handle: RunHandle) -> JointTrajectory | None:
         """The run's ``~/trajectory``: the first one received after the run was accepted (the planner runs
@@ -314,7 +337,7 @@ class PlannerClient:
         for entry in msg.status_list:
             handle = runs.get(bytes(entry.goal_info.goal_id.uuid).hex())
             if handle is not None and entry.status in _STATUS:
-                handle._set_status(_STATUS[entry.status])
+                handle.update_status(_STATUS[entry.status])
         self._notify()
 
     def _on_feedback(self, msg: DiagnosticStatus) -> None:
@@ -323,13 +346,17 @@ class PlannerClient:
             handle = self._runs.get(values.get("run_id", ""))
         if handle is not None:
             try:
-                feedback = Feedback(values.get("phase", msg.message), int(values.get("landmarks", "0")),
-                                    float(values.get("best_distance", "inf")), float(values.get("elapsed", "0")))
+                feedback = Feedback(
+                    values.get("phase", msg.message),
+                    int(values.get("landmarks", "0")),
+                    float(values.get("best_distance", "inf")),
+                    float(values.get("elapsed", "0")),
+                )
             except ValueError:
                 return
             if feedback.phase == "planning":
-                handle._set_status(RunStatus.EXECUTING)
-            handle._set_feedback(feedback)
+                handle.update_status(RunStatus.EXECUTING)
+            handle.update_feedback(feedback)
         self._notify()
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
@@ -345,6 +372,8 @@ class PlannerClient:
         self._world_text = msg.data
         self._notify()
 
-    def _request_cancel(self, handle: RunHandle) -> None:
-        del handle  # ~/cancel cancels the planner's current run, which is this one while it is not done
+    def cancel(self, handle: RunHandle) -> None:
+        """Ask the planner to cancel ``handle``'s run (``~/cancel`` cancels its current run, which is this one
+        while it is not done); :meth:`RunHandle.cancel` calls it."""
+        del handle
         self._cancel.call_async(Trigger.Request())

@@ -11,13 +11,14 @@ import enum
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 from trajectory_msgs.msg import JointTrajectory
 
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome
 
-__all__ = ["RunStatus", "Feedback", "RunResult", "RunHandle", "PlannerNotFoundError", "RunTimeoutError"]
+__all__ = ["Feedback", "PlannerNotFoundError", "RunHandle", "RunResult", "RunStatus", "RunTimeoutError"]
 
 
 class PlannerNotFoundError(RuntimeError):
@@ -26,6 +27,14 @@ class PlannerNotFoundError(RuntimeError):
 
 class RunTimeoutError(TimeoutError):
     """A run did not end (or was not answered) within the time the caller gave."""
+
+
+class Follower(Protocol):
+    """What a handle asks of the client that follows its run."""
+
+    def wait_until(self, predicate: Callable[[], bool], timeout_s: float | None) -> bool: ...
+
+    def cancel(self, handle: RunHandle) -> None: ...
 
 
 class RunStatus(enum.Enum):
@@ -89,8 +98,13 @@ class RunHandle:
     ``on_feedback`` call back from the executor that spins the client's node.
     """
 
-    def __init__(self, client: object, goal: tuple[float, float, float] | None, stamp_ns: int,
-                 on_feedback: Callable[[RunHandle, Feedback], None] | None = None) -> None:
+    def __init__(
+        self,
+        client: Follower,
+        goal: tuple[float, float, float] | None,
+        stamp_ns: int,
+        on_feedback: Callable[[RunHandle, Feedback], None] | None = None,
+    ) -> None:
         self._client = client
         self.goal = goal
         self.stamp_ns = stamp_ns
@@ -144,7 +158,7 @@ class RunHandle:
         """
         client = self._client
         ready = self._playback_ready if playback else self.done
-        if not client._wait_until(ready, timeout_s):  # type: ignore[attr-defined]
+        if not client.wait_until(ready, timeout_s):
             what = "played back" if self.done() else "answered"
             raise RunTimeoutError(f"run {self._run_id or '(not accepted yet)'} was not {what} within {timeout_s} s")
         assert self._result is not None
@@ -157,7 +171,7 @@ class RunHandle:
         """
         if self.done():
             return False
-        self._client._request_cancel(self)  # type: ignore[attr-defined]
+        self._client.cancel(self)
         return True
 
     def add_done_callback(self, callback: Callable[[RunHandle], None]) -> None:
@@ -173,20 +187,20 @@ class RunHandle:
             return False
         return self._result is None or not self._result.succeeded or self._playback_over.is_set()
 
-    # -- what the client feeds ------------------------------------------------------------------------
+    # -- what the client that follows the run feeds (not for users) -----------------------------------
 
-    def _accepted(self, run_id: str) -> None:
+    def mark_accepted(self, run_id: str) -> None:
         with self._lock:
             self._run_id = run_id
             if self._status is RunStatus.SENT:
                 self._status = RunStatus.ACCEPTED
 
-    def _set_status(self, status: RunStatus) -> None:
+    def update_status(self, status: RunStatus) -> None:
         with self._lock:
             if not self._status.done:
                 self._status = status
 
-    def _set_feedback(self, feedback: Feedback) -> None:
+    def update_feedback(self, feedback: Feedback) -> None:
         self._feedback = feedback
         if feedback.phase in ("playback_done", "playback_stopped"):
             self._playback = feedback.phase
@@ -194,7 +208,7 @@ class RunHandle:
         if self._on_feedback is not None:
             self._on_feedback(self, feedback)
 
-    def _finish(self, result: RunResult) -> None:
+    def finish(self, result: RunResult) -> None:
         status = {Outcome.SUCCEEDED: RunStatus.SUCCEEDED, Outcome.CANCELED: RunStatus.CANCELED}
         with self._lock:
             if self._done.is_set():

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any
 
 import numpy as np
 
@@ -14,10 +15,10 @@ from clew_ros.core.kinematics import transform_points
 from clew_ros.core.reach import approach_cells, carry_cells
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.core.tree import LandmarkTree, Segment, append_step
+from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
 from clew_ros.core.world import World
 
-__all__ = ["Progress", "PlanResult", "plan"]
+__all__ = ["PlanResult", "Progress", "plan"]
 
 #: When SEARCH from a landmark fails, the placement its closest transfer reached
 #: (put down there) becomes a landmark and SEARCH runs again from it, at most
@@ -47,28 +48,37 @@ class PlanResult:
     segments: list[Segment]
     final_object_pose: np.ndarray | None
     tree: LandmarkTree
-    stats: dict = field(default_factory=dict)
+    stats: dict[str, Any] = field(default_factory=dict)
 
     @property
     def success(self) -> bool:
         return self.outcome.succeeded
 
 
-def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: np.ndarray | None = None,
-         termination: Termination | None = None,
-         progress: Callable[[Progress], None] | None = None) -> PlanResult:
+def plan(
+    world: World,
+    settings: PlannerSettings | None = None,
+    *,
+    goal: np.ndarray | None = None,
+    termination: Termination | None = None,
+    progress: Callable[[Progress], None] | None = None,
+) -> PlanResult:
     """Plan a manipulation path from the world's start to ``goal`` (default ``world.object.goal``).
 
     Never raises for planning failures: the outcome says what happened. The
     run stops on success, when EXPLORE's new landmark is closer than
     ``settings.resolution`` to the others, or when ``termination`` says so.
+    ``settings`` defaults to :class:`PlannerSettings` ().
     """
+    settings = settings or PlannerSettings()
     goal = np.asarray(world.object.goal if goal is None else goal, dtype=float)
     termination = termination or Termination(settings.time_limit)
     ctx = PlanningContext(world, settings, np.random.default_rng(settings.seed), termination)
     tree = LandmarkTree(world.robot.initial, world.object.initial)
 
-    def finish(outcome: Outcome, message: str, segments=None, final_pose=None) -> PlanResult:
+    def finish(
+        outcome: Outcome, message: str, segments: list[Segment] | None = None, final_pose: np.ndarray | None = None
+    ) -> PlanResult:
         stats = {
             "time_s": round(termination.elapsed, 4),
             "landmarks": len(tree),
@@ -97,35 +107,33 @@ def plan(world: World, settings: PlannerSettings = PlannerSettings(), *, goal: n
                 failures += 1
                 explorer.forget_failures()
                 if failures >= EXPLORE_ATTEMPTS:
-                    return finish(Outcome.NO_PATH_AT_RESOLUTION, "no grasp of the object can be reached from any "
-                                  f"of the {len(tree)} landmarks")
+                    return finish(
+                        Outcome.NO_PATH_AT_RESOLUTION,
+                        f"no grasp of the object can be reached from any of the {len(tree)} landmarks",
+                    )
                 continue
             failures = 0
-            landmark = tree.add(**exploration.fields)
-            found = _search(ctx, explorer, tree, landmark, goal)
-            best = min(best, found.distance)
-            for _ in range(SEARCH_CHAIN):
-                if found.success or not _worth_chaining(ctx, landmark, found, goal) or termination():
-                    break
-                landmark = tree.add(parent=landmark.id, joints=found.transfer[-1].copy(), object_pose=found.object_pose,
-                                    grasp=found.grasp, grasp_rel=found.grasp_rel, transit=found.transit,
-                                    transfer=found.transfer)
-                found = _search(ctx, explorer, tree, landmark, goal)
-                best = min(best, found.distance)
+            landmark, found, closest = _search_chain(ctx, explorer, tree, tree.add(**exploration.fields), goal)
+            best = min(best, closest)
             if progress is not None:
                 progress(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
                 segments = tree.history_of(landmark.id)
                 append_step(segments, found.grasp, found.transit, found.transfer)
-                return finish(Outcome.SUCCEEDED, f"plan found with {len(tree)} landmarks, "
-                              f"{sum(s.kind == 'transfer' for s in segments)} grasp(s)",
-                              segments, found.object_pose)
+                return finish(
+                    Outcome.SUCCEEDED,
+                    f"plan found with {len(tree)} landmarks, {sum(s.kind == 'transfer' for s in segments)} grasp(s)",
+                    segments,
+                    found.object_pose,
+                )
             if exploration.distance < settings.resolution:
-                return finish(Outcome.NO_PATH_AT_RESOLUTION,
-                              f"no path at resolution {settings.resolution}: the new landmark lies "
-                              f"{exploration.distance:.4g} from the others after {len(tree)} landmarks; "
-                              f"best goal distance {best:.4g} m")
-    except Exception as error:  # a bug: reported as an outcome so a node keeps running
+                return finish(
+                    Outcome.NO_PATH_AT_RESOLUTION,
+                    f"no path at resolution {settings.resolution}: the new landmark lies "
+                    f"{exploration.distance:.4g} from the others after {len(tree)} landmarks; "
+                    f"best goal distance {best:.4g} m",
+                )
+    except Exception as error:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
         return finish(Outcome.INTERNAL_ERROR, f"internal error: {error!r}\n{traceback.format_exc(limit=4)}")
 
 
@@ -142,12 +150,43 @@ class _Found:
     grasp_rel: np.ndarray | None = None
 
 
-def _search(ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark, goal: np.ndarray) -> _Found:
+def _search_chain(
+    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
+) -> tuple[Landmark, _Found, float]:
+    """SEARCH from a new landmark; while its closest attempt gets nearer the goal, that attempt becomes a
+    landmark and SEARCH goes on from it (at most :data:`SEARCH_CHAIN` times).
+
+    Returns the last landmark, SEARCH's answer from it and the closest goal distance reached (m).
+    """
+    found = _search(ctx, explorer, tree, landmark, goal)
+    closest = found.distance
+    for _ in range(SEARCH_CHAIN):
+        if found.success or not _worth_chaining(ctx, landmark, found, goal) or ctx.termination():
+            break
+        assert found.transfer is not None  # worth chaining: SEARCH's closest attempt moved the object
+        landmark = tree.add(
+            parent=landmark.id,
+            joints=found.transfer[-1].copy(),
+            object_pose=found.object_pose,
+            grasp=found.grasp,
+            grasp_rel=found.grasp_rel,
+            transit=found.transit,
+            transfer=found.transfer,
+        )
+        found = _search(ctx, explorer, tree, landmark, goal)
+        closest = min(closest, found.distance)
+    return landmark, found, closest
+
+
+def _search(
+    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
+) -> _Found:
     """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
     reachable by a transit at its placement (a regrasp in place), until one reaches the goal."""
     closest = _Found(False, np.inf)
-    grasps = [landmark.grasp] + [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist()
-                                 if g != landmark.grasp]
+    grasps = [landmark.grasp] + [
+        g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != landmark.grasp
+    ]
     for grasp in grasps:
         if ctx.termination():
             break
@@ -161,8 +200,15 @@ def _search(ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landma
             continue
         result = search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
         if result.success or result.distance < closest.distance:
-            closest = _Found(result.success, result.distance, grasp, candidate.transit, result.waypoints,
-                             result.object_pose, candidate.grasp_rel)
+            closest = _Found(
+                result.success,
+                result.distance,
+                grasp,
+                candidate.transit,
+                result.waypoints,
+                result.object_pose,
+                candidate.grasp_rel,
+            )
         if result.success:
             break
     return closest
@@ -173,12 +219,14 @@ def _regrasp_approaches(world: World, object_pose: np.ndarray, grasp: int, goal:
     rigid grasp keeps its approach during the transfer): a regrasp in place can end at the goal only
     with one of them."""
     here = approach_cells(world, object_pose, grasp)
-    there = approach_cells(world, goal, grasp, angle_spread=world.goal_angle_tolerance,
-                           position_slack=world.goal_tolerance)
-    return here & there & carry_cells(world, goal, grasp)
+    there = approach_cells(
+        world, goal, grasp, angle_spread=world.goal_angle_tolerance, position_slack=world.goal_tolerance
+    )
+    cells: np.ndarray = here & there & carry_cells(world, goal, grasp)
+    return cells
 
 
-def _worth_chaining(ctx: PlanningContext, landmark, found: _Found, goal: np.ndarray) -> bool:
+def _worth_chaining(ctx: PlanningContext, landmark: Landmark, found: _Found, goal: np.ndarray) -> bool:
     """Whether SEARCH's closest attempt ended nearer the goal than ``landmark`` by more than the resolution."""
     if found.transfer is None or len(found.transfer) < 2 or not np.isfinite(found.distance):
         return False
@@ -203,6 +251,9 @@ def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None
     grasp_points = transform_points(goal, world.object.grasps)
     nearest = float(np.min(np.linalg.norm(grasp_points - world.robot.base, axis=1)))
     if nearest > world.robot.reach + world.grasp_tolerance:
-        return (Outcome.GOAL_OUT_OF_REACH, f"goal placement out of reach: its nearest grasp is {nearest:.3f} m "
-                f"from the base, the arm reaches {world.robot.reach:.3f} m")
+        message = (
+            f"goal placement out of reach: its nearest grasp is {nearest:.3f} m "
+            f"from the base, the arm reaches {world.robot.reach:.3f} m"
+        )
+        return Outcome.GOAL_OUT_OF_REACH, message
     return None

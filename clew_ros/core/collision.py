@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import shapely
@@ -29,13 +30,13 @@ from clew_ros.core.world import World
 
 __all__ = [
     "Scene",
-    "scene_of",
-    "packed_world",
-    "is_valid",
+    "check_start_and_goal",
     "explain_invalid",
     "explain_placement",
     "is_placement_valid",
-    "check_start_and_goal",
+    "is_valid",
+    "packed_world",
+    "scene_of",
 ]
 
 
@@ -55,7 +56,8 @@ class Scene:
 
     def obstacle_geometry(self, index: np.ndarray) -> np.ndarray:
         """Prepared obstacle polygons by index; ``-1`` gives the union of all of them."""
-        return np.where(index >= 0, self.obstacle_polygons[np.maximum(index, 0)], self.obstacle_union)
+        chosen: np.ndarray = np.where(index >= 0, self.obstacle_polygons[np.maximum(index, 0)], self.obstacle_union)  # type: ignore[call-overload]
+        return chosen
 
 
 @lru_cache(maxsize=64)
@@ -65,8 +67,9 @@ def scene_of(world: World) -> Scene:
     shapely.prepare(polygons)
     union = shapely.union_all(polygons) if len(polygons) else shapely.GeometryCollection()
     shapely.prepare(union)
-    edges = (np.concatenate([polygon_edges(o.vertices) for o in world.obstacles])
-             if world.obstacles else np.zeros((0, 2, 2)))
+    edges = (
+        np.concatenate([polygon_edges(o.vertices) for o in world.obstacles]) if world.obstacles else np.zeros((0, 2, 2))
+    )
     shrunk = shapely.Polygon(world.object.polygon).buffer(-world.grasp_tolerance, join_style="mitre")
     parts = tuple(np.asarray(g.exterior.coords)[:-1] for g in getattr(shrunk, "geoms", [shrunk]) if not g.is_empty)
     shrunk_edges = np.concatenate([polygon_edges(p) for p in parts]) if parts else np.zeros((0, 2, 2))
@@ -75,8 +78,17 @@ def scene_of(world: World) -> Scene:
     if not world.robot.self_collision:
         pairs = pairs[:0]
     boxes = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)] for o in world.obstacles]).reshape(-1, 2, 2)
-    return Scene(edges, union, polygons, polygon_edges(world.object.polygon), parts, shrunk_edges,
-                 world.robot.link_width / 2.0, pairs, boxes)
+    return Scene(
+        edges,
+        union,
+        polygons,
+        polygon_edges(world.object.polygon),
+        parts,
+        shrunk_edges,
+        world.robot.link_width / 2.0,
+        pairs,
+        boxes,
+    )
 
 
 def _contiguous(array: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
@@ -92,14 +104,26 @@ def packed_world(world: World) -> PackedWorld:
     obstacle_starts = np.cumsum([0] + [len(o.vertices) for o in world.obstacles]).astype(np.int64)
     boxes = scene.obstacle_boxes.reshape(-1, 4)  # (O, 2, 2) [low, high] as xmin, ymin, xmax, ymax
     shrunk_starts = np.cumsum([0] + [len(part) for part in scene.shrunk_parts]).astype(np.int64)
-    scale = max([float(np.abs(world.bounds).max()), robot.reach + float(np.abs(robot.base).max())]
-                + [float(np.abs(o.vertices).max()) for o in world.obstacles])
-    return PackedWorld(_contiguous(robot.base, (2,)), _contiguous(robot.link_lengths, (n,)),
-                       _contiguous(robot.joint_lower, (n,)), _contiguous(robot.joint_upper, (n,)),
-                       float(scene.link_radius), bool(robot.self_collision), _contiguous(world.bounds, (4,)),
-                       _contiguous(scene.obstacle_edges, (-1, 2, 2)), _contiguous(scene.object_edges, (-1, 2, 2)),
-                       _contiguous(scene.shrunk_edges, (-1, 2, 2)), obstacle_starts, _contiguous(boxes, (-1, 4)),
-                       shrunk_starts, 1e-9 * (1.0 + scale))
+    scale = max(
+        [float(np.abs(world.bounds).max()), robot.reach + float(np.abs(robot.base).max())]
+        + [float(np.abs(o.vertices).max()) for o in world.obstacles]
+    )
+    return PackedWorld(
+        _contiguous(robot.base, (2,)),
+        _contiguous(robot.link_lengths, (n,)),
+        _contiguous(robot.joint_lower, (n,)),
+        _contiguous(robot.joint_upper, (n,)),
+        float(scene.link_radius),
+        bool(robot.self_collision),
+        _contiguous(world.bounds, (4,)),
+        _contiguous(scene.obstacle_edges, (-1, 2, 2)),
+        _contiguous(scene.object_edges, (-1, 2, 2)),
+        _contiguous(scene.shrunk_edges, (-1, 2, 2)),
+        obstacle_starts,
+        _contiguous(boxes, (-1, 4)),
+        shrunk_starts,
+        1e-9 * (1.0 + scale),
+    )
 
 
 #: Largest boxes x obstacles comparison done per call; beyond it one box around all obstacles.
@@ -135,17 +159,21 @@ def _inside_bounds(bounds: np.ndarray, points: np.ndarray, inset: float) -> np.n
     """Whether all points ``(N, P, 2)`` are inside the closed box shrunk by ``inset``."""
     low = bounds[:2] + inset
     high = bounds[2:] - inset
-    return np.all((points >= low) & (points <= high), axis=(1, 2))
+    inside: np.ndarray = np.all((points >= low) & (points <= high), axis=(1, 2))
+    return inside
 
 
 def _link_lines(points: np.ndarray) -> np.ndarray:
     n_conf, n_points = points.shape[:2]
     segments = np.stack([points[:, :-1], points[:, 1:]], axis=2)  # (N, n, 2, 2)
-    return shapely.linestrings(segments.reshape(-1, 2, 2)).reshape(n_conf, n_points - 1)
+    lines: np.ndarray = np.asarray(shapely.linestrings(segments.reshape(-1, 2, 2)))
+    return lines.reshape(n_conf, n_points - 1)
 
 
-def _near(a, b, distance: float) -> np.ndarray:
-    return shapely.dwithin(a, b, distance) if distance > 0 else shapely.intersects(a, b)
+def _near(a: Any, b: Any, distance: float) -> np.ndarray:
+    """Whether geometries ``a`` and ``b`` come within ``distance`` (touching counts), elementwise."""
+    near: np.ndarray = np.asarray(shapely.dwithin(a, b, distance) if distance > 0 else shapely.intersects(a, b))
+    return near
 
 
 def is_placement_valid(world: World, object_poses: np.ndarray) -> np.ndarray:
@@ -216,12 +244,13 @@ def exactly_valid(world: World, q: np.ndarray, object_poses: np.ndarray) -> np.n
         if len(conf):
             hit = _near(_lines(points, conf, a), _lines(points, conf, b), 2 * r)
             ok[conf[hit]] = False
-    return ok
+    ok_array: np.ndarray = ok
+    return ok_array
 
 
 def _lines(points: np.ndarray, conf: np.ndarray, link: np.ndarray | int) -> np.ndarray:
     """LineStrings of links ``link`` of configurations ``conf`` (joint positions ``points`` ``(N, n + 1, 2)``)."""
-    return shapely.linestrings(np.stack([points[conf, link], points[conf, link + 1]], axis=1))
+    return np.asarray(shapely.linestrings(np.stack([points[conf, link], points[conf, link + 1]], axis=1)))
 
 
 def explain_placement(world: World, object_pose: np.ndarray) -> str | None:
@@ -231,7 +260,7 @@ def explain_placement(world: World, object_pose: np.ndarray) -> str | None:
     if not _inside_bounds(world.bounds, vertices, 0.0)[0]:
         return "the object leaves world.bounds"
     polygon = shapely.Polygon(vertices[0])
-    for obstacle, geometry in zip(world.obstacles, scene.obstacle_polygons):
+    for obstacle, geometry in zip(world.obstacles, scene.obstacle_polygons, strict=True):
         if polygon.intersects(geometry):
             return f"the object hits obstacle '{obstacle.name}'"
     return None
@@ -247,10 +276,10 @@ def explain_invalid(world: World, q: np.ndarray, object_pose: np.ndarray) -> str
     lines = _link_lines(points)[0]
     low, high = world.bounds[:2] + r, world.bounds[2:] - r
     for i, line in enumerate(lines):
-        ends = points[0, i:i + 2]
+        ends = points[0, i : i + 2]
         if np.any(ends < low) or np.any(ends > high):
             return f"link {i + 1} leaves world.bounds"
-        for obstacle, geometry in zip(world.obstacles, scene.obstacle_polygons):
+        for obstacle, geometry in zip(world.obstacles, scene.obstacle_polygons, strict=True):
             if _near(line, geometry, r):
                 return f"link {i + 1} hits obstacle '{obstacle.name}'"
     reason = explain_placement(world, object_pose)

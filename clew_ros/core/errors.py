@@ -38,4 +38,4 @@ def short_repr(value: Any, limit: int = 80) -> str:
         text = repr(value)
     except ValueError:  # an integer of more digits than Python converts to text
         return f"an integer of about {value.bit_length() * 0.30103:.0f} digits"
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return text if len(text) <= limit else text[: limit - 3] + "..."

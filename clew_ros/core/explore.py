@@ -12,7 +12,9 @@ pairs of one step are searched together, one island of a batch each.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -51,6 +53,11 @@ class Explorer:
         self.tree = tree
         self._transits: dict[tuple[int, int], _Candidate | None] = {}
         self._aimed: dict[tuple[int, int], _Candidate | None] = {}  # SEARCH's transits with an approach
+
+    @property
+    def transits(self) -> Mapping[tuple[int, int], _Candidate | None]:
+        """The transits searched so far, by ``(landmark id, grasp)`` (``None``: none found), read only."""
+        return MappingProxyType(self._transits)
 
     def candidate(self, landmark_id: int, grasp: int, approach: np.ndarray | None = None) -> _Candidate | None:
         """The single manipulation path's transit part from a landmark to a grasp (cached).

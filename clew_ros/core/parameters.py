@@ -17,8 +17,8 @@ the world parser; the checks of scalar parameters (:func:`check_value`); the
 ROS 2 parameter descriptors (``clew_ros.node.parameters.descriptor_for``);
 and the parameter tables of README.md (:func:`markdown_tables`)::
 
-    python -m clew_ros.core.parameters             # print the tables
-    python -m clew_ros.core.parameters --update README.md
+    python -m clew_ros.cli.parameter_tables        # print the tables
+    python -m clew_ros.cli.parameter_tables --update README.md
 
 The ``world.*`` lists, polygons and the rules that tie several keys together
 are checked by the world parser (:mod:`clew_ros.core.world`). Pure data and
@@ -27,27 +27,24 @@ checks: no ROS, no numpy.
 
 from __future__ import annotations
 
-import argparse
 import enum
 import math
 import re
-import sys
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from clew_ros.core.errors import ParameterError, short_repr
 
 __all__ = [
-    "REQUIRED",
-    "ParameterType",
-    "ParameterSpec",
-    "ParameterTable",
-    "WORLD_PARAMETERS",
+    "NODE_PARAMETERS",
     "OBSTACLE_PARAMETER",
     "PLANNER_PARAMETERS",
-    "NODE_PARAMETERS",
+    "REQUIRED",
+    "WORLD_PARAMETERS",
+    "ParameterSpec",
+    "ParameterTable",
+    "ParameterType",
     "check_value",
     "markdown_tables",
     "update_markdown",
@@ -78,8 +75,9 @@ class ParameterType(enum.Enum):
     @property
     def python_type(self) -> type:
         """The Python type of a checked value (of an item, for the arrays)."""
-        return {"bool": bool, "integer": int, "double": float, "string": str,
-                "double[]": float, "string[]": str}[self.value]
+        return {"bool": bool, "integer": int, "double": float, "string": str, "double[]": float, "string[]": str}[
+            self.value
+        ]
 
 
 @dataclass(frozen=True)
@@ -114,7 +112,7 @@ class ParameterTable(Mapping[str, ParameterSpec]):
         for spec in specs:
             if not spec.name.startswith(prefix):
                 raise ValueError(f"{spec.name} is not under {prefix!r}")
-            self._specs[spec.name[len(prefix):]] = spec
+            self._specs[spec.name[len(prefix) :]] = spec
 
     def __getitem__(self, key: str) -> ParameterSpec:
         return self._specs[key]
@@ -139,81 +137,180 @@ class ParameterTable(Mapping[str, ParameterSpec]):
 _B, _I, _D, _S = ParameterType.BOOL, ParameterType.INTEGER, ParameterType.DOUBLE, ParameterType.STRING
 _DA, _SA = ParameterType.DOUBLE_ARRAY, ParameterType.STRING_ARRAY
 
-WORLD_PARAMETERS = ParameterTable("world.", [
-    ParameterSpec("world.name", _S, "world", "Name of the world; plans and recordings carry it."),
-    ParameterSpec("world.bounds", _DA, REQUIRED,
-                  "The workspace box [xmin, ymin, xmax, ymax] (m); touching its edge is inside.", "m"),
-    ParameterSpec("world.robot.base", _DA, REQUIRED, "Position [x, y] of joint 1 (m).", "m"),
-    ParameterSpec("world.robot.link_lengths", _DA, REQUIRED, "Length of each link (m); n >= 2 links.", "m"),
-    ParameterSpec("world.robot.link_width", _D, 0.0,
-                  "Links are capsules of radius link_width / 2 (m); 0: segments.", "m"),
-    ParameterSpec("world.robot.joint_lower", _DA, REQUIRED, "Lower joint limits (rad), one per link.", "rad"),
-    ParameterSpec("world.robot.joint_upper", _DA, REQUIRED, "Upper joint limits (rad), one per link.", "rad"),
-    ParameterSpec("world.robot.initial", _DA, REQUIRED, "Joint angles at the start (rad), one per link.", "rad"),
-    ParameterSpec("world.robot.self_collision", _B, True, "Check non-adjacent links against each other."),
-    ParameterSpec("world.obstacle_names", _SA, None,
-                  "Names of the obstacles; each needs world.obstacles.<name>. Omit it for a world without obstacles."),
-    ParameterSpec("world.object.polygon", _DA, REQUIRED,
-                  "The object as a flat x0, y0, x1, y1, ... list in its own frame (m).", "m"),
-    ParameterSpec("world.object.initial", _DA, REQUIRED, "Start placement [x, y, theta] of the object (m, rad).",
-                  "m, rad"),
-    ParameterSpec("world.object.goal", _DA, REQUIRED,
-                  "Goal placement [x, y, theta] of the object (m, rad); ~/plan plans to it.", "m, rad"),
-    ParameterSpec("world.object.grasps", _DA, REQUIRED,
-                  "Grasp points on the object's boundary, flat x0, y0, ... in its frame (m).", "m"),
-    ParameterSpec("world.grasp_tolerance", _D, 0.005, "The tip holds a grasp when it is this close to it (m).", "m"),
-    ParameterSpec("world.goal_tolerance", _D, 0.02,
-                  "Largest distance of the final object position from the goal (m).", "m"),
-    ParameterSpec("world.goal_angle_tolerance", _D, math.pi,
-                  "Largest orientation error at the goal (rad); pi: any.", "rad"),
-])
+WORLD_PARAMETERS = ParameterTable(
+    "world.",
+    [
+        ParameterSpec("world.name", _S, "world", "Name of the world; plans and recordings carry it."),
+        ParameterSpec(
+            "world.bounds",
+            _DA,
+            REQUIRED,
+            "The workspace box [xmin, ymin, xmax, ymax] (m); touching its edge is inside.",
+            "m",
+        ),
+        ParameterSpec("world.robot.base", _DA, REQUIRED, "Position [x, y] of joint 1 (m).", "m"),
+        ParameterSpec("world.robot.link_lengths", _DA, REQUIRED, "Length of each link (m); n >= 2 links.", "m"),
+        ParameterSpec(
+            "world.robot.link_width", _D, 0.0, "Links are capsules of radius link_width / 2 (m); 0: segments.", "m"
+        ),
+        ParameterSpec("world.robot.joint_lower", _DA, REQUIRED, "Lower joint limits (rad), one per link.", "rad"),
+        ParameterSpec("world.robot.joint_upper", _DA, REQUIRED, "Upper joint limits (rad), one per link.", "rad"),
+        ParameterSpec("world.robot.initial", _DA, REQUIRED, "Joint angles at the start (rad), one per link.", "rad"),
+        ParameterSpec("world.robot.self_collision", _B, True, "Check non-adjacent links against each other."),
+        ParameterSpec(
+            "world.obstacle_names",
+            _SA,
+            None,
+            "Names of the obstacles; each needs world.obstacles.<name>. Omit it for a world without obstacles.",
+        ),
+        ParameterSpec(
+            "world.object.polygon",
+            _DA,
+            REQUIRED,
+            "The object as a flat x0, y0, x1, y1, ... list in its own frame (m).",
+            "m",
+        ),
+        ParameterSpec(
+            "world.object.initial", _DA, REQUIRED, "Start placement [x, y, theta] of the object (m, rad).", "m, rad"
+        ),
+        ParameterSpec(
+            "world.object.goal",
+            _DA,
+            REQUIRED,
+            "Goal placement [x, y, theta] of the object (m, rad); ~/plan plans to it.",
+            "m, rad",
+        ),
+        ParameterSpec(
+            "world.object.grasps",
+            _DA,
+            REQUIRED,
+            "Grasp points on the object's boundary, flat x0, y0, ... in its frame (m).",
+            "m",
+        ),
+        ParameterSpec(
+            "world.grasp_tolerance", _D, 0.005, "The tip holds a grasp when it is this close to it (m).", "m"
+        ),
+        ParameterSpec(
+            "world.goal_tolerance", _D, 0.02, "Largest distance of the final object position from the goal (m).", "m"
+        ),
+        ParameterSpec(
+            "world.goal_angle_tolerance", _D, math.pi, "Largest orientation error at the goal (rad); pi: any.", "rad"
+        ),
+    ],
+)
 
 #: ``world.obstacles.<name>``, one per name in ``world.obstacle_names`` (not a key of :data:`WORLD_PARAMETERS`).
-OBSTACLE_PARAMETER = ParameterSpec("world.obstacles.<name>", _DA, REQUIRED,
-                                   "Obstacle polygon as a flat x0, y0, x1, y1, ... list (m).", "m")
+OBSTACLE_PARAMETER = ParameterSpec(
+    "world.obstacles.<name>", _DA, REQUIRED, "Obstacle polygon as a flat x0, y0, x1, y1, ... list (m).", "m"
+)
 
-PLANNER_PARAMETERS = ParameterTable("planner.", [
-    ParameterSpec("planner.seed", _I, 0, "Seed of the random generator; same seed, same plan.",
-                  limits=(0, 2**31 - 1)),
-    ParameterSpec("planner.time_limit", _D, 30.0, "Seconds before the planner stops and reports TIME_LIMIT.",
-                  "s", (0.01, 86400.0)),
-    ParameterSpec("planner.resolution", _D, 0.01,
-                  "EXPLORE stops with NO_PATH_AT_RESOLUTION when a new landmark is closer than this to the others "
-                  "(landmark-distance units, m).", "m", (1e-6, 10.0)),
-    ParameterSpec("planner.clearance", _D, 0.001,
-                  "Clearance (m) every planned configuration keeps from what it could hit; bounds the motion "
-                  "between checks so plans stay valid at any finer check.", "m", (1e-6, 0.1)),
-    ParameterSpec("planner.manhattan_order", _I, 2,
-                  "Order k of the Manhattan paths optimised (k single paths of n moves).", limits=(1, 8)),
-    ParameterSpec("planner.population", _I, 24, "Genetic algorithm population size.", limits=(4, 10000)),
-    ParameterSpec("planner.generations", _I, 12, "Genetic algorithm generations per optimisation.",
-                  limits=(1, 10000)),
-    ParameterSpec("planner.explore_candidates", _I, 4, "Landmark/grasp pairs (m1) tried per EXPLORE step.",
-                  limits=(1, 1000)),
-    ParameterSpec("planner.search_rounds", _I, 3, "Rounds of SEARCH's do-while loop before it gives up.",
-                  limits=(1, 100)),
-    ParameterSpec("planner.joint_weight", _D, 0.1, "Weight (m/rad) of the joint angles in the landmark distance.",
-                  "m/rad", (0.0, 10.0)),
-    ParameterSpec("planner.max_sweep_steps", _I, 48,
-                  "Unused: free intervals are closed-form; kept so that parameter files that set it still load.",
-                  limits=(2, 10000)),
-    ParameterSpec("planner.threads", _I, 0,
-                  "Threads that decode a population's Manhattan paths (0: all cores); the plan does not depend on it.",
-                  limits=(0, 1024)),
-])
+PLANNER_PARAMETERS = ParameterTable(
+    "planner.",
+    [
+        ParameterSpec(
+            "planner.seed", _I, 0, "Seed of the random generator; same seed, same plan.", limits=(0, 2**31 - 1)
+        ),
+        ParameterSpec(
+            "planner.time_limit",
+            _D,
+            30.0,
+            "Seconds before the planner stops and reports TIME_LIMIT.",
+            "s",
+            (0.01, 86400.0),
+        ),
+        ParameterSpec(
+            "planner.resolution",
+            _D,
+            0.01,
+            "EXPLORE stops with NO_PATH_AT_RESOLUTION when a new landmark is closer than this to the others "
+            "(landmark-distance units, m).",
+            "m",
+            (1e-6, 10.0),
+        ),
+        ParameterSpec(
+            "planner.clearance",
+            _D,
+            0.001,
+            "Clearance (m) every planned configuration keeps from what it could hit; bounds the motion "
+            "between checks so plans stay valid at any finer check.",
+            "m",
+            (1e-6, 0.1),
+        ),
+        ParameterSpec(
+            "planner.manhattan_order",
+            _I,
+            2,
+            "Order k of the Manhattan paths optimised (k single paths of n moves).",
+            limits=(1, 8),
+        ),
+        ParameterSpec("planner.population", _I, 24, "Genetic algorithm population size.", limits=(4, 10000)),
+        ParameterSpec(
+            "planner.generations", _I, 12, "Genetic algorithm generations per optimisation.", limits=(1, 10000)
+        ),
+        ParameterSpec(
+            "planner.explore_candidates", _I, 4, "Landmark/grasp pairs (m1) tried per EXPLORE step.", limits=(1, 1000)
+        ),
+        ParameterSpec(
+            "planner.search_rounds", _I, 3, "Rounds of SEARCH's do-while loop before it gives up.", limits=(1, 100)
+        ),
+        ParameterSpec(
+            "planner.joint_weight",
+            _D,
+            0.1,
+            "Weight (m/rad) of the joint angles in the landmark distance.",
+            "m/rad",
+            (0.0, 10.0),
+        ),
+        ParameterSpec(
+            "planner.max_sweep_steps",
+            _I,
+            48,
+            "Unused: free intervals are closed-form; kept so that parameter files that set it still load.",
+            limits=(2, 10000),
+        ),
+        ParameterSpec(
+            "planner.threads",
+            _I,
+            0,
+            "Threads that decode a population's Manhattan paths (0: all cores); the plan does not depend on it.",
+            limits=(0, 1024),
+        ),
+    ],
+)
 
-NODE_PARAMETERS = ParameterTable("", [
-    ParameterSpec("record.enabled", _B, True, "Record every run as a rosbag2 directory <record.directory>/<run id>/."),
-    ParameterSpec("record.directory", _S, "~/.ros/clew_recordings",
-                  "Where runs are recorded; '~' and environment variables are expanded."),
-    ParameterSpec("playback.rate", _D, 20.0, "Rate (Hz) of ~/joint_states and ~/object_pose while a plan plays back.",
-                  "Hz", (1.0, 1000.0)),
-    ParameterSpec("trajectory.joint_speed", _D, 1.0,
-                  "Joint speed (rad/s) that times ~/trajectory: a move lasts max |dq| / joint_speed.",
-                  "rad/s", (0.001, 1000.0)),
-    ParameterSpec("trajectory.grasp_dwell", _D, 0.2, "Time (s) a grasp or ungrasp takes in ~/trajectory.",
-                  "s", (0.001, 60.0)),
-])
+NODE_PARAMETERS = ParameterTable(
+    "",
+    [
+        ParameterSpec(
+            "record.enabled", _B, True, "Record every run as a rosbag2 directory <record.directory>/<run id>/."
+        ),
+        ParameterSpec(
+            "record.directory",
+            _S,
+            "~/.ros/clew_recordings",
+            "Where runs are recorded; '~' and environment variables are expanded.",
+        ),
+        ParameterSpec(
+            "playback.rate",
+            _D,
+            20.0,
+            "Rate (Hz) of ~/joint_states and ~/object_pose while a plan plays back.",
+            "Hz",
+            (1.0, 1000.0),
+        ),
+        ParameterSpec(
+            "trajectory.joint_speed",
+            _D,
+            1.0,
+            "Joint speed (rad/s) that times ~/trajectory: a move lasts max |dq| / joint_speed.",
+            "rad/s",
+            (0.001, 1000.0),
+        ),
+        ParameterSpec(
+            "trajectory.grasp_dwell", _D, 0.2, "Time (s) a grasp or ungrasp takes in ~/trajectory.", "s", (0.001, 60.0)
+        ),
+    ],
+)
 
 
 # --------------------------------------------------------------------------- checks
@@ -252,14 +349,14 @@ def check_value(spec: ParameterSpec, value: Any) -> Any:
     if limits is None:
         if converted is None or not math.isfinite(converted):
             raise ParameterError(spec.name, f"expected a finite number, got {short_repr(value)}")
-    elif converted is None or converted != converted or not limits[0] <= converted <= limits[1]:
+    elif converted is None or math.isnan(converted) or not limits[0] <= converted <= limits[1]:
         raise ParameterError(spec.name, f"expected a value in [{limits[0]}, {limits[1]}], got {short_repr(value)}")
     return converted
 
 
 # --------------------------------------------------------------------------- README tables
 
-_BEGIN = "<!-- BEGIN generated parameter table: {} (python -m clew_ros.core.parameters --update README.md) -->"
+_BEGIN = "<!-- BEGIN generated parameter table: {} (python -m clew_ros.cli.parameter_tables --update README.md) -->"
 _END = "<!-- END generated parameter table: {} -->"
 
 
@@ -311,39 +408,12 @@ def update_markdown(text: str) -> str:
         match = re.search(re.escape(begin) + r"\n.*?" + re.escape(end), text, re.DOTALL)
         if match is None:
             raise ValueError(f"no generated table '{name}': expected a line {begin!r}, the table, then {end!r}")
-        text = f"{text[:match.start()]}{begin}\n{table}\n{end}{text[match.end():]}"
+        text = f"{text[: match.start()]}{begin}\n{table}\n{end}{text[match.end() :]}"
     return text
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m clew_ros.core.parameters",
-                                     description="Print the parameter tables, or rewrite them in a Markdown file.")
-    parser.add_argument("--update", metavar="FILE", type=Path,
-                        help="rewrite the generated tables of FILE (README.md) in place")
-    parser.add_argument("--check", metavar="FILE", type=Path,
-                        help="exit 1 when the generated tables of FILE are out of date")
-    args = parser.parse_args(argv)
-    if args.update is None and args.check is None:
-        for name, table in markdown_tables().items():
-            print(f"{_BEGIN.format(name)}\n{table}\n{_END.format(name)}\n")
-        return 0
-    path = args.update or args.check
-    text = path.read_text(encoding="utf-8")
-    try:
-        updated = update_markdown(text)
-    except ValueError as error:
-        print(f"{path}: {error}", file=sys.stderr)
-        return 2
-    if args.check is not None:
-        if updated != text:
-            print(f"{path}: the parameter tables are out of date; run "
-                  f"python -m clew_ros.core.parameters --update {path}", file=sys.stderr)
-            return 1
-        return 0
-    if updated != text:
-        path.write_text(updated, encoding="utf-8")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+def marked_tables() -> str:
+    """Every generated table between its markers, as :func:`update_markdown` finds them."""
+    return "\n".join(
+        f"{_BEGIN.format(name)}\n{table}\n{_END.format(name)}\n" for name, table in markdown_tables().items()
+    )

@@ -10,6 +10,7 @@ relative to the tip where the transfer starts).
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections.abc import Iterator, Mapping, Sequence
@@ -27,8 +28,15 @@ from clew_ros.core.settings import Outcome
 from clew_ros.core.world import World
 
 __all__ = [
-    "FORMAT", "CHECK_STEP_RAD", "Plan", "PlanSegment", "PlanLandmark", "SegmentMotion",
-    "replay", "validate_plan", "checked_plan",
+    "CHECK_STEP_RAD",
+    "FORMAT",
+    "Plan",
+    "PlanLandmark",
+    "PlanSegment",
+    "SegmentMotion",
+    "checked_plan",
+    "replay",
+    "validate_plan",
 ]
 
 FORMAT = "clew-plan/1"
@@ -53,7 +61,8 @@ def _array(values: Any, what: str, shape: tuple[int | None, ...]) -> np.ndarray:
 
 def _floats(array: np.ndarray) -> list[Any]:
     """Nested lists of Python floats (JSON-ready)."""
-    return array.tolist()
+    floats: list[Any] = array.tolist()
+    return floats
 
 
 def _optional_int(value: Any, what: str) -> int | None:
@@ -82,8 +91,11 @@ class PlanSegment:
         kind = data.get("kind")
         if kind not in KINDS:
             raise PlanFileError(f"{what}.kind: expected one of {list(KINDS)}, got {kind!r:.80}")
-        return cls(kind, _optional_int(data.get("grasp"), f"{what}.grasp"),
-                   _array(data.get("waypoints"), f"{what}.waypoints", (None, None)))
+        return cls(
+            kind,
+            _optional_int(data.get("grasp"), f"{what}.grasp"),
+            _array(data.get("waypoints"), f"{what}.waypoints", (None, None)),
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,8 +109,13 @@ class PlanLandmark:
     grasp: int | None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"id": self.id, "parent": self.parent, "joints": _floats(self.joints),
-                "object_pose": _floats(self.object_pose), "grasp": self.grasp}
+        return {
+            "id": self.id,
+            "parent": self.parent,
+            "joints": _floats(self.joints),
+            "object_pose": _floats(self.object_pose),
+            "grasp": self.grasp,
+        }
 
     @classmethod
     def from_dict(cls, data: Any, what: str) -> PlanLandmark:
@@ -107,10 +124,13 @@ class PlanLandmark:
         identifier = _optional_int(data.get("id"), f"{what}.id")
         if identifier is None:
             raise PlanFileError(f"{what}.id: expected an integer")
-        return cls(identifier, _optional_int(data.get("parent"), f"{what}.parent"),
-                   _array(data.get("joints"), f"{what}.joints", (None,)),
-                   _array(data.get("object_pose"), f"{what}.object_pose", (3,)),
-                   _optional_int(data.get("grasp"), f"{what}.grasp"))
+        return cls(
+            identifier,
+            _optional_int(data.get("parent"), f"{what}.parent"),
+            _array(data.get("joints"), f"{what}.joints", (None,)),
+            _array(data.get("object_pose"), f"{what}.object_pose", (3,)),
+            _optional_int(data.get("grasp"), f"{what}.grasp"),
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,14 +166,21 @@ class Plan:
     @classmethod
     def from_result(cls, world: World, result: PlanResult) -> Plan:
         """The plan of a planner run in ``world``."""
-        landmarks = tuple(PlanLandmark(lm.id, lm.parent, _frozen(lm.joints), _frozen(lm.object_pose), lm.grasp)
-                          for lm in result.tree)
+        landmarks = tuple(
+            PlanLandmark(lm.id, lm.parent, _frozen(lm.joints), _frozen(lm.object_pose), lm.grasp) for lm in result.tree
+        )
         segments = tuple(PlanSegment(s.kind, s.grasp, _frozen(s.waypoints)) for s in result.segments)
-        return cls(world=world.name, joint_names=tuple(world.robot.joint_names), success=result.success,
-                   message=result.message, code=result.outcome.name,
-                   segments=segments if result.success else (),
-                   final_object_pose=_frozen(result.final_object_pose) if result.success else None,
-                   landmarks=landmarks, stats=dict(result.stats))
+        return cls(
+            world=world.name,
+            joint_names=tuple(world.robot.joint_names),
+            success=result.success,
+            message=result.message,
+            code=result.outcome.name,
+            segments=segments if result.success else (),
+            final_object_pose=_frozen(result.final_object_pose) if result.success else None,
+            landmarks=landmarks,
+            stats=dict(result.stats),
+        )
 
     def failed(self, outcome: Outcome, message: str) -> Plan:
         """This plan turned into a failure: ``outcome``, ``message``, no segments (landmarks and stats kept)."""
@@ -163,17 +190,23 @@ class Plan:
 
     def to_dict(self) -> dict[str, Any]:
         """The plan file as a JSON-ready dict, keys in the file's order."""
-        document: dict[str, Any] = {"format": FORMAT, "world": self.world, "success": self.success,
-                                    "message": self.message}
+        document: dict[str, Any] = {
+            "format": FORMAT,
+            "world": self.world,
+            "success": self.success,
+            "message": self.message,
+        }
         if self.code is not None:
             document["code"] = self.code
-        document.update({
-            "joint_names": list(self.joint_names),
-            "segments": [segment.to_dict() for segment in self.segments],
-            "final_object_pose": None if self.final_object_pose is None else _floats(self.final_object_pose),
-            "landmarks": [landmark.to_dict() for landmark in self.landmarks],
-            "stats": dict(self.stats),
-        })
+        document.update(
+            {
+                "joint_names": list(self.joint_names),
+                "segments": [segment.to_dict() for segment in self.segments],
+                "final_object_pose": None if self.final_object_pose is None else _floats(self.final_object_pose),
+                "landmarks": [landmark.to_dict() for landmark in self.landmarks],
+                "stats": dict(self.stats),
+            }
+        )
         return document
 
     def to_json(self) -> str:
@@ -215,11 +248,16 @@ class Plan:
             raise PlanFileError(f"{source}: stats: expected an object")
         final = data.get("final_object_pose")
         return cls(
-            world=world, joint_names=tuple(names), success=success, message=str(data.get("message", "")), code=code,
+            world=world,
+            joint_names=tuple(names),
+            success=success,
+            message=str(data.get("message", "")),
+            code=code,
             segments=tuple(PlanSegment.from_dict(s, f"{source}: segments[{i}]") for i, s in enumerate(segments)),
             final_object_pose=None if final is None else _array(final, f"{source}: final_object_pose", (3,)),
             landmarks=tuple(PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]") for i, lm in enumerate(landmarks)),
-            stats=dict(stats))
+            stats=dict(stats),
+        )
 
     @classmethod
     def from_json(cls, text: str, *, source: str = "plan") -> Plan:
@@ -267,7 +305,7 @@ class SegmentMotion:
 def interpolate(waypoints: np.ndarray, step_rad: float) -> np.ndarray:
     """Configurations along straight joint-space pieces, at most ``step_rad`` apart per joint."""
     out = [waypoints[:1]]
-    for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
+    for a, b in itertools.pairwise(waypoints):
         count = max(1, math.ceil(np.max(np.abs(b - a)) / step_rad))
         t = np.arange(1, count + 1)[:, None] / count
         out.append(a + t * (b - a))
@@ -319,14 +357,18 @@ def validate_plan(world: World, plan: Plan | Mapping[str, Any], step_rad: float 
             held = transform_points(last_pose, world.object.grasps[motion.grasp][None])[0]
             tip = tip_poses(world.robot, configurations[:1])[0, :2]
             if np.linalg.norm(tip - held) > world.grasp_tolerance:
-                problems.append(f"segment {index}: the tip is {np.linalg.norm(tip - held):.6f} m from grasp "
-                                f"{motion.grasp} (more than world.grasp_tolerance {world.grasp_tolerance})")
+                problems.append(
+                    f"segment {index}: the tip is {np.linalg.norm(tip - held):.6f} m from grasp "
+                    f"{motion.grasp} (more than world.grasp_tolerance {world.grasp_tolerance})"
+                )
         valid = is_valid(world, configurations, poses)
         if not valid.all():
             bad = int(np.flatnonzero(~valid)[0])
             reason = explain_invalid(world, configurations[bad], poses[bad])
-            problems.append(f"segment {index} ({kind}): configuration {np.round(configurations[bad], 6).tolist()} "
-                            f"is invalid: {reason}")
+            problems.append(
+                f"segment {index} ({kind}): configuration {np.round(configurations[bad], 6).tolist()} "
+                f"is invalid: {reason}"
+            )
         last_pose = poses[-1]
     final = plan.final_object_pose
     if final is None:
@@ -339,8 +381,10 @@ def validate_plan(world: World, plan: Plan | Mapping[str, Any], step_rad: float 
     if distance > world.goal_tolerance:
         problems.append(f"the object ends {distance:.4f} m from the goal (goal_tolerance {world.goal_tolerance})")
     if angle > world.goal_angle_tolerance + 1e-9:
-        problems.append(f"the object ends {angle:.4f} rad from the goal orientation "
-                        f"(goal_angle_tolerance {world.goal_angle_tolerance})")
+        problems.append(
+            f"the object ends {angle:.4f} rad from the goal orientation "
+            f"(goal_angle_tolerance {world.goal_angle_tolerance})"
+        )
     return problems
 
 
@@ -405,5 +449,4 @@ def checked_plan(world: World, result: PlanResult) -> Plan:
     problems = validate_plan(world, plan)
     if not problems:
         return plan
-    return plan.failed(Outcome.INTERNAL_ERROR,
-                       "internal error: the plan failed validation: " + "; ".join(problems[:3]))
+    return plan.failed(Outcome.INTERNAL_ERROR, "internal error: the plan failed validation: " + "; ".join(problems[:3]))

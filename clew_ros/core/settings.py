@@ -6,14 +6,15 @@ from __future__ import annotations
 import enum
 import threading
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any, Mapping
+from typing import Any
 
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.genetic import GeneticSettings
 from clew_ros.core.parameters import PLANNER_PARAMETERS, check_value
 
-__all__ = ["PlannerSettings", "Outcome", "Termination", "PLANNER_PARAMETERS"]
+__all__ = ["PLANNER_PARAMETERS", "Outcome", "PlannerSettings", "Termination"]
 
 
 class Outcome(enum.Enum):
@@ -58,7 +59,7 @@ class PlannerSettings:
         return GeneticSettings(population=self.population, generations=self.generations)
 
     @classmethod
-    def from_parameters(cls, parameters: Mapping[str, Any], **overrides: Any) -> "PlannerSettings":
+    def from_parameters(cls, parameters: Mapping[str, Any], **overrides: Any) -> PlannerSettings:
         """From a ``ros__parameters`` tree (its ``planner`` key); ``overrides`` win (``None`` ones are ignored).
 
         Every value is checked by :func:`~clew_ros.core.parameters.check_value`;
@@ -78,7 +79,8 @@ class PlannerSettings:
 
 # Every planner.* parameter is a field of PlannerSettings, in the table's order, of the spec's type.
 assert [(f.name, f.type) for f in fields(PlannerSettings)] == [
-    (key, spec.type.python_type.__name__) for key, spec in PLANNER_PARAMETERS.items()]
+    (key, spec.type.python_type.__name__) for key, spec in PLANNER_PARAMETERS.items()
+]
 
 
 class Termination:

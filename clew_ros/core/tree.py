@@ -56,8 +56,9 @@ def append_path(segments: list[Segment], kind: str, grasp: int | None, waypoints
             last.waypoints.append(np.asarray(point, dtype=float))
 
 
-def append_step(segments: list[Segment], grasp: int | None, transit: np.ndarray | None,
-                transfer: np.ndarray | None) -> None:
+def append_step(
+    segments: list[Segment], grasp: int | None, transit: np.ndarray | None, transfer: np.ndarray | None
+) -> None:
     """Append one manipulation path: a transit to ``grasp`` (``transit`` None: the held grasp is kept)
     then the transfer holding it."""
     if transit is not None:

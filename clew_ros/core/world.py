@@ -14,10 +14,11 @@ are valid placements (section 1's validity test) is checked by
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 import shapely
@@ -27,17 +28,17 @@ from clew_ros.core.errors import WorldError, short_repr
 from clew_ros.core.parameters import REQUIRED, WORLD_PARAMETERS
 
 __all__ = [
-    "Robot",
-    "Obstacle",
-    "MovableObject",
-    "World",
     "GRASP_ON_BOUNDARY_TOLERANCE_M",
     "MAX_ABS_VALUE",
     "MAX_LINKS",
     "MAX_PARAMETER_FILE_BYTES",
+    "MovableObject",
+    "Obstacle",
+    "Robot",
+    "World",
+    "load_world",
     "read_parameter_file",
     "world_from_parameters",
-    "load_world",
     "world_to_parameters",
 ]
 
@@ -54,7 +55,7 @@ MAX_PARAMETER_FILE_BYTES = 64 * 2**20
 
 
 def _frozen(values: Any, dtype: type = float) -> np.ndarray:
-    array = np.array(values, dtype=dtype)
+    array: np.ndarray = np.array(values, dtype=dtype)
     array.setflags(write=False)
     return array
 
@@ -123,7 +124,7 @@ class World:
 # --------------------------------------------------------------------------- parsing
 
 
-def read_parameter_file(path: str | Path) -> dict:
+def read_parameter_file(path: str | Path) -> dict[str, Any]:
     """Read a ROS 2 parameter YAML and return its ``ros__parameters`` tree.
 
     The node key may be ``clew_planner`` (with or without a leading slash or
@@ -173,8 +174,11 @@ def _as_float(value: Any) -> float:
 
 def _check_magnitude(name: str, values: np.ndarray) -> None:
     if values.size and float(np.max(np.abs(values))) > MAX_ABS_VALUE:
-        raise WorldError(name, f"expected numbers within +-{MAX_ABS_VALUE:g} (m or rad), got "
-                         f"{float(values.flat[np.argmax(np.abs(values))]):.6g}")
+        raise WorldError(
+            name,
+            f"expected numbers within +-{MAX_ABS_VALUE:g} (m or rad), got "
+            f"{float(values.flat[np.argmax(np.abs(values))]):.6g}",
+        )
 
 
 def _default(name: str) -> Any:
@@ -184,7 +188,9 @@ def _default(name: str) -> Any:
     return None if spec is None or spec.default is REQUIRED else spec.default
 
 
-def _number(tree: Mapping, key: str, prefix: str, *, positive: bool = False, non_negative: bool = False) -> float:
+def _number(
+    tree: Mapping[str, Any], key: str, prefix: str, *, positive: bool = False, non_negative: bool = False
+) -> float:
     name = f"{prefix}.{key}"
     value = tree.get(key, _default(name))
     if value is None:
@@ -202,8 +208,15 @@ def _number(tree: Mapping, key: str, prefix: str, *, positive: bool = False, non
     return value
 
 
-def _numbers(tree: Mapping, key: str, prefix: str, *, length: int | None = None,
-             min_length: int = 1, even: bool = False) -> np.ndarray:
+def _numbers(
+    tree: Mapping[str, Any],
+    key: str,
+    prefix: str,
+    *,
+    length: int | None = None,
+    min_length: int = 1,
+    even: bool = False,
+) -> np.ndarray:
     name = f"{prefix}.{key}"
     value = tree.get(key, _default(name))
     if value is None:
@@ -226,7 +239,7 @@ def _numbers(tree: Mapping, key: str, prefix: str, *, length: int | None = None,
     return array
 
 
-def _polygon(tree: Mapping, key: str, prefix: str) -> np.ndarray:
+def _polygon(tree: Mapping[str, Any], key: str, prefix: str) -> np.ndarray:
     """A flat x0, y0, x1, y1, ... list as a valid, counter-clockwise polygon."""
     name = f"{prefix}.{key}"
     flat = _numbers(tree, key, prefix, min_length=6, even=True)
@@ -246,7 +259,7 @@ def _polygon(tree: Mapping, key: str, prefix: str) -> np.ndarray:
     return vertices.copy()
 
 
-def _mapping(tree: Mapping, key: str, prefix: str, *, required: bool = True) -> Mapping:
+def _mapping(tree: Mapping[str, Any], key: str, prefix: str, *, required: bool = True) -> Mapping[str, Any]:
     value = tree.get(key)
     if value is None and not required:
         return {}
@@ -255,7 +268,7 @@ def _mapping(tree: Mapping, key: str, prefix: str, *, required: bool = True) -> 
     return value
 
 
-def _bool(tree: Mapping, key: str, prefix: str) -> bool:
+def _bool(tree: Mapping[str, Any], key: str, prefix: str) -> bool:
     value = tree.get(key, _default(f"{prefix}.{key}"))
     if not isinstance(value, bool):
         raise WorldError(f"{prefix}.{key}", f"expected true or false, got {short_repr(value)}")
@@ -314,11 +327,14 @@ def _robot(tree: Mapping[str, Any]) -> Robot:
             raise WorldError(f"{rp}.{key}", f"expected {n} values (one per link in link_lengths), got {len(array)}")
     for i in range(n):
         if lower[i] > upper[i]:
-            raise WorldError(f"{rp}.joint_lower", f"expected joint_lower <= joint_upper, but joint_{i + 1} has "
-                             f"{lower[i]} > {upper[i]}")
+            raise WorldError(
+                f"{rp}.joint_lower",
+                f"expected joint_lower <= joint_upper, but joint_{i + 1} has {lower[i]} > {upper[i]}",
+            )
         if not lower[i] <= initial[i] <= upper[i]:
-            raise WorldError(f"{rp}.initial", f"expected joint_{i + 1} within [{lower[i]}, {upper[i]}], "
-                             f"got {initial[i]}")
+            raise WorldError(
+                f"{rp}.initial", f"expected joint_{i + 1} within [{lower[i]}, {upper[i]}], got {initial[i]}"
+            )
     return Robot(
         base=_frozen(_numbers(tree, "base", rp, length=2)),
         link_lengths=_frozen(lengths),
@@ -335,8 +351,9 @@ def _obstacles(tree: Mapping[str, Any]) -> tuple[Obstacle, ...]:
     names = tree.get("obstacle_names", _default("world.obstacle_names"))
     obstacle_tree = tree.get("obstacles") or {}
     if not isinstance(obstacle_tree, Mapping):
-        raise WorldError("world.obstacles",
-                         f"expected a mapping of name: [x0, y0, ...], got {short_repr(obstacle_tree)}")
+        raise WorldError(
+            "world.obstacles", f"expected a mapping of name: [x0, y0, ...], got {short_repr(obstacle_tree)}"
+        )
     if names is None:
         names = []
     if not isinstance(names, (list, tuple)) or not all(isinstance(s, str) and s for s in names):
@@ -345,13 +362,14 @@ def _obstacles(tree: Mapping[str, Any]) -> tuple[Obstacle, ...]:
         raise WorldError("world.obstacle_names", "expected unique names")
     for key in obstacle_tree:
         if key not in names:
-            raise WorldError(f"world.obstacles.{key}",
-                             f"unknown obstacle: not listed in world.obstacle_names {short_repr(names, 200)}")
+            raise WorldError(
+                f"world.obstacles.{key}",
+                f"unknown obstacle: not listed in world.obstacle_names {short_repr(names, 200)}",
+            )
     obstacles = []
     for obstacle_name in names:
         if obstacle_name not in obstacle_tree:
-            raise WorldError(f"world.obstacles.{obstacle_name}",
-                             "is required: it is listed in world.obstacle_names")
+            raise WorldError(f"world.obstacles.{obstacle_name}", "is required: it is listed in world.obstacle_names")
         obstacles.append(Obstacle(obstacle_name, _frozen(_polygon(obstacle_tree, obstacle_name, "world.obstacles"))))
     return tuple(obstacles)
 
@@ -362,12 +380,15 @@ def _movable_object(tree: Mapping[str, Any]) -> MovableObject:
     polygon = _polygon(tree, "polygon", op)
     grasps = _numbers(tree, "grasps", op, min_length=2, even=True).reshape(-1, 2)
     boundary = shapely.Polygon(polygon).exterior
-    distances = shapely.distance(boundary, shapely.points(grasps))
+    distances = np.atleast_1d(shapely.distance(boundary, shapely.points(grasps)))
     for index, distance in enumerate(distances):
         if distance > GRASP_ON_BOUNDARY_TOLERANCE_M:
-            raise WorldError(f"{op}.grasps", f"expected every grasp on the object's boundary (within "
-                             f"{GRASP_ON_BOUNDARY_TOLERANCE_M} m), but grasp {index} "
-                             f"{grasps[index].tolist()} is {distance:.6g} m away")
+            raise WorldError(
+                f"{op}.grasps",
+                f"expected every grasp on the object's boundary (within "
+                f"{GRASP_ON_BOUNDARY_TOLERANCE_M} m), but grasp {index} "
+                f"{grasps[index].tolist()} is {distance:.6g} m away",
+            )
     return MovableObject(
         polygon=_frozen(polygon),
         initial=_frozen(_numbers(tree, "initial", op, length=3)),
@@ -390,7 +411,7 @@ def load_world(path: str | Path) -> World:
     return world_from_parameters(read_parameter_file(path))
 
 
-def world_to_parameters(world: World) -> dict:
+def world_to_parameters(world: World) -> dict[str, Any]:
     """The world as a ``{'world': {...}}`` parameter tree (ROS 2 YAML-ready)."""
     tree: dict[str, Any] = {
         "name": world.name,

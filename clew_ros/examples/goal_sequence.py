@@ -50,8 +50,7 @@ class GoalSequence(Node):
         self.current = None
         text = f"goal {len(self.results)}/{len(self.goals)} {handle.goal}: {result.outcome.name}"
         if result.plan is not None:
-            text += (f", {len(result.plan.segments)} segments, {result.plan.grasp_count} grasps, "
-                     f"{result.time_s:.2f} s")
+            text += f", {len(result.plan.segments)} segments, {result.plan.grasp_count} grasps, {result.time_s:.2f} s"
         else:
             text += f": {result.message}"
         self.get_logger().info(text)

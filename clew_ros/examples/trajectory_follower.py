@@ -6,9 +6,10 @@
 Subscribes to ``<planner>/trajectory`` (transient-local, as the planner
 offers it) and, for each trajectory, steps through its points in time,
 interpolating linearly, and publishes ``~/joint_states`` (the arm's joints
-and ``gripper``) at ``--rate``. Prints ``following <topic>`` once the planner is found, then one line per trajectory followed,
-``followed 12 points over 3.42 s, 2 grasps``, and exits after ``--count``
-trajectories (0: runs until Ctrl-C).
+and ``gripper``) at ``--rate``. Prints ``following <topic>`` once the
+planner is found, then one line per trajectory followed, ``followed 12
+points over 3.42 s, 2 grasps``, and exits after ``--count`` trajectories
+(0: runs until Ctrl-C).
 """
 
 from __future__ import annotations
@@ -37,8 +38,9 @@ class TrajectoryFollower(Node):
         self._positions = np.zeros((0, 0))
         self._started_s = 0.0
         self._states = self.create_publisher(JointState, "~/joint_states", STREAM_QOS)
-        self._subscription = self.create_subscription(JointTrajectory, f"{planner.rstrip('/')}/trajectory",
-                                                      self._on_trajectory, LATCHED_QOS)
+        self._subscription = self.create_subscription(
+            JointTrajectory, f"{planner.rstrip('/')}/trajectory", self._on_trajectory, LATCHED_QOS
+        )
         self._announced = False
         self.create_timer(1.0 / rate_hz, self._step)
 

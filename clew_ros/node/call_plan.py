@@ -34,10 +34,12 @@ RUN_ID = re.compile(r"run ([0-9a-f]{32})")
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="call_plan", description=__doc__.splitlines()[0])
     parser.add_argument("--node", default="/clew_planner", help="the planner node's name (default /clew_planner)")
-    parser.add_argument("--timeout", type=float, default=120.0,
-                        help="seconds to wait for the service and for the answer (default 120)")
-    parser.add_argument("--wait-playback", action="store_true",
-                        help="after a success, wait until the node has played the plan back")
+    parser.add_argument(
+        "--timeout", type=float, default=120.0, help="seconds to wait for the service and for the answer (default 120)"
+    )
+    parser.add_argument(
+        "--wait-playback", action="store_true", help="after a success, wait until the node has played the plan back"
+    )
     args = parser.parse_args(argv)
 
     rclpy.init()

@@ -132,18 +132,22 @@ def goal_from_pose_stamped(msg: PoseStamped, world: World) -> np.ndarray:
     p, q = msg.pose.position, msg.pose.orientation
     values = [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
     if not all(math.isfinite(v) for v in values):
-        raise GoalPoseError(f"goal_pose: position and orientation must be finite numbers, got position "
-                            f"({p.x}, {p.y}, {p.z}) orientation ({q.x}, {q.y}, {q.z}, {q.w})")
+        raise GoalPoseError(
+            f"goal_pose: position and orientation must be finite numbers, got position "
+            f"({p.x}, {p.y}, {p.z}) orientation ({q.x}, {q.y}, {q.z}, {q.w})"
+        )
     norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
     if abs(norm - 1.0) > QUATERNION_TOLERANCE:
         raise GoalPoseError(f"goal_pose: orientation must be a unit quaternion, got norm {norm:.6g}")
     if abs(q.x) > QUATERNION_TOLERANCE or abs(q.y) > QUATERNION_TOLERANCE:
-        raise GoalPoseError(f"goal_pose: orientation must be a rotation about z only (x = y = 0), "
-                            f"got x={q.x:.6g} y={q.y:.6g}")
+        raise GoalPoseError(
+            f"goal_pose: orientation must be a rotation about z only (x = y = 0), got x={q.x:.6g} y={q.y:.6g}"
+        )
     xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
     if not (xmin <= p.x <= xmax and ymin <= p.y <= ymax):
-        raise GoalPoseError(f"goal_pose: position ({p.x:.6g}, {p.y:.6g}) lies outside world.bounds "
-                            f"[{xmin}, {ymin}, {xmax}, {ymax}]")
+        raise GoalPoseError(
+            f"goal_pose: position ({p.x:.6g}, {p.y:.6g}) lies outside world.bounds [{xmin}, {ymin}, {xmax}, {ymax}]"
+        )
     return np.array([p.x, p.y, quaternion_to_yaw(q)], dtype=float)
 
 
@@ -176,8 +180,9 @@ def _json_number(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def feedback_status(run_id: uuid.UUID, *, landmarks: int, best_distance: float, elapsed_s: float,
-                    phase: str) -> DiagnosticStatus:
+def feedback_status(
+    run_id: uuid.UUID, *, landmarks: int, best_distance: float, elapsed_s: float, phase: str
+) -> DiagnosticStatus:
     """``~/feedback``: run id, landmarks, best distance to goal (m; ``inf`` before any), elapsed (s)."""
     return DiagnosticStatus(
         level=DiagnosticStatus.OK,
@@ -231,8 +236,16 @@ def world_yaml_message(world: World, settings: PlannerSettings, node_name: str =
 _LINE_WIDTH_M = 0.01
 
 
-def _marker(ns: str, marker_id: int, kind: int, time_ns: int, color: ColorRGBA, *, scale: float = _LINE_WIDTH_M,
-            points: Iterable[Point] = ()) -> Marker:
+def _marker(
+    ns: str,
+    marker_id: int,
+    kind: int,
+    time_ns: int,
+    color: ColorRGBA,
+    *,
+    scale: float = _LINE_WIDTH_M,
+    points: Iterable[Point] = (),
+) -> Marker:
     marker = Marker(header=_header(time_ns), ns=ns, id=marker_id, type=kind, action=Marker.ADD, color=color)
     marker.pose.orientation.w = 1.0
     marker.scale.x = marker.scale.y = marker.scale.z = scale
@@ -251,7 +264,7 @@ def _outline(vertices: np.ndarray) -> list[Point]:
 def _triangles(vertices: np.ndarray) -> list[Point]:
     """A simple polygon as TRIANGLE_LIST points (constrained Delaunay, so concave polygons fill right)."""
     triangles = shapely.constrained_delaunay_triangles(shapely.Polygon(vertices))
-    points = []
+    points: list[Point] = []
     for triangle in shapely.get_parts(triangles):
         ring = np.asarray(triangle.exterior.coords)[:3]
         points.extend(_point(v) for v in ring)
@@ -272,19 +285,63 @@ def world_markers(world: World, time_ns: int, goal: np.ndarray | None = None) ->
     corners = np.array([[xmin, ymin], [xmax, ymin], [xmax, ymax], [xmin, ymax]])
     markers.append(_marker("bounds", 0, Marker.LINE_STRIP, time_ns, _color(0.6, 0.6, 0.6), points=_outline(corners)))
     for index, obstacle in enumerate(world.obstacles):
-        markers.append(_marker("obstacles", index, Marker.TRIANGLE_LIST, time_ns, _color(0.35, 0.35, 0.4, 0.9),
-                               scale=1.0, points=_triangles(obstacle.vertices)))
-        markers.append(_marker("obstacle_outlines", index, Marker.LINE_STRIP, time_ns, _color(0.1, 0.1, 0.1),
-                               points=_outline(obstacle.vertices)))
+        markers.append(
+            _marker(
+                "obstacles",
+                index,
+                Marker.TRIANGLE_LIST,
+                time_ns,
+                _color(0.35, 0.35, 0.4, 0.9),
+                scale=1.0,
+                points=_triangles(obstacle.vertices),
+            )
+        )
+        markers.append(
+            _marker(
+                "obstacle_outlines",
+                index,
+                Marker.LINE_STRIP,
+                time_ns,
+                _color(0.1, 0.1, 0.1),
+                points=_outline(obstacle.vertices),
+            )
+        )
     start = transform_points(world.object.initial, world.object.polygon)
     target = transform_points(goal, world.object.polygon)
-    markers.append(_marker("object_start", 0, Marker.LINE_STRIP, time_ns, _color(0.1, 0.7, 0.2),
-                           scale=2 * _LINE_WIDTH_M, points=_outline(start)))
-    markers.append(_marker("object_goal", 0, Marker.LINE_STRIP, time_ns, _color(0.9, 0.2, 0.1),
-                           scale=2 * _LINE_WIDTH_M, points=_outline(target)))
+    markers.append(
+        _marker(
+            "object_start",
+            0,
+            Marker.LINE_STRIP,
+            time_ns,
+            _color(0.1, 0.7, 0.2),
+            scale=2 * _LINE_WIDTH_M,
+            points=_outline(start),
+        )
+    )
+    markers.append(
+        _marker(
+            "object_goal",
+            0,
+            Marker.LINE_STRIP,
+            time_ns,
+            _color(0.9, 0.2, 0.1),
+            scale=2 * _LINE_WIDTH_M,
+            points=_outline(target),
+        )
+    )
     grasps = transform_points(world.object.initial, world.object.grasps)
-    markers.append(_marker("grasps", 0, Marker.SPHERE_LIST, time_ns, _color(1.0, 0.8, 0.0), scale=0.03,
-                           points=[_point(g) for g in grasps]))
+    markers.append(
+        _marker(
+            "grasps",
+            0,
+            Marker.SPHERE_LIST,
+            time_ns,
+            _color(1.0, 0.8, 0.0),
+            scale=0.03,
+            points=[_point(g) for g in grasps],
+        )
+    )
     return MarkerArray(markers=markers)
 
 
@@ -297,8 +354,15 @@ def landmark_markers(tree: LandmarkTree, time_ns: int) -> MarkerArray:
     """
     landmarks = list(tree)
     markers = [_delete_all(time_ns)]
-    spheres = _marker("landmarks", 0, Marker.SPHERE_LIST, time_ns, _color(0.2, 0.4, 1.0), scale=0.04,
-                      points=[_point(lm.object_pose[:2]) for lm in landmarks])
+    spheres = _marker(
+        "landmarks",
+        0,
+        Marker.SPHERE_LIST,
+        time_ns,
+        _color(0.2, 0.4, 1.0),
+        scale=0.04,
+        points=[_point(lm.object_pose[:2]) for lm in landmarks],
+    )
     spheres.colors = [_color(0.1, 0.7, 0.2) if lm.parent is None else _color(0.2, 0.4, 1.0) for lm in landmarks]
     markers.append(spheres)
     edges = []
@@ -322,11 +386,16 @@ def joint_trajectory(track: Track, time_ns: int) -> JointTrajectory:
     msg = JointTrajectory(header=_header(time_ns), joint_names=list(track.joint_names))
     for k in range(len(track.times_ns)):
         positions = [float(v) for v in track.positions[k]] + [float(track.gripper[k])]
-        msg.points.append(JointTrajectoryPoint(positions=positions, time_from_start=duration_msg(int(track.times_ns[k]))))
+        msg.points.append(
+            JointTrajectoryPoint(positions=positions, time_from_start=duration_msg(int(track.times_ns[k])))
+        )
     return msg
 
 
 def joint_state(joint_names: list[str], joints: np.ndarray, gripper: float, time_ns: int) -> JointState:
     """``~/joint_states``: ``joint_names`` already ends with ``gripper``."""
-    return JointState(header=_header(time_ns, frame_id=""), name=list(joint_names),
-                      position=[float(v) for v in joints] + [float(gripper)])
+    return JointState(
+        header=_header(time_ns, frame_id=""),
+        name=list(joint_names),
+        position=[float(v) for v in joints] + [float(gripper)],
+    )

@@ -87,19 +87,19 @@ class NodeSettings:
 
     @property
     def record_path(self) -> Path:
-        return Path(os.path.expandvars(os.path.expanduser(self.record_directory)))
+        return Path(os.path.expandvars(self.record_directory)).expanduser()
 
 
 #: The parameter behind each field of :class:`NodeSettings` (every node parameter, once).
-_FIELD_PARAMETERS = {
+SETTINGS_FIELDS = {
     "record_enabled": "record.enabled",
     "record_directory": "record.directory",
     "playback_rate_hz": "playback.rate",
     "joint_speed_rad_s": "trajectory.joint_speed",
     "grasp_dwell_s": "trajectory.grasp_dwell",
 }
-assert [f.name for f in fields(NodeSettings)] == list(_FIELD_PARAMETERS)
-assert sorted(_FIELD_PARAMETERS.values()) == sorted(NODE_PARAMETERS)
+assert [f.name for f in fields(NodeSettings)] == list(SETTINGS_FIELDS)
+assert sorted(SETTINGS_FIELDS.values()) == sorted(NODE_PARAMETERS)
 
 
 @dataclass(frozen=True)
@@ -157,7 +157,7 @@ def default_world_file() -> Path:
         path = Path(get_package_share_directory("clew_ros")) / "config" / DEFAULT_WORLD_FILE
         if path.is_file():
             return path
-    except Exception:  # noqa: BLE001, S110 - no ament index (not installed by colcon): use the source tree
+    except Exception:  # noqa: BLE001 - no ament index (not installed by colcon): use the source tree
         pass
     return Path(__file__).resolve().parents[2] / "config" / DEFAULT_WORLD_FILE
 
@@ -191,18 +191,23 @@ def initial_values(overrides: Mapping[str, Any], default_file: Path | None = Non
 
 def _check_known(name: str) -> None:
     if name.startswith("world."):
-        key = name[len("world."):]
+        key = name[len("world.") :]
         if key in WORLD_PARAMETERS:
             return
         parts = key.split(".")
         if parts[0] == "obstacles" and len(parts) == 2:
             return
-        raise WorldError(name, "unknown parameter; known: " + ", ".join(f"world.{k}" for k in WORLD_PARAMETERS)
-                         + ", world.obstacles.<name>")
+        raise WorldError(
+            name,
+            "unknown parameter; known: "
+            + ", ".join(f"world.{k}" for k in WORLD_PARAMETERS)
+            + ", world.obstacles.<name>",
+        )
     if name.startswith("planner."):
-        if name[len("planner."):] not in PLANNER_PARAMETERS:
-            raise ParameterError(name, "unknown parameter; known: "
-                                 + ", ".join(f"planner.{k}" for k in PLANNER_PARAMETERS))
+        if name[len("planner.") :] not in PLANNER_PARAMETERS:
+            raise ParameterError(
+                name, "unknown parameter; known: " + ", ".join(f"planner.{k}" for k in PLANNER_PARAMETERS)
+            )
         return
     if name not in NODE_PARAMETERS:
         raise ParameterError(name, "unknown parameter; known: " + ", ".join(NODE_PARAMETERS))
@@ -213,8 +218,11 @@ def _world_tree(values: Mapping[str, Any], *, listed_obstacles_only: bool) -> di
     if listed_obstacles_only:
         names = plain_value(world.get("world.obstacle_names")) or []
         names = names if isinstance(names, list) else []
-        world = {k: v for k, v in world.items()
-                 if not k.startswith("world.obstacles.") or k[len("world.obstacles."):] in names}
+        world = {
+            k: v
+            for k, v in world.items()
+            if not k.startswith("world.obstacles.") or k[len("world.obstacles.") :] in names
+        }
     return nest(world)
 
 
@@ -233,10 +241,12 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
         _check_known(name)
     world_tree = _world_tree(values, listed_obstacles_only=listed_obstacles_only)
     world = check_start_and_goal(world_from_parameters(world_tree))
-    planner_tree = {k[len("planner."):]: v for k, v in values.items() if k.startswith("planner.") and v is not None}
+    planner_tree = {k[len("planner.") :]: v for k, v in values.items() if k.startswith("planner.") and v is not None}
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
-    node = {field: check_value(NODE_PARAMETERS[name], values.get(name, NODE_PARAMETERS[name].default))
-            for field, name in _FIELD_PARAMETERS.items()}
+    node = {
+        field: check_value(NODE_PARAMETERS[name], values.get(name, NODE_PARAMETERS[name].default))
+        for field, name in SETTINGS_FIELDS.items()
+    }
     return Configuration(world, planner, NodeSettings(**node))
 
 
@@ -250,15 +260,17 @@ def descriptor_for(name: str) -> ParameterDescriptor:
     as ``30.0``: the value is checked by this module, not by rclpy).
     """
     spec = _spec_of(name)
-    descriptor = ParameterDescriptor(name=name, dynamic_typing=True, description=spec.description,
-                                     additional_constraints=_constraints(spec))
+    descriptor = ParameterDescriptor(
+        name=name, dynamic_typing=True, description=spec.description, additional_constraints=_constraints(spec)
+    )
     if spec.limits is not None:
         low, high = spec.limits
         if spec.type is ParameterType.INTEGER:
             descriptor.integer_range = [IntegerRange(from_value=int(low), to_value=int(high), step=1)]
         else:
-            descriptor.floating_point_range = [FloatingPointRange(from_value=float(low), to_value=float(high),
-                                                                  step=0.0)]
+            descriptor.floating_point_range = [
+                FloatingPointRange(from_value=float(low), to_value=float(high), step=0.0)
+            ]
     return descriptor
 
 
@@ -266,9 +278,9 @@ def _spec_of(name: str) -> ParameterSpec:
     if name.startswith("world.obstacles."):
         return OBSTACLE_PARAMETER
     if name.startswith("world."):
-        return WORLD_PARAMETERS[name[len("world."):]]
+        return WORLD_PARAMETERS[name[len("world.") :]]
     if name.startswith("planner."):
-        return PLANNER_PARAMETERS[name[len("planner."):]]
+        return PLANNER_PARAMETERS[name[len("planner.") :]]
     return NODE_PARAMETERS[name]
 
 

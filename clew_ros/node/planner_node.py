@@ -74,8 +74,9 @@ class PlannerNode(Node):
         # Every --params-file / -p value is declared as the node is created (world.obstacles.<name>
         # with any name); _declare_parameters checks them and gives each its descriptor.
         # Undeclared parameters stay allowed: ros2 param set may add an obstacle.
-        super().__init__(node_name, allow_undeclared_parameters=True,
-                         automatically_declare_parameters_from_overrides=True, **kwargs)
+        super().__init__(
+            node_name, allow_undeclared_parameters=True, automatically_declare_parameters_from_overrides=True, **kwargs
+        )
         self._lock = threading.Lock()  # the policy: _run, _config and _closing change under it
         self._closing = threading.Event()  # shutting down: no new run
         self._run: Run | None = None  # the current run: the last accepted
@@ -92,12 +93,18 @@ class PlannerNode(Node):
         # ~/cancel in a group of its own: never queued behind ~/plan or ~/goal_pose callbacks.
         self.create_service(Trigger, "~/cancel", self._on_cancel, callback_group=MutuallyExclusiveCallbackGroup())
         # ~/goal_pose in a group of its own: one goal at a time, in order (it only starts a run).
-        goal_sub = self.create_subscription(PoseStamped, "~/goal_pose", self._on_goal_pose, GOAL_QOS,
-                                            callback_group=MutuallyExclusiveCallbackGroup())
+        goal_sub = self.create_subscription(
+            PoseStamped, "~/goal_pose", self._on_goal_pose, GOAL_QOS, callback_group=MutuallyExclusiveCallbackGroup()
+        )
         # the status / feedback timer in a group of its own; parameter services stay in the default group.
         self.create_timer(1.0 / STATUS_RATE_HZ, self._on_timer, callback_group=MutuallyExclusiveCallbackGroup())
-        self._worker = RunWorker(self._out, Recordings(self.get_name(), self.get_logger()), goal_sub.topic_name,
-                                 self.get_logger(), self._closing)
+        self._worker = RunWorker(
+            self._out,
+            Recordings(self.get_name(), self.get_logger()),
+            goal_sub.topic_name,
+            self.get_logger(),
+            self._closing,
+        )
 
         # Parameter changes: checked as a whole (on_set), then republished (post_set).
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -108,7 +115,8 @@ class PlannerNode(Node):
         world = self._config.world
         self.get_logger().info(
             f"serving world '{world.name}' ({world.robot.dof} joints, {len(world.obstacles)} obstacles); "
-            f"recording {'to ' + str(self._config.node.record_path) if self._config.node.record_enabled else 'off'}")
+            f"recording {'to ' + str(self._config.node.record_path) if self._config.node.record_enabled else 'off'}"
+        )
 
     # ----------------------------------------------------------------- runs: the public entry points
 
@@ -118,8 +126,9 @@ class PlannerNode(Node):
         with self._lock:
             return self._run
 
-    def request_plan(self, source: Source = "plan", goal: np.ndarray | None = None,
-                     goal_stamp_ns: int | None = None) -> tuple[Run | None, str]:
+    def request_plan(
+        self, source: Source = "plan", goal: np.ndarray | None = None, goal_stamp_ns: int | None = None
+    ) -> tuple[Run | None, str]:
         """Start a run to ``goal`` (``(x, y, theta)``; ``None``: ``world.object.goal``), or refuse it.
 
         ``goal_stamp_ns``, the stamp of the ``~/goal_pose`` that asks, is echoed
@@ -140,9 +149,11 @@ class PlannerNode(Node):
             if self._closing.is_set():
                 refusal = "the node is shutting down"
             elif previous is not None and previous.is_busy:
-                refusal = (f"refused: run {previous.hex} is still planning "
-                           f"(started {time.monotonic() - previous.start_s:.1f} s ago); "
-                           "requests are not queued; cancel it with ~/cancel or wait")
+                refusal = (
+                    f"refused: run {previous.hex} is still planning "
+                    f"(started {time.monotonic() - previous.start_s:.1f} s ago); "
+                    "requests are not queued; cancel it with ~/cancel or wait"
+                )
             else:
                 refusal = None
                 run = self._run = Run(source, goal, self._config, self._out.now_ns(), goal_stamp_ns)
@@ -167,12 +178,18 @@ class PlannerNode(Node):
         stopped = run.wait_outcome(CANCEL_WAIT_S) if kind is CancelKind.PLAN else run.wait_finished(CANCEL_WAIT_S)
         took = f"in {1000 * (time.monotonic() - asked):.0f} ms"
         if kind is CancelKind.PLAN:
-            message = (f"canceled run {run.hex} {took}: {run.result_text()}" if stopped
-                       else f"cancel requested; run {run.hex} is stopping")
+            message = (
+                f"canceled run {run.hex} {took}: {run.result_text()}"
+                if stopped
+                else f"cancel requested; run {run.hex} is stopping"
+            )
         else:
             outcome = run.outcome.name if run.outcome else "unknown"
-            message = (f"stopped the playback of run {run.hex} {took} (its outcome stays {outcome})" if stopped
-                       else f"stopping the playback of run {run.hex} (its outcome stays {outcome})")
+            message = (
+                f"stopped the playback of run {run.hex} {took} (its outcome stays {outcome})"
+                if stopped
+                else f"stopping the playback of run {run.hex} (its outcome stays {outcome})"
+            )
         self.get_logger().info(message.splitlines()[0])
         return True, message
 
@@ -257,8 +274,7 @@ class PlannerNode(Node):
             if name in overrides:
                 self.set_descriptor(name, descriptor_for(name))
             else:  # an empty list has no parameter type
-                self.declare_parameter(name, None if value == [] else value, descriptor_for(name),
-                                       ignore_override=True)
+                self.declare_parameter(name, None if value == [] else value, descriptor_for(name), ignore_override=True)
         return config
 
     def _own_values(self) -> dict[str, Any]:
@@ -267,7 +283,8 @@ class PlannerNode(Node):
         for prefix in OWN_PREFIXES:
             group = prefix.rstrip(".")
             for name, parameter in self.get_parameters_by_prefix(group).items():
-                values[f"{group}.{name}"] = plain_value(parameter.value)
+                # rclpy annotates the values, but they are Parameter objects
+                values[f"{group}.{name}"] = plain_value(parameter.value)  # type: ignore[union-attr]
         return values
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
@@ -276,15 +293,22 @@ class PlannerNode(Node):
         except Exception as error:  # noqa: BLE001 - a checking bug must refuse the change, not end the node
             names = ", ".join(p.name for p in parameters)
             self.get_logger().error(f"internal error while checking {names}: {error!r}")
-            return SetParametersResult(successful=False, reason=f"{names}: internal error while checking the "
-                                       f"change ({type(error).__name__}: {error}); nothing was changed")
+            return SetParametersResult(
+                successful=False,
+                reason=f"{names}: internal error while checking the "
+                f"change ({type(error).__name__}: {error}); nothing was changed",
+            )
 
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         for p in parameters:
             if not p.name.startswith(OWN_PREFIXES) and not self.has_parameter(p.name):
-                return SetParametersResult(successful=False, reason=(
-                    f"{p.name}: unknown parameter; clew_planner takes "
-                    + ", ".join(prefix + "*" for prefix in OWN_PREFIXES)))
+                return SetParametersResult(
+                    successful=False,
+                    reason=(
+                        f"{p.name}: unknown parameter; clew_planner takes "
+                        + ", ".join(prefix + "*" for prefix in OWN_PREFIXES)
+                    ),
+                )
         own = [p for p in parameters if p.name.startswith(OWN_PREFIXES)]
         if not own:
             return SetParametersResult(successful=True)
@@ -298,8 +322,10 @@ class PlannerNode(Node):
         with self._lock:
             run = self._run
             if world_change and run is not None and run.is_busy:
-                reason = (f"{own[0].name}: the world cannot change while run {run.hex} is planning; "
-                          "cancel it (~/cancel) or wait for its outcome")
+                reason = (
+                    f"{own[0].name}: the world cannot change while run {run.hex} is planning; "
+                    "cancel it (~/cancel) or wait for its outcome"
+                )
                 return SetParametersResult(successful=False, reason=reason)
             try:
                 config = configuration_from_values(values, listed_obstacles_only=True)

@@ -19,6 +19,7 @@ Timing (interface.md §3 leaves it to us, README documents it):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,7 +66,7 @@ class Track:
     segment: np.ndarray
     grasps: list[int | None]
     grasp_rel: list[np.ndarray | None]
-    tip_pose_fn: object  # callable (N, n) -> (N, 3), the robot's tip poses
+    tip_pose_fn: Callable[[np.ndarray], np.ndarray]  # (N, n) -> (N, 3), the robot's tip poses
 
     @property
     def duration_s(self) -> float:
@@ -101,7 +102,7 @@ class Track:
         span = float(self.times_ns[k + 1] - self.times_ns[k])
         alpha = (t_ns - float(self.times_ns[k])) / span
         q = self.positions[k] + alpha * (self.positions[k + 1] - self.positions[k])
-        same_transfer = (self.segment[k] == self.segment[k + 1] and self.grasp_rel[self.segment[k]] is not None)
+        same_transfer = self.segment[k] == self.segment[k + 1] and self.grasp_rel[self.segment[k]] is not None
         if same_transfer:
             pose = compose(self.tip_pose_fn(q[None])[0], self.grasp_rel[self.segment[k]])
         else:
@@ -109,8 +110,7 @@ class Track:
         return q, float(self.gripper[k]), pose
 
 
-def track_from_plan(world: World, plan: Plan, *, joint_speed_rad_s: float = 1.0,
-                    grasp_dwell_s: float = 0.2) -> Track:
+def track_from_plan(world: World, plan: Plan, *, joint_speed_rad_s: float = 1.0, grasp_dwell_s: float = 0.2) -> Track:
     """Time a successful plan (its ``segments``) for ``world``.
 
     Raises ``ValueError`` for a plan without segments.
@@ -124,7 +124,10 @@ def track_from_plan(world: World, plan: Plan, *, joint_speed_rad_s: float = 1.0,
     def tips(q: np.ndarray) -> np.ndarray:
         return tip_poses(robot, q)
 
-    positions, gripper, seg_index, poses = [], [], [], []
+    positions: list[np.ndarray] = []
+    poses: list[np.ndarray] = []
+    gripper: list[float] = []
+    seg_index: list[int] = []
     grasps: list[int | None] = []
     grasp_rel: list[np.ndarray | None] = []
     for motion in replay(world, plan, step_rad=None):
@@ -146,7 +149,7 @@ def track_from_plan(world: World, plan: Plan, *, joint_speed_rad_s: float = 1.0,
             step_s = float(np.max(np.abs(positions_a[k] - positions_a[k - 1]))) / joint_speed_rad_s
         times[k] = times[k - 1] + max(MIN_STEP_NS, round(step_s * 1e9))
     return Track(
-        joint_names=list(robot.joint_names) + [GRIPPER_JOINT],
+        joint_names=[*list(robot.joint_names), GRIPPER_JOINT],
         times_ns=times,
         positions=positions_a,
         gripper=gripper_a,

@@ -32,9 +32,14 @@ class PlaybackEnd:
         return "playback_stopped" if self.stopped else "playback_done"
 
 
-def play(track: Track, rate_hz: float, *, wait_stop: Callable[[float], bool],
-         on_sample: Callable[[np.ndarray, float, np.ndarray], None],
-         on_event: Callable[[GripperEvent], None]) -> PlaybackEnd:
+def play(
+    track: Track,
+    rate_hz: float,
+    *,
+    wait_stop: Callable[[float], bool],
+    on_sample: Callable[[np.ndarray, float, np.ndarray], None],
+    on_event: Callable[[GripperEvent], None],
+) -> PlaybackEnd:
     """Play ``track`` back in time; return how it ended.
 
     Parameters

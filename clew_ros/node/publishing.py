@@ -64,8 +64,9 @@ class Publishing:
         self._logger = node.get_logger()
         self._node_name = node.get_name()
         self._closing = closing
-        self._publishers = {name: node.create_publisher(msg_type, f"~/{name}", qos)
-                            for name, (msg_type, qos) in TOPICS.items()}
+        self._publishers = {
+            name: node.create_publisher(msg_type, f"~/{name}", qos) for name, (msg_type, qos) in TOPICS.items()
+        }
         self._statuses = StatusTable()
         self._order = threading.Lock()  # ~/status and ~/feedback: see the module docstring
 
@@ -88,23 +89,34 @@ class Publishing:
         self.publish("world_yaml", messages.world_yaml_message(world, planner, self._node_name), recording)
         self.publish("world_markers", messages.world_markers(world, self.now_ns()), recording)
 
-    def event(self, run_id: uuid.UUID, event: str, recording: RunRecording, /, at_s: float | None = None,
-              **fields: Any) -> None:
+    def event(
+        self, run_id: uuid.UUID, event: str, recording: RunRecording, /, at_s: float | None = None, **fields: Any
+    ) -> None:
         """One ``~/events`` message; ``time`` is ``at_s`` if given (grasp events), else wall-clock seconds.
 
         ``fields`` go into the message (``recording=`` among them: the text of the run's recording).
         """
-        self.publish("events", messages.event_message(run_id, event, time.time() if at_s is None else at_s,
-                                                      **fields), recording)
+        self.publish(
+            "events", messages.event_message(run_id, event, time.time() if at_s is None else at_s, **fields), recording
+        )
 
     def feedback(self, run: Run, phase: str) -> None:
         """``~/feedback`` of ``run`` with ``phase``."""
-        self.publish("feedback", messages.feedback_status(
-            run.id, landmarks=run.landmarks, best_distance=run.best_distance,
-            elapsed_s=time.monotonic() - run.start_s, phase=phase), run.recording)
+        self.publish(
+            "feedback",
+            messages.feedback_status(
+                run.id,
+                landmarks=run.landmarks,
+                best_distance=run.best_distance,
+                elapsed_s=time.monotonic() - run.start_s,
+                phase=phase,
+            ),
+            run.recording,
+        )
 
-    def refusal(self, code: Outcome, message: str, source: str, recording: RunRecording,
-                goal_stamp_ns: int | None = None) -> str:
+    def refusal(
+        self, code: Outcome, message: str, source: str, recording: RunRecording, goal_stamp_ns: int | None = None
+    ) -> str:
         """A request that does not become a run: a UUID of its own, status aborted, an ``aborted`` event
         (with the request's ``goal_stamp_ns``, if any).
 
@@ -114,8 +126,16 @@ class Publishing:
         self.set_status(run_id, self.now_ns(), GoalStatus.STATUS_ABORTED)
         self.publish_status(recording)
         request = {} if goal_stamp_ns is None else {"goal_stamp_ns": goal_stamp_ns}
-        self.event(run_id, "aborted", recording, code=code.name, code_value=code.value, message=message,
-                   source=source, **request)
+        self.event(
+            run_id,
+            "aborted",
+            recording,
+            code=code.name,
+            code_value=code.value,
+            message=message,
+            source=source,
+            **request,
+        )
         return f"run {run_id.hex}: {code.name}: {message}"
 
     # ------------------------------------------------------------------ ~/status (with feedback, in order)

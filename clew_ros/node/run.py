@@ -78,8 +78,9 @@ class CancelKind(enum.Enum):
 
 def outcome_status(outcome: Outcome) -> int:
     """The terminal ``GoalStatus`` of an outcome: succeeded, canceled, else aborted."""
-    return {Outcome.SUCCEEDED: GoalStatus.STATUS_SUCCEEDED,
-            Outcome.CANCELED: GoalStatus.STATUS_CANCELED}.get(outcome, GoalStatus.STATUS_ABORTED)
+    return {Outcome.SUCCEEDED: GoalStatus.STATUS_SUCCEEDED, Outcome.CANCELED: GoalStatus.STATUS_CANCELED}.get(
+        outcome, GoalStatus.STATUS_ABORTED
+    )
 
 
 def outcome_event(outcome: Outcome) -> str:
@@ -105,8 +106,14 @@ class Run:
         echoed in its ``accepted`` event so that a client knows its run.
     """
 
-    def __init__(self, source: Source, goal: np.ndarray | None, config: Configuration, accepted_ns: int,
-                 goal_stamp_ns: int | None = None) -> None:
+    def __init__(
+        self,
+        source: Source,
+        goal: np.ndarray | None,
+        config: Configuration,
+        accepted_ns: int,
+        goal_stamp_ns: int | None = None,
+    ) -> None:
         self.id = uuid.uuid4()
         self.goal_stamp_ns = goal_stamp_ns
         self.source: Source = source
@@ -180,8 +187,10 @@ class Run:
     def result_text(self) -> str:
         """The ``~/plan`` answer: outcome, planner message, landmarks, time and recording."""
         outcome = self.outcome.name if self.outcome else "UNKNOWN"
-        text = (f"run {self.hex}: {outcome}: {self.message}; landmarks {self.landmarks}; "
-                f"time {self.elapsed_s:.2f} s; {self.recording.text}")
+        text = (
+            f"run {self.hex}: {outcome}: {self.message}; landmarks {self.landmarks}; "
+            f"time {self.elapsed_s:.2f} s; {self.recording.text}"
+        )
         if self.outcome is Outcome.SUCCEEDED and self.recording.is_open and self.track is not None:
             text += f" (complete when the {self.track.duration_s:.1f} s playback ends)"
         return text

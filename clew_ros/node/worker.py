@@ -52,8 +52,14 @@ class RunWorker:
         Set when the node shuts down (a run canceled then says so).
     """
 
-    def __init__(self, publishing: Publishing, recordings: Recordings, goal_topic: str, logger: RcutilsLogger,
-                 closing: threading.Event) -> None:
+    def __init__(
+        self,
+        publishing: Publishing,
+        recordings: Recordings,
+        goal_topic: str,
+        logger: RcutilsLogger,
+        closing: threading.Event,
+    ) -> None:
         self._out = publishing
         self._recordings = recordings
         self._goal_topic = goal_topic
@@ -81,11 +87,21 @@ class RunWorker:
         run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now)
         out.publish_status(run.recording)
         request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}
-        out.event(run.id, "accepted", run.recording, source=run.source, world=config.world.name,
-                  goal=run.goal.tolist(), seed=config.planner.seed, recording=run.recording.text,
-                  recording_path=run.recording.path, **request)
-        self._logger.info(f"run {run.hex} accepted ({run.source}): goal {np.round(run.goal, 4).tolist()}, "
-                          f"{run.recording.text}")
+        out.event(
+            run.id,
+            "accepted",
+            run.recording,
+            source=run.source,
+            world=config.world.name,
+            goal=run.goal.tolist(),
+            seed=config.planner.seed,
+            recording=run.recording.text,
+            recording_path=run.recording.path,
+            **request,
+        )
+        self._logger.info(
+            f"run {run.hex} accepted ({run.source}): goal {np.round(run.goal, 4).tolist()}, {run.recording.text}"
+        )
 
     def execute(self, run: Run) -> None:
         """The run's thread: plan, publish the outcome, play back; close the recording."""
@@ -97,8 +113,9 @@ class RunWorker:
             self._logger.error(f"run {run.hex}: internal error: {error!r}")
             if not run.is_outcome_out:  # else the outcome is out already: one outcome per run
                 try:
-                    run.conclude(Outcome.INTERNAL_ERROR, f"internal error in the node: {error!r}",
-                                 time.monotonic() - run.start_s)
+                    run.conclude(
+                        Outcome.INTERNAL_ERROR, f"internal error in the node: {error!r}", time.monotonic() - run.start_s
+                    )
                     self._publish_outcome(run)
                 except Exception as again:  # noqa: BLE001
                     self._logger.error(f"run {run.hex}: cannot publish its outcome: {again!r}")
@@ -124,8 +141,13 @@ class RunWorker:
             except Exception as error:  # noqa: BLE001 - never let a publishing fault end the planning
                 self._logger.error(f"run {run.hex}: cannot publish progress: {error!r}")
 
-        result = plan(config.world, config.planner, goal=None if run.source == "plan" else run.goal,
-                      termination=run.termination(), progress=on_progress)
+        result = plan(
+            config.world,
+            config.planner,
+            goal=None if run.source == "plan" else run.goal,
+            termination=run.termination(),
+            progress=on_progress,
+        )
         canceled = run.end_planning()
         run.landmarks = len(result.tree)
         self._announce_landmarks(run, result.tree, announced)
@@ -144,9 +166,17 @@ class RunWorker:
         landmarks = list(tree)
         if len(landmarks) <= announced[0]:
             return
-        for landmark in landmarks[announced[0]:]:
-            self._out.event(run.id, "landmark", run.recording, id=landmark.id, parent=landmark.parent,
-                            grasp=landmark.grasp, object_pose=landmark.object_pose, joints=landmark.joints)
+        for landmark in landmarks[announced[0] :]:
+            self._out.event(
+                run.id,
+                "landmark",
+                run.recording,
+                id=landmark.id,
+                parent=landmark.parent,
+                grasp=landmark.grasp,
+                object_pose=landmark.object_pose,
+                joints=landmark.joints,
+            )
         announced[0] = len(landmarks)
         self._out.publish("landmarks", messages.landmark_markers(tree, self._out.now_ns()), run.recording)
 
@@ -157,8 +187,17 @@ class RunWorker:
         if run.track is not None:
             out.publish("trajectory", messages.joint_trajectory(run.track, out.now_ns()), run.recording)
         out.outcome(run)
-        out.event(run.id, outcome_event(outcome), run.recording, code=outcome.name, code_value=outcome.value,
-                  message=run.message, landmarks=run.landmarks, time_s=run.elapsed_s, recording=run.recording.text)
+        out.event(
+            run.id,
+            outcome_event(outcome),
+            run.recording,
+            code=outcome.name,
+            code_value=outcome.value,
+            message=run.message,
+            landmarks=run.landmarks,
+            time_s=run.elapsed_s,
+            recording=run.recording.text,
+        )
         if run.track is None:
             run.recording.close()  # no playback follows: the recording is complete before the answer goes out
         else:
@@ -188,8 +227,9 @@ class RunWorker:
         def on_event(event: GripperEvent) -> None:
             out.event(run.id, event.kind, run.recording, at_s=float(event.time_s), grasp=event.grasp)
 
-        end = play(track, run.config.node.playback_rate_hz, wait_stop=run.wait_stop, on_sample=on_sample,
-                   on_event=on_event)
+        end = play(
+            track, run.config.node.playback_rate_hz, wait_stop=run.wait_stop, on_sample=on_sample, on_event=on_event
+        )
         out.feedback(run, end.phase)
         if end.at_s is None:  # a cancel or a new request came between the outcome and the first sample
             self._logger.info(f"run {run.hex}: playback stopped before it started")
@@ -209,6 +249,7 @@ def timed_plan(run: Run, result: PlanResult) -> tuple[Outcome, str, Track | None
     planned = checked_plan(world, result)
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
-    track = track_from_plan(world, planned, joint_speed_rad_s=settings.joint_speed_rad_s,
-                            grasp_dwell_s=settings.grasp_dwell_s)
+    track = track_from_plan(
+        world, planned, joint_speed_rad_s=settings.joint_speed_rad_s, grasp_dwell_s=settings.grasp_dwell_s
+    )
     return result.outcome, result.message, track

@@ -28,16 +28,16 @@ from clew_ros.recording.recorder import (
 from clew_ros.recording.trajectory import GRIPPER_JOINT, trajectory_to_plan
 
 __all__ = [
-    "RunRecorder",
-    "RecordingError",
-    "Recording",
-    "RecordedMessage",
-    "TopicInfo",
-    "find_mcap",
-    "recover_recording",
-    "trajectory_to_plan",
-    "default_offered_qos",
     "GRIPPER_JOINT",
     "ROSBAG2_VERSION",
     "TRANSIENT_LOCAL_TOPICS",
+    "RecordedMessage",
+    "Recording",
+    "RecordingError",
+    "RunRecorder",
+    "TopicInfo",
+    "default_offered_qos",
+    "find_mcap",
+    "recover_recording",
+    "trajectory_to_plan",
 ]

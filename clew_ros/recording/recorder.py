@@ -32,11 +32,11 @@ from clew_ros.recording.errors import RecordingError
 from clew_ros.recording.msgdefs import message_definition, message_type_name, type_description_hash
 
 __all__ = [
-    "RunRecorder",
     "ROSBAG2_VERSION",
     "TRANSIENT_LOCAL_TOPICS",
-    "default_offered_qos",
+    "RunRecorder",
     "bag_metadata",
+    "default_offered_qos",
     "write_bag_metadata",
 ]
 
@@ -61,8 +61,9 @@ def default_offered_qos(topic: str) -> dict[str, Any]:
     return _qos_dict("keep_last", 1 if latched else 10, "reliable", "transient_local" if latched else "volatile")
 
 
-def _qos_dict(history: str, depth: int, reliability: str, durability: str,
-              liveliness: str = "automatic") -> dict[str, Any]:
+def _qos_dict(
+    history: str, depth: int, reliability: str, durability: str, liveliness: str = "automatic"
+) -> dict[str, Any]:
     zero = {"sec": 0, "nsec": 0}
     return {
         "history": history,
@@ -79,6 +80,7 @@ def _qos_dict(history: str, depth: int, reliability: str, durability: str,
 
 def _qos_from_profile(profile: Any) -> dict[str, Any]:
     """An rclpy ``QoSProfile`` in rosbag2 v9 form."""
+
     def name(policy: Any) -> str:
         return str(getattr(policy, "name", policy)).lower()
 
@@ -86,8 +88,13 @@ def _qos_from_profile(profile: Any) -> dict[str, Any]:
         nanoseconds = int(getattr(value, "nanoseconds", 0) or 0)
         return {"sec": nanoseconds // 10**9, "nsec": nanoseconds % 10**9}
 
-    qos = _qos_dict(name(profile.history), profile.depth, name(profile.reliability), name(profile.durability),
-                    name(profile.liveliness))
+    qos = _qos_dict(
+        name(profile.history),
+        profile.depth,
+        name(profile.reliability),
+        name(profile.durability),
+        name(profile.liveliness),
+    )
     qos["deadline"] = duration(profile.deadline)
     qos["lifespan"] = duration(profile.lifespan)
     qos["liveliness_lease_duration"] = duration(profile.liveliness_lease_duration)
@@ -112,8 +119,15 @@ class _Topic:
         self.pending = 0  # in the chunk being built
 
 
-def bag_metadata(file_name: str, topics: list[dict[str, Any]], starting_time_ns: int, duration_ns: int,
-                 *, custom_data: dict[str, str] | None = None, ros_distro: str | None = None) -> dict[str, Any]:
+def bag_metadata(
+    file_name: str,
+    topics: list[dict[str, Any]],
+    starting_time_ns: int,
+    duration_ns: int,
+    *,
+    custom_data: dict[str, str] | None = None,
+    ros_distro: str | None = None,
+) -> dict[str, Any]:
     """The ``rosbag2_bagfile_information`` mapping of a one-file MCAP bag.
 
     ``topics`` holds dicts with ``name``, ``type``, ``offered_qos_profiles``
@@ -195,8 +209,16 @@ class RunRecorder:
     exit if nobody called it.
     """
 
-    def __init__(self, directory: str | os.PathLike, run_id: str, node_name: str = "clew_planner", *,
-                 chunk_size: int = 64 * 1024, flush_period_s: float = 0.5, compression: str = "zstd") -> None:
+    def __init__(
+        self,
+        directory: str | os.PathLike,
+        run_id: str,
+        node_name: str = "clew_planner",
+        *,
+        chunk_size: int = 64 * 1024,
+        flush_period_s: float = 0.5,
+        compression: str = "zstd",
+    ) -> None:
         from rclpy.serialization import serialize_message  # here: reading recordings needs no rclpy
 
         try:
@@ -204,25 +226,12 @@ class RunRecorder:
         except ImportError as error:  # before anything is created on disk
             raise RecordingError(f"the mcap package is not installed ({error})") from None
         self._serialize = serialize_message
-        directory = Path(directory)
-        if not run_id or "/" in run_id or run_id in (".", ".."):
-            raise RecordingError(f"run id {run_id!r} cannot name a directory")
-        if not directory.is_dir():
-            raise RecordingError(f"recording directory {directory} does not exist or is not a directory")
-        if not os.access(directory, os.W_OK | os.X_OK):
-            raise RecordingError(f"recording directory {directory} is not writable")
-        self.path = directory / run_id
-        try:
-            self.path.mkdir()
-        except FileExistsError:
-            raise RecordingError(f"{self.path} exists already, not overwriting.") from None
-        except OSError as error:
-            raise RecordingError(f"cannot create the recording directory {self.path}: {error.strerror}") from None
         self.run_id = run_id
         self.node_name = node_name
+        self.path = self._make_directory(Path(directory), run_id)
         self.mcap_path = self.path / f"{run_id}_0.mcap"
         try:
-            self._file = open(self.mcap_path, "xb")
+            self._file = self.mcap_path.open("xb")
         except OSError as error:
             with contextlib.suppress(OSError):
                 self.path.rmdir()  # created just above: leave nothing behind
@@ -231,8 +240,9 @@ class RunRecorder:
         compressions = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
         if compression not in compressions:
             self._abandon()
-            raise RecordingError(f"compression {compression!r} is not a valid option, must be one of "
-                                 f"{', '.join(compressions)}")
+            raise RecordingError(
+                f"compression {compression!r} is not a valid option, must be one of {', '.join(compressions)}"
+            )
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=compressions[compression])
         self._flush_period_s = float(flush_period_s)
         self._topics: dict[str, _Topic] = {}
@@ -258,6 +268,24 @@ class RunRecorder:
         self._thread = threading.Thread(target=self._run, name=f"recorder-{run_id[:8]}", daemon=True)
         self._thread.start()
         atexit.register(self._close_at_exit)
+
+    @staticmethod
+    def _make_directory(directory: Path, run_id: str) -> Path:
+        """Create ``directory/run_id`` (never over an existing one); :class:`RecordingError` says why not."""
+        if not run_id or "/" in run_id or run_id in (".", ".."):
+            raise RecordingError(f"run id {run_id!r} cannot name a directory")
+        if not directory.is_dir():
+            raise RecordingError(f"recording directory {directory} does not exist or is not a directory")
+        if not os.access(directory, os.W_OK | os.X_OK):
+            raise RecordingError(f"recording directory {directory} is not writable")
+        path = directory / run_id
+        try:
+            path.mkdir()
+        except FileExistsError:
+            raise RecordingError(f"{path} exists already, not overwriting.") from None
+        except OSError as error:
+            raise RecordingError(f"cannot create the recording directory {path}: {error.strerror}") from None
+        return path
 
     def _abandon(self) -> None:
         """Undo a start that failed (disk full, ...): close the file, remove what was created."""
@@ -313,12 +341,11 @@ class RunRecorder:
             self._drop()
             return
         with self._lock:
-            if self._closed:
-                self._drop()
+            if self._closed:  # close() ran in another thread since the check above
+                self._drop()  # type: ignore[unreachable]
                 return
             if self._queued_bytes + len(data) > _QUEUE_LIMIT_BYTES:
-                self._set_error(f"{self.mcap_path}: the writer is {self._queued_bytes} bytes behind; "
-                                "messages dropped")
+                self._set_error(f"{self.mcap_path}: the writer is {self._queued_bytes} bytes behind; messages dropped")
                 self._drop()
                 return
             self._queued_bytes += len(data)
@@ -337,13 +364,11 @@ class RunRecorder:
                     self._closed = True
                     self._queue.put(_STOP)
                 self._thread.join()
-                try:
+                with contextlib.suppress(Exception):  # the interpreter is shutting down
                     atexit.unregister(self._close_at_exit)
-                except Exception:  # noqa: BLE001 - interpreter shutting down
-                    pass
         return self.path
 
-    def __enter__(self) -> "RunRecorder":
+    def __enter__(self) -> RunRecorder:
         return self
 
     def __exit__(self, *exc_info: Any) -> None:
@@ -370,10 +395,8 @@ class RunRecorder:
         reason = getattr(error, "strerror", None) or repr(error)
         self._set_error(f"cannot write {self.mcap_path} ({doing}): {reason}")
         self._failed = True
-        try:
+        with contextlib.suppress(OSError):
             self._file.close()
-        except OSError:
-            pass
 
     def _run(self) -> None:
         last_flush = time.monotonic()
@@ -421,7 +444,9 @@ class RunRecorder:
             schema_id = self._writer.register_schema(type_name, encoding, definition.encode())
             self._schemas[type_name] = schema_id
         entry.channel_id = self._writer.register_channel(
-            topic, "cdr", schema_id,
+            topic,
+            "cdr",
+            schema_id,
             {"offered_qos_profiles": _dump([entry.qos]).strip(), "topic_type_hash": entry.type_hash},
         )
         self._topics[topic] = entry
@@ -437,8 +462,14 @@ class RunRecorder:
                 self._set_error(f"{self.mcap_path}: {error}")
                 self._drop()
                 return False
-            self._writer.add_message(entry.channel_id, log_time=time_ns, data=data, publish_time=time_ns,
-                                     sequence=next(self._sequence) & 0xFFFFFFFF)
+            assert entry.channel_id is not None  # registered by _channel
+            self._writer.add_message(
+                entry.channel_id,
+                log_time=time_ns,
+                data=data,
+                publish_time=time_ns,
+                sequence=next(self._sequence) & 0xFFFFFFFF,
+            )
             entry.pending += 1
             self._start_ns = time_ns if self._start_ns is None else min(self._start_ns, time_ns)
             self._end_ns = time_ns if self._end_ns is None else max(self._end_ns, time_ns)
@@ -481,8 +512,7 @@ class RunRecorder:
         custom = {"run_id": self.run_id, "node": self.node_name, "writer": f"clew_ros {clew_ros.__version__}"}
         if self._error:
             custom["error"] = self._error
-        return bag_metadata(self.mcap_path.name, topics, start, (self._end_ns or start) - start,
-                            custom_data=custom)
+        return bag_metadata(self.mcap_path.name, topics, start, (self._end_ns or start) - start, custom_data=custom)
 
     def _finish(self) -> None:
         if not self._failed:

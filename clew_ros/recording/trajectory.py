@@ -28,7 +28,7 @@ GRIPPER_JOINT = "gripper"
 
 def _segments_of(points: np.ndarray, gripper: np.ndarray) -> list[tuple[str, list[np.ndarray]]]:
     segments: list[tuple[str, list[np.ndarray]]] = []
-    for joints, closed in zip(points, gripper >= 0.5):
+    for joints, closed in zip(points, gripper >= 0.5, strict=True):
         kind = "transfer" if closed else "transit"
         if not segments or segments[-1][0] != kind:
             segments.append((kind, []))
@@ -42,8 +42,14 @@ def _segments_of(points: np.ndarray, gripper: np.ndarray) -> list[tuple[str, lis
     return segments
 
 
-def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] | None = None,
-                       message: str = "rebuilt from the recorded trajectory", strict: bool = False) -> Plan:
+def trajectory_to_plan(
+    world: World,
+    trajectory: Any,
+    *,
+    grasps: Sequence[int] | None = None,
+    message: str = "rebuilt from the recorded trajectory",
+    strict: bool = False,
+) -> Plan:
     """The :class:`~clew_ros.core.plan.Plan` that a ``JointTrajectory`` plays.
 
     Parameters
@@ -76,8 +82,8 @@ def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] |
     names = list(trajectory.joint_names)
     robot_names = list(world.robot.joint_names)
     if strict:
-        if names != robot_names + [GRIPPER_JOINT]:
-            raise ValueError(f"joint_names: expected {robot_names + [GRIPPER_JOINT]}, got {names}")
+        if names != [*robot_names, GRIPPER_JOINT]:
+            raise ValueError(f"joint_names: expected {[*robot_names, GRIPPER_JOINT]}, got {names}")
         if not len(trajectory.points):
             raise ValueError("the trajectory has no points")
     n = world.robot.dof
@@ -85,14 +91,19 @@ def trajectory_to_plan(world: World, trajectory: Any, *, grasps: Sequence[int] |
     gripper_column = names.index(GRIPPER_JOINT) if GRIPPER_JOINT in names else None
     rows = [list(p.positions) for p in trajectory.points]
     if not rows:
-        return Plan(world=world.name, joint_names=tuple(robot_names), success=False,
-                    message="the recorded trajectory has no points")
+        return Plan(
+            world=world.name,
+            joint_names=tuple(robot_names),
+            success=False,
+            message="the recorded trajectory has no points",
+        )
     positions = np.asarray(rows, dtype=float)
     points = positions[:, columns]
     gripper = positions[:, gripper_column] if gripper_column is not None else np.zeros(len(points))
     segments = [PlanSegment(kind, None, np.asarray(waypoints)) for kind, waypoints in _segments_of(points, gripper)]
-    rebuilt = Plan(world=world.name, joint_names=tuple(robot_names), success=True, message=message,
-                   segments=tuple(segments))
+    rebuilt = Plan(
+        world=world.name, joint_names=tuple(robot_names), success=True, message=message, segments=tuple(segments)
+    )
 
     # the object's replay does not depend on the grasp indices: it gives where each transfer takes the object
     transfers = [motion for motion in replay(world, rebuilt, step_rad=None) if motion.kind == "transfer"]

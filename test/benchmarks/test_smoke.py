@@ -22,8 +22,9 @@ def test_generated_worlds_are_valid_and_as_specified(tmp_path):
         robot = worlds[f"joints_{n}"].parameters["world"]["robot"]
         assert len(robot["link_lengths"]) == n
         assert sum(robot["link_lengths"]) == pytest.approx(1.7)
-        assert all(a >= b for a, b in zip(robot["link_lengths"], robot["link_lengths"][1:]))
-        assert robot["joint_upper"][0] == pytest.approx(3.14159) and set(robot["joint_upper"][1:]) == {2.8}
+        assert all(a >= b for a, b in zip(robot["link_lengths"], robot["link_lengths"][1:], strict=False))
+        assert robot["joint_upper"][0] == pytest.approx(3.14159)
+        assert set(robot["joint_upper"][1:]) == {2.8}
     for m in OBSTACLE_COUNTS:
         assert worlds[f"obstacles_{m}"].obstacles == m
     # written out, a generated world loads with the same checks as a config file (start and goal valid)
@@ -36,55 +37,93 @@ def test_quick_suite_writes_every_column(tmp_path):
     out = tmp_path / "bench"
     doc = tmp_path / "doc.md"
     doc.write_text(f"# Benchmarks\n\nkept\n\n{DOC_BEGIN}\nold\n{DOC_END}\n\nkept too\n")
-    done = subprocess.run([sys.executable, "-m", "benchmarks.run", "--quick", "--out", str(out), "--doc", str(doc)],
-                          check=False, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-m", "benchmarks.run", "--quick", "--out", str(out), "--doc", str(doc)],
+        check=False,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
-    with open(out / "benchmarks.csv", newline="") as handle:
+    with (out / "benchmarks.csv").open(newline="") as handle:
         reader = csv.DictReader(handle)
         assert reader.fieldnames == COLUMNS
         rows = {r["world"]: r for r in reader}
     assert set(rows) == set(QUICK_WORLDS.split(","))
     assert rows["obstacles_2"]["same_as"] == "joints_3"
     for row in rows.values():
-        for column in ("world", "family", "joints", "obstacles", "seeds", "time_limit_s", "success_rate", "median_s",
-                       "p90_s", "median_cpu_s", "p90_cpu_s", "landmarks_median", "evaluations_median",
-                       "collision_checks_median", "checks_per_s", "checks_per_cpu_s", "peak_rss_mb",
-                       "rss_growth_mb", "peer_note"):
+        for column in (
+            "world",
+            "family",
+            "joints",
+            "obstacles",
+            "seeds",
+            "time_limit_s",
+            "success_rate",
+            "median_s",
+            "p90_s",
+            "median_cpu_s",
+            "p90_cpu_s",
+            "landmarks_median",
+            "evaluations_median",
+            "collision_checks_median",
+            "checks_per_s",
+            "checks_per_cpu_s",
+            "peak_rss_mb",
+            "rss_growth_mb",
+            "peer_note",
+        ):
             assert row[column] != "", (row["world"], column)
         assert int(row["seeds"]) == 2
         assert 0.0 <= float(row["success_rate"]) <= 1.0
         assert 0.0 < float(row["median_s"]) <= float(row["p90_s"]) <= float(row["time_limit_s"]) + 1.0
-        assert float(row["evaluations_median"]) > 0 and float(row["collision_checks_median"]) > 0
-        assert float(row["checks_per_s"]) > 0 and float(row["peak_rss_mb"]) > 0
+        assert float(row["evaluations_median"]) > 0
+        assert float(row["collision_checks_median"]) > 0
+        assert float(row["checks_per_s"]) > 0
+        assert float(row["peak_rss_mb"]) > 0
         if float(row["success_rate"]) > 0:
-            assert row["median_success_s"] != "" and row["grasps_median"] != "" and row["valid_plans"] != ""
+            assert row["median_success_s"] != ""
+            assert row["grasps_median"] != ""
+            assert row["valid_plans"] != ""
     report = json.loads((out / "benchmarks.json").read_text())
-    assert report["machine"]["nproc"] >= 1 and report["machine"]["cpu_model"]
+    assert report["machine"]["nproc"] >= 1
+    assert report["machine"]["cpu_model"]
     # throughput: batched is_valid and the per-configuration shapely loop, same answers, both measured
     assert set(report["throughput"]) == {"figure1", "obstacles_32"}
     for t in report["throughput"].values():
         assert t["agree"] == t["configs"] > 0
-        assert t["batched"]["per_s"] > 0 and t["loop"]["per_s"] > 0 and t["ratio_batched_over_loop"] > 0
+        assert t["batched"]["per_s"] > 0
+        assert t["loop"]["per_s"] > 0
+        assert t["ratio_batched_over_loop"] > 0
         assert all(v["per_s"] > 0 for v in t["intervals"].values())
     # peer on figure1: the project's side always, OMPL's when the bench extra is installed
     figure1 = rows["figure1"]
     assert int(figure1["peer_problems"]) > 0
-    assert 0.0 <= float(figure1["project_success_rate"]) <= 1.0 and float(figure1["project_median_s"]) > 0
+    assert 0.0 <= float(figure1["project_success_rate"]) <= 1.0
+    assert float(figure1["project_median_s"]) > 0
     if importlib.util.find_spec("ompl") is None:
-        assert figure1["ompl_success_rate"] == "n/a" and "n/a" in figure1["peer_note"]
+        assert figure1["ompl_success_rate"] == "n/a"
+        assert "n/a" in figure1["peer_note"]
     else:
-        assert 0.0 <= float(figure1["ompl_success_rate"]) <= 1.0 and float(figure1["ompl_median_s"]) > 0
+        assert 0.0 <= float(figure1["ompl_success_rate"]) <= 1.0
+        assert float(figure1["ompl_median_s"]) > 0
         assert float(figure1["time_ratio_project_over_ompl"]) > 0
         assert report["peer"]["figure1"]["ompl_checker"] == "is_valid"
     for other in set(rows) - {"figure1"}:
-        assert rows[other]["peer_problems"] == "" and rows[other]["peer_note"] == "not in the peer selection"
+        assert rows[other]["peer_problems"] == ""
+        assert rows[other]["peer_note"] == "not in the peer selection"
     # profile, Markdown report, plot, and the doc updated between its markers only
-    assert report["profile"]["by_file"] and "ncalls" in report["profile"]["tottime"]
+    assert report["profile"]["by_file"]
+    assert "ncalls" in report["profile"]["tottime"]
     assert (out / "profile_figure1.txt").stat().st_size > 0
     markdown = (out / "benchmarks.md").read_text()
-    assert "| world | n | obs |" in markdown and "### Collision throughput" in markdown
+    assert "| world | n | obs |" in markdown
+    assert "### Collision throughput" in markdown
     text = doc.read_text()
-    assert text.startswith("# Benchmarks\n\nkept\n") and text.endswith("kept too\n") and "\nold\n" not in text
+    assert text.startswith("# Benchmarks\n\nkept\n")
+    assert text.endswith("kept too\n")
+    assert "\nold\n" not in text
     assert markdown.strip() in text
     if importlib.util.find_spec("matplotlib") is not None:
         png = out / "benchmarks_scaling.png"

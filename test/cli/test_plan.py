@@ -17,8 +17,14 @@ SOLVABLE = ["figure1", "single_transfer", "arm3_regrasp", "arm5_regrasp"]
 
 
 def clew_plan(*args, timeout=200):
-    return subprocess.run([sys.executable, "-m", "clew_ros.cli.plan", *map(str, args)], capture_output=True,
-                          text=True, timeout=timeout, cwd=ROOT, env=dict(os.environ))
+    return subprocess.run(
+        [sys.executable, "-m", "clew_ros.cli.plan", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=ROOT,
+        env=dict(os.environ),
+    )
 
 
 def _check_plan(name, output, seed):
@@ -26,7 +32,8 @@ def _check_plan(name, output, seed):
     assert result.returncode == 0, result.stderr
     document = json.loads(output.read_text())
     world = load_world(CONFIG / f"{name}.yaml")
-    assert document["success"] and document["code"] == "SUCCEEDED"
+    assert document["success"]
+    assert document["code"] == "SUCCEEDED"
     assert validate_plan(world, document, step_rad=0.002) == []
     return document
 
@@ -51,7 +58,9 @@ def test_unreachable_world_fails_cleanly_within_its_time_limit(tmp_path):
     assert result.returncode == 1
     assert "TIME_LIMIT" in result.stderr or "NO_PATH_AT_RESOLUTION" in result.stderr
     document = json.loads(output.read_text())
-    assert document["success"] is False and document["segments"] == [] and document["final_object_pose"] is None
+    assert document["success"] is False
+    assert document["segments"] == []
+    assert document["final_object_pose"] is None
     assert document["stats"]["time_s"] < 2.2
 
 
@@ -61,7 +70,8 @@ def test_invalid_input_exits_2_naming_the_parameter(tmp_path):
     bad.write_text(text)
     result = clew_plan(bad, "--output", tmp_path / "plan.json")
     assert result.returncode == 2
-    assert "world.robot.link_lengths" in result.stderr and "Traceback" not in result.stderr
+    assert "world.robot.link_lengths" in result.stderr
+    assert "Traceback" not in result.stderr
     assert not (tmp_path / "plan.json").exists()
 
 

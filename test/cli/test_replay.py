@@ -33,8 +33,9 @@ TIMEOUT_S = 30.0
 def timed_recording(tmp_path_factory) -> Path:
     """A latched trajectory, then five events 0.2 s apart."""
     recorder = RunRecorder(tmp_path_factory.mktemp("replay"), "timed")
-    trajectory = JointTrajectory(joint_names=["joint_1", "joint_2", "gripper"],
-                                 points=[JointTrajectoryPoint(positions=[0.0, 0.5, 0.0])])
+    trajectory = JointTrajectory(
+        joint_names=["joint_1", "joint_2", "gripper"], points=[JointTrajectoryPoint(positions=[0.0, 0.5, 0.0])]
+    )
     recorder.write("/clew_planner/trajectory", trajectory, T0_NS)
     for i in range(5):
         recorder.write("/clew_planner/events", String(data=f"event {i}"), T0_NS + int(i * GAP_S * 1e9))
@@ -52,12 +53,15 @@ class Listener:
         self.executor.add_node(self.node)
         self.events: list[tuple[float, str]] = []
         self.trajectories: list[JointTrajectory] = []
-        self.node.create_subscription(String, f"{prefix}/clew_planner/events",
-                                      lambda m: self.events.append((time.monotonic(), m.data)), 10)
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                             reliability=ReliabilityPolicy.RELIABLE)
-        self.node.create_subscription(JointTrajectory, f"{prefix}/clew_planner/trajectory",
-                                      self.trajectories.append, latched)
+        self.node.create_subscription(
+            String, f"{prefix}/clew_planner/events", lambda m: self.events.append((time.monotonic(), m.data)), 10
+        )
+        latched = QoSProfile(
+            depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
+        )
+        self.node.create_subscription(
+            JointTrajectory, f"{prefix}/clew_planner/trajectory", self.trajectories.append, latched
+        )
 
     def spin_until(self, done, timeout_s: float) -> bool:
         deadline = time.monotonic() + timeout_s
@@ -75,8 +79,12 @@ class Listener:
 
 def start_replay(recording: Path, log: Path, *args: str) -> tuple[subprocess.Popen, object]:
     out = log.open("wb")
-    process = subprocess.Popen([sys.executable, "-m", "clew_ros.cli.replay", str(recording), *args],
-                               stdout=out, stderr=subprocess.STDOUT, env=os.environ.copy())
+    process = subprocess.Popen(
+        [sys.executable, "-m", "clew_ros.cli.replay", str(recording), *args],
+        stdout=out,
+        stderr=subprocess.STDOUT,
+        env=os.environ.copy(),
+    )
     return process, out
 
 
@@ -85,8 +93,9 @@ def test_replay_keeps_order_and_scaled_timing(timed_recording: Path, tmp_path: P
     prefix = f"/replay_{uuid.uuid4().hex[:8]}"
     listener = Listener(prefix)
     log = tmp_path / "replay.log"
-    process, out = start_replay(timed_recording, log, "--rate", str(RATE), "--prefix", prefix,
-                                "--delay", "0", "--wait-for-subscribers", "20")
+    process, out = start_replay(
+        timed_recording, log, "--rate", str(RATE), "--prefix", prefix, "--delay", "0", "--wait-for-subscribers", "20"
+    )
     try:
         got_all = listener.spin_until(lambda: len(listener.events) == 5, TIMEOUT_S)
         publishers = listener.node.get_publishers_info_by_topic(f"{prefix}/clew_planner/trajectory")
@@ -106,8 +115,10 @@ def test_replay_keeps_order_and_scaled_timing(timed_recording: Path, tmp_path: P
     assert abs(np.median(gaps) - GAP_S / RATE) < TOLERANCE_S, f"inter-arrival times {gaps.round(3)}"
     assert abs(gaps.sum() - len(gaps) * GAP_S / RATE) < 2 * TOLERANCE_S, f"inter-arrival times {gaps.round(3)}"
     assert code == 0, output
-    assert listener.trajectories and list(listener.trajectories[0].joint_names) == ["joint_1", "joint_2", "gripper"]
-    assert publishers and publishers[0].qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    assert listener.trajectories
+    assert list(listener.trajectories[0].joint_names) == ["joint_1", "joint_2", "gripper"]
+    assert publishers
+    assert publishers[0].qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
 
 
 @pytest.mark.ros
@@ -115,8 +126,19 @@ def test_replay_loops_until_sigterm(timed_recording: Path, tmp_path: Path) -> No
     prefix = f"/replay_{uuid.uuid4().hex[:8]}"
     listener = Listener(prefix)
     log = tmp_path / "replay.log"
-    process, out = start_replay(timed_recording, log, "--rate", "4", "--loop", "--prefix", prefix,
-                                "--delay", "0", "--wait-for-subscribers", "20")
+    process, out = start_replay(
+        timed_recording,
+        log,
+        "--rate",
+        "4",
+        "--loop",
+        "--prefix",
+        prefix,
+        "--delay",
+        "0",
+        "--wait-for-subscribers",
+        "20",
+    )
     try:
         looped = listener.spin_until(lambda: len(listener.events) >= 7, TIMEOUT_S)  # more than one pass
         process.send_signal(signal.SIGTERM)

@@ -20,6 +20,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy")
 
+from helpers.node_harness import HAVE_RECORDER, NodeProcess, wait_until  # noqa: E402
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup  # noqa: E402
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor  # noqa: E402
 
@@ -34,8 +35,6 @@ from clew_ros.client import (  # noqa: E402
 from clew_ros.core.plan import validate_plan  # noqa: E402
 from clew_ros.core.settings import Outcome  # noqa: E402
 from clew_ros.core.world import load_world  # noqa: E402
-
-from helpers.node_harness import HAVE_RECORDER, NodeProcess, wait_until  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
@@ -83,40 +82,53 @@ def quick(tmp_path_factory, node) -> Iterator[Planner]:
 
 @pytest.fixture(scope="module")
 def ring(tmp_path_factory, node) -> Iterator[Planner]:
-    yield from _start(tmp_path_factory.mktemp("ring"), "ring", "node_ring.yaml", node,
-                      **{"planner.time_limit": 4.0})
+    yield from _start(tmp_path_factory.mktemp("ring"), "ring", "node_ring.yaml", node, **{"planner.time_limit": 4.0})
 
 
 def test_a_goal_is_planned_and_the_result_is_typed(quick: Planner) -> None:
     seen: list[str] = []
     handle = quick.client.send_goal(QUICK_GOAL, on_feedback=lambda _h, feedback: seen.append(feedback.phase))
-    assert handle.status is RunStatus.SENT and handle.goal == QUICK_GOAL
+    assert handle.status is RunStatus.SENT
+    assert handle.goal == QUICK_GOAL
     result = handle.wait(RESULT_TIMEOUT_S, playback=True)
-    assert result.outcome is Outcome.SUCCEEDED and result.succeeded and handle.status is RunStatus.SUCCEEDED
-    assert handle.run_id == result.run_id and len(result.run_id) == 32
+    assert result.outcome is Outcome.SUCCEEDED
+    assert result.succeeded
+    assert handle.status is RunStatus.SUCCEEDED
+    assert handle.run_id == result.run_id
+    assert len(result.run_id) == 32
     world = load_world(WORLDS / "node_quick.yaml")
     goal_world = dataclasses.replace(world, object=dataclasses.replace(world.object, goal=np.array(QUICK_GOAL)))
-    assert result.plan is not None and validate_plan(goal_world, result.plan) == []
-    assert result.trajectory is not None and len(result.trajectory.points) >= 2
-    assert result.landmarks >= 2 and result.time_s > 0
-    assert "SUCCEEDED" in seen and handle.playback == "playback_done"
+    assert result.plan is not None
+    assert validate_plan(goal_world, result.plan) == []
+    assert result.trajectory is not None
+    assert len(result.trajectory.points) >= 2
+    assert result.landmarks >= 2
+    assert result.time_s > 0
+    assert "SUCCEEDED" in seen
+    assert handle.playback == "playback_done"
     if HAVE_RECORDER:
         assert result.recording == str(quick.records / result.run_id)
         assert Path(result.recording).is_dir()
     # the planner's own goal (its world.object.goal parameter)
     default = quick.client.plan(timeout_s=RESULT_TIMEOUT_S)
-    assert default.outcome is Outcome.SUCCEEDED and default.run_id != result.run_id
+    assert default.outcome is Outcome.SUCCEEDED
+    assert default.run_id != result.run_id
 
 
-@pytest.mark.parametrize(("goal", "outcome"), [
-    ((5.0, 0.0, 0.0), Outcome.INVALID_WORLD),  # outside world.bounds: refused before planning
-    ((1.95, 0.0, 0.0), Outcome.GOAL_IN_COLLISION),  # the object would stick out of the bounds
-    ((1.85, 1.0, 0.0), Outcome.GOAL_OUT_OF_REACH),
-])
+@pytest.mark.parametrize(
+    ("goal", "outcome"),
+    [
+        ((5.0, 0.0, 0.0), Outcome.INVALID_WORLD),  # outside world.bounds: refused before planning
+        ((1.95, 0.0, 0.0), Outcome.GOAL_IN_COLLISION),  # the object would stick out of the bounds
+        ((1.85, 1.0, 0.0), Outcome.GOAL_OUT_OF_REACH),
+    ],
+)
 def test_hopeless_goals_end_with_their_own_code(quick: Planner, goal, outcome) -> None:
     result = quick.client.send_goal(goal).wait(RESULT_TIMEOUT_S)
-    assert result.outcome is outcome and not result.succeeded
-    assert result.plan is None and result.message
+    assert result.outcome is outcome
+    assert not result.succeeded
+    assert result.plan is None
+    assert result.message
 
 
 def test_busy_cancel_time_limit_and_timeout_on_a_planner_that_keeps_planning(ring: Planner) -> None:
@@ -126,13 +138,16 @@ def test_busy_cancel_time_limit_and_timeout_on_a_planner_that_keeps_planning(rin
     with pytest.raises(RunTimeoutError):
         first.wait(timeout_s=0.2)
     busy = client.send_goal().wait(RESULT_TIMEOUT_S)
-    assert busy.outcome is Outcome.BUSY and busy.run_id != first.run_id
+    assert busy.outcome is Outcome.BUSY
+    assert busy.run_id != first.run_id
     assert first.cancel()
     canceled = first.wait(RESULT_TIMEOUT_S)
-    assert canceled.outcome is Outcome.CANCELED and first.status is RunStatus.CANCELED
+    assert canceled.outcome is Outcome.CANCELED
+    assert first.status is RunStatus.CANCELED
     assert not first.cancel()  # over: nothing to cancel
     limited = client.send_goal().wait(RESULT_TIMEOUT_S)
-    assert limited.outcome is Outcome.TIME_LIMIT and limited.plan is None
+    assert limited.outcome is Outcome.TIME_LIMIT
+    assert limited.plan is None
 
 
 def test_two_planners_are_followed_at_once(quick: Planner, ring: Planner) -> None:
@@ -199,7 +214,8 @@ def test_inside_a_node_with_a_single_threaded_executor(quick: Planner) -> None:
 
     _in_own_node(quick, SingleThreadedExecutor, body)
     assert results[0].outcome is Outcome.SUCCEEDED
-    assert refused and "SingleThreadedExecutor" in refused[0]
+    assert refused
+    assert "SingleThreadedExecutor" in refused[0]
 
 
 def test_inside_a_node_with_a_multi_threaded_executor(quick: Planner) -> None:
@@ -215,24 +231,50 @@ def test_inside_a_node_with_a_multi_threaded_executor(quick: Planner) -> None:
         wait_until(lambda: results, RESULT_TIMEOUT_S, "the result waited for in a callback")
 
     _in_own_node(quick, MultiThreadedExecutor, body)
-    assert results[0].outcome is Outcome.SUCCEEDED and results[0].plan is not None
+    assert results[0].outcome is Outcome.SUCCEEDED
+    assert results[0].plan is not None
 
 
 def test_the_examples_run_against_a_real_planner(quick: Planner) -> None:
-    follower = subprocess.Popen([sys.executable, "-m", "clew_ros.examples.trajectory_follower", "--planner",
-                                 quick.process.name, "--count", "1", "--rate", "100"],
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    follower = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "clew_ros.examples.trajectory_follower",
+            "--planner",
+            quick.process.name,
+            "--count",
+            "1",
+            "--rate",
+            "100",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     printed: list[str] = []
     reader = threading.Thread(target=lambda: printed.extend(follower.stdout), daemon=True)
     reader.start()
     try:
         wait_until(lambda: any(line.startswith("following ") for line in printed), 60.0, "the follower ready")
-        sequence = subprocess.run([sys.executable, "-m", "clew_ros.examples.goal_sequence", "--planner",
-                                   quick.process.name, "0.6,1.1,0.0", "5.0,0.0,0.0"],
-                                  capture_output=True, text=True, timeout=120)
+        sequence = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "clew_ros.examples.goal_sequence",
+                "--planner",
+                quick.process.name,
+                "0.6,1.1,0.0",
+                "5.0,0.0,0.0",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         lines = [line for line in sequence.stdout.splitlines() if line.startswith("goal ")]
         assert len(lines) == 2, sequence.stdout + sequence.stderr
-        assert lines[0].startswith("goal 1/2 (0.6, 1.1, 0.0): SUCCEEDED, ") and "grasps" in lines[0]
+        assert lines[0].startswith("goal 1/2 (0.6, 1.1, 0.0): SUCCEEDED, ")
+        assert "grasps" in lines[0]
         assert lines[1].startswith("goal 2/2 (5.0, 0.0, 0.0): INVALID_WORLD")
         assert sequence.returncode == 1  # not every goal was planned
         assert follower.wait(timeout=60) == 0
@@ -242,4 +284,5 @@ def test_the_examples_run_against_a_real_planner(quick: Planner) -> None:
             follower.kill()
             follower.wait()
     followed = [line for line in printed if line.startswith("followed ")]
-    assert len(followed) == 1 and "points over" in followed[0], printed
+    assert len(followed) == 1, printed
+    assert "points over" in followed[0], printed

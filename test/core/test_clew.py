@@ -27,23 +27,32 @@ def world():
 def test_a_plan_is_found_and_progress_is_reported_after_each_landmark(world) -> None:
     reports: list[Progress] = []
     result = plan(world, PlannerSettings(seed=0, time_limit=30), progress=reports.append)
-    assert result.outcome is Outcome.SUCCEEDED and result.success
+    assert result.outcome is Outcome.SUCCEEDED
+    assert result.success
     assert validate_plan(world, Plan.from_result(world, result)) == []
-    assert reports and [r.landmarks for r in reports] == sorted(r.landmarks for r in reports)
-    assert reports[-1].landmarks == len(result.tree) and reports[-1].tree is result.tree
-    assert result.stats["landmarks"] == len(result.tree) and result.stats["seed"] == 0
+    assert reports
+    assert [r.landmarks for r in reports] == sorted(r.landmarks for r in reports)
+    assert reports[-1].landmarks == len(result.tree)
+    assert reports[-1].tree is result.tree
+    assert result.stats["landmarks"] == len(result.tree)
+    assert result.stats["seed"] == 0
     again = plan(world, PlannerSettings(seed=0, time_limit=30))
     assert Plan.from_result(world, again).to_dict()["segments"] == Plan.from_result(world, result).to_dict()["segments"]
 
 
-@pytest.mark.parametrize("goal,outcome", [
-    ([2.5, 0.0, 0.0], Outcome.GOAL_IN_COLLISION),  # outside world.bounds
-    ([1.85, 1.0, 0.0], Outcome.GOAL_OUT_OF_REACH),
-    ([np.nan, 0.0, 0.0], Outcome.INVALID_WORLD),
-])
+@pytest.mark.parametrize(
+    ("goal", "outcome"),
+    [
+        ([2.5, 0.0, 0.0], Outcome.GOAL_IN_COLLISION),  # outside world.bounds
+        ([1.85, 1.0, 0.0], Outcome.GOAL_OUT_OF_REACH),
+        ([np.nan, 0.0, 0.0], Outcome.INVALID_WORLD),
+    ],
+)
 def test_hopeless_goals_are_refused_at_once(world, goal, outcome) -> None:
     result = plan(world, PlannerSettings(time_limit=30), goal=np.array(goal))
-    assert result.outcome is outcome and not result.segments and result.final_object_pose is None
+    assert result.outcome is outcome
+    assert not result.segments
+    assert result.final_object_pose is None
     assert result.stats["time_s"] < 0.5
 
 
@@ -57,11 +66,13 @@ def test_a_start_in_collision_is_refused(world) -> None:
 def test_time_limit_and_cancel_end_the_run_with_their_outcome() -> None:
     unreachable = load_world(ROOT / "config" / "unreachable.yaml")
     limited = plan(unreachable, PlannerSettings(seed=0, time_limit=0.3))
-    assert limited.outcome is Outcome.TIME_LIMIT and "time limit" in limited.message
+    assert limited.outcome is Outcome.TIME_LIMIT
+    assert "time limit" in limited.message
     cancel = threading.Event()
     timer = threading.Timer(0.3, cancel.set)
     timer.start()
     started = time.monotonic()
     canceled = plan(unreachable, PlannerSettings(seed=1, time_limit=30), termination=Termination(30, cancel))
-    assert canceled.outcome is Outcome.CANCELED and canceled.message.startswith("canceled")
+    assert canceled.outcome is Outcome.CANCELED
+    assert canceled.message.startswith("canceled")
     assert time.monotonic() - started < 0.3 + 0.5

@@ -101,6 +101,6 @@ def test_broad_phase_never_changes_the_answer(name):
     poses = np.column_stack([rng.uniform(xmin, xmax, n), rng.uniform(ymin, ymax, n), rng.uniform(-np.pi, np.pi, n)])
     poses[: n // 2] = w.object.initial
     batch = is_valid(w, q, poses)
-    singles = [explain_invalid(w, c, p) is None for c, p in zip(q, poses)]
+    singles = [explain_invalid(w, c, p) is None for c, p in zip(q, poses, strict=False)]
     assert batch.tolist() == singles
     assert 0 < batch.sum() < n

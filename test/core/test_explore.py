@@ -30,7 +30,7 @@ def test_explore_beats_random_single_manipulation_paths():
     features = tree.features(settings.joint_weight, world.object.radius)[:1]
 
     # random single manipulation paths from the same transits
-    candidates = [c for c in explorer._transits.values() if c is not None]
+    candidates = [c for c in explorer.transits.values() if c is not None]
     rng = np.random.default_rng(99)
     n = world.robot.dof
     distances = []
@@ -41,7 +41,8 @@ def test_explore_beats_random_single_manipulation_paths():
         distances.append(np.linalg.norm(ends - features, axis=1))
     distances = np.concatenate(distances)
     assert exploration.distance >= np.percentile(distances, 90)
-    assert landmark.parent == 0 and landmark.grasp is not None
+    assert landmark.parent == 0
+    assert landmark.grasp is not None
     # the landmark holds its grasp: tip on the grasp point of the placed object
     from clew_ros.core.kinematics import tip_poses, transform_points
 
@@ -66,9 +67,10 @@ def test_a_transit_missed_once_is_tried_again_before_giving_up():
 def test_forget_failures_keeps_only_found_transits():
     explorer, ctx, _tree = _explorer("figure1", 0)
     found = [explorer.candidate(0, grasp) for grasp in range(len(ctx.world.object.grasps))]
-    assert any(c is None for c in found) and any(c is not None for c in found)
+    assert any(c is None for c in found)
+    assert any(c is not None for c in found)
     explorer.forget_failures()
-    assert set(explorer._transits) == {(0, g) for g, c in enumerate(found) if c is not None}
+    assert set(explorer.transits) == {(0, g) for g, c in enumerate(found) if c is not None}
 
 
 def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp(monkeypatch):
@@ -90,8 +92,9 @@ def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp
     monkeypatch.setattr(explore, "search_transits", spy)
     assert explorer.explore() is not None
     world = ctx.world
-    assert batches and max(batches) >= 2  # several transits in one batch
-    found = [c for c in explorer._transits.values() if c is not None and c.transit is not None]
+    assert batches
+    assert max(batches) >= 2
+    found = [c for c in explorer.transits.values() if c is not None and c.transit is not None]
     assert found
     for candidate in found:
         landmark = tree[candidate.parent]

@@ -28,9 +28,11 @@ def test_ga_is_deterministic_for_a_seed():
 def test_ga_stops_at_target_and_on_request():
     rng = np.random.default_rng(1)
     result = minimize(sphere, rng.uniform(-5, 5, (20, 2)), rng, GeneticSettings(generations=500), target=1.0)
-    assert result.fitness <= 1.0 and result.generations < 500
-    stopped = minimize(sphere, rng.uniform(-5, 5, (20, 2)), rng, GeneticSettings(generations=500),
-                       should_stop=lambda: True)
+    assert result.fitness <= 1.0
+    assert result.generations < 500
+    stopped = minimize(
+        sphere, rng.uniform(-5, 5, (20, 2)), rng, GeneticSettings(generations=500), should_stop=lambda: True
+    )
     assert stopped.generations == 0
 
 
@@ -45,7 +47,8 @@ def test_category_gene_stays_in_range():
     initial = np.column_stack([rng.integers(0, 4, 16), rng.normal(size=(16, 2))])
     result = minimize(evaluate, initial, rng, GeneticSettings(population=16, generations=20), categories=4)
     values = np.concatenate(seen)
-    assert np.all((values >= 0) & (values < 4)) and np.all(values == np.round(values))
+    assert np.all((values >= 0) & (values < 4))
+    assert np.all(values == np.round(values))
     assert result.genes[0] == 2
 
 
@@ -64,10 +67,12 @@ def test_islands_solve_their_own_problems_in_one_batch_and_stop_on_their_own():
     targets = np.array([1e9, -np.inf, -np.inf])  # island 0 is done at once
     settings = GeneticSettings(population=24, generations=40, stall_generations=40)
     results = minimize_islands(evaluate, initial, rng, settings, targets=targets)
-    assert results[0].generations == 0 and results[1].generations == results[2].generations == 40
+    assert results[0].generations == 0
+    assert results[1].generations == results[2].generations == 40
     for optimum, result in zip(optima[1:], results[1:], strict=True):
         assert np.linalg.norm(result.genes - optimum) < 0.1
-    assert all(list(c) == [1, 2] for c in calls[1:]) and list(calls[0]) == [0, 1, 2]
+    assert all(list(c) == [1, 2] for c in calls[1:])
+    assert list(calls[0]) == [0, 1, 2]
 
 
 def _reference_ga(evaluate, initial, rng, settings):
@@ -81,7 +86,7 @@ def _reference_ga(evaluate, initial, rng, settings):
         if stall >= settings.stall_generations:
             break
         order = np.argsort(fitness, kind="stable")
-        elite = population[order[:settings.elite]]
+        elite = population[order[: settings.elite]]
         count = size - len(elite)
         contenders = rng.integers(0, size, size=(2 * count, settings.tournament))
         parents = contenders[np.arange(2 * count), np.argmin(fitness[contenders], axis=1)]
@@ -92,7 +97,7 @@ def _reference_ga(evaluate, initial, rng, settings):
         mutate = rng.random((count, dims)) < settings.mutation_rate
         children += mutate * rng.normal(0.0, settings.mutation_scale, size=(count, dims))
         population = np.concatenate([elite, children])
-        fitness = np.concatenate([fitness[order[:settings.elite]], evaluate(children)])
+        fitness = np.concatenate([fitness[order[: settings.elite]], evaluate(children)])
         if fitness.min() < best_fitness - 1e-12:
             best_fitness, stall = fitness.min(), 0
         else:

@@ -6,6 +6,7 @@ swept at 1 mrad; the kernel never sees it.
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 import subprocess
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.sweep import sweep_interval
 
 from clew_ros.core.collision import exactly_valid, is_placement_valid, is_valid
 from clew_ros.core.kinematics import compose, joint_positions, tip_poses, transform_points
@@ -22,7 +24,6 @@ from clew_ros.core.manhattan import free_intervals, run_manhattan
 from clew_ros.core.world import world_from_parameters
 
 ROOT = Path(__file__).resolve().parents[2]
-from helpers.sweep import sweep_interval  # noqa: E402
 
 
 def random_world(seed: int, *, joints: int, obstacles: int, width: float, limit: float, self_collision: bool):
@@ -41,17 +42,29 @@ def random_world(seed: int, *, joints: int, obstacles: int, width: float, limit:
     angles = np.sort(rng.uniform(0, 2 * np.pi, rng.integers(3, 7)))
     radii = rng.uniform(0.06, 0.15, len(angles))
     polygon = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
-    parameters = {"world": {
-        "name": f"random_{seed}",
-        "bounds": [-2.5, -2.5, 2.5, 2.5],
-        "robot": {"base": [0.0, 0.0], "link_lengths": lengths.tolist(), "link_width": width,
-                  "joint_lower": [-limit] * joints, "joint_upper": [limit] * joints,
-                  "initial": [0.0] * joints, "self_collision": self_collision},
-        "obstacle_names": list(boxes),
-        "obstacles": boxes,
-        "object": {"polygon": polygon.ravel().tolist(), "initial": [0.0, -1.2, 0.3], "goal": [0.0, -1.2, 0.3],
-                   "grasps": polygon[0].tolist()},
-    }}
+    parameters = {
+        "world": {
+            "name": f"random_{seed}",
+            "bounds": [-2.5, -2.5, 2.5, 2.5],
+            "robot": {
+                "base": [0.0, 0.0],
+                "link_lengths": lengths.tolist(),
+                "link_width": width,
+                "joint_lower": [-limit] * joints,
+                "joint_upper": [limit] * joints,
+                "initial": [0.0] * joints,
+                "self_collision": self_collision,
+            },
+            "obstacle_names": list(boxes),
+            "obstacles": boxes,
+            "object": {
+                "polygon": polygon.ravel().tolist(),
+                "initial": [0.0, -1.2, 0.3],
+                "goal": [0.0, -1.2, 0.3],
+                "grasps": polygon[0].tolist(),
+            },
+        }
+    }
     return world_from_parameters(parameters), rng
 
 
@@ -74,8 +87,9 @@ CASES = [  # seed, joints, obstacles, link width, joint limit, self-collision
 @pytest.mark.parametrize("mode", ["transit", "transfer"])
 def test_free_intervals_match_a_brute_force_sweep_on_random_worlds(case, mode):
     seed, joints, obstacles, width, limit, self_collision = case
-    world, rng = random_world(seed, joints=joints, obstacles=obstacles, width=width, limit=limit,
-                              self_collision=self_collision)
+    world, rng = random_world(
+        seed, joints=joints, obstacles=obstacles, width=width, limit=limit, self_collision=self_collision
+    )
     rel = np.array([float(np.abs(world.object.polygon).max()) + width + 0.02, 0.0, rng.uniform(-np.pi, np.pi)])
     if mode == "transit":
         poses = rng.uniform((-1.5, -1.5, -np.pi), (1.5, 1.5, np.pi), (200, 3))
@@ -104,12 +118,25 @@ def test_the_clearance_is_kept_along_every_interval(case):
     ``1.5 m`` (closer, a pair is only kept from getting closer than it starts)."""
     seed, joints, obstacles, width, limit, self_collision = case
     margin = 0.03
-    world, rng = random_world(seed, joints=joints, obstacles=obstacles, width=width, limit=limit,
-                              self_collision=self_collision)
-    wide, _ = random_world(seed, joints=joints, obstacles=obstacles, width=width + 0.99 * margin, limit=limit,
-                           self_collision=self_collision)
-    wider, _ = random_world(seed, joints=joints, obstacles=obstacles, width=width + 2 * 1.6 * margin, limit=limit,
-                            self_collision=self_collision)
+    world, rng = random_world(
+        seed, joints=joints, obstacles=obstacles, width=width, limit=limit, self_collision=self_collision
+    )
+    wide, _ = random_world(
+        seed,
+        joints=joints,
+        obstacles=obstacles,
+        width=width + 0.99 * margin,
+        limit=limit,
+        self_collision=self_collision,
+    )
+    wider, _ = random_world(
+        seed,
+        joints=joints,
+        obstacles=obstacles,
+        width=width + 2 * 1.6 * margin,
+        limit=limit,
+        self_collision=self_collision,
+    )
     pose = world.object.initial
     poses_of = lambda qs: np.broadcast_to(pose, (len(qs), 3))  # noqa: E731
     qs = valid_configurations(wider, rng, 4, poses_of)
@@ -138,11 +165,12 @@ def test_a_decoded_population_is_valid_at_the_checking_step(mode):
     paths = run_manhattan(world, starts, genes, margin_m=1e-3, **kwargs)
     moved = 0
     for waypoints in paths.waypoints:
-        for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
+        for a, b in itertools.pairwise(waypoints):
             steps = max(1, int(np.ceil(np.abs(b - a).max() / 0.002)))
             qs = a + np.linspace(0, 1, steps + 1)[:, None] * (b - a)
             assert is_valid(world, qs, poses_of(qs)).all()
-            assert np.all(qs >= world.robot.joint_lower) and np.all(qs <= world.robot.joint_upper)
+            assert np.all(qs >= world.robot.joint_lower)
+            assert np.all(qs <= world.robot.joint_upper)
             moved += np.abs(b - a).max() > 1e-6
     assert moved > 30
 
@@ -164,11 +192,12 @@ def test_huge_batches_split_and_stop_between_calls():
     cut = run_manhattan(world, starts[0], genes, object_poses=pose, should_stop=stop_after_three)
     assert len(asked) > 3  # split into several calls
     same = np.all(np.isclose(cut.waypoints, full.waypoints), axis=2)  # (B, columns)
-    assert same[:, 1].any() and not same.all()
+    assert same[:, 1].any()
+    assert not same.all()
     for row, waypoints in zip(same, cut.waypoints, strict=True):
         first_diff = np.flatnonzero(~row)
         if len(first_diff):  # after the stop the path stays put
-            assert np.allclose(waypoints[first_diff[0]:], waypoints[first_diff[0] - 1])
+            assert np.allclose(waypoints[first_diff[0] :], waypoints[first_diff[0] - 1])
 
 
 def test_the_cache_falls_back_to_a_user_directory_when_the_package_is_read_only(tmp_path):
@@ -189,8 +218,14 @@ def test_the_cache_falls_back_to_a_user_directory_when_the_package_is_read_only(
     """)
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
     env.update(HOME=str(home), PYTHONPATH=str(package.parent), XDG_CACHE_HOME=str(home / ".cache"))
-    done = subprocess.run(["unshare", "-m", "--propagation", "private", "sh", "-c", script], env=env, cwd=home,
-                          capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        ["unshare", "-m", "--propagation", "private", "sh", "-c", script],
+        env=env,
+        cwd=home,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     if done.returncode in (77, 78):
         pytest.skip("cannot mount the package read-only here")
     assert done.returncode == 0, done.stderr[-2000:]
@@ -200,7 +235,8 @@ def test_the_cache_falls_back_to_a_user_directory_when_the_package_is_read_only(
     cached = list(home.rglob("*.nbi"))
     assert any("kernel" in path.name for path in cached), [str(p) for p in cached]
     first, second = (int(line.split()[-1]) for line in lines if line)
-    assert first == 0 and second > 0  # the second process loaded what the first compiled
+    assert first == 0
+    assert second > 0
 
 
 @pytest.mark.parametrize("case", CASES, ids=[f"seed{c[0]}_{c[1]}joints" for c in CASES])
@@ -209,8 +245,9 @@ def test_the_compiled_first_pass_never_changes_the_validity_test(case):
     configurations and object poses, and on configurations that touch: turned to the very end of
     their free interval (1e-6 rad short of contact) and past it by 1e-9 rad."""
     seed, joints, obstacles, width, limit, self_collision = case
-    world, rng = random_world(seed, joints=joints, obstacles=obstacles, width=width, limit=limit,
-                              self_collision=self_collision)
+    world, rng = random_world(
+        seed, joints=joints, obstacles=obstacles, width=width, limit=limit, self_collision=self_collision
+    )
     q = rng.uniform(world.robot.joint_lower, world.robot.joint_upper, (3000, joints))
     poses = rng.uniform((-2.4, -2.4, -np.pi), (2.4, 2.4, np.pi), (3000, 3))
     poses[::2] = compose(tip_poses(world.robot, q[::2]), np.array([0.12, 0.0, 0.3]))  # carried
@@ -259,14 +296,30 @@ def test_a_start_within_the_clearance_of_a_bound_never_crosses_it(mode):
     """A point that starts between ``bound - inset - margin`` and ``bound - inset`` is kept from
     getting closer (not pushed out): the interval must not turn it through the bound."""
     rng = np.random.default_rng(4)
-    world = world_from_parameters({"world": {
-        "name": "near_bound", "bounds": [-2.0, -2.0, 1.0, 2.0],
-        "robot": {"base": [0.0, 0.0], "link_lengths": [0.6, 0.4], "link_width": 0.02,
-                  "joint_lower": [-3.0, -3.0], "joint_upper": [3.0, 3.0], "initial": [0.0, 0.5]},
-        "obstacle_names": [], "obstacles": {},
-        "object": {"polygon": [-0.05, -0.05, 0.05, -0.05, 0.05, 0.05, -0.05, 0.05], "initial": [-1.5, 1.5, 0.0],
-                   "goal": [-1.5, 1.5, 0.0], "grasps": [0.05, 0.0]},
-    }})
+    world = world_from_parameters(
+        {
+            "world": {
+                "name": "near_bound",
+                "bounds": [-2.0, -2.0, 1.0, 2.0],
+                "robot": {
+                    "base": [0.0, 0.0],
+                    "link_lengths": [0.6, 0.4],
+                    "link_width": 0.02,
+                    "joint_lower": [-3.0, -3.0],
+                    "joint_upper": [3.0, 3.0],
+                    "initial": [0.0, 0.5],
+                },
+                "obstacle_names": [],
+                "obstacles": {},
+                "object": {
+                    "polygon": [-0.05, -0.05, 0.05, -0.05, 0.05, 0.05, -0.05, 0.05],
+                    "initial": [-1.5, 1.5, 0.0],
+                    "goal": [-1.5, 1.5, 0.0],
+                    "grasps": [0.05, 0.0],
+                },
+            }
+        }
+    )
     margin = 1e-3
     rel = np.array([0.05, 0.0, 0.0])
     if mode == "transit":  # the straight arm's tip: x within the last mm before the bound inset by r

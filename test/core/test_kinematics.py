@@ -40,6 +40,6 @@ def test_transform_points():
     np.testing.assert_allclose(transform_points(pose, np.array([[1.0, 0.0]])), [[1.0, 1.0]], atol=1e-12)
 
 
-@pytest.mark.parametrize("angle,wrapped", [(0.0, 0.0), (np.pi + 0.1, -np.pi + 0.1), (-7.0, -7.0 + 2 * np.pi)])
+@pytest.mark.parametrize(("angle", "wrapped"), [(0.0, 0.0), (np.pi + 0.1, -np.pi + 0.1), (-7.0, -7.0 + 2 * np.pi)])
 def test_wrap_angle(angle, wrapped):
     assert wrap_angle(angle) == pytest.approx(wrapped)

@@ -1,10 +1,11 @@
 """Free intervals against brute-force sweeps; bouncing; decoded paths are valid."""
 
-import sys
+import itertools
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.sweep import sweep_interval
 
 from clew_ros.core.collision import is_valid
 from clew_ros.core.kinematics import compose, tip_poses
@@ -13,7 +14,6 @@ from clew_ros.core.plan import CHECK_STEP_RAD
 from clew_ros.core.world import load_world
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
-from helpers.sweep import sweep_interval  # noqa: E402
 
 
 @pytest.mark.parametrize("name", ["single_transfer", "arm3_regrasp"])
@@ -50,7 +50,8 @@ def test_margin_shrinks_the_interval():
     q = np.array([[0.3, 0.2]])
     exact = free_intervals(world, q, 0, object_poses=world.object.initial[None], margin_m=0.0)
     kept = free_intervals(world, q, 0, object_poses=world.object.initial[None], margin_m=0.05)
-    assert kept[1][0] < exact[1][0] and kept[0][0] > exact[0][0]
+    assert kept[1][0] < exact[1][0]
+    assert kept[0][0] > exact[0][0]
 
 
 def test_bounce_lands_inside_the_interval():
@@ -61,7 +62,8 @@ def test_bounce_lands_inside_the_interval():
     high[:100] = 0.0
     x = rng.normal(0, 20, 10000)
     y = bounce(x, low, high)
-    assert np.all(y >= low) and np.all(y <= high)
+    assert np.all(y >= low)
+    assert np.all(y <= high)
     inside = (x >= low) & (x <= high)
     np.testing.assert_allclose(y[inside], x[inside])
 
@@ -84,7 +86,7 @@ def test_every_decoded_path_is_valid_at_the_checking_step(name):
     paths = run_manhattan(world, world.robot.initial, genes, object_poses=world.object.initial[None])
     moved = 0
     for waypoints in paths.waypoints:
-        for a, b in zip(waypoints[:-1], waypoints[1:]):
+        for a, b in itertools.pairwise(waypoints):
             steps = max(1, int(np.ceil(np.abs(b - a).max() / CHECK_STEP_RAD)))
             qs = a + np.linspace(0, 1, steps + 1)[:, None] * (b - a)
             assert is_valid(world, qs, world.object.initial).all()

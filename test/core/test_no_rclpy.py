@@ -14,7 +14,11 @@ def test_core_sources_do_not_mention_rclpy():
 
 def test_importing_the_core_and_cli_loads_no_rclpy():
     modules = [f"clew_ros.core.{p.stem}" for p in CORE.glob("*.py") if p.stem != "__init__"] + ["clew_ros.cli.plan"]
-    code = "import sys\n" + "".join(f"import {m}\n" for m in modules) + \
-        "assert not [m for m in sys.modules if m.startswith('rclpy')], 'rclpy imported'\nprint('ok')"
+    code = (
+        "import sys\n"
+        + "".join(f"import {m}\n" for m in modules)
+        + "assert not [m for m in sys.modules if m.startswith('rclpy')], 'rclpy imported'\nprint('ok')"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
-    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok", out.stderr

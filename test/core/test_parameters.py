@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from clew_ros.cli.parameter_tables import main
 from clew_ros.core.errors import ParameterError, short_repr
 from clew_ros.core.parameters import (
     NODE_PARAMETERS,
@@ -18,7 +19,6 @@ from clew_ros.core.parameters import (
     ParameterSpec,
     ParameterType,
     check_value,
-    main,
     markdown_tables,
     update_markdown,
 )
@@ -30,9 +30,9 @@ TABLES = (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS)
 
 def test_readme_tables_are_generated_from_the_specification() -> None:
     """README.md holds the tables markdown_tables() makes; after a change to the specification run
-    ``python -m clew_ros.core.parameters --update README.md``."""
+    ``python -m clew_ros.cli.parameter_tables --update README.md``."""
     text = README.read_text(encoding="utf-8")
-    assert update_markdown(text) == text, "run: python -m clew_ros.core.parameters --update README.md"
+    assert update_markdown(text) == text, "run: python -m clew_ros.cli.parameter_tables --update README.md"
     for name, table in markdown_tables().items():
         assert table in text, name
     for table in TABLES:
@@ -41,8 +41,9 @@ def test_readme_tables_are_generated_from_the_specification() -> None:
 
 
 def test_the_update_and_check_commands(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    stale = README.read_text(encoding="utf-8").replace("| `planner.seed` | integer | `0` |",
-                                                       "| `planner.seed` | integer | `7` |")
+    stale = README.read_text(encoding="utf-8").replace(
+        "| `planner.seed` | integer | `0` |", "| `planner.seed` | integer | `7` |"
+    )
     path = tmp_path / "README.md"
     path.write_text(stale, encoding="utf-8")
     assert main(["--check", str(path)]) == 1
@@ -62,7 +63,8 @@ def test_tables_are_well_formed() -> None:
     for table in TABLES:
         for key, spec in table.items():
             assert spec.name == table.prefix + key
-            assert spec.description.endswith(".") and "\n" not in spec.description
+            assert spec.description.endswith(".")
+            assert "\n" not in spec.description
             if spec.type in (ParameterType.INTEGER, ParameterType.DOUBLE) and table is not WORLD_PARAMETERS:
                 assert spec.limits is not None, spec.name
             if spec.required or spec.default is None:
@@ -80,14 +82,16 @@ def test_planner_settings_follow_the_table() -> None:
         assert getattr(defaults, key) == spec.default
     assert PlannerSettings.from_parameters({}) == defaults
     assert PlannerSettings.from_parameters({"planner": {"seed": 3.0, "time_limit": 2}}, seed=5) == PlannerSettings(
-        seed=5, time_limit=2.0)
+        seed=5, time_limit=2.0
+    )
     with pytest.raises(ParameterError, match=r"^planner\.speed: unknown parameter; known: seed, time_limit"):
         PlannerSettings.from_parameters({"planner": {"speed": 1}})
 
 
 def test_required_parameters_have_no_default() -> None:
-    assert WORLD_PARAMETERS["bounds"].required and WORLD_PARAMETERS["bounds"].default is REQUIRED
-    with pytest.raises(KeyError, match="world.bounds is required"):
+    assert WORLD_PARAMETERS["bounds"].required
+    assert WORLD_PARAMETERS["bounds"].default is REQUIRED
+    with pytest.raises(KeyError, match=r"world\.bounds is required"):
         WORLD_PARAMETERS.default("bounds")
     assert WORLD_PARAMETERS.default("goal_angle_tolerance") == math.pi
     assert WORLD_PARAMETERS.default("obstacle_names") is None
@@ -120,15 +124,17 @@ CHECKS = [
 ]
 
 
-@pytest.mark.parametrize("spec, value, expected", CHECKS, ids=[f"{c[0].name}={c[1]!r}" for c in CHECKS])
+@pytest.mark.parametrize(("spec", "value", "expected"), CHECKS, ids=[f"{c[0].name}={c[1]!r}" for c in CHECKS])
 def test_check_value(spec: ParameterSpec, value, expected) -> None:
     if isinstance(expected, str) and expected.startswith(spec.name + ":"):
         with pytest.raises(ParameterError) as caught:
             check_value(spec, value)
-        assert str(caught.value) == expected and caught.value.parameter == spec.name
+        assert str(caught.value) == expected
+        assert caught.value.parameter == spec.name
     else:
         result = check_value(spec, value)
-        assert result == expected and type(result) is type(expected)
+        assert result == expected
+        assert type(result) is type(expected)
 
 
 def test_arrays_are_the_world_parsers() -> None:

@@ -1,6 +1,7 @@
 """The plan file and its validator: a real plan passes, broken plans are caught."""
 
 import copy
+import itertools
 import json
 from pathlib import Path
 
@@ -27,12 +28,19 @@ def quick():
 def test_a_real_plan_passes_and_has_the_contract_shape(quick):
     world, document = quick
     assert validate_plan(world, document) == []
-    assert document["format"] == FORMAT and document["world"] == world.name
+    assert document["format"] == FORMAT
+    assert document["world"] == world.name
     assert document["joint_names"] == ["joint_1", "joint_2"]
     kinds = [s["kind"] for s in document["segments"]]
-    assert kinds[0] == "transit" and all(a != b for a, b in zip(kinds, kinds[1:]))
-    assert document["landmarks"][0] == {"id": 0, "parent": None, "joints": world.robot.initial.tolist(),
-                                        "object_pose": world.object.initial.tolist(), "grasp": None}
+    assert kinds[0] == "transit"
+    assert all(a != b for a, b in itertools.pairwise(kinds))
+    assert document["landmarks"][0] == {
+        "id": 0,
+        "parent": None,
+        "joints": world.robot.initial.tolist(),
+        "object_pose": world.object.initial.tolist(),
+        "grasp": None,
+    }
     assert set(document["stats"]) >= {"time_s", "landmarks", "collision_checks", "seed"}
     assert json.loads(Plan.from_dict(document).to_json()) == document
 
@@ -41,15 +49,18 @@ def _transfer_index(document):
     return next(i for i, s in enumerate(document["segments"]) if s["kind"] == "transfer")
 
 
-@pytest.mark.parametrize("breakage,expected", [
-    ("start", "not at robot.initial"),
-    ("gap", "not at the end of the previous segment"),
-    ("grasp_far", "from grasp"),
-    ("final", "differs from the replayed"),
-    ("kinds", "kinds must alternate"),
-    ("collision", "is invalid"),
-    ("limits", "joint limits"),
-])
+@pytest.mark.parametrize(
+    ("breakage", "expected"),
+    [
+        ("start", "not at robot.initial"),
+        ("gap", "not at the end of the previous segment"),
+        ("grasp_far", "from grasp"),
+        ("final", "differs from the replayed"),
+        ("kinds", "kinds must alternate"),
+        ("collision", "is invalid"),
+        ("limits", "joint limits"),
+    ],
+)
 def test_validator_catches_broken_plans(quick, breakage, expected):
     world, good = quick
     document = copy.deepcopy(good)
@@ -85,7 +96,9 @@ def test_failed_plan_shape():
     world = load_world(ROOT / "config" / "unreachable.yaml")
     result = plan(world, PlannerSettings(seed=0, time_limit=0.5))
     document = Plan.from_result(world, result).to_dict()
-    assert not document["success"] and document["segments"] == [] and document["final_object_pose"] is None
+    assert not document["success"]
+    assert document["segments"] == []
+    assert document["final_object_pose"] is None
     assert document["code"] in {"TIME_LIMIT", "NO_PATH_AT_RESOLUTION"}
     assert validate_plan(world, document) == []
 
@@ -93,7 +106,9 @@ def test_failed_plan_shape():
 def test_the_plan_file_round_trips_byte_for_byte(quick, tmp_path):
     world, document = quick
     planned = Plan.from_dict(document)
-    assert planned.success and planned.outcome is Outcome.SUCCEEDED and planned.world == world.name
+    assert planned.success
+    assert planned.outcome is Outcome.SUCCEEDED
+    assert planned.world == world.name
     path = planned.write(tmp_path / "sub" / "plan.json")
     again = Plan.read(path)
     assert again.to_json() == planned.to_json() == path.read_text()
@@ -101,16 +116,19 @@ def test_the_plan_file_round_trips_byte_for_byte(quick, tmp_path):
     assert not again.segments[0].waypoints.flags.writeable  # a value: nobody edits a plan in place
 
 
-@pytest.mark.parametrize("change,field", [
-    (lambda d: d.update(format="clew-plan/0"), "format"),
-    (lambda d: d.update(success="yes"), "success"),
-    (lambda d: d.update(code="DONE"), "code"),
-    (lambda d: d["segments"][1].update(kind="carry"), "segments[1].kind"),
-    (lambda d: d["segments"][0].update(grasp=1.5), "segments[0].grasp"),
-    (lambda d: d["segments"][0].update(waypoints=[[0.0, 1.0], [0.0]]), "segments[0].waypoints"),
-    (lambda d: d.update(final_object_pose=[0.0, 1.0]), "final_object_pose"),
-    (lambda d: d["landmarks"][0].update(object_pose="here"), "landmarks[0].object_pose"),
-])
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        (lambda d: d.update(format="clew-plan/0"), "format"),
+        (lambda d: d.update(success="yes"), "success"),
+        (lambda d: d.update(code="DONE"), "code"),
+        (lambda d: d["segments"][1].update(kind="carry"), "segments[1].kind"),
+        (lambda d: d["segments"][0].update(grasp=1.5), "segments[0].grasp"),
+        (lambda d: d["segments"][0].update(waypoints=[[0.0, 1.0], [0.0]]), "segments[0].waypoints"),
+        (lambda d: d.update(final_object_pose=[0.0, 1.0]), "final_object_pose"),
+        (lambda d: d["landmarks"][0].update(object_pose="here"), "landmarks[0].object_pose"),
+    ],
+)
 def test_a_malformed_plan_file_names_the_field_at_fault(quick, tmp_path, change, field):
     from clew_ros.core.errors import PlanFileError
 
@@ -136,7 +154,8 @@ def test_replay_carries_the_object_with_the_tip_during_transfers(quick):
         assert np.allclose(fine.configurations[[0, -1]], coarse.configurations[[0, -1]])
         assert np.max(np.abs(np.diff(fine.configurations, axis=0))) <= 0.002 + 1e-12
         if coarse.kind == "transit":
-            assert coarse.grasp_rel is None and np.allclose(fine.object_poses, rest)
+            assert coarse.grasp_rel is None
+            assert np.allclose(fine.object_poses, rest)
         else:
             held = relative(tip_poses(world.robot, fine.configurations), fine.object_poses)
             assert np.allclose(held, coarse.grasp_rel, atol=1e-9)  # rigid in the end-effector frame
@@ -153,9 +172,12 @@ def test_checked_plan_never_hands_out_an_invalid_plan(quick):
     world = quick[0]
     result = plan(world, PlannerSettings(seed=0, time_limit=30))
     assert checked_plan(world, result).to_dict()["segments"] == quick[1]["segments"]
-    broken = dataclasses.replace(result, final_object_pose=result.final_object_pose + [0.05, 0.0, 0.0])
+    broken = dataclasses.replace(result, final_object_pose=result.final_object_pose + np.array([0.05, 0.0, 0.0]))
     planned = checked_plan(world, broken)
-    assert not planned.success and planned.outcome is Outcome.INTERNAL_ERROR
+    assert not planned.success
+    assert planned.outcome is Outcome.INTERNAL_ERROR
     assert "differs from the replayed" in planned.message
-    assert planned.segments == () and planned.final_object_pose is None and len(planned.landmarks) == len(result.tree)
+    assert planned.segments == ()
+    assert planned.final_object_pose is None
+    assert len(planned.landmarks) == len(result.tree)
     assert validate_plan(world, planned) == []

@@ -29,7 +29,9 @@ def _differences(saved, fresh, where="plan") -> list[str]:
     if isinstance(saved, list) and isinstance(fresh, list):
         if len(saved) != len(fresh):
             return [f"{where}: {len(saved)} items != {len(fresh)}"]
-        return [d for i, (a, b) in enumerate(zip(saved, fresh, strict=True)) for d in _differences(a, b, f"{where}[{i}]")]
+        return [
+            d for i, (a, b) in enumerate(zip(saved, fresh, strict=True)) for d in _differences(a, b, f"{where}[{i}]")
+        ]
     if isinstance(saved, float) and isinstance(fresh, float):
         return [] if math.isclose(saved, fresh, rel_tol=0, abs_tol=1e-9) else [f"{where}: {saved} != {fresh}"]
     return [] if saved == fresh and type(saved) is type(fresh) else [f"{where}: {saved!r} != {fresh!r}"]
@@ -43,8 +45,9 @@ def test_saved_plans_exist() -> None:
 def test_same_seed_same_plan_as_before_the_refactor(saved_path: Path, tmp_path: Path) -> None:
     world, seed = saved_path.stem.rsplit("_seed", 1)
     out = tmp_path / "plan.json"
-    code = clew_plan([str(ROOT / "config" / f"{world}.yaml"), "-o", str(out), "--seed", seed,
-                      "--time-limit", "60", "-q"])
+    code = clew_plan(
+        [str(ROOT / "config" / f"{world}.yaml"), "-o", str(out), "--seed", seed, "--time-limit", "60", "-q"]
+    )
     fresh = json.loads(out.read_text())
     saved = json.loads(saved_path.read_text())
     assert code == (0 if saved["success"] else 1)

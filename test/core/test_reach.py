@@ -64,7 +64,7 @@ def test_approach_cells_keep_every_angle_the_arm_holds_a_grasp_with():
         cell = int(np.floor(wrap_angle(np.array([psi]))[0] % (2 * np.pi) / (2 * np.pi) * APPROACH_CELLS))
         assert cells[cell % APPROACH_CELLS], (q, psi)
         # with a spread, nearby orientations of the object keep the cell too
-        assert approach_cells(world, pose + [0.0, 0.0, 0.2], grasp, angle_spread=0.25)[cell % APPROACH_CELLS]
+        assert approach_cells(world, pose + np.array([0.0, 0.0, 0.2]), grasp, angle_spread=0.25)[cell % APPROACH_CELLS]
         refused += int(np.sum(~cells))
     assert refused > 0, "the bound should refuse some approach angles"
 
@@ -87,8 +87,9 @@ def test_two_link_grasps_finds_the_configuration_that_holds_a_grasp():
         pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
         holds = two_link_grasps(world, pose, grasp)
         target = transform_points(pose, point[None])[0]
-        assert np.all(np.linalg.norm(tip_poses(world.robot, holds)[:, :2] - target, axis=1)
-                      <= 0.5 * world.grasp_tolerance + 1e-9)
+        assert np.all(
+            np.linalg.norm(tip_poses(world.robot, holds)[:, :2] - target, axis=1) <= 0.5 * world.grasp_tolerance + 1e-9
+        )
         if len(holds):
             assert is_valid(world, holds, pose[None]).all()
             found += 1
@@ -96,14 +97,15 @@ def test_two_link_grasps_finds_the_configuration_that_holds_a_grasp():
             assert len(holds), (q, pose)  # a valid holding configuration exists: never refused
         else:
             empty += int(not len(holds))
-    assert found > 0 and empty > 0
+    assert found > 0
+    assert empty > 0
 
 
 def test_approach_excess_is_zero_in_allowed_cells_and_grows_outside():
     from clew_ros.core.reach import APPROACH_CELLS, approach_excess
 
     cells = np.zeros(APPROACH_CELLS, bool)
-    cells[:APPROACH_CELLS // 4] = True  # psi in [0, pi/2)
+    cells[: APPROACH_CELLS // 4] = True  # psi in [0, pi/2)
     excess = approach_excess(cells)
     assert np.allclose(excess(np.array([0.1, 0.7, 1.4])), 0.0)
     far = excess(np.array([np.pi / 2 + 0.2, np.pi / 2 + 0.5, -0.3]))

@@ -46,7 +46,8 @@ def test_search_transfer_carries_the_object_to_the_goal(world) -> None:
     assert transit.success
     goal = world.object.goal
     result = search_transfer(ctx, transit.waypoints[-1], transit.grasp_rel, goal)
-    assert result.success and goal_reached(world, result.object_pose, goal)
+    assert result.success
+    assert goal_reached(world, result.object_pose, goal)
     configurations = interpolate(result.waypoints, 0.002)
     poses = compose(tip_poses(world.robot, configurations), transit.grasp_rel[None])
     assert is_valid(world, configurations, poses).all()
@@ -60,13 +61,15 @@ def test_same_seed_same_path_and_an_unreachable_goal_fails_without_searching(wor
     far = np.array([5.0, 5.0, 0.0])
     ctx = context(world)
     result = search_transfer(ctx, first.waypoints[-1], first.grasp_rel, far)
-    assert not result.success and len(result.waypoints) == 1 and ctx.counters.evaluations == 0
+    assert not result.success
+    assert len(result.waypoints) == 1
+    assert ctx.counters.evaluations == 0
 
 
 def test_goal_error_is_zero_at_the_goal_and_counts_only_excess_angle(world) -> None:
     goal = np.array([0.5, 0.5, 0.0])
     assert np.allclose(goal_error(world, goal[None], goal), 0.0)
-    turned = goal + [0.0, 0.0, 0.5 * world.goal_angle_tolerance]
+    turned = goal + np.array([0.0, 0.0, 0.5 * world.goal_angle_tolerance])
     assert np.allclose(goal_error(world, turned[None], goal), 0.0)  # inside the angle slack
-    moved = goal + [0.03, -0.04, 0.0]
+    moved = goal + np.array([0.03, -0.04, 0.0])
     assert np.isclose(np.linalg.norm(goal_error(world, moved[None], goal)), 0.05)

@@ -86,7 +86,7 @@ BAD = [
 ]
 
 
-@pytest.mark.parametrize("parameter,value,expected", BAD, ids=[f"{p}={v!r}" for p, v, _ in BAD])
+@pytest.mark.parametrize(("parameter", "value", "expected"), BAD, ids=[f"{p}={v!r}" for p, v, _ in BAD])
 def test_bad_world_names_the_parameter(parameter, value, expected):
     tree = base_tree()
     _set(tree, parameter, value)
@@ -123,16 +123,28 @@ def test_start_in_collision_says_which_link_hits_what():
 
 
 COLLIDING = [
-    ("world.object.initial", [0.0, 2.6, 0.0], "world.object.initial: expected a collision-free placement, but "
-                                              "the object leaves world.bounds"),
-    ("world.object.goal", [-2.0, 0.0, 0.0], "world.object.goal: expected a collision-free placement, but "
-                                             "the object hits obstacle 'left_block'"),
-    ("world.robot.initial", [1.5708, 0.0], "world.robot.initial: expected a valid start configuration, but "
-                                           "link 2 goes into the object (deeper than world.grasp_tolerance)"),
+    (
+        "world.object.initial",
+        [0.0, 2.6, 0.0],
+        "world.object.initial: expected a collision-free placement, but the object leaves world.bounds",
+    ),
+    (
+        "world.object.goal",
+        [-2.0, 0.0, 0.0],
+        "world.object.goal: expected a collision-free placement, but the object hits obstacle 'left_block'",
+    ),
+    (
+        "world.robot.initial",
+        [1.5708, 0.0],
+        (
+            "world.robot.initial: expected a valid start configuration, but "
+            "link 2 goes into the object (deeper than world.grasp_tolerance)"
+        ),
+    ),
 ]
 
 
-@pytest.mark.parametrize("parameter,value,message", COLLIDING, ids=[c[0] for c in COLLIDING])
+@pytest.mark.parametrize(("parameter", "value", "message"), COLLIDING, ids=[c[0] for c in COLLIDING])
 def test_parsing_is_pure_and_the_collision_check_is_separate(parameter, value, message):
     """world_from_parameters parses without any geometry test; check_start_and_goal then refuses
     the start or goal, naming the parameter; it returns a valid world itself."""
@@ -158,7 +170,8 @@ def test_defaults_apply_when_keys_are_absent():
     assert world.grasp_tolerance == 0.005
     assert world.goal_tolerance == 0.02
     assert world.goal_angle_tolerance == pytest.approx(math.pi)
-    assert world.robot.link_width == 0.0 and world.robot.self_collision is True
+    assert world.robot.link_width == 0.0
+    assert world.robot.self_collision is True
     tree["world"].pop("name")
     assert world_from_parameters(tree).name == "world"
 
@@ -166,17 +179,30 @@ def test_defaults_apply_when_keys_are_absent():
 def test_the_defaults_are_the_specified_ones():
     """World and Robot take their defaults from the parameter specification, as the parser does."""
     defaults = {key: spec.default for key, spec in WORLD_PARAMETERS.items() if not spec.required}
-    assert defaults == {"name": "world", "robot.link_width": 0.0, "robot.self_collision": True,
-                        "obstacle_names": None, "grasp_tolerance": 0.005, "goal_tolerance": 0.02,
-                        "goal_angle_tolerance": math.pi}
+    assert defaults == {
+        "name": "world",
+        "robot.link_width": 0.0,
+        "robot.self_collision": True,
+        "obstacle_names": None,
+        "grasp_tolerance": 0.005,
+        "goal_tolerance": 0.02,
+        "goal_angle_tolerance": math.pi,
+    }
     world = load_world(CONFIG / "figure1.yaml")
-    robot = Robot(world.robot.base, world.robot.link_lengths, world.robot.joint_lower, world.robot.joint_upper,
-                  world.robot.initial)
-    assert (robot.link_width, robot.self_collision) == (defaults["robot.link_width"],
-                                                       defaults["robot.self_collision"])
+    robot = Robot(
+        world.robot.base,
+        world.robot.link_lengths,
+        world.robot.joint_lower,
+        world.robot.joint_upper,
+        world.robot.initial,
+    )
+    assert (robot.link_width, robot.self_collision) == (defaults["robot.link_width"], defaults["robot.self_collision"])
     bare = World(world.name, world.bounds, robot, (), world.object)
     assert (bare.grasp_tolerance, bare.goal_tolerance, bare.goal_angle_tolerance) == (
-        defaults["grasp_tolerance"], defaults["goal_tolerance"], defaults["goal_angle_tolerance"])
+        defaults["grasp_tolerance"],
+        defaults["goal_tolerance"],
+        defaults["goal_angle_tolerance"],
+    )
 
 
 def test_every_required_key_is_refused_when_absent():

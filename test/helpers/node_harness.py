@@ -37,10 +37,18 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
-LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
-STREAM = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                    durability=DurabilityPolicy.VOLATILE)
+LATCHED = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+STREAM = QoSProfile(
+    depth=100,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
 
 DISCOVERY_TIMEOUT_S = 20.0
 PLAN_TIMEOUT_S = 30.0
@@ -54,8 +62,14 @@ EXIT_TIMEOUT_S = 10.0
 class NodeProcess:
     """``clew_planner`` in a subprocess; output goes to ``log``."""
 
-    def __init__(self, log: Path, params_file: Path | None = None, parameters: dict[str, Any] | None = None,
-                 namespace: str | None = None, env: dict[str, str] | None = None) -> None:
+    def __init__(
+        self,
+        log: Path,
+        params_file: Path | None = None,
+        parameters: dict[str, Any] | None = None,
+        namespace: str | None = None,
+        env: dict[str, str] | None = None,
+    ) -> None:
         self.namespace = namespace if namespace is not None else f"/t{uuid.uuid4().hex[:12]}"
         self.name = f"{self.namespace}/clew_planner" if self.namespace != "/" else "/clew_planner"
         command = [sys.executable, "-m", "clew_ros.node.main", "--ros-args", "-r", f"__ns:={self.namespace}"]
@@ -68,8 +82,9 @@ class NodeProcess:
         self.command = command
         self.log = log
         self._log_file = log.open("wb")
-        self.proc = subprocess.Popen(command, stdout=self._log_file, stderr=subprocess.STDOUT,
-                                     env={**os.environ, **(env or {})})  # LOCALHOST discovery, ROS_DOMAIN_ID
+        self.proc = subprocess.Popen(
+            command, stdout=self._log_file, stderr=subprocess.STDOUT, env={**os.environ, **(env or {})}
+        )  # LOCALHOST discovery, ROS_DOMAIN_ID
 
     def output(self) -> str:
         if not self._log_file.closed:
@@ -143,8 +158,7 @@ class Inbox:
                         return msg
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    raise AssertionError(f"no matching message within {timeout_s} s "
-                                         f"({len(self._items)} received)")
+                    raise AssertionError(f"no matching message within {timeout_s} s ({len(self._items)} received)")
                 self._condition.wait(remaining)
 
 
@@ -174,14 +188,22 @@ class Client:
         self.node.create_subscription(msg_type, topic, box.put, qos)
         return box
 
-    def call(self, service: str, srv_type: Any, request: Any = None, *, timeout_s: float = 20.0,
-             wait_service_s: float = DISCOVERY_TIMEOUT_S) -> Any:
+    def call(
+        self,
+        service: str,
+        srv_type: Any,
+        request: Any = None,
+        *,
+        timeout_s: float = 20.0,
+        wait_service_s: float = DISCOVERY_TIMEOUT_S,
+    ) -> Any:
         """Call ``service`` and return its response; ``AssertionError`` on timeout."""
         future = self.call_async(service, srv_type, request, wait_service_s=wait_service_s)
         return wait_future(future, timeout_s, f"{service} did not answer")
 
-    def call_async(self, service: str, srv_type: Any, request: Any = None, *,
-                   wait_service_s: float = DISCOVERY_TIMEOUT_S) -> Any:
+    def call_async(
+        self, service: str, srv_type: Any, request: Any = None, *, wait_service_s: float = DISCOVERY_TIMEOUT_S
+    ) -> Any:
         client = self._client(service, srv_type)
         assert client.wait_for_service(timeout_sec=wait_service_s), f"{service} not found in {wait_service_s} s"
         return client.call_async(srv_type.Request() if request is None else request)
@@ -192,8 +214,9 @@ class Client:
             clients[service] = self.node.create_client(srv_type, service)
         return clients[service]
 
-    def publisher(self, topic: str, msg_type: Any, qos: QoSProfile = STREAM, *,
-                  timeout_s: float = DISCOVERY_TIMEOUT_S) -> Any:
+    def publisher(
+        self, topic: str, msg_type: Any, qos: QoSProfile = STREAM, *, timeout_s: float = DISCOVERY_TIMEOUT_S
+    ) -> Any:
         """A publisher that is matched with at least one subscriber."""
         publisher = self.node.create_publisher(msg_type, topic, qos)
         deadline = time.monotonic() + timeout_s
@@ -257,12 +280,16 @@ class Session:
         return None
 
     def wait_status(self, run_id: str, status: int, timeout_s: float = 10.0) -> None:
-        wait_until(lambda: self.status_of(run_id) == status, timeout_s,
-                   f"run {run_id} status {status} (now {self.status_of(run_id)})")
+        wait_until(
+            lambda: self.status_of(run_id) == status,
+            timeout_s,
+            f"run {run_id} status {status} (now {self.status_of(run_id)})",
+        )
 
     def wait_playback(self, run_id: str, timeout_s: float = 15.0) -> None:
-        self.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id
-                               and kv(m).get("phase") == "playback_done", timeout_s)
+        self.feedback.wait_for(
+            lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "playback_done", timeout_s
+        )
 
     def wait_idle(self, timeout_s: float = PLAN_TIMEOUT_S) -> None:
         """Wait until every run has an outcome and every playback has ended."""
@@ -273,8 +300,12 @@ class Session:
             run_id = event["run_id"]
             wait_until(lambda run_id=run_id: self.status_of(run_id) in terminal, timeout_s, f"run {run_id} outcome")
             if self.status_of(run_id) == GoalStatus.STATUS_SUCCEEDED:
-                self.feedback.wait_for(lambda m, run_id=run_id: kv(m).get("run_id") == run_id
-                                       and kv(m).get("phase", "").startswith("playback_"), timeout_s)
+                self.feedback.wait_for(
+                    lambda m, run_id=run_id: (
+                        kv(m).get("run_id") == run_id and kv(m).get("phase", "").startswith("playback_")
+                    ),
+                    timeout_s,
+                )
 
     def close(self) -> int | None:
         self.client.close()

@@ -57,8 +57,12 @@ def status(run: uuid.UUID, code: int, time_ns: int) -> GoalStatusArray:
 
 
 def feedback(run: uuid.UUID, landmarks: int, best: float, elapsed: float) -> DiagnosticStatus:
-    values = [KeyValue(key="run_id", value=run.hex), KeyValue(key="landmarks", value=str(landmarks)),
-              KeyValue(key="best_distance", value=f"{best:.4f}"), KeyValue(key="elapsed", value=f"{elapsed:.3f}")]
+    values = [
+        KeyValue(key="run_id", value=run.hex),
+        KeyValue(key="landmarks", value=str(landmarks)),
+        KeyValue(key="best_distance", value=f"{best:.4f}"),
+        KeyValue(key="elapsed", value=f"{elapsed:.3f}"),
+    ]
     return DiagnosticStatus(level=DiagnosticStatus.OK, name="clew_planner", message="planning", values=values)
 
 
@@ -68,8 +72,14 @@ def event(run: uuid.UUID, name: str, time_s: float, **fields) -> String:
 
 def _marker(ns: str, kind: int, time_ns: int, points, rgb=(0.25, 0.5, 1.0), marker_id: int = 0) -> Marker:
     # colours are float32: values exact in float32 keep messages equal after a round trip
-    marker = Marker(header=header(time_ns), ns=ns, id=marker_id, type=kind, action=Marker.ADD,
-                    color=ColorRGBA(r=rgb[0], g=rgb[1], b=rgb[2], a=1.0))
+    marker = Marker(
+        header=header(time_ns),
+        ns=ns,
+        id=marker_id,
+        type=kind,
+        action=Marker.ADD,
+        color=ColorRGBA(r=rgb[0], g=rgb[1], b=rgb[2], a=1.0),
+    )
     marker.pose.orientation.w = 1.0
     marker.scale.x = marker.scale.y = marker.scale.z = 0.02
     marker.points = [Point(x=float(x), y=float(y)) for x, y in points]
@@ -84,9 +94,13 @@ def landmark_markers(landmarks: list[dict], time_ns: int) -> MarkerArray:
     for lm in landmarks:
         if lm["parent"] is not None:
             edges += [nodes[index[lm["parent"]]], lm["object_pose"][:2]]
-    return MarkerArray(markers=[Marker(header=header(time_ns), action=Marker.DELETEALL),
-                                _marker("landmarks", Marker.SPHERE_LIST, time_ns, nodes),
-                                _marker("tree_edges", Marker.LINE_LIST, time_ns, edges)])
+    return MarkerArray(
+        markers=[
+            Marker(header=header(time_ns), action=Marker.DELETEALL),
+            _marker("landmarks", Marker.SPHERE_LIST, time_ns, nodes),
+            _marker("tree_edges", Marker.LINE_LIST, time_ns, edges),
+        ]
+    )
 
 
 def world_markers(world, time_ns: int) -> MarkerArray:
@@ -94,27 +108,37 @@ def world_markers(world, time_ns: int) -> MarkerArray:
     corners = [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax), (xmin, ymin)]
     markers = [_marker("bounds", Marker.LINE_STRIP, time_ns, corners, (0.625, 0.625, 0.625))]
     for i, obstacle in enumerate(world.obstacles):
-        ring = list(obstacle.vertices) + [obstacle.vertices[0]]
+        ring = [*list(obstacle.vertices), obstacle.vertices[0]]
         markers.append(_marker("obstacles", Marker.LINE_STRIP, time_ns, ring, (0.375, 0.375, 0.375), marker_id=i))
     return MarkerArray(markers=markers)
 
 
 def trajectory(plan: dict, time_ns: int, step_s: float = 0.5) -> JointTrajectory:
     """The plan as ``~/trajectory``: waypoints in order, ``gripper`` 1.0 on transfer points."""
-    msg = JointTrajectory(header=header(time_ns), joint_names=list(plan["joint_names"]) + ["gripper"])
+    msg = JointTrajectory(header=header(time_ns), joint_names=[*list(plan["joint_names"]), "gripper"])
     t = 0.0
     for segment in plan["segments"]:
         gripper = 1.0 if segment["kind"] == "transfer" else 0.0
         for waypoint in segment["waypoints"]:
-            ns = int(round(t * 1e9))
-            msg.points.append(JointTrajectoryPoint(positions=[float(v) for v in waypoint] + [gripper],
-                                                   time_from_start=Duration(sec=ns // 10**9, nanosec=ns % 10**9)))
+            ns = round(t * 1e9)
+            msg.points.append(
+                JointTrajectoryPoint(
+                    positions=[float(v) for v in waypoint] + [gripper],
+                    time_from_start=Duration(sec=ns // 10**9, nanosec=ns % 10**9),
+                )
+            )
             t += step_s
     return msg
 
 
-def sample_run(world, world_text: str, plan: dict | None, run: uuid.UUID | None = None,
-               start_ns: int = 1_700_000_000_000_000_000, outcome: str = "succeeded"):
+def sample_run(
+    world,
+    world_text: str,
+    plan: dict | None,
+    run: uuid.UUID | None = None,
+    start_ns: int = 1_700_000_000_000_000_000,
+    outcome: str = "succeeded",
+):
     """``(topic, message, time_ns)`` for one run, 10 ms apart, in publishing order."""
     run = run or uuid.UUID(int=0x1234)
     out = []
@@ -128,8 +152,7 @@ def sample_run(world, world_text: str, plan: dict | None, run: uuid.UUID | None 
     put("status", status(run, GoalStatus.STATUS_ACCEPTED, start_ns))
     put("events", event(run, "accepted", 0.0))
     put("status", status(run, GoalStatus.STATUS_EXECUTING, start_ns))
-    landmarks = (plan or {}).get("landmarks") or [
-        {"id": 0, "parent": None, "object_pose": list(world.object.initial)}]
+    landmarks = (plan or {}).get("landmarks") or [{"id": 0, "parent": None, "object_pose": list(world.object.initial)}]
     for count in range(1, len(landmarks) + 1):
         put("feedback", feedback(run, count, 1.0 / count, 0.1 * count))
         put("landmarks", landmark_markers(landmarks[:count], start_ns))
@@ -142,20 +165,36 @@ def sample_run(world, world_text: str, plan: dict | None, run: uuid.UUID | None 
                 put("events", event(run, "grasp", t, grasp=segment["grasp"]))
             for waypoint in segment["waypoints"]:
                 gripper = 1.0 if segment["kind"] == "transfer" else 0.0
-                put("joint_states", JointState(header=header(start_ns, ""), name=list(plan["joint_names"]) + ["gripper"],
-                                               position=[float(v) for v in waypoint] + [gripper]))
+                put(
+                    "joint_states",
+                    JointState(
+                        header=header(start_ns, ""),
+                        name=[*list(plan["joint_names"]), "gripper"],
+                        position=[float(v) for v in waypoint] + [gripper],
+                    ),
+                )
                 t += 0.5
             if segment["kind"] == "transfer":
                 put("events", event(run, "ungrasp", t, grasp=segment["grasp"]))
         pose = plan["final_object_pose"]
-        put("object_pose", PoseStamped(header=header(start_ns),
-                                       pose=Pose(position=Point(x=pose[0], y=pose[1]), orientation=quaternion(pose[2]))))
+        put(
+            "object_pose",
+            PoseStamped(
+                header=header(start_ns),
+                pose=Pose(position=Point(x=pose[0], y=pose[1]), orientation=quaternion(pose[2])),
+            ),
+        )
         code = GoalStatus.STATUS_SUCCEEDED
     else:
         code = GoalStatus.STATUS_CANCELED if outcome == "canceled" else GoalStatus.STATUS_ABORTED
         pose = list(world.object.initial)
-        put("object_pose", PoseStamped(header=header(start_ns),
-                                       pose=Pose(position=Point(x=pose[0], y=pose[1]), orientation=quaternion(pose[2]))))
+        put(
+            "object_pose",
+            PoseStamped(
+                header=header(start_ns),
+                pose=Pose(position=Point(x=pose[0], y=pose[1]), orientation=quaternion(pose[2])),
+            ),
+        )
     put("events", event(run, outcome, 1.0, code=code, message=f"run {outcome}"))
     put("status", status(run, code, start_ns))
     return out
@@ -172,4 +211,4 @@ def world_text(path: str | Path) -> str:
     return Path(path).read_text()
 
 
-__all__ = ["TOPIC_TYPES", "LATCHED", "sample_run", "counts", "trajectory", "world_text"]
+__all__ = ["LATCHED", "TOPIC_TYPES", "counts", "sample_run", "trajectory", "world_text"]

@@ -1,14 +1,14 @@
 """A RunRecorder in a process of its own, for the kill and disk-full tests.
 
-    python rec_writer.py loop DIR RUN_ID
-        writes std_msgs/String {"n": 0, 1, 2, ...} on /clew_planner/events
-        without end (small chunks); prints "ready" after the first message.
-    python rec_writer.py exit DIR RUN_ID
-        writes ten messages and exits without calling close() (atexit closes).
-    python rec_writer.py fsize DIR RUN_ID LIMIT_BYTES
-        limits the size of files this process writes (RLIMIT_FSIZE), writes
-        until the recorder reports an error, closes, and prints one JSON line:
-        {"error": ..., "raised": ..., "written": N, "dropped": N}.
+python rec_writer.py loop DIR RUN_ID
+    writes std_msgs/String {"n": 0, 1, 2, ...} on /clew_planner/events
+    without end (small chunks); prints "ready" after the first message.
+python rec_writer.py exit DIR RUN_ID
+    writes ten messages and exits without calling close() (atexit closes).
+python rec_writer.py fsize DIR RUN_ID LIMIT_BYTES
+    limits the size of files this process writes (RLIMIT_FSIZE), writes
+    until the recorder reports an error, closes, and prints one JSON line:
+    {"error": ..., "raised": ..., "written": N, "dropped": N}.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ def fsize(directory: str, run_id: str, limit: int) -> int:
     while recorder.error is None and time.monotonic() < deadline:
         try:
             recorder.write(TOPIC, String(data="y" * 2000), START_NS + written * 1_000_000)
-        except Exception as error:  # the test asserts that this never happens
+        except Exception as error:  # noqa: BLE001 - the test asserts that this never happens
             raised = repr(error)
             break
         written += 1
@@ -63,10 +63,12 @@ def fsize(directory: str, run_id: str, limit: int) -> int:
             recorder.write(TOPIC, String(data="late"), START_NS)
         recorder.close()
         recorder.close()
-    except Exception as error:
+    except Exception as error:  # noqa: BLE001 - reported to the test, which asserts none
         raised = raised or repr(error)
-    print(json.dumps({"error": recorder.error, "raised": raised, "written": written, "dropped": recorder.dropped}),
-          flush=True)
+    print(
+        json.dumps({"error": recorder.error, "raised": raised, "written": written, "dropped": recorder.dropped}),
+        flush=True,
+    )
     return 0
 
 

@@ -15,10 +15,10 @@ Built on :mod:`node_harness` (the node in a subprocess, a client here):
 from __future__ import annotations
 
 import json
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from action_msgs.msg import GoalStatusArray
@@ -28,13 +28,13 @@ from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomic
 
 __all__ = [
     "ProcessStats",
-    "settled_stats",
-    "parameter_msg",
-    "set_parameters",
     "get_parameters",
-    "received_at",
-    "status_is",
     "new_events",
+    "parameter_msg",
+    "received_at",
+    "set_parameters",
+    "settled_stats",
+    "status_is",
     "wait_event",
 ]
 
@@ -63,8 +63,7 @@ def parameter_value(value: Any) -> ParameterValue:
             return ParameterValue(type=ParameterType.PARAMETER_INTEGER_ARRAY, integer_array_value=items)
         if items and all(isinstance(v, str) for v in items):
             return ParameterValue(type=ParameterType.PARAMETER_STRING_ARRAY, string_array_value=items)
-        return ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY,
-                              double_array_value=[float(v) for v in items])
+        return ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[float(v) for v in items])
     raise TypeError(f"no parameter type for {value!r}")
 
 
@@ -72,17 +71,20 @@ def parameter_msg(name: str, value: Any) -> ParameterMsg:
     return ParameterMsg(name=name, value=parameter_value(value))
 
 
-def set_parameters(session: Any, values: dict[str, Any], *, atomically: bool = False,
-                   timeout_s: float = 10.0) -> list[Any]:
+def set_parameters(
+    session: Any, values: dict[str, Any], *, atomically: bool = False, timeout_s: float = 10.0
+) -> list[Any]:
     """Set ``values`` on the session's node; returns the ``SetParametersResult`` list (one for atomic)."""
     parameters = [parameter_msg(name, value) for name, value in values.items()]
     if atomically:
         request = SetParametersAtomically.Request(parameters=parameters)
-        return [session.client.call(session.srv("set_parameters_atomically"), SetParametersAtomically, request,
-                                    timeout_s=timeout_s).result]
+        return [
+            session.client.call(
+                session.srv("set_parameters_atomically"), SetParametersAtomically, request, timeout_s=timeout_s
+            ).result
+        ]
     request = SetParameters.Request(parameters=parameters)
-    return list(session.client.call(session.srv("set_parameters"), SetParameters, request,
-                                    timeout_s=timeout_s).results)
+    return list(session.client.call(session.srv("set_parameters"), SetParameters, request, timeout_s=timeout_s).results)
 
 
 def _plain(value: ParameterValue) -> Any:
@@ -107,8 +109,9 @@ def _plain(value: ParameterValue) -> Any:
 
 
 def get_parameters(session: Any, names: list[str], timeout_s: float = 10.0) -> dict[str, Any]:
-    response = session.client.call(session.srv("get_parameters"), GetParameters,
-                                   GetParameters.Request(names=names), timeout_s=timeout_s)
+    response = session.client.call(
+        session.srv("get_parameters"), GetParameters, GetParameters.Request(names=names), timeout_s=timeout_s
+    )
     return {name: _plain(value) for name, value in zip(names, response.values, strict=True)}
 
 
@@ -123,12 +126,12 @@ class ProcessStats:
     @classmethod
     def of(cls, pid: int) -> ProcessStats:
         rss = 0
-        with open(f"/proc/{pid}/status") as status:
+        proc = Path(f"/proc/{pid}")
+        with (proc / "status").open() as status:
             for line in status:
                 if line.startswith("VmRSS:"):
                     rss = int(line.split()[1])
-        return cls(len(os.listdir(f"/proc/{pid}/task")), len(os.listdir(f"/proc/{pid}/fd")), rss)
-
+        return cls(len(list((proc / "task").iterdir())), len(list((proc / "fd").iterdir())), rss)
 
 
 def settled_stats(pid: int, baseline: ProcessStats, timeout_s: float = 10.0) -> ProcessStats:
@@ -152,8 +155,10 @@ def received_at(inbox: Any, predicate: Callable[[Any], bool], timeout_s: float) 
 
 def status_is(run_id: str, status: int) -> Callable[[GoalStatusArray], bool]:
     """Predicate: a ``~/status`` message listing ``run_id`` with ``status``."""
+
     def predicate(msg: GoalStatusArray) -> bool:
         return any(bytes(e.goal_info.goal_id.uuid).hex() == run_id and e.status == status for e in msg.status_list)
+
     return predicate
 
 
@@ -162,9 +167,11 @@ def new_events(session: Any, mark: int) -> list[dict]:
     return [json.loads(m.data) for m in session.events.messages[mark:]]
 
 
-def wait_event(session: Any, mark: int, predicate: Callable[[dict], bool], timeout_s: float = 10.0
-               ) -> tuple[dict, float]:
+def wait_event(
+    session: Any, mark: int, predicate: Callable[[dict], bool], timeout_s: float = 10.0
+) -> tuple[dict, float]:
     """The first event after ``mark`` matching ``predicate`` and its receive time."""
+
     def matches(msg: Any) -> bool:
         return predicate(json.loads(msg.data))
 
@@ -174,10 +181,10 @@ def wait_event(session: Any, mark: int, predicate: Callable[[dict], bool], timeo
         for stamp, msg in timed:
             if matches(msg):
                 return json.loads(msg.data), stamp
-        assert time.monotonic() < deadline, (f"no matching event within {timeout_s} s; got "
-                                             f"{[json.loads(m.data).get('event') for _, m in timed]}")
+        assert time.monotonic() < deadline, (
+            f"no matching event within {timeout_s} s; got {[json.loads(m.data).get('event') for _, m in timed]}"
+        )
         time.sleep(0.01)  # poll; the receive time comes from the inbox, not from this loop
-
 
 
 def goal_publisher(session: Any, qos: Any = None, timeout_s: float = 20.0) -> Any:
@@ -193,8 +200,11 @@ def goal_publisher(session: Any, qos: Any = None, timeout_s: float = 20.0) -> An
     key = None if qos is None else qos.depth
     if key in cache:
         return cache[key]
-    publisher = (session.client.publisher(f"{session.node.name}/goal_pose", PoseStamped) if qos is None
-                 else session.client.publisher(f"{session.node.name}/goal_pose", PoseStamped, qos))
+    publisher = (
+        session.client.publisher(f"{session.node.name}/goal_pose", PoseStamped)
+        if qos is None
+        else session.client.publisher(f"{session.node.name}/goal_pose", PoseStamped, qos)
+    )
     probe = PoseStamped()
     probe.header.frame_id = "rel_probe"
     probe.pose.orientation.w = 1.0

@@ -19,12 +19,12 @@ from hypothesis import strategies as st
 
 __all__ = [
     "BASE_WORLD",
+    "FIXED_BAD_WORLDS",
     "bad_values",
     "bad_worlds",
     "many_obstacles",
     "random_trees",
     "world_paths",
-    "FIXED_BAD_WORLDS",
 ]
 
 #: A small valid world (node_quick with one obstacle); every mutation starts from it.
@@ -62,7 +62,7 @@ def world_paths(tree: dict | None = None, prefix: tuple[str, ...] = ()) -> list[
     tree = BASE_WORLD if tree is None else tree
     paths = []
     for key, value in tree.items():
-        path = prefix + (key,)
+        path = (*prefix, key)
         paths.append(path)
         if isinstance(value, dict):
             paths.extend(world_paths(value, path))
@@ -169,8 +169,11 @@ def _delete(tree: dict, path: tuple[str, ...]) -> None:
 @st.composite
 def mutations(draw, tree: dict) -> None:
     """Apply one mutation to ``tree`` in place."""
-    kind = draw(st.sampled_from(["value", "delete", "polygon", "grasps", "length", "unknown", "obstacles",
-                                 "special_number", "pose"]))
+    kind = draw(
+        st.sampled_from(
+            ["value", "delete", "polygon", "grasps", "length", "unknown", "obstacles", "special_number", "pose"]
+        )
+    )
     if kind == "value":
         _set(tree, draw(st.sampled_from(WORLD_PATHS)), draw(bad_values()))
     elif kind == "delete":
@@ -188,24 +191,26 @@ def mutations(draw, tree: dict) -> None:
         current = _get(tree, path)
         value = list(current) if isinstance(current, list) else list(_get(BASE_WORLD, path))
         n = draw(st.integers(0, 3))
-        value = value[:-n] if draw(st.booleans()) and n else value + draw(
-            st.lists(st.floats(-3, 3, allow_nan=False), min_size=n, max_size=n))
+        value = (
+            value[:-n]
+            if draw(st.booleans()) and n
+            else value + draw(st.lists(st.floats(-3, 3, allow_nan=False), min_size=n, max_size=n))
+        )
         _set(tree, path, value)
     elif kind == "unknown":
         parent = draw(st.sampled_from([("world",), ("world", "robot"), ("world", "object"), ("world", "obstacles")]))
-        _set(tree, parent + (draw(st.sampled_from(["colour", "extra", "goal_tolerence", "7"])),),
-             draw(bad_values()))
+        _set(tree, (*parent, draw(st.sampled_from(["colour", "extra", "goal_tolerence", "7"]))), draw(bad_values()))
     elif kind == "obstacles":
         count = draw(st.sampled_from([0, 1, 50, 2000]))
         names, polys = many_obstacles(count, overlap_robot=draw(st.booleans()))
         if draw(st.booleans()) and names:
-            names = names[:-1] + [names[0]]  # a duplicate name, one polygon unlisted
+            names = [*names[:-1], names[0]]  # a duplicate name, one polygon unlisted
         tree["world"]["obstacle_names"] = names
         tree["world"]["obstacles"] = polys
     elif kind == "special_number":
         path = draw(st.sampled_from([p for p in WORLD_PATHS if isinstance(_get(BASE_WORLD, p), (list, float))]))
         value = copy.deepcopy(_get(BASE_WORLD, path))
-        special = draw(st.sampled_from(_SPECIAL_FLOATS + [_HUGE_INT, 2**63, -(2**63)]))
+        special = draw(st.sampled_from([*_SPECIAL_FLOATS, _HUGE_INT, 2**63, -(2**63)]))
         if isinstance(value, list):
             value[draw(st.integers(0, len(value) - 1))] = special
         else:
@@ -213,8 +218,11 @@ def mutations(draw, tree: dict) -> None:
         _set(tree, path, value)
     elif kind == "pose":
         which = draw(st.sampled_from(["initial", "goal"]))
-        pose = [draw(st.floats(-5, 5, allow_nan=False)), draw(st.floats(-5, 5, allow_nan=False)),
-                draw(st.floats(-100, 100, allow_nan=False))]
+        pose = [
+            draw(st.floats(-5, 5, allow_nan=False)),
+            draw(st.floats(-5, 5, allow_nan=False)),
+            draw(st.floats(-100, 100, allow_nan=False)),
+        ]
         _set(tree, ("world", "object", which), pose)
 
 
@@ -239,11 +247,30 @@ def bad_worlds(draw, max_mutations: int = 3) -> dict:
 json_leaves = st.one_of(scalars, st.lists(numbers, max_size=8))
 random_trees = st.recursive(
     json_leaves,
-    lambda children: st.one_of(st.lists(children, max_size=4),
-                               st.dictionaries(st.sampled_from(["name", "bounds", "robot", "object", "obstacles",
-                                                                "obstacle_names", "base", "polygon", "grasps",
-                                                                "initial", "goal", "link_lengths", "x"]),
-                                               children, max_size=6)),
+    lambda children: st.one_of(
+        st.lists(children, max_size=4),
+        st.dictionaries(
+            st.sampled_from(
+                [
+                    "name",
+                    "bounds",
+                    "robot",
+                    "object",
+                    "obstacles",
+                    "obstacle_names",
+                    "base",
+                    "polygon",
+                    "grasps",
+                    "initial",
+                    "goal",
+                    "link_lengths",
+                    "x",
+                ]
+            ),
+            children,
+            max_size=6,
+        ),
+    ),
     max_leaves=20,
 )
 """Arbitrary JSON-like values: used as the whole ``world`` tree."""

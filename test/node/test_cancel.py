@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import signal
-import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -63,8 +62,9 @@ def start_planning(session: Session):
     """Call ~/plan without waiting; return (future, run id) once the run is executing."""
     before = len(session.events.messages)
     future = session.client.call_async(session.srv("plan"), Trigger)
-    accepted = session.events.wait_for(lambda m: session.events.messages.index(m) >= before
-                                       and json.loads(m.data)["event"] == "accepted", 10.0)
+    accepted = session.events.wait_for(
+        lambda m: session.events.messages.index(m) >= before and json.loads(m.data)["event"] == "accepted", 10.0
+    )
     run_id = json.loads(accepted.data)["run_id"]
     session.wait_status(run_id, GoalStatus.STATUS_EXECUTING)
     return future, run_id
@@ -81,11 +81,13 @@ def test_cancel_stops_the_running_plan(ring: Session) -> None:
     ring.wait_status(run_id, GoalStatus.STATUS_CANCELED, CANCEL_BUDGET_S)
     plan_response = wait_future(future, CANCEL_BUDGET_S, "~/plan did not answer after the cancel")
     assert time.monotonic() - sent <= CANCEL_BUDGET_S
-    assert not plan_response.success and "CANCELED" in plan_response.message
+    assert not plan_response.success
+    assert "CANCELED" in plan_response.message
     canceled = [e for e in ring.events_of(run_id) if e["event"] == "canceled"]
-    assert len(canceled) == 1 and canceled[0]["code"] == "CANCELED"
+    assert len(canceled) == 1
+    assert canceled[0]["code"] == "CANCELED"
     if HAVE_RECORDER:
-        wait_until(lambda: (ring.recordings / run_id / "metadata.yaml").is_file(), 5.0, "the closed recording")
+        wait_until((ring.recordings / run_id / "metadata.yaml").is_file, 5.0, "the closed recording")
 
 
 def test_requests_during_a_run_are_refused(ring: Session) -> None:
@@ -94,31 +96,46 @@ def test_requests_during_a_run_are_refused(ring: Session) -> None:
         # a second ~/plan: refused at once, with a run id of its own and an aborted status
         second = ring.plan(timeout_s=5.0)
         assert not second.success
-        assert "BUSY" in second.message and run_id in second.message
+        assert "BUSY" in second.message
+        assert run_id in second.message
         refused_id = run_id_of(second.message)
         assert refused_id != run_id
         ring.wait_status(refused_id, GoalStatus.STATUS_ABORTED)
         assert ring.status_of(run_id) == GoalStatus.STATUS_EXECUTING
         refused = ring.events.wait_for(lambda m: json.loads(m.data)["run_id"] == refused_id, 5.0)
-        assert json.loads(refused.data)["event"] == "aborted" and json.loads(refused.data)["code"] == "BUSY"
+        assert json.loads(refused.data)["event"] == "aborted"
+        assert json.loads(refused.data)["code"] == "BUSY"
 
         # a goal pose: refused the same way
         publisher = ring.client.publisher(f"{ring.node.name}/goal_pose", PoseStamped)
         before = len(ring.events.messages)
         publisher.publish(messages.goal_pose_stamped(np.array([0.5, 1.0, 0.0]), 0))
-        ring.events.wait_for(lambda m: ring.events.messages.index(m) >= before
-                             and json.loads(m.data).get("source") == "goal_pose"
-                             and json.loads(m.data).get("code") == "BUSY", 5.0)
+        ring.events.wait_for(
+            lambda m: (
+                ring.events.messages.index(m) >= before
+                and json.loads(m.data).get("source") == "goal_pose"
+                and json.loads(m.data).get("code") == "BUSY"
+            ),
+            5.0,
+        )
 
         # a world change: rejected, the reason says why
-        request = SetParameters.Request(parameters=[ParameterMsg(
-            name="world.object.goal",
-            value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[0.5, 1.0, 0.0]))])
+        request = SetParameters.Request(
+            parameters=[
+                ParameterMsg(
+                    name="world.object.goal",
+                    value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[0.5, 1.0, 0.0]),
+                )
+            ]
+        )
         result = ring.client.call(ring.srv("set_parameters"), SetParameters, request, timeout_s=5.0).results[0]
-        assert not result.successful and "world" in result.reason and "planning" in result.reason
+        assert not result.successful
+        assert "world" in result.reason
+        assert "planning" in result.reason
         # planner.* may change during a run (it applies to the next run)
-        request.parameters[0] = ParameterMsg(name="planner.seed", value=ParameterValue(
-            type=ParameterType.PARAMETER_INTEGER, integer_value=7))
+        request.parameters[0] = ParameterMsg(
+            name="planner.seed", value=ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=7)
+        )
         assert ring.client.call(ring.srv("set_parameters"), SetParameters, request, timeout_s=5.0).results[0].successful
     finally:
         ring.client.call(ring.srv("cancel"), Trigger, timeout_s=CANCEL_BUDGET_S)

@@ -13,19 +13,19 @@ import pytest
 
 pytest.importorskip("rclpy")
 
-from geometry_msgs.msg import PoseStamped  # noqa: E402
-from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
-from trajectory_msgs.msg import JointTrajectory  # noqa: E402
-from visualization_msgs.msg import Marker  # noqa: E402
+from geometry_msgs.msg import PoseStamped
+from rclpy.serialization import deserialize_message, serialize_message
+from trajectory_msgs.msg import JointTrajectory
+from visualization_msgs.msg import Marker
 
-from clew_ros.core.clew import plan  # noqa: E402
-from clew_ros.core.plan import Plan, validate_plan  # noqa: E402
-from clew_ros.core.settings import PlannerSettings  # noqa: E402
-from clew_ros.core.tree import LandmarkTree  # noqa: E402
-from clew_ros.core.world import load_world, world_from_parameters  # noqa: E402
-from clew_ros.node import messages  # noqa: E402
-from clew_ros.node.playback import track_from_plan  # noqa: E402
-from clew_ros.recording import trajectory_to_plan  # noqa: E402
+from clew_ros.core.clew import plan
+from clew_ros.core.plan import Plan, validate_plan
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.tree import LandmarkTree
+from clew_ros.core.world import load_world, world_from_parameters
+from clew_ros.node import messages
+from clew_ros.node.playback import track_from_plan
+from clew_ros.recording import trajectory_to_plan
 
 WORLDS = Path(__file__).parents[1] / "worlds"
 
@@ -82,13 +82,16 @@ def test_goal_pose_accepts_an_empty_frame_and_the_bounds_edge(quick) -> None:
     assert np.allclose(messages.goal_from_pose_stamped(goal_msg(2.0, -2.0, frame=""), quick)[:2], [2.0, -2.0])
 
 
-@pytest.mark.parametrize("change, reason", [
-    (lambda m: setattr(m.header, "frame_id", "map"), "frame_id"),
-    (lambda m: setattr(m.pose.position, "y", math.inf), "finite"),
-    (lambda m: setattr(m.pose.orientation, "w", 0.0), "unit quaternion"),
-    (lambda m: (setattr(m.pose.orientation, "x", 0.6), setattr(m.pose.orientation, "w", 0.8)), "about z"),
-    (lambda m: setattr(m.pose.position, "x", 2.01), "outside world.bounds"),
-])
+@pytest.mark.parametrize(
+    ("change", "reason"),
+    [
+        (lambda m: setattr(m.header, "frame_id", "map"), "frame_id"),
+        (lambda m: setattr(m.pose.position, "y", math.inf), "finite"),
+        (lambda m: setattr(m.pose.orientation, "w", 0.0), "unit quaternion"),
+        (lambda m: (setattr(m.pose.orientation, "x", 0.6), setattr(m.pose.orientation, "w", 0.8)), "about z"),
+        (lambda m: setattr(m.pose.position, "x", 2.01), "outside world.bounds"),
+    ],
+)
 def test_goal_pose_refusals_say_why(quick, change, reason: str) -> None:
     msg = goal_msg()
     change(msg)
@@ -107,7 +110,9 @@ def test_world_markers() -> None:
     assert len(by_ns["obstacles"]) == len(world.obstacles) == 4
     assert all(len(m.points) == 6 and m.type == Marker.TRIANGLE_LIST for m in by_ns["obstacles"])  # 2 triangles
     bounds = by_ns["bounds"][0]
-    assert bounds.type == Marker.LINE_STRIP and bounds.points[0] == bounds.points[-1] and len(bounds.points) == 5
+    assert bounds.type == Marker.LINE_STRIP
+    assert bounds.points[0] == bounds.points[-1]
+    assert len(bounds.points) == 5
     goal = by_ns["object_goal"][0]
     centre = np.mean([[p.x, p.y] for p in goal.points[:-1]], axis=0)
     assert np.allclose(centre, world.object.goal[:2])
@@ -129,22 +134,37 @@ def test_concave_obstacles_are_filled_inside_only(quick) -> None:
     filled = next(m for m in messages.world_markers(world, 0).markers if m.ns == "obstacles")
     points = filled.points
     assert len(points) % 3 == 0
-    area = sum(shapely.Polygon([(p.x, p.y) for p in points[i:i + 3]]).area for i in range(0, len(points), 3))
+    area = sum(shapely.Polygon([(p.x, p.y) for p in points[i : i + 3]]).area for i in range(0, len(points), 3))
     assert area == pytest.approx(shapely.Polygon(u_shape).area)
 
 
 def test_landmark_markers() -> None:
     tree = LandmarkTree(np.zeros(2), np.array([0.0, 1.0, 0.0]))
-    tree.add(parent=0, joints=np.ones(2), object_pose=np.array([1.0, 1.0, 0.0]), grasp=1, grasp_rel=None,
-             transit=None, transfer=None)
-    tree.add(parent=1, joints=np.ones(2), object_pose=np.array([1.0, 0.0, 0.0]), grasp=0, grasp_rel=None,
-             transit=None, transfer=None)
+    tree.add(
+        parent=0,
+        joints=np.ones(2),
+        object_pose=np.array([1.0, 1.0, 0.0]),
+        grasp=1,
+        grasp_rel=None,
+        transit=None,
+        transfer=None,
+    )
+    tree.add(
+        parent=1,
+        joints=np.ones(2),
+        object_pose=np.array([1.0, 0.0, 0.0]),
+        grasp=0,
+        grasp_rel=None,
+        transit=None,
+        transfer=None,
+    )
     markers = messages.landmark_markers(tree, 0).markers
     assert markers[0].action == Marker.DELETEALL
     spheres = next(m for m in markers if m.ns == "landmarks")
     assert [(p.x, p.y) for p in spheres.points] == [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0)]
     edges = next(m for m in markers if m.ns == "tree_edges")
-    assert edges.type == Marker.LINE_LIST and len(edges.points) == 4
+    assert edges.type == Marker.LINE_LIST
+    assert len(edges.points) == 4
     texts = [m for m in markers if m.ns == "landmark_ids"]
     assert [(m.id, m.text) for m in texts] == [(0, "0"), (1, "1"), (2, "2")]
 
@@ -153,14 +173,24 @@ def test_status_feedback_and_events() -> None:
     run_id = uuid.uuid4()
     status = messages.goal_status_array([(run_id, 1_500_000_000, 2)], 0)
     assert bytes(status.status_list[0].goal_info.goal_id.uuid) == run_id.bytes
-    assert status.status_list[0].goal_info.stamp.sec == 1 and status.status_list[0].status == 2
+    assert status.status_list[0].goal_info.stamp.sec == 1
+    assert status.status_list[0].status == 2
     feedback = messages.feedback_status(run_id, landmarks=3, best_distance=math.inf, elapsed_s=1.25, phase="planning")
     values = {kv.key: kv.value for kv in feedback.values}
-    assert values["run_id"] == run_id.hex and values["landmarks"] == "3" and values["elapsed"] == "1.250"
-    event = json.loads(messages.event_message(run_id, "aborted", 12.5, code="BUSY", best=math.nan,
-                                              pose=np.array([1.0, np.inf])).data)
-    assert event == {"run_id": run_id.hex, "event": "aborted", "time": 12.5, "code": "BUSY", "best": None,
-                     "pose": [1.0, None]}
+    assert values["run_id"] == run_id.hex
+    assert values["landmarks"] == "3"
+    assert values["elapsed"] == "1.250"
+    event = json.loads(
+        messages.event_message(run_id, "aborted", 12.5, code="BUSY", best=math.nan, pose=np.array([1.0, np.inf])).data
+    )
+    assert event == {
+        "run_id": run_id.hex,
+        "event": "aborted",
+        "time": 12.5,
+        "code": "BUSY",
+        "best": None,
+        "pose": [1.0, None],
+    }
 
 
 def test_world_yaml_is_a_parameter_file_for_the_same_world(tmp_path: Path) -> None:
@@ -172,6 +202,7 @@ def test_world_yaml_is_a_parameter_file_for_the_same_world(tmp_path: Path) -> No
     path.write_text(messages.world_yaml_message(world, settings).data)
     tree = read_parameter_file(path)
     again = world_from_parameters(tree)
-    assert again.name == world.name and [o.name for o in again.obstacles] == [o.name for o in world.obstacles]
+    assert again.name == world.name
+    assert [o.name for o in again.obstacles] == [o.name for o in world.obstacles]
     assert np.allclose(again.object.polygon, world.object.polygon)
     assert PlannerSettings.from_parameters(tree) == settings

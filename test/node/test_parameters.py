@@ -10,11 +10,11 @@ import pytest
 
 pytest.importorskip("rclpy")
 
-from clew_ros.core.errors import ParameterError, WorldError  # noqa: E402
-from clew_ros.core.parameters import NODE_PARAMETERS, PLANNER_PARAMETERS, WORLD_PARAMETERS  # noqa: E402
-from clew_ros.core.world import read_parameter_file  # noqa: E402
-from clew_ros.node import parameters  # noqa: E402
-from clew_ros.node.parameters import (  # noqa: E402
+from clew_ros.core.errors import ParameterError, WorldError
+from clew_ros.core.parameters import NODE_PARAMETERS, PLANNER_PARAMETERS, WORLD_PARAMETERS
+from clew_ros.core.world import read_parameter_file
+from clew_ros.node import parameters
+from clew_ros.node.parameters import (
     NodeSettings,
     configuration_from_values,
     default_world_file,
@@ -53,36 +53,43 @@ def test_without_world_parameters_the_default_file_is_served() -> None:
 def test_world_parameters_replace_the_default_world() -> None:
     values = initial_values(file_values("node_quick.yaml"))
     config = configuration_from_values(values)
-    assert config.world.name == "node_quick" and not config.world.obstacles
+    assert config.world.name == "node_quick"
+    assert not config.world.obstacles
     assert values["world.obstacle_names"] is None  # absent: no obstacles of the default world leak in
-    assert config.world.robot.link_width == 0.0 and config.world.goal_angle_tolerance == pytest.approx(math.pi)
+    assert config.world.robot.link_width == 0.0
+    assert config.world.goal_angle_tolerance == pytest.approx(math.pi)
     # a lone world.* override is a world of its own: the required keys are missing
-    with pytest.raises(WorldError, match="world.bounds"):
+    with pytest.raises(WorldError, match=r"world\.bounds"):
         configuration_from_values(initial_values({"world.object.goal": [0.5, 0.5, 0.0]}))
 
 
 def test_every_parameter_has_a_start_value() -> None:
     values = initial_values(file_values("node_quick.yaml"))
-    expected = ({f"world.{k}" for k in WORLD_PARAMETERS} | {f"planner.{k}" for k in PLANNER_PARAMETERS}
-                | set(NODE_PARAMETERS))
+    expected = (
+        {f"world.{k}" for k in WORLD_PARAMETERS} | {f"planner.{k}" for k in PLANNER_PARAMETERS} | set(NODE_PARAMETERS)
+    )
     assert expected <= set(values)
-    assert values["record.enabled"] is True and values["playback.rate"] == 20.0
+    assert values["record.enabled"] is True
+    assert values["playback.rate"] == 20.0
 
 
-@pytest.mark.parametrize("name, value, fault", [
-    ("world.robot.initial", [9.0, 0.0], "world.robot.initial"),
-    ("world.bounds", "wide", "world.bounds"),
-    ("world.goal_tolerence", 0.1, "world.goal_tolerence"),
-    ("world.obstacles.stray", [0.0, 0.0, 1.0, 0.0, 1.0, 1.0], "world.obstacles.stray"),
-    ("planner.time_limit", -1.0, "planner.time_limit"),
-    ("planner.population", "many", "planner.population"),
-    ("planner.speed", 1.0, "planner.speed"),
-    ("record.enabled", "yes", "record.enabled"),
-    ("record.directory", "", "record.directory"),
-    ("playback.rate", 0.0, "playback.rate"),
-    ("trajectory.joint_speed", math.nan, "trajectory.joint_speed"),
-    ("record.bogus", 1, "record.bogus"),
-])
+@pytest.mark.parametrize(
+    ("name", "value", "fault"),
+    [
+        ("world.robot.initial", [9.0, 0.0], "world.robot.initial"),
+        ("world.bounds", "wide", "world.bounds"),
+        ("world.goal_tolerence", 0.1, "world.goal_tolerence"),
+        ("world.obstacles.stray", [0.0, 0.0, 1.0, 0.0, 1.0, 1.0], "world.obstacles.stray"),
+        ("planner.time_limit", -1.0, "planner.time_limit"),
+        ("planner.population", "many", "planner.population"),
+        ("planner.speed", 1.0, "planner.speed"),
+        ("record.enabled", "yes", "record.enabled"),
+        ("record.directory", "", "record.directory"),
+        ("playback.rate", 0.0, "playback.rate"),
+        ("trajectory.joint_speed", math.nan, "trajectory.joint_speed"),
+        ("record.bogus", 1, "record.bogus"),
+    ],
+)
 def test_faults_name_the_parameter(name: str, value, fault: str) -> None:
     values = initial_values(file_values("node_quick.yaml"))
     values[name] = value
@@ -95,7 +102,8 @@ def test_numbers_may_be_integers() -> None:
     values = initial_values(file_values("node_quick.yaml"))
     values.update({"planner.time_limit": 5, "playback.rate": 10, "world.robot.base": [0, 0]})
     config = configuration_from_values(values)
-    assert config.planner.time_limit == 5.0 and config.node.playback_rate_hz == 10.0
+    assert config.planner.time_limit == 5.0
+    assert config.node.playback_rate_hz == 10.0
 
 
 def test_unlisted_obstacles_are_ignored_after_start_only() -> None:
@@ -103,13 +111,15 @@ def test_unlisted_obstacles_are_ignored_after_start_only() -> None:
     values["world.obstacle_names"] = ["ring_south", "ring_north", "ring_west"]  # ring_east retired
     config = configuration_from_values(values, listed_obstacles_only=True)
     assert [o.name for o in config.world.obstacles] == ["ring_south", "ring_north", "ring_west"]
-    with pytest.raises(WorldError, match="world.obstacles.ring_east"):
+    with pytest.raises(WorldError, match=r"world\.obstacles\.ring_east"):
         configuration_from_values(values)
 
 
 def test_descriptors() -> None:
     seed = descriptor_for("planner.seed")
-    assert seed.dynamic_typing and seed.integer_range[0].to_value == 2**31 - 1 and seed.description
+    assert seed.dynamic_typing
+    assert seed.integer_range[0].to_value == 2**31 - 1
+    assert seed.description
     limit = descriptor_for("planner.time_limit")
     assert limit.floating_point_range[0].from_value == pytest.approx(0.01)
     assert "required" in descriptor_for("world.bounds").additional_constraints
@@ -139,14 +149,17 @@ def test_descriptors_follow_the_specification() -> None:
     for table in (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS):
         for spec in table.values():
             d = descriptor_for(spec.name)
-            assert d.name == spec.name and d.description == spec.description and d.dynamic_typing
+            assert d.name == spec.name
+            assert d.description == spec.description
+            assert d.dynamic_typing
             ranges = [(r.from_value, r.to_value) for r in (*d.integer_range, *d.floating_point_range)]
             assert ranges == ([spec.limits] if spec.limits else []), spec.name
 
 
 def test_node_settings_take_the_specified_defaults() -> None:
-    assert NodeSettings() == NodeSettings(**{field: NODE_PARAMETERS[name].default
-                                             for field, name in parameters._FIELD_PARAMETERS.items()})
+    assert NodeSettings() == NodeSettings(
+        **{field: NODE_PARAMETERS[name].default for field, name in parameters.SETTINGS_FIELDS.items()}
+    )
     config = configuration_from_values(initial_values(file_values("node_quick.yaml")))
     assert config.node == NodeSettings()
 
@@ -157,16 +170,23 @@ CHECKER_CASES = [
     ("playback.rate", "fast", "playback.rate: expected a number, got 'fast'"),
     ("playback.rate", 0.5, "playback.rate: expected a value in [1.0, 1000.0], got 0.5"),
     ("trajectory.grasp_dwell", math.nan, "trajectory.grasp_dwell: expected a value in [0.001, 60.0], got nan"),
-    ("trajectory.joint_speed", 10**400, "trajectory.joint_speed: expected a value in [0.001, 1000.0], got "
-                                        + "1" + "0" * 76 + "..."),
-    ("trajectory.joint_speed", 10**5000, "trajectory.joint_speed: expected a value in [0.001, 1000.0], got "
-                                         "an integer of about 5000 digits"),
+    (
+        "trajectory.joint_speed",
+        10**400,
+        "trajectory.joint_speed: expected a value in [0.001, 1000.0], got " + "1" + "0" * 76 + "...",
+    ),
+    (
+        "trajectory.joint_speed",
+        10**5000,
+        "trajectory.joint_speed: expected a value in [0.001, 1000.0], got an integer of about 5000 digits",
+    ),
     ("planner.seed", 1.5, "planner.seed: expected an integer, got 1.5"),
 ]
 
 
-@pytest.mark.parametrize("name, value, message", CHECKER_CASES,
-                         ids=[f"{c[0]}-{i}" for i, c in enumerate(CHECKER_CASES)])
+@pytest.mark.parametrize(
+    ("name", "value", "message"), CHECKER_CASES, ids=[f"{c[0]}-{i}" for i, c in enumerate(CHECKER_CASES)]
+)
 def test_node_and_planner_values_share_one_checker(name: str, value, message: str) -> None:
     values = initial_values(file_values("node_quick.yaml"))
     values[name] = value

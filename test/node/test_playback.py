@@ -21,15 +21,22 @@ def world():
 
 
 def plan_of(*segments: PlanSegment) -> Plan:
-    return Plan(world="node_quick", joint_names=("joint_1", "joint_2"), success=bool(segments), message="by hand",
-                segments=segments)
+    return Plan(
+        world="node_quick",
+        joint_names=("joint_1", "joint_2"),
+        success=bool(segments),
+        message="by hand",
+        segments=segments,
+    )
 
 
 def hand_plan(q0, q1, q2, q3, grasp=2) -> Plan:
     """transit q0 -> q1, transfer (grasp) q1 -> q2, transit q2 -> q3."""
-    return plan_of(PlanSegment("transit", None, np.array([q0, q1], float)),
-                   PlanSegment("transfer", grasp, np.array([q1, q2], float)),
-                   PlanSegment("transit", None, np.array([q2, q3], float)))
+    return plan_of(
+        PlanSegment("transit", None, np.array([q0, q1], float)),
+        PlanSegment("transfer", grasp, np.array([q1, q2], float)),
+        PlanSegment("transit", None, np.array([q2, q3], float)),
+    )
 
 
 def test_times_follow_joint_speed_and_dwell(world) -> None:
@@ -40,7 +47,8 @@ def test_times_follow_joint_speed_and_dwell(world) -> None:
     steps = np.diff(track.times_s)
     # move 0.5 rad at 2 rad/s, grasp dwell, move 0.6 rad, ungrasp dwell, move 0.4 rad
     assert np.allclose(steps, [0.25, 0.25, 0.3, 0.25, 0.2])
-    assert track.times_ns[0] == 0 and np.all(np.diff(track.times_ns) >= MIN_STEP_NS)
+    assert track.times_ns[0] == 0
+    assert np.all(np.diff(track.times_ns) >= MIN_STEP_NS)
 
 
 def test_nearly_equal_points_still_get_increasing_times(world) -> None:
@@ -63,8 +71,10 @@ def test_grasp_events_follow_the_transfer_segments(world) -> None:
 
 
 def test_a_start_that_already_holds_a_grasp(world) -> None:
-    plan = plan_of(PlanSegment("transit", None, np.array([[0.0, 0.0]])),
-                   PlanSegment("transfer", 0, np.array([[0.0, 0.0], [0.3, 0.0]])))
+    plan = plan_of(
+        PlanSegment("transit", None, np.array([[0.0, 0.0]])),
+        PlanSegment("transfer", 0, np.array([[0.0, 0.0], [0.3, 0.0]])),
+    )
     track = track_from_plan(world, plan, grasp_dwell_s=0.2)
     assert [(e.kind, e.grasp, e.time_s) for e in track.events()] == [("grasp", 0, pytest.approx(0.2))]
 
@@ -80,7 +90,8 @@ def test_samples_move_the_object_with_the_end_effector(world) -> None:
         assert np.allclose(track.sample(t)[2], rest)
     # halfway through the transfer it follows the tip
     joints, gripper, pose = track.sample(0.5 * (t_grasp + t_place))
-    assert gripper == 1.0 and np.allclose(joints, 0.5 * (q1 + q2))
+    assert gripper == 1.0
+    assert np.allclose(joints, 0.5 * (q1 + q2))
     assert np.allclose(pose, compose(tip_poses(world.robot, joints[None])[0], rel))
     # after the ungrasp it rests where the transfer left it, to the end
     placed = compose(tip_poses(world.robot, q2[None])[0], rel)
@@ -93,5 +104,5 @@ def test_samples_move_the_object_with_the_end_effector(world) -> None:
 def test_a_plan_without_segments_has_no_track(world) -> None:
     with pytest.raises(ValueError, match="without segments"):
         track_from_plan(world, plan_of())
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="must be > 0"):
         track_from_plan(world, hand_plan([0, 0], [0, 0], [0, 0], [0, 0]), joint_speed_rad_s=0.0)

@@ -28,9 +28,13 @@ class Line:
 
 def recorded(duration_s: float, rate_hz: float, stop: threading.Event):
     samples, events = [], []
-    end = play(Line(duration_s), rate_hz, wait_stop=stop.wait,
-               on_sample=lambda q, gripper, pose: samples.append((time.monotonic(), float(q[0]), gripper)),
-               on_event=lambda e: events.append((len(samples), e)))
+    end = play(
+        Line(duration_s),
+        rate_hz,
+        wait_stop=stop.wait,
+        on_sample=lambda q, gripper, pose: samples.append((time.monotonic(), float(q[0]), gripper)),
+        on_event=lambda e: events.append((len(samples), e)),
+    )
     return end, samples, events
 
 
@@ -38,7 +42,9 @@ def test_plays_in_time_to_the_last_point() -> None:
     start = time.monotonic()
     end, samples, events = recorded(0.5, 20.0, threading.Event())
     took = time.monotonic() - start
-    assert not end.stopped and end.phase == "playback_done" and end.at_s == 0.5
+    assert not end.stopped
+    assert end.phase == "playback_done"
+    assert end.at_s == 0.5
     assert 0.5 <= took < 1.5
     assert samples[-1][1] == 0.5  # the last sample is the last point
     assert 9 <= len(samples) <= 13  # 20 Hz over 0.5 s, the first at 0 and the last at the end
@@ -47,7 +53,8 @@ def test_plays_in_time_to_the_last_point() -> None:
     # each event once, in order, right after the first sample at or past its time
     assert [e.kind for _, e in events] == ["grasp", "ungrasp"]
     for count, event in events:
-        assert samples[count - 1][1] >= event.time_s and (count < 2 or samples[count - 2][1] < event.time_s)
+        assert samples[count - 1][1] >= event.time_s
+        assert count < 2 or samples[count - 2][1] < event.time_s
 
 
 def test_a_stop_ends_it_within_a_period() -> None:
@@ -55,14 +62,20 @@ def test_a_stop_ends_it_within_a_period() -> None:
     threading.Timer(0.2, stop.set).start()
     start = time.monotonic()
     end, samples, events = recorded(10.0, 20.0, stop)
-    assert end.stopped and end.phase == "playback_stopped" and 0.1 < end.at_s < 0.5
+    assert end.stopped
+    assert end.phase == "playback_stopped"
+    assert 0.1 < end.at_s < 0.5
     assert time.monotonic() - start < 1.0
-    assert samples[-1][1] < 0.5 and not events  # the grasp (at 3 s) was not reached
+    assert samples[-1][1] < 0.5
+    assert not events
 
 
 def test_a_stop_before_the_start_sends_nothing() -> None:
     stop = threading.Event()
     stop.set()
     end, samples, events = recorded(1.0, 20.0, stop)
-    assert end.stopped and end.at_s is None and end.phase == "playback_stopped"
-    assert not samples and not events
+    assert end.stopped
+    assert end.at_s is None
+    assert end.phase == "playback_stopped"
+    assert not samples
+    assert not events

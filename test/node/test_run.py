@@ -12,13 +12,13 @@ import pytest
 
 pytest.importorskip("action_msgs")
 
-from action_msgs.msg import GoalStatus  # noqa: E402
+from action_msgs.msg import GoalStatus
 
-from clew_ros.core.settings import Outcome  # noqa: E402
-from clew_ros.core.world import read_parameter_file  # noqa: E402
-from clew_ros.node.parameters import configuration_from_values, flatten, initial_values  # noqa: E402
-from clew_ros.node.run import CancelKind, Phase, Run, StatusTable  # noqa: E402
-from clew_ros.node.run_recording import RunRecording  # noqa: E402
+from clew_ros.core.settings import Outcome
+from clew_ros.core.world import read_parameter_file
+from clew_ros.node.parameters import configuration_from_values, flatten, initial_values
+from clew_ros.node.run import CancelKind, Phase, Run, StatusTable
+from clew_ros.node.run_recording import RunRecording
 
 QUICK = Path(__file__).parents[1] / "worlds" / "node_quick.yaml"
 #: Stands in for the timed plan of a success (only its duration is read).
@@ -42,41 +42,60 @@ def planned(run: Run, outcome: Outcome = Outcome.SUCCEEDED, *, cancel_before_end
 
 def test_a_success_goes_through_every_phase(config) -> None:
     run = Run("plan", None, config, accepted_ns=7)
-    assert np.allclose(run.goal, config.world.object.goal) and np.allclose(run.world.object.goal, run.goal)
-    assert run.phase is Phase.ACCEPTED and run.is_busy and run.status == GoalStatus.STATUS_ACCEPTED
+    assert np.allclose(run.goal, config.world.object.goal)
+    assert np.allclose(run.world.object.goal, run.goal)
+    assert run.phase is Phase.ACCEPTED
+    assert run.is_busy
+    assert run.status == GoalStatus.STATUS_ACCEPTED
     run.begin_planning()
-    assert run.phase is Phase.PLANNING and run.is_busy and run.status == GoalStatus.STATUS_EXECUTING
+    assert run.phase is Phase.PLANNING
+    assert run.is_busy
+    assert run.status == GoalStatus.STATUS_EXECUTING
     assert run.end_planning() is False
-    assert run.phase is Phase.PUBLISHING and run.is_busy
+    assert run.phase is Phase.PUBLISHING
+    assert run.is_busy
     run.conclude(Outcome.SUCCEEDED, "found", 0.25, TRACK)
-    assert run.status == GoalStatus.STATUS_SUCCEEDED and not run.wait_outcome(0.0)
+    assert run.status == GoalStatus.STATUS_SUCCEEDED
+    assert not run.wait_outcome(0.0)
     run.outcome_published()
-    assert run.phase is Phase.PLAYBACK and not run.is_busy and run.wait_outcome(0.0)
+    assert run.phase is Phase.PLAYBACK
+    assert not run.is_busy
+    assert run.wait_outcome(0.0)
     assert not run.wait_finished(0.0)
     run.finish()
-    assert run.phase is Phase.FINISHED and run.wait_finished(0.0)
+    assert run.phase is Phase.FINISHED
+    assert run.wait_finished(0.0)
 
 
-@pytest.mark.parametrize(("outcome", "status"), [(Outcome.TIME_LIMIT, GoalStatus.STATUS_ABORTED),
-                                             (Outcome.INTERNAL_ERROR, GoalStatus.STATUS_ABORTED),
-                                             (Outcome.CANCELED, GoalStatus.STATUS_CANCELED)])
+@pytest.mark.parametrize(
+    ("outcome", "status"),
+    [
+        (Outcome.TIME_LIMIT, GoalStatus.STATUS_ABORTED),
+        (Outcome.INTERNAL_ERROR, GoalStatus.STATUS_ABORTED),
+        (Outcome.CANCELED, GoalStatus.STATUS_CANCELED),
+    ],
+)
 def test_without_a_plan_the_run_finishes_at_its_outcome(config, outcome: Outcome, status: int) -> None:
     run = Run("goal_pose", np.array([0.5, 0.5, 0.0]), config, accepted_ns=0)
     planned(run, outcome)
     run.outcome_published()
-    assert run.phase is Phase.FINISHED and run.status == status and run.track is None
+    assert run.phase is Phase.FINISHED
+    assert run.status == status
+    assert run.track is None
     assert np.allclose(run.world.object.goal, [0.5, 0.5, 0.0])
 
 
 def test_a_cancel_stops_the_planning_until_the_plan_is_known_then_the_playback(config) -> None:
     run = Run("plan", None, config, accepted_ns=0)
     assert run.request_cancel() is CancelKind.PLAN  # accepted: the planner will not even start
-    assert run.is_cancel_requested and run.termination().reason() is Outcome.CANCELED
+    assert run.is_cancel_requested
+    assert run.termination().reason() is Outcome.CANCELED
     assert not run.is_stop_requested
 
     run = Run("plan", None, config, accepted_ns=0)
     assert planned(run, cancel_before_end=True) is True  # the worker sees the cancel that came in time
-    assert run.request_cancel() is CancelKind.PLAYBACK and run.is_stop_requested  # publishing: the playback
+    assert run.request_cancel() is CancelKind.PLAYBACK
+    assert run.is_stop_requested
     run.outcome_published()
     assert run.request_cancel() is CancelKind.PLAYBACK
     run.finish()
@@ -105,8 +124,10 @@ def test_the_answer_names_the_outcome_and_the_recording(config) -> None:
     run.recording = Open("recording /tmp/x")
     planned(run)
     run.landmarks = 4
-    assert run.result_text() == (f"run {run.hex}: SUCCEEDED: message; landmarks 4; time 0.25 s; recording /tmp/x"
-                                 " (complete when the 1.5 s playback ends)")
+    assert run.result_text() == (
+        f"run {run.hex}: SUCCEEDED: message; landmarks 4; time 0.25 s; recording /tmp/x"
+        " (complete when the 1.5 s playback ends)"
+    )
     run.recording = RunRecording("recording off (record.enabled is false)")
     assert run.result_text().endswith("; recording off (record.enabled is false)")
 
@@ -115,9 +136,11 @@ def test_waits_return_when_the_worker_gets_there(config) -> None:
     run = Run("plan", None, config, accepted_ns=0)
     assert not run.wait_stop(0.0)
     threading.Timer(0.05, run.stop).start()
-    assert run.wait_stop(5.0) and run.is_cancel_requested
+    assert run.wait_stop(5.0)
+    assert run.is_cancel_requested
     threading.Timer(0.05, run.finish).start()  # a worker that failed before its outcome still lets waiters go
-    assert run.wait_outcome(5.0) and run.wait_finished(5.0)
+    assert run.wait_outcome(5.0)
+    assert run.wait_finished(5.0)
 
 
 def test_status_table_keeps_the_last_runs_in_order() -> None:
@@ -126,8 +149,11 @@ def test_status_table_keeps_the_last_runs_in_order() -> None:
     for k, run_id in enumerate(ids):
         table.set(run_id, k, GoalStatus.STATUS_ACCEPTED)
     table.set(ids[2], 2, GoalStatus.STATUS_SUCCEEDED)  # an update moves the run last
-    assert table.entries() == [(ids[3], 3, GoalStatus.STATUS_ACCEPTED), (ids[4], 4, GoalStatus.STATUS_ACCEPTED),
-                               (ids[2], 2, GoalStatus.STATUS_SUCCEEDED)]
+    assert table.entries() == [
+        (ids[3], 3, GoalStatus.STATUS_ACCEPTED),
+        (ids[4], 4, GoalStatus.STATUS_ACCEPTED),
+        (ids[2], 2, GoalStatus.STATUS_SUCCEEDED),
+    ]
     assert len(table) == 3
 
 
@@ -136,4 +162,5 @@ def test_a_fault_before_planning_still_ends_the_run(config) -> None:
     run.conclude(Outcome.INTERNAL_ERROR, "internal error in the node: ...", 0.0)  # the worker failed at once
     assert run.status == GoalStatus.STATUS_ABORTED
     run.outcome_published()
-    assert run.phase is Phase.FINISHED and not run.is_busy
+    assert run.phase is Phase.FINISHED
+    assert not run.is_busy

@@ -10,11 +10,11 @@ import pytest
 pytest.importorskip("rclpy")
 pytest.importorskip("mcap")
 
-from std_msgs.msg import String  # noqa: E402
+from std_msgs.msg import String
 
-from clew_ros.node.parameters import NodeSettings  # noqa: E402
-from clew_ros.node.run_recording import NO_RECORDING, BagRecording, Recordings, RunRecording  # noqa: E402
-from clew_ros.recording import Recording  # noqa: E402
+from clew_ros.node.parameters import NodeSettings
+from clew_ros.node.run_recording import NO_RECORDING, BagRecording, Recordings, RunRecording
+from clew_ros.recording import Recording
 
 RUN = "0123456789abcdef0123456789abcdef"
 
@@ -39,28 +39,34 @@ def settings(directory: Path, enabled: bool = True) -> NodeSettings:
 
 def test_off_records_nothing_and_says_so(tmp_path: Path) -> None:
     recording = Recordings("clew_planner", Logger()).open(settings(tmp_path / "runs", enabled=False), RUN)
-    assert recording.text == "recording off (record.enabled is false)" and not recording.is_open
+    assert recording.text == "recording off (record.enabled is false)"
+    assert not recording.is_open
     recording.write("/clew_planner/events", String(data="x"), 1)
     recording.check()
     recording.close()
     assert not (tmp_path / "runs").exists()
-    assert NO_RECORDING.text == "" and not NO_RECORDING.is_open
+    assert NO_RECORDING.text == ""
+    assert not NO_RECORDING.is_open
 
 
 def test_a_run_is_written_and_closed(tmp_path: Path) -> None:
     logger = Logger()
     recording = Recordings("clew_planner", logger).open(settings(tmp_path / "runs"), RUN)  # created if missing
-    assert isinstance(recording, BagRecording) and recording.is_open
+    assert isinstance(recording, BagRecording)
+    assert recording.is_open
     assert recording.text == f"recording {tmp_path / 'runs' / RUN}"
     for k in range(3):
         recording.write("/clew_planner/events", String(data=str(k)), 1_000_000_000 + k)
     recording.check()
     recording.close()
     recording.close()  # idempotent
-    assert not recording.is_open and recording.text == f"recording {tmp_path / 'runs' / RUN}" and not logger.errors
+    assert not recording.is_open
+    assert recording.text == f"recording {tmp_path / 'runs' / RUN}"
+    assert not logger.errors
     recording.write("/clew_planner/events", String(data="late"), 2_000_000_000)  # after close: dropped
     read = Recording(tmp_path / "runs" / RUN)
-    assert read.complete and [m.data for m in read.decoded("/clew_planner/events")] == ["0", "1", "2"]
+    assert read.complete
+    assert [m.data for m in read.decoded("/clew_planner/events")] == ["0", "1", "2"]
 
 
 def test_a_directory_that_cannot_be_made_leaves_the_run_unrecorded(tmp_path: Path) -> None:
@@ -68,7 +74,8 @@ def test_a_directory_that_cannot_be_made_leaves_the_run_unrecorded(tmp_path: Pat
     logger = Logger()
     recording = Recordings("clew_planner", logger).open(settings(tmp_path / "file" / "runs"), RUN)
     assert recording.text.startswith(f"not recorded: record.directory {tmp_path / 'file' / 'runs'} cannot be created")
-    assert not recording.is_open and logger.errors == [f"run {RUN}: {recording.text}"]
+    assert not recording.is_open
+    assert logger.errors == [f"run {RUN}: {recording.text}"]
 
 
 def test_an_existing_run_directory_is_not_overwritten(tmp_path: Path) -> None:
@@ -76,18 +83,22 @@ def test_an_existing_run_directory_is_not_overwritten(tmp_path: Path) -> None:
     logger = Logger()
     recording = Recordings("clew_planner", logger).open(settings(tmp_path), RUN)
     assert recording.text == f"not recorded: {tmp_path / RUN} exists already, not overwriting."
-    assert logger.errors and "cannot record to" in logger.errors[0]
+    assert logger.errors
+    assert "cannot record to" in logger.errors[0]
 
 
 def test_without_the_recorder_runs_are_not_recorded_and_that_is_logged_once(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setitem(sys.modules, "clew_ros.recording", None)  # any import of it raises ImportError
     logger = Logger()
     recordings = Recordings("clew_planner", logger)
     for run in (RUN, RUN[::-1]):
         recording = recordings.open(settings(tmp_path), run)
-        assert recording.text.startswith("not recorded: the recorder is not available") and not recording.is_open
-    assert len(logger.warnings) == 1 and logger.warnings[0].startswith("runs are not recorded:")
+        assert recording.text.startswith("not recorded: the recorder is not available")
+        assert not recording.is_open
+    assert len(logger.warnings) == 1
+    assert logger.warnings[0].startswith("runs are not recorded:")
 
 
 class FailingRecorder:
@@ -109,10 +120,13 @@ class FailingRecorder:
         return self.path
 
 
-@pytest.mark.parametrize(("raise_on", "reason"), [
-    ("", "cannot write (writing a chunk): No space left on device"),
-    ("write", "write to /t failed: disk full"),
-])
+@pytest.mark.parametrize(
+    ("raise_on", "reason"),
+    [
+        ("", "cannot write (writing a chunk): No space left on device"),
+        ("write", "write to /t failed: disk full"),
+    ],
+)
 def test_the_first_fault_goes_into_the_text_once(raise_on: str, reason: str) -> None:
     failures: list[str] = []
     recording = BagRecording(FailingRecorder(raise_on), failures.append)  # type: ignore[arg-type]
@@ -128,5 +142,7 @@ def test_a_failing_close_is_reported_not_raised() -> None:
     failures: list[str] = []
     recording = BagRecording(FailingRecorder("close"), failures.append)  # type: ignore[arg-type]
     recording.close()
-    assert failures == ["close failed: gone"] and recording.text.endswith("(recording failed: close failed: gone)")
-    assert isinstance(recording, RunRecording) and not recording.is_open
+    assert failures == ["close failed: gone"]
+    assert recording.text.endswith("(recording failed: close failed: gone)")
+    assert isinstance(recording, RunRecording)
+    assert not recording.is_open

@@ -82,7 +82,8 @@ def test_plan_succeeds_and_publishes_the_run(quick: Session, quick_world, tmp_pa
     response = quick.plan()
     assert response.success, response.message
     run_id = run_id_of(response.message)
-    assert "SUCCEEDED" in response.message and "landmarks" in response.message
+    assert "SUCCEEDED" in response.message
+    assert "landmarks" in response.message
     quick.wait_status(run_id, GoalStatus.STATUS_SUCCEEDED)
 
     # the trajectory of this run: joint names, gripper values, strictly increasing times
@@ -108,27 +109,41 @@ def test_plan_succeeds_and_publishes_the_run(quick: Session, quick_world, tmp_pa
     events = quick.events_of(run_id)
     kinds = [e["event"] for e in events]
     assert kinds[0] == "accepted"
-    assert "succeeded" in kinds and "aborted" not in kinds
+    assert "succeeded" in kinds
+    assert "aborted" not in kinds
     succeeded = next(e for e in events if e["event"] == "succeeded")
-    assert succeeded["code"] == "SUCCEEDED" and succeeded["message"]
+    assert succeeded["code"] == "SUCCEEDED"
+    assert succeeded["message"]
     transfers = [s.grasp for s in plan.segments if s.kind == "transfer"]
     assert [e["grasp"] for e in events if e["event"] == "grasp"] == transfers
     grasp_times = [e["time"] for e in events if e["event"] in ("grasp", "ungrasp")]
-    assert grasp_times == sorted(grasp_times) and all(0 < t <= times[-1] for t in grasp_times)
+    assert grasp_times == sorted(grasp_times)
+    assert all(0 < t <= times[-1] for t in grasp_times)
 
     # feedback while planning / at the end carries the run id
-    assert any(kv(m).get("run_id") == run_id and kv(m).get("phase") == "SUCCEEDED"
-               for m in quick.feedback.messages)
+    assert any(kv(m).get("run_id") == run_id and kv(m).get("phase") == "SUCCEEDED" for m in quick.feedback.messages)
 
     if HAVE_RECORDER:
         recording = quick.recordings / run_id
         assert str(recording) in response.message
-        wait_until(lambda: (recording / "metadata.yaml").is_file(), 10.0, "the recording's metadata.yaml")
+        wait_until((recording / "metadata.yaml").is_file, 10.0, "the recording's metadata.yaml")
         topics = recorded_topics(recording)
         name = quick.node.name
-        expected = {f"{name}/{t}" for t in ("status", "feedback", "events", "landmarks", "trajectory",
-                                            "joint_states", "object_pose", "world_markers", "world_yaml",
-                                            "goal_pose")}
+        expected = {
+            f"{name}/{t}"
+            for t in (
+                "status",
+                "feedback",
+                "events",
+                "landmarks",
+                "trajectory",
+                "joint_states",
+                "object_pose",
+                "world_markers",
+                "world_yaml",
+                "goal_pose",
+            )
+        }
         assert expected <= topics, f"missing {expected - topics}"
 
 
@@ -153,14 +168,17 @@ def test_late_subscriber_gets_the_latched_topics(quick: Session, quick_world) ->
 
     assert landmarks.markers[0].action == Marker.DELETEALL
     spheres = next(m for m in landmarks.markers if m.ns == "landmarks")
-    assert len(spheres.points) >= 2 and all(m.header.frame_id == "world" for m in landmarks.markers[1:])
+    assert len(spheres.points) >= 2
+    assert all(m.header.frame_id == "world" for m in landmarks.markers[1:])
     assert {"bounds", "object_start", "object_goal"} <= {m.ns for m in world_markers.markers}
 
     # world_yaml is a parameter file holding the node's world
     tree = next(iter(yaml.safe_load(world_yaml.data).values()))["ros__parameters"]
     assert world_from_parameters(tree).name == quick_world.name
-    assert any(bytes(s.goal_info.goal_id.uuid).hex() == run_id and s.status == GoalStatus.STATUS_SUCCEEDED
-               for s in status.status_list)
+    assert any(
+        bytes(s.goal_info.goal_id.uuid).hex() == run_id and s.status == GoalStatus.STATUS_SUCCEEDED
+        for s in status.status_list
+    )
 
 
 def test_goal_pose_starts_a_run_to_that_goal(quick: Session, quick_world) -> None:
@@ -168,8 +186,9 @@ def test_goal_pose_starts_a_run_to_that_goal(quick: Session, quick_world) -> Non
     before = len(quick.events.messages)
     publisher = quick.client.publisher(f"{quick.node.name}/goal_pose", PoseStamped)
     publisher.publish(messages.goal_pose_stamped(goal, 0))
-    accepted = quick.events.wait_for(lambda m: json.loads(m.data)["event"] == "accepted"
-                                     and json.loads(m.data)["source"] == "goal_pose", 10.0)
+    accepted = quick.events.wait_for(
+        lambda m: json.loads(m.data)["event"] == "accepted" and json.loads(m.data)["source"] == "goal_pose", 10.0
+    )
     run_id = json.loads(accepted.data)["run_id"]
     assert quick.events.messages.index(accepted) >= before
     assert np.allclose(json.loads(accepted.data)["goal"], goal)
@@ -186,12 +205,15 @@ def test_goal_pose_starts_a_run_to_that_goal(quick: Session, quick_world) -> Non
     assert np.allclose(tree["world"]["object"]["goal"], goal)
 
 
-@pytest.mark.parametrize("frame, x, w, reason", [
-    ("map", 1.0, 1.0, "frame_id"),
-    ("world", float("nan"), 1.0, "finite"),
-    ("world", 1.0, 0.5, "unit quaternion"),
-    ("world", 9.0, 1.0, "outside world.bounds"),
-])
+@pytest.mark.parametrize(
+    ("frame", "x", "w", "reason"),
+    [
+        ("map", 1.0, 1.0, "frame_id"),
+        ("world", float("nan"), 1.0, "finite"),
+        ("world", 1.0, 0.5, "unit quaternion"),
+        ("world", 9.0, 1.0, "outside world.bounds"),
+    ],
+)
 def test_bad_goal_pose_is_refused(quick: Session, frame: str, x: float, w: float, reason: str) -> None:
     publisher = quick.client.publisher(f"{quick.node.name}/goal_pose", PoseStamped)
     msg = PoseStamped()
@@ -200,9 +222,11 @@ def test_bad_goal_pose_is_refused(quick: Session, frame: str, x: float, w: float
     before = len(quick.events.messages)
     publisher.publish(msg)
     refused = quick.events.wait_for(
-        lambda m: quick.events.messages.index(m) >= before and json.loads(m.data)["event"] == "aborted", 10.0)
+        lambda m: quick.events.messages.index(m) >= before and json.loads(m.data)["event"] == "aborted", 10.0
+    )
     event = json.loads(refused.data)
-    assert reason in event["message"] and event["code"] == "INVALID_WORLD"
+    assert reason in event["message"]
+    assert event["code"] == "INVALID_WORLD"
     quick.wait_status(event["run_id"], GoalStatus.STATUS_ABORTED)
 
 
@@ -218,13 +242,18 @@ def _doubles(values: list[float]) -> ParameterValue:
 
 def test_bad_parameters_are_rejected_and_good_ones_republish(quick: Session) -> None:
     ok, reason = _set(quick, "world.robot.initial", _doubles([9.0, 0.0]))
-    assert not ok and "world.robot.initial" in reason
-    ok, reason = _set(quick, "planner.population",
-                      ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="many"))
-    assert not ok and "planner.population" in reason
-    ok, reason = _set(quick, "world.goal_tolerence", ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
-                                                                    double_value=0.1))
-    assert not ok and "world.goal_tolerence" in reason
+    assert not ok
+    assert "world.robot.initial" in reason
+    ok, reason = _set(
+        quick, "planner.population", ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="many")
+    )
+    assert not ok
+    assert "planner.population" in reason
+    ok, reason = _set(
+        quick, "world.goal_tolerence", ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=0.1)
+    )
+    assert not ok
+    assert "world.goal_tolerence" in reason
 
     # a valid change is taken and ~/world_markers shows the new goal
     count = len(quick.world_markers.messages)
@@ -237,19 +266,26 @@ def test_bad_parameters_are_rejected_and_good_ones_republish(quick: Session) -> 
     assert ok, reason
 
     # an obstacle is added with one atomic set of its name and its polygon, and retired by its name
-    names = ParameterMsg(name="world.obstacle_names", value=ParameterValue(
-        type=ParameterType.PARAMETER_STRING_ARRAY, string_array_value=["pillar"]))
+    names = ParameterMsg(
+        name="world.obstacle_names",
+        value=ParameterValue(type=ParameterType.PARAMETER_STRING_ARRAY, string_array_value=["pillar"]),
+    )
     pillar = ParameterMsg(name="world.obstacles.pillar", value=_doubles([-1.8, -1.8, -1.6, -1.8, -1.6, -1.6]))
     ok, reason = _set(quick, "world.obstacle_names", names.value)
-    assert not ok and "world.obstacles.pillar" in reason
+    assert not ok
+    assert "world.obstacles.pillar" in reason
     count = len(quick.world_markers.messages)
     ok, reason = _set(quick, "world.obstacles.pillar", pillar.value)  # not listed yet: accepted, ignored
     assert ok, reason
     markers = quick.world_markers.wait_for(lambda m: quick.world_markers.messages.index(m) >= count, 10.0)
     assert "obstacles" not in [m.ns for m in markers.markers]
     count = len(quick.world_markers.messages)
-    result = quick.client.call(quick.srv("set_parameters_atomically"), SetParametersAtomically,
-                               SetParametersAtomically.Request(parameters=[names, pillar]), timeout_s=10.0).result
+    result = quick.client.call(
+        quick.srv("set_parameters_atomically"),
+        SetParametersAtomically,
+        SetParametersAtomically.Request(parameters=[names, pillar]),
+        timeout_s=10.0,
+    ).result
     assert result.successful, result.reason
     markers = quick.world_markers.wait_for(lambda m: quick.world_markers.messages.index(m) >= count, 10.0)
     assert [m.ns for m in markers.markers].count("obstacles") == 1
@@ -260,7 +296,8 @@ def test_bad_parameters_are_rejected_and_good_ones_republish(quick: Session) -> 
 
     # parameters the node does not know are refused
     ok, reason = _set(quick, "colour", ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="red"))
-    assert not ok and "colour" in reason
+    assert not ok
+    assert "colour" in reason
 
 
 def test_a_new_request_or_cancel_stops_a_playback(quick: Session) -> None:
@@ -272,20 +309,27 @@ def test_a_new_request_or_cancel_stops_a_playback(quick: Session) -> None:
         quick.feedback.wait_for(lambda m: kv(m).get("run_id") == first and kv(m).get("phase") == "SUCCEEDED", 5.0)
         second = quick.plan()
         assert second.success, second.message
-        quick.feedback.wait_for(lambda m: kv(m).get("run_id") == first
-                                and kv(m).get("phase") == "playback_stopped", 5.0)
+        quick.feedback.wait_for(
+            lambda m: kv(m).get("run_id") == first and kv(m).get("phase") == "playback_stopped", 5.0
+        )
         assert quick.status_of(first) == GoalStatus.STATUS_SUCCEEDED  # the outcome stays
         cancel = quick.client.call(quick.srv("cancel"), Trigger, timeout_s=5.0)
-        assert cancel.success and "playback" in cancel.message and run_id_of(second.message) in cancel.message
+        assert cancel.success
+        assert "playback" in cancel.message
+        assert run_id_of(second.message) in cancel.message
     finally:
-        assert _set(quick, "trajectory.joint_speed", ParameterValue(
-            type=ParameterType.PARAMETER_DOUBLE, double_value=FAST["trajectory.joint_speed"]))[0]
+        assert _set(
+            quick,
+            "trajectory.joint_speed",
+            ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=FAST["trajectory.joint_speed"]),
+        )[0]
 
 
 def test_cancel_with_nothing_running_says_so(quick: Session) -> None:
     quick.wait_idle()
     response = quick.client.call(quick.srv("cancel"), Trigger, timeout_s=10.0)
-    assert not response.success and "nothing to cancel" in response.message
+    assert not response.success
+    assert "nothing to cancel" in response.message
 
 
 # --------------------------------------------------------------------------- unreachable goal
@@ -312,7 +356,9 @@ def test_plan_fails_on_an_unreachable_goal(unreachable: Session) -> None:
     unreachable.wait_status(run_id, GoalStatus.STATUS_ABORTED)
     aborted = unreachable.events.wait_for(lambda m: json.loads(m.data)["event"] == "aborted", 10.0)
     event = json.loads(aborted.data)
-    assert event["run_id"] == run_id and event["code"] == "GOAL_OUT_OF_REACH" and "reach" in event["message"]
+    assert event["run_id"] == run_id
+    assert event["code"] == "GOAL_OUT_OF_REACH"
+    assert "reach" in event["message"]
     assert not unreachable.trajectory.messages, "a failed run publishes no trajectory"
     if HAVE_RECORDER:
         # without a playback, the recording is complete when the answer comes
@@ -321,10 +367,16 @@ def test_plan_fails_on_an_unreachable_goal(unreachable: Session) -> None:
 
 
 def test_call_plan_client_reports_the_failure(unreachable: Session) -> None:
-    done = subprocess.run([sys.executable, "-m", "clew_ros.node.call_plan", "--node", unreachable.node.name,
-                           "--timeout", "20"], capture_output=True, text=True, timeout=40, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "clew_ros.node.call_plan", "--node", unreachable.node.name, "--timeout", "20"],
+        capture_output=True,
+        text=True,
+        timeout=40,
+        check=False,
+    )
     assert done.returncode == 1, done.stdout + done.stderr
-    assert "success: False" in done.stdout and "GOAL_OUT_OF_REACH" in done.stdout
+    assert "success: False" in done.stdout
+    assert "GOAL_OUT_OF_REACH" in done.stdout
 
 
 def test_world_yaml_round_trips_the_world_file(unreachable: Session) -> None:
@@ -332,4 +384,5 @@ def test_world_yaml_round_trips_the_world_file(unreachable: Session) -> None:
     tree = next(iter(yaml.safe_load(world_yaml.wait_for(timeout_s=10.0).data).values()))
     expected = world_from_parameters(read_parameter_file(UNREACHABLE))
     world = world_from_parameters(tree["ros__parameters"])
-    assert world.name == expected.name and np.allclose(world.object.goal, expected.object.goal)
+    assert world.name == expected.name
+    assert np.allclose(world.object.goal, expected.object.goal)

@@ -25,16 +25,20 @@ QUICK = Path(__file__).parents[1] / "worlds" / "node_quick.yaml"
 START_TIMEOUT_S = 20.0
 
 
-@pytest.mark.parametrize("overrides, parameter", [
-    ({"world.robot.initial": [5.0, 0.0]}, "world.robot.initial"),
-    ({"world.object.grasps": [0.0, 0.0, 0.3, 0.3]}, "world.object.grasps"),
-    ({"planner.time_limit": -1.0}, "planner.time_limit"),
-    ({"world.goal_tolerence": 0.1}, "world.goal_tolerence"),
-    ({"record.enabled": "sometimes"}, "record.enabled"),
-    ({"world.obstacles.stray": [1.7, 1.7, 1.9, 1.7, 1.9, 1.9]}, "world.obstacles.stray"),  # not in obstacle_names
-])
+@pytest.mark.parametrize(
+    ("overrides", "parameter"),
+    [
+        ({"world.robot.initial": [5.0, 0.0]}, "world.robot.initial"),
+        ({"world.object.grasps": [0.0, 0.0, 0.3, 0.3]}, "world.object.grasps"),
+        ({"planner.time_limit": -1.0}, "planner.time_limit"),
+        ({"world.goal_tolerence": 0.1}, "world.goal_tolerence"),
+        ({"record.enabled": "sometimes"}, "record.enabled"),
+        ({"world.obstacles.stray": [1.7, 1.7, 1.9, 1.7, 1.9, 1.9]}, "world.obstacles.stray"),  # not in obstacle_names
+    ],
+)
 def test_invalid_parameters_at_start_exit_2_naming_the_parameter(
-        tmp_path: Path, overrides: dict, parameter: str) -> None:
+    tmp_path: Path, overrides: dict, parameter: str
+) -> None:
     node = NodeProcess(tmp_path / "node.log", QUICK, overrides)
     try:
         code = node.proc.wait(timeout=START_TIMEOUT_S)
@@ -45,7 +49,8 @@ def test_invalid_parameters_at_start_exit_2_naming_the_parameter(
     output = node.output()
     assert code == 2, output
     errors = [line for line in output.splitlines() if "ERROR" in line]
-    assert len(errors) == 1 and parameter in errors[0], output
+    assert len(errors) == 1, output
+    assert parameter in errors[0], output
     assert "Traceback" not in output
 
 
@@ -57,7 +62,8 @@ def test_invalid_parameter_file_exits_2(tmp_path: Path) -> None:
     node = NodeProcess(tmp_path / "node.log", broken)
     code = node.proc.wait(timeout=START_TIMEOUT_S)
     node.stop()
-    assert code == 2 and "world.bounds" in node.output()
+    assert code == 2
+    assert "world.bounds" in node.output()
 
 
 def test_without_parameters_the_default_world_is_served(tmp_path: Path) -> None:
@@ -116,7 +122,8 @@ def test_runs_go_on_without_a_recording(monkeypatch: pytest.MonkeyPatch, tmp_pat
             assert run is not None, refusal
             assert run.wait_outcome(30.0), "no outcome within 30 s"
             text = run.result_text()
-            assert "SUCCEEDED" in text and expected in text, text
+            assert "SUCCEEDED" in text, text
+            assert expected in text, text
         finally:
             node.shutdown_runs()
             node.destroy_node()
@@ -162,8 +169,14 @@ def test_given_parameters_get_their_descriptors() -> None:
     from clew_ros.node.planner_node import PlannerNode
 
     given = flatten(read_parameter_file(QUICK))
-    given.update({"world.obstacle_names": ["pillar_7"], "world.obstacles.pillar_7": NAMED_OBSTACLES["pillar_7"],
-                  "record.enabled": False, "planner.seed": 3})
+    given.update(
+        {
+            "world.obstacle_names": ["pillar_7"],
+            "world.obstacles.pillar_7": NAMED_OBSTACLES["pillar_7"],
+            "record.enabled": False,
+            "planner.seed": 3,
+        }
+    )
     context = rclpy.Context()
     rclpy.init(context=context)
     try:
@@ -171,8 +184,14 @@ def test_given_parameters_get_their_descriptors() -> None:
         try:
             assert node.get_parameter("planner.seed").value == 3
             assert list(node.get_parameter("world.obstacles.pillar_7").value) == NAMED_OBSTACLES["pillar_7"]
-            for name in ("world.obstacles.pillar_7", "world.goal_tolerance", "planner.seed", "planner.time_limit",
-                         "record.enabled", "world.robot.link_width"):
+            for name in (
+                "world.obstacles.pillar_7",
+                "world.goal_tolerance",
+                "planner.seed",
+                "planner.time_limit",
+                "record.enabled",
+                "world.robot.link_width",
+            ):
                 described = node.describe_parameters([name])[0]
                 expected = descriptor_for(name)
                 assert described.dynamic_typing, name
@@ -184,7 +203,8 @@ def test_given_parameters_get_their_descriptors() -> None:
             result = node.set_parameters([Parameter("world.goal_tolerance", value=1)])[0]
             assert result.successful, result.reason
             result = node.set_parameters([Parameter("world.obstacles.pillar_7", value=[0.0, 0.0, 1.0])])[0]
-            assert not result.successful and "world.obstacles.pillar_7" in result.reason
+            assert not result.successful
+            assert "world.obstacles.pillar_7" in result.reason
         finally:
             node.shutdown_runs()
             node.destroy_node()
@@ -211,16 +231,17 @@ def test_a_stop_signal_at_any_moment_of_start_up_exits_0(tmp_path: Path) -> None
     delays_s = [0.0, 0.1, 0.25, 0.4, 0.6, 0.9]
     nodes = [NodeProcess(tmp_path / f"node{i}.log", QUICK, {"record.enabled": False}) for i in range(len(delays_s))]
     codes = []
-    for i, (node, delay) in enumerate(zip(nodes, delays_s)):
+    for i, (node, delay) in enumerate(zip(nodes, delays_s, strict=False)):
         deadline = time.monotonic() + START_TIMEOUT_S
         while not _catches(node.proc.pid, signal.SIGTERM) and time.monotonic() < deadline:
             time.sleep(0.005)
         time.sleep(delay)  # staggering the moment, not waiting for a condition
         codes.append(node.stop(signal.SIGINT if i % 2 == 0 else signal.SIGTERM))
-    for node, code in zip(nodes, codes):
+    for node, code in zip(nodes, codes, strict=False):
         output = node.output()
         assert code == 0, output
-        assert "Traceback" not in output and "Fatal Python error" not in output, output
+        assert "Traceback" not in output, output
+        assert "Fatal Python error" not in output, output
 
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads handlers from /proc")
@@ -230,8 +251,9 @@ def test_a_stop_signal_while_the_kernel_compiles_exits_0_at_once(tmp_path: Path)
     import signal
     import time
 
-    node = NodeProcess(tmp_path / "node.log", QUICK, {"record.enabled": False},
-                       env={"NUMBA_CACHE_DIR": str(tmp_path / "empty_cache")})
+    node = NodeProcess(
+        tmp_path / "node.log", QUICK, {"record.enabled": False}, env={"NUMBA_CACHE_DIR": str(tmp_path / "empty_cache")}
+    )
     deadline = time.monotonic() + START_TIMEOUT_S
     while not _catches(node.proc.pid, signal.SIGTERM) and time.monotonic() < deadline:  # main() took them
         time.sleep(0.005)

@@ -36,8 +36,11 @@ def node(tmp_path: Path):
     rclpy.init(context=context)
     values = flatten(read_parameter_file(FAST_WORLD))
     values.update({"record.directory": str(tmp_path / "recordings"), "trajectory.joint_speed": 50.0})
-    node = PlannerNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in values.items()],
-                       namespace=f"/worker{id(tmp_path) % 10**6}")
+    node = PlannerNode(
+        context=context,
+        parameter_overrides=[Parameter(k, value=v) for k, v in values.items()],
+        namespace=f"/worker{id(tmp_path) % 10**6}",
+    )
     try:
         yield node
     finally:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import re
-import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -64,10 +63,17 @@ MEASURED: dict[str, float] = {}
 @pytest.fixture(scope="module")
 def ring(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("cancel")
-    node = NodeProcess(tmp / "node.log", UNREACHABLE, {
-        "record.directory": str(tmp / "recordings"), "planner.time_limit": 30.0,
-        # a playback of several seconds, so that a cancel lands in it
-        "trajectory.joint_speed": 0.5, "playback.rate": 50.0})
+    node = NodeProcess(
+        tmp / "node.log",
+        UNREACHABLE,
+        {
+            "record.directory": str(tmp / "recordings"),
+            "planner.time_limit": 30.0,
+            # a playback of several seconds, so that a cancel lands in it
+            "trajectory.joint_speed": 0.5,
+            "playback.rate": 50.0,
+        },
+    )
     session = Session(node)
     session.recordings = tmp / "recordings"
     try:
@@ -76,8 +82,9 @@ def ring(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
         code = session.close()
         assert code == 0, f"node exit code {code}; output:\n{node.output()}"
         if MEASURED:
-            print("\ncancel / time-limit figures (ms): "
-                  + ", ".join(f"{k} {1000 * v:.0f}" for k, v in MEASURED.items()))
+            print(
+                "\ncancel / time-limit figures (ms): " + ", ".join(f"{k} {1000 * v:.0f}" for k, v in MEASURED.items())
+            )
 
 
 def cancel(session: Session) -> tuple[Trigger.Response, float, float]:
@@ -111,13 +118,15 @@ def assert_next_plan_works(session: Session) -> None:
     session.status.wait_for(status_is(run_id, GoalStatus.STATUS_SUCCEEDED), 30.0)
     playback_started(session, before)
     response, _, _ = cancel(session)  # stops the playback
-    assert response.success and "stopped the playback" in response.message, response.message
+    assert response.success, response.message
+    assert "stopped the playback" in response.message, response.message
 
 
 def test_cancel_with_nothing_running(ring: Session) -> None:
     response, sent, answered = cancel(ring)
     MEASURED["nothing_running_answer"] = answered - sent
-    assert not response.success and response.message.startswith("nothing to cancel"), response.message
+    assert not response.success, response.message
+    assert response.message.startswith("nothing to cancel"), response.message
     assert answered - sent < DDS_BOUND_S
     assert_next_plan_works(ring)
 
@@ -134,10 +143,13 @@ def test_cancel_right_after_the_goal(ring: Session) -> None:
     MEASURED["after_goal_answer"] = answered - sent
     MEASURED["after_goal_status"] = canceled_at - sent
     MEASURED["after_goal_node_side"] = node_side_s(response)
-    assert response.success and f"canceled run {run_id} in " in response.message, response.message
-    assert not plan_response.success and f"run {run_id}: CANCELED: " in plan_response.message
+    assert response.success, response.message
+    assert f"canceled run {run_id} in " in response.message, response.message
+    assert not plan_response.success
+    assert f"run {run_id}: CANCELED: " in plan_response.message
     assert node_side_s(response) < CANCEL_BOUND_S
-    assert answered - sent < DDS_BOUND_S and canceled_at - sent < DDS_BOUND_S
+    assert answered - sent < DDS_BOUND_S
+    assert canceled_at - sent < DDS_BOUND_S
     outcome = [e for e in ring.events_of(run_id) if e["event"] in ("succeeded", "aborted", "canceled")]
     assert [e["code"] for e in outcome] == ["CANCELED"]
     assert_next_plan_works(ring)
@@ -155,10 +167,13 @@ def test_cancel_during_explore(ring: Session) -> None:
     MEASURED["explore_answer"] = answered - sent
     MEASURED["explore_status"] = canceled_at - sent
     MEASURED["explore_node_side"] = node_side_s(response)
-    assert response.success and f"canceled run {run_id} in " in response.message, response.message
-    assert not plan_response.success and "CANCELED" in plan_response.message
+    assert response.success, response.message
+    assert f"canceled run {run_id} in " in response.message, response.message
+    assert not plan_response.success
+    assert "CANCELED" in plan_response.message
     assert node_side_s(response) < CANCEL_BOUND_S
-    assert answered - sent < DDS_BOUND_S and canceled_at - sent < DDS_BOUND_S
+    assert answered - sent < DDS_BOUND_S
+    assert canceled_at - sent < DDS_BOUND_S
     ring.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "CANCELED", 2.0)
     # the recording is closed before the answer goes out
     assert (ring.recordings / run_id / "metadata.yaml").is_file()
@@ -177,14 +192,17 @@ def test_cancel_during_playback(ring: Session) -> None:
     ring.status.wait_for(status_is(run_id, GoalStatus.STATUS_SUCCEEDED), 30.0)
     playback_started(ring, before)
     response, sent, answered = cancel(ring)
-    stopped_at = received_at(ring.feedback, lambda m: kv(m).get("run_id") == run_id
-                             and kv(m).get("phase") == "playback_stopped", 5.0)
+    stopped_at = received_at(
+        ring.feedback, lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "playback_stopped", 5.0
+    )
     MEASURED["playback_answer"] = answered - sent
     MEASURED["playback_feedback"] = stopped_at - sent
     MEASURED["playback_node_side"] = node_side_s(response)
-    assert response.success and f"stopped the playback of run {run_id} in " in response.message, response.message
+    assert response.success, response.message
+    assert f"stopped the playback of run {run_id} in " in response.message, response.message
     assert node_side_s(response) < CANCEL_BOUND_S
-    assert answered - sent < DDS_BOUND_S and stopped_at - sent < DDS_BOUND_S
+    assert answered - sent < DDS_BOUND_S
+    assert stopped_at - sent < DDS_BOUND_S
     assert ring.status_of(run_id) == GoalStatus.STATUS_SUCCEEDED  # the outcome stays
     # nothing is left to cancel
     assert not cancel(ring)[0].success
@@ -219,15 +237,18 @@ def test_every_run_had_exactly_one_outcome(ring: Session) -> None:
     for run_id in runs:
         outcomes = [e for e in events if e["run_id"] == run_id and e["event"] in ("succeeded", "aborted", "canceled")]
         assert len(outcomes) == 1, outcomes
-        assert outcomes[0]["code"] and outcomes[0]["message"] and isinstance(outcomes[0]["code_value"], int)
+        assert outcomes[0]["code"]
+        assert outcomes[0]["message"]
+        assert isinstance(outcomes[0]["code_value"], int)
         # README: `time` is wall-clock seconds, `time_s` the planning time
-        assert abs(outcomes[0]["time"] - time.time()) < 600 and 0 <= outcomes[0]["time_s"] < 60, outcomes[0]
+        assert abs(outcomes[0]["time"] - time.time()) < 600, outcomes[0]
+        assert 0 <= outcomes[0]["time_s"] < 60, outcomes[0]
 
 
 # --------------------------------------------------------------------------- in-process: before the worker
 
 
-@pytest.fixture()
+@pytest.fixture
 def local_node(tmp_path: Path):
     """A PlannerNode in this process (own context, no executor), recording to ``tmp_path / "recordings"``.
 
@@ -276,8 +297,10 @@ def test_cancel_before_the_worker_started(local_node, tmp_path: Path, monkeypatc
     latency = time.monotonic() - sent
     MEASURED["before_worker_answer"] = latency
     print(f"\ncancel before the worker started: answered in {1000 * latency:.0f} ms")
-    assert success and f"canceled run {run.hex}" in message, message
-    assert run.outcome is Outcome.CANCELED and run.wait_outcome(0.0)
+    assert success, message
+    assert f"canceled run {run.hex}" in message, message
+    assert run.outcome is Outcome.CANCELED
+    assert run.wait_outcome(0.0)
     assert latency < CANCEL_BOUND_S
     assert run.wait_finished(5.0)
     assert (tmp_path / "recordings" / run.hex / "metadata.yaml").is_file()
@@ -285,5 +308,6 @@ def test_cancel_before_the_worker_started(local_node, tmp_path: Path, monkeypatc
     monkeypatch.setattr(RunWorker, "execute", original)  # the next plan works
     following, refusal = node.request_plan("plan")
     assert following is not None, refusal
-    assert following.wait_outcome(20.0) and following.outcome is Outcome.SUCCEEDED, following.message
+    assert following.wait_outcome(20.0), following.message
+    assert following.outcome is Outcome.SUCCEEDED, following.message
     assert following.wait_finished(10.0)

@@ -20,7 +20,6 @@ import os
 import resource
 import signal
 import subprocess
-import sys
 import time
 import uuid
 from collections.abc import Iterator
@@ -33,11 +32,11 @@ rosbags_rosbag2 = pytest.importorskip("rosbags.rosbag2")
 
 
 from action_msgs.msg import GoalStatus  # noqa: E402
+from helpers.node_harness import NodeProcess, Session, run_id_of, wait_until  # noqa: E402
+from helpers.rel_node import set_parameters, status_is, wait_event  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
 from mcap.records import Message  # noqa: E402
 from mcap.stream_reader import StreamReader  # noqa: E402
-from helpers.node_harness import NodeProcess, Session, run_id_of, wait_until  # noqa: E402
-from helpers.rel_node import set_parameters, status_is, wait_event  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
 from clew_ros.recording import Recording, recover_recording  # noqa: E402
@@ -60,8 +59,12 @@ SHUTDOWN_FIGURES: dict[str, float] = {}
 def tiny_tmpfs(path: Path, size_kib: int) -> Iterator[bool]:
     """Mount a tmpfs of ``size_kib`` KiB at ``path``; yields False (nothing mounted) without mount rights."""
     path.mkdir(parents=True, exist_ok=True)
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_kib}k", "tmpfs", str(path)],
-                          capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={size_kib}k", "tmpfs", str(path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     try:
         yield done.returncode == 0
     finally:
@@ -112,8 +115,11 @@ def events_in(recording: Recording) -> list[dict]:
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("faults")
-    session = Session(NodeProcess(tmp / "node.log", FAST_WORLD,
-                                  {"record.directory": str(tmp / "missing" / "deeper" / "runs"), **FAST}))
+    session = Session(
+        NodeProcess(
+            tmp / "node.log", FAST_WORLD, {"record.directory": str(tmp / "missing" / "deeper" / "runs"), **FAST}
+        )
+    )
     session.tmp = tmp
     try:
         yield session
@@ -126,10 +132,12 @@ def test_missing_record_directory_is_created(quick: Session) -> None:
     runs = quick.tmp / "missing" / "deeper" / "runs"
     assert not runs.exists()
     response, run_id = plan_and_wait(quick)
-    assert response.success and f"recording {runs / run_id}" in response.message, response.message
-    wait_until(lambda: (runs / run_id / "metadata.yaml").is_file(), 5.0, "the closed recording")
+    assert response.success, response.message
+    assert f"recording {runs / run_id}" in response.message, response.message
+    wait_until((runs / run_id / "metadata.yaml").is_file, 5.0, "the closed recording")
     recording, _counts = read_both(runs / run_id)
-    assert recording.complete and events_in(recording)[-1]["event"] in ("succeeded", "grasp", "ungrasp")
+    assert recording.complete
+    assert events_in(recording)[-1]["event"] in ("succeeded", "grasp", "ungrasp")
 
 
 def test_record_directory_that_cannot_be_created(quick: Session) -> None:
@@ -138,13 +146,15 @@ def test_record_directory_that_cannot_be_created(quick: Session) -> None:
     assert set_parameters(quick, {"record.directory": str(blocker / "sub")})[0].successful
     response, run_id = plan_and_wait(quick)
     assert response.success, response.message
-    assert "not recorded" in response.message and "record.directory" in response.message, response.message
+    assert "not recorded" in response.message, response.message
+    assert "record.directory" in response.message, response.message
     assert "Not a directory" in response.message or "File exists" in response.message, response.message
     # once the directory is fixed, runs are recorded again
     assert set_parameters(quick, {"record.directory": str(quick.tmp / "ok")})[0].successful
     response, run_id = plan_and_wait(quick)
-    assert response.success and f"recording {quick.tmp / 'ok' / run_id}" in response.message, response.message
-    wait_until(lambda: (quick.tmp / "ok" / run_id / "metadata.yaml").is_file(), 5.0, "recording once fixed")
+    assert response.success, response.message
+    assert f"recording {quick.tmp / 'ok' / run_id}" in response.message, response.message
+    wait_until((quick.tmp / "ok" / run_id / "metadata.yaml").is_file, 5.0, "recording once fixed")
 
 
 def test_disk_full(quick: Session, tmp_path: Path) -> None:
@@ -157,7 +167,8 @@ def test_disk_full(quick: Session, tmp_path: Path) -> None:
         assert set_parameters(quick, {"record.directory": str(mount / "runs")})[0].successful
         response, run_id = plan_and_wait(quick)
         assert response.success, response.message
-        assert "not recorded" in response.message and "No space left" in response.message, response.message
+        assert "not recorded" in response.message, response.message
+        assert "No space left" in response.message, response.message
         assert str(mount) in response.message  # the answer says where
         assert not any((mount / "runs").iterdir()), "a failed start leaves nothing behind"
 
@@ -167,15 +178,19 @@ def test_disk_full(quick: Session, tmp_path: Path) -> None:
         fill(mount, leave_bytes=8 * 1024)
         response, run_id = plan_and_wait(quick)
         assert response.success, response.message
-        wait_until(lambda: f"run {run_id}: recording failed" in quick.node.output(), 10.0,
-                   "the node reports the failed recording")
+        wait_until(
+            lambda: f"run {run_id}: recording failed" in quick.node.output(),
+            10.0,
+            "the node reports the failed recording",
+        )
         assert "No space left" in quick.node.output()
         # what was written reads up to the last complete chunk
         partial = Recording(mount / "runs" / run_id)
         assert not partial.complete
         assert set_parameters(quick, {"record.directory": str(quick.tmp / "ok")})[0].successful
     response, run_id = plan_and_wait(quick)
-    assert response.success and "recording failed" not in response.message, response.message
+    assert response.success, response.message
+    assert "recording failed" not in response.message, response.message
 
 
 def test_disk_full_by_rlimit(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -213,8 +228,11 @@ def test_disk_full_by_rlimit(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) ->
 def start_long_run(tmp_path: Path) -> Session:
     """A node that will plan the unreachable world (it explores until stopped)."""
     tmp_path.mkdir(parents=True, exist_ok=True)
-    session = Session(NodeProcess(tmp_path / "node.log", UNREACHABLE,
-                                  {"record.directory": str(tmp_path / "runs"), "planner.time_limit": 60.0}))
+    session = Session(
+        NodeProcess(
+            tmp_path / "node.log", UNREACHABLE, {"record.directory": str(tmp_path / "runs"), "planner.time_limit": 60.0}
+        )
+    )
     session.runs = tmp_path / "runs"
     return session
 
@@ -258,9 +276,11 @@ def check_finalised(run_id: str, run_dir: Path) -> None:
     recording, counts = read_both(run_dir)
     assert recording.complete
     outcome = [e for e in events_in(recording) if e["event"] in ("succeeded", "aborted", "canceled")]
-    assert [e["code"] for e in outcome] == ["CANCELED"] and "shutting down" in outcome[0]["message"]
+    assert [e["code"] for e in outcome] == ["CANCELED"]
+    assert "shutting down" in outcome[0]["message"]
     assert outcome[0]["run_id"] == run_id
-    assert any(t.endswith("/landmarks") for t in counts) and any(t.endswith("/world_yaml") for t in counts)
+    assert any(t.endswith("/landmarks") for t in counts)
+    assert any(t.endswith("/world_yaml") for t in counts)
 
 
 def check_recoverable(run_id: str, run_dir: Path) -> None:
@@ -268,20 +288,24 @@ def check_recoverable(run_id: str, run_dir: Path) -> None:
     mcap_path = run_dir / f"{run_id}_0.mcap"
     assert not (run_dir / "metadata.yaml").exists()
     messages = 0
-    with mcap_path.open("rb") as stream:
-        with contextlib.suppress(Exception):  # the cut: an incomplete record
-            for record in StreamReader(stream).records:
-                messages += isinstance(record, Message)
+    with mcap_path.open("rb") as stream, contextlib.suppress(Exception):  # the cut: an incomplete record
+        for record in StreamReader(stream).records:
+            messages += isinstance(record, Message)
     recording = Recording(run_dir)
-    assert not recording.complete and len(recording.messages()) == messages > 0
+    assert not recording.complete
+    assert len(recording.messages()) == messages > 0
     events = events_in(recording)
-    assert events[0]["event"] == "accepted" and events[0]["run_id"] == run_id
+    assert events[0]["event"] == "accepted"
+    assert events[0]["run_id"] == run_id
 
     recover_recording(run_dir)  # python -c "from clew_ros.recording import recover_recording as r; r('<dir>')"
-    assert (run_dir / f"{run_id}_0.mcap.truncated").is_file() and (run_dir / "metadata.yaml").is_file()
+    assert (run_dir / f"{run_id}_0.mcap.truncated").is_file()
+    assert (run_dir / "metadata.yaml").is_file()
     recovered, counts = read_both(run_dir)
-    assert recovered.complete and sum(counts.values()) == messages
+    assert recovered.complete
+    assert sum(counts.values()) == messages
     with mcap_path.open("rb") as stream:
         summary = make_reader(stream).get_summary()
-    assert summary is not None and sum(summary.statistics.channel_message_counts.values()) == messages
+    assert summary is not None
+    assert sum(summary.statistics.channel_message_counts.values()) == messages
     assert uuid.UUID(hex=run_id)

@@ -19,22 +19,20 @@ from pathlib import Path
 
 import pytest
 import yaml
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
-
-from helpers.rel_worlds import (  # noqa: E402
+from helpers.rel_worlds import (
     BASE_WORLD,
     FIXED_BAD_WORLDS,
     bad_worlds,
     many_obstacles,
     random_trees,
 )
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from clew_ros.core.collision import check_start_and_goal  # noqa: E402
-from clew_ros.core.errors import ParameterError, WorldError  # noqa: E402
-from clew_ros.core.settings import PlannerSettings  # noqa: E402
-from clew_ros.core.world import MAX_LINKS, World, read_parameter_file, world_from_parameters  # noqa: E402
+from clew_ros.core.collision import check_start_and_goal
+from clew_ros.core.errors import ParameterError, WorldError
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.world import MAX_LINKS, World, read_parameter_file, world_from_parameters
 
 CLEW_PLAN = [sys.executable, "-m", "clew_ros.cli.plan"]
 ROOT = Path(__file__).resolve().parents[2]
@@ -55,7 +53,8 @@ def load(tree: dict) -> World | WorldError:
 def assert_names_a_world_parameter(error: WorldError) -> None:
     assert error.parameter == "world" or error.parameter.startswith("world."), error
     assert str(error).startswith(error.parameter + ": ")
-    assert error.expected and len(str(error)) < 2000, "the message should be short and say what was expected"
+    assert error.expected, "the message should be short and say what was expected"
+    assert len(str(error)) < 2000, "the message should be short and say what was expected"
 
 
 def set_path(tree: dict, path: tuple[str, ...], value) -> dict:
@@ -108,7 +107,9 @@ def test_loader_answers_a_tree_that_is_no_mapping(tree) -> None:
     assert caught.value.parameter in ("ros__parameters", "world")
 
 
-@pytest.mark.parametrize("label, path, value, parameter", FIXED_BAD_WORLDS, ids=[c[0] for c in FIXED_BAD_WORLDS])
+@pytest.mark.parametrize(
+    ("label", "path", "value", "parameter"), FIXED_BAD_WORLDS, ids=[c[0] for c in FIXED_BAD_WORLDS]
+)
 def test_fixed_bad_worlds_name_their_parameter(label: str, path, value, parameter: str) -> None:
     answer = load(mutated(path, value))
     assert isinstance(answer, WorldError), label
@@ -120,7 +121,8 @@ def test_huge_and_tiny_numbers(value) -> None:
     """Beyond +-1e6 (m or rad) the geometry loses precision: refused; tiny numbers are numbers."""
     answer = load(mutated(("world", "object", "goal"), [0.6, 1.1, value]))
     if abs(value) > 1e6:
-        assert isinstance(answer, WorldError) and answer.parameter == "world.object.goal", answer
+        assert isinstance(answer, WorldError), answer
+        assert answer.parameter == "world.object.goal", answer
     else:
         assert isinstance(answer, World)
 
@@ -133,7 +135,8 @@ def test_too_many_links_are_refused_at_once() -> None:
     started = time.monotonic()
     answer = load(tree)
     assert time.monotonic() - started < 0.5
-    assert isinstance(answer, WorldError) and answer.parameter == "world.robot.link_lengths"
+    assert isinstance(answer, WorldError)
+    assert answer.parameter == "world.robot.link_lengths"
 
 
 def test_thousands_of_obstacles_load_in_bounded_time() -> None:
@@ -144,7 +147,8 @@ def test_thousands_of_obstacles_load_in_bounded_time() -> None:
     answer = load(tree)
     elapsed = time.monotonic() - started
     assert elapsed < LOAD_BUDGET_S, f"{count} obstacles took {elapsed:.2f} s"
-    assert isinstance(answer, World) and len(answer.obstacles) == count
+    assert isinstance(answer, World)
+    assert len(answer.obstacles) == count
 
 
 # --------------------------------------------------------------------------- parameter files
@@ -179,10 +183,19 @@ def test_special_files_are_refused(tmp_path: Path) -> None:
         assert caught.value.parameter == str(path)
 
 
-@pytest.mark.parametrize("key, value", [
-    ("time_limit", 10**400), ("time_limit", math.nan), ("time_limit", -1.0), ("seed", 1.5),
-    ("seed", 2**31), ("population", "many"), ("resolution", math.inf), ("unknown_knob", 1),
-])
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [
+        ("time_limit", 10**400),
+        ("time_limit", math.nan),
+        ("time_limit", -1.0),
+        ("seed", 1.5),
+        ("seed", 2**31),
+        ("population", "many"),
+        ("resolution", math.inf),
+        ("unknown_knob", 1),
+    ],
+)
 def test_bad_planner_settings_raise_parameter_error(key: str, value) -> None:
     with pytest.raises(ParameterError) as caught:
         PlannerSettings.from_parameters({"planner": {key: value}})
@@ -198,8 +211,13 @@ def parameter_file(path: Path, tree: dict) -> Path:
 
 
 def clew_plan(world: Path, output: Path, *extra: str) -> subprocess.Popen:
-    return subprocess.Popen([*CLEW_PLAN, str(world), "--output", str(output), "--quiet", *extra],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    return subprocess.Popen(
+        [*CLEW_PLAN, str(world), "--output", str(output), "--quiet", *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
 
 
 def finish(proc: subprocess.Popen, timeout_s: float = 60.0) -> tuple[int, str]:
@@ -217,10 +235,13 @@ def check_cli_answer(code: int, stderr: str, output: Path, expected) -> None:
     else:
         assert code in (0, 1), stderr
         document = json.loads(output.read_text())
-        assert document["code"] and isinstance(document["message"], str) and document["message"]
+        assert document["code"]
+        assert isinstance(document["message"], str)
+        assert document["message"]
         assert document["success"] is (code == 0)
         if code == 1:
-            assert document["code"] != "SUCCEEDED" and document["segments"] == []
+            assert document["code"] != "SUCCEEDED"
+            assert document["segments"] == []
 
 
 @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -239,22 +260,29 @@ def test_clew_plan_fixed_cases(tmp_path: Path) -> None:
     cases: dict[str, tuple[list[str], str]] = {}
 
     def case(label: str, tree_or_path, expected: str, *extra: str) -> None:
-        path = tree_or_path if isinstance(tree_or_path, Path) else parameter_file(tmp_path / f"{label}.yaml",
-                                                                                  tree_or_path)
+        path = (
+            tree_or_path if isinstance(tree_or_path, Path) else parameter_file(tmp_path / f"{label}.yaml", tree_or_path)
+        )
         cases[label] = ([str(path), "--output", str(tmp_path / f"{label}.json"), *extra], expected)
 
     for label, path, value, parameter in FIXED_BAD_WORLDS[:4]:
         case(label, mutated(path, value), parameter)
     (tmp_path / "binary.yaml").write_bytes(FILE_CASES["not_utf8"])
     case("binary", tmp_path / "binary.yaml", str(tmp_path / "binary.yaml"))
-    case("huge_time_limit", set_path(json.loads(json.dumps(BASE_WORLD)), ("planner", "time_limit"), 10**400),
-         "planner.time_limit")
+    case(
+        "huge_time_limit",
+        set_path(json.loads(json.dumps(BASE_WORLD)), ("planner", "time_limit"), 10**400),
+        "planner.time_limit",
+    )
     case("nan_time_limit_flag", quick, "planner.time_limit", "--time-limit", "nan")
     cases["output_under_a_file"] = ([str(quick), "--output", str(tmp_path / "blocker" / "plan.json")], "--output")
 
-    procs = {label: subprocess.Popen([*CLEW_PLAN, *args, "--quiet"], stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, text=True, cwd=ROOT)
-             for label, (args, _expected) in cases.items()}
+    procs = {
+        label: subprocess.Popen(
+            [*CLEW_PLAN, *args, "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT
+        )
+        for label, (args, _expected) in cases.items()
+    }
     for label, proc in procs.items():
         code, stderr = finish(proc)
         assert code == 2, f"{label}: exit {code}: {stderr}"
@@ -271,26 +299,33 @@ def test_clew_plan_failures_carry_a_code_and_the_time_limit_holds(tmp_path: Path
     ring = ROOT / "config" / "unreachable.yaml"
     limit = 2.0
     started = time.monotonic()
-    procs = {"GOAL_OUT_OF_REACH": clew_plan(unreachable, tmp_path / "a.json"),
-             "TIME_LIMIT": clew_plan(ring, tmp_path / "b.json", "--time-limit", str(limit))}
+    procs = {
+        "GOAL_OUT_OF_REACH": clew_plan(unreachable, tmp_path / "a.json"),
+        "TIME_LIMIT": clew_plan(ring, tmp_path / "b.json", "--time-limit", str(limit)),
+    }
     for (code_name, proc), output in zip(procs.items(), (tmp_path / "a.json", tmp_path / "b.json"), strict=True):
         code, stderr = finish(proc)
         assert code == 1, stderr
         document = json.loads(output.read_text())
-        assert document["success"] is False and document["message"], document
-        assert document["segments"] == [] and document["final_object_pose"] is None
+        assert document["success"] is False, document
+        assert document["message"], document
+        assert document["segments"] == []
+        assert document["final_object_pose"] is None
         if code_name == "TIME_LIMIT":
             wall = time.monotonic() - started
-            print(f"\nclew_plan on config/unreachable.yaml, --time-limit {limit}: {document['code']} after "
-                  f"{document['stats']['time_s']:.3f} s planning, {wall:.2f} s wall (process start included)")
+            print(
+                f"\nclew_plan on config/unreachable.yaml, --time-limit {limit}: {document['code']} after "
+                f"{document['stats']['time_s']:.3f} s planning, {wall:.2f} s wall (process start included)"
+            )
             assert document["code"] in ("TIME_LIMIT", "NO_PATH_AT_RESOLUTION"), document["code"]
             assert document["stats"]["time_s"] <= limit + 0.2, document["stats"]
         else:
-            assert document["code"] == code_name and document["stats"]["time_s"] < 0.5
+            assert document["code"] == code_name
+            assert document["stats"]["time_s"] < 0.5
         assert document["code"] in stderr
 
 
-@pytest.mark.parametrize("links, obstacles", [(MAX_LINKS, 0), (2, 5000)], ids=["max_links", "5000_obstacles"])
+@pytest.mark.parametrize(("links", "obstacles"), [(MAX_LINKS, 0), (2, 5000)], ids=["max_links", "5000_obstacles"])
 def test_the_time_limit_holds_on_big_worlds(links: int, obstacles: int) -> None:
     """The longest piece of work between two looks at the clock is bounded: the planner stops
     within limit + 0.2 s even when one genetic-algorithm evaluation is expensive."""
@@ -298,14 +333,20 @@ def test_the_time_limit_holds_on_big_worlds(links: int, obstacles: int) -> None:
 
     tree = read_parameter_file(ROOT / "test" / "worlds" / "node_quick.yaml")
     if links > 2:
-        tree["world"]["robot"].update(link_lengths=[1.7 / links] * links, joint_lower=[-3.0] * links,
-                                      joint_upper=[3.0] * links, initial=[0.0] * links)
+        tree["world"]["robot"].update(
+            link_lengths=[1.7 / links] * links,
+            joint_lower=[-3.0] * links,
+            joint_upper=[3.0] * links,
+            initial=[0.0] * links,
+        )
     if obstacles:
         tree["world"]["obstacle_names"], tree["world"]["obstacles"] = many_obstacles(obstacles)
     limit = 1.0
     result = plan(check_start_and_goal(world_from_parameters(tree)), PlannerSettings(time_limit=limit, seed=0))
-    print(f"\n{links} links, {obstacles} obstacles, time limit {limit} s: {result.outcome.name} after "
-          f"{result.stats['time_s']:.3f} s")
+    print(
+        f"\n{links} links, {obstacles} obstacles, time limit {limit} s: {result.outcome.name} after "
+        f"{result.stats['time_s']:.3f} s"
+    )
     assert result.stats["time_s"] <= limit + 0.2, result.stats
 
 
@@ -313,8 +354,13 @@ def test_the_time_limit_holds_on_big_worlds(links: int, obstacles: int) -> None:
 def test_clew_plan_signal_cancels_and_writes_the_plan_file(tmp_path: Path, sig: int) -> None:
     ring = ROOT / "config" / "unreachable.yaml"
     output = tmp_path / "plan.json"
-    proc = subprocess.Popen([*CLEW_PLAN, str(ring), "--output", str(output), "--time-limit", "60"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    proc = subprocess.Popen(
+        [*CLEW_PLAN, str(ring), "--output", str(output), "--time-limit", "60"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
     try:
         line = proc.stderr.readline()  # the first progress line: planning for a second already
         assert line.startswith("clew_plan: "), line
@@ -331,4 +377,5 @@ def test_clew_plan_signal_cancels_and_writes_the_plan_file(tmp_path: Path, sig: 
     assert proc.returncode == 1, rest
     assert latency < 1.0
     document = json.loads(output.read_text())
-    assert document["code"] == "CANCELED" and document["success"] is False, document
+    assert document["code"] == "CANCELED", document
+    assert document["success"] is False, document

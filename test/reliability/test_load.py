@@ -17,7 +17,6 @@ Figures are printed (``-s``) and kept in docs/reliability.md.
 from __future__ import annotations
 
 import json
-import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -30,8 +29,8 @@ rclpy = pytest.importorskip("rclpy")
 
 from action_msgs.msg import GoalStatus  # noqa: E402
 from helpers.node_harness import NodeProcess, Session, kv, run_id_of, wait_future  # noqa: E402
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from helpers.rel_node import ProcessStats, goal_publisher, settled_stats, status_is  # noqa: E402
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
@@ -50,13 +49,18 @@ RSS_GROWTH_BOUND_KIB = 32 * 1024
 #: jitters by hundreds of ms on a busy machine).
 RESPONSIVE_S = 2.0
 BURST = 100
-DEEP = QoSProfile(depth=2000, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                  durability=DurabilityPolicy.VOLATILE)
+DEEP = QoSProfile(
+    depth=2000,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
 
 
 def start(tmp_path: Path, record: bool) -> Session:
-    node = NodeProcess(tmp_path / "node.log", WORLD,
-                       {"record.enabled": record, "record.directory": str(tmp_path / "runs"), **FAST})
+    node = NodeProcess(
+        tmp_path / "node.log", WORLD, {"record.enabled": record, "record.directory": str(tmp_path / "runs"), **FAST}
+    )
     session = Session(node)
     session.runs = tmp_path / "runs"
     session.recording = record
@@ -78,7 +82,7 @@ def loaded(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Session]:
         stop(session)
 
 
-@pytest.fixture()
+@pytest.fixture
 def quick(tmp_path: Path) -> Iterator[Session]:
     session = start(tmp_path, False)
     try:
@@ -98,11 +102,16 @@ def wait_idle(session: Session, timeout_s: float = 30.0) -> None:
         return
     run_id = accepted[-1]
     outcome = session.deep_events.wait_for(
-        lambda m: json.loads(m.data)["run_id"] == run_id
-        and json.loads(m.data)["event"] in ("succeeded", "aborted", "canceled"), timeout_s)
+        lambda m: (
+            json.loads(m.data)["run_id"] == run_id
+            and json.loads(m.data)["event"] in ("succeeded", "aborted", "canceled")
+        ),
+        timeout_s,
+    )
     if json.loads(outcome.data)["event"] == "succeeded":
-        session.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id
-                                  and kv(m).get("phase", "").startswith("playback_"), timeout_s)
+        session.feedback.wait_for(
+            lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase", "").startswith("playback_"), timeout_s
+        )
 
 
 def responsive(session: Session, run_id: str) -> tuple[float, float]:
@@ -138,22 +147,26 @@ def test_500_sequential_plans(loaded: Session) -> None:
     total = time.monotonic() - started
     wait_idle(loaded)
     final = settled_stats(pid, baseline)
-    figures = (f"{PLANS} plans (recording {'on' if loaded.recording else 'off'}) in {total:.0f} s, "
-               f"call median {1000 * np.median(durations):.0f} ms / max {1000 * max(durations):.0f} ms; "
-               f"status <= {1000 * max(latencies):.0f} ms, cancel <= {1000 * max(cancels):.0f} ms; "
-               f"threads {baseline.threads} -> {final.threads}, fds {baseline.fds} -> {final.fds}, "
-               f"RSS {baseline.rss_kib} -> {middle.rss_kib} (run {(WARM_UP + PLANS) // 2}) -> {final.rss_kib} KiB "
-               f"({(final.rss_kib - baseline.rss_kib) / 1024:+.1f} MiB); "
-               f"call p99 {1000 * np.percentile(durations[1:], 99):.0f} ms (the first call waits for discovery)")
+    figures = (
+        f"{PLANS} plans (recording {'on' if loaded.recording else 'off'}) in {total:.0f} s, "
+        f"call median {1000 * np.median(durations):.0f} ms / max {1000 * max(durations):.0f} ms; "
+        f"status <= {1000 * max(latencies):.0f} ms, cancel <= {1000 * max(cancels):.0f} ms; "
+        f"threads {baseline.threads} -> {final.threads}, fds {baseline.fds} -> {final.fds}, "
+        f"RSS {baseline.rss_kib} -> {middle.rss_kib} (run {(WARM_UP + PLANS) // 2}) -> {final.rss_kib} KiB "
+        f"({(final.rss_kib - baseline.rss_kib) / 1024:+.1f} MiB); "
+        f"call p99 {1000 * np.percentile(durations[1:], 99):.0f} ms (the first call waits for discovery)"
+    )
     print("\n" + figures)
     # the executor's pool starts its (at most EXECUTOR_THREADS) threads lazily; a leak would add one per run
     assert final.threads <= baseline.threads + EXECUTOR_THREADS, figures
     assert final.fds <= baseline.fds, figures
     assert final.rss_kib - baseline.rss_kib < RSS_GROWTH_BOUND_KIB, figures
-    assert max(latencies) < RESPONSIVE_S and max(cancels) < RESPONSIVE_S, figures
+    assert max(latencies) < RESPONSIVE_S, figures
+    assert max(cancels) < RESPONSIVE_S, figures
     if loaded.recording:
         runs = [p for p in loaded.runs.iterdir() if p.is_dir()]
-        assert len(runs) == PLANS and all((p / "metadata.yaml").is_file() for p in runs)
+        assert len(runs) == PLANS
+        assert all((p / "metadata.yaml").is_file() for p in runs)
 
 
 def test_burst_of_goal_poses(quick: Session) -> None:
@@ -200,13 +213,16 @@ def test_burst_of_goal_poses(quick: Session) -> None:
             open_run = None
     wait_idle(loaded)
     final = settled_stats(pid, baseline)
-    figures = (f"burst: {BURST} goal poses sent in {sent_in:.2f} s; answered {len(got)} "
-               f"({len(accepted)} runs, {len(busy)} BUSY); cancel answered in {1000 * cancel_latency:.0f} ms; "
-               f"threads {baseline.threads} -> {final.threads}, fds {baseline.fds} -> {final.fds}")
+    figures = (
+        f"burst: {BURST} goal poses sent in {sent_in:.2f} s; answered {len(got)} "
+        f"({len(accepted)} runs, {len(busy)} BUSY); cancel answered in {1000 * cancel_latency:.0f} ms; "
+        f"threads {baseline.threads} -> {final.threads}, fds {baseline.fds} -> {final.fds}"
+    )
     print("\n" + figures)
     assert len(got) == BURST, figures
     assert all(e["code"] == "BUSY" for e in busy), figures
     assert cancel_latency < RESPONSIVE_S, figures
-    assert final.threads <= baseline.threads + EXECUTOR_THREADS and final.fds <= baseline.fds, figures
+    assert final.threads <= baseline.threads + EXECUTOR_THREADS, figures
+    assert final.fds <= baseline.fds, figures
     after = loaded.plan()  # and the next plan works
     assert after.success, after.message

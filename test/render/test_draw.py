@@ -8,12 +8,12 @@ tree stops coming from the recorded ``landmark`` events.
 from __future__ import annotations
 
 import ast
-import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.rec_plan import quick_plan, quick_world
 from PIL import Image
 
 from clew_ros.core.plan import Plan
@@ -29,8 +29,6 @@ from clew_ros.render.draw import END_MS, EVENT_MS, FILMSTRIP_POSES, FRAME_MS, GI
 from clew_ros.render.raster import rasterize, render_png
 from clew_ros.render.shapes import Circle, Paint, Polygon, Polyline, Rect, Text
 from clew_ros.render.svg import render_svg, svg_text
-
-from helpers.rec_plan import quick_plan, quick_world
 
 SIZE = 400
 RENDER = Path(__file__).resolve().parents[2] / "clew_ros" / "render"

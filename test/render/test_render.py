@@ -3,20 +3,18 @@
 from __future__ import annotations
 
 import json
-import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.rec_plan import WORLD_PATH, quick_plan, quick_world
 from PIL import Image, ImageSequence
 
 from clew_ros.cli.render import main as clew_render
 from clew_ros.render import draw_still, scene_from_recording
 from clew_ros.render.shapes import COLORS
 from clew_ros.render.view import View
-
-from helpers.rec_plan import WORLD_PATH, quick_plan, quick_world
 
 SIZE = 480
 

@@ -23,7 +23,7 @@ setup(
         ),
         ("share/" + package_name + "/launch", sorted(glob("launch/*.py"))),
     ],
-    python_requires=">=3.10",
+    python_requires=">=3.11",
     install_requires=[
         "numpy>=1.26",
         "numba>=0.59",  # the compiled planning kernel (clew_ros/core/kernel.py)

@@ -49,7 +49,7 @@ fi
 
 # Step 2: the clew_planner node on the default world (no parameter file: it
 # serves config/figure1.yaml), recording to $OUT/recordings; a client calls
-# ~/plan, prints the answer and waits for the playback; then SIGINT stops the
+# for a plan (clew_ros.client), prints the outcome and waits for the playback; then SIGINT stops the
 # node (which must exit 0). Works with or without the recorder: the answer
 # says where the run was recorded, or why not. Joints move at 3 rad/s in the
 # trajectory (default 1 rad/s) so that the playback is short.
@@ -71,7 +71,7 @@ echo "demo: clew_planner --ros-args -p record.directory:=$RECORDINGS -p trajecto
     >"$OUT/clew_planner.log" 2>&1 &
 node_pid=$!
 
-echo "demo: calling /clew_planner/plan (std_srvs/srv/Trigger)"
+echo "demo: python -m clew_ros.node.call_plan: a plan to the default goal through clew_ros.client"
 set +e
 "$PY" -m clew_ros.node.call_plan --node /clew_planner --timeout 180 --wait-playback | tee "$OUT/plan_call.txt"
 rc=${PIPESTATUS[0]}

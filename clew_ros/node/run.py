@@ -78,9 +78,10 @@ class CancelKind(enum.Enum):
 
 def outcome_status(outcome: Outcome) -> int:
     """The terminal ``GoalStatus`` of an outcome: succeeded, canceled, else aborted."""
-    return {Outcome.SUCCEEDED: GoalStatus.STATUS_SUCCEEDED, Outcome.CANCELED: GoalStatus.STATUS_CANCELED}.get(
+    status: int = {Outcome.SUCCEEDED: GoalStatus.STATUS_SUCCEEDED, Outcome.CANCELED: GoalStatus.STATUS_CANCELED}.get(
         outcome, GoalStatus.STATUS_ABORTED
     )
+    return status
 
 
 def outcome_event(outcome: Outcome) -> str:
@@ -178,7 +179,8 @@ class Run:
         """The run's ``GoalStatus`` code for ``~/status``."""
         if self.outcome is not None:
             return outcome_status(self.outcome)
-        return GoalStatus.STATUS_ACCEPTED if self._phase is Phase.ACCEPTED else GoalStatus.STATUS_EXECUTING
+        status: int = GoalStatus.STATUS_ACCEPTED if self._phase is Phase.ACCEPTED else GoalStatus.STATUS_EXECUTING
+        return status
 
     def termination(self) -> Termination:
         """The planner's stop condition: the run's time limit or its cancel."""

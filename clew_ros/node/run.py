@@ -289,7 +289,7 @@ class Run:
 
 
 class StatusTable:
-    """The runs of ``~/status``: ``run id -> (accepted stamp (ns), GoalStatus code)``, newest last.
+    """The runs of ``~/status``: ``run id -> (accepted stamp (ns), GoalStatus code)``.
 
     Keeps the last ``history`` runs. Not locked: the node's publishing
     serialises updates and snapshots (:class:`~clew_ros.node.publishing.Publishing`).
@@ -306,8 +306,9 @@ class StatusTable:
             self._entries.popitem(last=False)
 
     def entries(self) -> list[tuple[uuid.UUID, int, int]]:
-        """``(run id, stamp (ns), status)`` of each run kept, oldest first."""
-        return [(run_id, stamp, status) for run_id, (stamp, status) in self._entries.items()]
+        """``(run id, stamp (ns), status)`` of each run kept, newest first: ``status_list[0]`` is the run a
+        status display should show (the current one)."""
+        return [(run_id, stamp, status) for run_id, (stamp, status) in reversed(self._entries.items())]
 
     def __len__(self) -> int:
         return len(self._entries)

@@ -143,16 +143,16 @@ def test_waits_return_when_the_worker_gets_there(config) -> None:
     assert run.wait_finished(5.0)
 
 
-def test_status_table_keeps_the_last_runs_in_order() -> None:
+def test_status_table_keeps_the_last_runs_newest_first() -> None:
     table = StatusTable(history=3)
     ids = [uuid.uuid4() for _ in range(5)]
     for k, run_id in enumerate(ids):
         table.set(run_id, k, GoalStatus.STATUS_ACCEPTED)
-    table.set(ids[2], 2, GoalStatus.STATUS_SUCCEEDED)  # an update moves the run last
-    assert table.entries() == [
-        (ids[3], 3, GoalStatus.STATUS_ACCEPTED),
-        (ids[4], 4, GoalStatus.STATUS_ACCEPTED),
+    table.set(ids[2], 2, GoalStatus.STATUS_SUCCEEDED)  # an update makes the run the newest
+    assert table.entries() == [  # newest first: status_list[0] is the run a status panel shows
         (ids[2], 2, GoalStatus.STATUS_SUCCEEDED),
+        (ids[4], 4, GoalStatus.STATUS_ACCEPTED),
+        (ids[3], 3, GoalStatus.STATUS_ACCEPTED),
     ]
     assert len(table) == 3
 

@@ -4,6 +4,9 @@ Two planners run at once in their own namespaces: ``quick`` (plans in well
 under a second) and ``ring`` (its goal lies inside a closed ring: it plans
 until canceled or out of time). Every outcome the node can give is asked
 for and told apart by code; so are "no planner", "busy" and "timed out".
+(``START_IN_COLLISION`` cannot reach a running node: it refuses such a world
+as a parameter; ``INTERNAL_ERROR`` is a planner bug, tested in-process in
+test/node/test_worker.py.)
 """
 
 from __future__ import annotations
@@ -129,6 +132,20 @@ def test_hopeless_goals_end_with_their_own_code(quick: Planner, goal, outcome) -
     assert not result.succeeded
     assert result.plan is None
     assert result.message
+
+
+@pytest.fixture(scope="module")
+def coarse(tmp_path_factory, node) -> Iterator[Planner]:
+    """The ring world at the coarsest resolution: EXPLORE's first landmark is already too close."""
+    yield from _start(
+        tmp_path_factory.mktemp("coarse"), "coarse", "node_ring.yaml", node, **{"planner.resolution": 10.0}
+    )
+
+
+def test_no_path_at_resolution_is_its_own_code(coarse: Planner) -> None:
+    result = coarse.client.send_goal().wait(RESULT_TIMEOUT_S)
+    assert result.outcome is Outcome.NO_PATH_AT_RESOLUTION
+    assert result.plan is None
 
 
 def test_busy_cancel_time_limit_and_timeout_on_a_planner_that_keeps_planning(ring: Planner) -> None:

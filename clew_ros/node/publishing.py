@@ -77,7 +77,7 @@ class Publishing:
     def publish(self, name: str, msg: Any, recording: RunRecording) -> None:
         """Record ``msg`` in ``recording``, then publish it on ``~/<name>``; never raises."""
         publisher = self._publishers[name]
-        recording.write(publisher.topic_name, msg, self.now_ns())
+        recording.write(publisher.topic_name, msg, self.now_ns(), publisher.qos_profile)
         try:
             publisher.publish(msg)
         except Exception as error:  # noqa: BLE001 - the context is gone while shutting down

@@ -26,6 +26,7 @@ from clew_ros.node import messages
 from clew_ros.node.playback import GripperEvent, Track, track_from_plan
 from clew_ros.node.player import play
 from clew_ros.node.publishing import Publishing
+from clew_ros.node.qos import GOAL_QOS
 from clew_ros.node.run import Phase, Run, outcome_event
 from clew_ros.node.run_recording import Recordings
 
@@ -84,7 +85,7 @@ class RunWorker:
         out.set_status(run.id, run.accepted_ns, GoalStatus.STATUS_ACCEPTED)
         out.world(run.world, config.planner, run.recording)
         now = out.now_ns()
-        run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now)
+        run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)
         out.publish_status(run.recording)
         request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}
         out.event(

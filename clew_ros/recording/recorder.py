@@ -27,7 +27,7 @@ from typing import Any
 import yaml
 
 import clew_ros
-from clew_ros.recording.cdr import tidy_cdr
+from clew_ros.recording.cdr import SerializedMessage, tidy_cdr
 from clew_ros.recording.errors import RecordingError
 from clew_ros.recording.msgdefs import message_definition, message_type_name, type_description_hash
 
@@ -328,7 +328,9 @@ class RunRecorder:
         topic:
             Full topic name, e.g. ``/clew_planner/status``.
         msg:
-            An rclpy message instance; its type names the schema.
+            An rclpy message instance (its type names the schema), or a
+            :class:`~clew_ros.recording.cdr.SerializedMessage` (CDR already,
+            e.g. :func:`~clew_ros.recording.cdr.tf_message`), recorded as it is.
         time_ns:
             Receive/log time (ns since the epoch), e.g. ``node.get_clock().now().nanoseconds``.
         qos:
@@ -339,8 +341,10 @@ class RunRecorder:
             self._drop()
             return
         try:
-            data = tidy_cdr(msg, self._serialize(msg))
-            type_name = message_type_name(msg)
+            if isinstance(msg, SerializedMessage):
+                data, type_name = msg.data, msg.type_name
+            else:
+                data, type_name = tidy_cdr(msg, self._serialize(msg)), message_type_name(msg)
             offered = _qos_from_profile(qos) if qos is not None else None
             time_ns = int(time_ns)
             if not 0 <= time_ns < 2**64:

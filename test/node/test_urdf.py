@@ -14,6 +14,8 @@ import pytest
 
 urdf_lib = pytest.importorskip("urdf_parser_py.urdf")
 
+from helpers.urdf_fk import matrix, urdf_fk  # noqa: E402
+
 from clew_ros.core.kinematics import joint_positions, tip_poses  # noqa: E402
 from clew_ros.core.world import World, load_world, world_from_parameters, world_to_parameters  # noqa: E402
 from clew_ros.node import frames, urdf  # noqa: E402
@@ -55,49 +57,6 @@ def world(request: pytest.FixtureRequest) -> World:
 # ----------------------------------------------------------------- forward kinematics of a parsed URDF
 
 
-def _rotation(rpy: list[float]) -> np.ndarray:
-    roll, pitch, yaw = rpy
-    rx = np.array([[1, 0, 0], [0, math.cos(roll), -math.sin(roll)], [0, math.sin(roll), math.cos(roll)]])
-    ry = np.array([[math.cos(pitch), 0, math.sin(pitch)], [0, 1, 0], [-math.sin(pitch), 0, math.cos(pitch)]])
-    rz = np.array([[math.cos(yaw), -math.sin(yaw), 0], [math.sin(yaw), math.cos(yaw), 0], [0, 0, 1]])
-    return rz @ ry @ rx  # URDF: fixed axes roll, pitch, yaw
-
-
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    axis = axis / np.linalg.norm(axis)
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
-
-
-def _matrix(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
-    out = np.eye(4)
-    out[:3, :3] = rotation
-    out[:3, 3] = translation
-    return out
-
-
-def urdf_fk(robot, positions: dict[str, float]) -> dict[str, np.ndarray]:
-    """Every link's 4x4 pose in the root link, from the parsed URDF's joints (revolute, fixed, mimic)."""
-    poses = {robot.get_root(): np.eye(4)}
-    pending = list(robot.joints)
-    while pending:
-        joint = next(j for j in pending if j.parent in poses)
-        pending.remove(joint)
-        origin = joint.origin
-        placed = poses[joint.parent] @ _matrix(_rotation(list(origin.rpy)), np.array(origin.xyz))
-        if joint.type == "fixed":
-            motion = np.eye(4)
-        else:
-            assert joint.type == "revolute", joint.type
-            if joint.mimic is not None:
-                value = positions[joint.mimic.joint] * joint.mimic.multiplier + joint.mimic.offset
-            else:
-                value = positions[joint.name]
-            motion = _matrix(_axis_angle(np.array(joint.axis, dtype=float), value), np.zeros(3))
-        poses[joint.child] = placed @ motion
-    return poses
-
-
 def tf_fk(transforms: list[frames.FrameTransform]) -> dict[str, np.ndarray]:
     """Every frame's 4x4 pose in ``world``, composing TF edges (parents first or not)."""
     poses = {"world": np.eye(4)}
@@ -113,7 +72,7 @@ def tf_fk(transforms: list[frames.FrameTransform]) -> dict[str, np.ndarray]:
                 [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
             ]
         )
-        poses[edge.child] = poses[edge.parent] @ _matrix(rotation, np.array(edge.translation))
+        poses[edge.child] = poses[edge.parent] @ matrix(rotation, np.array(edge.translation))
     return poses
 
 

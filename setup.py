@@ -40,7 +40,7 @@ setup(
             "ros-jazzy-common-interfaces>=5.3",
             "ros-jazzy-std-srvs>=5.3",
         ],
-        "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10"],
+        "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10", "urdf-parser-py>=0.0.4"],
         # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
         "bench": ["ompl>=2.0", "matplotlib>=3.8"],
         # make lint (and .ci/run): the checks configured in pyproject.toml. ruff's minor is capped: a new

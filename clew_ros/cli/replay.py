@@ -150,9 +150,18 @@ def _load(args: argparse.Namespace) -> tuple[Any, list[Any], dict[str, Any]]:
                 f"{args.recording} has no topic {', '.join(unknown)}; it has {', '.join(sorted(topics))}"
             )
         messages = recording.messages(args.topics)
+        classes = {}
+        for name in sorted({m.topic for m in messages}):
+            try:
+                classes[name] = message_class(topics[name].type_name)
+            except RecordingError as error:
+                if args.topics:  # asked for by name: say why it cannot be played
+                    raise
+                # e.g. /tf without tf2_msgs (PyPI wheels): play the rest
+                print(f"clew_replay: not playing {name}: {error}", file=sys.stderr)
+        messages = [m for m in messages if m.topic in classes]
         if not messages:
             raise RecordingError(f"{args.recording} holds no messages to play")
-        classes = {name: message_class(topics[name].type_name) for name in {m.topic for m in messages}}
     except RecordingError as error:
         raise _InvalidInputError(str(error)) from None
     return recording, messages, classes

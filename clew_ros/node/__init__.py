@@ -5,11 +5,14 @@
 - ``run``: one run's handle (its phase, cancel, outcome, recording) and the ``~/status`` table.
 - ``worker``: one run's life in its thread: plan, check, publish the outcome, play back.
 - ``player``: plays a timed plan back in real time (no rclpy).
-- ``publishing``: the node's topics and QoS; every message also goes to the run's recording.
+- ``publishing``: the node's topics and QoS (the arm: URDF, TF, ``~/scene``); every message also goes to
+  the run's recording.
 - ``run_recording``: a run's recording as the node uses it (nothing when recording is off).
 - ``parameters``: parameter names, defaults, descriptors and checks.
 - ``messages``: the one module that turns core values into ROS messages and back.
 - ``playback``: the timed plan (trajectory times, grasp events, samples); no rclpy.
+- ``urdf``: the arm's URDF (``~/robot_description``) generated from the world; no rclpy.
+- ``frames``: the arm's and the object's TF frames (``/tf``, ``/tf_static``) at a joint state; no rclpy.
 - ``call_plan``: a small client that calls ``~/plan`` (for pip installs without ``ros2``).
 
 Importing this package imports nothing; the modules import rclpy as they need it.

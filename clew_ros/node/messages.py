@@ -1,7 +1,8 @@
 """The one place where core values become ROS 2 messages, and back.
 
 Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
-plans, :class:`~clew_ros.node.playback.Track`) and a stamp, and returns
+plans, :class:`~clew_ros.node.playback.Track`, TF edges of
+:mod:`~clew_ros.node.frames`) and a stamp, and returns
 a standard message, or the reverse (a ``~/goal_pose``; a ``~/trajectory``
 becomes a plan again with :func:`clew_ros.recording.trajectory_to_plan`).
 The node calls these and nothing else to build what it publishes
@@ -38,11 +39,13 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from unique_identifier_msgs.msg import UUID
 from visualization_msgs.msg import Marker, MarkerArray
 
-from clew_ros.core.kinematics import transform_points
+from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
+from clew_ros.node.frames import FrameTransform
 from clew_ros.node.playback import Track
+from clew_ros.node.urdf import robot_urdf, visual_width_m
 
 __all__ = [
     "FRAME_ID",
@@ -58,6 +61,9 @@ __all__ = [
     "object_pose_stamped",
     "pose_msg",
     "quaternion_to_yaw",
+    "robot_description_message",
+    "scene_markers",
+    "tf_message",
     "time_msg",
     "uuid_msg",
     "world_markers",
@@ -345,12 +351,14 @@ def world_markers(world: World, time_ns: int, goal: np.ndarray | None = None) ->
     return MarkerArray(markers=markers)
 
 
-def landmark_markers(tree: LandmarkTree, time_ns: int) -> MarkerArray:
+def landmark_markers(tree: LandmarkTree, time_ns: int, polygon: np.ndarray | None = None) -> MarkerArray:
     """``~/landmarks``: DELETEALL, then the tree drawn at the object's resting positions.
 
     Namespaces: ``landmarks`` (one SPHERE_LIST, the root green, the others
     blue), ``tree_edges`` (LINE_LIST parent -> child), ``landmark_ids``
-    (TEXT_VIEW_FACING, marker id = landmark id).
+    (TEXT_VIEW_FACING, marker id = landmark id) and, given the object's
+    ``polygon`` (its own frame), ``landmark_outlines`` (a LINE_STRIP of the
+    object at each landmark's placement, marker id = landmark id).
     """
     landmarks = list(tree)
     markers = [_delete_all(time_ns)]
@@ -375,7 +383,101 @@ def landmark_markers(tree: LandmarkTree, time_ns: int) -> MarkerArray:
         text.pose.position = _point(lm.object_pose[:2], z=0.06)
         text.text = str(lm.id)
         markers.append(text)
+    if polygon is not None:
+        markers.extend(
+            _marker(
+                "landmark_outlines",
+                lm.id,
+                Marker.LINE_STRIP,
+                time_ns,
+                _color(0.1, 0.7, 0.2, 0.6) if lm.parent is None else _color(0.2, 0.4, 1.0, 0.6),
+                points=_outline(transform_points(lm.object_pose, polygon)),
+            )
+            for lm in landmarks
+        )
     return MarkerArray(markers=markers)
+
+
+# --------------------------------------------------------------------------- the arm
+
+#: ``~/scene`` colours of the gripper: open (``gripper`` 0.0) and holding (1.0), as ``clew_render`` draws them.
+GRIPPER_OPEN_COLOR = (0.1, 0.75, 0.2)
+GRIPPER_HOLDING_COLOR = (0.9, 0.1, 0.1)
+
+
+def robot_description_message(world: World) -> String:
+    """``~/robot_description``: the URDF of the arm (:func:`clew_ros.node.urdf.robot_urdf`)."""
+    return String(data=robot_urdf(world))
+
+
+def scene_markers(
+    world: World, joints: np.ndarray, gripper: float, object_pose: np.ndarray, time_ns: int
+) -> MarkerArray:
+    """``~/scene``: the arm at ``joints`` ``(n,)`` rad, its gripper and the object at ``object_pose``.
+
+    Namespaces (one marker each, id 0, replaced at every sample): ``arm``
+    (LINE_STRIP base -> joints -> tip, as wide as the links), ``arm_joints``
+    (SPHERE_LIST at the base and the joints), ``gripper`` (a SPHERE at the
+    tip, green and small while open, red and larger while holding: ``gripper``
+    >= 0.5), ``object`` (the object's outline, orange while held, grey at rest).
+    """
+    robot = world.robot
+    points = joint_positions(robot, np.asarray(joints, dtype=float)[None])[0]
+    width = visual_width_m(robot)
+    holding = gripper >= 0.5
+    arm = _marker(
+        "arm", 0, Marker.LINE_STRIP, time_ns, _color(0.45, 0.47, 0.52), scale=width, points=map(_point, points)
+    )
+    joints_marker = _marker(
+        "arm_joints",
+        0,
+        Marker.SPHERE_LIST,
+        time_ns,
+        _color(0.15, 0.15, 0.18),
+        scale=1.5 * width,
+        points=map(_point, points[:-1]),
+    )
+    grip = _marker(
+        "gripper",
+        0,
+        Marker.SPHERE,
+        time_ns,
+        _color(*(GRIPPER_HOLDING_COLOR if holding else GRIPPER_OPEN_COLOR)),
+        scale=(3.0 if holding else 2.0) * width,
+    )
+    grip.pose.position = _point(points[-1])
+    outline = _marker(
+        "object",
+        0,
+        Marker.LINE_STRIP,
+        time_ns,
+        _color(1.0, 0.55, 0.0) if holding else _color(0.5, 0.5, 0.5),
+        scale=2 * _LINE_WIDTH_M,
+        points=_outline(transform_points(np.asarray(object_pose, dtype=float), world.object.polygon)),
+    )
+    return MarkerArray(markers=[arm, joints_marker, grip, outline])
+
+
+def tf_message(transforms: Iterable[FrameTransform], time_ns: int) -> Any:
+    """A ``tf2_msgs/msg/TFMessage`` of ``transforms`` stamped ``time_ns``; ImportError without tf2_msgs.
+
+    Recordings do not need it: :func:`clew_ros.recording.cdr.tf_message` encodes the same message.
+    """
+    from geometry_msgs.msg import Transform, TransformStamped, Vector3
+    from tf2_msgs.msg import TFMessage
+
+    out = []
+    for edge in transforms:
+        x, y, z = edge.translation
+        qx, qy, qz, qw = edge.rotation
+        out.append(
+            TransformStamped(
+                header=_header(time_ns, edge.parent),
+                child_frame_id=edge.child,
+                transform=Transform(translation=Vector3(x=x, y=y, z=z), rotation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
+            )
+        )
+    return TFMessage(transforms=out)
 
 
 # --------------------------------------------------------------------------- trajectory

@@ -7,6 +7,13 @@ run's, or :data:`~clew_ros.node.run_recording.NO_RECORDING`) and records the
 message there before publishing it. The messages themselves come from
 :mod:`clew_ros.node.messages`.
 
+The arm goes out three ways (interface.md §3): ``~/robot_description`` (the
+URDF, with the world), ``/tf`` and ``/tf_static`` (:mod:`~clew_ros.node.frames`)
+and ``~/scene`` markers, at rest (:meth:`Publishing.world`) and at every
+playback sample (:meth:`Publishing.arm`). ``/tf`` and ``/tf_static`` are
+published where ``tf2_msgs`` is importable (a native install; the PyPI wheels
+lack it) and always recorded, encoded by :func:`clew_ros.recording.cdr.tf_message`.
+
 ``~/status`` and ``~/feedback`` are built and published under one lock, so
 that the latched ``~/status`` never ends on an older snapshot and no
 ``planning`` feedback follows a run's outcome.
@@ -14,11 +21,14 @@ that the latched ``~/status`` never ends on an older snapshot and no
 
 from __future__ import annotations
 
+import importlib.util
 import threading
 import time
 import uuid
+from collections.abc import Sequence
 from typing import Any
 
+import numpy as np
 from action_msgs.msg import GoalStatus, GoalStatusArray
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
@@ -31,12 +41,13 @@ from visualization_msgs.msg import MarkerArray
 
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.core.world import World
-from clew_ros.node import messages
-from clew_ros.node.qos import EVENTS_QOS, LATCHED_QOS, STREAM_QOS
+from clew_ros.node import frames, messages
+from clew_ros.node.qos import EVENTS_QOS, LATCHED_QOS, STREAM_QOS, TF_QOS, TF_STATIC_QOS
 from clew_ros.node.run import Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
+from clew_ros.recording.cdr import tf_message
 
-__all__ = ["TOPICS", "Publishing"]
+__all__ = ["TF_TOPICS", "TOPICS", "Publishing", "have_tf2_msgs"]
 
 #: The node's published topics (``~/<name>``): message type and QoS.
 TOPICS: dict[str, tuple[type, QoSProfile]] = {
@@ -49,7 +60,16 @@ TOPICS: dict[str, tuple[type, QoSProfile]] = {
     "landmarks": (MarkerArray, LATCHED_QOS),
     "world_markers": (MarkerArray, LATCHED_QOS),
     "world_yaml": (String, LATCHED_QOS),
+    "robot_description": (String, LATCHED_QOS),
+    "scene": (MarkerArray, STREAM_QOS),
 }
+#: The TF topics (absolute names, as tf2 wants them) and their QoS; type ``tf2_msgs/msg/TFMessage``.
+TF_TOPICS: dict[str, QoSProfile] = {"/tf": TF_QOS, "/tf_static": TF_STATIC_QOS}
+
+
+def have_tf2_msgs() -> bool:
+    """Whether ``tf2_msgs`` is importable, so that ``/tf`` and ``/tf_static`` are published live."""
+    return importlib.util.find_spec("tf2_msgs") is not None
 
 
 class Publishing:
@@ -67,6 +87,13 @@ class Publishing:
         self._publishers = {
             name: node.create_publisher(msg_type, f"~/{name}", qos) for name, (msg_type, qos) in TOPICS.items()
         }
+        self._tf_publishers: dict[str, Any] = {}
+        if have_tf2_msgs():
+            from tf2_msgs.msg import TFMessage
+
+            self._tf_publishers = {
+                topic: node.create_publisher(TFMessage, topic, qos) for topic, qos in TF_TOPICS.items()
+            }
         self._statuses = StatusTable()
         self._order = threading.Lock()  # ~/status and ~/feedback: see the module docstring
 
@@ -77,17 +104,63 @@ class Publishing:
     def publish(self, name: str, msg: Any, recording: RunRecording) -> None:
         """Record ``msg`` in ``recording``, then publish it on ``~/<name>``; never raises."""
         publisher = self._publishers[name]
-        recording.write(publisher.topic_name, msg, self.now_ns())
+        recording.write(publisher.topic_name, msg, self.now_ns(), publisher.qos_profile)
         try:
             publisher.publish(msg)
         except Exception as error:  # noqa: BLE001 - the context is gone while shutting down
             if not self._closing.is_set():
                 self._logger.error(f"cannot publish on {publisher.topic_name}: {error}")
 
+    @property
+    def tf_live(self) -> bool:
+        """Whether ``/tf`` and ``/tf_static`` are published (not only recorded)."""
+        return bool(self._tf_publishers)
+
     def world(self, world: World, planner: PlannerSettings, recording: RunRecording) -> None:
-        """``~/world_yaml`` and ``~/world_markers`` of a problem."""
+        """``~/world_yaml``, ``~/world_markers`` and the arm of a problem: ``~/robot_description``,
+        ``/tf_static``, and ``/tf`` and ``~/scene`` at the start (arm at ``robot.initial``, gripper open,
+        object at its initial pose)."""
         self.publish("world_yaml", messages.world_yaml_message(world, planner, self._node_name), recording)
         self.publish("world_markers", messages.world_markers(world, self.now_ns()), recording)
+        self.publish("robot_description", messages.robot_description_message(world), recording)
+        self.publish_tf(frames.static_transforms(world.robot), self.now_ns(), recording, static=True)
+        self.arm(world, world.robot.initial, 0.0, world.object.initial, time_ns=self.now_ns(), recording=recording)
+
+    def arm(
+        self,
+        world: World,
+        joints: Sequence[float] | np.ndarray,
+        gripper: float,
+        object_pose: np.ndarray,
+        *,
+        time_ns: int,
+        recording: RunRecording,
+    ) -> None:
+        """``/tf`` (the arm's joints and the object) and ``~/scene`` at one state, stamped ``time_ns``."""
+        transforms = [*frames.arm_transforms(world.robot, joints, gripper), frames.object_transform(object_pose)]
+        self.publish_tf(transforms, time_ns, recording)
+        self.publish(
+            "scene",
+            messages.scene_markers(world, np.asarray(joints, dtype=float), gripper, object_pose, time_ns),
+            recording,
+        )
+
+    def publish_tf(
+        self, transforms: list[frames.FrameTransform], time_ns: int, recording: RunRecording, *, static: bool = False
+    ) -> None:
+        """``transforms`` stamped ``time_ns`` on ``/tf`` (or ``/tf_static``): recorded, and published where
+        ``tf2_msgs`` is installed; never raises."""
+        topic = "/tf_static" if static else "/tf"
+        if recording.is_open:
+            recording.write(topic, tf_message(transforms, time_ns), self.now_ns(), TF_TOPICS[topic])
+        publisher = self._tf_publishers.get(topic)
+        if publisher is None:
+            return
+        try:
+            publisher.publish(messages.tf_message(transforms, time_ns))
+        except Exception as error:  # noqa: BLE001 - the context is gone while shutting down
+            if not self._closing.is_set():
+                self._logger.error(f"cannot publish on {topic}: {error}")
 
     def event(
         self, run_id: uuid.UUID, event: str, recording: RunRecording, /, at_s: float | None = None, **fields: Any

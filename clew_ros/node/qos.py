@@ -4,17 +4,17 @@ from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["EVENTS_QOS", "GOAL_QOS", "LATCHED_QOS", "STREAM_QOS"]
+__all__ = ["EVENTS_QOS", "GOAL_QOS", "LATCHED_QOS", "STREAM_QOS", "TF_QOS", "TF_STATIC_QOS"]
 
-#: Latched topics (~/status, ~/trajectory, ~/landmarks, ~/world_markers, ~/world_yaml): a late subscriber
-#: gets the last message.
+#: Latched topics (~/status, ~/trajectory, ~/landmarks, ~/world_markers, ~/world_yaml, ~/robot_description):
+#: a late subscriber gets the last message.
 LATCHED_QOS = QoSProfile(
     depth=1,
     history=HistoryPolicy.KEEP_LAST,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
-#: Streams (~/feedback, ~/joint_states, ~/object_pose).
+#: Streams (~/feedback, ~/joint_states, ~/object_pose, ~/scene).
 STREAM_QOS = QoSProfile(
     depth=10,
     history=HistoryPolicy.KEEP_LAST,
@@ -34,4 +34,18 @@ EVENTS_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
+)
+#: /tf, as tf2_ros's TransformBroadcaster offers it (DynamicBroadcasterQoS).
+TF_QOS = QoSProfile(
+    depth=100,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+#: /tf_static, as tf2_ros's StaticTransformBroadcaster offers it (StaticBroadcasterQoS): latched.
+TF_STATIC_QOS = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )

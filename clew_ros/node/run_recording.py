@@ -22,6 +22,7 @@ from clew_ros.node.parameters import NodeSettings
 
 if TYPE_CHECKING:
     from rclpy.impl.rcutils_logger import RcutilsLogger
+    from rclpy.qos import QoSProfile
 
     from clew_ros.recording import RunRecorder
 
@@ -50,8 +51,11 @@ class RunRecording:
         """Whether messages are still being recorded (closed after the run, or never opened)."""
         return False
 
-    def write(self, topic: str, msg: object, time_ns: int) -> None:
-        """Record ``msg`` as published on ``topic`` at ``time_ns`` (ns, the node's clock)."""
+    def write(self, topic: str, msg: object, time_ns: int, qos: QoSProfile | None = None) -> None:
+        """Record ``msg`` as published on ``topic`` at ``time_ns`` (ns, the node's clock).
+
+        ``qos`` is the profile the topic is offered with; the recording keeps it (interface.md §4).
+        """
 
     def check(self) -> None:
         """Add a write error met so far to :attr:`text` (the recording stays open)."""
@@ -81,12 +85,12 @@ class BagRecording(RunRecording):
     def is_open(self) -> bool:
         return self._recorder is not None
 
-    def write(self, topic: str, msg: object, time_ns: int) -> None:
+    def write(self, topic: str, msg: object, time_ns: int, qos: QoSProfile | None = None) -> None:
         recorder = self._recorder
         if recorder is None:
             return
         try:
-            recorder.write(topic, msg, time_ns)
+            recorder.write(topic, msg, time_ns, qos=qos)
         except Exception as error:  # noqa: BLE001 - a recording fault never stops the plan
             self._fail(f"write to {topic} failed: {error}")
 

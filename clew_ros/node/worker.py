@@ -26,6 +26,7 @@ from clew_ros.node import messages
 from clew_ros.node.playback import GripperEvent, Track, track_from_plan
 from clew_ros.node.player import play
 from clew_ros.node.publishing import Publishing
+from clew_ros.node.qos import GOAL_QOS
 from clew_ros.node.run import Phase, Run, outcome_event
 from clew_ros.node.run_recording import Recordings
 
@@ -84,7 +85,7 @@ class RunWorker:
         out.set_status(run.id, run.accepted_ns, GoalStatus.STATUS_ACCEPTED)
         out.world(run.world, config.planner, run.recording)
         now = out.now_ns()
-        run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now)
+        run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)
         out.publish_status(run.recording)
         request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}
         out.event(
@@ -131,7 +132,8 @@ class RunWorker:
         out.set_status(run.id, run.accepted_ns, run.status)
         out.publish_status(run.recording)
         tree = LandmarkTree(config.world.robot.initial, config.world.object.initial)
-        out.publish("landmarks", messages.landmark_markers(tree, out.now_ns()), run.recording)
+        polygon = config.world.object.polygon
+        out.publish("landmarks", messages.landmark_markers(tree, out.now_ns(), polygon), run.recording)
         announced = [1]  # landmarks already announced (the root)
 
         def on_progress(progress: Progress) -> None:
@@ -178,7 +180,9 @@ class RunWorker:
                 joints=landmark.joints,
             )
         announced[0] = len(landmarks)
-        self._out.publish("landmarks", messages.landmark_markers(tree, self._out.now_ns()), run.recording)
+        self._out.publish(
+            "landmarks", messages.landmark_markers(tree, self._out.now_ns(), run.world.object.polygon), run.recording
+        )
 
     def _publish_outcome(self, run: Run) -> None:
         """Publish the concluded outcome; then the ``~/plan`` answer goes out."""
@@ -215,7 +219,7 @@ class RunWorker:
     # ------------------------------------------------------------------ playback
 
     def _play_back(self, run: Run) -> None:
-        """``~/joint_states``, ``~/object_pose`` and grasp events along the run's track, in time."""
+        """``~/joint_states``, ``~/object_pose``, ``/tf``, ``~/scene`` and grasp events along the track, in time."""
         out, track = self._out, run.track
         assert track is not None  # PLAYBACK follows a plan
 
@@ -223,6 +227,7 @@ class RunWorker:
             now = out.now_ns()
             out.publish("joint_states", messages.joint_state(track.joint_names, joints, gripper, now), run.recording)
             out.publish("object_pose", messages.object_pose_stamped(pose, now), run.recording)
+            out.arm(run.world, joints, gripper, pose, time_ns=now, recording=run.recording)
 
         def on_event(event: GripperEvent) -> None:
             out.event(run.id, event.kind, run.recording, at_s=float(event.time_s), grasp=event.grasp)

@@ -3,8 +3,11 @@
 Each run is a rosbag2 directory ``<record dir>/<run id>/`` holding
 ``metadata.yaml`` (rosbag2 version 9, as ROS 2 Jazzy writes it) and one MCAP
 file ``<run id>_0.mcap``: schema encoding ``ros2msg`` with the full dependency
-text, message encoding ``cdr``. Foxglove, ``ros2 bag``, ``rosbags`` and the
-``mcap`` readers open it.
+text, message encoding ``cdr``, each topic with the QoS it was offered with.
+Foxglove, ``ros2 bag``, ``rosbags`` and the ``mcap`` readers open it. ``/tf``
+and ``/tf_static`` (``tf2_msgs/msg/TFMessage``) are recorded without
+``tf2_msgs`` installed: :func:`~clew_ros.recording.cdr.tf_message` encodes
+them and :mod:`~clew_ros.recording.msgdefs` holds their definition.
 
 - :class:`RunRecorder` writes a run from the node without ever blocking it
   (the node holds it through :mod:`clew_ros.node.run_recording`, which

@@ -1,18 +1,36 @@
-"""Exact length of a CDR buffer from ``rclpy.serialization.serialize_message``.
+"""CDR for recordings: rclpy's buffers tidied, and ``tf2_msgs/msg/TFMessage`` encoded by hand.
 
+**Tidy.**
 With rmw_fastrtps (Jazzy), ``serialize_message`` returns a buffer as long as
 the *estimated* serialized size, which can exceed the message by a few bytes
 per string, and its alignment padding is not zeroed. Strict readers
 (``rosbags``) refuse such trailing bytes. :func:`tidy_cdr` walks the message
 (its ``SLOT_TYPES``, XCDR1 plain CDR rules), cuts the buffer to the message's
 real length and zeroes the padding, so equal messages record as equal bytes.
+
+**TF without tf2_msgs.** The PyPI ROS wheels have no ``tf2_msgs``, yet a
+recording must carry ``/tf`` and ``/tf_static`` (interface.md §4).
+:func:`tf_message` encodes a list of transforms (anything with ``parent``,
+``child``, ``translation`` and ``rotation``, as
+:class:`clew_ros.node.frames.FrameTransform`) as the CDR of a
+``TFMessage`` and returns a :class:`SerializedMessage` that
+:meth:`clew_ros.recording.RunRecorder.write` records as it is; its schema
+text comes from :mod:`clew_ros.recording.msgdefs`.
 """
 
 from __future__ import annotations
 
-from typing import Any
+import struct
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any, Protocol
 
-__all__ = ["tidy_cdr"]
+__all__ = ["TF_MESSAGE_TYPE", "SerializedMessage", "TransformLike", "tf_message", "tidy_cdr"]
+
+#: The type of ``/tf`` and ``/tf_static``.
+TF_MESSAGE_TYPE = "tf2_msgs/msg/TFMessage"
+#: CDR little-endian (XCDR1 plain CDR), the encapsulation rmw_fastrtps writes.
+_ENCAPSULATION = b"\x00\x01\x00\x00"
 
 _SIZES = {
     "boolean": 1,
@@ -105,3 +123,80 @@ def tidy_cdr(msg: Any, data: bytes) -> bytes:
     for start, gap in walker.padding:
         out[4 + start : 4 + start + gap] = bytes(gap)
     return bytes(out)
+
+
+# --------------------------------------------------------------------------- messages encoded here
+
+
+@dataclass(frozen=True)
+class SerializedMessage:
+    """A message already in CDR (with its 4-byte encapsulation header), of type ``type_name`` (``pkg/msg/Type``)."""
+
+    type_name: str
+    data: bytes
+
+
+class TransformLike(Protocol):
+    """One TF edge: the pose of frame ``child`` in frame ``parent``."""
+
+    @property
+    def parent(self) -> str: ...
+    @property
+    def child(self) -> str: ...
+    @property
+    def translation(self) -> tuple[float, float, float]: ...
+    @property
+    def rotation(self) -> tuple[float, float, float, float]: ...
+
+
+class _Encoder:
+    """Plain CDR, little endian; alignment counts from the end of the encapsulation header."""
+
+    def __init__(self) -> None:
+        self.buffer = bytearray(_ENCAPSULATION)
+
+    def _align(self, size: int) -> None:
+        self.buffer += bytes((-(len(self.buffer) - 4)) % size)
+
+    def uint32(self, value: int) -> None:
+        self._align(4)
+        self.buffer += struct.pack("<I", value)
+
+    def int32(self, value: int) -> None:
+        self._align(4)
+        self.buffer += struct.pack("<i", value)
+
+    def string(self, value: str) -> None:
+        data = value.encode("utf-8") + b"\x00"
+        self.uint32(len(data))
+        self.buffer += data
+
+    def doubles(self, values: Iterable[float]) -> None:
+        self._align(8)
+        for value in values:
+            self.buffer += struct.pack("<d", float(value))
+
+    def finish(self) -> bytes:
+        self.buffer += bytes((-len(self.buffer)) % 4)  # DDS payloads end on a 4-byte boundary
+        return bytes(self.buffer)
+
+
+def tf_message(transforms: Iterable[TransformLike], stamp_ns: int) -> SerializedMessage:
+    """``tf2_msgs/msg/TFMessage`` holding ``transforms``, each stamped ``stamp_ns`` (ns since the epoch).
+
+    The bytes are those rmw_fastrtps would send: a ``geometry_msgs/TransformStamped``
+    sequence (header stamp and ``frame_id`` = ``parent``, ``child_frame_id``,
+    translation, rotation ``x, y, z, w``).
+    """
+    edges = list(transforms)
+    sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
+    encoder = _Encoder()
+    encoder.uint32(len(edges))
+    for edge in edges:
+        encoder.int32(sec)
+        encoder.uint32(nanosec)
+        encoder.string(edge.parent)
+        encoder.string(edge.child)
+        encoder.doubles(edge.translation)
+        encoder.doubles(edge.rotation)
+    return SerializedMessage(TF_MESSAGE_TYPE, encoder.finish())

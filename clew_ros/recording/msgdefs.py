@@ -7,6 +7,11 @@ order of a depth-first walk over the sorted dependency names. This module
 does the same from the ``.msg`` files installed with the message packages
 (``share/<pkg>/msg/<Type>.msg``), so that a recording written here carries the
 same schema text as one written by ``ros2 bag record``.
+
+Types whose package is not installed but that the node records
+(``tf2_msgs/msg/TFMessage``: the PyPI ROS wheels lack ``tf2_msgs``) have
+their ``.msg`` text and type hash here (:data:`BUILTIN_DEFINITIONS`); their
+dependencies still come from the installed files.
 """
 
 from __future__ import annotations
@@ -24,7 +29,14 @@ from typing import Any
 
 from clew_ros.recording.errors import RecordingError
 
-__all__ = ["DELIMITER", "message_class", "message_definition", "message_type_name", "type_description_hash"]
+__all__ = [
+    "BUILTIN_DEFINITIONS",
+    "DELIMITER",
+    "message_class",
+    "message_definition",
+    "message_type_name",
+    "type_description_hash",
+]
 
 #: The line that separates definitions in a ``ros2msg`` full text.
 DELIMITER = "=" * 80 + "\n"
@@ -51,6 +63,15 @@ _PRIMITIVES = frozenset(
 )
 _TYPE_NAME = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)/(?:([A-Za-z][A-Za-z0-9_]*)/)?([A-Za-z][A-Za-z0-9_]*)$")
 _MAX_DEPTH = 50
+
+#: ``pkg/msg/Type`` -> (its ``.msg`` text, its ``RIHS01`` type hash) for types recorded without their
+#: package installed; used only when the package's own files are not found. (Jazzy's tf2_msgs.)
+BUILTIN_DEFINITIONS: dict[str, tuple[str, str]] = {
+    "tf2_msgs/msg/TFMessage": (
+        "geometry_msgs/TransformStamped[] transforms\n",
+        "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087",
+    ),
+}
 
 
 def message_type_name(message: Any) -> str:
@@ -115,6 +136,8 @@ def _interface_file(package: str, namespace: str, name: str, suffix: str) -> Pat
 def _msg_text(type_name: str) -> str:
     package, namespace, name = _split(type_name)
     path = _interface_file(package, namespace, name, ".msg")
+    if path is None and f"{package}/{namespace}/{name}" in BUILTIN_DEFINITIONS:
+        return BUILTIN_DEFINITIONS[f"{package}/{namespace}/{name}"][0]
     if path is None:
         raise RecordingError(
             f"no .msg file for {type_name} (looked for share/{package}/{namespace}/{name}.msg "
@@ -176,13 +199,13 @@ def type_description_hash(type_name: str) -> str:
     except RecordingError:
         return ""
     path = _interface_file(package, namespace, name, ".json")
+    full = f"{package}/{namespace}/{name}"
     if path is None:
-        return ""
+        return BUILTIN_DEFINITIONS[full][1] if full in BUILTIN_DEFINITIONS else ""
     try:
         hashes = json.loads(path.read_text()).get("type_hashes", [])
     except (OSError, ValueError):
         return ""
-    full = f"{package}/{namespace}/{name}"
     for entry in hashes:
         if entry.get("type_name") == full:
             return str(entry.get("hash_string", ""))

@@ -27,7 +27,7 @@ from typing import Any
 import yaml
 
 import clew_ros
-from clew_ros.recording.cdr import tidy_cdr
+from clew_ros.recording.cdr import SerializedMessage, tidy_cdr
 from clew_ros.recording.errors import RecordingError
 from clew_ros.recording.msgdefs import message_definition, message_type_name, type_description_hash
 
@@ -42,8 +42,12 @@ __all__ = [
 
 #: rosbag2 metadata version written by ROS 2 Jazzy.
 ROSBAG2_VERSION = 9
-#: Topics (last name component) that the node offers with transient-local durability.
-TRANSIENT_LOCAL_TOPICS = frozenset({"trajectory", "landmarks", "world_markers", "world_yaml"})
+#: Topics (last name component) that the node offers with transient-local durability (depth 1).
+TRANSIENT_LOCAL_TOPICS = frozenset(
+    {"status", "trajectory", "landmarks", "world_markers", "world_yaml", "robot_description", "tf_static"}
+)
+#: Volatile topics (last name component) that the node offers with depth 100 (the others: 10).
+_DEEP_TOPICS = frozenset({"events", "goal_pose", "tf"})
 
 _STOP = object()
 _FLUSH = object()
@@ -53,12 +57,17 @@ _QUEUE_LIMIT_BYTES = 256 * 2**20
 def default_offered_qos(topic: str) -> dict[str, Any]:
     """The QoS profile (rosbag2 v9 form) the node offers on ``topic``.
 
-    Reliable; transient-local with depth 1 for the latched topics of
-    :data:`TRANSIENT_LOCAL_TOPICS`, volatile with depth 10 otherwise. Zero
-    durations mean "default" (no deadline, lifespan or lease).
+    Used for a message written without its QoS (and by readers for a topic
+    recorded without one). Reliable; transient-local with depth 1 for the
+    latched topics of :data:`TRANSIENT_LOCAL_TOPICS`, volatile with depth 100
+    for ``events``, ``goal_pose`` and ``/tf``, 10 otherwise (as
+    :mod:`clew_ros.node.qos`). Zero durations mean "default" (no deadline,
+    lifespan or lease).
     """
-    latched = topic.rstrip("/").rsplit("/", 1)[-1] in TRANSIENT_LOCAL_TOPICS
-    return _qos_dict("keep_last", 1 if latched else 10, "reliable", "transient_local" if latched else "volatile")
+    last = topic.rstrip("/").rsplit("/", 1)[-1]
+    if last in TRANSIENT_LOCAL_TOPICS:
+        return _qos_dict("keep_last", 1, "reliable", "transient_local")
+    return _qos_dict("keep_last", 100 if last in _DEEP_TOPICS else 10, "reliable", "volatile")
 
 
 def _qos_dict(
@@ -319,7 +328,9 @@ class RunRecorder:
         topic:
             Full topic name, e.g. ``/clew_planner/status``.
         msg:
-            An rclpy message instance; its type names the schema.
+            An rclpy message instance (its type names the schema), or a
+            :class:`~clew_ros.recording.cdr.SerializedMessage` (CDR already,
+            e.g. :func:`~clew_ros.recording.cdr.tf_message`), recorded as it is.
         time_ns:
             Receive/log time (ns since the epoch), e.g. ``node.get_clock().now().nanoseconds``.
         qos:
@@ -330,8 +341,10 @@ class RunRecorder:
             self._drop()
             return
         try:
-            data = tidy_cdr(msg, self._serialize(msg))
-            type_name = message_type_name(msg)
+            if isinstance(msg, SerializedMessage):
+                data, type_name = msg.data, msg.type_name
+            else:
+                data, type_name = tidy_cdr(msg, self._serialize(msg)), message_type_name(msg)
             offered = _qos_from_profile(qos) if qos is not None else None
             time_ns = int(time_ns)
             if not 0 <= time_ns < 2**64:

@@ -36,7 +36,7 @@ TOPIC_TYPES = {
     f"{NODE}/world_markers": "visualization_msgs/msg/MarkerArray",
     f"{NODE}/world_yaml": "std_msgs/msg/String",
 }
-LATCHED = {f"{NODE}/{name}" for name in ("trajectory", "landmarks", "world_markers", "world_yaml")}
+LATCHED = {f"{NODE}/{name}" for name in ("status", "trajectory", "landmarks", "world_markers", "world_yaml")}
 
 
 def stamp(time_ns: int) -> Time:

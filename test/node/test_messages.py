@@ -167,6 +167,38 @@ def test_landmark_markers() -> None:
     assert len(edges.points) == 4
     texts = [m for m in markers if m.ns == "landmark_ids"]
     assert [(m.id, m.text) for m in texts] == [(0, "0"), (1, "1"), (2, "2")]
+    assert not [m for m in markers if m.ns == "landmark_outlines"]  # no polygon given
+
+    # every landmark's placement drawn as the object's outline
+    square = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
+    outlines = [m for m in messages.landmark_markers(tree, 0, square).markers if m.ns == "landmark_outlines"]
+    assert [m.id for m in outlines] == [0, 1, 2]
+    assert all(m.type == Marker.LINE_STRIP and len(m.points) == 5 for m in outlines)
+    assert (outlines[1].points[0].x, outlines[1].points[0].y) == pytest.approx((0.9, 0.9))
+
+
+def test_scene_markers(quick) -> None:
+    joints = np.array([math.pi / 2, -math.pi / 2])
+    resting = {m.ns: m for m in messages.scene_markers(quick, joints, 0.0, quick.object.initial, 7).markers}
+    assert set(resting) == {"arm", "arm_joints", "gripper", "object"}
+    arm = resting["arm"]
+    assert arm.type == Marker.LINE_STRIP
+    assert np.allclose([(p.x, p.y) for p in arm.points], [(0.0, 0.0), (0.0, 1.0), (0.8, 1.0)])
+    assert (resting["gripper"].pose.position.x, resting["gripper"].pose.position.y) == pytest.approx((0.8, 1.0))
+    held = {m.ns: m for m in messages.scene_markers(quick, joints, 1.0, np.array([0.8, 1.05, 0.0]), 7).markers}
+    assert resting["gripper"].color.g > resting["gripper"].color.r  # open: green
+    assert held["gripper"].color.r > held["gripper"].color.g  # holding: red, and larger
+    assert held["gripper"].scale.x > resting["gripper"].scale.x
+    assert held["object"].color != resting["object"].color
+    assert len(held["object"].points) == len(quick.object.polygon) + 1
+    assert all(m.header.frame_id == "world" and m.header.stamp.nanosec == 7 for m in held.values())
+
+
+def test_robot_description_message(quick) -> None:
+    text = messages.robot_description_message(quick).data
+    assert text.startswith("<?xml")
+    assert '<joint name="joint_2" type="revolute">' in text
+    assert '<joint name="gripper" type="revolute">' in text
 
 
 def test_status_feedback_and_events() -> None:

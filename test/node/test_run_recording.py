@@ -109,7 +109,7 @@ class FailingRecorder:
         self.error: str | None = None
         self.raise_on = raise_on
 
-    def write(self, topic: str, msg: object, time_ns: int) -> None:
+    def write(self, topic: str, msg: object, time_ns: int, *, qos: object = None) -> None:
         if self.raise_on == "write":
             raise OSError("disk full")
         self.error = "cannot write (writing a chunk): No space left on device"

@@ -7,7 +7,9 @@ the QoS its publisher offers.
 
 from __future__ import annotations
 
+import json
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -237,3 +239,21 @@ def test_every_topic_is_recorded_with_its_offered_qos(recorded: Recorded) -> Non
             assert {key: profile[key] for key in offered[topic]} == offered[topic], topic
     assert offered[f"{recorded.node}/status"]["durability"] == "transient_local"
     assert offered[f"{recorded.node}/events"]["depth"] == 100
+
+
+def test_the_foxglove_layout_names_only_recorded_topics(recorded: Recorded) -> None:
+    """config/foxglove_layout.json, opened on this recording, finds every topic it names (issue 15)."""
+    layout = json.loads((Path(__file__).resolve().parents[2] / "config" / "foxglove_layout.json").read_text())
+    panels = json.dumps(layout["configById"])
+    named = set(re.findall(r"/clew_planner/[a-z_]+", panels))
+    recorded_topics = {topic.replace(recorded.node, "/clew_planner", 1) for topic in recorded.messages}
+    assert {"/clew_planner/robot_description", "/clew_planner/status", "/clew_planner/landmarks"} <= named
+    assert named <= recorded_topics, named - recorded_topics
+    scene = layout["configById"]["3D!clew_world"]
+    urdf_layers = [layer for layer in scene["layers"].values() if layer["layerId"] == "foxglove.Urdf"]
+    assert [layer["topic"] for layer in urdf_layers] == ["/clew_planner/robot_description"]
+    assert scene["followTf"] == "world"
+    assert {"/tf", "/tf_static"} <= recorded_topics  # the URDF's links are placed by the recorded TF
+    # the status panel reads status_list[0]: the node lists the newest run first
+    status = recorded.messages[f"{recorded.node}/status"][-1][1]
+    assert status.status_list[0].status == 4  # this recording's own run, succeeded

@@ -43,6 +43,10 @@ setup(
         "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10", "urdf-parser-py>=0.0.4"],
         # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
         "bench": ["ompl>=2.0", "matplotlib>=3.8"],
+        # clew_plan --foxglove (clew_ros/live): the run served live to Foxglove over a WebSocket on 127.0.0.1.
+        # websockets and protobuf are the tests' client (test/helpers/foxglove_client.py): it subscribes and
+        # decodes with the schemas the server advertises, as the Foxglove app does.
+        "live": ["foxglove-sdk>=0.30.3", "websockets>=15.0", "protobuf>=5.29"],
         # make lint (and .ci/run): the checks configured in pyproject.toml. ruff's minor is capped: a new
         # minor release turns on new rules of the selected families, which would fail CI with no code change.
         "lint": ["ruff>=0.17.6,<0.18", "mypy>=2.4", "types-PyYAML>=6.0", "types-shapely>=2.1"],

@@ -5,6 +5,13 @@ Exit 0: a plan was found; 1: no plan (the file is still written with
 message naming the parameter. Ctrl-C (SIGINT) or SIGTERM cancels the run:
 the file is written with code ``CANCELED`` and the exit code is 1; a second
 signal aborts at once (exit 130, no file).
+
+``--foxglove [PORT]`` (the ``live`` extra) also serves the run to Foxglove
+over a WebSocket on 127.0.0.1 (PORT 8765; 0: any free port, printed): it
+waits for a client, shows the world and the landmark tree as it grows, writes
+the plan file as usual, then plays the plan back again and again until
+Ctrl-C (SIGINT) or SIGTERM; the exit code is the run's. The live view only
+observes: same seed, same plan. Channels: :mod:`clew_ros.live.view`.
 """
 
 from __future__ import annotations
@@ -24,7 +31,8 @@ from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import Plan, checked_plan
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree
-from clew_ros.core.world import read_parameter_file, world_from_parameters
+from clew_ros.core.world import World, read_parameter_file, world_from_parameters
+from clew_ros.live import DEFAULT_PORT, HOST, INSTALL_HINT, LiveView, LiveViewError, LiveViewUnavailableError
 
 EXIT_ABORTED = 130
 
@@ -36,6 +44,16 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, default=None, help="overrides planner.seed")
     parser.add_argument("--time-limit", type=float, default=None, help="overrides planner.time_limit (s)")
     parser.add_argument("--quiet", "-q", action="store_true", help="no progress line on stderr")
+    parser.add_argument(
+        "--foxglove",
+        nargs="?",
+        type=int,
+        const=DEFAULT_PORT,
+        default=None,
+        metavar="PORT",
+        help=f"serve the run live to Foxglove on ws://{HOST}:PORT (default {DEFAULT_PORT}; 0: any free port) "
+        f"and play the plan back until Ctrl-C; needs the live extra ({INSTALL_HINT})",
+    )
     return parser
 
 
@@ -64,7 +82,7 @@ class _ProgressLine:
             print(file=sys.stderr)
 
 
-def _cancel_on_signals(cancel: threading.Event) -> Callable[[], None]:
+def _cancel_on_signals(cancel: threading.Event, doing: str = "canceling the run") -> Callable[[], None]:
     """SIGINT / SIGTERM set ``cancel`` (the planner stops and reports CANCELED); a second one aborts.
 
     Returns a function that restores the previous handlers. Outside the main thread it does nothing.
@@ -74,7 +92,7 @@ def _cancel_on_signals(cancel: threading.Event) -> Callable[[], None]:
         if cancel.is_set():
             raise KeyboardInterrupt
         cancel.set()
-        print(f"clew_plan: {signal.Signals(signum).name}: canceling the run (again to abort)", file=sys.stderr)
+        print(f"clew_plan: {signal.Signals(signum).name}: {doing} (again to abort)", file=sys.stderr)
 
     previous = {}
     try:
@@ -90,6 +108,44 @@ def _cancel_on_signals(cancel: threading.Event) -> Callable[[], None]:
     return restore
 
 
+def _start_live_view(parameters: dict, port: int) -> LiveView | str:
+    """The started live view, or why it cannot start (a message for stderr)."""
+    try:
+        return LiveView.from_parameters(parameters, port=port).start()
+    except LiveViewUnavailableError:
+        return f"--foxglove needs foxglove-sdk, which is not installed: {INSTALL_HINT}"
+    except (LiveViewError, ParameterError) as error:
+        return f"--foxglove: {error}"
+
+
+def _serve_until_signal(view: LiveView, planned: Plan) -> None:
+    """Show the outcome, then play the plan back (a failed one: keep showing the tree) until SIGINT / SIGTERM."""
+    stop = threading.Event()
+    restore = _cancel_on_signals(stop, "stopping the live view")
+    try:
+        view.publish_outcome(planned)
+        print(f"clew_plan: playing the plan back on {view.url} until Ctrl-C", file=sys.stderr)
+        while not stop.is_set():
+            if not planned.segments or view.play(planned, stop=stop):
+                stop.wait(1.0)
+    except KeyboardInterrupt:  # a second signal
+        pass
+    finally:
+        restore()
+
+
+def _show_world(view: LiveView, world: World, cancel: threading.Event) -> bool:
+    """Publish the world, then wait for a Foxglove client or ``cancel``; ``False``: aborted (a second signal)."""
+    view.publish_world(world)
+    print(f"clew_plan: live view on {view.url}: waiting for a Foxglove client (Ctrl-C to stop)", file=sys.stderr)
+    try:
+        while not view.wait_for_client(0.2) and not cancel.is_set():
+            pass
+    except KeyboardInterrupt:
+        return False
+    return True
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
@@ -99,13 +155,37 @@ def main(argv: list[str] | None = None) -> int:
     except ParameterError as error:
         print(f"clew_plan: invalid input: {error}", file=sys.stderr)
         return 2
+    if args.foxglove is None:
+        return _plan(args, world, settings, None)
+    view = _start_live_view(parameters, args.foxglove)
+    if isinstance(view, str):
+        print(f"clew_plan: {view}", file=sys.stderr)
+        return 2
+    try:
+        return _plan(args, world, settings, view)
+    finally:
+        view.stop()
+
+
+def _plan(args: argparse.Namespace, world: World, settings: PlannerSettings, view: LiveView | None) -> int:
+    """Plan, write the plan file, and with a live view play the plan back until a signal; the exit code."""
     progress = _ProgressLine(not args.quiet)
+
+    def observe(update: Progress) -> None:
+        progress(update)
+        if view is not None:
+            view.on_progress(update)
+
     warm_up()  # compile the kernel (or load numba's cache) before the clock starts: no plan pays for it
-    started = time.monotonic()
     cancel = threading.Event()
     restore = _cancel_on_signals(cancel)
+    if view is not None and not _show_world(view, world, cancel):
+        restore()
+        print("clew_plan: aborted; no plan file written", file=sys.stderr)
+        return EXIT_ABORTED
+    started = time.monotonic()
     try:
-        result = plan(world, settings, termination=Termination(settings.time_limit, cancel), progress=progress)
+        result = plan(world, settings, termination=Termination(settings.time_limit, cancel), progress=observe)
         planned = checked_plan(world, result)
     except KeyboardInterrupt:  # a second signal
         print("clew_plan: aborted; no plan file written", file=sys.stderr)
@@ -134,6 +214,8 @@ def main(argv: list[str] | None = None) -> int:
         f"{len(result.tree)} landmarks) -> {args.output}",
         file=sys.stderr,
     )
+    if view is not None:
+        _serve_until_signal(view, planned)
     return 0 if planned.success else 1
 
 

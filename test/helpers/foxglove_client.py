@@ -47,8 +47,11 @@ class FoxgloveClient:
 
     @classmethod
     def connect(cls, port: int, *, channels: int, timeout_s: float = 10.0) -> FoxgloveClient:
-        """Connect to ``ws://127.0.0.1:<port>``, wait for ``channels`` advertised channels, subscribe to all."""
-        ws = connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL], open_timeout=timeout_s)
+        """Connect to ``ws://127.0.0.1:<port>``, wait for ``channels`` advertised channels, subscribe to all.
+
+        No keepalive pings: a client in the planner's process may not answer in time while it plans.
+        """
+        ws = connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL], open_timeout=timeout_s, ping_interval=None)
         assert ws.subprotocol == SUBPROTOCOL
         server_info = json.loads(ws.recv(timeout=timeout_s))
         assert server_info["op"] == "serverInfo"
@@ -101,10 +104,16 @@ def _decoder(channel: dict[str, Any]) -> Any:
     if channel["encoding"] == "json":
         assert channel["schemaEncoding"] == "jsonschema"
         json.loads(channel["schema"])  # the schema itself is JSON
-        return lambda payload: json.loads(payload)
+        return json.loads
     assert channel["encoding"] == "protobuf", channel["encoding"]
     assert channel["schemaEncoding"] == "protobuf"
-    files = descriptor_pb2.FileDescriptorSet.FromString(base64.b64decode(channel["schema"])).file
+    return protobuf_decoder(channel["schemaName"], base64.b64decode(channel["schema"]))
+
+
+def protobuf_decoder(schema_name: str, descriptor_set: bytes) -> Any:
+    """payload -> dict for protobuf message ``schema_name`` of a serialised ``FileDescriptorSet``
+    (fields at their defaults included, names as in the .proto)."""
+    files = descriptor_pb2.FileDescriptorSet.FromString(descriptor_set).file
     pool = descriptor_pool.DescriptorPool()
     pending = list(files)
     while pending:  # dependencies first, whatever the set's order
@@ -113,7 +122,7 @@ def _decoder(channel: dict[str, Any]) -> Any:
         for proto in added:
             pool.Add(proto)
             pending.remove(proto)
-    message_class = message_factory.GetMessageClass(pool.FindMessageTypeByName(channel["schemaName"]))
+    message_class = message_factory.GetMessageClass(pool.FindMessageTypeByName(schema_name))
 
     def decode(payload: bytes) -> dict[str, Any]:
         message = message_class.FromString(payload)

@@ -15,6 +15,8 @@ import base64
 import json
 import struct
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,30 +48,32 @@ class FoxgloveClient:
     topics: dict[int, tuple[str, str]] = field(default_factory=dict)  # subscription id -> (topic, schema name)
 
     @classmethod
-    def connect(cls, port: int, *, channels: int, timeout_s: float = 10.0) -> FoxgloveClient:
-        """Connect to ``ws://127.0.0.1:<port>``, wait for ``channels`` advertised channels, subscribe to all.
+    @contextmanager
+    def connect(cls, port: int, *, channels: int, timeout_s: float = 10.0) -> Iterator[FoxgloveClient]:
+        """``with FoxgloveClient.connect(port, channels=n) as client:`` connects to ``ws://127.0.0.1:<port>``,
+        waits for ``n`` advertised channels and subscribes to all; the connection closes at the end.
 
         No keepalive pings: a client in the planner's process may not answer in time while it plans.
         """
-        ws = connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL], open_timeout=timeout_s, ping_interval=None)
-        assert ws.subprotocol == SUBPROTOCOL
-        server_info = json.loads(ws.recv(timeout=timeout_s))
-        assert server_info["op"] == "serverInfo"
-        advertised: dict[int, dict[str, Any]] = {}
-        deadline = time.monotonic() + timeout_s
-        while len(advertised) < channels:
-            text = ws.recv(timeout=max(0.1, deadline - time.monotonic()))
-            message = json.loads(text)
-            if message["op"] == "advertise":
-                advertised.update({c["id"]: c for c in message["channels"]})
-        client = cls(ws, server_info, advertised)
-        subscriptions = []
-        for subscription_id, (channel_id, channel) in enumerate(sorted(advertised.items()), start=1):
-            client.decoders[subscription_id] = _decoder(channel)
-            client.topics[subscription_id] = (channel["topic"], channel["schemaName"])
-            subscriptions.append({"id": subscription_id, "channelId": channel_id})
-        ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
-        return client
+        uri = f"ws://127.0.0.1:{port}"
+        with connect(uri, subprotocols=[SUBPROTOCOL], open_timeout=timeout_s, ping_interval=None) as ws:
+            assert ws.subprotocol == SUBPROTOCOL
+            server_info = json.loads(ws.recv(timeout=timeout_s))
+            assert server_info["op"] == "serverInfo"
+            advertised: dict[int, dict[str, Any]] = {}
+            deadline = time.monotonic() + timeout_s
+            while len(advertised) < channels:
+                message = json.loads(ws.recv(timeout=max(0.1, deadline - time.monotonic())))
+                if message["op"] == "advertise":
+                    advertised.update({c["id"]: c for c in message["channels"]})
+            client = cls(ws, server_info, advertised)
+            subscriptions = []
+            for subscription_id, (channel_id, channel) in enumerate(sorted(advertised.items()), start=1):
+                client.decoders[subscription_id] = _decoder(channel)
+                client.topics[subscription_id] = (channel["topic"], channel["schemaName"])
+                subscriptions.append({"id": subscription_id, "channelId": channel_id})
+            ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
+            yield client
 
     def receive(self, timeout_s: float = 10.0) -> Received:
         """The next message of a subscribed channel, decoded (JSON status and other text ops are skipped)."""
@@ -94,9 +98,6 @@ class FoxgloveClient:
             out.append(message)
             if done(message):
                 return out
-
-    def close(self) -> None:
-        self.ws.close()
 
 
 def _decoder(channel: dict[str, Any]) -> Any:

@@ -41,7 +41,7 @@ ROSDEP_KEYS = {
     "PIL": "python3-pil",
 }
 #: Imported, but with no rosdep key (setup.py's install_requires), or optional (imported under try).
-NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags"}
+NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags", "foxglove"}  # foxglove: the live extra (clew_ros.live)
 
 CONSOLE_SCRIPTS = {
     "clew_planner": "clew_ros.node.main:main",

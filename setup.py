@@ -49,7 +49,8 @@ setup(
         "live": ["foxglove-sdk>=0.30.3", "websockets>=15.0", "protobuf>=5.29"],
         # make lint (and .ci/run): the checks configured in pyproject.toml. ruff's minor is capped: a new
         # minor release turns on new rules of the selected families, which would fail CI with no code change.
-        "lint": ["ruff>=0.17.6,<0.18", "mypy>=2.4", "types-PyYAML>=6.0", "types-shapely>=2.1"],
+        # foxglove-sdk too: mypy reads its own type information for clew_ros/live.
+        "lint": ["ruff>=0.17.6,<0.18", "mypy>=2.4", "types-PyYAML>=6.0", "types-shapely>=2.1", "foxglove-sdk>=0.30.3"],
     },
     zip_safe=True,
     entry_points={

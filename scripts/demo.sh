@@ -51,8 +51,8 @@ fi
 # serves config/figure1.yaml), recording to $OUT/recordings; a client calls
 # for a plan (clew_ros.client), prints the outcome and waits for the playback; then SIGINT stops the
 # node (which must exit 0). Works with or without the recorder: the answer
-# says where the run was recorded, or why not. Joints move at 3 rad/s in the
-# trajectory (default 1 rad/s) so that the playback is short.
+# says where the run was recorded, or why not. Joints move at up to 3 rad/s and
+# 12 rad/s^2 in the trajectory (default 1 rad/s, 2 rad/s^2) so that the playback is short.
 RECORDINGS="$OUT/recordings"
 mkdir -p "$RECORDINGS"
 node_pid=""
@@ -65,9 +65,10 @@ stop_node() {
 }
 trap stop_node EXIT
 
-echo "demo: clew_planner --ros-args -p record.directory:=$RECORDINGS -p trajectory.joint_speed:=3.0" \
-     "(log: $OUT/clew_planner.log)"
-"$BIN/clew_planner" --ros-args -p "record.directory:=$RECORDINGS" -p trajectory.joint_speed:=3.0 \
+echo "demo: clew_planner --ros-args -p record.directory:=$RECORDINGS -p trajectory.max_velocity:=3.0" \
+     "-p trajectory.max_acceleration:=12.0 (log: $OUT/clew_planner.log)"
+"$BIN/clew_planner" --ros-args -p "record.directory:=$RECORDINGS" -p trajectory.max_velocity:=3.0 \
+    -p trajectory.max_acceleration:=12.0 \
     >"$OUT/clew_planner.log" 2>&1 &
 node_pid=$!
 

@@ -4,12 +4,16 @@
     python -m clew_ros.examples.trajectory_follower [--planner /clew_planner] [--count N] [--rate HZ]
 
 Subscribes to ``<planner>/trajectory`` (transient-local, as the planner
-offers it) and, for each trajectory, steps through its points in time,
-interpolating linearly, and publishes ``~/joint_states`` (the arm's joints
+offers it) and, for each trajectory, steps through its points in time and
+publishes ``~/joint_states`` (the arm's joints
 and ``gripper``) at ``--rate``. Prints ``following <topic>`` once the
 planner is found, then one line per trajectory followed, ``followed 12
 points over 3.42 s, 2 grasps``, and exits after ``--count`` trajectories
-(0: runs until Ctrl-C).
+(0: runs until Ctrl-C). Between points it interpolates as
+``joint_trajectory_controller`` does: quintic splines when the points carry
+velocities and accelerations (the planner's do: every point at rest, so the
+arm moves along the straight segment between them), linearly otherwise; the
+``gripper`` switches at a point, it does not slide.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from clew_ros.node.qos import LATCHED_QOS, STREAM_QOS
+from clew_ros.node.timing import quintic_spline
 
 
 class TrajectoryFollower(Node):
@@ -36,6 +41,7 @@ class TrajectoryFollower(Node):
         self._trajectory: JointTrajectory | None = None
         self._times_s = np.zeros(0)
         self._positions = np.zeros((0, 0))
+        self._rates: tuple[np.ndarray, np.ndarray] | None = None  # velocities, accelerations: quintic splines
         self._started_s = 0.0
         self._states = self.create_publisher(JointState, "~/joint_states", STREAM_QOS)
         self._subscription = self.create_subscription(
@@ -53,6 +59,12 @@ class TrajectoryFollower(Node):
         self._trajectory = msg
         self._times_s = np.array([p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in msg.points])
         self._positions = np.array([list(p.positions) for p in msg.points], dtype=float)
+        width = self._positions.shape[1]
+        complete = all(len(p.velocities) == len(p.accelerations) == width for p in msg.points)
+        self._rates = None
+        if complete:
+            velocities = np.array([list(p.velocities) for p in msg.points], dtype=float)
+            self._rates = (velocities, np.array([list(p.accelerations) for p in msg.points], dtype=float))
         self._started_s = self._now_s()
 
     def _step(self) -> None:
@@ -65,6 +77,9 @@ class TrajectoryFollower(Node):
         k = int(np.searchsorted(self._times_s, t, side="right")) - 1
         if k >= len(self._times_s) - 1:
             positions = self._positions[-1]
+        elif self._rates is not None:
+            positions = quintic_spline(self._times_s, self._positions, *self._rates, np.array([t]))[0]
+            positions[-1] = self._positions[k][-1]  # the gripper switches, it does not slide
         else:
             alpha = (t - self._times_s[k]) / (self._times_s[k + 1] - self._times_s[k])
             positions = self._positions[k] + alpha * (self._positions[k + 1] - self._positions[k])

@@ -484,12 +484,21 @@ def tf_message(transforms: Iterable[FrameTransform], time_ns: int) -> Any:
 
 
 def joint_trajectory(track: Track, time_ns: int) -> JointTrajectory:
-    """``~/trajectory``: the track's points; ``header.stamp`` is when playback starts."""
+    """``~/trajectory``: the track's points; ``header.stamp`` is when playback starts.
+
+    Every point carries positions, velocities and accelerations of every
+    joint (``gripper``: velocity and acceleration 0), as
+    ``joint_trajectory_controller`` expects.
+    """
     msg = JointTrajectory(header=_header(time_ns), joint_names=list(track.joint_names))
     for k in range(len(track.times_ns)):
-        positions = [float(v) for v in track.positions[k]] + [float(track.gripper[k])]
         msg.points.append(
-            JointTrajectoryPoint(positions=positions, time_from_start=duration_msg(int(track.times_ns[k])))
+            JointTrajectoryPoint(
+                positions=[float(v) for v in track.positions[k]] + [float(track.gripper[k])],
+                velocities=[float(v) for v in track.velocities[k]] + [0.0],
+                accelerations=[float(v) for v in track.accelerations[k]] + [0.0],
+                time_from_start=duration_msg(int(track.times_ns[k])),
+            )
         )
     return msg
 

@@ -82,8 +82,15 @@ class NodeSettings:
     record_enabled: bool = NODE_PARAMETERS.default("record.enabled")
     record_directory: str = NODE_PARAMETERS.default("record.directory")
     playback_rate_hz: float = NODE_PARAMETERS.default("playback.rate")
-    joint_speed_rad_s: float = NODE_PARAMETERS.default("trajectory.joint_speed")
+    max_velocity_rad_s: float = NODE_PARAMETERS.default("trajectory.max_velocity")
+    max_acceleration_rad_s2: float = NODE_PARAMETERS.default("trajectory.max_acceleration")
+    joint_speed_rad_s: float | None = NODE_PARAMETERS.default("trajectory.joint_speed")
     grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell")
+
+    @property
+    def velocity_limit_rad_s(self) -> float:
+        """The joints' velocity limit: ``trajectory.joint_speed`` (deprecated alias) when set, else ``max_velocity``."""
+        return self.max_velocity_rad_s if self.joint_speed_rad_s is None else self.joint_speed_rad_s
 
     @property
     def record_path(self) -> Path:
@@ -95,6 +102,8 @@ SETTINGS_FIELDS = {
     "record_enabled": "record.enabled",
     "record_directory": "record.directory",
     "playback_rate_hz": "playback.rate",
+    "max_velocity_rad_s": "trajectory.max_velocity",
+    "max_acceleration_rad_s2": "trajectory.max_acceleration",
     "joint_speed_rad_s": "trajectory.joint_speed",
     "grasp_dwell_s": "trajectory.grasp_dwell",
 }
@@ -243,11 +252,15 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
     world = check_start_and_goal(world_from_parameters(world_tree))
     planner_tree = {k[len("planner.") :]: v for k, v in values.items() if k.startswith("planner.") and v is not None}
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
-    node = {
-        field: check_value(NODE_PARAMETERS[name], values.get(name, NODE_PARAMETERS[name].default))
-        for field, name in SETTINGS_FIELDS.items()
-    }
+    node = {field: _node_value(NODE_PARAMETERS[name], values.get(name)) for field, name in SETTINGS_FIELDS.items()}
     return Configuration(world, planner, NodeSettings(**node))
+
+
+def _node_value(spec: ParameterSpec, value: Any) -> Any:
+    """A node parameter's value checked; unset (``None``) is its default, ``None`` for one absent unless given."""
+    if value is None:
+        return spec.default
+    return check_value(spec, value)
 
 
 # --------------------------------------------------------------------------- descriptors
@@ -294,5 +307,5 @@ def _constraints(spec: ParameterSpec) -> str:
     if spec.name.startswith("planner."):
         assert spec.limits is not None
         return f"{spec.type.python_type.__name__} in [{spec.limits[0]}, {spec.limits[1]}]; default {spec.default}"
-    text = f"{spec.type.value}; default {spec.default!r}"
+    text = f"{spec.type.value}; " + ("unset by default" if spec.default is None else f"default {spec.default!r}")
     return text if spec.limits is None else f"{text}; in [{spec.limits[0]}, {spec.limits[1]}]"

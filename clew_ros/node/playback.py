@@ -7,26 +7,36 @@ publish ``~/joint_states`` and ``~/object_pose``.
 
 Timing (interface.md §3 leaves it to us, README documents it):
 
-- the first point is at ``t = 0``;
-- a move between two points of one segment lasts
-  ``max_i |dq_i| / joint_speed_rad_s`` (every joint moves at most at that
-  speed, all joints arrive together);
+- the points are the plan's waypoints (interface.md §3), the first at ``t = 0``;
+- a move between two points of one segment is the rest-to-rest quintic of
+  :mod:`~clew_ros.node.timing`: it starts and ends at rest (zero velocity
+  and acceleration), all joints move together along the straight segment,
+  and it lasts the shortest time in which no joint exceeds
+  ``max_velocity_rad_s`` or ``max_acceleration_rad_s2``;
 - a grasp or an ungrasp (two points with the same joints and a different
-  ``gripper``) lasts ``grasp_dwell_s``;
+  ``gripper``) lasts ``grasp_dwell_s``, the arm at rest;
 - every step lasts at least :data:`MIN_STEP_NS` so that ``time_from_start``
-  increases strictly even between nearly equal points.
+  increases strictly even between nearly equal points; durations are rounded
+  up to the nanosecond, so the limits hold for the times as published.
+
+Every point is therefore at rest: its velocities and accelerations are zero,
+and a controller that interpolates the points with quintic splines
+(``joint_trajectory_controller``) moves exactly as :meth:`Track.sample`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from clew_ros.core.kinematics import compose, tip_poses
+from clew_ros.core.parameters import NODE_PARAMETERS
 from clew_ros.core.plan import Plan, replay
 from clew_ros.core.world import World
+from clew_ros.node.timing import profile, rest_to_rest_duration_s
 
 __all__ = ["GRIPPER_JOINT", "MIN_STEP_NS", "GripperEvent", "Track", "track_from_plan"]
 
@@ -52,21 +62,29 @@ class GripperEvent:
 class Track:
     """A plan as timed points; sampled by :meth:`sample` for playback.
 
-    ``times_ns`` (P,), ``positions`` (P, n) rad, ``gripper`` (P,) 0.0 / 1.0,
-    ``object_poses`` (P, 3) the object's pose at each point, ``segment`` (P,)
-    the plan segment each point belongs to, ``grasp_rel`` the held object's
-    pose in the end-effector frame per segment (``None`` for transit).
+    ``times_ns`` (P,), ``positions`` (P, n) rad, ``velocities`` (P, n) rad/s
+    and ``accelerations`` (P, n) rad/s^2 (the profile at each point: zero,
+    every point is at rest), ``gripper`` (P,) 0.0 / 1.0, ``object_poses``
+    (P, 3) the object's pose at each point, ``segment`` (P,) the plan segment
+    each point belongs to, ``grasp_rel`` the held object's
+    pose in the end-effector frame per segment (``None`` for transit);
+    ``max_velocity`` (n,) rad/s and ``max_acceleration`` (n,) rad/s^2 the
+    limits it was timed with.
     """
 
     joint_names: list[str]
     times_ns: np.ndarray
     positions: np.ndarray
+    velocities: np.ndarray
+    accelerations: np.ndarray
     gripper: np.ndarray
     object_poses: np.ndarray
     segment: np.ndarray
     grasps: list[int | None]
     grasp_rel: list[np.ndarray | None]
     tip_pose_fn: Callable[[np.ndarray], np.ndarray]  # (N, n) -> (N, 3), the robot's tip poses
+    max_velocity: np.ndarray
+    max_acceleration: np.ndarray
 
     @property
     def duration_s(self) -> float:
@@ -88,10 +106,32 @@ class Track:
                 out.append(GripperEvent("ungrasp", int(self.grasps[self.segment[k - 1]]), self.times_s[k], k))
         return out
 
+    def joints_at(self, times_s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(positions, velocities, accelerations)``, each (N, n), at ``times_s`` (N,) s (clamped to the track).
+
+        Between two points the joints follow the rest-to-rest quintic of
+        :mod:`~clew_ros.node.timing` along the straight segment; before the
+        first point and after the last the arm rests.
+        """
+        t_ns = np.clip(np.asarray(times_s, dtype=float).reshape(-1) * 1e9, 0.0, float(self.times_ns[-1]))
+        last = len(self.times_ns) - 1
+        k = np.clip(np.searchsorted(self.times_ns, t_ns, side="right") - 1, 0, max(last - 1, 0))
+        if last == 0:
+            zeros = np.zeros((len(t_ns), self.positions.shape[1]))
+            return np.repeat(self.positions[:1], len(t_ns), axis=0), zeros, zeros.copy()
+        span_s = (self.times_ns[k + 1] - self.times_ns[k]).astype(float) * 1e-9
+        u = (t_ns - self.times_ns[k].astype(float)) * 1e-9 / span_s
+        s, ds, dds = profile(u)
+        delta = self.positions[k + 1] - self.positions[k]
+        q = self.positions[k] + s[:, None] * delta
+        dq = (ds / span_s)[:, None] * delta
+        ddq = (dds / span_s**2)[:, None] * delta
+        return q, dq, ddq
+
     def sample(self, t_s: float) -> tuple[np.ndarray, float, np.ndarray]:
         """``(joints (n,), gripper, object_pose (3,))`` at ``t_s`` seconds (clamped to the track).
 
-        Joints move linearly between points; the gripper holds the value of the
+        Joints follow :meth:`joints_at`; the gripper holds the value of the
         last point reached; the object rests, or follows the end effector
         between two points of one transfer segment.
         """
@@ -99,9 +139,7 @@ class Track:
         k = int(np.searchsorted(self.times_ns, t_ns, side="right")) - 1
         if k >= len(self.times_ns) - 1:
             return self.positions[-1].copy(), float(self.gripper[-1]), self.object_poses[-1].copy()
-        span = float(self.times_ns[k + 1] - self.times_ns[k])
-        alpha = (t_ns - float(self.times_ns[k])) / span
-        q = self.positions[k] + alpha * (self.positions[k + 1] - self.positions[k])
+        q = self.joints_at(np.array([t_ns * 1e-9]))[0][0]
         same_transfer = self.segment[k] == self.segment[k + 1] and self.grasp_rel[self.segment[k]] is not None
         if same_transfer:
             pose = compose(self.tip_pose_fn(q[None])[0], self.grasp_rel[self.segment[k]])
@@ -110,15 +148,31 @@ class Track:
         return q, float(self.gripper[k]), pose
 
 
-def track_from_plan(world: World, plan: Plan, *, joint_speed_rad_s: float = 1.0, grasp_dwell_s: float = 0.2) -> Track:
+def track_from_plan(
+    world: World,
+    plan: Plan,
+    *,
+    max_velocity_rad_s: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_velocity"),
+    max_acceleration_rad_s2: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_acceleration"),
+    grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell"),
+) -> Track:
     """Time a successful plan (its ``segments``) for ``world``.
 
-    Raises ``ValueError`` for a plan without segments.
+    ``max_velocity_rad_s`` and ``max_acceleration_rad_s2`` are one limit for
+    every joint or one per joint. Raises ``ValueError`` for a plan without
+    segments or a limit or dwell that is not > 0.
     """
-    if joint_speed_rad_s <= 0 or grasp_dwell_s <= 0:
-        raise ValueError("joint_speed_rad_s and grasp_dwell_s must be > 0")
     if not plan.segments:
         raise ValueError("a plan without segments has no trajectory")
+    n = world.robot.dof
+    try:
+        max_velocity = np.broadcast_to(np.asarray(max_velocity_rad_s, dtype=float), (n,)).copy()
+        max_acceleration = np.broadcast_to(np.asarray(max_acceleration_rad_s2, dtype=float), (n,)).copy()
+    except ValueError:
+        raise ValueError(f"the limits must be one number or one per joint ({n})") from None
+    finite = np.all(np.isfinite(max_velocity)) and np.all(np.isfinite(max_acceleration))
+    if not (finite and np.all(max_velocity > 0) and np.all(max_acceleration > 0) and grasp_dwell_s > 0):
+        raise ValueError("the velocity and acceleration limits and grasp_dwell_s must be > 0")
     robot = world.robot
 
     def tips(q: np.ndarray) -> np.ndarray:
@@ -144,18 +198,23 @@ def track_from_plan(world: World, plan: Plan, *, joint_speed_rad_s: float = 1.0,
     times = np.zeros(len(positions_a), dtype=np.int64)
     for k in range(1, len(positions_a)):
         if gripper_a[k] != gripper_a[k - 1]:
-            step_s = grasp_dwell_s
+            step_ns = round(grasp_dwell_s * 1e9)
         else:
-            step_s = float(np.max(np.abs(positions_a[k] - positions_a[k - 1]))) / joint_speed_rad_s
-        times[k] = times[k - 1] + max(MIN_STEP_NS, round(step_s * 1e9))
+            step_s = rest_to_rest_duration_s(positions_a[k] - positions_a[k - 1], max_velocity, max_acceleration)
+            step_ns = math.ceil(step_s * 1e9)
+        times[k] = times[k - 1] + max(MIN_STEP_NS, step_ns)
     return Track(
         joint_names=[*list(robot.joint_names), GRIPPER_JOINT],
         times_ns=times,
         positions=positions_a,
+        velocities=np.zeros_like(positions_a),
+        accelerations=np.zeros_like(positions_a),
         gripper=gripper_a,
         object_poses=np.array(poses),
         segment=np.array(seg_index),
         grasps=grasps,
         grasp_rel=grasp_rel,
         tip_pose_fn=tips,
+        max_velocity=max_velocity,
+        max_acceleration=max_acceleration,
     )

@@ -255,6 +255,10 @@ def timed_plan(run: Run, result: PlanResult) -> tuple[Outcome, str, Track | None
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
     track = track_from_plan(
-        world, planned, joint_speed_rad_s=settings.joint_speed_rad_s, grasp_dwell_s=settings.grasp_dwell_s
+        world,
+        planned,
+        max_velocity_rad_s=settings.velocity_limit_rad_s,
+        max_acceleration_rad_s2=settings.max_acceleration_rad_s2,
+        grasp_dwell_s=settings.grasp_dwell_s,
     )
     return result.outcome, result.message, track

@@ -41,7 +41,7 @@ from clew_ros.node.qos import GOAL_QOS  # noqa: E402
 pytestmark = [pytest.mark.ros, pytest.mark.skipif(not HAVE_RECORDER, reason="the recorder needs mcap")]
 
 QUICK = Path(__file__).parents[1] / "worlds" / "node_quick.yaml"
-FAST = {"trajectory.joint_speed": 20.0, "playback.rate": 50.0}
+FAST = {"trajectory.max_velocity": 20.0, "trajectory.max_acceleration": 400.0, "playback.rate": 50.0}
 #: The quick world with a 3-link arm of capsules, off the origin.
 ARM3 = {
     "world.robot.base": [0.1, -0.2],

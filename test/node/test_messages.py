@@ -25,6 +25,7 @@ from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import load_world, world_from_parameters
 from clew_ros.node import messages
 from clew_ros.node.playback import track_from_plan
+from clew_ros.node.timing import quintic_spline
 from clew_ros.recording import trajectory_to_plan
 
 WORLDS = Path(__file__).parents[1] / "worlds"
@@ -64,6 +65,25 @@ def test_trajectory_points_hold_the_contract(quick, quick_plan) -> None:
     assert [p.positions[2] for p in msg.points] == gripper
     times = [p.time_from_start.sec * 10**9 + p.time_from_start.nanosec for p in msg.points]
     assert all(b > a for a, b in itertools.pairwise(times))
+
+
+def test_trajectory_points_carry_velocities_and_accelerations(quick, quick_plan) -> None:
+    """Every point has positions, velocities and accelerations of every joint, as joint_trajectory_controller
+    expects; a controller that runs them as quintic splines moves exactly as the node's playback."""
+    track = track_from_plan(quick, quick_plan, max_velocity_rad_s=1.5, max_acceleration_rad_s2=3.0)
+    msg = deserialize_message(serialize_message(messages.joint_trajectory(track, 0)), JointTrajectory)
+    for point in msg.points:
+        assert len(point.positions) == len(point.velocities) == len(point.accelerations) == 3
+        assert list(point.velocities) == [0.0, 0.0, 0.0]  # every waypoint is at rest; gripper: always 0
+        assert list(point.accelerations) == [0.0, 0.0, 0.0]
+    times = np.array([p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in msg.points])
+    assert np.array_equal(np.round(times * 1e9).astype(np.int64), track.times_ns)
+    columns = [
+        np.array([list(getattr(p, f))[:2] for p in msg.points]) for f in ("positions", "velocities", "accelerations")
+    ]
+    t = np.linspace(0.0, track.duration_s, 4001)
+    assert np.allclose(quintic_spline(times, *columns, t), track.joints_at(t)[0], atol=1e-7)
+    assert np.allclose(quintic_spline(times, *columns, t), [track.sample(s)[0] for s in t], atol=1e-7)
 
 
 def goal_msg(x=0.5, y=0.5, yaw=0.0, frame="world") -> PoseStamped:

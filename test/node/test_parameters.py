@@ -164,6 +164,24 @@ def test_node_settings_take_the_specified_defaults() -> None:
     assert config.node == NodeSettings()
 
 
+def test_trajectory_limits_and_the_deprecated_joint_speed() -> None:
+    values = initial_values(file_values("node_quick.yaml"))
+    assert values["trajectory.joint_speed"] is None  # unset: declared without a value
+    node = configuration_from_values(values).node
+    assert (node.max_velocity_rad_s, node.max_acceleration_rad_s2, node.joint_speed_rad_s) == (1.0, 2.0, None)
+    assert node.velocity_limit_rad_s == 1.0
+    values.update({"trajectory.max_velocity": 3, "trajectory.max_acceleration": 7.5})
+    node = configuration_from_values(values).node
+    assert (node.velocity_limit_rad_s, node.max_acceleration_rad_s2) == (3.0, 7.5)
+    # a parameter file that still sets trajectory.joint_speed loads, and its value is the velocity limit
+    values["trajectory.joint_speed"] = 20
+    assert configuration_from_values(values).node.velocity_limit_rad_s == 20.0
+    for name, bad in [("trajectory.max_velocity", 0.0), ("trajectory.max_acceleration", -1.0)]:
+        with pytest.raises(ParameterError, match=rf"^{name}: expected a value in"):
+            configuration_from_values({**values, name: bad})
+    assert "unset by default" in descriptor_for("trajectory.joint_speed").additional_constraints
+
+
 CHECKER_CASES = [
     ("record.enabled", "yes", "record.enabled: expected true or false, got 'yes'"),
     ("record.directory", 5, "record.directory: expected a non-empty string, got 5"),

@@ -57,7 +57,7 @@ WORLDS = Path(__file__).parents[1] / "worlds"
 QUICK = WORLDS / "node_quick.yaml"
 UNREACHABLE = WORLDS / "node_unreachable.yaml"
 # Fast playback so that a run (plan + playback) ends in about two seconds.
-FAST = {"trajectory.joint_speed": 20.0, "playback.rate": 50.0}
+FAST = {"trajectory.max_velocity": 20.0, "trajectory.max_acceleration": 400.0, "playback.rate": 50.0}
 
 
 @pytest.fixture(scope="module")
@@ -302,7 +302,8 @@ def test_bad_parameters_are_rejected_and_good_ones_republish(quick: Session) -> 
 
 def test_a_new_request_or_cancel_stops_a_playback(quick: Session) -> None:
     quick.wait_idle()
-    slow = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=0.2)  # a playback of many seconds
+    # a playback of many seconds; set through the deprecated alias trajectory.joint_speed, which wins when set
+    slow = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=0.2)
     assert _set(quick, "trajectory.joint_speed", slow)[0]
     try:
         first = run_id_of(quick.plan().message)
@@ -321,7 +322,7 @@ def test_a_new_request_or_cancel_stops_a_playback(quick: Session) -> None:
         assert _set(
             quick,
             "trajectory.joint_speed",
-            ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=FAST["trajectory.joint_speed"]),
+            ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=FAST["trajectory.max_velocity"]),
         )[0]
 
 

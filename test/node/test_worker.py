@@ -35,7 +35,13 @@ def node(tmp_path: Path):
     context = rclpy.Context()
     rclpy.init(context=context)
     values = flatten(read_parameter_file(FAST_WORLD))
-    values.update({"record.directory": str(tmp_path / "recordings"), "trajectory.joint_speed": 50.0})
+    values.update(
+        {
+            "record.directory": str(tmp_path / "recordings"),
+            "trajectory.max_velocity": 50.0,
+            "trajectory.max_acceleration": 1000.0,
+        }
+    )
     node = PlannerNode(
         context=context,
         parameter_overrides=[Parameter(k, value=v) for k, v in values.items()],

@@ -70,7 +70,7 @@ def ring(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
             "record.directory": str(tmp / "recordings"),
             "planner.time_limit": 30.0,
             # a playback of several seconds, so that a cancel lands in it
-            "trajectory.joint_speed": 0.5,
+            "trajectory.max_velocity": 0.5,
             "playback.rate": 50.0,
         },
     )
@@ -261,7 +261,13 @@ def local_node(tmp_path: Path):
     context = rclpy.Context()
     rclpy.init(context=context)
     values = flatten(read_parameter_file(FAST_WORLD))
-    values.update({"record.directory": str(tmp_path / "recordings"), "trajectory.joint_speed": 50.0})
+    values.update(
+        {
+            "record.directory": str(tmp_path / "recordings"),
+            "trajectory.max_velocity": 50.0,
+            "trajectory.max_acceleration": 1000.0,
+        }
+    )
     overrides = [Parameter(name, value=value) for name, value in values.items()]
     node = PlannerNode(context=context, parameter_overrides=overrides, namespace=f"/rel{id(tmp_path) % 10**6}")
     try:

@@ -46,7 +46,12 @@ pytestmark = pytest.mark.ros
 ROOT = Path(__file__).resolve().parents[2]
 FAST_WORLD = ROOT / "test" / "worlds" / "rel_fast.yaml"
 UNREACHABLE = ROOT / "config" / "unreachable.yaml"
-FAST = {"trajectory.joint_speed": 20.0, "playback.rate": 50.0, "trajectory.grasp_dwell": 0.02}
+FAST = {
+    "trajectory.max_velocity": 20.0,
+    "trajectory.max_acceleration": 400.0,
+    "playback.rate": 50.0,
+    "trajectory.grasp_dwell": 0.02,
+}
 #: A signal ends the node within this (s): cancel (~0.1 s), close the recording, shut rclpy down.
 EXIT_BOUND_S = 5.0
 SHUTDOWN_FIGURES: dict[str, float] = {}

@@ -40,7 +40,12 @@ from clew_ros.node.main import EXECUTOR_THREADS  # noqa: E402
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 WORLD = Path(__file__).parents[1] / "worlds" / "rel_fast.yaml"
-FAST = {"trajectory.joint_speed": 20.0, "playback.rate": 50.0, "trajectory.grasp_dwell": 0.02}
+FAST = {
+    "trajectory.max_velocity": 20.0,
+    "trajectory.max_acceleration": 400.0,
+    "playback.rate": 50.0,
+    "trajectory.grasp_dwell": 0.02,
+}
 PLANS = 500
 WARM_UP = 50  # runs before the baseline sample: caches (scene per world, rclpy, numpy) fill up
 #: Largest RSS growth (KiB) from the warmed-up baseline to the end of the 500 runs.

@@ -41,7 +41,12 @@ from clew_ros.node.parameters import NODE_PARAMETERS, flatten  # noqa: E402
 pytestmark = pytest.mark.ros
 
 WORLD = Path(__file__).parents[1] / "worlds" / "rel_fast.yaml"
-FAST = {"record.enabled": False, "trajectory.joint_speed": 20.0, "playback.rate": 50.0}
+FAST = {
+    "record.enabled": False,
+    "trajectory.max_velocity": 20.0,
+    "trajectory.max_acceleration": 400.0,
+    "playback.rate": 50.0,
+}
 #: A quick answer (a refusal the planner knows at once) is out within this (s) of the goal's acceptance,
 #: by the node's own clock (the events' wall-clock ``time``) ...
 QUICK_ANSWER_S = 0.5

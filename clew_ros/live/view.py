@@ -102,7 +102,9 @@ EVENT_SCHEMA: dict[str, Any] = {
 #: The node's parameters that time a playback -> the keyword of :class:`LiveView` each sets.
 _TIMING = {
     "playback.rate": "rate_hz",
-    "trajectory.joint_speed": "joint_speed_rad_s",
+    "trajectory.max_velocity": "max_velocity_rad_s",
+    "trajectory.max_acceleration": "max_acceleration_rad_s2",
+    "trajectory.joint_speed": "max_velocity_rad_s",  # the deprecated alias of max_velocity wins when set
     "trajectory.grasp_dwell": "grasp_dwell_s",
 }
 
@@ -120,8 +122,9 @@ class LiveView:
     """A Foxglove WebSocket server on 127.0.0.1 that shows a run: see the module docstring for its channels.
 
     ``port`` 0 picks a free port (:attr:`port` says which once started).
-    ``rate_hz``, ``joint_speed_rad_s`` and ``grasp_dwell_s`` time the
-    playback as the node's ``playback.rate``, ``trajectory.joint_speed`` and
+    ``rate_hz``, ``max_velocity_rad_s``, ``max_acceleration_rad_s2`` and
+    ``grasp_dwell_s`` time the playback as the node's ``playback.rate``,
+    ``trajectory.max_velocity``, ``trajectory.max_acceleration`` and
     ``trajectory.grasp_dwell`` (their defaults are those parameters').
     A context manager: ``with LiveView() as view:`` starts and stops it.
 
@@ -138,18 +141,20 @@ class LiveView:
         namespace: str = "/clew_plan",
         name: str = "clew_plan",
         rate_hz: float = NODE_PARAMETERS.default("playback.rate"),
-        joint_speed_rad_s: float = NODE_PARAMETERS.default("trajectory.joint_speed"),
+        max_velocity_rad_s: float = NODE_PARAMETERS.default("trajectory.max_velocity"),
+        max_acceleration_rad_s2: float = NODE_PARAMETERS.default("trajectory.max_acceleration"),
         grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell"),
     ) -> None:
         if not 0 <= port <= 65535:
             raise LiveViewError(f"port {port} is not a TCP port, must be in [0, 65535]")
-        if rate_hz <= 0 or joint_speed_rad_s <= 0 or grasp_dwell_s <= 0:
-            raise LiveViewError("rate_hz, joint_speed_rad_s and grasp_dwell_s must be > 0")
+        if min(rate_hz, max_velocity_rad_s, max_acceleration_rad_s2, grasp_dwell_s) <= 0:
+            raise LiveViewError("rate_hz, max_velocity_rad_s, max_acceleration_rad_s2 and grasp_dwell_s must be > 0")
         self._requested_port = port
         self._namespace = namespace.rstrip("/")
         self._name = name
         self._rate_hz = rate_hz
-        self._joint_speed_rad_s = joint_speed_rad_s
+        self._max_velocity_rad_s = max_velocity_rad_s
+        self._max_acceleration_rad_s2 = max_acceleration_rad_s2
         self._grasp_dwell_s = grasp_dwell_s
         self._server: WebSocketServer | None = None
         self._context: foxglove.Context | None = None
@@ -164,8 +169,8 @@ class LiveView:
 
     @classmethod
     def from_parameters(cls, parameters: Mapping[str, Any], *, port: int = DEFAULT_PORT) -> LiveView:
-        """A live view timed by a ``ros__parameters`` tree's ``playback.rate``, ``trajectory.joint_speed`` and
-        ``trajectory.grasp_dwell`` (the node's; absent ones take their defaults). Raises
+        """A live view timed by a ``ros__parameters`` tree's ``playback.rate`` and ``trajectory.*`` (the node's;
+        absent ones take their defaults; ``trajectory.joint_speed``, if set, is the velocity limit). Raises
         :class:`~clew_ros.core.errors.ParameterError` naming a parameter that is out of range."""
         values = {}
         for key, keyword in _TIMING.items():
@@ -314,7 +319,11 @@ class LiveView:
         if not plan.segments:
             return True
         track = track_from_plan(
-            world, plan, joint_speed_rad_s=self._joint_speed_rad_s, grasp_dwell_s=self._grasp_dwell_s
+            world,
+            plan,
+            max_velocity_rad_s=self._max_velocity_rad_s,
+            max_acceleration_rad_s2=self._max_acceleration_rad_s2,
+            grasp_dwell_s=self._grasp_dwell_s,
         )
         names = track.joint_names[:-1]
 

@@ -44,7 +44,7 @@ def fast_world(tmp_path: Path, name: str = "figure1") -> Path:
     """``config/<name>.yaml`` with a fast playback (the node's playback and trajectory parameters)."""
     document = yaml.safe_load((CONFIG / f"{name}.yaml").read_text())
     parameters = document["clew_planner"]["ros__parameters"]
-    parameters["trajectory"] = {"joint_speed": 20.0, "grasp_dwell": 0.05}
+    parameters["trajectory"] = {"joint_speed": 20.0, "max_acceleration": 400.0, "grasp_dwell": 0.05}
     parameters["playback"] = {"rate": 50.0}
     path = tmp_path / f"{name}.yaml"
     path.write_text(yaml.safe_dump(document))

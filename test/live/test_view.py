@@ -32,7 +32,7 @@ from clew_ros.live import HOST, LiveView, LiveViewError
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 CHANNELS = 6
 #: Fast playback: a plan of figure1 plays in about 2 s.
-FAST = {"joint_speed_rad_s": 20.0, "grasp_dwell_s": 0.05, "rate_hz": 50.0}
+FAST = {"max_velocity_rad_s": 20.0, "max_acceleration_rad_s2": 400.0, "grasp_dwell_s": 0.05, "rate_hz": 50.0}
 
 
 @pytest.fixture(scope="module")
@@ -158,7 +158,7 @@ def test_a_run_live_the_tree_as_it_grows_the_outcome_and_the_plan_played_back(vi
 
 
 def test_stop_ends_a_playback_under_way(world) -> None:
-    slow = LiveView(port=0, joint_speed_rad_s=0.1)
+    slow = LiveView(port=0, max_velocity_rad_s=0.1)
     slow.start()
     slow.publish_world(world)
     planned = checked_plan(world, plan(world, PlannerSettings(seed=0)))

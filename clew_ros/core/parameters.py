@@ -88,7 +88,7 @@ class ParameterSpec:
     when it is simply absent unless given (``world.obstacle_names``).
     ``limits`` is the closed range ``(low, high)`` of a number, or ``None``.
     ``unit`` is the unit of a number (``m``, ``rad``, ``s``, ...), ``""`` if it
-    has none.
+    has none. ``read_only``: taken when the node starts, never changed while it runs.
     """
 
     name: str
@@ -97,6 +97,7 @@ class ParameterSpec:
     description: str
     unit: str = ""
     limits: tuple[float, float] | None = None
+    read_only: bool = False
 
     @property
     def required(self) -> bool:
@@ -281,6 +282,16 @@ PLANNER_PARAMETERS = ParameterTable(
 NODE_PARAMETERS = ParameterTable(
     "",
     [
+        ParameterSpec(
+            "live.foxglove_port",
+            _I,
+            0,
+            "Serve the runs live to Foxglove over a WebSocket on 127.0.0.1 at this port (0: off; needs the live "
+            "extra, foxglove-sdk). Read only: taken when the node starts.",
+            "",
+            (0, 65535),
+            read_only=True,
+        ),
         ParameterSpec(
             "record.enabled", _B, True, "Record every run as a rosbag2 directory <record.directory>/<run id>/."
         ),

@@ -44,7 +44,7 @@ from __future__ import annotations
 import queue
 import threading
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -344,6 +344,20 @@ class LiveView:
         if not end.stopped:
             self._send("events", {"kind": "playback_done", "time_s": round(track.duration_s, 4)})
         return not end.stopped
+
+    def publish_sample(
+        self, joint_names: Sequence[str], joints: np.ndarray, gripper: float, object_pose: np.ndarray
+    ) -> None:
+        """One state of a playback run elsewhere (the node's): the arm, the object and the joint states."""
+        from clew_ros.live import messages
+
+        now = time.time_ns()
+        self._send_arm(joints, gripper, object_pose, now)
+        self._send("joint_states", messages.joint_states(list(joint_names), joints, gripper, now))
+
+    def publish_event(self, kind: str, **fields: Any) -> None:
+        """One ``events`` message: ``{"kind": kind, **fields}`` (fields JSON-ready)."""
+        self._send("events", {"kind": kind, **fields})
 
     # ------------------------------------------------------------------ internals
 

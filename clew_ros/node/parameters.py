@@ -72,7 +72,7 @@ __all__ = [
 DEFAULT_WORLD_FILE = "figure1.yaml"
 
 #: The parameter prefixes the node owns and checks (others, e.g. use_sim_time, are rclpy's).
-OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.")
+OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.", "live.")
 
 
 @dataclass(frozen=True)
@@ -86,6 +86,7 @@ class NodeSettings:
     max_acceleration_rad_s2: float = NODE_PARAMETERS.default("trajectory.max_acceleration")
     joint_speed_rad_s: float | None = NODE_PARAMETERS.default("trajectory.joint_speed")
     grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell")
+    foxglove_port: int = NODE_PARAMETERS.default("live.foxglove_port")
 
     @property
     def velocity_limit_rad_s(self) -> float:
@@ -106,6 +107,7 @@ SETTINGS_FIELDS = {
     "max_acceleration_rad_s2": "trajectory.max_acceleration",
     "joint_speed_rad_s": "trajectory.joint_speed",
     "grasp_dwell_s": "trajectory.grasp_dwell",
+    "foxglove_port": "live.foxglove_port",
 }
 assert [f.name for f in fields(NodeSettings)] == list(SETTINGS_FIELDS)
 assert sorted(SETTINGS_FIELDS.values()) == sorted(NODE_PARAMETERS)
@@ -274,7 +276,11 @@ def descriptor_for(name: str) -> ParameterDescriptor:
     """
     spec = _spec_of(name)
     descriptor = ParameterDescriptor(
-        name=name, dynamic_typing=True, description=spec.description, additional_constraints=_constraints(spec)
+        name=name,
+        dynamic_typing=True,
+        description=spec.description,
+        additional_constraints=_constraints(spec),
+        read_only=spec.read_only,
     )
     if spec.limits is not None:
         low, high = spec.limits

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped
@@ -41,6 +41,7 @@ from clew_ros.node import messages
 from clew_ros.node.parameters import (
     OWN_PREFIXES,
     Configuration,
+    NodeSettings,
     configuration_from_values,
     descriptor_for,
     initial_values,
@@ -48,6 +49,9 @@ from clew_ros.node.parameters import (
 )
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.qos import GOAL_QOS
+
+if TYPE_CHECKING:
+    from clew_ros.live import LiveView
 from clew_ros.node.run import CancelKind, Run, Source
 from clew_ros.node.run_recording import NO_RECORDING, Recordings
 from clew_ros.node.worker import RunWorker
@@ -86,6 +90,7 @@ class PlannerNode(Node):
         if warm_up_s > 1.0:
             self.get_logger().info(f"planning kernel compiled in {warm_up_s:.1f} s (cached for the next start)")
         self._out = Publishing(self, self._closing)
+        self._out.live = self._start_live_view(self._config.node)
 
         # ~/plan blocks until its run's outcome is out, and a second call must still be
         # answered (refused) at once, on another executor thread: a reentrant group.
@@ -194,15 +199,47 @@ class PlannerNode(Node):
         return True, message
 
     def shutdown_runs(self, timeout_s: float = 10.0) -> None:
-        """Refuse new runs; cancel the running plan, stop the playback, close the recording; wait for the worker."""
+        """Refuse new runs; cancel the running plan, stop the playback, close the recording; wait for the worker.
+        Then stop the live view, if any."""
         with self._lock:
             self._closing.set()
             run = self._run
+        try:
+            self._stop_runs(run, timeout_s)
+        finally:
+            live, self._out.live = self._out.live, None
+            if live is not None:
+                live.stop()
+
+    def _stop_runs(self, run: Run | None, timeout_s: float) -> None:
         if run is None:
             return
         run.stop()
         if not run.wait_finished(timeout_s):
             self.get_logger().error(f"run {run.hex}: the worker did not stop within {timeout_s} s")
+
+    def _start_live_view(self, settings: NodeSettings) -> LiveView | None:
+        """The Foxglove live view on ``live.foxglove_port`` (0: none); a failure is logged, the node serves on."""
+        if settings.foxglove_port == 0:
+            return None
+        from clew_ros.live import LiveView, LiveViewError
+
+        live = LiveView(
+            port=settings.foxglove_port,
+            namespace=self.get_fully_qualified_name(),
+            name=self.get_name(),
+            rate_hz=settings.playback_rate_hz,
+            max_velocity_rad_s=settings.velocity_limit_rad_s,
+            max_acceleration_rad_s2=settings.max_acceleration_rad_s2,
+            grasp_dwell_s=settings.grasp_dwell_s,
+        )
+        try:
+            live.start()
+        except LiveViewError as error:
+            self.get_logger().error(f"live.foxglove_port: {error}; runs are not served live")
+            return None
+        self.get_logger().info(f"serving runs live to Foxglove at {live.url}")
+        return live
 
     def _refuse(self, code: Outcome, message: str, source: Source, goal_stamp_ns: int | None = None) -> str:
         """Publish a refused request (a UUID of its own, status aborted, an aborted event); its text."""

@@ -25,8 +25,8 @@ import importlib.util
 import threading
 import time
 import uuid
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from action_msgs.msg import GoalStatus, GoalStatusArray
@@ -45,6 +45,9 @@ from clew_ros.node import frames, messages
 from clew_ros.node.qos import EVENTS_QOS, LATCHED_QOS, STREAM_QOS, TF_QOS, TF_STATIC_QOS
 from clew_ros.node.run import Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
+
+if TYPE_CHECKING:
+    from clew_ros.live import LiveView
 from clew_ros.recording.cdr import tf_message
 
 __all__ = ["TF_TOPICS", "TOPICS", "Publishing", "have_tf2_msgs"]
@@ -96,6 +99,19 @@ class Publishing:
             }
         self._statuses = StatusTable()
         self._order = threading.Lock()  # ~/status and ~/feedback: see the module docstring
+        #: The Foxglove live view (``live.foxglove_port``), set by the node; it mirrors the world, the
+        #: landmark tree, progress, events and the playback.
+        self.live: LiveView | None = None
+
+    def to_live(self, what: str, send: Callable[[LiveView], None]) -> None:
+        """Mirror something to the live view, if there is one; a fault there is logged, never raised."""
+        live = self.live
+        if live is None:
+            return
+        try:
+            send(live)
+        except Exception as error:  # noqa: BLE001 - a viewer never stops a run
+            self._logger.error(f"live view: cannot send {what}: {error!r}")
 
     def now_ns(self) -> int:
         """The node's clock (ns)."""
@@ -124,6 +140,7 @@ class Publishing:
         self.publish("world_markers", messages.world_markers(world, self.now_ns()), recording)
         self.publish("robot_description", messages.robot_description_message(world), recording)
         self.publish_tf(frames.static_transforms(world.robot), self.now_ns(), recording, static=True)
+        self.to_live("the world", lambda live: live.publish_world(world, goal=world.object.goal))
         self.arm(world, world.robot.initial, 0.0, world.object.initial, time_ns=self.now_ns(), recording=recording)
 
     def arm(
@@ -144,6 +161,8 @@ class Publishing:
             messages.scene_markers(world, np.asarray(joints, dtype=float), gripper, object_pose, time_ns),
             recording,
         )
+        names = world.robot.joint_names
+        self.to_live("a state", lambda live: live.publish_sample(names, np.asarray(joints), gripper, object_pose))
 
     def publish_tf(
         self, transforms: list[frames.FrameTransform], time_ns: int, recording: RunRecording, *, static: bool = False
@@ -172,6 +191,9 @@ class Publishing:
         self.publish(
             "events", messages.event_message(run_id, event, time.time() if at_s is None else at_s, **fields), recording
         )
+        if event != "landmark":  # the live view draws landmarks as a tree
+            plain = {k: v for k, v in fields.items() if v is None or isinstance(v, (str, int, float, bool))}
+            self.to_live("an event", lambda live: live.publish_event(event, run_id=run_id.hex, **plain))
 
     def feedback(self, run: Run, phase: str) -> None:
         """``~/feedback`` of ``run`` with ``phase``."""

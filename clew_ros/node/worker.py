@@ -136,8 +136,11 @@ class RunWorker:
         out.publish("landmarks", messages.landmark_markers(tree, out.now_ns(), polygon), run.recording)
         announced = [1]  # landmarks already announced (the root)
 
+        out.to_live("the landmark tree", lambda live: live.publish_landmarks(tree))
+
         def on_progress(progress: Progress) -> None:
             run.landmarks, run.best_distance = progress.landmarks, progress.best_distance
+            out.to_live("progress", lambda live: live.publish_progress(progress))
             try:
                 self._announce_landmarks(run, progress.tree, announced)
             except Exception as error:  # noqa: BLE001 - never let a publishing fault end the planning
@@ -180,6 +183,7 @@ class RunWorker:
                 joints=landmark.joints,
             )
         announced[0] = len(landmarks)
+        self._out.to_live("the landmark tree", lambda live: live.publish_landmarks(tree))
         self._out.publish(
             "landmarks", messages.landmark_markers(tree, self._out.now_ns(), run.world.object.polygon), run.recording
         )

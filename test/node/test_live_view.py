@@ -1,0 +1,75 @@
+"""``live.foxglove_port``: a running clew_planner mirrors its runs to a Foxglove WebSocket on 127.0.0.1.
+
+The node runs in a subprocess; a Foxglove WebSocket client here subscribes
+to every channel and decodes what it receives while ``~/plan`` runs.
+"""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("rclpy")
+pytest.importorskip("foxglove")
+pytest.importorskip("websockets")
+pytest.importorskip("google.protobuf")
+
+from helpers.foxglove_client import FoxgloveClient
+from helpers.node_harness import NodeProcess, Session, run_id_of
+from helpers.rel_node import set_parameters
+
+pytestmark = pytest.mark.ros
+
+QUICK = Path(__file__).parents[1] / "worlds" / "node_quick.yaml"
+CHANNELS = 6
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def test_a_run_of_the_node_is_seen_live(tmp_path: Path) -> None:
+    port = _free_port()
+    fast = {"trajectory.max_velocity": 20.0, "trajectory.max_acceleration": 400.0, "playback.rate": 50.0}
+    node = NodeProcess(tmp_path / "node.log", QUICK, {"record.enabled": False, "live.foxglove_port": port, **fast})
+    session = Session(node)
+    try:
+        session.world_markers.wait_for(timeout_s=60.0)  # started: its world is out, after the live view
+        with FoxgloveClient.connect(port, channels=CHANNELS, timeout_s=60.0) as client:
+            topics = set(client.topics.values())
+            assert all(topic.startswith(f"{node.name}/") for topic, _schema in topics)
+            response = session.plan()
+            assert response.success, response.message
+            run_id = run_id_of(response.message)
+            seen: list[str] = []
+
+            def grasped_then_moved(message) -> bool:  # the grasp event, then the arm moving with the object
+                if message.topic.endswith("/events"):
+                    seen.append(message.data.get("kind"))
+                return "grasp" in seen and message.topic.endswith("/joint_states") and seen.count("state") > 1
+
+            def count(message) -> bool:
+                if "grasp" in seen and message.topic.endswith("/joint_states"):
+                    seen.append("state")
+                return grasped_then_moved(message)
+
+            received = client.receive_until(count, timeout_s=60.0)
+        kinds = [m.data["kind"] for m in received if m.topic.endswith("/events")]
+        assert "succeeded" in kinds
+        assert "grasp" in kinds
+        assert any(m.data.get("run_id") == run_id for m in received if m.topic.endswith("/events"))
+        assert any(m.topic.endswith("/scene") for m in received)  # the world (sent when subscribed)
+        assert any(m.topic.endswith("/landmarks") for m in received)
+        states = [m for m in received if m.topic.endswith("/joint_states")]
+        assert len(states) >= 2  # the playback, mirrored
+        # read only: taken when the node starts
+        [result] = set_parameters(session, {"live.foxglove_port": port + 1})
+        assert not result.successful
+    finally:
+        code = session.close()
+    assert code == 0, node.output()
+    assert f"serving runs live to Foxglove at ws://127.0.0.1:{port}" in node.output()

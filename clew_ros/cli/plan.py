@@ -1,4 +1,5 @@
-"""``clew_plan WORLD.yaml --output PLAN.json [--seed N] [--time-limit S]``: plan offline, no ROS needed.
+"""``clew_plan WORLD.yaml --output PLAN.json [--seed N] [--time-limit S] [--improve-time S]``: plan offline,
+no ROS needed.
 
 Exit 0: a plan was found; 1: no plan (the file is still written with
 ``success: false`` and the outcome ``code``); 2: invalid input, with a
@@ -43,6 +44,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--output", "-o", type=Path, required=True, help="plan file to write (clew-plan/1 JSON)")
     parser.add_argument("--seed", type=int, default=None, help="overrides planner.seed")
     parser.add_argument("--time-limit", type=float, default=None, help="overrides planner.time_limit (s)")
+    parser.add_argument(
+        "--improve-time", type=float, default=None, help="overrides planner.improve_time (s; 0: the first plan)"
+    )
     parser.add_argument("--quiet", "-q", action="store_true", help="no progress line on stderr")
     parser.add_argument(
         "--foxglove",
@@ -151,7 +155,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         parameters = read_parameter_file(args.world)
         world = check_start_and_goal(world_from_parameters(parameters))
-        settings = PlannerSettings.from_parameters(parameters, seed=args.seed, time_limit=args.time_limit)
+        settings = PlannerSettings.from_parameters(
+            parameters, seed=args.seed, time_limit=args.time_limit, improve_time=args.improve_time
+        )
     except ParameterError as error:
         print(f"clew_plan: invalid input: {error}", file=sys.stderr)
         return 2
@@ -211,12 +217,20 @@ def _plan(args: argparse.Namespace, world: World, settings: PlannerSettings, vie
     elapsed = time.monotonic() - started
     print(
         f"clew_plan: {planned.code}: {planned.message.splitlines()[0]} ({elapsed:.2f} s, "
-        f"{len(result.tree)} landmarks) -> {args.output}",
+        f"{len(result.tree)} landmarks{_quality(planned)}) -> {args.output}",
         file=sys.stderr,
     )
     if view is not None:
         _serve_until_signal(view, planned)
     return 0 if planned.success else 1
+
+
+def _quality(planned: Plan) -> str:
+    """``, joint travel X rad, N transfers`` for a plan that has them (its stats), else nothing."""
+    stats = planned.stats
+    if not planned.success or "joint_travel_rad" not in stats:
+        return ""
+    return f", joint travel {stats['joint_travel_rad']:.2f} rad, {stats['transfers']} transfer(s)"
 
 
 if __name__ == "__main__":

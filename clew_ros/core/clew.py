@@ -11,6 +11,7 @@ import numpy as np
 
 from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
+from clew_ros.core.improve import Improvement, improve
 from clew_ros.core.kinematics import transform_points
 from clew_ros.core.reach import approach_cells, carry_cells
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
@@ -27,6 +28,8 @@ SEARCH_CHAIN = 2
 #: EXPLORE rounds in a row without a single transit (failed pairs retried each time) before
 #: NO_PATH_AT_RESOLUTION: the transit search is local and stochastic, one miss proves little.
 EXPLORE_ATTEMPTS = 8
+#: The improvement's generator is seeded with (planner.seed, this): its own stream of the same seed.
+IMPROVE_STREAM = 14
 
 
 @dataclass(frozen=True)
@@ -120,12 +123,16 @@ def plan(
             if found.success:
                 segments = tree.history_of(landmark.id)
                 append_step(segments, found.grasp, found.transit, found.transfer)
-                return finish(
+                assert found.object_pose is not None  # a successful SEARCH_TRANSFER says where the object ends
+                better = _improved(ctx, segments, found.object_pose, goal)
+                result = finish(
                     Outcome.SUCCEEDED,
-                    f"plan found with {len(tree)} landmarks, {sum(s.kind == 'transfer' for s in segments)} grasp(s)",
-                    segments,
-                    found.object_pose,
+                    _found_message(len(tree), better, settings.improve_time),
+                    better.segments,
+                    better.final_object_pose,
                 )
+                result.stats.update(_quality(better))
+                return result
             if exploration.distance < settings.resolution:
                 return finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
@@ -232,6 +239,38 @@ def _worth_chaining(ctx: PlanningContext, landmark: Landmark, found: _Found, goa
         return False
     here = float(np.linalg.norm(goal_error(ctx.world, landmark.object_pose[None], goal)[0]))
     return found.distance < here - ctx.settings.resolution
+
+
+def _improved(ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray) -> Improvement:
+    """The first plan improved within ``planner.improve_time`` (:mod:`clew_ros.core.improve`), drawing
+    from its own generator, seeded from ``planner.seed``."""
+    rng = np.random.default_rng([ctx.settings.seed, IMPROVE_STREAM])
+    return improve(
+        PlanningContext(ctx.world, ctx.settings, rng, ctx.termination, ctx.counters), segments, object_pose, goal
+    )
+
+
+def _found_message(landmarks: int, better: Improvement, improve_time: float) -> str:
+    if improve_time <= 0:  # the first plan's message, as before improvement existed
+        return f"plan found with {landmarks} landmarks, {better.transfers} grasp(s)"
+    message = (
+        f"plan found with {landmarks} landmarks, {better.transfers} grasp(s), joint travel {better.travel:.2f} rad"
+    )
+    if better.travel < better.first_travel or better.transfers < better.first_transfers:
+        message += f" (first plan: {better.first_transfers} grasp(s), {better.first_travel:.2f} rad)"
+    return message
+
+
+def _quality(better: Improvement) -> dict[str, Any]:
+    """The plan's quality for its stats: joint travel (rad, sum over joints of the absolute motion) and
+    transfers, of the returned plan and of the first one, and the improvement's work (deterministic)."""
+    return {
+        "joint_travel_rad": round(better.travel, 6),
+        "transfers": better.transfers,
+        "first_joint_travel_rad": round(better.first_travel, 6),
+        "first_transfers": better.first_transfers,
+        "improve_work": better.work,
+    }
 
 
 def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int) -> str:

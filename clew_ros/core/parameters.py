@@ -276,6 +276,15 @@ PLANNER_PARAMETERS = ParameterTable(
             "Threads that decode a population's Manhattan paths (0: all cores); the plan does not depend on it.",
             limits=(0, 1024),
         ),
+        ParameterSpec(
+            "planner.improve_time",
+            _D,
+            0.3,
+            "Budget (s) for improving a found plan (fewer transfers, shortcuts); counted in work, not wall "
+            "time, so the plan does not depend on the machine; stops early at time_limit or cancel; 0: off.",
+            "s",
+            (0.0, 3600.0),
+        ),
     ],
 )
 

@@ -53,6 +53,7 @@ class PlannerSettings:
     joint_weight: float = PLANNER_PARAMETERS.default("joint_weight")
     max_sweep_steps: int = PLANNER_PARAMETERS.default("max_sweep_steps")
     threads: int = PLANNER_PARAMETERS.default("threads")
+    improve_time: float = PLANNER_PARAMETERS.default("improve_time")
 
     @property
     def genetic(self) -> GeneticSettings:

@@ -1,0 +1,447 @@
+"""Anytime improvement of a found plan (issue 14): fewer transfers, shorter paths, never worse.
+
+The ACA keeps every single manipulation path that led to the goal, made of
+Manhattan moves (one joint at a time, in large arcs). Once a plan is found,
+:func:`improve` spends a bounded budget (``planner.improve_time``) on it:
+
+1. **Back-and-forth pruning** (free): a waypoint between two collinear
+   pieces (a joint moving one way, then back) is dropped, and so is a loop
+   that comes back to an earlier waypoint. The configurations left were
+   already on the plan, so nothing needs checking.
+2. **Fewer transfers**: from the start of each transfer but the last
+   (earliest first), SEARCH_TRANSFER tries to carry the object, with that
+   transfer's grasp, straight to the goal; the first success replaces every
+   later segment.
+3. **Shortcuts**: a sub-path of one segment is replaced by one straight
+   joint-space move (all joints together), first each segment's whole path,
+   then pairs of waypoints and pairs of points along the path drawn by the
+   run's generator. A segment's end points never change, so every grasp and
+   ungrasp stays where it was (the tip still holds its grasp) and the object
+   rests or is carried exactly as before.
+
+A change is kept only when it lowers ``(transfers, joint travel)`` or keeps
+them and drops waypoints; joint travel is the sum over joints of the
+absolute motion (rad). The first plan is kept when nothing better is found.
+
+**Continuous check of a straight move** (:func:`straight_move_clear`). Along
+``q(t) = a + t (b - a)`` a point of the arm or of the carried object moves
+at most ``V = sum_j |b_j - a_j| R_j`` over the whole move, where ``R_j`` is
+the length of links ``j..n-1`` plus, in a transfer, the object's largest
+distance from the tip (the velocity of a point is ``sum_j dq_j x (p -
+p_j)``). Every distance the validity test compares (link to obstacle, link
+to link, link to the shrunk object, object to obstacle, to the bounds)
+changes by at most that motion: for two moving bodies, measure in the
+frame of the nearer one to the base, where only the joints between them
+move the other; the last link and the object it carries do not move
+relative to each other. So when the compiled first pass of the validity
+test (:func:`clew_ros.core.kernel.clearly_valid`) clears the midpoint of a
+piece ``[t0, t1]`` with every distance past its threshold by more than
+``V (t1 - t0) / 2``, the whole piece is valid, at any checking resolution.
+Pieces that fail are halved (the margin halves with them) down to
+:data:`MIN_MARGIN_FACTOR` x ``planner.clearance``; a piece still not
+cleared rejects the move. A shortcut therefore keeps at least that
+clearance everywhere, like the planner's own paths. The whole improved plan
+is checked once more at the validator's 0.002 rad; if that ever failed, the
+first plan would be returned.
+
+**Determinism.** All choices come from a generator seeded with
+``planner.seed`` (apart from the planner's own), and the budget is counted
+in work, not seconds: :data:`WORK_PER_SECOND` units per second of
+``planner.improve_time``, one unit per configuration checked plus
+:data:`CALL_WORK` per check call and :data:`EVALUATION_WORK` per
+genetic-algorithm individual. Attempts run until the work is spent, so the
+same seed gives the same plan on any machine. Only the planner's time limit
+and cancel stop it by the clock (between checks, well within 100 ms), and
+then the best plan so far is returned.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from clew_ros.core.collision import is_valid, packed_world
+from clew_ros.core.kernel import clearly_valid
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
+from clew_ros.core.tree import Segment
+from clew_ros.core.world import World
+
+__all__ = [
+    "CALL_WORK",
+    "EVALUATION_WORK",
+    "MIN_MARGIN_FACTOR",
+    "WORK_PER_SECOND",
+    "Improvement",
+    "improve",
+    "joint_travel",
+    "straight_move_clear",
+]
+
+#: Work units per second of ``planner.improve_time`` (about 3 microseconds each on the machine of
+#: docs/benchmarks.md: improvement takes about its budget there, and the same work everywhere).
+WORK_PER_SECOND = 3.0e5
+#: Work of one call of the compiled check (its Python overhead), in units of one configuration.
+CALL_WORK = 30
+#: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
+EVALUATION_WORK = 110
+#: Shortcuts keep at least this fraction of ``planner.clearance`` from everything (m / m).
+MIN_MARGIN_FACTOR = 0.5
+#: Largest margin (m) the first level of a straight-move check asks for.
+MAX_MARGIN_M = 0.05
+#: Share of the budget that attempts to drop transfers may start in.
+TRANSFER_SHARE = 0.5
+#: Joint travel below this (rad) counts as equal.
+TRAVEL_EPS = 1e-9
+#: Step (rad per joint) of the final check, the validator's.
+CHECK_STEP_RAD = 0.002
+
+
+def joint_travel(segments: list[Segment] | list[np.ndarray]) -> float:
+    """Sum over joints of the absolute motion (rad) along segments (or waypoint arrays)."""
+    total = 0.0
+    for segment in segments:
+        waypoints = np.asarray(segment.waypoints if isinstance(segment, Segment) else segment, dtype=float)
+        if len(waypoints) > 1:
+            total += float(np.abs(np.diff(waypoints, axis=0)).sum())
+    return total
+
+
+@dataclass
+class Improvement:
+    """What :func:`improve` made of a plan (``segments`` is the first plan when nothing was better)."""
+
+    segments: list[Segment]
+    final_object_pose: np.ndarray
+    first_travel: float  # rad
+    first_transfers: int
+    travel: float  # rad
+    transfers: int
+    shortcuts: int  # straight moves accepted
+    work: int  # work units spent (deterministic)
+    stopped: bool  # the time limit or cancel cut it short
+
+
+@dataclass
+class _Piece:
+    """One segment as the improvement sees it: the object's pose at its start, the grasp's relative pose."""
+
+    kind: str
+    grasp: int | None
+    waypoints: np.ndarray  # (m, n)
+    start_pose: np.ndarray  # (3,) where the object is when the segment starts
+    grasp_rel: np.ndarray | None  # (3,) object in the end-effector frame (transfer)
+
+    def end_pose(self, world: World) -> np.ndarray:
+        if self.grasp_rel is None:
+            return self.start_pose
+        end: np.ndarray = compose(tip_poses(world.robot, self.waypoints[-1:]), self.grasp_rel)[0]
+        return end
+
+    def segment(self) -> Segment:
+        return Segment(self.kind, self.grasp, [w.copy() for w in self.waypoints])
+
+
+def _pieces(world: World, segments: list[Segment]) -> list[_Piece]:
+    """The plan's segments with the object carried along (as :func:`clew_ros.core.plan.replay` does)."""
+    pose = np.asarray(world.object.initial, dtype=float)
+    pieces = []
+    for segment in segments:
+        waypoints = np.array(segment.waypoints, dtype=float)
+        grasp_rel = None
+        if segment.kind == "transfer":
+            grasp_rel = relative(tip_poses(world.robot, waypoints[:1])[0], pose)
+        piece = _Piece(segment.kind, segment.grasp, waypoints, pose, grasp_rel)
+        pose = piece.end_pose(world)
+        pieces.append(piece)
+    return pieces
+
+
+class _Budget:
+    """Work units left, and the clock's stop test (time limit, cancel)."""
+
+    def __init__(self, ctx: PlanningContext, total: float) -> None:
+        self.ctx = ctx
+        self.total = total
+        self.spent = 0
+        self.evaluations_at_start = ctx.counters.evaluations
+        self.stopped = False
+
+    def spend(self, units: int) -> None:
+        self.spent += units
+
+    def left(self, share: float = 1.0) -> bool:
+        """Whether work is left (within ``share`` of the budget) and the clock allows more."""
+        if self.stop():
+            return False
+        return self.spent < share * self.total
+
+    def stop(self) -> bool:
+        if not self.stopped and self.ctx.termination():
+            self.stopped = True
+        return self.stopped
+
+
+def _reach_radii(world: World, grasp_rel: np.ndarray | None) -> np.ndarray:
+    """``R_j``: how far from joint ``j`` any point moved by it can be (links ``j..n-1`` and the carried object)."""
+    lengths = np.asarray(world.robot.link_lengths, dtype=float)
+    radii = np.cumsum(lengths[::-1])[::-1]
+    if grasp_rel is not None:
+        radii = radii + float(np.max(np.linalg.norm(transform_points(grasp_rel, world.object.polygon), axis=-1)))
+    return radii
+
+
+def straight_move_clear(
+    world: World,
+    a: np.ndarray,
+    b: np.ndarray,
+    *,
+    object_pose: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    min_margin: float,
+    budget: _Budget | None = None,
+) -> bool:
+    """Whether every configuration of the straight joint-space move ``a`` -> ``b`` is valid with at
+    least ``min_margin`` (m) to spare, the object resting at ``object_pose`` (transit) or carried as
+    ``grasp_rel`` (transfer). Conservative: ``False`` may also mean "not proven" (module docstring)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if grasp_rel is None and object_pose is None:
+        raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
+    resting = np.zeros(3) if object_pose is None else np.asarray(object_pose, dtype=float)
+    if np.any(a < world.robot.joint_lower) or np.any(b > world.robot.joint_upper):
+        return False
+    if np.any(b < world.robot.joint_lower) or np.any(a > world.robot.joint_upper):
+        return False
+    motion = float(np.abs(b - a) @ _reach_radii(world, grasp_rel)) * (1.0 + 1e-9) + 1e-12  # V (m)
+    packed = packed_world(world)
+    # level k: 2**k pieces, each cleared by its midpoint with margin motion / 2**(k + 1)
+    level = max(0, math.ceil(math.log2(max(motion / (2.0 * MAX_MARGIN_M), 1.0))))
+    pending = np.arange(2**level, dtype=float)  # piece indices at this level
+    while len(pending):
+        if budget is not None and budget.stop():
+            return False
+        pieces = 2.0**level
+        margin = motion / (2.0 * pieces)
+        margin = max(margin, min_margin)  # the last level: a piece this short needs only the minimal margin
+        t = (pending + 0.5) / pieces
+        q = a + t[:, None] * (b - a)
+        poses = (
+            np.broadcast_to(resting, (len(q), 3))
+            if grasp_rel is None
+            else compose(tip_poses(world.robot, q), grasp_rel)
+        )
+        clear = clearly_valid(dataclasses.replace(packed, rounding=margin), q, poses)
+        if budget is not None:
+            budget.spend(len(q) + CALL_WORK)
+        if clear.all():
+            return True
+        if margin <= min_margin:
+            return False
+        pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
+        pending = pending.reshape(-1)
+        level += 1
+    return True
+
+
+def _dense_clear(world: World, piece: _Piece) -> bool:
+    """The validator's check of one segment: configurations at most 0.002 rad apart per joint."""
+    configurations = [piece.waypoints[:1]]
+    for a, b in itertools.pairwise(piece.waypoints):
+        count = max(1, math.ceil(float(np.max(np.abs(b - a))) / CHECK_STEP_RAD))
+        configurations.append(a + (np.arange(1, count + 1)[:, None] / count) * (b - a))
+    q = np.concatenate(configurations)
+    poses = piece.start_pose if piece.grasp_rel is None else compose(tip_poses(world.robot, q), piece.grasp_rel)
+    return bool(is_valid(world, q, poses).all())
+
+
+def _prune(waypoints: np.ndarray) -> np.ndarray:
+    """Drop repeated waypoints, loops back to an earlier waypoint, and waypoints between collinear pieces
+    (a move undone or continued along the same line): the remaining path only visits configurations the
+    old one visited."""
+    points: list[np.ndarray] = []
+    for w in waypoints:
+        for i, p in enumerate(points):  # a loop: back where the path already was
+            if np.max(np.abs(w - p)) <= 1e-12:
+                del points[i + 1 :]
+                break
+        else:
+            points.append(w)
+        while len(points) >= 3:
+            u, v = points[-2] - points[-3], points[-1] - points[-2]
+            scale = max(float(np.max(np.abs(u))), float(np.max(np.abs(v))))
+            if scale > 0 and float(np.max(np.abs(u * np.linalg.norm(v) ** 2 - v * (u @ v)))) > 1e-12 * scale**3:
+                break  # not collinear
+            del points[-2]
+    return np.array(points)
+
+
+def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
+    """Lexicographic (transfers, travel, waypoints); travel within :data:`TRAVEL_EPS` counts as equal."""
+    if new[0] != old[0]:
+        return new[0] < old[0]
+    if abs(new[1] - old[1]) > TRAVEL_EPS:
+        return new[1] < old[1]
+    return new[2] < old[2]
+
+
+def _score(pieces: list[_Piece]) -> tuple[int, float, int]:
+    return (
+        sum(p.kind == "transfer" for p in pieces),
+        joint_travel([p.waypoints for p in pieces]),
+        sum(len(p.waypoints) for p in pieces),
+    )
+
+
+class _Improver:
+    def __init__(self, ctx: PlanningContext, pieces: list[_Piece], goal: np.ndarray) -> None:
+        self.ctx = ctx
+        self.world = ctx.world
+        self.pieces = pieces
+        self.goal = goal
+        self.budget = _Budget(ctx, ctx.settings.improve_time * WORK_PER_SECOND)
+        self.min_margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+        self.shortcuts = 0
+
+    def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
+        return straight_move_clear(
+            self.world,
+            a,
+            b,
+            object_pose=piece.start_pose,
+            grasp_rel=piece.grasp_rel,
+            min_margin=self.min_margin,
+            budget=self.budget,
+        )
+
+    def prune(self) -> None:
+        for piece in self.pieces:
+            pruned = _prune(piece.waypoints)
+            if _better(
+                (0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([pruned]), len(pruned))
+            ):
+                piece.waypoints = pruned
+
+    def fewer_transfers(self) -> None:
+        """From the start of each transfer but the last, earliest first: carry the object to the goal."""
+        transfers = [i for i, p in enumerate(self.pieces) if p.kind == "transfer"]
+        for index in transfers[:-1]:
+            if not self.budget.left(TRANSFER_SHARE):
+                return
+            piece = self.pieces[index]
+            assert piece.grasp_rel is not None
+            before = self.ctx.counters.evaluations
+            result = search_transfer(self.ctx, piece.waypoints[0], piece.grasp_rel, self.goal)
+            self.budget.spend(EVALUATION_WORK * (self.ctx.counters.evaluations - before))
+            if not result.success:
+                continue
+            carried = _Piece("transfer", piece.grasp, _prune(result.waypoints), piece.start_pose, piece.grasp_rel)
+            candidate = [*self.pieces[:index], carried]
+            if _better(_score(self.pieces), _score(candidate)):
+                self.pieces = candidate
+                return
+
+    def try_shortcut(self, index: int, first: int, last: int, a: np.ndarray, b: np.ndarray) -> bool:
+        """Replace waypoints ``first..last`` (inclusive, ``first < last``) of piece ``index`` by ``a``,
+        ``b`` (points on the pieces before ``first`` and after ``last``) joined straight."""
+        piece = self.pieces[index]
+        w = piece.waypoints
+        joined = [*w[:first], a, b, *w[last + 1 :]]
+        new = _prune(np.array([p for i, p in enumerate(joined) if i == 0 or np.max(np.abs(p - joined[i - 1])) > 1e-12]))
+        old_score = (0, joint_travel([w]), len(w))
+        if not _better(old_score, (0, joint_travel([new]), len(new))):
+            return False
+        if not self.clear(piece, a, b):
+            return False
+        piece.waypoints = new
+        self.shortcuts += 1
+        return True
+
+    def whole_segments(self) -> None:
+        """Each segment as one straight move, when that is clear."""
+        for index, piece in enumerate(self.pieces):
+            if not self.budget.left():
+                return
+            w = piece.waypoints
+            if len(w) > 2:
+                self.try_shortcut(index, 1, len(w) - 2, w[0], w[-1])
+
+    def random_shortcuts(self) -> None:
+        """Pairs of waypoints, and pairs of points along a segment's path, until the work is spent."""
+        rng = self.ctx.rng
+        failures = 0
+        while self.budget.left() and failures < 200:
+            travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
+            if travels.sum() <= 0:
+                return
+            index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
+            w = self.pieces[index].waypoints
+            if rng.random() < 0.5:  # two waypoints at least two apart
+                i, j = sorted(rng.choice(len(w), size=2, replace=False).tolist())
+                accepted = j - i >= 2 and self.try_shortcut(index, i + 1, j - 1, w[i], w[j])
+            else:  # two points along the path, by joint travel
+                cumulative = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(w, axis=0)).sum(axis=1))])
+                u = np.sort(rng.uniform(0.0, cumulative[-1], size=2))
+                i, j = (int(np.clip(np.searchsorted(cumulative, x, side="right") - 1, 0, len(w) - 2)) for x in u)
+                points = []
+                for x, k in zip(u, (i, j), strict=True):
+                    span = cumulative[k + 1] - cumulative[k]
+                    s = 0.0 if span <= 0 else (x - cumulative[k]) / span
+                    points.append(w[k] + s * (w[k + 1] - w[k]))
+                accepted = j > i and self.try_shortcut(index, i + 1, j, points[0], points[1])
+            failures = 0 if accepted else failures + 1
+
+    def run(self) -> list[_Piece]:
+        self.prune()
+        self.fewer_transfers()
+        self.prune()
+        self.whole_segments()
+        self.random_shortcuts()
+        return self.pieces
+
+
+def improve(
+    ctx: PlanningContext, segments: list[Segment], final_object_pose: np.ndarray, goal: np.ndarray
+) -> Improvement:
+    """Improve a found plan within ``ctx.settings.improve_time`` of work (module docstring).
+
+    ``ctx`` carries the world, the settings, the generator the improvement draws from and the
+    termination (time limit, cancel). Returns the better plan, or the first one.
+    """
+    world = ctx.world
+    first = _pieces(world, segments)
+    first_score = _score(first)
+    if ctx.settings.improve_time <= 0 or ctx.termination():
+        return Improvement(
+            segments, final_object_pose, first_score[1], first_score[0], first_score[1], first_score[0], 0, 0, False
+        )
+    improver = _Improver(ctx, _pieces(world, segments), goal)
+    pieces = improver.run()
+    pieces = _pieces(world, [p.segment() for p in pieces])  # the object carried along the final paths
+    changed = [
+        p
+        for p, q in itertools.zip_longest(pieces, first)
+        if q is None or p is None or not np.array_equal(p.waypoints, q.waypoints)
+    ]
+    final = pieces[-1].end_pose(world) if pieces else final_object_pose
+    if (
+        not _better(first_score, _score(pieces))
+        or any(p is not None and not _dense_clear(world, p) for p in changed)
+        or not goal_reached(world, final, goal)
+    ):
+        pieces, final = first, final_object_pose
+    score = _score(pieces)
+    return Improvement(
+        [p.segment() for p in pieces],
+        final,
+        first_score[1],
+        first_score[0],
+        score[1],
+        score[0],
+        improver.shortcuts if pieces is not first else 0,
+        improver.budget.spent,
+        improver.budget.stopped,
+    )

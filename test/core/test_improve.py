@@ -1,0 +1,218 @@
+"""Anytime improvement (issue 14): never invalid, never longer, never more transfers; deterministic;
+cancel returns the best plan so far; ``improve_time: 0`` gives the first plan."""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from clew_ros.core.clew import IMPROVE_STREAM, plan
+from clew_ros.core.collision import is_valid
+from clew_ros.core.improve import _prune, improve, joint_travel, straight_move_clear
+from clew_ros.core.kinematics import compose, relative, tip_poses
+from clew_ros.core.manhattan import run_manhattan
+from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
+from clew_ros.core.search import PlanningContext
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.tree import Segment
+from clew_ros.core.world import load_world, world_from_parameters
+
+ROOT = Path(__file__).resolve().parents[2]
+FINE_RAD = 2e-4  # ten times finer than the validator
+
+
+def _world(name: str):
+    path = ROOT / "config" / f"{name}.yaml"
+    return load_world(path if path.exists() else ROOT / "test" / "worlds" / f"{name}.yaml")
+
+
+def _plan(world, seed: int, improve_time: float, **settings):
+    return plan(world, PlannerSettings(seed=seed, time_limit=60, improve_time=improve_time, **settings))
+
+
+CASES = [("figure1", 0), ("figure1", 3), ("arm3_regrasp", 1), ("single_transfer", 2), ("node_quick", 0)]
+
+
+@pytest.mark.parametrize(("name", "seed"), CASES, ids=[f"{n}_seed{s}" for n, s in CASES])
+def test_improvement_keeps_the_plan_valid_and_never_makes_it_longer(name, seed) -> None:
+    world = _world(name)
+    first = _plan(world, seed, 0.0)
+    better = _plan(world, seed, 0.3)
+    assert first.success
+    assert better.success
+    assert better.stats["first_joint_travel_rad"] == first.stats["joint_travel_rad"]
+    assert better.stats["first_transfers"] == first.stats["transfers"]
+    travel = joint_travel(better.segments)
+    transfers = sum(s.kind == "transfer" for s in better.segments)
+    assert better.stats["joint_travel_rad"] == pytest.approx(travel, abs=1e-6)
+    assert better.stats["transfers"] == transfers
+    assert transfers <= first.stats["transfers"]
+    assert travel <= joint_travel(first.segments) + 1e-9
+    improved = Plan.from_result(world, better)
+    assert validate_plan(world, improved) == []
+    # valid at a much finer check too: the shortcuts keep a clearance, they are not only sampled
+    for motion in replay(world, improved, FINE_RAD):
+        assert is_valid(world, motion.configurations, motion.object_poses).all()
+
+
+def test_improvement_gains_on_figure1_and_is_deterministic() -> None:
+    world = _world("figure1")
+    a = _plan(world, 0, 0.3)
+    b = _plan(world, 0, 0.3)
+    assert a.stats["joint_travel_rad"] < 0.8 * a.stats["first_joint_travel_rad"]
+    assert "first plan" in a.message
+    plan_a, plan_b = Plan.from_result(world, a).to_dict(), Plan.from_result(world, b).to_dict()
+    plan_a["stats"].pop("time_s")
+    plan_b["stats"].pop("time_s")
+    assert plan_a == plan_b
+
+
+def test_improve_time_zero_gives_exactly_the_first_plan() -> None:
+    world = _world("figure1")
+    result = _plan(world, 1, 0.0)
+    assert result.stats["joint_travel_rad"] == result.stats["first_joint_travel_rad"]
+    assert result.stats["improve_work"] == 0
+    assert result.message == f"plan found with {len(result.tree)} landmarks, {result.stats['transfers']} grasp(s)"
+    settings = PlannerSettings(seed=1, improve_time=0.0)
+    ctx = PlanningContext(world, settings, np.random.default_rng(0), Termination(10))
+    same = improve(ctx, result.segments, result.final_object_pose, world.object.goal)
+    assert same.segments is result.segments
+    assert same.final_object_pose is result.final_object_pose
+
+
+def test_cancel_during_improvement_returns_the_best_plan_so_far_quickly() -> None:
+    world = _world("figure1")
+    first = _plan(world, 2, 0.0)
+    cancel = threading.Event()
+    settings = PlannerSettings(seed=2, improve_time=60.0)
+    rng = np.random.default_rng([2, IMPROVE_STREAM])
+    ctx = PlanningContext(world, settings, rng, Termination(60, cancel))
+    timer = threading.Timer(0.3, cancel.set)
+    timer.start()
+    started = time.monotonic()
+    better = improve(ctx, first.segments, first.final_object_pose, world.object.goal)
+    stopped = time.monotonic()
+    timer.join()
+    assert stopped - started < 0.3 + 0.1 + 0.15  # the last check + the final dense check of the changed segments
+    assert better.stopped
+    assert better.travel <= better.first_travel
+    assert better.transfers <= better.first_transfers
+    result = dataclasses.replace(first, segments=better.segments, final_object_pose=better.final_object_pose)
+    assert validate_plan(world, Plan.from_result(world, result)) == []
+
+
+def test_the_time_limit_stops_improvement_and_keeps_the_plan() -> None:
+    world = _world("figure1")
+    started = time.monotonic()
+    result = plan(world, PlannerSettings(seed=0, time_limit=1.5, improve_time=60.0))
+    assert time.monotonic() - started < 1.5 + 0.3
+    assert result.outcome is Outcome.SUCCEEDED
+    assert validate_plan(world, Plan.from_result(world, result)) == []
+    assert result.stats["joint_travel_rad"] <= result.stats["first_joint_travel_rad"]
+
+
+def test_pruning_drops_back_and_forth_and_loops_only() -> None:
+    w = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.5, 2.0], [0.5, 1.5], [1.0, 1.5], [0.5, 1.5]])
+    pruned = _prune(w)
+    # 0->1->0.5 along joint 1 is one move to 0.5; 1.0->2.0->1.5 along joint 2 is one move; the loop closes
+    assert pruned.tolist() == [[0.0, 0.0], [0.5, 0.0], [0.5, 1.5]]
+    assert joint_travel([pruned]) < joint_travel([w])
+
+
+# -- random worlds: the straight-move check and improvement of random Manhattan paths ----------------------
+
+
+def _random_world(seed: int, joints: int, width: float):
+    rng = np.random.default_rng(seed)
+    boxes = {}
+    while len(boxes) < 6:
+        centre = rng.uniform(-2.0, 2.0, 2)
+        if np.hypot(*centre) < 0.6:
+            continue
+        half = rng.uniform(0.05, 0.3, 2)
+        corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+        boxes[f"box_{len(boxes)}"] = [float(v) for sx, sy in corners for v in centre + half * (sx, sy)]
+    polygon = [0.0, 0.0, 0.2, 0.0, 0.2, 0.08, 0.0, 0.08]
+    parameters = {
+        "world": {
+            "name": f"random_{seed}",
+            "bounds": [-2.5, -2.5, 2.5, 2.5],
+            "robot": {
+                "base": [0.0, 0.0],
+                "link_lengths": (rng.uniform(0.3, 1.0, joints) * 1.8 / joints + 0.1).tolist(),
+                "link_width": width,
+                "joint_lower": [-3.0] * joints,
+                "joint_upper": [3.0] * joints,
+                "initial": [0.0] * joints,
+            },
+            "obstacle_names": list(boxes),
+            "obstacles": boxes,
+            "object": {"polygon": polygon, "initial": [0.0, 0.35, 0.0], "goal": [0.0, 0.35, 0.0], "grasps": [0, 0]},
+        }
+    }
+    return world_from_parameters(parameters), rng
+
+
+RANDOM = [(1, 2, 0.0), (2, 3, 0.04), (3, 4, 0.02), (4, 5, 0.03)]
+
+
+@pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])
+def test_a_cleared_straight_move_is_valid_at_a_fine_step(seed, joints, width) -> None:
+    world, rng = _random_world(seed, joints, width)
+    grasp_rel = np.array([0.02, 0.0, 0.3])
+    cleared = 0
+    for trial in range(60):
+        a, b = rng.uniform(-3.0, 3.0, (2, joints)) * rng.uniform(0.05, 1.0)
+        transfer = trial % 2 == 1
+        rest = world.object.initial
+        if not straight_move_clear(
+            world, a, b, object_pose=rest, grasp_rel=grasp_rel if transfer else None, min_margin=5e-4
+        ):
+            continue
+        cleared += 1
+        steps = int(np.ceil(np.max(np.abs(b - a)) / FINE_RAD))
+        q = a + np.linspace(0.0, 1.0, steps + 1)[:, None] * (b - a)
+        poses = compose(tip_poses(world.robot, q), grasp_rel) if transfer else rest
+        assert is_valid(world, q, poses).all()
+    assert cleared >= 5
+
+
+@pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])
+def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(seed, joints, width) -> None:
+    world, rng = _random_world(seed, joints, width)
+    candidates = rng.uniform(-1.5, 1.5, (200, joints))
+    q0 = candidates[is_valid(world, candidates, world.object.initial)][0]
+    genes = rng.normal(0.0, 1.5, (1, 4, joints))
+    transit = run_manhattan(world, q0[None], genes, margin_m=1e-3, object_poses=world.object.initial[None])
+    path = transit.waypoints[0]
+    grasp_rel = relative(tip_poses(world.robot, path[-1:])[0], world.object.initial)  # as replay carries it
+    genes = rng.normal(0.0, 1.5, (1, 4, joints))
+    carried = run_manhattan(world, path[-1:], genes, margin_m=1e-3, grasp_rel=grasp_rel[None]).waypoints[0]
+    segments = [Segment("transit", None, list(path)), Segment("transfer", 0, list(carried))]
+    final = compose(tip_poses(world.robot, carried[-1:]), grasp_rel)[0]
+    world = dataclasses.replace(world, object=dataclasses.replace(world.object, goal=final))
+    settings = PlannerSettings(seed=seed, improve_time=0.2)
+    ctx = PlanningContext(world, settings, np.random.default_rng(seed), Termination(30))
+    before = joint_travel(segments)
+    better = improve(ctx, segments, final, final)
+    assert better.travel <= before + 1e-9
+    assert better.travel < 0.9 * before  # random Manhattan paths wander: a shortcut always helps here
+    assert better.transfers == 1
+    assert [s.kind for s in better.segments] == ["transit", "transfer"]
+    for new, old in zip(better.segments, segments, strict=True):
+        assert np.array_equal(new.waypoints[0], old.waypoints[0])
+        assert np.array_equal(new.waypoints[-1], old.waypoints[-1])
+    improved = Plan(
+        world.name,
+        tuple(world.robot.joint_names),
+        True,
+        "",
+        segments=tuple(PlanSegment(s.kind, s.grasp, np.array(s.waypoints)) for s in better.segments),
+    )
+    for motion in replay(world, improved, FINE_RAD):
+        assert is_valid(world, motion.configurations, motion.object_poses).all()

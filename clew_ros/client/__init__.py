@@ -14,7 +14,15 @@ Which calls may block where: see :mod:`clew_ros.client.planner_client`.
 """
 
 from clew_ros.client.planner_client import PlannerClient
-from clew_ros.client.run import Feedback, PlannerNotFoundError, RunHandle, RunResult, RunStatus, RunTimeoutError
+from clew_ros.client.run import (
+    Feedback,
+    PlannerNotFoundError,
+    RunHandle,
+    RunResult,
+    RunStatus,
+    RunTimeoutError,
+    goal_argument,
+)
 
 __all__ = [
     "Feedback",
@@ -24,4 +32,5 @@ __all__ = [
     "RunResult",
     "RunStatus",
     "RunTimeoutError",
+    "goal_argument",
 ]

@@ -7,6 +7,7 @@ the handle from its subscriptions).
 
 from __future__ import annotations
 
+import argparse
 import enum
 import threading
 from collections.abc import Callable
@@ -18,7 +19,24 @@ from trajectory_msgs.msg import JointTrajectory
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome
 
-__all__ = ["Feedback", "PlannerNotFoundError", "RunHandle", "RunResult", "RunStatus", "RunTimeoutError"]
+__all__ = [
+    "Feedback",
+    "PlannerNotFoundError",
+    "RunHandle",
+    "RunResult",
+    "RunStatus",
+    "RunTimeoutError",
+    "goal_argument",
+]
+
+
+def goal_argument(text: str) -> tuple[float, float, float]:
+    """An object goal ``X,Y,YAW`` (m, m, rad, frame ``world``) typed on a command line: an ``argparse`` type."""
+    try:
+        x, y, yaw = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y,YAW (three numbers), got {text!r}") from None
+    return (x, y, yaw)
 
 
 class PlannerNotFoundError(RuntimeError):

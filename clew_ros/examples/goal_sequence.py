@@ -18,7 +18,7 @@ import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
-from clew_ros.client import PlannerClient, RunHandle
+from clew_ros.client import PlannerClient, RunHandle, goal_argument
 
 
 class GoalSequence(Node):
@@ -57,17 +57,9 @@ class GoalSequence(Node):
         print(text, flush=True)
 
 
-def _goal(text: str) -> tuple[float, float, float]:
-    try:
-        x, y, yaw = (float(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected X,Y,YAW (three numbers), got {text!r}") from None
-    return (x, y, yaw)
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="goal_sequence", description=__doc__.splitlines()[0])
-    parser.add_argument("goals", nargs="+", type=_goal, help="object goals X,Y,YAW in frame world")
+    parser.add_argument("goals", nargs="+", type=goal_argument, help="object goals X,Y,YAW in frame world")
     parser.add_argument("--planner", default="/clew_planner", help="the planner node (default /clew_planner)")
     args, ros_args = parser.parse_known_args(argv)
     rclpy.init(args=ros_args)

@@ -22,23 +22,15 @@ import sys
 import rclpy
 from rclpy.executors import ExternalShutdownException
 
-from clew_ros.client import PlannerClient, PlannerNotFoundError, RunTimeoutError
+from clew_ros.client import PlannerClient, PlannerNotFoundError, RunTimeoutError, goal_argument
 
 EXIT_SUCCESS, EXIT_NO_PLAN, EXIT_NO_ANSWER = 0, 1, 2
-
-
-def _goal(text: str) -> tuple[float, float, float]:
-    try:
-        x, y, yaw = (float(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected X,Y,YAW (three numbers), got {text!r}") from None
-    return (x, y, yaw)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="call_plan", description=__doc__.splitlines()[0])
     parser.add_argument("--node", default="/clew_planner", help="the planner node's name (default /clew_planner)")
-    parser.add_argument("--goal", type=_goal, default=None, help="object goal X,Y,YAW (default: the planner's)")
+    parser.add_argument("--goal", type=goal_argument, default=None, help="object goal X,Y,YAW (default: the planner's)")
     parser.add_argument(
         "--timeout", type=float, default=120.0, help="seconds to wait for the planner and for the answer (default 120)"
     )

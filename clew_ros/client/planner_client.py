@@ -13,7 +13,8 @@ Where each call may be made
 - In a script, with a node that no executor spins: :meth:`RunHandle.wait`
   and :meth:`PlannerClient.wait_for_planner` spin the node themselves (with
   the client's own single-threaded executor) until they return.
-- In a node spun by your executor: :meth:`PlannerClient.send_goal`,
+- In a node spun by your executor: :meth:`PlannerClient.send_goal` with a goal (``None``, the planner's own
+  goal, asks its ``get_parameters`` service and waits for the answer),
   :meth:`RunHandle.cancel`, :meth:`RunHandle.add_done_callback` and reading
   the handle never block and are safe in any callback. :meth:`RunHandle.wait`
   blocks, so call it from a thread of your own, or from a callback of a
@@ -96,10 +97,9 @@ class PlannerClient:
         self._pending: dict[int, RunHandle] = {}  # goal stamp (ns) -> handle not answered yet
         self._runs: dict[str, RunHandle] = {}  # run id -> handle
         self._trajectories: list[JointTrajectory] = []  # the last few received, newest last
-        self._trajectory_count = 0  # how many were received
         self._world_text: str | None = None
         self._status_seen = False
-        self._callback_threads: set[int] = set()
+        self._callback_threads: dict[int, set[int]] = {}  # id(executor) -> threads that ran our callbacks
         self._last_stamp_ns = 0
         name = self.planner
         group = self._group
@@ -149,7 +149,7 @@ class PlannerClient:
         if not self._wait_until(future.done, timeout_s):
             raise RunTimeoutError(f"{self.planner}/get_parameters did not answer within {timeout_s} s")
         values = future.result().values
-        goal = list(values[0].double_array_value) if values else []
+        goal = [float(v) for v in (values[0].double_array_value or values[0].integer_array_value)] if values else []
         if len(goal) != 3:
             raise PlannerNotFoundError(f"{self.planner} has no world.object.goal parameter of three numbers")
         return (goal[0], goal[1], goal[2])
@@ -175,8 +175,8 @@ class PlannerClient:
             raise PlannerNotFoundError(f"no planner at {self.planner} yet: call wait_for_planner() first")
         if goal is None:
             goal = self.default_goal()
-        with self._lock:
-            stamp_ns = max(self._node.get_clock().now().nanoseconds, self._last_stamp_ns + 1)
+        with self._lock:  # wall-clock ns (a sim clock may be at 0 in every client): unique goal stamps
+            stamp_ns = max(time.time_ns(), self._last_stamp_ns + 1)
             self._last_stamp_ns = stamp_ns
         if isinstance(goal, PoseStamped):
             msg = goal
@@ -200,7 +200,16 @@ class PlannerClient:
         return self.send_goal(goal).wait(timeout_s)
 
     def destroy(self) -> None:
-        """Remove the client's publisher, subscriptions and service clients from the node."""
+        """Remove the client's publisher, subscriptions and service clients from the node; runs still followed
+        end with ``INTERNAL_ERROR`` ("the client was destroyed"), so no ``wait()`` is left hanging."""
+        with self._lock:
+            left = [*self._pending.values(), *self._runs.values()]
+            self._pending.clear()
+            self._runs.clear()
+        for handle in left:
+            if not handle.done():
+                handle.finish(RunResult(handle.run_id or "", Outcome.INTERNAL_ERROR, "the client was destroyed"))
+        self._notify()
         node = self._node
         node.destroy_publisher(self._goal_pub)
         for subscription in self._subscriptions:
@@ -221,13 +230,16 @@ class PlannerClient:
         def left() -> float:
             return 0.1 if deadline is None else min(0.1, deadline - time.monotonic())
 
-        executor = self._node.executor
-        if executor is None or executor in _SCRIPT_EXECUTORS:
-            # a script's node that nobody spins: spin it here, with one executor per node for all its clients
-            if executor is None:
-                executor = SingleThreadedExecutor(context=self._node.context)
+        node = self._node
+        executor = node.executor
+        spun_elsewhere = executor is not None and executor not in _SCRIPT_EXECUTORS and node in executor.get_nodes()
+        if not spun_elsewhere:
+            # a script's node that nobody spins (rclpy.spin_once leaves node.executor set after it returns):
+            # spin it here, with one executor per node for all its clients
+            if executor is None or executor not in _SCRIPT_EXECUTORS:
+                executor = SingleThreadedExecutor(context=node.context)
                 _SCRIPT_EXECUTORS[executor] = threading.Lock()
-                executor.add_node(self._node)
+                executor.add_node(node)
             spinning = _SCRIPT_EXECUTORS[executor]  # type: ignore[index]  # one of ours: a SingleThreadedExecutor
             while not predicate():
                 if left() <= 0:
@@ -235,7 +247,8 @@ class PlannerClient:
                 with spinning:
                     executor.spin_once(timeout_sec=max(0.0, left()))
             return True
-        if threading.get_ident() in self._callback_threads and not isinstance(executor, MultiThreadedExecutor):
+        callback_threads = self._callback_threads.get(id(executor), set())
+        if threading.get_ident() in callback_threads and not isinstance(executor, MultiThreadedExecutor):
             raise RuntimeError(
                 "waiting here would block the executor that must deliver the answer: in a node "
                 "spun by a SingleThreadedExecutor use RunHandle.add_done_callback, or wait "
@@ -249,7 +262,9 @@ class PlannerClient:
         return True
 
     def _notify(self) -> None:
-        self._callback_threads.add(threading.get_ident())
+        executor = self._node.executor
+        if executor is not None:
+            self._callback_threads.setdefault(id(executor), set()).add(threading.get_ident())
         with self._changed:
             self._changed.notify_all()
 
@@ -276,7 +291,8 @@ class PlannerClient:
             if kind == "accepted":
                 handle.mark_accepted(run_id)
                 handle.recording = (event.get("recording_path"), str(event.get("recording", "")))
-                handle.trajectories_before = self._trajectory_count
+                if handle.cancel_requested:  # asked before the planner answered: its run is this one now
+                    self._cancel.call_async(Trigger.Request())
             elif kind in _OUTCOME_EVENTS:
                 if handle.run_id is None:
                     handle.mark_accepted(run_id)  # refused: the refusal has its own run id
@@ -303,6 +319,7 @@ class PlannerClient:
             handle.finish(result)
 
     def _complete_success(self, handle: RunHandle) -> None:
+        """Finish a success once its trajectory and a world are here (called again as either arrives)."""
         result = handle.outcome_event
         if result is None or handle.done():
             return
@@ -310,15 +327,26 @@ class PlannerClient:
         world = self._world()
         if trajectory is None or world is None:
             return
-        plan = trajectory_to_plan(world, trajectory, message=result.message)
+        try:
+            plan = trajectory_to_plan(world, trajectory, message=result.message, strict=True)
+        except (ValueError, IndexError) as error:  # the world changed under the run (another joint count)
+            handle.finish(
+                dataclasses.replace(
+                    result, outcome=Outcome.INTERNAL_ERROR, message=f"the client cannot rebuild the plan: {error}"
+                )
+            )
+            return
         handle.finish(dataclasses.replace(result, plan=plan, trajectory=trajectory))
 
     def _trajectory_of(self, handle: RunHandle) -> JointTrajectory | None:
-        """The run's ``~/trajectory``: the first one received after the run was accepted (the planner runs
-        one plan at a time and publishes it when the run ends)."""
+        """The run's ``~/trajectory``: the oldest one stamped at or after the run's acceptance (both stamps are
+        the planner's clock; the trajectory is stamped when its playback starts, after the outcome)."""
+        accepted = handle.accepted_stamp_ns
+        if accepted is None:
+            return None
         with self._lock:
-            index = handle.trajectories_before - (self._trajectory_count - len(self._trajectories))
-            return self._trajectories[index] if 0 <= index < len(self._trajectories) else None
+            later = [t for t in self._trajectories if t.header.stamp.sec * 10**9 + t.header.stamp.nanosec >= accepted]
+        return later[0] if later else None
 
     def _world(self) -> World | None:
         if self._world_text is None:
@@ -336,7 +364,12 @@ class PlannerClient:
             runs = dict(self._runs)
         for entry in msg.status_list:
             handle = runs.get(bytes(entry.goal_info.goal_id.uuid).hex())
-            if handle is not None and entry.status in _STATUS:
+            if handle is None:
+                continue
+            if handle.accepted_stamp_ns is None:
+                handle.accepted_stamp_ns = entry.goal_info.stamp.sec * 10**9 + entry.goal_info.stamp.nanosec
+                self._complete_success(handle)
+            if entry.status in _STATUS:
                 handle.update_status(_STATUS[entry.status])
         self._notify()
 
@@ -362,7 +395,6 @@ class PlannerClient:
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         with self._lock:
             self._trajectories = [*self._trajectories[-7:], msg]
-            self._trajectory_count += 1
             waiting = [h for h in self._runs.values() if h.outcome_event is not None and not h.done()]
         for handle in waiting:
             self._complete_success(handle)
@@ -370,10 +402,16 @@ class PlannerClient:
 
     def _on_world_yaml(self, msg: String) -> None:
         self._world_text = msg.data
+        with self._lock:
+            waiting = [h for h in self._runs.values() if h.outcome_event is not None and not h.done()]
+        for handle in waiting:
+            self._complete_success(handle)
         self._notify()
 
     def cancel(self, handle: RunHandle) -> None:
         """Ask the planner to cancel ``handle``'s run (``~/cancel`` cancels its current run, which is this one
         while it is not done); :meth:`RunHandle.cancel` calls it."""
-        del handle
+        if handle.run_id is None:  # not answered yet: cancel it once its run is known to be this one
+            handle.cancel_requested = True
+            return
         self._cancel.call_async(Trigger.Request())

@@ -137,7 +137,8 @@ class RunHandle:
         self._result: RunResult | None = None
         self._playback: str | None = None
         # kept by the client while the run goes on
-        self.trajectories_before = 0  # ~/trajectory messages received before the run was accepted
+        self.accepted_stamp_ns: int | None = None  # the run's ~/status stamp (the planner's clock)
+        self.cancel_requested = False  # cancel() before the planner answered: sent once it accepts the run
         self.recording: tuple[str | None, str] = (None, "")  # (directory, note) from the accepted event
         self.outcome_event: RunResult | None = None  # a success waiting for its ~/trajectory
 

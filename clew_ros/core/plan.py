@@ -373,7 +373,9 @@ def validate_plan(world: World, plan: Plan | Mapping[str, Any], step_rad: float 
     final = plan.final_object_pose
     if final is None:
         return [*problems, "a successful plan has a final_object_pose"]
-    if np.max(np.abs(np.r_[final[:2] - last_pose[:2], wrap_angle(final[2] - last_pose[2])])) > 1e-4:
+    if not np.all(np.isfinite(final)) or not (
+        np.max(np.abs(np.r_[final[:2] - last_pose[:2], wrap_angle(final[2] - last_pose[2])])) <= 1e-4
+    ):
         problems.append(f"final_object_pose {final.tolist()} differs from the replayed {last_pose.tolist()}")
     goal = world.object.goal
     distance = float(np.hypot(*(last_pose[:2] - goal[:2])))

@@ -235,10 +235,11 @@ class Publishing:
 
     # ------------------------------------------------------------------ ~/status (with feedback, in order)
 
-    def set_status(self, run_id: uuid.UUID, stamp_ns: int, status: int) -> None:
-        """Enter a run's status in the table (published by the next :meth:`publish_status`)."""
+    def set_status(self, run_id: uuid.UUID, stamp_ns: int, status: int, *, current: bool = False) -> None:
+        """Enter a run's status in the table (published by the next :meth:`publish_status`); ``current``:
+        the node's current run, listed first."""
         with self._order:
-            self._statuses.set(run_id, stamp_ns, status)
+            self._statuses.set(run_id, stamp_ns, status, current=current)
 
     def publish_status(self, recording: RunRecording) -> None:
         """``~/status``: every run of the table."""

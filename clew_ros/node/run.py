@@ -298,17 +298,21 @@ class StatusTable:
     def __init__(self, history: int = STATUS_HISTORY) -> None:
         self._history = history
         self._entries: OrderedDict[uuid.UUID, tuple[int, int]] = OrderedDict()
+        self._current: uuid.UUID | None = None
 
-    def set(self, run_id: uuid.UUID, stamp_ns: int, status: int) -> None:
-        self._entries[run_id] = (stamp_ns, status)
-        self._entries.move_to_end(run_id)
+    def set(self, run_id: uuid.UUID, stamp_ns: int, status: int, *, current: bool = False) -> None:
+        """Enter or update a run; ``current``: it is the node's current run (listed first from now on)."""
+        self._entries[run_id] = (stamp_ns, status)  # an update keeps the run's place
+        if current:
+            self._current = run_id
         while len(self._entries) > self._history:
             self._entries.popitem(last=False)
 
     def entries(self) -> list[tuple[uuid.UUID, int, int]]:
-        """``(run id, stamp (ns), status)`` of each run kept, newest first: ``status_list[0]`` is the run a
-        status display should show (the current one)."""
-        return [(run_id, stamp, status) for run_id, (stamp, status) in reversed(self._entries.items())]
+        """``(run id, stamp (ns), status)`` of each run kept: the current run first (``status_list[0]`` is the
+        run a status display should show), then the others, newest first (a refused request is not current)."""
+        ordered = [(run_id, stamp, status) for run_id, (stamp, status) in reversed(self._entries.items())]
+        return sorted(ordered, key=lambda entry: entry[0] != self._current)  # stable: the rest keep their order
 
     def __len__(self) -> int:
         return len(self._entries)

@@ -82,7 +82,7 @@ class RunWorker:
     def _announce(self, run: Run) -> None:
         out, config = self._out, run.config
         run.recording = self._recordings.open(config.node, run.hex)
-        out.set_status(run.id, run.accepted_ns, GoalStatus.STATUS_ACCEPTED)
+        out.set_status(run.id, run.accepted_ns, GoalStatus.STATUS_ACCEPTED, current=True)
         out.world(run.world, config.planner, run.recording)
         now = out.now_ns()
         run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)

@@ -181,3 +181,10 @@ def test_checked_plan_never_hands_out_an_invalid_plan(quick):
     assert planned.final_object_pose is None
     assert len(planned.landmarks) == len(result.tree)
     assert validate_plan(world, planned) == []
+
+
+def test_a_non_finite_final_pose_is_refused(quick):
+    world, good = quick
+    document = copy.deepcopy(good)
+    document["final_object_pose"] = [float("nan")] * 3
+    assert any("final_object_pose" in p for p in validate_plan(world, document))

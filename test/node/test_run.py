@@ -148,12 +148,16 @@ def test_status_table_keeps_the_last_runs_newest_first() -> None:
     ids = [uuid.uuid4() for _ in range(5)]
     for k, run_id in enumerate(ids):
         table.set(run_id, k, GoalStatus.STATUS_ACCEPTED)
-    table.set(ids[2], 2, GoalStatus.STATUS_SUCCEEDED)  # an update makes the run the newest
-    assert table.entries() == [  # newest first: status_list[0] is the run a status panel shows
-        (ids[2], 2, GoalStatus.STATUS_SUCCEEDED),
+    table.set(ids[2], 2, GoalStatus.STATUS_SUCCEEDED)  # an update keeps the run's place
+    assert table.entries() == [  # newest first
         (ids[4], 4, GoalStatus.STATUS_ACCEPTED),
         (ids[3], 3, GoalStatus.STATUS_ACCEPTED),
+        (ids[2], 2, GoalStatus.STATUS_SUCCEEDED),
     ]
+    table.set(ids[3], 3, GoalStatus.STATUS_EXECUTING, current=True)
+    table.set(uuid.uuid4(), 5, GoalStatus.STATUS_ABORTED)  # a request refused while ids[3] runs
+    assert table.entries()[0] == (ids[3], 3, GoalStatus.STATUS_EXECUTING)  # the current run first
+    assert table.entries()[1][2] == GoalStatus.STATUS_ABORTED  # then the others, newest first
     assert len(table) == 3
 
 

@@ -79,6 +79,8 @@ COLUMNS = [
     "checks_per_s",
     "checks_per_cpu_s",
     "grasps_median",
+    "travel_median",
+    "first_travel_median",
     "valid_plans",
     "outcomes",
     "peak_rss_mb",
@@ -247,6 +249,10 @@ def _summarise_world(world: BenchWorld, record: dict, same_as: str | None) -> di
         checks_per_s=checks / sum(walls) if sum(walls) > 0 else None,
         checks_per_cpu_s=checks / sum(cpus) if sum(cpus) > 0 else None,
         grasps_median=_median([r["grasps"] for r in successes]),
+        travel_median=_median([r["travel_rad"] for r in successes if r.get("travel_rad") is not None]),
+        first_travel_median=_median(
+            [r["first_travel_rad"] for r in successes if r.get("first_travel_rad") is not None]
+        ),
         valid_plans=f"{sum(validated)}/{len(validated)}" if validated else "",
         outcomes=" ".join(
             f"{name}:{count}"
@@ -356,6 +362,11 @@ TABLE = [
     ("checks", lambda r: _format(r["collision_checks_median"], 0)),
     ("checks/s", lambda r: _format(r["checks_per_s"], 0)),
     ("checks/CPU s", lambda r: _format(r["checks_per_cpu_s"], 0)),
+    ("grasps", lambda r: _format(r["grasps_median"], 0)),
+    (
+        "travel rad (first plan)",
+        lambda r: f"{_format(r.get('travel_median'), 1)} ({_format(r.get('first_travel_median'), 1)})",
+    ),
     ("peak RSS MB", lambda r: _format(r["peak_rss_mb"], 0)),
     ("valid", lambda r: r["valid_plans"] or "-"),
     ("failures", lambda r: _failures(r["outcomes"])),
@@ -447,7 +458,9 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
             "Per world: seeds, per-run wall-clock limit, success rate, median and p90 wall time of all runs "
             "(a failed run counts at the limit), median wall time of the successful runs, median CPU time; "
             "medians of landmarks, GA evaluations and collision checks (free intervals: one configuration, "
-            "one joint swept); checks per wall and per CPU second (all runs); peak RSS of the world's worker; "
+            "one joint swept); checks per wall and per CPU second (all runs); of the successful runs, the median "
+            "grasps and joint travel (sum over joints of |motion|, rad) of the plan returned and, in brackets, of "
+            "the first plan found before `planner.improve_time`'s improvement; peak RSS of the world's worker; "
             "plans passing `validate_plan`; the failed runs by outcome (limit: `TIME_LIMIT`, no path: "
             "`NO_PATH_AT_RESOLUTION`); and, for the peer worlds, the transit comparison (success rates, "
             "ratio of median wall times project / OMPL)."

@@ -53,6 +53,9 @@ def run_world(name: str, seeds: list[int], time_limit_s: float, validate: bool =
             "evaluations": result.stats["evaluations"],
             "collision_checks": result.stats["collision_checks"],
             "grasps": sum(s.kind == "transfer" for s in result.segments),
+            # plan quality (issue 14): joint travel of the plan returned and of the first plan found
+            "travel_rad": result.stats.get("joint_travel_rad"),
+            "first_travel_rad": result.stats.get("first_joint_travel_rad"),
             "valid": None,
         }
         if validate and result.success:

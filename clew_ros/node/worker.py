@@ -156,6 +156,7 @@ class RunWorker:
         canceled = run.end_planning()
         run.landmarks = len(result.tree)
         self._announce_landmarks(run, result.tree, announced)
+        out.to_live("the landmark tree", lambda live: live.publish_landmarks(result.tree))  # progress sent the rest
         outcome, message = result.outcome, result.message
         if canceled and outcome is not Outcome.CANCELED:
             outcome, message = Outcome.CANCELED, f"canceled (the run had ended {outcome.name} at the same moment)"
@@ -183,7 +184,6 @@ class RunWorker:
                 joints=landmark.joints,
             )
         announced[0] = len(landmarks)
-        self._out.to_live("the landmark tree", lambda live: live.publish_landmarks(tree))
         self._out.publish(
             "landmarks", messages.landmark_markers(tree, self._out.now_ns(), run.world.object.polygon), run.recording
         )

@@ -45,19 +45,17 @@ def test_a_run_of_the_node_is_seen_live(tmp_path: Path) -> None:
             response = session.plan()
             assert response.success, response.message
             run_id = run_id_of(response.message)
-            seen: list[str] = []
+            states_after_grasp: list[object] = []
+            grasped = False
 
             def grasped_then_moved(message) -> bool:  # the grasp event, then the arm moving with the object
-                if message.topic.endswith("/events"):
-                    seen.append(message.data.get("kind"))
-                return "grasp" in seen and message.topic.endswith("/joint_states") and seen.count("state") > 1
+                nonlocal grasped
+                grasped = grasped or (message.topic.endswith("/events") and message.data.get("kind") == "grasp")
+                if grasped and message.topic.endswith("/joint_states"):
+                    states_after_grasp.append(message)
+                return len(states_after_grasp) >= 2
 
-            def count(message) -> bool:
-                if "grasp" in seen and message.topic.endswith("/joint_states"):
-                    seen.append("state")
-                return grasped_then_moved(message)
-
-            received = client.receive_until(count, timeout_s=60.0)
+            received = client.receive_until(grasped_then_moved, timeout_s=60.0)
         kinds = [m.data["kind"] for m in received if m.topic.endswith("/events")]
         assert "succeeded" in kinds
         assert "grasp" in kinds

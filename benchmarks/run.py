@@ -49,7 +49,7 @@ ROOT = Path(__file__).absolute().parents[1]
 #: Worlds of --quick: a fast one, the default one, one of each generated family (obstacles_2 = joints_3).
 QUICK_WORLDS = "single_transfer,figure1,joints_3,obstacles_2,obstacles_8"
 #: Worlds of the peer comparison by default: one or two of each kind.
-PEER_WORLDS = "figure1,arm5_regrasp,unreachable,joints_7,joints_10,obstacles_32"
+PEER_WORLDS = "figure1,arm5_regrasp,behind_wall,joints_7,joints_10,obstacles_32"
 THROUGHPUT_WORLDS = ("figure1", "obstacles_32")
 #: Default per-run cap (s) on a world's own time limit: 20 seeds x 12 worlds fit in 10 min on 2 cores.
 LIMIT_CAP_S = 5.0

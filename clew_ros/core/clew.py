@@ -13,6 +13,7 @@ from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.improve import Improvement, improve
 from clew_ros.core.kinematics import transform_points
+from clew_ros.core.passage import passage_refusal
 from clew_ros.core.reach import approach_cells, carry_cells
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
@@ -280,7 +281,7 @@ def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int)
 
 
 def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None:
-    """Answers knowable at once: a colliding start or goal, a goal beyond reach."""
+    """Answers knowable at once: a colliding start or goal, a goal beyond reach, a proof that none exists."""
     if not np.all(np.isfinite(goal)) or goal.shape != (3,):
         return Outcome.INVALID_WORLD, "goal: expected three finite numbers (x, y, theta)"
     if not is_placement_valid(world, goal[None])[0]:
@@ -295,4 +296,7 @@ def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None
             f"from the base, the arm reaches {world.robot.reach:.3f} m"
         )
         return Outcome.GOAL_OUT_OF_REACH, message
+    reason = passage_refusal(world, goal)
+    if reason is not None:
+        return Outcome.NO_PATH_AT_RESOLUTION, reason
     return None

@@ -41,12 +41,14 @@ __all__ = [
     "OBSTACLE_PARAMETER",
     "PLANNER_PARAMETERS",
     "REQUIRED",
+    "RETIRED_PARAMETERS",
     "WORLD_PARAMETERS",
     "ParameterSpec",
     "ParameterTable",
     "ParameterType",
     "check_value",
     "markdown_tables",
+    "retired_message",
     "update_markdown",
 ]
 
@@ -60,6 +62,17 @@ class _Required:
 
 #: The default of a required parameter.
 REQUIRED: Any = _Required()
+
+#: Parameters that no longer do anything, with the reason: a file that sets one still loads (the value
+#: is ignored, with a warning), so that older parameter files keep working.
+RETIRED_PARAMETERS: dict[str, str] = {
+    "planner.max_sweep_steps": "free intervals are computed in closed form, with no sweep",
+}
+
+
+def retired_message(name: str) -> str:
+    """What a warning says about retired parameter ``name``."""
+    return f"{name} is retired and ignored: {RETIRED_PARAMETERS[name]}"
 
 
 class ParameterType(enum.Enum):
@@ -261,13 +274,6 @@ PLANNER_PARAMETERS = ParameterTable(
             "Weight (m/rad) of the joint angles in the landmark distance.",
             "m/rad",
             (0.0, 10.0),
-        ),
-        ParameterSpec(
-            "planner.max_sweep_steps",
-            _I,
-            48,
-            "Unused: free intervals are closed-form; kept so that parameter files that set it still load.",
-            limits=(2, 10000),
         ),
         ParameterSpec(
             "planner.threads",

@@ -6,13 +6,14 @@ from __future__ import annotations
 import enum
 import threading
 import time
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.genetic import GeneticSettings
-from clew_ros.core.parameters import PLANNER_PARAMETERS, check_value
+from clew_ros.core.parameters import PLANNER_PARAMETERS, RETIRED_PARAMETERS, check_value, retired_message
 
 __all__ = ["PLANNER_PARAMETERS", "Outcome", "PlannerSettings", "Termination"]
 
@@ -51,7 +52,6 @@ class PlannerSettings:
     explore_candidates: int = PLANNER_PARAMETERS.default("explore_candidates")
     search_rounds: int = PLANNER_PARAMETERS.default("search_rounds")
     joint_weight: float = PLANNER_PARAMETERS.default("joint_weight")
-    max_sweep_steps: int = PLANNER_PARAMETERS.default("max_sweep_steps")
     threads: int = PLANNER_PARAMETERS.default("threads")
     improve_time: float = PLANNER_PARAMETERS.default("improve_time")
 
@@ -71,6 +71,9 @@ class PlannerSettings:
             raise ParameterError("planner", f"expected a mapping, got {tree!r}")
         values: dict[str, Any] = {}
         for key, value in tree.items():
+            if f"planner.{key}" in RETIRED_PARAMETERS:
+                warnings.warn(retired_message(f"planner.{key}"), FutureWarning, stacklevel=2)
+                continue
             if key not in PLANNER_PARAMETERS:
                 raise ParameterError(f"planner.{key}", f"unknown parameter; known: {', '.join(PLANNER_PARAMETERS)}")
             values[key] = value

@@ -45,6 +45,7 @@ from clew_ros.core.parameters import (
     NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
     PLANNER_PARAMETERS,
+    RETIRED_PARAMETERS,
     WORLD_PARAMETERS,
     ParameterSpec,
     ParameterType,
@@ -201,6 +202,8 @@ def initial_values(overrides: Mapping[str, Any], default_file: Path | None = Non
 
 
 def _check_known(name: str) -> None:
+    if name in RETIRED_PARAMETERS:
+        return  # accepted and ignored (the node warns at start: retired_names)
     if name.startswith("world."):
         key = name[len("world.") :]
         if key in WORLD_PARAMETERS:
@@ -252,7 +255,11 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
         _check_known(name)
     world_tree = _world_tree(values, listed_obstacles_only=listed_obstacles_only)
     world = check_start_and_goal(world_from_parameters(world_tree))
-    planner_tree = {k[len("planner.") :]: v for k, v in values.items() if k.startswith("planner.") and v is not None}
+    planner_tree = {
+        k[len("planner.") :]: v
+        for k, v in values.items()
+        if k.startswith("planner.") and v is not None and k not in RETIRED_PARAMETERS
+    }
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
     node = {field: _node_value(NODE_PARAMETERS[name], values.get(name)) for field, name in SETTINGS_FIELDS.items()}
     return Configuration(world, planner, NodeSettings(**node))

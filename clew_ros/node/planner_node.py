@@ -36,6 +36,7 @@ from std_srvs.srv import Trigger
 
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.kernel import warm_up
+from clew_ros.core.parameters import RETIRED_PARAMETERS, retired_message
 from clew_ros.core.settings import Outcome
 from clew_ros.node import messages
 from clew_ros.node.parameters import (
@@ -308,7 +309,9 @@ class PlannerNode(Node):
             self.get_logger().error(f"invalid parameter {error}; not starting")
             raise StartupError(str(error)) from None
         for name, value in values.items():
-            if name in overrides:
+            if name in RETIRED_PARAMETERS:
+                self.get_logger().warning(retired_message(name))
+            elif name in overrides:
                 self.set_descriptor(name, descriptor_for(name))
             else:  # an empty list has no parameter type
                 self.declare_parameter(name, None if value == [] else value, descriptor_for(name), ignore_override=True)

@@ -52,9 +52,22 @@ def test_solvable_worlds_every_seed(name, seed, tmp_path):
     _check_plan(name, tmp_path / "plan.json", seed)
 
 
-def test_unreachable_world_fails_cleanly_within_its_time_limit(tmp_path):
+def test_a_provably_unsolvable_world_is_answered_before_any_exploration(tmp_path):
+    """config/unreachable.yaml: the goal inside a closed ring is refused with the reason (clew_ros.core.passage)."""
     output = tmp_path / "plan.json"
-    result = clew_plan(CONFIG / "unreachable.yaml", "--output", output, "--time-limit", 2)
+    result = clew_plan(CONFIG / "unreachable.yaml", "--output", output)
+    assert result.returncode == 1
+    document = json.loads(output.read_text())
+    assert document["code"] == "NO_PATH_AT_RESOLUTION"
+    assert "cannot pass" in document["message"]
+    assert "'ring_north'" in document["message"]
+    assert document["stats"]["landmarks"] == 1  # no EXPLORE step ran
+    print(f"\nconfig/unreachable.yaml answered after {document['stats']['time_s']:.4f} s of planning")
+
+
+def test_behind_wall_world_fails_cleanly_within_its_time_limit(tmp_path):
+    output = tmp_path / "plan.json"
+    result = clew_plan(CONFIG / "behind_wall.yaml", "--output", output, "--time-limit", 2)
     assert result.returncode == 1
     assert "TIME_LIMIT" in result.stderr or "NO_PATH_AT_RESOLUTION" in result.stderr
     document = json.loads(output.read_text())

@@ -162,7 +162,7 @@ def test_a_run_served_live_plans_the_same_as_without_and_plays_back_until_ctrl_c
 
 def test_a_failed_run_shows_its_outcome_and_exits_1(tmp_path, live_client) -> None:
     output = tmp_path / "plan.json"
-    run = Run(CONFIG / "unreachable.yaml", "--output", output, "--time-limit", 1)
+    run = Run(CONFIG / "behind_wall.yaml", "--output", output, "--time-limit", 1)
     try:
         port = int(run.wait_for_line(r"live view on ws://127\.0\.0\.1:(\d+)").group(1))
         with live_client.connect(port, channels=6) as client:

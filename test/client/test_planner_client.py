@@ -1,7 +1,7 @@
 """clew_ros.client against real planners in other processes, driven through the client only.
 
 Two planners run at once in their own namespaces: ``quick`` (plans in well
-under a second) and ``ring`` (its goal lies inside a closed ring: it plans
+under a second) and ``walled`` (a wall hides its goal from the arm: it plans
 until canceled or out of time). Every outcome the node can give is asked
 for and told apart by code; so are "no planner", "busy" and "timed out".
 (``START_IN_COLLISION`` cannot reach a running node: it refuses such a world
@@ -84,8 +84,10 @@ def quick(tmp_path_factory, node) -> Iterator[Planner]:
 
 
 @pytest.fixture(scope="module")
-def ring(tmp_path_factory, node) -> Iterator[Planner]:
-    yield from _start(tmp_path_factory.mktemp("ring"), "ring", "node_ring.yaml", node, **{"planner.time_limit": 4.0})
+def walled(tmp_path_factory, node) -> Iterator[Planner]:
+    yield from _start(
+        tmp_path_factory.mktemp("walled"), "walled", "node_behind_wall.yaml", node, **{"planner.time_limit": 4.0}
+    )
 
 
 def test_a_goal_is_planned_and_the_result_is_typed(quick: Planner) -> None:
@@ -136,9 +138,9 @@ def test_hopeless_goals_end_with_their_own_code(quick: Planner, goal, outcome) -
 
 @pytest.fixture(scope="module")
 def coarse(tmp_path_factory, node) -> Iterator[Planner]:
-    """The ring world at the coarsest resolution: EXPLORE's first landmark is already too close."""
+    """The walled world at the coarsest resolution: EXPLORE's first landmark is already too close."""
     yield from _start(
-        tmp_path_factory.mktemp("coarse"), "coarse", "node_ring.yaml", node, **{"planner.resolution": 10.0}
+        tmp_path_factory.mktemp("coarse"), "coarse", "node_behind_wall.yaml", node, **{"planner.resolution": 10.0}
     )
 
 
@@ -148,8 +150,8 @@ def test_no_path_at_resolution_is_its_own_code(coarse: Planner) -> None:
     assert result.plan is None
 
 
-def test_busy_cancel_time_limit_and_timeout_on_a_planner_that_keeps_planning(ring: Planner) -> None:
-    client = ring.client
+def test_busy_cancel_time_limit_and_timeout_on_a_planner_that_keeps_planning(walled: Planner) -> None:
+    client = walled.client
     first = client.send_goal()
     assert client.wait_until(lambda: first.status is RunStatus.EXECUTING, 30.0)
     with pytest.raises(RunTimeoutError):
@@ -167,11 +169,11 @@ def test_busy_cancel_time_limit_and_timeout_on_a_planner_that_keeps_planning(rin
     assert limited.plan is None
 
 
-def test_two_planners_are_followed_at_once(quick: Planner, ring: Planner) -> None:
-    long = ring.client.send_goal()
+def test_two_planners_are_followed_at_once(quick: Planner, walled: Planner) -> None:
+    long = walled.client.send_goal()
     short = quick.client.send_goal(QUICK_GOAL)
     assert short.wait(RESULT_TIMEOUT_S).outcome is Outcome.SUCCEEDED
-    assert not long.done()  # the ring planner is still at work (its limit is 4 s)
+    assert not long.done()  # the walled planner is still at work (its limit is 4 s)
     assert long.wait(RESULT_TIMEOUT_S).outcome is Outcome.TIME_LIMIT
     assert short.run_id != long.run_id
 

@@ -64,7 +64,7 @@ def test_a_start_in_collision_is_refused(world) -> None:
 
 
 def test_time_limit_and_cancel_end_the_run_with_their_outcome() -> None:
-    unreachable = load_world(ROOT / "config" / "unreachable.yaml")
+    unreachable = load_world(ROOT / "config" / "behind_wall.yaml")
     limited = plan(unreachable, PlannerSettings(seed=0, time_limit=0.3))
     assert limited.outcome is Outcome.TIME_LIMIT
     assert "time limit" in limited.message

@@ -147,3 +147,12 @@ def test_short_repr() -> None:
     assert short_repr("a" * 200) == "'" + "a" * 76 + "..."
     assert len(short_repr(list(range(100)), 20)) == 20
     assert short_repr(10**5000) == "an integer of about 5000 digits"
+
+
+def test_a_retired_parameter_still_loads_with_a_warning() -> None:
+    with pytest.warns(FutureWarning, match=r"planner\.max_sweep_steps is retired"):
+        settings = PlannerSettings.from_parameters({"planner": {"max_sweep_steps": 48, "seed": 3}})
+    assert settings.seed == 3
+    assert not hasattr(settings, "max_sweep_steps")
+    with pytest.raises(ParameterError, match=r"planner\.max_sweep_step\b"):
+        PlannerSettings.from_parameters({"planner": {"max_sweep_step": 48}})  # a misspelt name is still an error

@@ -1,6 +1,6 @@
 """``clew_planner`` while a long plan runs: cancel, refusals, shutdown.
 
-The ring world has no plan (its goal lies inside a closed ring of obstacles)
+The walled world has no plan (a wall hides its goal from the arm)
 but nothing refuses it at once, so ~/plan keeps the planner busy until it
 is canceled or its time limit (30 s) runs out.
 """
@@ -39,16 +39,16 @@ from clew_ros.node import messages  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
-RING = Path(__file__).parents[1] / "worlds" / "node_ring.yaml"
+BEHIND_WALL = Path(__file__).parents[1] / "worlds" / "node_behind_wall.yaml"
 #: The contract's target is 100 ms; over DDS, with a loaded CI machine, we
 #: assert the round trip (cancel sent -> canceled status seen) within this.
 CANCEL_BUDGET_S = 2.0
 
 
 @pytest.fixture(scope="module")
-def ring(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
-    tmp = tmp_path_factory.mktemp("ring")
-    node = NodeProcess(tmp / "node.log", RING, {"record.directory": str(tmp / "recordings")})
+def walled(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
+    tmp = tmp_path_factory.mktemp("walled")
+    node = NodeProcess(tmp / "node.log", BEHIND_WALL, {"record.directory": str(tmp / "recordings")})
     session = Session(node)
     session.recordings = tmp / "recordings"
     try:
@@ -70,49 +70,49 @@ def start_planning(session: Session):
     return future, run_id
 
 
-def test_cancel_stops_the_running_plan(ring: Session) -> None:
-    future, run_id = start_planning(ring)
+def test_cancel_stops_the_running_plan(walled: Session) -> None:
+    future, run_id = start_planning(walled)
     # feedback flows while planning
-    ring.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "planning", 5.0)
+    walled.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "planning", 5.0)
     sent = time.monotonic()
-    response = ring.client.call(ring.srv("cancel"), Trigger, timeout_s=CANCEL_BUDGET_S)
+    response = walled.client.call(walled.srv("cancel"), Trigger, timeout_s=CANCEL_BUDGET_S)
     assert response.success, response.message
     assert run_id in response.message
-    ring.wait_status(run_id, GoalStatus.STATUS_CANCELED, CANCEL_BUDGET_S)
+    walled.wait_status(run_id, GoalStatus.STATUS_CANCELED, CANCEL_BUDGET_S)
     plan_response = wait_future(future, CANCEL_BUDGET_S, "~/plan did not answer after the cancel")
     assert time.monotonic() - sent <= CANCEL_BUDGET_S
     assert not plan_response.success
     assert "CANCELED" in plan_response.message
-    canceled = [e for e in ring.events_of(run_id) if e["event"] == "canceled"]
+    canceled = [e for e in walled.events_of(run_id) if e["event"] == "canceled"]
     assert len(canceled) == 1
     assert canceled[0]["code"] == "CANCELED"
     if HAVE_RECORDER:
-        wait_until((ring.recordings / run_id / "metadata.yaml").is_file, 5.0, "the closed recording")
+        wait_until((walled.recordings / run_id / "metadata.yaml").is_file, 5.0, "the closed recording")
 
 
-def test_requests_during_a_run_are_refused(ring: Session) -> None:
-    future, run_id = start_planning(ring)
+def test_requests_during_a_run_are_refused(walled: Session) -> None:
+    future, run_id = start_planning(walled)
     try:
         # a second ~/plan: refused at once, with a run id of its own and an aborted status
-        second = ring.plan(timeout_s=5.0)
+        second = walled.plan(timeout_s=5.0)
         assert not second.success
         assert "BUSY" in second.message
         assert run_id in second.message
         refused_id = run_id_of(second.message)
         assert refused_id != run_id
-        ring.wait_status(refused_id, GoalStatus.STATUS_ABORTED)
-        assert ring.status_of(run_id) == GoalStatus.STATUS_EXECUTING
-        refused = ring.events.wait_for(lambda m: json.loads(m.data)["run_id"] == refused_id, 5.0)
+        walled.wait_status(refused_id, GoalStatus.STATUS_ABORTED)
+        assert walled.status_of(run_id) == GoalStatus.STATUS_EXECUTING
+        refused = walled.events.wait_for(lambda m: json.loads(m.data)["run_id"] == refused_id, 5.0)
         assert json.loads(refused.data)["event"] == "aborted"
         assert json.loads(refused.data)["code"] == "BUSY"
 
         # a goal pose: refused the same way
-        publisher = ring.client.publisher(f"{ring.node.name}/goal_pose", PoseStamped)
-        before = len(ring.events.messages)
+        publisher = walled.client.publisher(f"{walled.node.name}/goal_pose", PoseStamped)
+        before = len(walled.events.messages)
         publisher.publish(messages.goal_pose_stamped(np.array([0.5, 1.0, 0.0]), 0))
-        ring.events.wait_for(
+        walled.events.wait_for(
             lambda m: (
-                ring.events.messages.index(m) >= before
+                walled.events.messages.index(m) >= before
                 and json.loads(m.data).get("source") == "goal_pose"
                 and json.loads(m.data).get("code") == "BUSY"
             ),
@@ -128,7 +128,7 @@ def test_requests_during_a_run_are_refused(ring: Session) -> None:
                 )
             ]
         )
-        result = ring.client.call(ring.srv("set_parameters"), SetParameters, request, timeout_s=5.0).results[0]
+        result = walled.client.call(walled.srv("set_parameters"), SetParameters, request, timeout_s=5.0).results[0]
         assert not result.successful
         assert "world" in result.reason
         assert "planning" in result.reason
@@ -136,14 +136,18 @@ def test_requests_during_a_run_are_refused(ring: Session) -> None:
         request.parameters[0] = ParameterMsg(
             name="planner.seed", value=ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=7)
         )
-        assert ring.client.call(ring.srv("set_parameters"), SetParameters, request, timeout_s=5.0).results[0].successful
+        assert (
+            walled.client.call(walled.srv("set_parameters"), SetParameters, request, timeout_s=5.0)
+            .results[0]
+            .successful
+        )
     finally:
-        ring.client.call(ring.srv("cancel"), Trigger, timeout_s=CANCEL_BUDGET_S)
+        walled.client.call(walled.srv("cancel"), Trigger, timeout_s=CANCEL_BUDGET_S)
     assert not wait_future(future, CANCEL_BUDGET_S, "~/plan after cancel").success
 
 
 def test_sigterm_during_a_run_exits_cleanly(tmp_path: Path) -> None:
-    node = NodeProcess(tmp_path / "node.log", RING, {"record.directory": str(tmp_path / "recordings")})
+    node = NodeProcess(tmp_path / "node.log", BEHIND_WALL, {"record.directory": str(tmp_path / "recordings")})
     session = Session(node)
     try:
         _future, run_id = start_planning(session)

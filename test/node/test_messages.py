@@ -29,6 +29,7 @@ from clew_ros.node.timing import quintic_spline
 from clew_ros.recording import trajectory_to_plan
 
 WORLDS = Path(__file__).parents[1] / "worlds"
+RING = Path(__file__).parents[2] / "config" / "unreachable.yaml"  # four obstacles
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +121,7 @@ def test_goal_pose_refusals_say_why(quick, change, reason: str) -> None:
 
 
 def test_world_markers() -> None:
-    world = load_world(WORLDS / "node_ring.yaml")
+    world = load_world(RING)
     markers = messages.world_markers(world, 7).markers
     assert markers[0].action == Marker.DELETEALL
     assert all(m.header.frame_id == "world" for m in markers)
@@ -248,7 +249,7 @@ def test_status_feedback_and_events() -> None:
 def test_world_yaml_is_a_parameter_file_for_the_same_world(tmp_path: Path) -> None:
     from clew_ros.core.world import read_parameter_file
 
-    world = load_world(WORLDS / "node_ring.yaml")
+    world = load_world(WORLDS / "node_behind_wall.yaml")
     settings = PlannerSettings(seed=4, time_limit=3.0)
     path = tmp_path / "world.yaml"
     path.write_text(messages.world_yaml_message(world, settings).data)

@@ -25,6 +25,7 @@ from clew_ros.node.parameters import (
 )
 
 WORLDS = Path(__file__).parents[1] / "worlds"
+RING = Path(__file__).parents[2] / "config" / "unreachable.yaml"  # four named obstacles
 #: Every descriptor as the node declared it before the parameter specification (issue 12) was introduced.
 DESCRIPTORS_BEFORE = Path(__file__).parents[1] / "data" / "parameter_descriptors.json"
 
@@ -34,7 +35,7 @@ def file_values(name: str) -> dict:
 
 
 def test_flatten_and_nest_are_inverse() -> None:
-    tree = read_parameter_file(WORLDS / "node_ring.yaml")
+    tree = read_parameter_file(WORLDS / "node_behind_wall.yaml")
     assert nest(flatten(tree)) == tree
     assert nest({"a.b": 1, "a.c": None}) == {"a": {"b": 1}}
 
@@ -107,7 +108,7 @@ def test_numbers_may_be_integers() -> None:
 
 
 def test_unlisted_obstacles_are_ignored_after_start_only() -> None:
-    values = initial_values(file_values("node_ring.yaml"))
+    values = initial_values(flatten(read_parameter_file(RING)))
     values["world.obstacle_names"] = ["ring_south", "ring_north", "ring_west"]  # ring_east retired
     config = configuration_from_values(values, listed_obstacles_only=True)
     assert [o.name for o in config.world.obstacles] == ["ring_south", "ring_north", "ring_west"]

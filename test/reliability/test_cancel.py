@@ -3,9 +3,9 @@
 README: ``~/cancel`` stops the planner within about 100 ms and answers once it
 has stopped; during a playback it stops the playback (the run stays
 succeeded); with nothing running it answers ``success: false``. The node
-here serves ``config/unreachable.yaml``: ``~/plan`` explores until canceled or
-out of time (its goal lies in a closed ring), a ``~/goal_pose`` outside the
-ring plans in about a second. Latencies are measured from the cancel request
+here serves ``config/behind_wall.yaml``: ``~/plan`` explores until canceled or
+out of time (a wall hides its goal from the arm), a ``~/goal_pose`` above the
+wall plans in about a second. Latencies are measured from the cancel request
 to the receive time of the answer / status, and printed (``-s`` shows them).
 The node's own figure (``canceled run ... in N ms``, from the request to the
 stopped run) is held to :data:`CANCEL_BOUND_S`; end to end, DDS included, to
@@ -44,9 +44,9 @@ from clew_ros.node.parameters import flatten  # noqa: E402
 pytestmark = pytest.mark.ros
 
 ROOT = Path(__file__).resolve().parents[2]
-UNREACHABLE = ROOT / "config" / "unreachable.yaml"
+UNREACHABLE = ROOT / "config" / "behind_wall.yaml"
 FAST_WORLD = ROOT / "test" / "worlds" / "rel_fast.yaml"
-REACHABLE_GOAL = np.array([0.6, 1.1, 0.0])  # outside the ring: plans in about a second
+REACHABLE_GOAL = np.array([0.6, 1.1, 0.0])  # above the wall: plans in about a second
 #: The contract's target is 100 ms; asserted on the node's own figure ("... in N ms"), with margin
 #: for a loaded machine.
 CANCEL_BOUND_S = 0.5
@@ -61,7 +61,7 @@ MEASURED: dict[str, float] = {}
 
 
 @pytest.fixture(scope="module")
-def ring(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
+def walled(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("cancel")
     node = NodeProcess(
         tmp / "node.log",
@@ -112,7 +112,7 @@ def goal_pose_run(session: Session) -> str:
 
 
 def assert_next_plan_works(session: Session) -> None:
-    """A goal pose outside the ring succeeds; its playback is then stopped (not needed here)."""
+    """A goal pose above the wall succeeds; its playback is then stopped (not needed here)."""
     before = {id(m) for m in session.joint_states.messages}
     run_id = goal_pose_run(session)
     session.status.wait_for(status_is(run_id, GoalStatus.STATUS_SUCCEEDED), 30.0)
@@ -122,23 +122,23 @@ def assert_next_plan_works(session: Session) -> None:
     assert "stopped the playback" in response.message, response.message
 
 
-def test_cancel_with_nothing_running(ring: Session) -> None:
-    response, sent, answered = cancel(ring)
+def test_cancel_with_nothing_running(walled: Session) -> None:
+    response, sent, answered = cancel(walled)
     MEASURED["nothing_running_answer"] = answered - sent
     assert not response.success, response.message
     assert response.message.startswith("nothing to cancel"), response.message
     assert answered - sent < DDS_BOUND_S
-    assert_next_plan_works(ring)
+    assert_next_plan_works(walled)
 
 
-def test_cancel_right_after_the_goal(ring: Session) -> None:
+def test_cancel_right_after_the_goal(walled: Session) -> None:
     """Over DDS: the cancel follows the ``accepted`` event at once (the worker has barely started)."""
-    future_mark = len(ring.events.messages)
-    plan_future = ring.client.call_async(ring.srv("plan"), Trigger)
-    accepted, _ = wait_event(ring, future_mark, lambda e: e["event"] == "accepted", 10.0)
+    future_mark = len(walled.events.messages)
+    plan_future = walled.client.call_async(walled.srv("plan"), Trigger)
+    accepted, _ = wait_event(walled, future_mark, lambda e: e["event"] == "accepted", 10.0)
     run_id = accepted["run_id"]
-    response, sent, answered = cancel(ring)
-    canceled_at = received_at(ring.status, status_is(run_id, GoalStatus.STATUS_CANCELED), 5.0)
+    response, sent, answered = cancel(walled)
+    canceled_at = received_at(walled.status, status_is(run_id, GoalStatus.STATUS_CANCELED), 5.0)
     plan_response = wait_future(plan_future, 5.0, "~/plan after the cancel")
     MEASURED["after_goal_answer"] = answered - sent
     MEASURED["after_goal_status"] = canceled_at - sent
@@ -150,19 +150,19 @@ def test_cancel_right_after_the_goal(ring: Session) -> None:
     assert node_side_s(response) < CANCEL_BOUND_S
     assert answered - sent < DDS_BOUND_S
     assert canceled_at - sent < DDS_BOUND_S
-    outcome = [e for e in ring.events_of(run_id) if e["event"] in ("succeeded", "aborted", "canceled")]
+    outcome = [e for e in walled.events_of(run_id) if e["event"] in ("succeeded", "aborted", "canceled")]
     assert [e["code"] for e in outcome] == ["CANCELED"]
-    assert_next_plan_works(ring)
+    assert_next_plan_works(walled)
 
 
-def test_cancel_during_explore(ring: Session) -> None:
-    mark = len(ring.events.messages)
-    plan_future = ring.client.call_async(ring.srv("plan"), Trigger)
-    accepted, _ = wait_event(ring, mark, lambda e: e["event"] == "accepted", 10.0)
+def test_cancel_during_explore(walled: Session) -> None:
+    mark = len(walled.events.messages)
+    plan_future = walled.client.call_async(walled.srv("plan"), Trigger)
+    accepted, _ = wait_event(walled, mark, lambda e: e["event"] == "accepted", 10.0)
     run_id = accepted["run_id"]
-    wait_event(ring, mark, lambda e: e["run_id"] == run_id and e["event"] == "landmark", 15.0)  # EXPLORE runs
-    response, sent, answered = cancel(ring)
-    canceled_at = received_at(ring.status, status_is(run_id, GoalStatus.STATUS_CANCELED), 5.0)
+    wait_event(walled, mark, lambda e: e["run_id"] == run_id and e["event"] == "landmark", 15.0)  # EXPLORE runs
+    response, sent, answered = cancel(walled)
+    canceled_at = received_at(walled.status, status_is(run_id, GoalStatus.STATUS_CANCELED), 5.0)
     plan_response = wait_future(plan_future, 5.0, "~/plan after the cancel")
     MEASURED["explore_answer"] = answered - sent
     MEASURED["explore_status"] = canceled_at - sent
@@ -174,10 +174,10 @@ def test_cancel_during_explore(ring: Session) -> None:
     assert node_side_s(response) < CANCEL_BOUND_S
     assert answered - sent < DDS_BOUND_S
     assert canceled_at - sent < DDS_BOUND_S
-    ring.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "CANCELED", 2.0)
+    walled.feedback.wait_for(lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "CANCELED", 2.0)
     # the recording is closed before the answer goes out
-    assert (ring.recordings / run_id / "metadata.yaml").is_file()
-    assert_next_plan_works(ring)
+    assert (walled.recordings / run_id / "metadata.yaml").is_file()
+    assert_next_plan_works(walled)
 
 
 def playback_started(session: Session, before: set[int]) -> None:
@@ -186,14 +186,14 @@ def playback_started(session: Session, before: set[int]) -> None:
     session.joint_states.wait_for(lambda m: id(m) not in before, 10.0)
 
 
-def test_cancel_during_playback(ring: Session) -> None:
-    before = {id(m) for m in ring.joint_states.messages}
-    run_id = goal_pose_run(ring)
-    ring.status.wait_for(status_is(run_id, GoalStatus.STATUS_SUCCEEDED), 30.0)
-    playback_started(ring, before)
-    response, sent, answered = cancel(ring)
+def test_cancel_during_playback(walled: Session) -> None:
+    before = {id(m) for m in walled.joint_states.messages}
+    run_id = goal_pose_run(walled)
+    walled.status.wait_for(status_is(run_id, GoalStatus.STATUS_SUCCEEDED), 30.0)
+    playback_started(walled, before)
+    response, sent, answered = cancel(walled)
     stopped_at = received_at(
-        ring.feedback, lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "playback_stopped", 5.0
+        walled.feedback, lambda m: kv(m).get("run_id") == run_id and kv(m).get("phase") == "playback_stopped", 5.0
     )
     MEASURED["playback_answer"] = answered - sent
     MEASURED["playback_feedback"] = stopped_at - sent
@@ -203,23 +203,23 @@ def test_cancel_during_playback(ring: Session) -> None:
     assert node_side_s(response) < CANCEL_BOUND_S
     assert answered - sent < DDS_BOUND_S
     assert stopped_at - sent < DDS_BOUND_S
-    assert ring.status_of(run_id) == GoalStatus.STATUS_SUCCEEDED  # the outcome stays
+    assert walled.status_of(run_id) == GoalStatus.STATUS_SUCCEEDED  # the outcome stays
     # nothing is left to cancel
-    assert not cancel(ring)[0].success
-    assert_next_plan_works(ring)
+    assert not cancel(walled)[0].success
+    assert_next_plan_works(walled)
 
 
-def test_time_limit_is_honoured_by_the_node(ring: Session) -> None:
-    """config/unreachable.yaml, planner.time_limit 2 (default tuning): the run ends by 2.2 s."""
+def test_time_limit_is_honoured_by_the_node(walled: Session) -> None:
+    """config/behind_wall.yaml, planner.time_limit 2 (default tuning): the run ends by 2.2 s."""
     limit = 2.0
-    assert set_parameters(ring, {"planner.time_limit": limit})[0].successful
+    assert set_parameters(walled, {"planner.time_limit": limit})[0].successful
     try:
-        mark = len(ring.events.messages)
+        mark = len(walled.events.messages)
         sent = time.monotonic()
-        response = ring.plan(timeout_s=limit + 10.0)
+        response = walled.plan(timeout_s=limit + 10.0)
         round_trip = time.monotonic() - sent
         run_id = run_id_of(response.message)
-        outcome, _ = wait_event(ring, mark, lambda e: e["run_id"] == run_id and e["event"] == "aborted", 2.0)
+        outcome, _ = wait_event(walled, mark, lambda e: e["run_id"] == run_id and e["event"] == "aborted", 2.0)
         MEASURED["time_limit_planner"] = outcome["time_s"]
         MEASURED["time_limit_round_trip"] = round_trip
         assert outcome["code"] in ("TIME_LIMIT", "NO_PATH_AT_RESOLUTION"), outcome
@@ -227,11 +227,11 @@ def test_time_limit_is_honoured_by_the_node(ring: Session) -> None:
         assert outcome["time_s"] <= limit + TIME_LIMIT_SLACK_S, outcome
         assert round_trip <= limit + TIME_LIMIT_ROUND_TRIP_SLACK_S, f"~/plan answered after {round_trip:.3f} s"
     finally:
-        assert set_parameters(ring, {"planner.time_limit": 30.0})[0].successful
+        assert set_parameters(walled, {"planner.time_limit": 30.0})[0].successful
 
 
-def test_every_run_had_exactly_one_outcome(ring: Session) -> None:
-    events = [json.loads(m.data) for m in ring.events.messages]
+def test_every_run_had_exactly_one_outcome(walled: Session) -> None:
+    events = [json.loads(m.data) for m in walled.events.messages]
     runs = {e["run_id"] for e in events if e["event"] == "accepted"}
     assert runs
     for run_id in runs:

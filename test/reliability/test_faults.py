@@ -45,7 +45,7 @@ pytestmark = pytest.mark.ros
 
 ROOT = Path(__file__).resolve().parents[2]
 FAST_WORLD = ROOT / "test" / "worlds" / "rel_fast.yaml"
-UNREACHABLE = ROOT / "config" / "unreachable.yaml"
+UNREACHABLE = ROOT / "config" / "behind_wall.yaml"
 FAST = {
     "trajectory.max_velocity": 20.0,
     "trajectory.max_acceleration": 400.0,

@@ -292,16 +292,16 @@ def test_clew_plan_fixed_cases(tmp_path: Path) -> None:
 def test_clew_plan_failures_carry_a_code_and_the_time_limit_holds(tmp_path: Path) -> None:
     """Every failure writes ``success: false``, a ``code`` and a message (exit 1).
 
-    The unreachable world (config/unreachable.yaml) with ``--time-limit 2`` ends by 2.2 s as the
+    The behind-wall world (config/behind_wall.yaml) with ``--time-limit 2`` ends by 2.2 s as the
     planner measures it (``stats.time_s``); the process's wall time adds Python's start-up.
     """
     unreachable = ROOT / "test" / "worlds" / "node_unreachable.yaml"
-    ring = ROOT / "config" / "unreachable.yaml"
+    walled = ROOT / "config" / "behind_wall.yaml"
     limit = 2.0
     started = time.monotonic()
     procs = {
         "GOAL_OUT_OF_REACH": clew_plan(unreachable, tmp_path / "a.json"),
-        "TIME_LIMIT": clew_plan(ring, tmp_path / "b.json", "--time-limit", str(limit)),
+        "TIME_LIMIT": clew_plan(walled, tmp_path / "b.json", "--time-limit", str(limit)),
     }
     for (code_name, proc), output in zip(procs.items(), (tmp_path / "a.json", tmp_path / "b.json"), strict=True):
         code, stderr = finish(proc)
@@ -314,7 +314,7 @@ def test_clew_plan_failures_carry_a_code_and_the_time_limit_holds(tmp_path: Path
         if code_name == "TIME_LIMIT":
             wall = time.monotonic() - started
             print(
-                f"\nclew_plan on config/unreachable.yaml, --time-limit {limit}: {document['code']} after "
+                f"\nclew_plan on config/behind_wall.yaml, --time-limit {limit}: {document['code']} after "
                 f"{document['stats']['time_s']:.3f} s planning, {wall:.2f} s wall (process start included)"
             )
             assert document["code"] in ("TIME_LIMIT", "NO_PATH_AT_RESOLUTION"), document["code"]
@@ -352,10 +352,10 @@ def test_the_time_limit_holds_on_big_worlds(links: int, obstacles: int) -> None:
 
 @pytest.mark.parametrize("sig", [signal.SIGINT], ids=["SIGINT"])  # SIGTERM takes the same handler
 def test_clew_plan_signal_cancels_and_writes_the_plan_file(tmp_path: Path, sig: int) -> None:
-    ring = ROOT / "config" / "unreachable.yaml"
+    walled = ROOT / "config" / "behind_wall.yaml"
     output = tmp_path / "plan.json"
     proc = subprocess.Popen(
-        [*CLEW_PLAN, str(ring), "--output", str(output), "--time-limit", "60"],
+        [*CLEW_PLAN, str(walled), "--output", str(output), "--time-limit", "60"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

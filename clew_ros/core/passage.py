@@ -153,7 +153,7 @@ def _separated_for_disc(world: World, goal: np.ndarray, centre: np.ndarray, radi
         return None  # no room: the start would not be valid either; prove nothing
     box = shapely.box(xmin + radius, ymin + radius, xmax - radius, ymax - radius)
     obstacles = shapely.polygons([o.vertices for o in world.obstacles])
-    grown = shapely.buffer(obstacles, radius - _GROW_MARGIN_M, quad_segs=_QUAD_SEGS)
+    grown: np.ndarray = np.asarray(shapely.buffer(obstacles, radius - _GROW_MARGIN_M, quad_segs=_QUAD_SEGS))
     free = box.difference(shapely.union_all(grown))
     start_centre = shapely.Point(transform_points(world.object.initial, centre[None])[0])
     parts = list(getattr(free, "geoms", [free]))

@@ -126,8 +126,9 @@ class Explorer:
         wanted = ctx.settings.explore_candidates
         order = ctx.rng.permutation(len(fresh))
         chosen = [fresh[i] for i in order[:wanted]]
-        # previously successful pairs stay in the pool, newest landmarks first
-        chosen += sorted(known, key=lambda p: -p[0])[: max(0, 2 * wanted - len(chosen))]
+        # every pair with a transit stays in the pool, whatever its landmark's age: the GA's category
+        # gene chooses among them (the paper's [landmark] x [grasp] dimension)
+        chosen += known
         self._search_transits([p for p in chosen if p not in self._transits])
         if ctx.termination():
             return None

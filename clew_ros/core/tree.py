@@ -124,9 +124,13 @@ def landmark_features(
     """Embedding of (joints, object pose) where Euclidean distance is the landmark distance.
 
     Object position (m), orientation as a chord on a circle of the object's
-    radius (m), joints weighted by ``joint_weight`` (m/rad).
+    radius (m), joints weighted by ``joint_weight`` (m/rad) times ``sqrt(2 / n)``
+    for ``n`` joints: the joints' part of the distance is then the weighted
+    root mean square over the joints (scaled to a two-joint arm's), so that
+    the angles of many joints do not swamp where the object lies.
     """
     theta = object_poses[:, 2]
+    joint_weight = joint_weight * float(np.sqrt(2.0 / joints.shape[1]))
     return np.concatenate(
         [
             object_poses[:, :2],

@@ -47,6 +47,7 @@ __all__ = [
     "clearly_valid",
     "decode",
     "intervals",
+    "reach_point",
     "warm_up",
 ]
 
@@ -841,6 +842,52 @@ def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndar
             points[b, i + 1, 0], points[b, i + 1, 1] = links[i, 1, 0], links[i, 1, 1]
 
 
+@_jit
+def _reach_point(
+    q: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    target: np.ndarray,
+    damping: float,
+    iterations: int,
+    tolerance: float,
+) -> None:
+    """Damped least squares on the tip position, in place on every row of ``q (B, n)``, clamped to
+    the limits at every step (a step's largest joint move is at most 0.5 rad); a row stops once its
+    tip is within ``tolerance`` of ``target``."""
+    n = lengths.shape[0]
+    links = np.empty((n, 2, 2))
+    jacobian = np.empty((2, n))
+    for b in range(q.shape[0]):
+        for _ in range(iterations):
+            tx, ty, _phi = _forward(q[b], base, lengths, links)
+            ex, ey = target[0] - tx, target[1] - ty
+            if ex * ex + ey * ey <= tolerance * tolerance:
+                break
+            for i in range(n):  # a planar revolute joint moves the tip at right angles to joint-to-tip
+                jacobian[0, i] = -(ty - links[i, 0, 1])
+                jacobian[1, i] = tx - links[i, 0, 0]
+            a = damping
+            c = damping
+            m = 0.0
+            for i in range(n):
+                a += jacobian[0, i] * jacobian[0, i]
+                m += jacobian[0, i] * jacobian[1, i]
+                c += jacobian[1, i] * jacobian[1, i]
+            det = a * c - m * m
+            ux = (c * ex - m * ey) / det  # (J J^T + damping I)^-1 e
+            uy = (a * ey - m * ex) / det
+            largest = 0.0
+            for i in range(n):
+                largest = max(largest, abs(jacobian[0, i] * ux + jacobian[1, i] * uy))
+            scale = 1.0 if largest <= 0.5 else 0.5 / largest
+            for i in range(n):
+                step = scale * (jacobian[0, i] * ux + jacobian[1, i] * uy)
+                q[b, i] = min(max(q[b, i] + step, lower[i]), upper[i])
+
+
 # --------------------------------------------------------------------------- Python entry points
 
 
@@ -945,6 +992,34 @@ def chain(base: np.ndarray, lengths: np.ndarray, q: np.ndarray) -> tuple[np.ndar
     return points, tips
 
 
+def reach_point(
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    q: np.ndarray,
+    target: np.ndarray,
+    damping: float,
+    iterations: int,
+    tolerance: float,
+) -> np.ndarray:
+    """Compiled damped least squares that brings the tip of each configuration ``q (B, n)`` towards
+    ``target (2,)`` within the joint limits; returns the configurations reached (a new array)."""
+    solved = np.array(q, dtype=np.float64, order="C")
+    _reach_point(
+        solved,
+        _arg(np.asarray(base, np.float64)),
+        _arg(np.asarray(lengths, np.float64)),
+        _arg(np.asarray(lower, np.float64)),
+        _arg(np.asarray(upper, np.float64)),
+        _arg(np.asarray(target, np.float64)),
+        float(damping),
+        int(iterations),
+        float(tolerance),
+    )
+    return solved
+
+
 def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """Compiled :func:`_bounce` over arrays of one shape."""
     x, low, high = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (x, low, high)))
@@ -993,5 +1068,6 @@ def warm_up() -> float:
     bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
     clearly_valid(world, waypoints[:, 0], np.zeros(3))
     chain(world.base, world.lengths, waypoints[:, 0])
+    reach_point(world.base, world.lengths, world.lower, world.upper, waypoints[:, 0], np.ones(2), 1e-3, 2, 1e-6)
     _WARMED_IN_S.append(time.perf_counter() - start)
     return _WARMED_IN_S[0]

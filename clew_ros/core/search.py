@@ -18,7 +18,14 @@ import numpy as np
 from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, ManhattanPaths, run_manhattan, single_moves
-from clew_ros.core.reach import approach_cell, approach_excess, goal_within_reach, two_link_grasps, within_reach
+from clew_ros.core.reach import (
+    approach_cell,
+    approach_excess,
+    goal_within_reach,
+    holding_configurations,
+    two_link_grasps,
+    within_reach,
+)
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
@@ -258,7 +265,8 @@ def _transit_job(
     holds = _holding_configurations(world, object_pose, grasp, approach)
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
-    bends = np.unique(np.sign(wrap_angle(holds[:, 1]))) if holds is not None else np.zeros(0)
+    two_joints = world.robot.dof == 2
+    bends = np.unique(np.sign(wrap_angle(holds[:, 1]))) if two_joints and holds is not None else np.zeros(0)
     elbow = float(bends[0]) if len(bends) == 1 and bends[0] != 0 else None
 
     def tip_error(q: np.ndarray) -> np.ndarray:
@@ -283,11 +291,13 @@ def _transit_job(
 def _holding_configurations(
     world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None
 ) -> np.ndarray | None:
-    """Two-joint arms: the valid configurations holding ``grasp`` (with an allowed approach), which
-    a transit can only end near; ``None`` for other arms (not solved)."""
-    if world.robot.dof != 2:
-        return None
-    holds = two_link_grasps(world, object_pose, grasp)
+    """The valid configurations holding ``grasp`` (with an allowed approach), which a transit can
+    only end near: all of them for two-joint arms (:func:`two_link_grasps`), a sample for others
+    (:func:`holding_configurations`). Empty: the transit is given up as hopeless."""
+    if world.robot.dof == 2:
+        holds = two_link_grasps(world, object_pose, grasp)
+    else:
+        holds = holding_configurations(world, object_pose, grasp)
     if approach is None or not len(holds):
         return holds
     psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]

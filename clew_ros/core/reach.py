@@ -231,7 +231,7 @@ def holding_configurations(
         robot.base, robot.link_lengths, lower, upper, start, target, damping, iterations, 0.25 * world.grasp_tolerance
     )
     tips = joint_positions(robot, q)[:, -1]
-    held = q[np.linalg.norm(tips - target, axis=1) <= 0.5 * world.grasp_tolerance]
+    held: np.ndarray = q[np.linalg.norm(tips - target, axis=1) <= 0.5 * world.grasp_tolerance]
     if not len(held):
         return held
     valid: np.ndarray = held[is_valid(world, held, pose[None])]

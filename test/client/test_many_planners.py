@@ -37,6 +37,7 @@ from helpers.node_harness import (  # noqa: E402
     PlannersProcess,
     kv,
     recorded_topics,
+    wait_until,
 )
 from std_msgs.msg import String  # noqa: E402
 
@@ -250,6 +251,8 @@ def test_four_planners_plan_at_once_and_a_cancel_stops_only_its_own(graph: Graph
         for name, result in results:
             directory = graph.records / graph.prefix.strip("/") / name / result.run_id
             assert result.recording == str(directory)
+            # metadata.yaml is written when the recording closes, right after the playback's last feedback
+            wait_until(lambda d=directory: (d / "metadata.yaml").is_file(), 10.0, f"{name}: recording closed")
             topics = recorded_topics(directory)
             own_topics = {t for t in topics if t.startswith(graph.node_name(name) + "/")}
             assert own_topics, f"{name}: nothing of its own recorded"

@@ -1,7 +1,7 @@
 """Four planners in one process (``clew_planners``), driven at once by four clients in this process.
 
 The planners serve four worlds of ``config/`` in namespaces of their own:
-three solvable ones and ``unreachable``, whose planner keeps planning until
+three solvable ones and ``behind_wall``, whose planner keeps planning until
 it is canceled. Each client is a node of its own (its own context), driven
 from a thread of its own through :class:`clew_ros.client.PlannerClient`.
 Round 1 sends the four goals together: the three solvable runs succeed
@@ -49,12 +49,12 @@ from clew_ros.core.world import load_world  # noqa: E402
 pytestmark = pytest.mark.ros
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
-#: namespace (under the test's own prefix) -> world file; "ring" never finds a plan.
+#: namespace (under the test's own prefix) -> world file; "walled" never finds a plan.
 WORLDS = {
     "figure1": "figure1.yaml",
     "arm3": "arm3_regrasp.yaml",
     "single": "single_transfer.yaml",
-    "ring": "unreachable.yaml",
+    "walled": "behind_wall.yaml",
 }
 SOLVABLE = ("figure1", "arm3", "single")
 START_TIMEOUT_S = 90.0
@@ -80,11 +80,11 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Graph]:
     tmp = tmp_path_factory.mktemp("many_planners")
     prefix = f"/t{uuid.uuid4().hex[:12]}"
     records = tmp / "records"
-    # the command line's parameters win over the world files (unreachable.yaml's limit is 5 s); a section
+    # the command line's parameters win over the world files (behind_wall.yaml's limit is 5 s); a section
     # keyed with a node's full name reaches that node only
-    ring_limit = tmp / "ring_limit.yaml"
-    ring_limit.write_text(
-        yaml.safe_dump({f"{prefix}/ring/clew_planner": {"ros__parameters": {"planner": {"time_limit": 90.0}}}})
+    walled_limit = tmp / "walled_limit.yaml"
+    walled_limit.write_text(
+        yaml.safe_dump({f"{prefix}/walled/clew_planner": {"ros__parameters": {"planner": {"time_limit": 90.0}}}})
     )
     process = PlannersProcess(
         tmp / "planners.log",
@@ -95,7 +95,7 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Graph]:
             # a quick playback, so that each run's recording is complete soon after its outcome
             *("-p", "trajectory.max_velocity:=30.0", "-p", "trajectory.max_acceleration:=300.0"),
             *("-p", "trajectory.grasp_dwell:=0.01"),
-            *("--params-file", str(ring_limit)),
+            *("--params-file", str(walled_limit)),
         ],
     )
     streams = Client("clew_many_planners_streams")
@@ -186,11 +186,11 @@ def _status_ids(msg: GoalStatusArray) -> list[str]:
 def test_four_planners_plan_at_once_and_a_cancel_stops_only_its_own(graph: Graph, drivers: dict[str, Driver]) -> None:
     handles: dict[str, list[RunHandle]] = {name: [] for name in WORLDS}
 
-    # round 1: four goals together; the solvable three succeed while the ring planner still plans
+    # round 1: four goals together; the solvable three succeed while the walled planner still plans
     def first_round(name: str, driver: Driver) -> RunResult:
         handle = driver.client.send_goal()  # the planner's own goal: its world.object.goal parameter
         handles[name].append(handle)
-        if name == "ring":
+        if name == "walled":
             assert driver.client.wait_until(lambda: handle.status is RunStatus.EXECUTING, RESULT_TIMEOUT_S)
             return RunResult(handle.run_id or "", Outcome.INTERNAL_ERROR, "still planning")
         return handle.wait(RESULT_TIMEOUT_S, playback=True)
@@ -198,18 +198,18 @@ def test_four_planners_plan_at_once_and_a_cancel_stops_only_its_own(graph: Graph
     first = _at_once(drivers, tuple(WORLDS), first_round)
     for name in SOLVABLE:
         _check_success(name, first[name])
-    ring = handles["ring"][0]
-    assert not ring.done(), "the unreachable world's planner stopped while the others planned"
-    assert ring.status is RunStatus.EXECUTING
+    walled = handles["walled"][0]
+    assert not walled.done(), "the behind-wall world's planner stopped while the others planned"
+    assert walled.status is RunStatus.EXECUTING
 
-    # round 2: the three again, and the ring planner's run canceled once they are accepted
+    # round 2: the three again, and the walled planner's run canceled once they are accepted
     accepted = threading.Barrier(len(SOLVABLE) + 1)
 
     def second_round(name: str, driver: Driver) -> RunResult:
-        if name == "ring":
+        if name == "walled":
             accepted.wait(timeout=RESULT_TIMEOUT_S)
-            assert ring.cancel()
-            return ring.wait(RESULT_TIMEOUT_S)
+            assert walled.cancel()
+            return walled.wait(RESULT_TIMEOUT_S)
         handle = driver.client.send_goal()
         handles[name].append(handle)
         assert driver.client.wait_until(lambda: handle.run_id is not None, RESULT_TIMEOUT_S)
@@ -217,8 +217,8 @@ def test_four_planners_plan_at_once_and_a_cancel_stops_only_its_own(graph: Graph
         return handle.wait(RESULT_TIMEOUT_S, playback=True)
 
     second = _at_once(drivers, tuple(WORLDS), second_round)
-    assert second["ring"].outcome is Outcome.CANCELED, second["ring"].message
-    assert second["ring"].run_id == ring.run_id
+    assert second["walled"].outcome is Outcome.CANCELED, second["walled"].message
+    assert second["walled"].run_id == walled.run_id
     for name in SOLVABLE:
         _check_success(name, second[name])
         assert second[name].run_id != first[name].run_id
@@ -246,8 +246,8 @@ def test_four_planners_plan_at_once_and_a_cancel_stops_only_its_own(graph: Graph
 
     # each planner records into <record.directory>/<its namespace>/<run id>/, with its own topics only
     if HAVE_RECORDER:
-        results = [(name, result) for name, result in [*first.items(), *second.items()] if name != "ring"]
-        results.append(("ring", second["ring"]))
+        results = [(name, result) for name, result in [*first.items(), *second.items()] if name != "walled"]
+        results.append(("walled", second["walled"]))
         for name, result in results:
             directory = graph.records / graph.prefix.strip("/") / name / result.run_id
             assert result.recording == str(directory)

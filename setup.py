@@ -56,6 +56,7 @@ setup(
     entry_points={
         "console_scripts": [
             "clew_planner = clew_ros.node.main:main",
+            "clew_planners = clew_ros.node.multi:main",
             "clew_plan = clew_ros.cli.plan:main",
             "clew_replay = clew_ros.cli.replay:main",
             "clew_render = clew_ros.cli.render:main",

@@ -45,6 +45,7 @@ NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags", "foxglove"}  # foxglove: the li
 
 CONSOLE_SCRIPTS = {
     "clew_planner": "clew_ros.node.main:main",
+    "clew_planners": "clew_ros.node.multi:main",
     "clew_plan": "clew_ros.cli.plan:main",
     "clew_replay": "clew_ros.cli.replay:main",
     "clew_render": "clew_ros.cli.render:main",
@@ -129,7 +130,7 @@ def test_setup_py_installs_ament_files(setup_kwargs: dict[str, Any]) -> None:
     assert data_files["share/ament_index/resource_index/packages"] == ["resource/clew_ros"]
     assert (ROOT / "resource" / "clew_ros").is_file()
     assert data_files["share/clew_ros"] == ["package.xml"]
-    assert data_files["share/clew_ros/launch"] == ["launch/clew_planner.launch.py"]
+    assert data_files["share/clew_ros/launch"] == ["launch/clew_planner.launch.py", "launch/clew_planners.launch.py"]
 
 
 def test_setup_py_installs_config_worlds(tmp_path: Path) -> None:

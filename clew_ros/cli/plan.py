@@ -112,10 +112,11 @@ def _cancel_on_signals(cancel: threading.Event, doing: str = "canceling the run"
     return restore
 
 
-def _start_live_view(parameters: dict, port: int) -> LiveView | str:
-    """The started live view, or why it cannot start (a message for stderr)."""
+def _start_live_view(parameters: dict, port: int, joints: int) -> LiveView | str:
+    """The started live view (timed for a robot of ``joints`` joints), or why it cannot start (a message for
+    stderr)."""
     try:
-        return LiveView.from_parameters(parameters, port=port).start()
+        return LiveView.from_parameters(parameters, port=port, joints=joints).start()
     except LiveViewUnavailableError:
         return f"--foxglove needs foxglove-sdk, which is not installed: {INSTALL_HINT}"
     except (LiveViewError, ParameterError) as error:
@@ -163,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.foxglove is None:
         return _plan(args, world, settings, None)
-    view = _start_live_view(parameters, args.foxglove)
+    view = _start_live_view(parameters, args.foxglove, world.robot.dof)
     if isinstance(view, str):
         print(f"clew_plan: {view}", file=sys.stderr)
         return 2

@@ -46,6 +46,7 @@ __all__ = [
     "ParameterSpec",
     "ParameterTable",
     "ParameterType",
+    "check_joint_count",
     "check_value",
     "markdown_tables",
     "retired_message",
@@ -84,13 +85,13 @@ class ParameterType(enum.Enum):
     STRING = "string"
     DOUBLE_ARRAY = "double[]"
     STRING_ARRAY = "string[]"
+    #: One number for every joint, or a list with one per joint (a joint limit, as in ``joint_limits.yaml``).
+    DOUBLE_PER_JOINT = "double or double[]"
 
     @property
     def python_type(self) -> type:
-        """The Python type of a checked value (of an item, for the arrays)."""
-        return {"bool": bool, "integer": int, "double": float, "string": str, "double[]": float, "string[]": str}[
-            self.value
-        ]
+        """The Python type of a checked value (of an item, for the arrays and the per-joint values)."""
+        return {"bool": bool, "integer": int, "string": str, "string[]": str}.get(self.value, float)
 
 
 @dataclass(frozen=True)
@@ -149,7 +150,7 @@ class ParameterTable(Mapping[str, ParameterSpec]):
 
 
 _B, _I, _D, _S = ParameterType.BOOL, ParameterType.INTEGER, ParameterType.DOUBLE, ParameterType.STRING
-_DA, _SA = ParameterType.DOUBLE_ARRAY, ParameterType.STRING_ARRAY
+_DA, _SA, _DJ = ParameterType.DOUBLE_ARRAY, ParameterType.STRING_ARRAY, ParameterType.DOUBLE_PER_JOINT
 
 WORLD_PARAMETERS = ParameterTable(
     "world.",
@@ -326,23 +327,25 @@ NODE_PARAMETERS = ParameterTable(
         ),
         ParameterSpec(
             "trajectory.max_velocity",
-            _D,
+            _DJ,
             1.0,
-            "Velocity limit (rad/s) of every joint in ~/trajectory and the playback.",
+            "Velocity limit (rad/s) of the joints in ~/trajectory and the playback: one value for every joint, "
+            "or a list with one per joint, joint_1 first (the per-joint limits of a joint_limits.yaml).",
             "rad/s",
             (0.001, 1000.0),
         ),
         ParameterSpec(
             "trajectory.max_acceleration",
-            _D,
+            _DJ,
             2.0,
-            "Acceleration limit (rad/s^2) of every joint in ~/trajectory and the playback.",
+            "Acceleration limit (rad/s^2) of the joints in ~/trajectory and the playback: one value for every "
+            "joint, or a list with one per joint.",
             "rad/s^2",
             (0.001, 100000.0),
         ),
         ParameterSpec(
             "trajectory.joint_speed",
-            _D,
+            _DJ,
             None,
             "Deprecated alias of trajectory.max_velocity, kept so that parameter files that set it still load; "
             "when set, it is the velocity limit and trajectory.max_velocity is ignored.",
@@ -365,8 +368,11 @@ def check_value(spec: ParameterSpec, value: Any) -> Any:
     For the scalar types: a bool is ``true`` or ``false``; a string is
     non-empty; an integer is an ``int`` or an integral ``float`` (``5.0``),
     returned as ``int``; a double is an ``int`` or a ``float``, returned as
-    ``float``; a number lies within ``spec.limits`` (NaN never does). Arrays
-    (``world.*`` lists) are checked by the world parser, not here.
+    ``float``; a number lies within ``spec.limits`` (NaN never does). A
+    per-joint value is a double, or a non-empty list of doubles (each within
+    the limits) returned as a tuple of floats; how many joints it must cover
+    is :func:`check_joint_count`'s to check. Arrays (``world.*`` lists) are
+    checked by the world parser, not here.
     """
     kind = spec.type
     if kind is ParameterType.BOOL:
@@ -377,11 +383,19 @@ def check_value(spec: ParameterSpec, value: Any) -> Any:
         if not isinstance(value, str) or not value:
             raise ParameterError(spec.name, f"expected a non-empty string, got {short_repr(value)}")
         return value
+    if kind is ParameterType.DOUBLE_PER_JOINT:
+        return _check_per_joint(spec, value)
     if kind not in (ParameterType.INTEGER, ParameterType.DOUBLE):
         raise TypeError(f"{spec.name}: {kind.value} values are checked by the world parser")
+    return _check_number(spec, value, kind)
+
+
+def _check_number(spec: ParameterSpec, value: Any, kind: ParameterType, joint: str = "") -> Any:
+    """One number of ``spec`` (``joint``: the item of a per-joint list it is, named in the message)."""
+    of = f" for {joint}" if joint else ""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         expected = "an integer" if kind is ParameterType.INTEGER else "a number"
-        raise ParameterError(spec.name, f"expected {expected}, got {short_repr(value)}")
+        raise ParameterError(spec.name, f"expected {expected}{of}, got {short_repr(value)}")
     if kind is ParameterType.INTEGER and isinstance(value, float) and not value.is_integer():
         raise ParameterError(spec.name, f"expected an integer, got {value!r}")
     try:
@@ -391,10 +405,40 @@ def check_value(spec: ParameterSpec, value: Any) -> Any:
     limits = spec.limits
     if limits is None:
         if converted is None or not math.isfinite(converted):
-            raise ParameterError(spec.name, f"expected a finite number, got {short_repr(value)}")
+            raise ParameterError(spec.name, f"expected a finite number{of}, got {short_repr(value)}")
     elif converted is None or math.isnan(converted) or not limits[0] <= converted <= limits[1]:
-        raise ParameterError(spec.name, f"expected a value in [{limits[0]}, {limits[1]}], got {short_repr(value)}")
+        raise ParameterError(spec.name, f"expected a value in [{limits[0]}, {limits[1]}]{of}, got {short_repr(value)}")
     return converted
+
+
+def _check_per_joint(spec: ParameterSpec, value: Any) -> float | tuple[float, ...]:
+    if isinstance(value, (list, tuple)):
+        if not value:
+            raise ParameterError(
+                spec.name, "expected a number for every joint or a list with one per joint, got an empty list"
+            )
+        return tuple(
+            _check_number(spec, item, ParameterType.DOUBLE, f"joint_{index + 1}") for index, item in enumerate(value)
+        )
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(
+            spec.name,
+            f"expected a number for every joint or a list with one per joint, got {short_repr(value)}",
+        )
+    return float(_check_number(spec, value, ParameterType.DOUBLE))
+
+
+def check_joint_count(spec: ParameterSpec, value: float | tuple[float, ...] | None, joints: int) -> None:
+    """Check that a per-joint value (checked by :func:`check_value`) covers ``joints`` joints: a number covers
+    them all, a list must hold one per joint. Raises :class:`ParameterError` naming ``spec.name``."""
+    if not isinstance(value, tuple) or len(value) == joints:
+        return
+    names = ", ".join(f"joint_{i + 1}" for i in range(joints))
+    raise ParameterError(
+        spec.name,
+        f"expected a number for every joint or a list with one per joint ({joints}: {names}), "
+        f"got a list of {len(value)}",
+    )
 
 
 # --------------------------------------------------------------------------- README tables

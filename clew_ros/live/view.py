@@ -51,7 +51,7 @@ import numpy as np
 
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.parameters import NODE_PARAMETERS, check_value
+from clew_ros.core.parameters import NODE_PARAMETERS, ParameterType, check_joint_count, check_value
 from clew_ros.core.plan import Plan
 from clew_ros.core.world import World
 from clew_ros.live.errors import LiveViewError, LiveViewUnavailableError
@@ -122,7 +122,8 @@ class LiveView:
     """A Foxglove WebSocket server on 127.0.0.1 that shows a run: see the module docstring for its channels.
 
     ``port`` 0 picks a free port (:attr:`port` says which once started).
-    ``rate_hz``, ``max_velocity_rad_s``, ``max_acceleration_rad_s2`` and
+    ``rate_hz``, ``max_velocity_rad_s``, ``max_acceleration_rad_s2`` (one
+    for every joint, or one per joint) and
     ``grasp_dwell_s`` time the playback as the node's ``playback.rate``,
     ``trajectory.max_velocity``, ``trajectory.max_acceleration`` and
     ``trajectory.grasp_dwell`` (their defaults are those parameters').
@@ -141,13 +142,14 @@ class LiveView:
         namespace: str = "/clew_plan",
         name: str = "clew_plan",
         rate_hz: float = NODE_PARAMETERS.default("playback.rate"),
-        max_velocity_rad_s: float = NODE_PARAMETERS.default("trajectory.max_velocity"),
-        max_acceleration_rad_s2: float = NODE_PARAMETERS.default("trajectory.max_acceleration"),
+        max_velocity_rad_s: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_velocity"),
+        max_acceleration_rad_s2: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_acceleration"),
         grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell"),
     ) -> None:
         if not 0 <= port <= 65535:
             raise LiveViewError(f"port {port} is not a TCP port, must be in [0, 65535]")
-        if min(rate_hz, max_velocity_rad_s, max_acceleration_rad_s2, grasp_dwell_s) <= 0:
+        limits = np.concatenate([np.atleast_1d(max_velocity_rad_s), np.atleast_1d(max_acceleration_rad_s2)])
+        if min(rate_hz, grasp_dwell_s, *limits.tolist()) <= 0:
             raise LiveViewError("rate_hz, max_velocity_rad_s, max_acceleration_rad_s2 and grasp_dwell_s must be > 0")
         self._requested_port = port
         self._namespace = namespace.rstrip("/")
@@ -168,10 +170,13 @@ class LiveView:
         self._world: World | None = None
 
     @classmethod
-    def from_parameters(cls, parameters: Mapping[str, Any], *, port: int = DEFAULT_PORT) -> LiveView:
+    def from_parameters(
+        cls, parameters: Mapping[str, Any], *, port: int = DEFAULT_PORT, joints: int | None = None
+    ) -> LiveView:
         """A live view timed by a ``ros__parameters`` tree's ``playback.rate`` and ``trajectory.*`` (the node's;
         absent ones take their defaults; ``trajectory.joint_speed``, if set, is the velocity limit). Raises
-        :class:`~clew_ros.core.errors.ParameterError` naming a parameter that is out of range."""
+        :class:`~clew_ros.core.errors.ParameterError` naming a parameter that is out of range, or (given the
+        world's ``joints``) a per-joint limit that does not hold one value per joint."""
         values = {}
         for key, keyword in _TIMING.items():
             group, _, leaf = key.partition(".")
@@ -180,6 +185,8 @@ class LiveView:
                 raise ParameterError(group, f"expected a mapping, got {tree!r:.80}")
             if leaf in tree:
                 values[keyword] = check_value(NODE_PARAMETERS[key], tree[leaf])
+                if joints is not None and NODE_PARAMETERS[key].type is ParameterType.DOUBLE_PER_JOINT:
+                    check_joint_count(NODE_PARAMETERS[key], values[keyword], joints)
         return cls(port=port, **values)
 
     # ------------------------------------------------------------------ life
@@ -312,7 +319,7 @@ class LiveView:
         :meth:`stop` or ``stop`` ended it first. A plan without segments plays nothing (``True``).
         """
         from clew_ros.live import messages
-        from clew_ros.node.playback import GripperEvent, track_from_plan
+        from clew_ros.node.playback import GripperEvent, TrackState, track_from_plan
         from clew_ros.node.player import play
 
         world = self._current_world()
@@ -332,10 +339,10 @@ class LiveView:
                 return self._stopping.wait(timeout_s)
             return self._stopping.wait(timeout_s / 2) or stop.wait(timeout_s / 2)
 
-        def on_sample(joints: np.ndarray, gripper: float, object_pose: np.ndarray) -> None:
+        def on_sample(state: TrackState) -> None:
             now = time.time_ns()
-            self._send_arm(joints, gripper, object_pose, now)
-            self._send("joint_states", messages.joint_states(names, joints, gripper, now))
+            self._send_arm(state.joints, state.gripper, state.object_pose, now)
+            self._send("joint_states", messages.joint_states(names, state.joints, state.gripper, now))
 
         def on_event(event: GripperEvent) -> None:
             self._send("events", {"kind": event.kind, "grasp": event.grasp, "time_s": round(event.time_s, 4)})

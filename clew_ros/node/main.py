@@ -12,6 +12,8 @@ the main thread notices it between two executor waits and then tears down in
 order (runs, executor, node, context) from that one thread. rclpy's own
 handler would shut the context down from its signal thread while the main
 thread may still be building the node, a race that can end in a crash.
+:func:`serve` does all this for any number of nodes; ``clew_planners``
+(:mod:`clew_ros.node.multi`) serves several with it.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import os
 import signal
 import sys
 import threading
+from collections.abc import Callable
 
 import rclpy
 from rclpy.executors import MultiThreadedExecutor
@@ -31,7 +34,7 @@ from clew_ros.node.planner_node import PlannerNode, StartupError
 
 EXIT_OK = 0
 EXIT_INVALID_PARAMETERS = 2
-#: Executor threads: a blocked ~/plan, a refused second call, ~/cancel,
+#: Executor threads per node: a blocked ~/plan, a refused second call, ~/cancel,
 #: ~/goal_pose, the timer and the parameter services can all run at once.
 EXECUTOR_THREADS = 6
 #: Longest wait between two looks at the stop flag (the shutdown latency).
@@ -41,7 +44,19 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 def main(argv: list[str] | None = None) -> int:
     """Start ``clew_planner``, spin until SIGINT / SIGTERM or context shutdown; return the exit code."""
-    args = sys.argv if argv is None else argv
+    return serve(sys.argv if argv is None else argv, lambda: [PlannerNode()])
+
+
+def serve(args: list[str], make_nodes: Callable[[], list[PlannerNode]]) -> int:
+    """Serve the planners ``make_nodes()`` builds, in one ``MultiThreadedExecutor``; return the exit code.
+
+    ``args`` initialise rclpy (the process's ROS arguments). The kernel is
+    warmed up first; then the nodes are built (a :class:`StartupError`:
+    exit code 2, the nodes built so far destroyed by ``make_nodes``) and
+    spun with :data:`EXECUTOR_THREADS` threads per node until SIGINT /
+    SIGTERM or context shutdown, then torn down in order: every node's runs,
+    the executor, the nodes, the context.
+    """
     faulthandler.enable()  # a crash in a native library prints the Python stacks, not just "-11"
     faulthandler.register(signal.SIGUSR1, all_threads=True)  # `kill -USR1 PID`: where is it stuck?
     stop = threading.Event()
@@ -66,18 +81,21 @@ def main(argv: list[str] | None = None) -> int:
         raise
     try:
         try:
-            node = PlannerNode()
+            nodes = make_nodes()
         except StartupError:
             return EXIT_INVALID_PARAMETERS
-        executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
-        executor.add_node(node)
+        executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS * len(nodes))
+        for node in nodes:
+            executor.add_node(node)
         try:
             while not stop.is_set() and rclpy.ok():
                 executor.spin_once(timeout_sec=SPIN_PERIOD_S)
         finally:
-            node.shutdown_runs()
+            for node in nodes:
+                node.shutdown_runs()
             executor.shutdown(timeout_sec=5.0)
-            node.destroy_node()
+            for node in nodes:
+                node.destroy_node()
         return EXIT_OK
     finally:
         rclpy.try_shutdown()

@@ -503,10 +503,19 @@ def joint_trajectory(track: Track, time_ns: int) -> JointTrajectory:
     return msg
 
 
-def joint_state(joint_names: list[str], joints: np.ndarray, gripper: float, time_ns: int) -> JointState:
-    """``~/joint_states``: ``joint_names`` already ends with ``gripper``."""
-    return JointState(
+def joint_state(
+    joint_names: list[str], joints: np.ndarray, gripper: float, time_ns: int, velocities: np.ndarray | None = None
+) -> JointState:
+    """``~/joint_states``: ``joint_names`` already ends with ``gripper``.
+
+    ``velocities`` (rad/s, one per arm joint) fill ``velocity``, with 0.0 for
+    the gripper, so that it has one entry per name; ``None``: no ``velocity``.
+    """
+    msg = JointState(
         header=_header(time_ns, frame_id=""),
         name=list(joint_names),
         position=[float(v) for v in joints] + [float(gripper)],
     )
+    if velocities is not None:
+        msg.velocity = [float(v) for v in velocities] + [0.0]
+    return msg

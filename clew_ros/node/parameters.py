@@ -49,6 +49,7 @@ from clew_ros.core.parameters import (
     WORLD_PARAMETERS,
     ParameterSpec,
     ParameterType,
+    check_joint_count,
     check_value,
 )
 from clew_ros.core.settings import PlannerSettings
@@ -83,15 +84,17 @@ class NodeSettings:
     record_enabled: bool = NODE_PARAMETERS.default("record.enabled")
     record_directory: str = NODE_PARAMETERS.default("record.directory")
     playback_rate_hz: float = NODE_PARAMETERS.default("playback.rate")
-    max_velocity_rad_s: float = NODE_PARAMETERS.default("trajectory.max_velocity")
-    max_acceleration_rad_s2: float = NODE_PARAMETERS.default("trajectory.max_acceleration")
-    joint_speed_rad_s: float | None = NODE_PARAMETERS.default("trajectory.joint_speed")
+    #: The joint limits: one number for every joint, or one per joint (checked against the world's joints).
+    max_velocity_rad_s: float | tuple[float, ...] = NODE_PARAMETERS.default("trajectory.max_velocity")
+    max_acceleration_rad_s2: float | tuple[float, ...] = NODE_PARAMETERS.default("trajectory.max_acceleration")
+    joint_speed_rad_s: float | tuple[float, ...] | None = NODE_PARAMETERS.default("trajectory.joint_speed")
     grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell")
     foxglove_port: int = NODE_PARAMETERS.default("live.foxglove_port")
 
     @property
-    def velocity_limit_rad_s(self) -> float:
-        """The joints' velocity limit: ``trajectory.joint_speed`` (deprecated alias) when set, else ``max_velocity``."""
+    def velocity_limit_rad_s(self) -> float | tuple[float, ...]:
+        """The joints' velocity limit (one for all, or one per joint): ``trajectory.joint_speed`` (deprecated
+        alias) when set, else ``max_velocity``."""
         return self.max_velocity_rad_s if self.joint_speed_rad_s is None else self.joint_speed_rad_s
 
     @property
@@ -262,6 +265,9 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
     }
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
     node = {field: _node_value(NODE_PARAMETERS[name], values.get(name)) for field, name in SETTINGS_FIELDS.items()}
+    for field, name in SETTINGS_FIELDS.items():  # a per-joint list holds one value per joint of this world
+        if NODE_PARAMETERS[name].type is ParameterType.DOUBLE_PER_JOINT:
+            check_joint_count(NODE_PARAMETERS[name], node[field], world.robot.dof)
     return Configuration(world, planner, NodeSettings(**node))
 
 
@@ -320,5 +326,11 @@ def _constraints(spec: ParameterSpec) -> str:
     if spec.name.startswith("planner."):
         assert spec.limits is not None
         return f"{spec.type.python_type.__name__} in [{spec.limits[0]}, {spec.limits[1]}]; default {spec.default}"
-    text = f"{spec.type.value}; " + ("unset by default" if spec.default is None else f"default {spec.default!r}")
-    return text if spec.limits is None else f"{text}; in [{spec.limits[0]}, {spec.limits[1]}]"
+    kind = spec.type.value
+    if spec.type is ParameterType.DOUBLE_PER_JOINT:
+        kind = "double (every joint) or double[] (one per joint)"
+    text = f"{kind}; " + ("unset by default" if spec.default is None else f"default {spec.default!r}")
+    if spec.limits is None:
+        return text
+    each = "each " if spec.type is ParameterType.DOUBLE_PER_JOINT else ""
+    return f"{text}; {each}in [{spec.limits[0]}, {spec.limits[1]}]"

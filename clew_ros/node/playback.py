@@ -11,15 +11,17 @@ Timing (interface.md §3 leaves it to us, README documents it):
 - a move between two points of one segment is the rest-to-rest quintic of
   :mod:`~clew_ros.node.timing`: it starts and ends at rest (zero velocity
   and acceleration), all joints move together along the straight segment,
-  and it lasts the shortest time in which no joint exceeds
-  ``max_velocity_rad_s`` or ``max_acceleration_rad_s2``;
+  and it lasts the shortest time in which no joint exceeds its
+  ``max_velocity_rad_s`` or ``max_acceleration_rad_s2`` (one limit for every
+  joint, or one per joint);
 - a grasp or an ungrasp (two points with the same joints and a different
   ``gripper``) lasts ``grasp_dwell_s``, the arm at rest;
 - every step lasts at least :data:`MIN_STEP_NS` so that ``time_from_start``
   increases strictly even between nearly equal points; durations are rounded
   up to the nanosecond, so the limits hold for the times as published.
 
-Every point is therefore at rest: its velocities and accelerations are zero,
+:meth:`Track.state` gives the joints and their velocities at any time (what
+``~/joint_states`` carries). Every point is at rest: its velocities and accelerations are zero,
 and a controller that interpolates the points with quintic splines
 (``joint_trajectory_controller``) moves exactly as :meth:`Track.sample`.
 """
@@ -38,7 +40,7 @@ from clew_ros.core.plan import Plan, replay
 from clew_ros.core.world import World
 from clew_ros.node.timing import profile, rest_to_rest_duration_s
 
-__all__ = ["GRIPPER_JOINT", "MIN_STEP_NS", "GripperEvent", "Track", "track_from_plan"]
+__all__ = ["GRIPPER_JOINT", "MIN_STEP_NS", "GripperEvent", "Track", "TrackState", "track_from_plan"]
 
 #: The joint after the arm's in ~/trajectory and ~/joint_states: 1.0 while grasping
 #: (the name clew_ros.recording.GRIPPER_JOINT reads back; the node needs no recording package).
@@ -56,6 +58,17 @@ class GripperEvent:
     grasp: int
     time_s: float
     point: int  # index of the trajectory point at which the gripper has its new value
+
+
+@dataclass(frozen=True)
+class TrackState:
+    """The played-back state at one time: ``joints`` (n,) rad and their ``velocities`` (n,) rad/s (from the
+    same timing), ``gripper`` 0.0 / 1.0 and the object's pose ``object_pose`` (3,)."""
+
+    joints: np.ndarray
+    velocities: np.ndarray
+    gripper: float
+    object_pose: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -128,24 +141,31 @@ class Track:
         ddq = (dds / span_s**2)[:, None] * delta
         return q, dq, ddq
 
-    def sample(self, t_s: float) -> tuple[np.ndarray, float, np.ndarray]:
-        """``(joints (n,), gripper, object_pose (3,))`` at ``t_s`` seconds (clamped to the track).
+    def state(self, t_s: float) -> TrackState:
+        """The state at ``t_s`` seconds (clamped to the track).
 
-        Joints follow :meth:`joints_at`; the gripper holds the value of the
-        last point reached; the object rests, or follows the end effector
-        between two points of one transfer segment.
+        Joints and velocities follow :meth:`joints_at`; the gripper holds the
+        value of the last point reached; the object rests, or follows the end
+        effector between two points of one transfer segment.
         """
         t_ns = float(np.clip(t_s * 1e9, 0.0, float(self.times_ns[-1])))
         k = int(np.searchsorted(self.times_ns, t_ns, side="right")) - 1
         if k >= len(self.times_ns) - 1:
-            return self.positions[-1].copy(), float(self.gripper[-1]), self.object_poses[-1].copy()
-        q = self.joints_at(np.array([t_ns * 1e-9]))[0][0]
+            last = self.positions[-1]
+            return TrackState(last.copy(), np.zeros_like(last), float(self.gripper[-1]), self.object_poses[-1].copy())
+        joints, velocities, _ = self.joints_at(np.array([t_ns * 1e-9]))
+        q = joints[0]
         same_transfer = self.segment[k] == self.segment[k + 1] and self.grasp_rel[self.segment[k]] is not None
         if same_transfer:
             pose = compose(self.tip_pose_fn(q[None])[0], self.grasp_rel[self.segment[k]])
         else:
             pose = self.object_poses[k].copy()
-        return q, float(self.gripper[k]), pose
+        return TrackState(q, velocities[0], float(self.gripper[k]), pose)
+
+    def sample(self, t_s: float) -> tuple[np.ndarray, float, np.ndarray]:
+        """``(joints (n,), gripper, object_pose (3,))`` at ``t_s`` seconds: :meth:`state` without velocities."""
+        state = self.state(t_s)
+        return state.joints, state.gripper, state.object_pose
 
 
 def track_from_plan(

@@ -12,9 +12,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import numpy as np
-
-from clew_ros.node.playback import GripperEvent, Track
+from clew_ros.node.playback import GripperEvent, Track, TrackState
 
 __all__ = ["PlaybackEnd", "play"]
 
@@ -37,7 +35,7 @@ def play(
     rate_hz: float,
     *,
     wait_stop: Callable[[float], bool],
-    on_sample: Callable[[np.ndarray, float, np.ndarray], None],
+    on_sample: Callable[[TrackState], None],
     on_event: Callable[[GripperEvent], None],
 ) -> PlaybackEnd:
     """Play ``track`` back in time; return how it ended.
@@ -51,7 +49,8 @@ def play(
         the playback is to stop (``threading.Event.wait``); asked once with
         ``0`` before the first sample.
     on_sample:
-        Called with ``(joints (n,) rad, gripper, object pose (3,))`` at each sample.
+        Called with the :class:`~clew_ros.node.playback.TrackState` at each sample (joints, their
+        velocities, gripper, object pose).
     on_event:
         Called with each grasp / ungrasp event once the playback reaches it,
         after the sample that reached it.
@@ -65,7 +64,7 @@ def play(
     tick = 0
     while True:
         t = time.monotonic() - start
-        on_sample(*track.sample(t))
+        on_sample(track.state(t))
         while next_event < len(events) and events[next_event].time_s <= t:
             on_event(events[next_event])
             next_event += 1

@@ -23,7 +23,7 @@ from clew_ros.core.plan import checked_plan
 from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.node import messages
-from clew_ros.node.playback import GripperEvent, Track, track_from_plan
+from clew_ros.node.playback import GripperEvent, Track, TrackState, track_from_plan
 from clew_ros.node.player import play
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.qos import GOAL_QOS
@@ -223,13 +223,16 @@ class RunWorker:
     # ------------------------------------------------------------------ playback
 
     def _play_back(self, run: Run) -> None:
-        """``~/joint_states``, ``~/object_pose``, ``/tf``, ``~/scene`` and grasp events along the track, in time."""
+        """``~/joint_states`` (positions and velocities), ``~/object_pose``, ``/tf``, ``~/scene`` and grasp events
+        along the track, in time."""
         out, track = self._out, run.track
         assert track is not None  # PLAYBACK follows a plan
 
-        def on_sample(joints: np.ndarray, gripper: float, pose: np.ndarray) -> None:
+        def on_sample(state: TrackState) -> None:
             now = out.now_ns()
-            out.publish("joint_states", messages.joint_state(track.joint_names, joints, gripper, now), run.recording)
+            joints, gripper, pose = state.joints, state.gripper, state.object_pose
+            joint_state = messages.joint_state(track.joint_names, joints, gripper, now, state.velocities)
+            out.publish("joint_states", joint_state, run.recording)
             out.publish("object_pose", messages.object_pose_stamped(pose, now), run.recording)
             out.arm(run.world, joints, gripper, pose, time_ns=now, recording=run.recording)
 

@@ -18,6 +18,7 @@ from clew_ros.core.parameters import (
     WORLD_PARAMETERS,
     ParameterSpec,
     ParameterType,
+    check_joint_count,
     check_value,
     markdown_tables,
     update_markdown,
@@ -65,7 +66,8 @@ def test_tables_are_well_formed() -> None:
             assert spec.name == table.prefix + key
             assert spec.description.endswith(".")
             assert "\n" not in spec.description
-            if spec.type in (ParameterType.INTEGER, ParameterType.DOUBLE) and table is not WORLD_PARAMETERS:
+            numbers = (ParameterType.INTEGER, ParameterType.DOUBLE, ParameterType.DOUBLE_PER_JOINT)
+            if spec.type in numbers and table is not WORLD_PARAMETERS:
                 assert spec.limits is not None, spec.name
             if spec.required or spec.default is None:
                 continue
@@ -100,6 +102,8 @@ def test_required_parameters_have_no_default() -> None:
 SEED = PLANNER_PARAMETERS["seed"]
 LIMIT = PLANNER_PARAMETERS["time_limit"]
 UNBOUNDED = ParameterSpec("test.x", ParameterType.DOUBLE, 1.0, "Anything finite.")
+VELOCITY = NODE_PARAMETERS["trajectory.max_velocity"]
+PER_JOINT = "trajectory.max_velocity: expected a number for every joint or a list with one per joint, got "
 
 CHECKS = [
     (SEED, 5, 5),
@@ -121,6 +125,19 @@ CHECKS = [
     (NODE_PARAMETERS["record.enabled"], 1, "record.enabled: expected true or false, got 1"),
     (NODE_PARAMETERS["record.directory"], "runs", "runs"),
     (NODE_PARAMETERS["record.directory"], "", "record.directory: expected a non-empty string, got ''"),
+    # per-joint limits: one number for every joint, or a list with one per joint (joint_limits.yaml)
+    (VELOCITY, 2, 2.0),
+    (VELOCITY, [1, 2.5, 1000], (1.0, 2.5, 1000.0)),
+    (VELOCITY, (0.5,), (0.5,)),
+    (VELOCITY, 0.0, "trajectory.max_velocity: expected a value in [0.001, 1000.0], got 0.0"),
+    (VELOCITY, [1.0, -2.0], "trajectory.max_velocity: expected a value in [0.001, 1000.0] for joint_2, got -2.0"),
+    (VELOCITY, [math.nan], "trajectory.max_velocity: expected a value in [0.001, 1000.0] for joint_1, got nan"),
+    (VELOCITY, [1.0, "fast"], "trajectory.max_velocity: expected a number for joint_2, got 'fast'"),
+    (VELOCITY, [1.0, [2.0]], "trajectory.max_velocity: expected a number for joint_2, got [2.0]"),
+    (VELOCITY, [True], "trajectory.max_velocity: expected a number for joint_1, got True"),
+    (VELOCITY, [], PER_JOINT + "an empty list"),
+    (VELOCITY, "fast", PER_JOINT + "'fast'"),
+    (VELOCITY, None, PER_JOINT + "None"),
 ]
 
 
@@ -135,6 +152,19 @@ def test_check_value(spec: ParameterSpec, value, expected) -> None:
         result = check_value(spec, value)
         assert result == expected
         assert type(result) is type(expected)
+
+
+def test_a_per_joint_list_holds_one_value_per_joint() -> None:
+    check_joint_count(VELOCITY, 2.0, 3)  # one number: every joint
+    check_joint_count(VELOCITY, None, 3)  # unset
+    check_joint_count(VELOCITY, (1.0, 2.0, 3.0), 3)
+    with pytest.raises(ParameterError) as caught:
+        check_joint_count(VELOCITY, (1.0, 2.0), 3)
+    assert caught.value.parameter == "trajectory.max_velocity"
+    assert str(caught.value) == (
+        "trajectory.max_velocity: expected a number for every joint or a list with one per joint "
+        "(3: joint_1, joint_2, joint_3), got a list of 2"
+    )
 
 
 def test_arrays_are_the_world_parsers() -> None:

@@ -2,7 +2,9 @@
 
 - :class:`NodeProcess` starts ``python -m clew_ros.node.main`` with a
   parameter file, ``-p`` overrides and a namespace of its own (so that no
-  other node on the domain can answer in its place), and stops it by pid.
+  other node on the domain can answer in its place), and stops it by pid;
+  :class:`PlannersProcess` starts ``clew_planners`` (several planners in one
+  process) the same way.
 - :class:`Client` is an rclpy node in its own context, spun by a background
   thread: services are called with a timeout and topics are collected into
   :class:`Inbox` es that tests wait on with conditions, never plain sleeps.
@@ -73,6 +75,9 @@ class NodeProcess:
             command += ["--params-file", str(params_file)]
         for key, value in (parameters or {}).items():
             command += ["-p", f"{key}:={_param_text(value)}"]
+        self._start(command, log, env)
+
+    def _start(self, command: list[str], log: Path, env: dict[str, str] | None) -> None:
         self.command = command
         self.log = log
         self._log_file = log.open("wb")
@@ -103,6 +108,18 @@ class NodeProcess:
         if not self._log_file.closed:
             self._log_file.close()
         return code
+
+
+class PlannersProcess(NodeProcess):
+    """``clew_planners`` (``python -m clew_ros.node.multi``) in a subprocess: one planner per
+    ``namespace -> world file`` of ``worlds``, with ``ros_args`` after ``--ros-args``."""
+
+    def __init__(
+        self, log: Path, worlds: dict[str, Path], ros_args: list[str], env: dict[str, str] | None = None
+    ) -> None:
+        self.names = {namespace: f"{namespace}/clew_planner" for namespace in worlds}
+        pairs = [f"{namespace}:={path}" for namespace, path in worlds.items()]
+        self._start([sys.executable, "-m", "clew_ros.node.multi", *pairs, "--ros-args", *ros_args], log, env)
 
 
 def _for_any_node(params_file: Path, copy: Path) -> Path:

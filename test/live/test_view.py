@@ -199,6 +199,13 @@ def test_timing_comes_from_the_node_parameters() -> None:
         LiveView.from_parameters({"trajectory": {"grasp_dwell": 0.0}})
     with pytest.raises(ParameterError, match="playback"):
         LiveView.from_parameters({"playback": 3})
+    # per-joint limits: one per joint of the world, when the world's joint count is given
+    per_joint = {"trajectory": {"max_velocity": [1.0, 2.5], "max_acceleration": 4}}
+    LiveView.from_parameters(per_joint, joints=2)
+    with pytest.raises(ParameterError, match=r"^trajectory\.max_velocity: .*\(3: joint_1, joint_2, joint_3\)"):
+        LiveView.from_parameters(per_joint, joints=3)
+    with pytest.raises(LiveViewError, match="must be > 0"):
+        LiveView(max_velocity_rad_s=[1.0, 0.0])
 
 
 def test_the_live_view_loads_no_rclpy_and_no_foxglove_until_started() -> None:

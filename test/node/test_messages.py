@@ -15,6 +15,7 @@ pytest.importorskip("rclpy")
 
 from geometry_msgs.msg import PoseStamped
 from rclpy.serialization import deserialize_message, serialize_message
+from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import Marker
 
@@ -85,6 +86,17 @@ def test_trajectory_points_carry_velocities_and_accelerations(quick, quick_plan)
     t = np.linspace(0.0, track.duration_s, 4001)
     assert np.allclose(quintic_spline(times, *columns, t), track.joints_at(t)[0], atol=1e-7)
     assert np.allclose(quintic_spline(times, *columns, t), [track.sample(s)[0] for s in t], atol=1e-7)
+
+
+def test_joint_states_carry_velocities_for_every_name() -> None:
+    names = ["joint_1", "joint_2", "gripper"]
+    msg = messages.joint_state(names, np.array([0.1, -0.2]), 1.0, 5, np.array([0.5, -1.5]))
+    msg = deserialize_message(serialize_message(msg), JointState)
+    assert list(msg.name) == names
+    assert list(msg.position) == pytest.approx([0.1, -0.2, 1.0])
+    assert list(msg.velocity) == [0.5, -1.5, 0.0]  # the gripper: 0.0
+    assert list(msg.effort) == []
+    assert list(messages.joint_state(names, np.array([0.1, -0.2]), 0.0, 5).velocity) == []
 
 
 def goal_msg(x=0.5, y=0.5, yaw=0.0, frame="world") -> PoseStamped:

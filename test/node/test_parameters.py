@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import array
 import json
 import math
 from pathlib import Path
@@ -181,6 +182,36 @@ def test_trajectory_limits_and_the_deprecated_joint_speed() -> None:
         with pytest.raises(ParameterError, match=rf"^{name}: expected a value in"):
             configuration_from_values({**values, name: bad})
     assert "unset by default" in descriptor_for("trajectory.joint_speed").additional_constraints
+
+
+def test_trajectory_limits_may_be_given_per_joint() -> None:
+    values = initial_values(file_values("node_quick.yaml"))  # two joints
+    values.update({"trajectory.max_velocity": [1.5, 3], "trajectory.max_acceleration": array.array("d", [4.0, 0.5])})
+    node = configuration_from_values(values).node
+    assert node.max_velocity_rad_s == (1.5, 3.0)
+    assert node.velocity_limit_rad_s == (1.5, 3.0)
+    assert node.max_acceleration_rad_s2 == (4.0, 0.5)
+    values["trajectory.joint_speed"] = [2.0, 2.5]  # the deprecated alias takes a list too, and wins
+    assert configuration_from_values(values).node.velocity_limit_rad_s == (2.0, 2.5)
+    # one value per joint of this world, each in the parameter's range
+    expected = "expected a number for every joint or a list with one per joint (2: joint_1, joint_2)"
+    for name, bad, message in [
+        ("trajectory.max_velocity", [1.0, 2.0, 3.0], f"{expected}, got a list of 3"),
+        ("trajectory.max_acceleration", [1.0], f"{expected}, got a list of 1"),
+        ("trajectory.joint_speed", [1.0, 2.0, 3.0], f"{expected}, got a list of 3"),
+        ("trajectory.max_velocity", [1.0, 0.0], "expected a value in [0.001, 1000.0] for joint_2, got 0.0"),
+        ("trajectory.max_acceleration", [-4.0, 1.0], "expected a value in [0.001, 100000.0] for joint_1, got -4.0"),
+    ]:
+        with pytest.raises(ParameterError) as error:
+            configuration_from_values({**values, name: bad})
+        assert str(error.value) == f"{name}: {message}"
+    # a world of another number of joints needs lists of its length (set together, atomically)
+    arm3 = flatten(read_parameter_file(Path(__file__).parents[2] / "config" / "arm3_regrasp.yaml"))
+    with pytest.raises(ParameterError, match=r"^trajectory\.max_velocity: .*\(3: joint_1, joint_2, joint_3\)"):
+        configuration_from_values({**values, **arm3})
+    three = {"trajectory.max_velocity": [1.0, 1.0, 2.0], "trajectory.max_acceleration": 2.0}
+    three["trajectory.joint_speed"] = None
+    assert configuration_from_values({**values, **arm3, **three}).node.velocity_limit_rad_s == (1.0, 1.0, 2.0)
 
 
 CHECKER_CASES = [

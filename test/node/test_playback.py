@@ -205,7 +205,15 @@ def assert_track_respects_the_limits(track: Track, grasp_dwell_s: float) -> None
     # is a mean velocity, a second difference a weighted mean acceleration, so neither may exceed its limit
     h = max(FD_STEP_S, track.duration_s / FD_SAMPLES)
     t = np.arange(0.0, track.duration_s + h, h)
-    samples = np.array([track.sample(float(s))[0] for s in t])
+    states = [track.state(float(s)) for s in t]
+    samples = np.array([state.joints for state in states])
+    assert np.array_equal(samples, [track.sample(float(s))[0] for s in t])
+    # the velocities ~/joint_states carries: the same timing's, each joint within its own limit, at rest at the end
+    velocities = np.array([state.velocities for state in states])
+    inside = t < track.duration_s
+    assert np.allclose(velocities[inside], track.joints_at(t[inside])[1], rtol=0, atol=1e-12)
+    assert np.all(np.abs(velocities) <= v * (1 + 1e-9))
+    assert not np.any(track.state(track.duration_s).velocities)
     first = np.diff(samples, axis=0) / h
     second = np.diff(samples, 2, axis=0) / h**2
     assert np.all(np.abs(first) <= v * (1 + 1e-9) + 1e-9)

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from clew_ros.node.playback import GripperEvent
+from clew_ros.node.playback import GripperEvent, TrackState
 from clew_ros.node.player import play
 
 
@@ -21,9 +21,10 @@ class Line:
     def events(self) -> list[GripperEvent]:
         return list(self._events)
 
-    def sample(self, t_s: float) -> tuple[np.ndarray, float, np.ndarray]:
+    def state(self, t_s: float) -> TrackState:
         t = min(max(t_s, 0.0), self.duration_s)
-        return np.array([t]), float(0.3 * self.duration_s <= t < 0.6 * self.duration_s), np.zeros(3)
+        gripper = float(0.3 * self.duration_s <= t < 0.6 * self.duration_s)
+        return TrackState(np.array([t]), np.array([1.0]), gripper, np.zeros(3))
 
 
 def recorded(duration_s: float, rate_hz: float, stop: threading.Event):
@@ -32,7 +33,7 @@ def recorded(duration_s: float, rate_hz: float, stop: threading.Event):
         Line(duration_s),
         rate_hz,
         wait_stop=stop.wait,
-        on_sample=lambda q, gripper, pose: samples.append((time.monotonic(), float(q[0]), gripper)),
+        on_sample=lambda state: samples.append((time.monotonic(), float(state.joints[0]), state.gripper)),
         on_event=lambda e: events.append((len(samples), e)),
     )
     return end, samples, events

@@ -34,6 +34,8 @@ START_TIMEOUT_S = 20.0
         ({"world.goal_tolerence": 0.1}, "world.goal_tolerence"),
         ({"record.enabled": "sometimes"}, "record.enabled"),
         ({"world.obstacles.stray": [1.7, 1.7, 1.9, 1.7, 1.9, 1.9]}, "world.obstacles.stray"),  # not in obstacle_names
+        ({"trajectory.max_velocity": [1.0, 2.0, 3.0]}, "trajectory.max_velocity"),  # the world has 2 joints
+        ({"trajectory.max_acceleration": [1.0, -2.0]}, "trajectory.max_acceleration"),
     ],
 )
 def test_invalid_parameters_at_start_exit_2_naming_the_parameter(

@@ -5,7 +5,10 @@ Both minimise a distance over Manhattan paths of order k coded with bouncing
 from the best end point while it improves (the paper's do-while loop). A short
 numeric refinement then closes the last millimetres: damped least squares on a
 finite-difference Jacobian, applied as single-joint moves clamped to their
-free intervals. No inverse kinematics anywhere, so redundant arms work alike.
+free intervals. No inverse kinematics builds a path, so redundant arms work
+alike; configurations that hold a grasp (closed form for two joints, sampled
+for more: :mod:`clew_ros.core.reach`) only refuse hopeless transits and, for
+two joints, steer the elbow.
 """
 
 from __future__ import annotations

@@ -132,3 +132,39 @@ def test_carry_cells_keep_every_approach_that_holds_the_object_there():
     # figure1's goal lies beyond the bare arm's reach: only in-line approaches carry the bar there
     goal_cells = carry_cells(world, world.object.goal, 1)
     assert 0 < goal_cells.sum() < APPROACH_CELLS / 2
+
+
+def test_holding_configurations_hold_the_grasp_within_the_limits_and_validly():
+    from clew_ros.core.collision import is_valid
+    from clew_ros.core.kinematics import joint_positions, transform_points
+    from clew_ros.core.reach import holding_configurations
+
+    for name in ("arm3_regrasp", "arm5_regrasp"):
+        world = load_world(CONFIG / f"{name}.yaml")
+        pose = world.object.initial
+        found_any = False
+        for grasp in range(len(world.object.grasps)):
+            holds = holding_configurations(world, pose, grasp)
+            again = holding_configurations(world, pose, grasp)
+            np.testing.assert_array_equal(holds, again)  # the same request, the same answer
+            if not len(holds):
+                continue
+            found_any = True
+            target = transform_points(pose, world.object.grasps[grasp][None])[0]
+            tips = joint_positions(world.robot, holds)[:, -1]
+            assert np.all(np.linalg.norm(tips - target, axis=1) <= 0.5 * world.grasp_tolerance)
+            assert np.all((holds >= world.robot.joint_lower) & (holds <= world.robot.joint_upper))
+            assert is_valid(world, holds, pose[None]).all()
+        assert found_any, name
+
+
+def test_holding_configurations_are_empty_beyond_reach():
+    import dataclasses
+
+    from clew_ros.core.reach import holding_configurations
+
+    world = load_world(CONFIG / "arm3_regrasp.yaml")
+    far = np.array([world.robot.reach + 0.5, 0.0, 0.0]) + np.r_[world.robot.base, 0.0]
+    bounds = np.array([-5.0, -5.0, 5.0, 5.0])
+    world = dataclasses.replace(world, bounds=bounds)
+    assert len(holding_configurations(world, far, 0)) == 0

@@ -58,7 +58,7 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Exit 0: every job ran; 1: no worker could run; 2: invalid input; 130: stopped (rerun to resume).",
     )
     parser.add_argument(
-        "worlds", nargs="+", metavar="WORLD", help="world parameter file, folder of .yaml world files, or @LIST file"
+        "worlds", nargs="*", metavar="WORLD", help="world parameter file, folder of .yaml world files, or @LIST file"
     )
     parser.add_argument("--seeds", type=int, required=True, metavar="N", help="seeds per world: 0..N-1")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created; resumed)")
@@ -104,6 +104,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def _check_arguments(args: argparse.Namespace) -> None:
     """:class:`BatchInputError` for the first option out of range."""
+    if not args.worlds:
+        taken = " (--ray took the one given as its ADDRESS: put --ray after the world files)" if args.ray else ""
+        raise BatchInputError("WORLD", f"expected at least one world file, folder or @LIST file{taken}")
     if args.seeds < 1:
         raise BatchInputError("--seeds", f"expected an integer >= 1, got {args.seeds}")
     if args.jobs is not None and args.jobs < 1:
@@ -157,6 +160,10 @@ def _resume_hint(argv: Sequence[str]) -> str:
 
 def _report(report: BatchReport, out: Path) -> None:
     """The summary table (stdout) and the counts (stderr)."""
+    if report.repaired_bytes:
+        print(f"clew_batch: cut off a torn last line of the index ({report.repaired_bytes} bytes)", file=sys.stderr)
+    if report.skipped_lines:
+        print(f"clew_batch: skipped {report.skipped_lines} index line(s) that are not job records", file=sys.stderr)
     if report.records:
         print(summary_table(report.records))
     retried = f", {report.retried} attempt(s) repeated" if report.retried else ""

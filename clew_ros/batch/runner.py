@@ -36,7 +36,7 @@ from clew_ros.core.errors import PlanFileError
 from clew_ros.core.offline import failed_plan
 from clew_ros.core.plan import Plan
 
-__all__ = ["DEFAULT_GRACE_S", "BatchReport", "has_valid_output", "run_batch"]
+__all__ = ["DEFAULT_GRACE_S", "BatchReport", "has_valid_output", "job_spec", "run_batch"]
 
 #: Seconds a job may run past its time limit before it is stopped and recorded as timed out.
 DEFAULT_GRACE_S = 60.0
@@ -118,7 +118,8 @@ def _record(job: Job, outcome: JobOutcome, attempts: int) -> dict[str, Any]:
     return record
 
 
-def _spec(job: Job, grace_s: float) -> JobSpec:
+def job_spec(job: Job, grace_s: float) -> JobSpec:
+    """What a worker gets of ``job``; it is given up ``grace_s`` (s) after its time limit."""
     return JobSpec(
         key=job.key,
         parameters=job.world.parameters,
@@ -140,9 +141,18 @@ class _Driver:
     """One run of the batch: the queue, the jobs in flight, and what finishing one means."""
 
     def __init__(
-        self, out_dir: Path, index: Index, executor: Executor, report: BatchReport, *, retries: int, grace_s: float
+        self,
+        out_dir: Path,
+        index: Index,
+        executor: Executor,
+        report: BatchReport,
+        *,
+        retries: int,
+        grace_s: float,
+        stop: threading.Event,
     ) -> None:
         self.out_dir = out_dir
+        self.stop = stop
         self.index = index
         self.executor = executor
         self.report = report
@@ -154,10 +164,10 @@ class _Driver:
         self.successes = 0
 
     def fill(self) -> None:
-        """Submit queued jobs while the executor has room."""
-        while self.queue and len(self.running) < self.executor.capacity:
+        """Submit queued jobs while the executor has room (none once ``stop`` is set)."""
+        while self.queue and len(self.running) < self.executor.capacity and not self.stop.is_set():
             job, attempts = self.queue.popleft()
-            self.executor.submit(_spec(job, self.grace_s))
+            self.executor.submit(job_spec(job, self.grace_s))
             self.running[job.key] = _Running(job, attempts + 1, time.monotonic())
 
     def finish(self, finished: Finished) -> None:
@@ -173,6 +183,7 @@ class _Driver:
             self.report.retried += 1
             self.queue.appendleft((job, running.attempts))
             return
+        self.fill()  # the freed worker gets its next job before the files are written (fsync takes ms)
         _write_atomically(self.out_dir / job.plan_path, outcome.plan_json)
         self.index.append(_record(job, outcome, running.attempts))
         self.done.add(job.key)
@@ -200,7 +211,7 @@ def run_batch(
     stop = stop or threading.Event()
     with Index.open(out_dir) as index:
         report = BatchReport(len(jobs), repaired_bytes=index.repaired_bytes, skipped_lines=index.skipped_lines)
-        driver = _Driver(out_dir, index, executor, report, retries=retries, grace_s=grace_s)
+        driver = _Driver(out_dir, index, executor, report, retries=retries, grace_s=grace_s, stop=stop)
         done_before = {job.key for job in jobs if has_valid_output(job, index.records.get(job.key), out_dir)}
         report.done_before = len(done_before)
         driver.successes = sum(index.records[key].get("success") is True for key in done_before)
@@ -208,7 +219,7 @@ def run_batch(
         if progress is not None:
             progress.done_before = report.done_before
         if driver.queue and not stop.is_set():
-            _drive(driver, stop, progress)
+            _drive(driver, progress)
         report.stopped = stop.is_set() and (bool(driver.queue) or bool(driver.running))
         report.dropped = len(driver.running)
         driver.done |= done_before
@@ -216,12 +227,12 @@ def run_batch(
     return report
 
 
-def _drive(driver: _Driver, stop: threading.Event, progress: ProgressBar | None) -> None:
+def _drive(driver: _Driver, progress: ProgressBar | None) -> None:
     """Start the executor, run the queue until it is empty or ``stop`` is set, close the executor."""
     executor = driver.executor
     try:
         executor.start()
-        while (driver.queue or driver.running) and not stop.is_set():
+        while (driver.queue or driver.running) and not driver.stop.is_set():
             driver.fill()
             for finished in executor.wait(_POLL_S):
                 driver.finish(finished)

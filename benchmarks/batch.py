@@ -19,10 +19,13 @@ identical plans; resume after a SIGKILL of the driver at about half way.
   kill, those the rerun planned, and finished jobs planned again (index lines
   per job, plan files rewritten; 0 expected).
 
-Throughput is jobs per second of each whole command's wall time (start-up
-included: workers, Ray, the kernel's warm-up), on whatever else the machine
-is doing (the load average is printed with the figures). Prints one JSON
-object.
+The modes run world by world (one round per world), in turn, the order
+reversed every other round, so that a load that drifts (other programs on
+the machine) falls on each mode alike. Throughput is jobs per second of the
+commands' wall time (start-up included: workers, Ray, the kernel's
+warm-up); ``cores_used`` is the CPU time of the command's processes over
+its wall time (for Ray only the processes this one reaps: a lower bound).
+The load average is printed with the figures. Prints one JSON object.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import signal
 import subprocess
@@ -157,6 +161,28 @@ def _resume(common: list[Any], out: Path, total: int) -> dict[str, Any]:
     }
 
 
+def _rounds(worlds: list[Path]) -> list[list[Path]]:
+    """The worlds run per round: one world per round (every mode runs every round)."""
+    return [[world] for world in worlds]
+
+
+def _mode_commands(mode: str, worlds: list[Path], args: argparse.Namespace, out: Path) -> tuple[list[str], dict]:
+    """The command (and environment) of ``mode`` planning ``worlds`` x ``args.seeds`` into ``out / mode``."""
+    common = [*worlds, "--seeds", args.seeds, "--time-limit", args.time_limit, "--jobs", args.jobs, "--quiet"]
+    if mode == "sequential":
+        command = [sys.executable, "-c", _SEQUENTIAL, str(out / mode), str(args.seeds), str(args.time_limit)]
+        return command + [str(w) for w in worlds], dict(os.environ)
+    if mode == "pool":
+        return _batch(*common, "--out", out / mode), dict(os.environ)
+    env = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", RAY_TMPDIR=str(out / "ray_tmp"))
+    return [*IN_PRIVATE_NETWORK, *_batch(*common, "--out", out / mode, "--ray")], env
+
+
+def _children_cpu_s() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.batch", description=__doc__.split("\n\n")[0])
     parser.add_argument("--worlds", nargs="+", type=Path, default=DEFAULT_WORLDS)
@@ -169,8 +195,8 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or Path(tempfile.mkdtemp(prefix="clew_bench_batch_"))
     for part in ("sequential", "pool", "ray", "resume", "ray_tmp"):
         shutil.rmtree(out / part, ignore_errors=True)
+    (out / "ray_tmp").mkdir(parents=True)
     total = len(args.worlds) * args.seeds
-    common = [*args.worlds, "--seeds", args.seeds, "--time-limit", args.time_limit, "--jobs", args.jobs, "--quiet"]
     figures: dict[str, Any] = {
         "jobs": total,
         "worlds": [w.name for w in args.worlds],
@@ -179,32 +205,31 @@ def main(argv: list[str] | None = None) -> int:
         "cores": os.cpu_count(),
         "load_average_before": [round(v, 2) for v in os.getloadavg()],
     }
-    sequential_s = _timed(
-        [sys.executable, "-c", _SEQUENTIAL, str(out / "sequential"), str(args.seeds), str(args.time_limit)]
-        + [str(w) for w in args.worlds]
-    )
-    pool_s = _timed(_batch(*common, "--out", out / "pool"))
-    figures["sequential"] = {"s": round(sequential_s, 1), "jobs_per_s": round(total / sequential_s, 3)}
-    figures["pool"] = {
-        "s": round(pool_s, 1),
-        "jobs_per_s": round(total / pool_s, 3),
-        "x_sequential": round(sequential_s / pool_s, 2),
-    }
+    reason = "--no-ray" if args.no_ray else _private_network()
+    modes = ["sequential", "pool"] + (["ray"] if reason is None else [])
+    wall = dict.fromkeys(modes, 0.0)
+    cpu = dict.fromkeys(modes, 0.0)
+    for number, worlds in enumerate(_rounds(args.worlds)):
+        for mode in modes if number % 2 == 0 else modes[::-1]:  # alternate the order: drifting load evens out
+            command, env = _mode_commands(mode, worlds, args, out)
+            before = _children_cpu_s()
+            wall[mode] += _timed(command, env)
+            cpu[mode] += _children_cpu_s() - before
+    for mode in modes:
+        figures[mode] = {
+            "s": round(wall[mode], 1),
+            "jobs_per_s": round(total / wall[mode], 3),
+            "cores_used": round(cpu[mode] / wall[mode], 2),
+        }
+    figures["pool"]["x_sequential"] = round(wall["sequential"] / wall["pool"], 2)
     reference = _plans(out / "sequential")
     figures["identical"] = {"pool": _compare(reference, _plans(out / "pool"))}
-    reason = "--no-ray" if args.no_ray else _private_network()
     if reason is None:
-        (out / "ray_tmp").mkdir()
-        env = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", RAY_TMPDIR=str(out / "ray_tmp"))
-        ray_s = _timed([*IN_PRIVATE_NETWORK, *_batch(*common, "--out", out / "ray", "--ray")], env)
-        figures["ray"] = {
-            "s": round(ray_s, 1),
-            "jobs_per_s": round(total / ray_s, 3),
-            "x_pool": round(pool_s / ray_s, 2),
-        }
+        figures["ray"]["x_pool"] = round(wall["pool"] / wall["ray"], 2)
         figures["identical"]["ray"] = _compare(reference, _plans(out / "ray"))
     else:
         figures["ray"] = f"skipped: {reason}"
+    common = [*args.worlds, "--seeds", args.seeds, "--time-limit", args.time_limit, "--jobs", args.jobs, "--quiet"]
     figures["resume"] = _resume(common, out / "resume", total)
     figures["load_average_after"] = [round(v, 2) for v in os.getloadavg()]
     print(json.dumps(figures, indent=1))

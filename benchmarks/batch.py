@@ -24,7 +24,11 @@ reversed every other round, so that a load that drifts (other programs on
 the machine) falls on each mode alike. Throughput is jobs per second of the
 commands' wall time (start-up included: workers, Ray, the kernel's
 warm-up); ``cores_used`` is the CPU time of the command's processes over
-its wall time (for Ray only the processes this one reaps: a lower bound).
+its wall time and ``jobs_per_cpu_s`` the jobs per CPU second (for Ray only
+the processes this one reaps count: a bound). On a machine shared with
+other sessions, Linux's ``sched_autogroup`` gives each session an equal
+share of the cores, whatever number of processes it runs: ``cores_used``
+shows what this one got.
 The load average is printed with the figures. Prints one JSON object.
 """
 
@@ -220,6 +224,7 @@ def main(argv: list[str] | None = None) -> int:
             "s": round(wall[mode], 1),
             "jobs_per_s": round(total / wall[mode], 3),
             "cores_used": round(cpu[mode] / wall[mode], 2),
+            "jobs_per_cpu_s": round(total / cpu[mode], 3) if cpu[mode] else None,
         }
     figures["pool"]["x_sequential"] = round(wall["sequential"] / wall["pool"], 2)
     reference = _plans(out / "sequential")

@@ -113,7 +113,6 @@ class LocalPool:
         self._pool: list[_Worker] = []
         self._queue: deque[JobSpec] = deque()
         self._start_failures = 0
-        self._last_start_failure = ""
 
     @property
     def capacity(self) -> int:
@@ -231,7 +230,6 @@ class LocalPool:
             finished.append(Finished(worker.spec, failure=f"the worker process died while planning ({reason})"))
         elif not worker.ready:
             self._start_failures += 1
-            self._last_start_failure = reason
         self._remove(worker)
         if self._start_failures >= MAX_START_FAILURES:
             raise ExecutorError(

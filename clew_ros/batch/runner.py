@@ -235,6 +235,8 @@ def _drive(driver: _Driver, progress: ProgressBar | None) -> None:
         while (driver.queue or driver.running) and not driver.stop.is_set():
             driver.fill()
             for finished in executor.wait(_POLL_S):
+                if finished.failure is not None and driver.stop.is_set():
+                    continue  # its worker may have had the same Ctrl-C / SIGTERM: dropped, not failed
                 driver.finish(finished)
                 if progress is not None:
                     progress.update(driver.report.ran, driver.successes)

@@ -4,15 +4,17 @@ worker processes)."""
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import pytest
 from helpers.batch_cli import CONFIG, index_lines
 from helpers.batch_faults import FAULT_DIR_VARIABLE, faulty_job
 
-from clew_ros.batch.executors import LocalPool
+from clew_ros.batch.executors import Finished, LocalPool
 from clew_ros.batch.jobs import load_worlds, make_jobs
 from clew_ros.batch.runner import has_valid_output, run_batch
+from clew_ros.batch.worker import JobSpec
 from clew_ros.core.plan import Plan
 
 
@@ -64,3 +66,42 @@ def test_a_job_that_hangs_is_stopped_after_its_time_limit_and_grace(tmp_path: Pa
     for seed in (0, 5):
         assert records[seed]["code"] in ("TIME_LIMIT", "NO_PATH_AT_RESOLUTION")
         assert records[seed]["error"] is None
+
+
+class _StoppedExecutor:
+    """An executor (no processes) whose first wait is interrupted by a stop request, and whose jobs then
+    fail the way workers hit by the same Ctrl-C or SIGTERM would."""
+
+    capacity = 2
+    description = "scripted"
+
+    def __init__(self, stop: threading.Event) -> None:
+        self.stop = stop
+        self.submitted: list[JobSpec] = []
+
+    def start(self) -> None:
+        pass
+
+    def submit(self, spec: JobSpec) -> None:
+        self.submitted.append(spec)
+
+    def wait(self, timeout_s: float) -> list[Finished]:
+        self.stop.set()
+        return [
+            Finished(spec, failure="the worker process died while planning (killed by SIGTERM)")
+            for spec in self.submitted
+        ]
+
+    def close(self) -> None:
+        pass
+
+
+def test_failures_after_a_stop_request_are_dropped_not_recorded(tmp_path: Path) -> None:
+    jobs = make_jobs(load_worlds([(CONFIG / "single_transfer.yaml").resolve()]), [0, 1, 2])
+    stop = threading.Event()
+    report = run_batch(jobs, tmp_path, _StoppedExecutor(stop), stop=stop, retries=3)
+    assert report.stopped
+    assert report.dropped == 2
+    assert report.ran == 0
+    assert report.retried == 0
+    assert index_lines(tmp_path) == []

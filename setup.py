@@ -47,6 +47,8 @@ setup(
         # websockets and protobuf are the tests' client (test/helpers/foxglove_client.py): it subscribes and
         # decodes with the schemas the server advertises, as the Foxglove app does.
         "live": ["foxglove-sdk>=0.30.3", "websockets>=15.0", "protobuf>=5.29"],
+        # clew_batch --ray (clew_ros/batch/executors.py): jobs as Ray tasks, on a local Ray or a cluster.
+        "batch": ["ray>=2.9"],
         # make lint (and .ci/run): the checks configured in pyproject.toml. ruff's minor is capped: a new
         # minor release turns on new rules of the selected families, which would fail CI with no code change.
         # foxglove-sdk too: mypy reads its own type information for clew_ros/live.
@@ -60,6 +62,7 @@ setup(
             "clew_plan = clew_ros.cli.plan:main",
             "clew_replay = clew_ros.cli.replay:main",
             "clew_render = clew_ros.cli.render:main",
+            "clew_batch = clew_ros.cli.batch:main",
         ],
     },
 )

@@ -41,7 +41,8 @@ ROSDEP_KEYS = {
     "PIL": "python3-pil",
 }
 #: Imported, but with no rosdep key (setup.py's install_requires), or optional (imported under try).
-NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags", "foxglove"}  # foxglove: the live extra (clew_ros.live)
+# foxglove: the live extra (clew_ros.live); ray: the batch extra (clew_batch --ray)
+NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags", "foxglove", "ray"}
 
 CONSOLE_SCRIPTS = {
     "clew_planner": "clew_ros.node.main:main",
@@ -49,6 +50,7 @@ CONSOLE_SCRIPTS = {
     "clew_plan": "clew_ros.cli.plan:main",
     "clew_replay": "clew_ros.cli.replay:main",
     "clew_render": "clew_ros.cli.render:main",
+    "clew_batch": "clew_ros.cli.batch:main",
 }
 
 

@@ -25,14 +25,12 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from clew_ros.core.clew import PlanResult, Progress, plan
-from clew_ros.core.collision import check_start_and_goal
+from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.kernel import warm_up
-from clew_ros.core.plan import Plan, checked_plan
-from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.core.tree import LandmarkTree
-from clew_ros.core.world import World, read_parameter_file, world_from_parameters
+from clew_ros.core.offline import Problem, plan_problem, problem_from_parameters
+from clew_ros.core.plan import Plan
+from clew_ros.core.world import World, read_parameter_file
 from clew_ros.live import DEFAULT_PORT, HOST, INSTALL_HINT, LiveView, LiveViewError, LiveViewUnavailableError
 
 EXIT_ABORTED = 130
@@ -155,26 +153,25 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         parameters = read_parameter_file(args.world)
-        world = check_start_and_goal(world_from_parameters(parameters))
-        settings = PlannerSettings.from_parameters(
+        problem = problem_from_parameters(
             parameters, seed=args.seed, time_limit=args.time_limit, improve_time=args.improve_time
         )
     except ParameterError as error:
         print(f"clew_plan: invalid input: {error}", file=sys.stderr)
         return 2
     if args.foxglove is None:
-        return _plan(args, world, settings, None)
-    view = _start_live_view(parameters, args.foxglove, world.robot.dof)
+        return _plan(args, problem, None)
+    view = _start_live_view(parameters, args.foxglove, problem.world.robot.dof)
     if isinstance(view, str):
         print(f"clew_plan: {view}", file=sys.stderr)
         return 2
     try:
-        return _plan(args, world, settings, view)
+        return _plan(args, problem, view)
     finally:
         view.stop()
 
 
-def _plan(args: argparse.Namespace, world: World, settings: PlannerSettings, view: LiveView | None) -> int:
+def _plan(args: argparse.Namespace, problem: Problem, view: LiveView | None) -> int:
     """Plan, write the plan file, and with a live view play the plan back until a signal; the exit code."""
     progress = _ProgressLine(not args.quiet)
 
@@ -186,27 +183,16 @@ def _plan(args: argparse.Namespace, world: World, settings: PlannerSettings, vie
     warm_up()  # compile the kernel (or load numba's cache) before the clock starts: no plan pays for it
     cancel = threading.Event()
     restore = _cancel_on_signals(cancel)
-    if view is not None and not _show_world(view, world, cancel):
+    if view is not None and not _show_world(view, problem.world, cancel):
         restore()
         print("clew_plan: aborted; no plan file written", file=sys.stderr)
         return EXIT_ABORTED
     started = time.monotonic()
     try:
-        result = plan(world, settings, termination=Termination(settings.time_limit, cancel), progress=observe)
-        planned = checked_plan(world, result)
+        planned = plan_problem(problem, cancel=cancel, progress=observe)  # a planner bug: INTERNAL_ERROR, exit 1
     except KeyboardInterrupt:  # a second signal
         print("clew_plan: aborted; no plan file written", file=sys.stderr)
         return EXIT_ABORTED
-    except Exception as error:  # noqa: BLE001 - a bug in the planner: reported in the plan file, exit 1
-        result = PlanResult(
-            Outcome.INTERNAL_ERROR,
-            f"internal error: {error!r}",
-            [],
-            None,
-            LandmarkTree(world.robot.initial, world.object.initial),
-            {"time_s": round(time.monotonic() - started, 4), "seed": settings.seed},
-        )
-        planned = Plan.from_result(world, result)
     finally:
         restore()
         progress.close()
@@ -218,7 +204,7 @@ def _plan(args: argparse.Namespace, world: World, settings: PlannerSettings, vie
     elapsed = time.monotonic() - started
     print(
         f"clew_plan: {planned.code}: {planned.message.splitlines()[0]} ({elapsed:.2f} s, "
-        f"{len(result.tree)} landmarks{_quality(planned)}) -> {args.output}",
+        f"{len(planned.landmarks)} landmarks{_quality(planned)}) -> {args.output}",
         file=sys.stderr,
     )
     if view is not None:

@@ -48,6 +48,7 @@ CONSOLE_SCRIPTS = {
     "clew_plan": "clew_ros.cli.plan:main",
     "clew_replay": "clew_ros.cli.replay:main",
     "clew_render": "clew_ros.cli.render:main",
+    "clew_world": "clew_ros.cli.world:main",
 }
 
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 import zlib
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -37,10 +37,10 @@ from clew_ros.core.world import World, world_from_parameters
 from clew_ros.worlds.arms import ArmShape, make_arm
 from clew_ros.worlds.enclosure import separation
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
-from clew_ros.worlds.layouts import Layout, LayoutFailed, blocks_near, clutter, pocket, ring, shelves, window
+from clew_ros.worlds.layouts import Layout, LayoutError, blocks_near, clutter, pocket, ring, shelves, window
 from clew_ros.worlds.shapes import SHAPES, ObjectShape, make_shape
 from clew_ros.worlds.sweep import Sweep
-from clew_ros.worlds.witness import WitnessFailed, simulate
+from clew_ros.worlds.witness import WitnessError, simulate
 
 __all__ = ["FAMILIES", "MAX_ATTEMPTS", "Family", "GeneratedWorld", "family_names", "generate"]
 
@@ -54,7 +54,7 @@ ANY_ANGLE = 3.14159
 LayoutBuilder = Callable[[World, Sweep, np.random.Generator], Layout]
 
 
-class _Rejected(Exception):
+class _RejectedError(Exception):
     """This stream gave no acceptable world."""
 
 
@@ -105,11 +105,13 @@ class GeneratedWorld:
 # --------------------------------------------------------------------------- the layouts of the families
 
 
-def _with_blocks(world: World, sweep: Sweep, rng: np.random.Generator, layout: Layout, near_start: int, near_goal: int) -> Layout:
+def _with_blocks(
+    world: World, sweep: Sweep, rng: np.random.Generator, layout: Layout, *, near_start: int, near_goal: int
+) -> Layout:
     taken = list(layout.obstacles.values())
     for pose, count, what in ((world.object.initial, near_start, "start"), (world.object.goal, near_goal, "goal")):
         if count:
-            extra = blocks_near(world, sweep, rng, pose, count, what, taken)
+            extra = blocks_near(world, sweep, rng, pose, count=count, what=what, taken=taken)
             layout.obstacles.update(extra.obstacles)
             layout.notes += extra.notes
             taken += list(extra.obstacles.values())
@@ -117,14 +119,16 @@ def _with_blocks(world: World, sweep: Sweep, rng: np.random.Generator, layout: L
 
 
 def _blocks_layout(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
-    layout = _with_blocks(world, sweep, rng, Layout({}, []), int(rng.integers(1, 3)), int(rng.integers(2, 4)))
+    near_start, near_goal = int(rng.integers(1, 3)), int(rng.integers(2, 4))
+    layout = _with_blocks(world, sweep, rng, Layout({}, []), near_start=near_start, near_goal=near_goal)
     if len(layout.obstacles) < 2:
-        raise LayoutFailed("fewer than two blocks found a place near the placements")
+        raise LayoutError("fewer than two blocks found a place near the placements")
     return layout
 
 
 def _pocket_layout(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
-    return _with_blocks(world, sweep, rng, pocket(world, sweep, rng, world.object.goal), int(rng.integers(0, 3)), 0)
+    layout = pocket(world, sweep, rng, world.object.goal)
+    return _with_blocks(world, sweep, rng, layout, near_start=int(rng.integers(0, 3)), near_goal=0)
 
 
 def _shelves_layout(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
@@ -132,15 +136,18 @@ def _shelves_layout(world: World, sweep: Sweep, rng: np.random.Generator) -> Lay
 
 
 def _window_layout(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
-    return _with_blocks(world, sweep, rng, window(world, sweep, rng), 0, int(rng.integers(0, 3)))
+    layout = window(world, sweep, rng)
+    return _with_blocks(world, sweep, rng, layout, near_start=0, near_goal=int(rng.integers(0, 3)))
 
 
 def _clutter_layout(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
-    return _with_blocks(world, sweep, rng, clutter(world, sweep, rng, int(rng.integers(8, 17))), 0, int(rng.integers(1, 3)))
+    layout = clutter(world, sweep, rng, int(rng.integers(8, 17)))
+    return _with_blocks(world, sweep, rng, layout, near_start=0, near_goal=int(rng.integers(1, 3)))
 
 
 def _mixed_layout(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
-    return _with_blocks(world, sweep, rng, clutter(world, sweep, rng, int(rng.integers(4, 9))), 1, 2)
+    layout = clutter(world, sweep, rng, int(rng.integers(4, 9)))
+    return _with_blocks(world, sweep, rng, layout, near_start=1, near_goal=2)
 
 
 ALL_SHAPES = tuple(SHAPES)
@@ -232,68 +239,93 @@ def _pose(values: np.ndarray) -> list[float]:
     return [round(float(values[0]), 6), round(float(values[1]), 6), round(float(wrap_angle(values[2])), 6)]
 
 
-def _tree(
-    name: str, bounds: float, arm: ArmShape, shape: ObjectShape, initial: np.ndarray, start: list[float], goal: list[float]
-) -> dict[str, Any]:
-    """The ``world`` parameter tree, keys in the contract's order (obstacles and tolerances come later)."""
-    return {
-        "name": name,
-        "bounds": [-bounds, -bounds, bounds, bounds],
-        "robot": {
-            "base": [0.0, 0.0],
-            "link_lengths": arm.link_lengths.tolist(),
-            "link_width": arm.link_width,
-            "joint_lower": arm.joint_lower.tolist(),
-            "joint_upper": arm.joint_upper.tolist(),
-            "initial": [round(float(v), 6) for v in initial],
-            "self_collision": True,
-        },
-        "object": {
-            "polygon": shape.vertices.ravel().tolist(),
-            "initial": start,
-            "goal": goal,
-            "grasps": shape.grasps.ravel().tolist(),
-        },
-    }
-
-
-def _with_obstacles(tree: dict[str, Any], layout: Layout, angle_tolerance: float) -> dict[str, Any]:
-    tree = dict(tree)
-    if layout.obstacles:
-        tree["obstacle_names"] = list(layout.obstacles)
-        tree["obstacles"] = {name: vertices.ravel().tolist() for name, vertices in layout.obstacles.items()}
-    tree["grasp_tolerance"] = 0.005
-    tree["goal_tolerance"] = 0.02
-    tree["goal_angle_tolerance"] = angle_tolerance
-    return tree
-
-
 def _travel(plan: Plan) -> float:
     """Sum over joints of the absolute motion (rad), as the planner's ``joint_travel_rad``."""
     return float(sum(np.abs(np.diff(s.waypoints, axis=0)).sum() for s in plan.segments))
 
 
-def _attempt(family: Family, seed: int, rng: np.random.Generator, attempt: int) -> GeneratedWorld:
+def _parsed(tree: dict[str, Any]) -> World:
+    """The world of ``tree`` as a user's file gets it: parsed, start and goal checked."""
+    try:
+        return check_start_and_goal(world_from_parameters({"world": tree}))
+    except WorldError as error:
+        raise _RejectedError(str(error)) from None
+
+
+@dataclass
+class _Draft:
+    """A world before its layout: the ``world`` tree (arm, object, start, goal), the witness plan that
+    ends at the goal, and what the notes and stats say of them."""
+
+    tree: dict[str, Any]
+    witness: Plan
+    kind: str
+    angle_tolerance: float
+    stats: dict[str, Any]
+
+    @property
+    def world(self) -> World:
+        return world_from_parameters({"world": self.tree})
+
+    def with_layout(self, layout: Layout) -> dict[str, Any]:
+        """The tree with the layout's obstacles and the tolerances, keys in the contract's order."""
+        tree = dict(self.tree)
+        if layout.obstacles:
+            tree["obstacle_names"] = list(layout.obstacles)
+            tree["obstacles"] = {name: vertices.ravel().tolist() for name, vertices in layout.obstacles.items()}
+        tree["grasp_tolerance"] = 0.005
+        tree["goal_tolerance"] = 0.02
+        tree["goal_angle_tolerance"] = self.angle_tolerance
+        return tree
+
+
+def _robot_tree(arm: ArmShape, initial: np.ndarray) -> dict[str, Any]:
+    return {
+        "base": [0.0, 0.0],
+        "link_lengths": arm.link_lengths.tolist(),
+        "link_width": arm.link_width,
+        "joint_lower": arm.joint_lower.tolist(),
+        "joint_upper": arm.joint_upper.tolist(),
+        "initial": [round(float(v), 6) for v in initial],
+        "self_collision": True,
+    }
+
+
+def _object_tree(shape: ObjectShape, start: list[float], goal: list[float]) -> dict[str, Any]:
+    return {
+        "polygon": shape.vertices.ravel().tolist(),
+        "initial": start,
+        "goal": goal,
+        "grasps": shape.grasps.ravel().tolist(),
+    }
+
+
+def _draft(family: Family, seed: int, rng: np.random.Generator, attempt: int) -> _Draft:
+    """Arm, object, bounds and witness (steps 1 and 2 of the module's recipe)."""
     name = f"{family.name}_{seed}"
     arm = make_arm(rng, int(rng.choice(family.joints)))
     shape = make_shape(str(rng.choice(family.shapes)), rng, arm.reach * float(rng.uniform(0.15, 0.3)))
-    bounds = round(arm.reach + max(0.35, shape.radius + 0.1), 2)
-    free = world_from_parameters({"world": _tree(name, bounds, arm, shape, np.zeros(len(arm.link_lengths)), [0, 0, 0], [0, 0, 0])})
+    half = round(arm.reach + max(0.35, shape.radius + 0.1), 2)
+    tree: dict[str, Any] = {
+        "name": name,
+        "bounds": [-half, -half, half, half],
+        "robot": _robot_tree(arm, np.zeros(len(arm.link_lengths))),
+        "object": _object_tree(shape, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]),
+    }
     transfers = int(rng.choice([1, 2, 3], p=family.transfers))
     try:
-        witness = simulate(free, shape, rng, transfers=transfers)
-    except WitnessFailed as error:
-        raise _Rejected(str(error)) from None
+        witness = simulate(world_from_parameters({"world": tree}), shape, rng, transfers=transfers)
+    except WitnessError as error:
+        raise _RejectedError(str(error)) from None
     start = _pose(witness.object_initial)
-    tree = _tree(name, bounds, arm, shape, witness.initial, start, start)
-    plan = Plan(name, tuple(free.robot.joint_names), True, "", None, witness.segments, None)
-    end = list(replay(world_from_parameters({"world": tree}), plan, None))[-1].object_poses[-1]
-    goal = _pose(end)
+    tree["robot"] = _robot_tree(arm, witness.initial)
+    tree["object"] = _object_tree(shape, start, start)
+    joint_names = tuple(f"joint_{i + 1}" for i in range(len(arm.link_lengths)))
+    plan = Plan(name, joint_names, True, "", None, witness.segments, None)
+    goal = _pose(list(replay(world_from_parameters({"world": tree}), plan, None))[-1].object_poses[-1])
     if math.hypot(goal[0] - start[0], goal[1] - start[1]) < MIN_CARRY_M:
-        raise _Rejected("the witness leaves the object too close to its start")
+        raise _RejectedError("the witness leaves the object too close to its start")
     tree["object"]["goal"] = goal
-    angle_tolerance = float(rng.choice(family.angle_tolerances))
-    world = world_from_parameters({"world": tree})
     stats = {
         "generator": "clew_world",
         "family": family.name,
@@ -301,78 +333,76 @@ def _attempt(family: Family, seed: int, rng: np.random.Generator, attempt: int) 
         "attempts": attempt + 1,
         "expected": "solvable" if family.solvable else "unsolvable",
     }
-    if not family.solvable:
-        return _unsolvable(family, seed, rng, world, tree, plan, angle_tolerance, stats)
-    plan = Plan(
-        name,
-        tuple(free.robot.joint_names),
-        True,
-        f"witness of {name}: a random manipulation simulated from the start; its end is the goal",
-        None,
-        witness.segments,
-        np.array(goal),
-        (),
-        {**stats, "transfers": transfers, "joint_travel_rad": round(_travel(plan), 6)},
-    )
+    if family.solvable:
+        stats.update(transfers=transfers, joint_travel_rad=round(_travel(plan), 6))
+    message = f"witness of {name}: a random manipulation simulated from the start; its end is the goal"
+    plan = Plan(name, joint_names, True, message, None, witness.segments, np.array(goal), (), stats)
+    return _Draft(tree, plan, shape.kind, float(rng.choice(family.angle_tolerances)), stats)
+
+
+def _solvable(family: Family, seed: int, draft: _Draft, rng: np.random.Generator) -> GeneratedWorld:
+    """The family's layout around the witness, then the checks (steps 3 and 4)."""
+    world = draft.world
     try:
-        layout = family.layout(world, Sweep(world, plan, family.margin_m), rng)
-    except LayoutFailed as error:
-        raise _Rejected(str(error)) from None
-    tree = _with_obstacles(tree, layout, angle_tolerance)
-    checked = _checked(tree)
-    problems = validate_plan(checked, plan)
+        layout = family.layout(world, Sweep(world, draft.witness, family.margin_m), rng)
+    except LayoutError as error:
+        raise _RejectedError(str(error)) from None
+    tree = draft.with_layout(layout)
+    problems = validate_plan(_parsed(tree), draft.witness)
     if problems:
-        raise _Rejected("the witness fails validation: " + "; ".join(problems[:2]))
+        raise _RejectedError("the witness fails validation: " + "; ".join(problems[:2]))
     notes = (
-        f"{arm.link_lengths.size}-joint arm, {shape.kind} object, {len(layout.obstacles)} obstacles, "
-        f"goal_angle_tolerance {angle_tolerance:g} rad",
+        (
+            f"{world.robot.dof}-joint arm, {draft.kind} object, {len(layout.obstacles)} obstacles, "
+            f"goal_angle_tolerance {draft.angle_tolerance:g} rad"
+        ),
         *layout.notes,
-        f"Witness: {transfers} transfer(s), joint travel {_travel(plan):.2f} rad; obstacles keep "
-        f"{family.margin_m:g} m from it.",
+        (
+            f"Witness: {draft.stats['transfers']} transfer(s), joint travel {draft.stats['joint_travel_rad']:.2f} "
+            f"rad; obstacles keep {family.margin_m:g} m from it."
+        ),
     )
-    return GeneratedWorld(family.name, seed, {"world": tree}, plan, True, notes, attempt + 1, dict(plan.stats))
+    return GeneratedWorld(
+        family.name, seed, {"world": tree}, draft.witness, True, notes, draft.stats["attempts"], draft.stats
+    )
 
 
-def _checked(tree: dict[str, Any]) -> World:
-    try:
-        return check_start_and_goal(world_from_parameters({"world": tree}))
-    except WorldError as error:
-        raise _Rejected(str(error)) from None
-
-
-def _unsolvable(
-    family: Family,
-    seed: int,
-    rng: np.random.Generator,
-    world: World,
-    tree: dict[str, Any],
-    plan: Plan,
-    angle_tolerance: float,
-    stats: dict[str, Any],
-) -> GeneratedWorld:
+def _unsolvable(family: Family, seed: int, draft: _Draft, rng: np.random.Generator) -> GeneratedWorld:
     """A ring around the goal the witness reached (closed, or with an opening narrower than the object's
     inscribed disc), kept only when :func:`separation` proves the goal out of the object's way."""
-    first = PlanSegment("transit", None, plan.segments[0].waypoints[:1])
-    start_only = Plan(plan.world, plan.joint_names, True, "", None, (first,), None)
+    world, witness = draft.world, draft.witness
+    at_start = Plan(
+        witness.world,
+        witness.joint_names,
+        True,
+        "",
+        None,
+        (PlanSegment("transit", None, world.robot.initial[None]),),
+        None,
+    )
     diameter = 2 * float(shapely.maximum_inscribed_circle(shapely.Polygon(world.object.polygon), 1e-5).length)
     opening = None if rng.random() < 0.5 else round(diameter * float(rng.uniform(0.3, 0.7)), 4)
     try:
-        layout = ring(world, Sweep(world, start_only, family.margin_m), rng, opening=opening)
-    except LayoutFailed as error:
-        raise _Rejected(str(error)) from None
-    tree = _with_obstacles(tree, layout, angle_tolerance)
-    checked = _checked(tree)
-    why = separation(checked)
+        layout = ring(world, Sweep(world, at_start, family.margin_m), rng, opening=opening)
+    except LayoutError as error:
+        raise _RejectedError(str(error)) from None
+    tree = draft.with_layout(layout)
+    why = separation(_parsed(tree))
     if why is None:
-        raise _Rejected("the ring does not separate the goal from the start")
-    witness = Plan(plan.world, plan.joint_names, False, f"no plan exists (unsolvable by construction): {why}", None, (), None, (), stats)
+        raise _RejectedError("the ring does not separate the goal from the start")
+    failed = Plan(witness.world, witness.joint_names, False, f"no plan exists (unsolvable by construction): {why}")
+    failed = replace(failed, stats=draft.stats)
     notes = (
-        f"{world.robot.dof}-joint arm, object with inscribed disc {diameter:.3f} m across, "
-        f"goal_angle_tolerance {angle_tolerance:g} rad",
+        (
+            f"{world.robot.dof}-joint arm, {draft.kind} object (inscribed disc {diameter:.3f} m across), "
+            f"goal_angle_tolerance {draft.angle_tolerance:g} rad"
+        ),
         *layout.notes,
         f"No plan exists: {why}.",
     )
-    return GeneratedWorld(family.name, seed, {"world": tree}, witness, False, notes, int(stats["attempts"]), stats)
+    return GeneratedWorld(
+        family.name, seed, {"world": tree}, failed, False, notes, draft.stats["attempts"], draft.stats
+    )
 
 
 def generate(family: str, seed: int) -> GeneratedWorld:
@@ -387,10 +417,13 @@ def generate(family: str, seed: int) -> GeneratedWorld:
         raise UnknownFamilyError(family, family_names())
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected an integer >= 0, got {seed!r}")
+    chosen = FAMILIES[family]
+    build = _solvable if chosen.solvable else _unsolvable
     reasons: list[str] = []
     for attempt in range(MAX_ATTEMPTS):
+        rng = _stream(family, int(seed), attempt)
         try:
-            return _attempt(FAMILIES[family], int(seed), _stream(family, int(seed), attempt), attempt)
-        except _Rejected as rejected:
+            return build(chosen, int(seed), _draft(chosen, int(seed), rng, attempt), rng)
+        except _RejectedError as rejected:
             reasons.append(str(rejected))
     raise GenerationError(f"family {family}, seed {seed}: no world in {MAX_ATTEMPTS} attempts (last: {reasons[-1]})")

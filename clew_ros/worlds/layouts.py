@@ -7,7 +7,7 @@ the object along the whole witness, and the kept cells of a wall are merged back
 So a wall built tight around a placement opens exactly where the witness came in or went out: a
 pocket opens towards the side the arm entered from, a wall across the object's way gets the windows
 the witness passed through. Each layout scores its candidates (how much of the intended walls
-survives) and raises :class:`LayoutFailed` when none is good enough; the generator then starts over.
+survives) and raises :class:`LayoutError` when none is good enough; the generator then starts over.
 Vertices are rounded to 0.1 mm.
 """
 
@@ -26,7 +26,7 @@ from clew_ros.worlds.sweep import Sweep
 __all__ = [
     "CELL_M",
     "Layout",
-    "LayoutFailed",
+    "LayoutError",
     "blocks_near",
     "clutter",
     "pocket",
@@ -39,11 +39,13 @@ __all__ = [
 CELL_M = 0.04
 #: Least share of the two boards beside the object that a shelf rack keeps.
 SHELF_COVERAGE = 0.55
+#: Farthest (m) a rack's further boards stand from the boards beside the object.
+RACK_REACH_M = 0.6
 #: Obstacle vertices are rounded to this grid (m).
 GRID_M = 1e-4
 
 
-class LayoutFailed(Exception):
+class LayoutError(Exception):
     """No candidate layout was good enough around this witness."""
 
 
@@ -64,6 +66,11 @@ def _rounded(vertices: np.ndarray) -> np.ndarray:
     return rounded
 
 
+def polygons(vertices: list[np.ndarray] | np.ndarray) -> np.ndarray:
+    """Shapely polygons ``(K,)`` of vertex arrays ``(K, V, 2)``."""
+    return np.asarray(shapely.polygons(np.asarray(vertices)), dtype=object)
+
+
 def rectangle(a: np.ndarray, b: np.ndarray, thickness: float) -> np.ndarray:
     """The rectangle (4, 2) of ``thickness`` m centred on the segment ``a -> b``, counter-clockwise."""
     u = (b - a) / np.linalg.norm(b - a)
@@ -77,7 +84,7 @@ def _carved_wall(sweep: Sweep, a: np.ndarray, b: np.ndarray, thickness: float) -
     length = float(np.linalg.norm(b - a))
     count = max(1, round(length / CELL_M))
     ends = a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a)
-    cells = shapely.polygons(np.array([rectangle(ends[i], ends[i + 1], thickness) for i in range(count)]))
+    cells = polygons([rectangle(ends[i], ends[i + 1], thickness) for i in range(count)])
     ok = sweep.clear(cells)
     pieces = []
     start = None
@@ -110,7 +117,7 @@ class _Frame:
 
 def _frame(world: World, pose: np.ndarray) -> _Frame:
     polygon = shapely.Polygon(transform_points(np.asarray(pose, float), world.object.polygon))
-    corners = np.asarray(shapely.minimum_rotated_rectangle(polygon).exterior.coords)[:4]
+    corners = shapely.get_coordinates(shapely.minimum_rotated_rectangle(polygon))[:4]
     edge_u, edge_v = corners[1] - corners[0], corners[2] - corners[1]
     centre = corners.mean(axis=0)
     return _Frame(
@@ -173,13 +180,15 @@ def pocket(world: World, sweep: Sweep, rng: np.random.Generator, pose: np.ndarra
             best = (kept / total, pieces)
     coverage, pieces = best
     if coverage < 0.5:
-        raise LayoutFailed(f"the pocket keeps {coverage:.0%} of its walls")
+        raise LayoutError(f"the pocket keeps {coverage:.0%} of its walls")
     layout = Layout({}, [f"a pocket around the goal, {coverage:.0%} closed, open where the witness enters"])
     layout.add("pocket", pieces)
     return layout
 
 
-def _rack(sweep: Sweep, frame: _Frame, gap: float, thickness: float, extra: int, overhang: float) -> tuple[float, list[np.ndarray]]:
+def _rack(
+    sweep: Sweep, frame: _Frame, *, gap: float, thickness: float, extra: int, overhang: float
+) -> tuple[float, list[np.ndarray]]:
     """Boards along ``frame.u`` on both sides of the object (and ``extra`` more on each side, one shelf
     apart): the share of the two boards beside the object that stays, and the kept pieces."""
     pitch = 2 * (frame.half_v + gap) + thickness
@@ -188,6 +197,8 @@ def _rack(sweep: Sweep, frame: _Frame, gap: float, thickness: float, extra: int,
     beside = 0.0
     for side in (-1.0, 1.0):
         for level in range(extra + 1):
+            if level * pitch > RACK_REACH_M:
+                break
             offset = side * (frame.half_v + gap + thickness / 2 + level * pitch)
             wall, ok = _carved_wall(sweep, frame.point(-half, offset), frame.point(half, offset), thickness)
             pieces += wall
@@ -211,18 +222,25 @@ def shelves(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
             candidate = (along, frame, frame.turned())[index % 3]
             gap = sweep.margin * float(rng.uniform(1.15, 3.0))
             score, pieces = _rack(
-                sweep, candidate, gap, float(rng.uniform(0.03, 0.06)), int(rng.integers(1, 3)), float(rng.uniform(0.15, 0.45))
+                sweep,
+                candidate,
+                gap=gap,
+                thickness=float(rng.uniform(0.03, 0.06)),
+                extra=int(rng.integers(1, 3)),
+                overhang=float(rng.uniform(0.15, 0.45)),
             )
             if score > best[0]:
                 best = (score, pieces)
         if best[0] < SHELF_COVERAGE:
-            raise LayoutFailed(f"the shelf at the {name} keeps {best[0]:.0%} of its boards")
+            raise LayoutError(f"the shelf at the {name} keeps {best[0]:.0%} of its boards")
         layout.add(f"shelf_{name}", best[1])
         layout.notes.append(f"a rack of shelves at the {name}, {best[0]:.0%} of the boards beside the object")
     return layout
 
 
-def _clip_to_bounds(world: World, point: np.ndarray, direction: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
+def _clip_to_bounds(
+    world: World, point: np.ndarray, direction: np.ndarray, inset: float
+) -> tuple[np.ndarray, np.ndarray]:
     """The chord of the line through ``point`` along ``direction`` inside the bounds shrunk by ``inset``."""
     xmin, ymin, xmax, ymax = np.asarray(world.bounds) + np.array([inset, inset, -inset, -inset])
     far = 4.0 * float(max(xmax - xmin, ymax - ymin))
@@ -238,7 +256,7 @@ def window(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
     start, goal = np.asarray(world.object.initial[:2]), np.asarray(world.object.goal[:2])
     way = goal - start
     if np.linalg.norm(way) < 0.4:
-        raise LayoutFailed("start and goal are too close for a wall between them")
+        raise LayoutError("start and goal are too close for a wall between them")
     best: tuple[float, list[np.ndarray], int] = (0.0, [], 0)
     for _ in range(8):
         angle = math.atan2(way[1], way[0]) + math.pi / 2 + float(rng.uniform(-0.5, 0.5))
@@ -250,7 +268,7 @@ def window(world: World, sweep: Sweep, rng: np.random.Generator) -> Layout:
         if 1 <= windows <= 3 and ok.mean() > best[0]:
             best = (float(ok.mean()), pieces, windows)
     if best[0] < 0.45:
-        raise LayoutFailed(f"the wall keeps {best[0]:.0%} of its length")
+        raise LayoutError(f"the wall keeps {best[0]:.0%} of its length")
     layout = Layout({}, [f"a wall between start and goal, {best[0]:.0%} of it standing, {best[2]} window(s)"])
     layout.add("wall", best[1])
     return layout
@@ -267,6 +285,7 @@ def _place_boxes(
     sweep: Sweep,
     rng: np.random.Generator,
     anchors: np.ndarray,
+    *,
     count: int,
     reach: tuple[float, float],
     taken: list[np.ndarray],
@@ -288,10 +307,10 @@ def _place_boxes(
             [np.cos(direction), np.sin(direction)], axis=1
         )
         candidates = [_box(centre[i], size[i], float(angle[i])) for i in range(k)]
-        polygons = shapely.polygons(np.array(candidates))
-        ok = sweep.clear(polygons) & shapely.contains(bounds, polygons)
+        shapes = polygons(candidates)
+        ok = sweep.clear(shapes) & shapely.contains(bounds, shapes)
         for index in np.flatnonzero(ok):
-            polygon = polygons[index]
+            polygon = shapes[index]
             if all(polygon.distance(o) >= 0.03 for o in others):
                 boxes.append(candidates[index])
                 others.append(polygon)
@@ -304,21 +323,30 @@ def clutter(world: World, sweep: Sweep, rng: np.random.Generator, count: int) ->
     """``count`` boxes scattered along the witness (each 0-25 cm beyond the margin from a point the arm
     or the object passes); at least three quarters of them must find a place."""
     anchors = np.concatenate([sweep.object_vertices.reshape(-1, 2), sweep.arm_points[:, 1:].reshape(-1, 2)])
-    boxes = _place_boxes(world, sweep, rng, anchors, count, (0.0, 0.25), [])
+    boxes = _place_boxes(world, sweep, rng, anchors, count=count, reach=(0.0, 0.25), taken=[])
     if len(boxes) < 0.75 * count:
-        raise LayoutFailed(f"only {len(boxes)} of {count} clutter boxes found a place")
+        raise LayoutError(f"only {len(boxes)} of {count} clutter boxes found a place")
     layout = Layout({}, [f"{len(boxes)} boxes scattered along the witness"])
     layout.add("box", boxes)
     return layout
 
 
-def blocks_near(world: World, sweep: Sweep, rng: np.random.Generator, pose: np.ndarray, count: int, what: str, taken: list[np.ndarray]) -> Layout:
+def blocks_near(
+    world: World,
+    sweep: Sweep,
+    rng: np.random.Generator,
+    pose: np.ndarray,
+    *,
+    count: int,
+    what: str,
+    taken: list[np.ndarray],
+) -> Layout:
     """Up to ``count`` boxes within 6 cm beyond the margin of the object placed at ``pose`` (``what``
     names the placement in the notes and the obstacle names)."""
     anchors = transform_points(np.asarray(pose, float), world.object.polygon)
     edges = np.roll(anchors, -1, axis=0) - anchors
     points = (anchors[:, None] + np.linspace(0.0, 1.0, 5)[None, :, None] * edges[:, None]).reshape(-1, 2)
-    boxes = _place_boxes(world, sweep, rng, points, count, (0.0, 0.06), taken)
+    boxes = _place_boxes(world, sweep, rng, points, count=count, reach=(0.0, 0.06), taken=taken)
     layout = Layout({}, [f"{len(boxes)} block(s) close to the {what}"] if boxes else [])
     layout.add(f"near_{what}", boxes)
     return layout
@@ -337,10 +365,13 @@ def ring(world: World, start: Sweep, rng: np.random.Generator, *, opening: float
             side = int(rng.integers(0, 4))
             a, b = _frame_walls(frame, gap, thickness)[side]
             middle, u = (a + b) / 2, (b - a) / np.linalg.norm(b - a)
-            walls[side : side + 1] = [rectangle(a, middle - u * opening / 2, thickness), rectangle(middle + u * opening / 2, b, thickness)]
-        if start.clear(shapely.polygons(np.array(walls))).all():
+            walls[side : side + 1] = [
+                rectangle(a, middle - u * opening / 2, thickness),
+                rectangle(middle + u * opening / 2, b, thickness),
+            ]
+        if start.clear(polygons(walls)).all():
             what = "closed ring" if opening is None else f"ring with a {opening:.3f} m opening"
             layout = Layout({}, [f"the goal inside a {what} the object cannot pass"])
             layout.add("ring", walls)
             return layout
-    raise LayoutFailed("the ring around the goal meets the arm or the object at the start")
+    raise LayoutError("the ring around the goal meets the arm or the object at the start")

@@ -71,7 +71,9 @@ def _edge_points(vertices: np.ndarray, edges: list[int], fractions: list[float])
     return np.array(points), np.array(normals)
 
 
-def _shape(kind: str, vertices: np.ndarray, edges: list[int] | None = None, fractions: list[float] | None = None) -> ObjectShape:
+def _shape(
+    kind: str, vertices: np.ndarray, edges: list[int] | None = None, fractions: list[float] | None = None
+) -> ObjectShape:
     on_grid = _on_grid(np.asarray(vertices, dtype=float))
     grasps, normals = _edge_points(on_grid, list(range(len(on_grid))) if edges is None else edges, fractions or [0.5])
     return ObjectShape(kind, on_grid, grasps, normals)
@@ -86,7 +88,10 @@ def _bar(rng: np.random.Generator, size: float) -> ObjectShape:
     shape = _shape("bar", vertices, [1, 3])
     long_grasps, long_normals = _edge_points(shape.vertices, [0, 2], [0.25, 0.5, 0.75])
     return ObjectShape(
-        "bar", shape.vertices, np.concatenate([shape.grasps, long_grasps]), np.concatenate([shape.normals, long_normals])
+        "bar",
+        shape.vertices,
+        np.concatenate([shape.grasps, long_grasps]),
+        np.concatenate([shape.normals, long_normals]),
     )
 
 
@@ -108,7 +113,9 @@ def _triangle(rng: np.random.Generator, size: float) -> ObjectShape:
 def _l_shape(rng: np.random.Generator, size: float) -> ObjectShape:
     width, height = size * rng.uniform(0.55, 1.0, 2)
     thickness = float(rng.uniform(0.3, 0.45)) * min(width, height)
-    vertices = np.array([[0, 0], [width, 0], [width, thickness], [thickness, thickness], [thickness, height], [0, height]])
+    vertices = np.array(
+        [[0, 0], [width, 0], [width, thickness], [thickness, thickness], [thickness, height], [0, height]]
+    )
     return _shape("L", vertices)
 
 
@@ -117,7 +124,9 @@ def _convex(rng: np.random.Generator, size: float) -> ObjectShape:
     angles = np.sort(rng.uniform(0.0, 2 * np.pi, count))
     a, b = size / 2, size / 2 * float(rng.uniform(0.55, 1.0))
     hull = shapely.MultiPoint(np.stack([a * np.cos(angles), b * np.sin(angles)], axis=1)).convex_hull
-    return _shape("convex", np.asarray(hull.exterior.coords)[:-1])
+    if not isinstance(hull, shapely.Polygon):  # all points on a line: not a polygon, draw again
+        return _box(rng, size)
+    return _shape("convex", shapely.get_coordinates(hull)[:-1])
 
 
 def _non_convex(rng: np.random.Generator, size: float) -> ObjectShape:

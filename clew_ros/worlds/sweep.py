@@ -63,8 +63,10 @@ class Sweep:
         self.object_vertices = np.concatenate(objects)
         self.arm_points = np.concatenate(arm)  # (N, n + 1, 2)
         links = np.stack([self.arm_points[:, :-1], self.arm_points[:, 1:]], axis=2).reshape(-1, 2, 2)
-        self.arm_lines = shapely.linestrings(links)  # one per link and sample: tight boxes for the tree
-        self.object_polygons = shapely.polygons(self.object_vertices)
+        self.arm_lines = np.asarray(
+            shapely.linestrings(links), dtype=object
+        )  # one per link and sample: tight boxes for the tree
+        self.object_polygons = np.asarray(shapely.polygons(self.object_vertices), dtype=object)
         self._arm_tree = shapely.STRtree(self.arm_lines)
         self._object_tree = shapely.STRtree(self.object_polygons)
         self._arm_distance = margin + robot.link_width / 2

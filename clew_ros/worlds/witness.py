@@ -15,7 +15,7 @@ object at rest or held count, exactly section 1's validity test), then the layou
 
 Every straight piece is checked at :data:`~clew_ros.core.plan.CHECK_STEP_RAD` with
 :func:`~clew_ros.core.collision.is_valid`, many candidates in one call. :func:`simulate` returns the
-segments as a :class:`~clew_ros.core.plan.Plan` would hold them, or raises :class:`WitnessFailed`
+segments as a :class:`~clew_ros.core.plan.Plan` would hold them, or raises :class:`WitnessError`
 when a step found no valid candidate (the generator then starts over with the next random stream).
 """
 
@@ -33,7 +33,7 @@ from clew_ros.core.plan import CHECK_STEP_RAD, PlanSegment
 from clew_ros.core.world import World
 from clew_ros.worlds.shapes import ObjectShape
 
-__all__ = ["MAX_APPROACH_RAD", "Witness", "WitnessFailed", "grasp_configurations", "grasp_relation", "simulate"]
+__all__ = ["MAX_APPROACH_RAD", "Witness", "WitnessError", "grasp_configurations", "grasp_relation", "simulate"]
 
 #: Largest angle (rad) between the last link, pointing back from the tip, and the grasped edge's normal.
 MAX_APPROACH_RAD = 1.1
@@ -45,7 +45,7 @@ REGRASP_ATTEMPTS = 6
 CANDIDATES = 48
 
 
-class WitnessFailed(Exception):
+class WitnessError(Exception):
     """A step of the simulation found no valid candidate."""
 
 
@@ -192,9 +192,7 @@ def grasp_configurations(
     reachable = np.abs(cosine) <= 1.0
     elbow = np.where(rng.random(count) < 0.5, -1.0, 1.0) * np.arccos(np.clip(cosine, -1.0, 1.0))
     shoulder = wrap_angle(
-        np.arctan2(to_target[:, 1], to_target[:, 0])
-        - np.arctan2(l2 * np.sin(elbow), l1 + l2 * np.cos(elbow))
-        - heading
+        np.arctan2(to_target[:, 1], to_target[:, 0]) - np.arctan2(l2 * np.sin(elbow), l1 + l2 * np.cos(elbow)) - heading
     )
     q = np.concatenate([free, shoulder[:, None], elbow[:, None]], axis=1)
     keep = reachable & np.all((q >= robot.joint_lower) & (q <= robot.joint_upper), axis=1)
@@ -228,7 +226,7 @@ class _Simulation:
         poses = compose(tip_poses(world.robot, q), relations)
         valid = np.flatnonzero(is_valid(world, q, poses))
         if not len(valid):
-            raise WitnessFailed("no configuration holds a grasp of a valid start placement")
+            raise WitnessError("no configuration holds a grasp of a valid start placement")
         pick = int(valid[0])
         return q[pick], int(grasps[pick]), poses[pick]
 
@@ -248,8 +246,9 @@ class _Simulation:
         usable = np.flatnonzero(away & is_valid(world, candidates, object_pose))
         found = _first_valid(world, candidates[usable], grasping, _resting(object_pose), rng.permutation(len(usable)))
         if found is None:
-            raise WitnessFailed("no start configuration reaches the first grasp in a straight transit")
-        return candidates[usable[found]]
+            raise WitnessError("no start configuration reaches the first grasp in a straight transit")
+        start: np.ndarray = candidates[usable[found]]
+        return start
 
     def transfer(self, q: np.ndarray, grasp: int, object_pose: np.ndarray, moves: int) -> tuple[np.ndarray, np.ndarray]:
         """Carry the object from ``q`` by ``moves`` random straight moves; the end configuration and placement."""
@@ -265,13 +264,15 @@ class _Simulation:
             targets = np.clip(q + mask * rng.uniform(-scale, scale, (CANDIDATES, n)), *_limits(world))
             ends = compose(tip_poses(world.robot, targets), rel)[:, :2]
             score = np.hypot(*(ends - origin).T) + rng.uniform(0.0, 0.3, len(ends))
-            found = _first_valid(world, np.broadcast_to(q, targets.shape), targets, _held(world, rel), np.argsort(-score))
+            found = _first_valid(
+                world, np.broadcast_to(q, targets.shape), targets, _held(world, rel), np.argsort(-score)
+            )
             if found is None:
                 break
             q = targets[found]
             waypoints.append(q)
         if len(waypoints) == 1:
-            raise WitnessFailed("no valid transfer move")
+            raise WitnessError("no valid transfer move")
         self.segments.append(PlanSegment("transfer", grasp, np.array(waypoints)))
         return q, compose(tip_poses(world.robot, q[None])[0], rel)
 
@@ -282,11 +283,13 @@ class _Simulation:
         held = _approach(shape, object_pose[None], np.array([grasp]), tip_poses(world.robot, q[None])[:, 2])[0]
         targets, grasps = grasp_configurations(world, shape, object_pose, self.rng)
         if len(targets):
-            approach = _approach(shape, np.broadcast_to(object_pose, (len(targets), 3)), grasps, tip_poses(world.robot, targets)[:, 2])
+            approach = _approach(
+                shape, np.broadcast_to(object_pose, (len(targets), 3)), grasps, tip_poses(world.robot, targets)[:, 2]
+            )
             other = (grasps != grasp) | (np.abs(wrap_angle(approach - held)) >= MIN_REGRASP_TURN_RAD)
             targets, grasps = targets[other][:CANDIDATES], grasps[other][:CANDIDATES]
         if not len(targets):
-            raise WitnessFailed("no configuration takes the object again")
+            raise WitnessError("no configuration takes the object again")
         pick = _first_valid(world, np.broadcast_to(q, targets.shape), targets, _resting(object_pose))
         if pick is not None:
             self.transit(q, targets[pick])
@@ -296,7 +299,7 @@ class _Simulation:
             if via is not None:
                 self.transit(q, via, target)
                 return target, int(new_grasp)
-        raise WitnessFailed("no transit reaches a regrasp")
+        raise WitnessError("no transit reaches a regrasp")
 
     def waypoint(self, q: np.ndarray, target: np.ndarray, object_pose: np.ndarray) -> np.ndarray | None:
         """A configuration joined to ``q`` and to ``target`` by valid straight transits, or ``None``."""
@@ -307,8 +310,9 @@ class _Simulation:
         ok[ok] = _pieces_valid(world, vias[ok], target, _resting(object_pose), CHECK_STEPS_RAD[:-1])
         candidates = np.flatnonzero(ok)
         for index in candidates[:8]:
-            if transit_valid(world, np.stack([q, vias[index]]), np.stack([vias[index], target]), object_pose).all():
-                return vias[int(index)]
+            via: np.ndarray = vias[int(index)]
+            if transit_valid(world, np.stack([q, via]), np.stack([via, target]), object_pose).all():
+                return via
         return None
 
     def transit(self, *waypoints: np.ndarray) -> None:
@@ -324,7 +328,7 @@ def simulate(
 ) -> Witness:
     """Simulate a manipulation of ``transfers`` transfers in ``world`` (its obstacles, if any, count too;
     the generator passes a world without them) with the object ``shape``; ``moves``: the range of
-    straight moves per transfer. Raises :class:`WitnessFailed` when a step finds no valid candidate."""
+    straight moves per transfer. Raises :class:`WitnessError` when a step finds no valid candidate."""
     simulation = _Simulation(world, shape, rng)
     grasping, grasp, object_initial = simulation.first_grasp()
     initial = simulation.start(grasping, object_initial)
@@ -337,7 +341,7 @@ def simulate(
                 q_end, pose_end = simulation.transfer(q, grasp, object_pose, int(rng.integers(moves[0], moves[1] + 1)))
                 if index + 1 < transfers:
                     q_end, next_grasp = simulation.regrasp(q_end, grasp, pose_end)
-            except WitnessFailed:
+            except WitnessError:
                 del simulation.segments[kept:]
                 if attempt + 1 == REGRASP_ATTEMPTS:
                     raise

@@ -71,7 +71,7 @@ class Family:
     summary: str
     joints: tuple[int, ...]
     shapes: tuple[str, ...]
-    layout: LayoutBuilder
+    layout: LayoutBuilder | None  # None: the unsolvable family's ring (:func:`_unsolvable`)
     margin_m: float = 0.04
     transfers: tuple[float, float, float] = (0.4, 0.4, 0.2)
     angle_tolerances: tuple[float, ...] = (ANY_ANGLE, 0.5, 0.2)
@@ -213,7 +213,7 @@ FAMILIES: dict[str, Family] = {
             "2-4 joints; the goal inside a closed ring, or one whose opening is narrower than the object",
             (2, 3, 4),
             ALL_SHAPES,
-            _blocks_layout,  # unused: the ring is built by _unsolvable
+            None,
             transfers=(1.0, 0.0, 0.0),
             solvable=False,
         ),
@@ -343,6 +343,7 @@ def _draft(family: Family, seed: int, rng: np.random.Generator, attempt: int) ->
 def _solvable(family: Family, seed: int, draft: _Draft, rng: np.random.Generator) -> GeneratedWorld:
     """The family's layout around the witness, then the checks (steps 3 and 4)."""
     world = draft.world
+    assert family.layout is not None  # a solvable family has a layout
     try:
         layout = family.layout(world, Sweep(world, draft.witness, family.margin_m), rng)
     except LayoutError as error:

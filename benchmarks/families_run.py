@@ -213,6 +213,7 @@ def run(args: argparse.Namespace, directory: Path) -> dict:
     """Generate the worlds and plan them; the report (rows and every run)."""
     families, world_count, seed_count, limit = _settings(args)
     context = multiprocessing.get_context("spawn")
+    loadavg_start = os.getloadavg()
     started = time.monotonic()
     with concurrent.futures.ProcessPoolExecutor(
         max_workers=args.jobs, mp_context=context, initializer=_warm_up
@@ -238,6 +239,7 @@ def run(args: argparse.Namespace, directory: Path) -> dict:
         "command": command,
         "started": time.strftime("%Y-%m-%d %H:%M:%S"),
         "nproc": os.cpu_count(),
+        "loadavg_start": loadavg_start,
         "loadavg_end": os.getloadavg(),
         "worlds_per_family": world_count,
         "seeds": seed_count,
@@ -265,7 +267,8 @@ def main(argv: list[str] | None = None) -> int:
     (args.out / "families.json").write_text(json.dumps(report, indent=1) + "\n")
     text = (
         f"`{report['command']}` ({report['started']}, {report['total_s'] / 60:.1f} min on {report['nproc']} cores, "
-        f"{report['jobs']} worker processes, planner.threads {report['threads']}; per-run limit "
+        f"{report['jobs']} worker processes, planner.threads {report['threads']}, load average "
+        f"{report['loadavg_start'][0]:.1f} at the start and {report['loadavg_end'][0]:.1f} at the end; per-run limit "
         f"{report['time_limit_s']:g} s):\n\n{markdown(report['rows'])}\n"
     )
     (args.out / "families.md").write_text(text)

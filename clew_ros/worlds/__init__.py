@@ -10,7 +10,7 @@ the checks a user's world gets plus the witness validated at 0.002 rad; the ``un
 puts the goal where the object provably cannot go. :func:`write_world` writes the parameter file
 and the witness plan next to it. Modules: :mod:`~clew_ros.worlds.arms`,
 :mod:`~clew_ros.worlds.shapes`, :mod:`~clew_ros.worlds.witness`, :mod:`~clew_ros.worlds.sweep`,
-:mod:`~clew_ros.worlds.layouts`, :mod:`~clew_ros.worlds.enclosure`,
+:mod:`~clew_ros.worlds.layouts`, :mod:`~clew_ros.worlds.enclosure`, :mod:`~clew_ros.worlds.regrasp`,
 :mod:`~clew_ros.worlds.families`, :mod:`~clew_ros.worlds.files`.
 """
 
@@ -18,6 +18,7 @@ from clew_ros.worlds.enclosure import separation
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
 from clew_ros.worlds.families import FAMILIES, Family, GeneratedWorld, family_names, generate
 from clew_ros.worlds.files import witness_path, world_text, write_world
+from clew_ros.worlds.regrasp import regrasp_needed
 
 __all__ = [
     "FAMILIES",
@@ -27,6 +28,7 @@ __all__ = [
     "UnknownFamilyError",
     "family_names",
     "generate",
+    "regrasp_needed",
     "separation",
     "witness_path",
     "world_text",

@@ -38,6 +38,7 @@ from clew_ros.worlds.arms import ArmShape, make_arm
 from clew_ros.worlds.enclosure import separation
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
 from clew_ros.worlds.layouts import Layout, LayoutError, blocks_near, clutter, pocket, ring, shelves, window
+from clew_ros.worlds.regrasp import regrasp_needed
 from clew_ros.worlds.shapes import SHAPES, ObjectShape, make_shape
 from clew_ros.worlds.sweep import Sweep
 from clew_ros.worlds.witness import WitnessError, simulate
@@ -64,7 +65,8 @@ class Family:
 
     ``joints`` and ``shapes`` are drawn uniformly; ``transfers`` gives the chances of a witness with
     1, 2, 3 transfers; ``angle_tolerances`` the choices of ``world.goal_angle_tolerance`` (rad);
-    ``margin_m`` the clearance of every obstacle from the witness (m).
+    ``margin_m`` the clearance of every obstacle from the witness (m); ``needs_regrasp``: keep only worlds
+    that provably need two transfers or more.
     """
 
     name: str
@@ -76,6 +78,7 @@ class Family:
     transfers: tuple[float, float, float] = (0.4, 0.4, 0.2)
     angle_tolerances: tuple[float, ...] = (ANY_ANGLE, 0.5, 0.2)
     solvable: bool = True
+    needs_regrasp: bool = False  # keep only worlds where :func:`regrasp_needed` proves one transfer too few
 
 
 @dataclass(frozen=True, eq=False)
@@ -162,6 +165,16 @@ FAMILIES: dict[str, Family] = {
             (2,),
             ALL_SHAPES,
             _blocks_layout,
+        ),
+        Family(
+            "regrasp2",
+            "2-joint arm, every object shape, a tight goal orientation that provably needs a regrasp (as figure1)",
+            (2,),
+            ALL_SHAPES,
+            _blocks_layout,
+            transfers=(0.0, 0.6, 0.4),
+            angle_tolerances=(0.1, 0.2),
+            needs_regrasp=True,
         ),
         Family(
             "pocket",
@@ -344,6 +357,11 @@ def _solvable(family: Family, seed: int, draft: _Draft, rng: np.random.Generator
     """The family's layout around the witness, then the checks (steps 3 and 4)."""
     world = draft.world
     assert family.layout is not None  # a solvable family has a layout
+    regrasp = None
+    if family.needs_regrasp:
+        regrasp = regrasp_needed(world_from_parameters({"world": draft.with_layout(Layout({}, []))}))
+        if regrasp is None:
+            raise _RejectedError("one transfer might do")
     try:
         layout = family.layout(world, Sweep(world, draft.witness, family.margin_m), rng)
     except LayoutError as error:
@@ -358,6 +376,7 @@ def _solvable(family: Family, seed: int, draft: _Draft, rng: np.random.Generator
             f"goal_angle_tolerance {draft.angle_tolerance:g} rad"
         ),
         *layout.notes,
+        *([f"A regrasp is needed: {regrasp}."] if regrasp else []),
         (
             f"Witness: {draft.stats['transfers']} transfer(s), joint travel {draft.stats['joint_travel_rad']:.2f} "
             f"rad; obstacles keep {family.margin_m:g} m from it."

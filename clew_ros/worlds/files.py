@@ -29,7 +29,9 @@ def world_text(generated: GeneratedWorld) -> str:
         *(f"# {line}" for line in generated.notes),
     ]
     if generated.solvable:
-        header.append("# Solvable by construction: its witness plan is WORLD.witness.json (clew-plan/1).")
+        header.append(
+            "# Solvable by construction: clew_world writes its witness plan (clew-plan/1) next to it as *.witness.json."
+        )
     body = yaml.safe_dump(
         {"clew_planner": {"ros__parameters": generated.parameters}},
         sort_keys=False,

@@ -188,7 +188,7 @@ def test_same_bytes_in_another_process(written: dict, tmp_path: Path) -> None:
 
 
 def test_an_unknown_family_is_named() -> None:
-    with pytest.raises(UnknownFamilyError, match=r"'shelf'.*shapes2, pocket, shelves"):
+    with pytest.raises(UnknownFamilyError, match=r"'shelf'.*shapes2, regrasp2, pocket, shelves"):
         generate("shelf", 0)
 
 

@@ -63,6 +63,7 @@ setup(
             "clew_replay = clew_ros.cli.replay:main",
             "clew_render = clew_ros.cli.render:main",
             "clew_batch = clew_ros.cli.batch:main",
+            "clew_world = clew_ros.cli.world:main",
         ],
     },
 )

@@ -8,5 +8,8 @@ see ``docs/benchmarks.md``. Modules:
 * :mod:`benchmarks.throughput`: collision-test and free-interval throughput;
 * :mod:`benchmarks.peer`: OMPL RRTConnect against the project on transit sub-problems;
 * :mod:`benchmarks.profile`: cProfile of one planner run;
-* :mod:`benchmarks.plot`: median time against joints and obstacles.
+* :mod:`benchmarks.plot`: median time against joints and obstacles;
+* :mod:`benchmarks.generated`: the generated families of :mod:`clew_ros.worlds` as benchmark worlds;
+* :mod:`benchmarks.families_run`: the planner on those families, a table per family next to figure1
+  (``python -m benchmarks.families_run``, apart from :mod:`benchmarks.run`).
 """

@@ -51,6 +51,7 @@ CONSOLE_SCRIPTS = {
     "clew_replay": "clew_ros.cli.replay:main",
     "clew_render": "clew_ros.cli.render:main",
     "clew_batch": "clew_ros.cli.batch:main",
+    "clew_world": "clew_ros.cli.world:main",
 }
 
 

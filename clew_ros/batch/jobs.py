@@ -6,9 +6,12 @@ seed, and the batch's ``--time-limit`` / ``--improve-time`` overrides, exactly
 as ``clew_plan WORLD --seed S [--time-limit T] [--improve-time I]`` would
 plan it.
 
-Worlds come from files, folders (every ``*.yaml`` in them, by name) and list
+Worlds come from files, folders (every ``*.yaml`` in them, by name), list
 files (``@FILE``: one file or folder per line, relative to the list file;
-blank lines and ``#`` comments skipped). Seeds are ``0 .. N-1``, or with a
+blank lines and ``#`` comments skipped) and generator specifications
+(``--generate FAMILY:COUNT``: the worlds ``clew_world FAMILY --seed 0..COUNT-1``
+writes, kept under the output folder's ``worlds/`` with their witnesses,
+see :func:`generated_world_paths`). Seeds are ``0 .. N-1``, or with a
 batch seed ``B`` derived from it (:func:`derived_seeds`). Every world uses the
 same seeds. Job ``figure1/seed_0007`` writes ``plans/figure1/seed_0007.json``
 under the output folder (the folder is the world file's name without
@@ -32,14 +35,17 @@ from clew_ros.core.offline import Problem, problem_from_parameters
 from clew_ros.core.parameters import PLANNER_PARAMETERS, check_value
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import read_parameter_file
+from clew_ros.worlds import GenerationError, UnknownFamilyError, generate, write_world
 
 __all__ = [
+    "GENERATED_FOLDER",
     "PLANS_FOLDER",
     "WORLD_SUFFIX",
     "BatchWorld",
     "Job",
     "collect_world_paths",
     "derived_seeds",
+    "generated_world_paths",
     "load_worlds",
     "make_jobs",
 ]
@@ -217,3 +223,34 @@ def make_jobs(
             except ParameterError as error:
                 raise BatchInputError(option, error.expected) from None
     return [Job(world, seed, time_limit_s, improve_time_s) for world in worlds for seed in seeds]
+
+
+#: Where the generated worlds of ``--generate`` go, under the output folder.
+GENERATED_FOLDER = "worlds"
+
+
+def generated_world_paths(specs: Sequence[str], out: Path) -> list[Path]:
+    """The world files of generator specifications ``FAMILY:COUNT`` (seeds ``0..COUNT-1``), written
+    under ``out/worlds/`` as ``FAMILY_SSSS.yaml`` with the witness plan next to each; a file that is
+    already there is kept (generation is deterministic, so a rerun finds the same worlds).
+    :class:`BatchInputError` names the specification at fault."""
+    paths: list[Path] = []
+    for spec in specs:
+        family, _, count_text = spec.partition(":")
+        try:
+            count = int(count_text)
+        except ValueError:
+            count = 0
+        if count < 1:
+            raise BatchInputError("--generate", f"expected FAMILY:COUNT with COUNT an integer >= 1, got {spec!r}")
+        for seed in range(count):
+            path = out / GENERATED_FOLDER / f"{family}_{seed:04d}{WORLD_SUFFIX}"
+            if not path.is_file():
+                try:
+                    write_world(generate(family, seed), path)
+                except UnknownFamilyError as error:
+                    raise BatchInputError("--generate", str(error)) from None
+                except GenerationError as error:
+                    raise BatchInputError("--generate", f"{spec}: seed {seed}: {error}") from None
+            paths.append(path)
+    return paths

@@ -37,7 +37,7 @@ from types import FrameType
 from clew_ros.batch.errors import BatchInputError, ExecutorError, ExecutorUnavailableError
 from clew_ros.batch.executors import Executor, LocalPool, RayExecutor, default_workers
 from clew_ros.batch.index import INDEX_NAME
-from clew_ros.batch.jobs import collect_world_paths, derived_seeds, load_worlds, make_jobs
+from clew_ros.batch.jobs import collect_world_paths, derived_seeds, generated_world_paths, load_worlds, make_jobs
 from clew_ros.batch.progress import ProgressBar
 from clew_ros.batch.runner import DEFAULT_GRACE_S, BatchReport, run_batch
 from clew_ros.batch.summary import summary_table
@@ -59,6 +59,14 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "worlds", nargs="*", metavar="WORLD", help="world parameter file, folder of .yaml world files, or @LIST file"
+    )
+    parser.add_argument(
+        "--generate",
+        action="append",
+        default=[],
+        metavar="FAMILY:COUNT",
+        help="also plan COUNT generated worlds of FAMILY (clew_world FAMILY --seed 0..COUNT-1), written to "
+        "DIR/worlds/ with their witnesses (repeatable; clew_world --list shows the families)",
     )
     parser.add_argument("--seeds", type=int, required=True, metavar="N", help="seeds per world: 0..N-1")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created; resumed)")
@@ -104,9 +112,11 @@ def _parser() -> argparse.ArgumentParser:
 
 def _check_arguments(args: argparse.Namespace) -> None:
     """:class:`BatchInputError` for the first option out of range."""
-    if not args.worlds:
+    if not args.worlds and not args.generate:
         taken = " (--ray took the one given as its ADDRESS: put --ray after the world files)" if args.ray else ""
-        raise BatchInputError("WORLD", f"expected at least one world file, folder or @LIST file{taken}")
+        raise BatchInputError(
+            "WORLD", f"expected at least one world file, folder, @LIST file or --generate FAMILY:COUNT{taken}"
+        )
     if args.seeds < 1:
         raise BatchInputError("--seeds", f"expected an integer >= 1, got {args.seeds}")
     if args.jobs is not None and args.jobs < 1:
@@ -183,7 +193,8 @@ def main(argv: Sequence[str] | None = None, *, job_function: JobFunction = run_j
     args = _parser().parse_args(argv)
     try:
         _check_arguments(args)
-        worlds = load_worlds(collect_world_paths(args.worlds))
+        generated = generated_world_paths(args.generate, args.out)
+        worlds = load_worlds(collect_world_paths([*args.worlds, *(str(path) for path in generated)]))
         seeds = list(range(args.seeds)) if args.batch_seed is None else derived_seeds(args.batch_seed, args.seeds)
         jobs = make_jobs(worlds, seeds, time_limit_s=args.time_limit, improve_time_s=args.improve_time)
         executor = _executor(args, len(jobs), job_function)

@@ -209,6 +209,8 @@ def _kill_group(pgid: int) -> None:
         ),
         (["--ray", str(CONFIG / "figure1.yaml"), "--seeds", "2"], "put --ray after the world files"),
         (["a.yaml", "--ray", "not an address", "--seeds", "2"], "--ray: expected a Ray address"),
+        (["--generate", "shapes2:x", "--seeds", "1"], "--generate: expected FAMILY:COUNT"),
+        (["--generate", "no_such_family:2", "--seeds", "1"], "--generate: "),
     ],
 )
 def test_bad_input_exits_2_naming_the_argument(
@@ -238,3 +240,22 @@ def test_ray_missing_says_to_install_the_batch_extra(
     code = main([str(CONFIG / "single_transfer.yaml"), "--seeds", "1", "--out", str(tmp_path / "out"), "--ray"])
     assert code == 2
     assert "pip install 'clew_ros[batch]'" in capsys.readouterr().err
+
+
+def test_generated_worlds_are_planned_and_kept_for_the_rerun(tmp_path: Path) -> None:
+    """``--generate FAMILY:COUNT``: the worlds clew_world makes (with their witnesses) are written under
+    DIR/worlds/ and planned; a rerun plans nothing again and keeps the same world files."""
+    out = tmp_path / "out"
+    args = ["--generate", "shapes2:2", "--seeds", 1, "--out", out, "--time-limit", 3, "--jobs", 2]
+    done = run_batch_cli(*args)
+    assert done.returncode == 0, done.stderr
+    worlds = sorted((out / "worlds").glob("*.yaml"))
+    assert [w.name for w in worlds] == ["shapes2_0000.yaml", "shapes2_0001.yaml"]
+    assert all(w.with_suffix(".witness.json").is_file() for w in worlds)
+    records = index_lines(out)
+    assert sorted(r["job"] for r in records) == ["shapes2_0000/seed_0000", "shapes2_0001/seed_0000"]
+    contents = {w: w.read_bytes() for w in worlds}
+    again = run_batch_cli(*args)
+    assert again.returncode == 0, again.stderr
+    assert len(index_lines(out)) == 2  # nothing planned twice
+    assert {w: w.read_bytes() for w in worlds} == contents

@@ -1,0 +1,69 @@
+"""The generated families as benchmark worlds: ``clew_world``'s worlds written into a directory.
+
+Each world of :mod:`clew_ros.worlds` (family, world seed 0..N-1) is generated and written as
+``DIR/<family>_<seed>.yaml`` with its witness next to it, exactly as ``clew_world FAMILY --seed S``
+would write it; :class:`GeneratedBenchWorld` keeps what the benchmark table needs: whether the
+world is solvable (the success rate's denominator counts only those) and the witness's transfers
+and joint travel (the plan-quality reference). :func:`reference_world` adds figure1 from
+``config/`` in the same form, so that the table shows it next to the families. Worlds are never
+written into ``config/``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from benchmarks.families import CONFIG_DIR
+from clew_ros.worlds import FAMILIES, generate, write_world
+
+__all__ = ["GeneratedBenchWorld", "build_world", "reference_world", "solvable_families"]
+
+
+@dataclass(frozen=True)
+class GeneratedBenchWorld:
+    """One benchmark world: its file, family, world seed, and the witness's figures (solvable worlds)."""
+
+    family: str
+    seed: int
+    path: str
+    solvable: bool
+    joints: int
+    obstacles: int
+    witness_transfers: int | None
+    witness_travel_rad: float | None
+
+
+def solvable_families() -> list[str]:
+    """The families whose worlds are solvable by construction, in :data:`clew_ros.worlds.FAMILIES`' order."""
+    return [name for name, family in FAMILIES.items() if family.solvable]
+
+
+def build_world(family: str, seed: int, directory: str | Path) -> GeneratedBenchWorld:
+    """Generate world ``seed`` of ``family`` and write it (and its witness) into ``directory``."""
+    directory = Path(directory).resolve()
+    if directory == CONFIG_DIR.resolve():
+        raise ValueError("benchmark worlds are never written into config/")
+    generated = generate(family, seed)
+    path = directory / f"{generated.name}.yaml"
+    write_world(generated, path)
+    tree = generated.parameters["world"]
+    return GeneratedBenchWorld(
+        family,
+        seed,
+        str(path),
+        generated.solvable,
+        len(tree["robot"]["link_lengths"]),
+        len(tree.get("obstacle_names", [])),
+        generated.stats.get("transfers"),
+        generated.stats.get("joint_travel_rad"),
+    )
+
+
+def reference_world(name: str = "figure1") -> GeneratedBenchWorld:
+    """A world of ``config/`` (default figure1) as a family of one world, for the table's reference row."""
+    from clew_ros.core.world import load_world
+
+    path = CONFIG_DIR / f"{name}.yaml"
+    world = load_world(path)
+    return GeneratedBenchWorld(name, 0, str(path), True, world.robot.dof, len(world.obstacles), None, None)

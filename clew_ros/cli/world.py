@@ -1,0 +1,83 @@
+"""``clew_world FAMILY --seed N -o WORLD.yaml [--no-witness]``: generate a world of a family, solvable by
+construction; ``clew_world --list`` lists the families.
+
+Writes the ROS 2 parameter file WORLD.yaml (``clew_plan`` and the node read it as any world) and,
+unless ``--no-witness``, the witness plan WORLD.witness.json next to it (``clew-plan/1``: the
+manipulation the world was built around; for the ``unsolvable`` family a failed plan saying why no
+plan exists). Same family and seed, same bytes. Exit 0: written; 1: no world could be built for this
+seed; 2: invalid arguments (an unknown family, a negative seed, an output that cannot be written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from clew_ros.worlds import FAMILIES, GenerationError, UnknownFamilyError, generate, write_world
+
+EXIT_OK = 0
+EXIT_FAILED = 1
+EXIT_INVALID = 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="clew_world", description=__doc__.split("\n\n")[0])
+    parser.add_argument("family", nargs="?", help="the family of worlds (--list shows them)")
+    parser.add_argument("--seed", type=int, default=0, help="the world's seed, an integer >= 0 (default 0)")
+    parser.add_argument("--output", "-o", type=Path, help="parameter file to write (WORLD.yaml)")
+    parser.add_argument("--no-witness", action="store_true", help="do not write WORLD.witness.json")
+    parser.add_argument("--list", action="store_true", help="list the families, one line each, and exit")
+    return parser
+
+
+def _invalid(message: str) -> int:
+    print(f"clew_world: invalid arguments: {message}", file=sys.stderr)
+    return EXIT_INVALID
+
+
+def _argument_problem(args: argparse.Namespace) -> str | None:
+    """What is wrong with the arguments of a generation (the argument named first), or ``None``."""
+    if args.family is None:
+        return f"FAMILY: expected one of {', '.join(FAMILIES)} (or --list)"
+    if args.output is None:
+        return "--output: expected the parameter file to write (WORLD.yaml)"
+    if args.seed < 0:
+        return f"--seed: expected an integer >= 0, got {args.seed}"
+    return None
+
+
+def _list() -> int:
+    width = max(len(name) for name in FAMILIES)
+    for name, family in FAMILIES.items():
+        print(f"{name:<{width}}  {family.summary}")
+    return EXIT_OK
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    if args.list:
+        return _list()
+    problem = _argument_problem(args)
+    if problem:
+        return _invalid(problem)
+    try:
+        generated = generate(args.family, args.seed)
+        written = write_world(generated, args.output, witness=not args.no_witness)
+    except UnknownFamilyError as error:
+        return _invalid(f"FAMILY: {error}")
+    except GenerationError as error:
+        print(f"clew_world: no world: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    except OSError as error:
+        return _invalid(f"--output: cannot write {args.output} ({error.strerror})")
+    what = f"{'solvable' if generated.solvable else 'unsolvable'}, "
+    what += f"{len(generated.parameters['world'].get('obstacle_names', []))} obstacles"
+    if generated.solvable:
+        what += f", witness with {generated.stats['transfers']} transfer(s)"
+    print(f"clew_world: {generated.name} ({what}) -> {', '.join(str(p) for p in written)}", file=sys.stderr)
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

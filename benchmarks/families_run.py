@@ -11,7 +11,8 @@ writes ``DIR/families.json`` (every run) and ``DIR/families.md`` (the table in M
 
 * success: successful runs over the runs on known-solvable worlds (every world of a solvable family
   has a witness; for ``unsolvable`` the column says how many runs answered ``NO_PATH_AT_RESOLUTION``);
-* median and p90 wall time of all runs (a failed run counts at its limit);
+* median and p90 wall time of all runs (a failed run counts at its limit), median CPU time of the run's
+  process (steadier than wall time on a shared machine);
 * medians of landmarks, and over successful runs of transfers and joint travel (rad, the plan returned);
 * the witnesses' median transfers and joint travel: a plan that solves the world, for scale.
 
@@ -105,6 +106,7 @@ def summarise(family: str, worlds: list[GeneratedBenchWorld], runs: list[dict], 
         "median_s": _median(walls),
         "p90_s": _p90(walls),
         "median_success_s": _median([r["wall_s"] for r in successes]),
+        "median_cpu_s": _median([r["cpu_s"] for r in runs]),
         "landmarks_median": _median([r["landmarks"] for r in runs]),
         "transfers_median": _median([r["transfers"] for r in successes]),
         "travel_median": _median([r["travel_rad"] for r in successes]),
@@ -128,6 +130,7 @@ HEADER = [
     "worlds solved",
     "median s",
     "p90 s",
+    "median CPU s",
     "landmarks",
     "transfers",
     "travel rad",
@@ -153,6 +156,7 @@ def cells(row: dict) -> list[str]:
         f"{row['worlds_solved']}/{row['worlds']}" if row["solvable"] else "-",
         _fmt(row["median_s"]),
         _fmt(row["p90_s"]),
+        _fmt(row["median_cpu_s"]),
         _fmt(row["landmarks_median"], 0),
         _fmt(row["transfers_median"], 0),
         _fmt(row["travel_median"], 1),
@@ -194,6 +198,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--no-figure1", action="store_true", help="leave out the figure1 reference row")
     parser.add_argument("--out", type=Path, default=Path("bench_out"), help="where families.json/.md go")
     parser.add_argument("--keep-worlds", type=Path, default=None, help="write the worlds here (default: a temp dir)")
+    parser.add_argument(
+        "--render", type=Path, default=None, metavar="JSON", help="re-summarise a saved families.json, no planning"
+    )
     return parser
 
 
@@ -254,10 +261,29 @@ def run(args: argparse.Namespace, directory: Path) -> dict:
     }
 
 
+def rerender(path: Path) -> dict:
+    """A saved report with its rows summarised again from its worlds and runs (after a change of the table)."""
+    report = json.loads(path.read_text())
+    worlds = [GeneratedBenchWorld(**w) for w in report["worlds"]]
+    order = list(dict.fromkeys(w.family for w in worlds))
+    report["rows"] = [
+        summarise(
+            family,
+            [w for w in worlds if w.family == family],
+            [r for r in report["runs"] if r["family"] == family],
+            report["time_limit_s"],
+        )
+        for family in order
+    ]
+    return report
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     args.command = None if argv is None else " ".join(["python -m benchmarks.families_run", *argv])
-    if args.keep_worlds:
+    if args.render:
+        report = rerender(args.render)
+    elif args.keep_worlds:
         args.keep_worlds.mkdir(parents=True, exist_ok=True)
         report = run(args, args.keep_worlds)
     else:

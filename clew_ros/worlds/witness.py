@@ -33,7 +33,17 @@ from clew_ros.core.plan import CHECK_STEP_RAD, PlanSegment
 from clew_ros.core.world import World
 from clew_ros.worlds.shapes import ObjectShape
 
-__all__ = ["MAX_APPROACH_RAD", "Witness", "WitnessError", "grasp_configurations", "grasp_relation", "simulate"]
+__all__ = [
+    "MAX_APPROACH_RAD",
+    "Witness",
+    "WitnessError",
+    "grasp_configurations",
+    "grasp_relation",
+    "random_configurations",
+    "simulate",
+    "transfer_valid",
+    "transit_valid",
+]
 
 #: Largest angle (rad) between the last link, pointing back from the tip, and the grasped edge's normal.
 MAX_APPROACH_RAD = 1.1

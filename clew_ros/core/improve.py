@@ -67,6 +67,7 @@ import numpy as np
 from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
@@ -95,6 +96,14 @@ MIN_MARGIN_FACTOR = 0.5
 MAX_MARGIN_M = 0.05
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5
+#: Share of the budget that rebuilding the manipulation from straight moves may start in.
+REBUILD_SHARE = 0.5
+#: Proposals checked per placement at most.
+REBUILD_TRIES = 8
+#: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
+ALIKE_RAD = 0.3
+#: Detours tried around a straight move of a proposal that is not clear.
+DETOURS = 3
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
 #: Step (rad per joint) of the final check, the validator's.
@@ -241,6 +250,12 @@ def straight_move_clear(
             return True
         if margin <= min_margin:
             return False
+        # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
+        doubtful = np.flatnonzero(~clear)
+        if budget is not None:
+            budget.spend(len(doubtful) + CALL_WORK)
+        if not is_valid(world, q[doubtful], np.asarray(poses)[doubtful]).all():
+            return False
         pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
         pending = pending.reshape(-1)
         level += 1
@@ -288,6 +303,11 @@ def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
     return new[2] < old[2]
 
 
+def _alike(a: Proposal, b: Proposal) -> bool:
+    """Whether two proposals take the same grasps at key configurations within :data:`ALIKE_RAD` of each other."""
+    return a.grasps == b.grasps and float(np.max(np.abs(a.keys - b.keys))) <= ALIKE_RAD
+
+
 def _score(pieces: list[_Piece]) -> tuple[int, float, int]:
     return (
         sum(p.kind == "transfer" for p in pieces),
@@ -305,6 +325,7 @@ class _Improver:
         self.budget = _Budget(ctx, ctx.settings.improve_time * WORK_PER_SECOND)
         self.min_margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
         self.shortcuts = 0
+        self.rebuilt = 0
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
@@ -324,6 +345,106 @@ class _Improver:
                 (0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([pruned]), len(pruned))
             ):
                 piece.waypoints = pruned
+
+    def cuts(self) -> list[tuple[int, np.ndarray, np.ndarray]]:
+        """Where the plan could be finished differently: ``(kept, configuration, placement)`` for the start
+        (no piece kept) and after each transfer but one ending at the goal (the pieces through it kept)."""
+        cuts = [(0, self.pieces[0].waypoints[0], np.asarray(self.world.object.initial, dtype=float))]
+        for index, piece in enumerate(self.pieces[:-1]):
+            if piece.kind == "transfer":
+                cuts.append((index + 1, piece.waypoints[-1], piece.end_pose(self.world)))
+        return cuts
+
+    def rebuild(self) -> None:
+        """From each placement of the plan, earliest first: finish with straight moves through other grasps,
+        postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better."""
+        position = 0
+        while self.budget.left(REBUILD_SHARE):
+            cuts = [cut for cut in self.cuts() if cut[0] >= position]
+            if not cuts:
+                return
+            kept, configuration, placement = cuts[0]
+            position = kept + 1
+            before = self.pieces[:kept]
+            transfers = sum(p.kind == "transfer" for p in before)
+            score = _score(self.pieces)
+            if transfers + 1 > score[0]:
+                return
+            following = self.pieces[kept + 1] if kept + 1 < len(self.pieces) else None
+            own = [(following.grasp, following.waypoints[0])] if following and following.grasp is not None else []
+            proposals, work = propose(
+                self.world,
+                configuration,
+                placement,
+                self.goal,
+                self.ctx.rng,
+                own=[(int(g), q) for g, q in own],
+                two_transfers=transfers + 2 <= score[0],
+                margin_m=self.min_margin,
+            )
+            self.budget.spend(math.ceil(work))
+            travel_before = joint_travel([p.waypoints for p in before])
+            failed: list[Proposal] = []
+            for proposal in proposals:
+                if not _better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
+                    continue
+                if any(_alike(proposal, other) for other in failed):
+                    continue  # as good as one that failed: try something else
+                if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
+                    break
+                tail = self.checked_tail(proposal, placement)
+                if tail is not None and _better(score, _score(before + tail)):
+                    self.pieces = before + tail
+                    self.rebuilt += 1
+                    break
+                failed.append(proposal)
+
+    def checked_tail(self, proposal: Proposal, placement: np.ndarray) -> list[_Piece] | None:
+        """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked
+        continuously (:meth:`route`); ``None`` if a move stays blocked."""
+        pieces: list[_Piece] = []
+        keys = proposal.keys
+        pose = np.asarray(placement, dtype=float)
+        for step, grasp in enumerate(proposal.grasps):
+            start, hold, end = keys[2 * step], keys[2 * step + 1], keys[2 * step + 2]
+            grasp_rel = relative(tip_poses(self.world.robot, hold[None])[0], pose)  # as plan.replay computes it
+            transit = _Piece("transit", None, np.array([start, hold]), pose, None)
+            transfer = _Piece("transfer", grasp, np.array([hold, end]), pose, grasp_rel)
+            for piece, route in zip((transit, transfer), proposal.routes[2 * step : 2 * step + 2], strict=True):
+                path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], route)
+                if path is None:
+                    return None
+                piece.waypoints = path
+                pieces.append(piece)
+            pose = transfer.end_pose(self.world)
+        return pieces
+
+    def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:
+        """Waypoints from ``a`` to ``b`` in ``piece``'s mode, each move checked continuously: the ways of
+        :data:`clew_ros.core.regrasp.ROUTES` (the one that looked clear, ``hint``, first; all as long in
+        joint travel), then through a configuration drawn inside the box ``[a, b]`` (as long too), then
+        through one drawn around the middle (:data:`DETOURS` tries each); ``None`` when none is clear."""
+        ways = [hint] if hint >= 0 else []
+        for way in [*ways, *(w for w in range(len(ROUTES)) if w != hint)]:
+            path = route_waypoints(a, b, way)
+            if self.budget.stop():
+                return None
+            if all(self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
+                return path
+        n = len(a)
+        lower, upper = self.world.robot.joint_lower, self.world.robot.joint_upper
+        spread = 0.25 * float(np.max(np.abs(b - a))) + 0.1
+        for monotone in (True, False):
+            for _ in range(DETOURS):
+                if self.budget.stop():
+                    return None
+                if monotone:
+                    via = a + self.ctx.rng.uniform(0.0, 1.0, size=n) * (b - a)
+                else:
+                    via = np.clip(0.5 * (a + b) + self.ctx.rng.normal(0.0, spread, size=n), lower, upper)
+                if self.clear(piece, a, via) and self.clear(piece, via, b):
+                    return np.array([a, via, b])
+        return None
 
     def fewer_transfers(self) -> None:
         """From the start of each transfer but the last, earliest first: carry the object to the goal."""
@@ -396,6 +517,7 @@ class _Improver:
 
     def run(self) -> list[_Piece]:
         self.prune()
+        self.rebuild()
         self.fewer_transfers()
         self.prune()
         self.whole_segments()

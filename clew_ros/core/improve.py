@@ -97,7 +97,9 @@ MAX_MARGIN_M = 0.05
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5
 #: Share of the budget that rebuilding the manipulation from straight moves may start in.
-REBUILD_SHARE = 0.5
+REBUILD_SHARE = 0.6
+#: Rebuilding stops after this many passes in a row that found nothing better.
+REBUILD_IDLE_PASSES = 2
 #: Proposals checked per placement at most.
 REBUILD_TRIES = 8
 #: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
@@ -356,48 +358,68 @@ class _Improver:
         return cuts
 
     def rebuild(self) -> None:
+        """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts)."""
+        idle = 0
+        while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
+            idle = 0 if self.rebuild_pass() else idle + 1
+
+    def rebuild_pass(self) -> bool:
         """From each placement of the plan, earliest first: finish with straight moves through other grasps,
-        postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better."""
+        postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
+        Returns whether the plan got better."""
         position = 0
+        better = False
         while self.budget.left(REBUILD_SHARE):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
-                return
+                break
             kept, configuration, placement = cuts[0]
             position = kept + 1
             before = self.pieces[:kept]
             transfers = sum(p.kind == "transfer" for p in before)
             score = _score(self.pieces)
             if transfers + 1 > score[0]:
-                return
-            following = self.pieces[kept + 1] if kept + 1 < len(self.pieces) else None
-            own = [(following.grasp, following.waypoints[0])] if following and following.grasp is not None else []
+                break
+            after = self.pieces[kept:]
+            own = [(int(p.grasp), p.waypoints[0]) for p in after[1:2] if p.grasp is not None]
+            hints = np.array([p.waypoints[-1] for p in after[:-1] if p.kind == "transfer"]).reshape(-1, len(configuration))
             proposals, work = propose(
                 self.world,
                 configuration,
                 placement,
                 self.goal,
                 self.ctx.rng,
-                own=[(int(g), q) for g, q in own],
+                own=own,
+                releases=hints,
                 two_transfers=transfers + 2 <= score[0],
                 margin_m=self.min_margin,
             )
             self.budget.spend(math.ceil(work))
-            travel_before = joint_travel([p.waypoints for p in before])
-            failed: list[Proposal] = []
-            for proposal in proposals:
-                if not _better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
-                    continue
-                if any(_alike(proposal, other) for other in failed):
-                    continue  # as good as one that failed: try something else
-                if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
-                    break
-                tail = self.checked_tail(proposal, placement)
-                if tail is not None and _better(score, _score(before + tail)):
-                    self.pieces = before + tail
-                    self.rebuilt += 1
-                    break
-                failed.append(proposal)
+            better |= self.try_proposals(proposals, kept, placement)
+        return better
+
+    def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
+        """The first of ``proposals`` (after the first ``kept`` pieces) whose moves are clear and that makes
+        the plan better replaces the plan's end; whether one did."""
+        before = self.pieces[:kept]
+        transfers = sum(p.kind == "transfer" for p in before)
+        score = _score(self.pieces)
+        travel_before = joint_travel([p.waypoints for p in before])
+        failed: list[Proposal] = []
+        for proposal in proposals:
+            if not _better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
+                continue
+            if any(_alike(proposal, other) for other in failed):
+                continue  # as good as one that failed: try something else
+            if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
+                break
+            tail = self.checked_tail(proposal, placement)
+            if tail is not None and _better(score, _score(before + tail)):
+                self.pieces = before + tail
+                self.rebuilt += 1
+                return True
+            failed.append(proposal)
+        return False
 
     def checked_tail(self, proposal: Proposal, placement: np.ndarray) -> list[_Piece] | None:
         """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked

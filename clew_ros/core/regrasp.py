@@ -47,18 +47,25 @@ SCREEN_WORK = 0.1
 HOLD_ERROR_M = 1e-9
 #: A goal configuration puts the object's origin this close to the goal, as a share of goal_tolerance.
 GOAL_SHARE = 0.25
-#: Release configurations drawn per grasp configuration: along the way to the goal, anywhere.
-TOWARDS, ANYWHERE = 8, 24
-#: Refinement rounds around the best releases: how many are kept, samples around each, spread (rad).
-ROUNDS = ((8, 6, 0.3), (6, 6, 0.1))
+#: Release configurations drawn per grasp configuration (and per its mirror image): along the way to where
+#: the object comes closest to the goal, putting the object down around the goal; and anywhere.
+TOWARDS, NEAR, ANYWHERE = 6, 20, 8
+#: Releases drawn around the goal put the object within this distance of it (m).
+NEAR_RADIUS_M = 0.6
+#: Releases tried per configuration where the plan put the object down (itself, then drawn around it), and
+#: their spread (rad).
+HINTED, HINT_SPREAD_RAD = 4, 0.2
+#: Refinement rounds around the best releases of each grasp configuration: how many are kept, samples
+#: around each, spread (rad).
+ROUNDS = ((4, 6, 0.3), (3, 6, 0.1))
 #: Releases refined in one round lie at least this far apart (rad, largest joint difference).
 DISTINCT_RAD = 0.3
 #: Continuations (grasp and posture after a release) screened per release.
 CONTINUATIONS = 3
-#: Configurations sampled per move by the screen.
-SCREEN_SAMPLES = 32
+#: Joint travel (rad) between configurations sampled by the screen, about.
+SCREEN_STEP_RAD = 0.04
 #: Joint travel (rad) a move that looks blocked counts extra when proposals are ranked.
-BLOCKED_PENALTY_RAD = 4.0
+BLOCKED_PENALTY_RAD = 8.0
 #: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
 #: (first joint first), one joint after the other (last joint first). All are as long in joint travel.
 ROUTES = ("straight", "first joint first", "last joint first")
@@ -141,22 +148,29 @@ class _Kinematics:
         self, a: np.ndarray, b: np.ndarray, *, resting: np.ndarray | None = None, grasp_rel: np.ndarray | None = None
     ) -> np.ndarray:
         """Per move ``a[k] -> b[k]``, the first way of :data:`ROUTES` whose sampled configurations are all
-        valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is."""
+        valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is. A move
+        is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 128 samples)."""
         route = np.full(len(a), -1)
-        if not len(a):
-            return route
-        for index, way in enumerate(_route_samples(a, b, SCREEN_SAMPLES)):
-            rows = np.flatnonzero(route < 0)
-            if not len(rows):
-                break
-            q = way[rows].reshape(-1, a.shape[1])
-            if grasp_rel is None:
-                assert resting is not None
-                poses = np.repeat(resting[rows], way.shape[1], axis=0)
-            else:
-                poses = compose(tip_poses(self.world.robot, q), np.repeat(grasp_rel[rows], way.shape[1], axis=0))
-            clear = self.valid(q, poses).reshape(len(rows), way.shape[1]).all(axis=1)
-            route[rows[clear]] = index
+        samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 4)
+        for count in np.unique(samples).astype(int):
+            group = np.flatnonzero(samples == count)
+            for index, way in enumerate(_route_samples(a[group], b[group], count)):
+                rows = np.flatnonzero(route[group] < 0)
+                if not len(rows):
+                    break
+                coarse = np.arange(way.shape[1]) % 4 == 0  # every fourth sample first: most blocked moves stop there
+                for part in (coarse, ~coarse):
+                    if not len(rows):
+                        break
+                    q = way[rows][:, part].reshape(-1, a.shape[1])
+                    moves = group[rows]
+                    if grasp_rel is None:
+                        assert resting is not None
+                        poses = np.repeat(resting[moves], int(part.sum()), axis=0)
+                    else:
+                        poses = compose(tip_poses(self.world.robot, q), np.repeat(grasp_rel[moves], int(part.sum()), axis=0))
+                    rows = rows[self.valid(q, poses).reshape(len(rows), -1).all(axis=1)]
+                route[group[rows]] = index
         return route
 
     def holding(self, placements: np.ndarray, grasps: np.ndarray, seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -190,9 +204,10 @@ class _Kinematics:
         ok[ok] = self.valid(q[ok], compose(tip_poses(world.robot, q[ok]), grasp_rel[ok]))
         return q, ok
 
-    def toward_goal(self, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray) -> np.ndarray:
-        """Where the object, held as ``grasp_rel``, gets closest to the goal from ``seeds`` (reached or not)."""
-        q, _ = solve_point(self.world.robot, seeds, goal[:2], offsets=grasp_rel[:, :2])
+    def toward(self, grasp_rel: np.ndarray, seeds: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Where the object's origin, held as ``grasp_rel``, gets closest to ``points`` from ``seeds`` (reached
+        or not)."""
+        q, _ = solve_point(self.world.robot, seeds, points, offsets=grasp_rel[:, :2])
         self.work += IK_WORK * len(q) * ITERATIONS
         return q
 
@@ -242,12 +257,14 @@ def propose(
     rng: np.random.Generator,
     *,
     own: list[tuple[int, np.ndarray]] | None = None,
+    releases: np.ndarray | None = None,
     two_transfers: bool = True,
     margin_m: float = 0.0,
 ) -> tuple[list[Proposal], float]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
-    the object at this placement, tried as they are. Ranked by joint travel plus
+    the object at this placement, tried as they are; ``releases`` ``(m, n)``: configurations where the
+    plan put the object down, tried (and around them) as releases. Ranked by joint travel plus
     :data:`BLOCKED_PENALTY_RAD` per move that looked blocked.
 
     Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work spent (units).
@@ -258,7 +275,8 @@ def propose(
         return [], kinematics.work
     proposals = _one_transfer(kinematics, begin, goal)
     if two_transfers:
-        proposals += _two_transfers(kinematics, begin, goal, rng)
+        hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
+        proposals += _two_transfers(kinematics, begin, goal, rng, hints)
     proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
     return proposals[:MAX_PROPOSALS], kinematics.work
 
@@ -397,7 +415,18 @@ def _continue(kinematics: _Kinematics, begin: _Start, option: np.ndarray, releas
     return found
 
 
-def _two_transfers(kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng: np.random.Generator) -> list[Proposal]:
+def _best_distinct(found: _Releases, option: int, keep: int) -> np.ndarray:
+    """The ``keep`` best-scored releases carried with grasp configuration ``option``, at least
+    :data:`DISTINCT_RAD` apart."""
+    rows = np.flatnonzero((found.option == option) & np.isfinite(found.score))
+    ranked = rows[np.argsort(found.score[rows], kind="stable")][: 8 * keep]
+    chosen: np.ndarray = ranked[_unique_rows(found.release[ranked], DISTINCT_RAD)][:keep]
+    return chosen
+
+
+def _two_transfers(
+    kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng: np.random.Generator, hints: np.ndarray
+) -> list[Proposal]:
     """Grasp configurations carried to a release, regrasped there, and carried to the goal."""
     world = kinematics.world
     robot = world.robot
@@ -405,17 +434,32 @@ def _two_transfers(kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng
     count, n = first.shape
     goal_side = np.broadcast_to(goal[:2], (count, 2))
     sides = np.tile(np.arange(count), 2)  # from each grasp configuration and its mirror image
-    closest = kinematics.toward_goal(begin.grasp_rel[sides], _with_mirrors(world, first, goal_side), goal)
+    closest = kinematics.toward(begin.grasp_rel[sides], _with_mirrors(world, first, goal_side), goal[:2])
     share = np.linspace(1.0 / TOWARDS, 1.0, TOWARDS)
     along = first[sides][:, None, :] + share[None, :, None] * (closest - first[sides])[:, None, :]
+    # around the goal: the object put down at points drawn within NEAR_RADIUS_M of it (both elbows)
+    radius = NEAR_RADIUS_M * np.sqrt(rng.uniform(0.0, 1.0, size=len(sides) * NEAR))
+    angle = rng.uniform(0.0, 2.0 * np.pi, size=len(radius))
+    points = goal[:2] + np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1)
+    near_sides = np.repeat(sides, NEAR)
+    near = kinematics.toward(begin.grasp_rel[near_sides], np.repeat(_with_mirrors(world, first, goal_side), NEAR, axis=0), points)
     anywhere = rng.uniform(robot.joint_lower, robot.joint_upper, size=(count * ANYWHERE, n))
-    release = np.concatenate([along.reshape(-1, n), anywhere])
-    option = np.concatenate([np.repeat(sides, TOWARDS), np.repeat(np.arange(count), ANYWHERE)])
+    hinted = np.repeat(hints, HINTED, axis=0)  # each hint itself, then drawn around it
+    drawn = (np.arange(len(hinted)) % HINTED > 0)[:, None]
+    hinted = hinted + drawn * rng.normal(0.0, HINT_SPREAD_RAD, size=hinted.shape)
+    release = np.concatenate([along.reshape(-1, n), near, anywhere, np.tile(hinted, (count, 1))])
+    release = np.clip(release, robot.joint_lower, robot.joint_upper)
+    option = np.concatenate(
+        [
+            np.repeat(sides, TOWARDS),
+            near_sides,
+            np.repeat(np.arange(count), ANYWHERE),
+            np.repeat(np.arange(count), len(hinted)),
+        ]
+    )
     found = _continue(kinematics, begin, option, release, goal)
     for keep, samples, spread in ROUNDS:
-        ranked = np.argsort(found.score, kind="stable")
-        ranked = ranked[np.isfinite(found.score[ranked])][: 8 * keep]
-        best = ranked[_unique_rows(found.release[ranked], DISTINCT_RAD)][:keep]
+        best = np.concatenate([_best_distinct(found, a, keep) for a in range(count)]).astype(int)
         if not len(best):
             break
         option = np.repeat(found.option[best], samples)

@@ -11,12 +11,14 @@ reflected seed finds the other elbow of a two-link arm.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from clew_ros.core import kernel
 from clew_ros.core.world import Robot
 
-__all__ = ["ITERATIONS", "mirrored", "solve_point"]
+__all__ = ["ITERATIONS", "Solution", "mirrored", "solve_point"]
 
 #: Iterations of :func:`solve_point`.
 ITERATIONS = 40
@@ -24,6 +26,17 @@ ITERATIONS = 40
 DAMPING = 1e-6
 #: Largest change of one joint in one step (rad).
 MAX_STEP_RAD = 0.4
+#: A configuration whose point is this close to its target (m) stops moving.
+TOLERANCE_M = 1e-12
+
+
+class Solution(NamedTuple):
+    """What :func:`solve_point` found: configurations ``(B, n)``, the error left ``(B,)`` (m) and the steps
+    taken by all of them (a measure of the work done)."""
+
+    q: np.ndarray
+    error: np.ndarray
+    steps: int
 
 
 def solve_point(
@@ -36,18 +49,18 @@ def solve_point(
     angle_tolerance: float = np.pi,
     angle_scale: float = 1.0,
     iterations: int = ITERATIONS,
-) -> tuple[np.ndarray, np.ndarray]:
+    tolerance_m: float = TOLERANCE_M,
+) -> Solution:
     """Configurations ``(B, n)`` from ``seeds`` ``(B, n)`` that put the point at ``offsets`` ``(B, 2)`` (default
     the tip) in the end-effector frame on ``targets`` ``(B, 2)``; with ``angles`` ``(B,)``, also the frame's
-    angle within ``angle_tolerance`` of them (the angle error counts ``angle_scale`` m per rad).
+    angle within ``angle_tolerance`` of them (the angle error counts ``angle_scale`` m per rad). A
+    configuration stops moving once its error is at most ``tolerance_m``, or after ``iterations`` steps.
 
-    Returns the configurations and the remaining error ``(B,)`` (m: the point's distance from its
-    target, and the angle's excess times ``angle_scale``). Joint limits always hold. Compiled
-    (:func:`clew_ros.core.kernel.solve_point`).
+    Joint limits always hold. Compiled (:func:`clew_ros.core.kernel.solve_point`).
     """
     seeds = np.array(seeds, dtype=float, ndmin=2)
     count = len(seeds)
-    return kernel.solve_point(
+    q, error, steps = kernel.solve_point(
         robot.base,
         robot.link_lengths,
         robot.joint_lower,
@@ -61,7 +74,9 @@ def solve_point(
         iterations=iterations,
         damping=DAMPING,
         max_step=MAX_STEP_RAD,
+        tolerance=tolerance_m,
     )
+    return Solution(q, error, int(steps.sum()))
 
 
 def mirrored(robot: Robot, q: np.ndarray, directions: np.ndarray) -> np.ndarray:

@@ -857,11 +857,14 @@ def _solve_point(  # noqa: PLR0914 - one compiled loop: kinematics, Jacobian, a 
     lengths: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
+    tolerance: float,
     error: np.ndarray,
+    steps: np.ndarray,
 ) -> None:
     """Damped least squares, in place on ``q (B, n)``: the point ``offsets[b]`` of the end-effector frame
-    to ``targets[b]``, and (``angles[b]`` not NaN) the frame's angle within ``angle_tolerance`` of it.
-    ``error[b]``: what is left (m; the angle's excess counts ``angle_scale`` m per rad)."""
+    to ``targets[b]``, and (``angles[b]`` not NaN) the frame's angle within ``angle_tolerance`` of it;
+    a row stops once its error is at most ``tolerance``. ``error[b]``: what is left (m; the angle's
+    excess counts ``angle_scale`` m per rad); ``steps[b]``: the steps taken."""
     n = lengths.shape[0]
     px = np.empty(n)
     py = np.empty(n)
@@ -888,7 +891,8 @@ def _solve_point(  # noqa: PLR0914 - one compiled loop: kinematics, Jacobian, a 
                 elif turn < -angle_tolerance:
                     et = angle_scale * (turn + angle_tolerance)
             error[b] = math.sqrt(ex * ex + ey * ey + et * et)
-            if it == iterations:
+            steps[b] = it
+            if it == iterations or error[b] <= tolerance:
                 break
             a11 = a12 = a22 = a13 = a23 = 0.0
             for i in range(n):
@@ -1041,11 +1045,13 @@ def solve_point(
     iterations: int,
     damping: float,
     max_step: float,
-) -> tuple[np.ndarray, np.ndarray]:
+    tolerance: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Compiled damped least squares from ``seeds (B, n)`` (see :func:`clew_ros.core.inverse.solve_point`):
-    the configurations and the error left ``(B,)``."""
+    the configurations, the error left and the steps taken ``(B,)``."""
     q = np.array(seeds, dtype=np.float64, order="C")
     error = np.empty(len(q))
+    steps = np.zeros(len(q), dtype=np.int64)
     _solve_point(
         q,
         _arg(targets),
@@ -1060,9 +1066,11 @@ def solve_point(
         _arg(lengths),
         _arg(lower),
         _arg(upper),
+        float(tolerance),
         error,
+        steps,
     )
-    return q, error
+    return q, error, steps
 
 
 def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:

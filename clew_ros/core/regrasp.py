@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.collision import packed_world
-from clew_ros.core.inverse import ITERATIONS, mirrored, solve_point
+from clew_ros.core.inverse import mirrored, solve_point
 from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.world import World
@@ -178,38 +178,57 @@ class _Kinematics:
         ``(B, .)``), and which ones do, validly."""
         robot = self.world.robot
         targets = transform_points(placements, self.world.object.grasps)[np.arange(len(grasps)), grasps]
-        q, error = solve_point(robot, seeds, targets)
-        self.work += IK_WORK * len(q) * ITERATIONS
-        ok = error <= HOLD_ERROR_M
+        q = np.array(seeds, dtype=float)
+        ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
+        solved, error, steps = solve_point(robot, seeds[ok], targets[ok])
+        self.work += IK_WORK * (steps + len(solved))
+        q[ok] = solved
+        ok[ok] = error <= HOLD_ERROR_M
         ok[ok] = self.valid(q[ok], placements[ok])
         return q, ok
 
     def at_goal(self, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Configurations near ``seeds`` putting the object, held as ``grasp_rel``, on the goal, and which do."""
         world = self.world
+        lengths = np.broadcast_to(world.robot.link_lengths, (len(grasp_rel), world.robot.dof)).copy()
+        lengths[:, -1] = np.hypot(lengths[:, -1] + grasp_rel[:, 0], grasp_rel[:, 1])  # joint n to the object
+        distance = float(np.hypot(*(goal[:2] - world.robot.base)))
+        ok = _within_reach(lengths, np.full(len(grasp_rel), distance), GOAL_SHARE * world.goal_tolerance)
         angles = None
         if world.goal_angle_tolerance < np.pi - 1e-6:
-            angles = goal[2] - grasp_rel[:, 2]
-        q, error = solve_point(
+            angles = goal[2] - grasp_rel[ok, 2]
+        q = np.array(seeds, dtype=float)
+        solved, error, steps = solve_point(
             world.robot,
-            seeds,
+            seeds[ok],
             goal[:2],
-            offsets=grasp_rel[:, :2],
+            offsets=grasp_rel[ok, :2],
             angles=angles,
             angle_tolerance=0.8 * world.goal_angle_tolerance,
             angle_scale=world.object.radius,
+            tolerance_m=1e-9,
         )
-        self.work += IK_WORK * len(q) * ITERATIONS
-        ok = error <= GOAL_SHARE * world.goal_tolerance
+        self.work += IK_WORK * (steps + len(solved))
+        q[ok] = solved
+        ok[ok] = error <= GOAL_SHARE * world.goal_tolerance
         ok[ok] = self.valid(q[ok], compose(tip_poses(world.robot, q[ok]), grasp_rel[ok]))
         return q, ok
 
     def toward(self, grasp_rel: np.ndarray, seeds: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Where the object's origin, held as ``grasp_rel``, gets closest to ``points`` from ``seeds`` (reached
         or not)."""
-        q, _ = solve_point(self.world.robot, seeds, points, offsets=grasp_rel[:, :2])
-        self.work += IK_WORK * len(q) * ITERATIONS
+        q, _, steps = solve_point(self.world.robot, seeds, points, offsets=grasp_rel[:, :2], tolerance_m=1e-6)
+        self.work += IK_WORK * (steps + len(q))
         return q
+
+
+def _within_reach(lengths: np.ndarray, distance: np.ndarray, slack: float) -> np.ndarray:
+    """Whether a chain of ``lengths`` (``(n,)`` or ``(B, n)``) can end ``distance`` ``(B,)`` from its base."""
+    lengths = np.atleast_2d(lengths)
+    total = lengths.sum(axis=1)
+    inner = np.maximum(0.0, 2.0 * lengths.max(axis=1) - total)
+    reachable: np.ndarray = (distance >= inner - slack) & (distance <= total + slack)
+    return reachable
 
 
 def _direction(world: World, points: np.ndarray) -> np.ndarray:

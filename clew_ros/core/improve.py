@@ -100,8 +100,8 @@ TRANSFER_SHARE = 0.5
 REBUILD_SHARE = 0.6
 #: Rebuilding stops after this many passes in a row that found nothing better.
 REBUILD_IDLE_PASSES = 2
-#: Proposals checked per placement at most.
-REBUILD_TRIES = 8
+#: Proposals checked per placement at most, and of them with a move that looked blocked.
+REBUILD_TRIES, BLOCKED_TRIES = 6, 2
 #: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
 ALIKE_RAD = 0.3
 #: Detours tried around a straight move of a proposal that is not clear.
@@ -411,6 +411,8 @@ class _Improver:
                 continue
             if any(_alike(proposal, other) for other in failed):
                 continue  # as good as one that failed: try something else
+            if proposal.blocked and sum(p.blocked > 0 for p in failed) >= BLOCKED_TRIES:
+                continue  # a move that looked blocked is rarely clear: try those few times
             if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
                 break
             tail = self.checked_tail(proposal, placement)

@@ -393,6 +393,7 @@ class _Improver:
                 releases=hints,
                 two_transfers=transfers + 2 <= score[0],
                 margin_m=self.min_margin,
+                should_stop=self.budget.stop,
             )
             self.budget.spend(math.ceil(work))
             better |= self.try_proposals(proposals, kept, placement)

@@ -27,6 +27,7 @@ the plan gets better. Everything is batched numpy; the work it did is counted in
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -133,10 +134,14 @@ def _route_samples(a: np.ndarray, b: np.ndarray, samples: int) -> list[np.ndarra
 class _Kinematics:
     """Batched inverse kinematics and validity with a margin, counting the work."""
 
-    def __init__(self, world: World, margin_m: float) -> None:
+    def __init__(self, world: World, margin_m: float, should_stop: Callable[[], bool] | None = None) -> None:
         self.world = world
         self.packed = dataclasses.replace(packed_world(world), rounding=max(margin_m, packed_world(world).rounding))
         self.work = 0.0
+        self.should_stop = should_stop
+
+    def stop(self) -> bool:
+        return self.should_stop is not None and self.should_stop()
 
     def valid(self, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
         if not len(q):
@@ -279,6 +284,7 @@ def propose(
     releases: np.ndarray | None = None,
     two_transfers: bool = True,
     margin_m: float = 0.0,
+    should_stop: Callable[[], bool] | None = None,
 ) -> tuple[list[Proposal], float]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
@@ -286,14 +292,16 @@ def propose(
     plan put the object down, tried (and around them) as releases. Ranked by joint travel plus
     :data:`BLOCKED_PENALTY_RAD` per move that looked blocked.
 
+    ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
+    milliseconds at most): when it says stop, the proposals found so far are returned.
     Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work spent (units).
     """
-    kinematics = _Kinematics(world, margin_m)
+    kinematics = _Kinematics(world, margin_m, should_stop)
     begin = _grasps_at_start(kinematics, np.asarray(start, float), np.asarray(placement, float), own or [])
     if begin is None:
         return [], kinematics.work
     proposals = _one_transfer(kinematics, begin, goal)
-    if two_transfers:
+    if two_transfers and not kinematics.stop():
         hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
         proposals += _two_transfers(kinematics, begin, goal, rng, hints)
     proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
@@ -478,6 +486,8 @@ def _two_transfers(
     )
     found = _continue(kinematics, begin, option, release, goal)
     for keep, samples, spread in ROUNDS:
+        if kinematics.stop():
+            break
         best = np.concatenate([_best_distinct(found, a, keep) for a in range(count)]).astype(int)
         if not len(best):
             break

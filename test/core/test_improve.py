@@ -204,15 +204,16 @@ def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(see
     assert better.travel < 0.9 * before  # random Manhattan paths wander: a shortcut always helps here
     assert better.transfers == 1
     assert [s.kind for s in better.segments] == ["transit", "transfer"]
-    for new, old in zip(better.segments, segments, strict=True):
-        assert np.array_equal(new.waypoints[0], old.waypoints[0])
-        assert np.array_equal(new.waypoints[-1], old.waypoints[-1])
+    assert np.array_equal(better.segments[0].waypoints[0], segments[0].waypoints[0])  # the start stays
+    # grasp and goal configurations may be chosen anew (the rebuild), but the plan stays valid, and more
     improved = Plan(
         world.name,
         tuple(world.robot.joint_names),
         True,
         "",
         segments=tuple(PlanSegment(s.kind, s.grasp, np.array(s.waypoints)) for s in better.segments),
+        final_object_pose=better.final_object_pose,
     )
+    assert validate_plan(world, improved) == []
     for motion in replay(world, improved, FINE_RAD):
         assert is_valid(world, motion.configurations, motion.object_poses).all()

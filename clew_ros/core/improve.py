@@ -101,7 +101,7 @@ REBUILD_SHARE = 0.6
 #: Rebuilding stops after this many passes in a row that found nothing better.
 REBUILD_IDLE_PASSES = 2
 #: Proposals checked per placement at most, and of them with a move that looked blocked.
-REBUILD_TRIES, BLOCKED_TRIES = 6, 2
+REBUILD_TRIES, BLOCKED_TRIES = 6, 0
 #: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
 ALIKE_RAD = 0.3
 #: Detours tried around a straight move of a proposal that is not clear.
@@ -296,6 +296,22 @@ def _prune(waypoints: np.ndarray) -> np.ndarray:
     return np.array(points)
 
 
+def _cumulative(waypoints: np.ndarray) -> np.ndarray:
+    """Joint travel (rad) along ``waypoints`` up to each of them."""
+    steps = np.abs(np.diff(waypoints, axis=0)).sum(axis=1)
+    cumulative: np.ndarray = np.concatenate([[0.0], np.cumsum(steps)])
+    return cumulative
+
+
+def _point_at(waypoints: np.ndarray, cumulative: np.ndarray, travel: float) -> tuple[int, np.ndarray]:
+    """The point ``travel`` (rad of joint travel) along the path, and the number of the piece it lies on."""
+    k = int(np.clip(np.searchsorted(cumulative, travel, side="right") - 1, 0, len(waypoints) - 2))
+    span = cumulative[k + 1] - cumulative[k]
+    share = 0.0 if span <= 0 else (travel - cumulative[k]) / span
+    point: np.ndarray = waypoints[k] + share * (waypoints[k + 1] - waypoints[k])
+    return k, point
+
+
 def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
     """Lexicographic (transfers, travel, waypoints); travel within :data:`TRAVEL_EPS` counts as equal."""
     if new[0] != old[0]:
@@ -358,17 +374,21 @@ class _Improver:
         return cuts
 
     def rebuild(self) -> None:
-        """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts)."""
+        """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
+        none after a pass in which every proposal had a move that looked blocked (a cluttered world)."""
         idle = 0
         while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
-            idle = 0 if self.rebuild_pass() else idle + 1
+            better, hopeful = self.rebuild_pass()
+            if not better and not hopeful:
+                return
+            idle = 0 if better else idle + 1
 
-    def rebuild_pass(self) -> bool:
+    def rebuild_pass(self) -> tuple[bool, bool]:
         """From each placement of the plan, earliest first: finish with straight moves through other grasps,
         postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
-        Returns whether the plan got better."""
+        Returns whether the plan got better, and whether any proposal looked clear."""
         position = 0
-        better = False
+        better = hopeful = False
         while self.budget.left(REBUILD_SHARE):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
@@ -396,8 +416,9 @@ class _Improver:
                 should_stop=self.budget.stop,
             )
             self.budget.spend(math.ceil(work))
+            hopeful |= any(not p.blocked for p in proposals)
             better |= self.try_proposals(proposals, kept, placement)
-        return better
+        return better, hopeful
 
     def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
         """The first of ``proposals`` (after the first ``kept`` pieces) whose moves are clear and that makes
@@ -516,7 +537,8 @@ class _Improver:
                 self.try_shortcut(index, 1, len(w) - 2, w[0], w[-1])
 
     def random_shortcuts(self) -> None:
-        """Pairs of waypoints, and pairs of points along a segment's path, until the work is spent."""
+        """Pairs of waypoints, pairs of points along a segment's path, and one joint between two such points
+        (:meth:`try_partial`), drawn at random, until the work is spent."""
         rng = self.ctx.rng
         failures = 0
         while self.budget.left() and failures < 200:
@@ -525,20 +547,44 @@ class _Improver:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
             w = self.pieces[index].waypoints
-            if rng.random() < 0.5:  # two waypoints at least two apart
+            kind = rng.random()
+            if kind < 1.0 / 3.0:  # two waypoints at least two apart
                 i, j = sorted(rng.choice(len(w), size=2, replace=False).tolist())
                 accepted = j - i >= 2 and self.try_shortcut(index, i + 1, j - 1, w[i], w[j])
-            else:  # two points along the path, by joint travel
-                cumulative = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(w, axis=0)).sum(axis=1))])
+            else:  # two points along the path, by joint travel: a straight move, or one joint evened out
+                cumulative = _cumulative(w)
                 u = np.sort(rng.uniform(0.0, cumulative[-1], size=2))
-                i, j = (int(np.clip(np.searchsorted(cumulative, x, side="right") - 1, 0, len(w) - 2)) for x in u)
-                points = []
-                for x, k in zip(u, (i, j), strict=True):
-                    span = cumulative[k + 1] - cumulative[k]
-                    s = 0.0 if span <= 0 else (x - cumulative[k]) / span
-                    points.append(w[k] + s * (w[k + 1] - w[k]))
-                accepted = j > i and self.try_shortcut(index, i + 1, j, points[0], points[1])
+                (i, a), (j, b) = (_point_at(w, cumulative, x) for x in u)
+                if kind < 2.0 / 3.0:
+                    accepted = j > i and self.try_shortcut(index, i + 1, j, a, b)
+                else:
+                    accepted = j > i and self.try_partial(index, int(rng.integers(w.shape[1])), (i, a, u[0]), (j, b, u[1]))
             failures = 0 if accepted else failures + 1
+
+    def try_partial(
+        self, index: int, joint: int, start: tuple[int, np.ndarray, float], end: tuple[int, np.ndarray, float]
+    ) -> bool:
+        """A partial shortcut: between two points of piece ``index``'s path (each ``(piece number, point, path
+        travel)``), ``joint`` moves evenly along the path while the other joints move as before, so a joint
+        that went back and forth there goes straight. Every new straight piece is checked."""
+        piece = self.pieces[index]
+        w = piece.waypoints
+        (i, a, x0), (j, b, x1) = start, end
+        if x1 - x0 <= 0:
+            return False
+        cumulative = _cumulative(w)
+        path = np.array([a, *w[i + 1 : j + 1], b])
+        travel = np.array([x0, *cumulative[i + 1 : j + 1], x1])
+        path[:, joint] = a[joint] + (travel - x0) / (x1 - x0) * (b[joint] - a[joint])
+        joined = [*w[: i + 1], *path, *w[j + 1 :]]
+        new = np.array([p for k, p in enumerate(joined) if k == 0 or np.max(np.abs(p - joined[k - 1])) > 1e-12])
+        if not _better((0, joint_travel([w]), len(w)), (0, joint_travel([new]), len(new))):
+            return False
+        if not all(self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
+            return False
+        piece.waypoints = _prune(new)
+        self.shortcuts += 1
+        return True
 
     def run(self) -> list[_Piece]:
         self.prune()

@@ -42,8 +42,8 @@ __all__ = ["IK_WORK", "ROUTES", "SCREEN_WORK", "Proposal", "propose", "route_way
 
 #: Work units (see :mod:`clew_ros.core.improve`) per configuration and iteration of inverse kinematics.
 IK_WORK = 0.125
-#: Work units per configuration of the quick sampled screen (the compiled first pass only).
-SCREEN_WORK = 0.1
+#: Work units per configuration of the quick sampled screen (the compiled first pass only), and per call.
+SCREEN_WORK, SCREEN_CALL_WORK = 1.0, 30
 #: A grasp configuration puts the tip this close to the grasp point (m).
 HOLD_ERROR_M = 1e-9
 #: A goal configuration puts the object's origin this close to the goal, as a share of goal_tolerance.
@@ -61,10 +61,11 @@ HINTED, HINT_SPREAD_RAD = 4, 0.2
 ROUNDS = ((4, 6, 0.3), (3, 6, 0.1))
 #: Releases refined in one round lie at least this far apart (rad, largest joint difference).
 DISTINCT_RAD = 0.3
-#: Continuations (grasp and posture after a release) screened per release.
-CONTINUATIONS = 3
+#: Continuations (grasp and posture after a release) screened per release, and releases screened per grasp
+#: configuration and round (the shortest ways; the others are dropped).
+CONTINUATIONS, SCREENED = 3, 12
 #: Joint travel (rad) between configurations sampled by the screen, about.
-SCREEN_STEP_RAD = 0.04
+SCREEN_STEP_RAD = 0.1
 #: Joint travel (rad) a move that looks blocked counts extra when proposals are ranked.
 BLOCKED_PENALTY_RAD = 8.0
 #: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
@@ -146,7 +147,7 @@ class _Kinematics:
     def valid(self, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
         if not len(q):
             return np.zeros(0, dtype=bool)
-        self.work += SCREEN_WORK * len(q)
+        self.work += SCREEN_WORK * len(q) + SCREEN_CALL_WORK
         return clearly_valid(self.packed, np.ascontiguousarray(q), np.ascontiguousarray(poses))
 
     def routes(
@@ -154,9 +155,9 @@ class _Kinematics:
     ) -> np.ndarray:
         """Per move ``a[k] -> b[k]``, the first way of :data:`ROUTES` whose sampled configurations are all
         valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is. A move
-        is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 128 samples)."""
+        is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 32 samples)."""
         route = np.full(len(a), -1)
-        samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 4)
+        samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 2)
         for count in np.unique(samples).astype(int):
             group = np.flatnonzero(samples == count)
             for index, way in enumerate(_route_samples(a[group], b[group], count)):
@@ -421,15 +422,16 @@ def _continue(kinematics: _Kinematics, begin: _Start, option: np.ndarray, releas
         starts = np.r_[True, rows[order][1:] != rows[order][:-1]]
         group = np.cumsum(starts) - 1
         rank[order] = np.arange(len(order)) - np.flatnonzero(starts)[group]
-    keep = np.flatnonzero(rank < CONTINUATIONS)
-    rows, grasp, regrasp, end, rel2, travel = rows[keep], grasp[keep], regrasp[keep], end[keep], rel2[keep], travel[keep]
+    total = _l1(begin.start, first[rows]) + _l1(first[rows], release[rows]) + travel
+    screened = _shortest_per_option(option, rows, total, SCREENED)
+    keep = np.flatnonzero((rank < CONTINUATIONS) & np.isin(rows, screened))
+    rows, grasp, regrasp, end, rel2, total = rows[keep], grasp[keep], regrasp[keep], end[keep], rel2[keep], total[keep]
     carried = np.unique(rows)
     carry = np.full(len(release), -1)
     carry[carried] = kinematics.routes(first[carried], release[carried], grasp_rel=rel[carried])
     transit = kinematics.routes(release[rows], regrasp, resting=placement[rows])
     last = kinematics.routes(regrasp, end, grasp_rel=rel2)
     routes = np.stack([begin.route[option[rows]], carry[rows], transit, last], axis=1)
-    total = _l1(begin.start, first[rows]) + _l1(first[rows], release[rows]) + travel
     score = total + BLOCKED_PENALTY_RAD * (routes < 0).sum(axis=1)
     order = np.lexsort((score, rows))
     best = order[np.r_[True, rows[order][1:] != rows[order][:-1]]] if len(order) else order
@@ -440,6 +442,19 @@ def _continue(kinematics: _Kinematics, begin: _Start, option: np.ndarray, releas
     found.travel[at] = total[best]
     found.routes[at] = routes[best]
     return found
+
+
+def _shortest_per_option(option: np.ndarray, rows: np.ndarray, travel: np.ndarray, count: int) -> np.ndarray:
+    """The releases (indices) of the ``count`` shortest ways of each grasp configuration: ``travel[k]`` is the
+    joint travel of a way through release ``rows[k]``, carried with grasp configuration ``option[rows[k]]``."""
+    order = np.lexsort((travel, rows))
+    firsts = order[np.r_[True, rows[order][1:] != rows[order][:-1]]] if len(order) else order
+    releases, shortest = rows[firsts], travel[firsts]  # each release once, with its shortest way
+    chosen = [
+        releases[mine][np.argsort(shortest[mine], kind="stable")[:count]]
+        for mine in (option[releases] == a for a in np.unique(option[releases]))
+    ]
+    return np.concatenate(chosen) if chosen else releases[:0]
 
 
 def _best_distinct(found: _Releases, option: int, keep: int) -> np.ndarray:

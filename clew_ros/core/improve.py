@@ -75,9 +75,12 @@ from clew_ros.core.world import World
 __all__ = [
     "CALL_WORK",
     "EVALUATION_WORK",
+    "IK_WORK",
+    "REFERENCE_PAIRS",
     "MIN_MARGIN_FACTOR",
     "WORK_PER_SECOND",
     "Improvement",
+    "check_work",
     "improve",
     "joint_travel",
     "straight_move_clear",
@@ -90,6 +93,10 @@ WORK_PER_SECOND = 3.0e5
 CALL_WORK = 30
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
+#: Work of one step of inverse kinematics (one configuration, one iteration), in units.
+IK_WORK = 0.125
+#: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
+REFERENCE_PAIRS = 70
 #: Shortcuts keep at least this fraction of ``planner.clearance`` from everything (m / m).
 MIN_MARGIN_FACTOR = 0.5
 #: Largest margin (m) the first level of a straight-move check asks for.
@@ -181,9 +188,14 @@ class _Budget:
         self.spent = 0
         self.evaluations_at_start = ctx.counters.evaluations
         self.stopped = False
+        self.check_work = check_work(ctx.world)
 
     def spend(self, units: int) -> None:
         self.spent += units
+
+    def spend_checks(self, configurations: int, calls: int = 1) -> None:
+        """Charge ``configurations`` checked in ``calls`` calls of the compiled check."""
+        self.spent += math.ceil(configurations * self.check_work) + calls * CALL_WORK
 
     def left(self, share: float = 1.0) -> bool:
         """Whether work is left (within ``share`` of the budget) and the clock allows more."""
@@ -195,6 +207,12 @@ class _Budget:
         if not self.stopped and self.ctx.termination():
             self.stopped = True
         return self.stopped
+
+
+def check_work(world: World) -> float:
+    """Work units one configuration check costs in ``world``: 1 up to :data:`REFERENCE_PAIRS` pairs of pieces
+    compared per check (:attr:`clew_ros.core.kernel.PackedWorld.pairs_per_move`), in proportion beyond."""
+    return max(1.0, packed_world(world).pairs_per_move / REFERENCE_PAIRS)
 
 
 def _reach_radii(world: World, grasp_rel: np.ndarray | None) -> np.ndarray:
@@ -247,7 +265,7 @@ def straight_move_clear(
         )
         clear = clearly_valid(dataclasses.replace(packed, rounding=margin), q, poses)
         if budget is not None:
-            budget.spend(len(q) + CALL_WORK)
+            budget.spend_checks(len(q))
         if clear.all():
             return True
         if margin <= min_margin:
@@ -255,7 +273,7 @@ def straight_move_clear(
         # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
         doubtful = np.flatnonzero(~clear)
         if budget is not None:
-            budget.spend(len(doubtful) + CALL_WORK)
+            budget.spend_checks(len(doubtful))
         if not is_valid(world, q[doubtful], np.asarray(poses)[doubtful]).all():
             return False
         pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
@@ -279,21 +297,25 @@ def _prune(waypoints: np.ndarray) -> np.ndarray:
     """Drop repeated waypoints, loops back to an earlier waypoint, and waypoints between collinear pieces
     (a move undone or continued along the same line): the remaining path only visits configurations the
     old one visited."""
-    points: list[np.ndarray] = []
+    waypoints = np.asarray(waypoints, dtype=float)
+    points = np.empty_like(waypoints)  # the path kept so far: points[:size]
+    size = 0
     for w in waypoints:
-        for i, p in enumerate(points):  # a loop: back where the path already was
-            if np.max(np.abs(w - p)) <= 1e-12:
-                del points[i + 1 :]
-                break
+        back = np.flatnonzero(np.max(np.abs(points[:size] - w), axis=1) <= 1e-12)  # a loop: back where it was
+        if len(back):
+            size = int(back[0]) + 1
         else:
-            points.append(w)
-        while len(points) >= 3:
-            u, v = points[-2] - points[-3], points[-1] - points[-2]
+            points[size] = w
+            size += 1
+        while size >= 3:
+            u, v = points[size - 2] - points[size - 3], points[size - 1] - points[size - 2]
             scale = max(float(np.max(np.abs(u))), float(np.max(np.abs(v))))
             if scale > 0 and float(np.max(np.abs(u * np.linalg.norm(v) ** 2 - v * (u @ v)))) > 1e-12 * scale**3:
                 break  # not collinear
-            del points[-2]
-    return np.array(points)
+            points[size - 2] = points[size - 1]
+            size -= 1
+    pruned: np.ndarray = points[:size].copy()
+    return pruned
 
 
 def _cumulative(waypoints: np.ndarray) -> np.ndarray:
@@ -403,7 +425,7 @@ class _Improver:
             after = self.pieces[kept:]
             own = [(int(p.grasp), p.waypoints[0]) for p in after[1:2] if p.grasp is not None]
             hints = np.array([p.waypoints[-1] for p in after[:-1] if p.kind == "transfer"]).reshape(-1, len(configuration))
-            proposals, work = propose(
+            proposals, effort = propose(
                 self.world,
                 configuration,
                 placement,
@@ -415,7 +437,8 @@ class _Improver:
                 margin_m=self.min_margin,
                 should_stop=self.budget.stop,
             )
-            self.budget.spend(math.ceil(work))
+            self.budget.spend_checks(effort.checks, effort.calls)
+            self.budget.spend(math.ceil(IK_WORK * effort.steps))
             hopeful |= any(not p.blocked for p in proposals)
             better |= self.try_proposals(proposals, kept, placement)
         return better, hopeful

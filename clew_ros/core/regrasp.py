@@ -20,8 +20,8 @@ the goal, and anywhere within the joint limits, then refined around the best (cr
 style). A proposal's joint travel is the sum of its straight moves (sum over joints of ``|dq|``);
 every key configuration is valid with ``margin_m`` to spare, but the moves between them are not
 checked here: :mod:`clew_ros.core.improve` checks them continuously and keeps a proposal only when
-the plan gets better. Everything is batched numpy; the work it did is counted in
-:data:`IK_WORK` units per configuration and solver iteration.
+the plan gets better. Everything is batched (numpy and compiled kernels); :class:`Effort` counts the work
+done, which :mod:`clew_ros.core.improve` charges to its budget.
 """
 
 from __future__ import annotations
@@ -38,12 +38,8 @@ from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["IK_WORK", "ROUTES", "SCREEN_WORK", "Proposal", "propose", "route_waypoints"]
+__all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
 
-#: Work units (see :mod:`clew_ros.core.improve`) per configuration and iteration of inverse kinematics.
-IK_WORK = 0.125
-#: Work units per configuration of the quick sampled screen (the compiled first pass only), and per call.
-SCREEN_WORK, SCREEN_CALL_WORK = 1.0, 30
 #: A grasp configuration puts the tip this close to the grasp point (m).
 HOLD_ERROR_M = 1e-9
 #: A goal configuration puts the object's origin this close to the goal, as a share of goal_tolerance.
@@ -73,6 +69,16 @@ BLOCKED_PENALTY_RAD = 8.0
 ROUTES = ("straight", "first joint first", "last joint first")
 #: Proposals returned at most.
 MAX_PROPOSALS = 24
+
+
+@dataclass
+class Effort:
+    """The work :func:`propose` did: configurations checked, calls of the check, inverse-kinematics steps (one
+    configuration, one iteration)."""
+
+    checks: int = 0
+    calls: int = 0
+    steps: int = 0
 
 
 @dataclass(frozen=True)
@@ -138,7 +144,7 @@ class _Kinematics:
     def __init__(self, world: World, margin_m: float, should_stop: Callable[[], bool] | None = None) -> None:
         self.world = world
         self.packed = dataclasses.replace(packed_world(world), rounding=max(margin_m, packed_world(world).rounding))
-        self.work = 0.0
+        self.effort = Effort()
         self.should_stop = should_stop
 
     def stop(self) -> bool:
@@ -147,7 +153,8 @@ class _Kinematics:
     def valid(self, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
         if not len(q):
             return np.zeros(0, dtype=bool)
-        self.work += SCREEN_WORK * len(q) + SCREEN_CALL_WORK
+        self.effort.checks += len(q)
+        self.effort.calls += 1
         return clearly_valid(self.packed, np.ascontiguousarray(q), np.ascontiguousarray(poses))
 
     def routes(
@@ -187,7 +194,7 @@ class _Kinematics:
         q = np.array(seeds, dtype=float)
         ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
         solved, error, steps = solve_point(robot, seeds[ok], targets[ok])
-        self.work += IK_WORK * (steps + len(solved))
+        self.effort.steps += steps + len(solved)
         q[ok] = solved
         ok[ok] = error <= HOLD_ERROR_M
         ok[ok] = self.valid(q[ok], placements[ok])
@@ -214,7 +221,7 @@ class _Kinematics:
             angle_scale=world.object.radius,
             tolerance_m=1e-9,
         )
-        self.work += IK_WORK * (steps + len(solved))
+        self.effort.steps += steps + len(solved)
         q[ok] = solved
         ok[ok] = error <= GOAL_SHARE * world.goal_tolerance
         ok[ok] = self.valid(q[ok], compose(tip_poses(world.robot, q[ok]), grasp_rel[ok]))
@@ -224,7 +231,7 @@ class _Kinematics:
         """Where the object's origin, held as ``grasp_rel``, gets closest to ``points`` from ``seeds`` (reached
         or not)."""
         q, _, steps = solve_point(self.world.robot, seeds, points, offsets=grasp_rel[:, :2], tolerance_m=1e-6)
-        self.work += IK_WORK * (steps + len(q))
+        self.effort.steps += steps + len(q)
         return q
 
 
@@ -286,7 +293,7 @@ def propose(
     two_transfers: bool = True,
     margin_m: float = 0.0,
     should_stop: Callable[[], bool] | None = None,
-) -> tuple[list[Proposal], float]:
+) -> tuple[list[Proposal], Effort]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
     the object at this placement, tried as they are; ``releases`` ``(m, n)``: configurations where the
@@ -295,18 +302,18 @@ def propose(
 
     ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
     milliseconds at most): when it says stop, the proposals found so far are returned.
-    Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work spent (units).
+    Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work done.
     """
     kinematics = _Kinematics(world, margin_m, should_stop)
     begin = _grasps_at_start(kinematics, np.asarray(start, float), np.asarray(placement, float), own or [])
     if begin is None:
-        return [], kinematics.work
+        return [], kinematics.effort
     proposals = _one_transfer(kinematics, begin, goal)
     if two_transfers and not kinematics.stop():
         hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
         proposals += _two_transfers(kinematics, begin, goal, rng, hints)
     proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
-    return proposals[:MAX_PROPOSALS], kinematics.work
+    return proposals[:MAX_PROPOSALS], kinematics.effort
 
 
 def _grasps_at_start(

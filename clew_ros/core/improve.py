@@ -1,23 +1,41 @@
 """Anytime improvement of a found plan (issue 14): fewer transfers, shorter paths, never worse.
 
 The ACA keeps every single manipulation path that led to the goal, made of
-Manhattan moves (one joint at a time, in large arcs). Once a plan is found,
+Manhattan moves (one joint at a time, in large arcs), and takes the object
+wherever its search happened to: often with the elbow the wrong way round,
+or put down far from where a regrasp was needed. Once a plan is found,
 :func:`improve` spends a bounded budget (``planner.improve_time``) on it:
 
 1. **Back-and-forth pruning** (free): a waypoint between two collinear
    pieces (a joint moving one way, then back) is dropped, and so is a loop
    that comes back to an earlier waypoint. The configurations left were
    already on the plan, so nothing needs checking.
-2. **Fewer transfers**: from the start of each transfer but the last
+2. **Rebuilding the manipulation** (at most :data:`REBUILD_SHARE` of the
+   budget): from each placement of the plan (the start, then where each
+   transfer put the object down), :func:`clew_ros.core.regrasp.propose`
+   lists ways to finish with one transfer or two (one regrasp), through any
+   grasp, either elbow and release placements drawn around the goal, made
+   of straight moves between key configurations found by inverse
+   kinematics. They are ranked by joint travel plus a penalty per move that
+   a quick sampled check found blocked, and checked in that order: each
+   move continuously (below), straight or one joint after the other (as
+   long in joint travel), else through a configuration drawn inside the box
+   between its ends (as long too) or around its middle. The first that makes
+   the plan better replaces the plan's end from that placement on. Passes
+   repeat while they find something (:data:`REBUILD_IDLE_PASSES`), and stop
+   in a cluttered world where every proposal looked blocked.
+3. **Fewer transfers**: from the start of each transfer but the last
    (earliest first), SEARCH_TRANSFER tries to carry the object, with that
    transfer's grasp, straight to the goal; the first success replaces every
    later segment.
-3. **Shortcuts**: a sub-path of one segment is replaced by one straight
+4. **Shortcuts**: a sub-path of one segment is replaced by one straight
    joint-space move (all joints together), first each segment's whole path,
    then pairs of waypoints and pairs of points along the path drawn by the
-   run's generator. A segment's end points never change, so every grasp and
-   ungrasp stays where it was (the tip still holds its grasp) and the object
-   rests or is carried exactly as before.
+   run's generator; or, between two such points, one joint is made to move
+   evenly while the others move as before (a partial shortcut: a joint that
+   went back and forth there goes straight). A segment's end points never
+   change, so every grasp and ungrasp stays where it was (the tip still
+   holds its grasp) and the object rests or is carried exactly as before.
 
 A change is kept only when it lowers ``(transfers, joint travel)`` or keeps
 them and drops waypoints; joint travel is the sum over joints of the
@@ -39,20 +57,23 @@ piece ``[t0, t1]`` with every distance past its threshold by more than
 ``V (t1 - t0) / 2``, the whole piece is valid, at any checking resolution.
 Pieces that fail are halved (the margin halves with them) down to
 :data:`MIN_MARGIN_FACTOR` x ``planner.clearance``; a piece still not
-cleared rejects the move. A shortcut therefore keeps at least that
-clearance everywhere, like the planner's own paths. The whole improved plan
-is checked once more at the validator's 0.002 rad; if that ever failed, the
-first plan would be returned.
+cleared rejects the move, and so does a midpoint that is not valid at all
+(at once). A shortcut therefore keeps at least that clearance everywhere,
+like the planner's own paths. The whole improved plan is checked once more
+at the validator's 0.002 rad; if that ever failed, the first plan would be
+returned.
 
 **Determinism.** All choices come from a generator seeded with
 ``planner.seed`` (apart from the planner's own), and the budget is counted
 in work, not seconds: :data:`WORK_PER_SECOND` units per second of
-``planner.improve_time``, one unit per configuration checked plus
-:data:`CALL_WORK` per check call and :data:`EVALUATION_WORK` per
-genetic-algorithm individual. Attempts run until the work is spent, so the
-same seed gives the same plan on any machine. Only the planner's time limit
-and cancel stop it by the clock (between checks, well within 100 ms), and
-then the best plan so far is returned.
+``planner.improve_time``; a configuration checked costs one unit, or more
+in a world whose check compares more pieces (:func:`check_work`), plus
+:data:`CALL_WORK` per call of the check, :data:`IK_WORK` per step of inverse
+kinematics and :data:`EVALUATION_WORK` per genetic-algorithm individual.
+Attempts run until the work is spent, so the same seed gives the same plan
+on any machine. Only the planner's time limit and cancel stop it by the
+clock (between checks, well within 100 ms), and then the best plan so far
+is returned.
 """
 
 from __future__ import annotations
@@ -105,6 +126,8 @@ MAX_MARGIN_M = 0.05
 TRANSFER_SHARE = 0.5
 #: Share of the budget that rebuilding the manipulation from straight moves may start in.
 REBUILD_SHARE = 0.6
+#: Share of what is left of the rebuilding's budget that one round of proposals may spend on checks.
+PROPOSE_SHARE = 0.5
 #: Rebuilding stops after this many passes in a row that found nothing better.
 REBUILD_IDLE_PASSES = 2
 #: Proposals checked per placement at most, and of them with a move that looked blocked.
@@ -113,6 +136,8 @@ REBUILD_TRIES, BLOCKED_TRIES = 6, 0
 ALIKE_RAD = 0.3
 #: Detours tried around a straight move of a proposal that is not clear.
 DETOURS = 3
+#: A partial shortcut spans at most this many pieces of the path.
+PARTIAL_PIECES = 8
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
 #: Step (rad per joint) of the final check, the validator's.
@@ -436,12 +461,19 @@ class _Improver:
                 two_transfers=transfers + 2 <= score[0],
                 margin_m=self.min_margin,
                 should_stop=self.budget.stop,
+                max_checks=self.proposal_checks(),
             )
             self.budget.spend_checks(effort.checks, effort.calls)
             self.budget.spend(math.ceil(IK_WORK * effort.steps))
             hopeful |= any(not p.blocked for p in proposals)
             better |= self.try_proposals(proposals, kept, placement)
         return better, hopeful
+
+    def proposal_checks(self) -> int:
+        """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
+        left of the rebuilding's share of the budget."""
+        left = REBUILD_SHARE * self.budget.total - self.budget.spent
+        return max(0, int(PROPOSE_SHARE * left / self.budget.check_work))
 
     def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
         """The first of ``proposals`` (after the first ``kept`` pieces) whose moves are clear and that makes
@@ -595,6 +627,8 @@ class _Improver:
         (i, a, x0), (j, b, x1) = start, end
         if x1 - x0 <= 0:
             return False
+        if j - i > PARTIAL_PIECES:
+            return False  # a long stretch: many pieces to check for one joint's gain
         cumulative = _cumulative(w)
         path = np.array([a, *w[i + 1 : j + 1], b])
         travel = np.array([x0, *cumulative[i + 1 : j + 1], x1])
@@ -603,7 +637,7 @@ class _Improver:
         new = np.array([p for k, p in enumerate(joined) if k == 0 or np.max(np.abs(p - joined[k - 1])) > 1e-12])
         if not _better((0, joint_travel([w]), len(w)), (0, joint_travel([new]), len(new))):
             return False
-        if not all(self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
+        if not all(self.budget.left() and self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
             return False
         piece.waypoints = _prune(new)
         self.shortcuts += 1

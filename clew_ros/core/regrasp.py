@@ -59,7 +59,7 @@ ROUNDS = ((4, 6, 0.3), (3, 6, 0.1))
 DISTINCT_RAD = 0.3
 #: Continuations (grasp and posture after a release) screened per release, and releases screened per grasp
 #: configuration and round (the shortest ways; the others are dropped).
-CONTINUATIONS, SCREENED = 3, 12
+CONTINUATIONS, SCREENED = 2, 8
 #: Joint travel (rad) between configurations sampled by the screen, about.
 SCREEN_STEP_RAD = 0.1
 #: Joint travel (rad) a move that looks blocked counts extra when proposals are ranked.
@@ -141,14 +141,26 @@ def _route_samples(a: np.ndarray, b: np.ndarray, samples: int) -> list[np.ndarra
 class _Kinematics:
     """Batched inverse kinematics and validity with a margin, counting the work."""
 
-    def __init__(self, world: World, margin_m: float, should_stop: Callable[[], bool] | None = None) -> None:
+    def __init__(
+        self,
+        world: World,
+        margin_m: float,
+        should_stop: Callable[[], bool] | None = None,
+        max_checks: int | None = None,
+    ) -> None:
         self.world = world
         self.packed = dataclasses.replace(packed_world(world), rounding=max(margin_m, packed_world(world).rounding))
         self.effort = Effort()
         self.should_stop = should_stop
+        self.max_checks = max_checks
+
+    @property
+    def exhausted(self) -> bool:
+        """Whether the configurations allowed have been checked."""
+        return self.max_checks is not None and self.effort.checks >= self.max_checks
 
     def stop(self) -> bool:
-        return self.should_stop is not None and self.should_stop()
+        return self.exhausted or (self.should_stop is not None and self.should_stop())
 
     def valid(self, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
         if not len(q):
@@ -164,6 +176,8 @@ class _Kinematics:
         valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is. A move
         is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 32 samples)."""
         route = np.full(len(a), -1)
+        if self.exhausted:
+            return route
         samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 2)
         for count in np.unique(samples).astype(int):
             group = np.flatnonzero(samples == count)
@@ -293,6 +307,7 @@ def propose(
     two_transfers: bool = True,
     margin_m: float = 0.0,
     should_stop: Callable[[], bool] | None = None,
+    max_checks: int | None = None,
 ) -> tuple[list[Proposal], Effort]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
@@ -301,10 +316,11 @@ def propose(
     :data:`BLOCKED_PENALTY_RAD` per move that looked blocked.
 
     ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
-    milliseconds at most): when it says stop, the proposals found so far are returned.
+    milliseconds at most): when it says stop, the proposals found so far are returned; so they are
+    once ``max_checks`` configurations have been checked (moves not checked then count as blocked).
     Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work done.
     """
-    kinematics = _Kinematics(world, margin_m, should_stop)
+    kinematics = _Kinematics(world, margin_m, should_stop, max_checks)
     begin = _grasps_at_start(kinematics, np.asarray(start, float), np.asarray(placement, float), own or [])
     if begin is None:
         return [], kinematics.effort

@@ -288,6 +288,24 @@ class Graph:
 
 
 @numba.njit(cache=True)
+def _neighbour(
+    u: int, move: int, nj: int, ok0: np.ndarray, ok1: np.ndarray, step0: np.ndarray, step1: np.ndarray
+) -> tuple[int, float]:
+    """The node one valid edge from flat node ``u`` in direction ``move`` (0, 1: joint 1 up, down; 2, 3:
+    joint 2 up, down) and the edge's joint travel; ``-1`` when there is no such edge."""
+    i, j = u // nj, u % nj
+    if move == 0 and i < ok0.shape[0] and ok0[i, j]:
+        return u + nj, step0[i]
+    if move == 1 and i > 0 and ok0[i - 1, j]:
+        return u - nj, step0[i - 1]
+    if move == 2 and j + 1 < nj and ok1[i, j]:
+        return u + 1, step1[j]
+    if move == 3 and j > 0 and ok1[i, j - 1]:
+        return u - 1, step1[j - 1]
+    return -1, 0.0
+
+
+@numba.njit(cache=True)
 def _dijkstra(
     ok0: np.ndarray,
     ok1: np.ndarray,
@@ -310,25 +328,9 @@ def _dijkstra(
         d, u = heapq.heappop(heap)
         if d > dist[u]:
             continue
-        i, j = u // nj, u % nj
         for move in range(4):
-            if move == 0:
-                if i + 1 > ok0.shape[0] or not ok0[i, j]:
-                    continue
-                v, w = u + nj, step0[i]
-            elif move == 1:
-                if i == 0 or not ok0[i - 1, j]:
-                    continue
-                v, w = u - nj, step0[i - 1]
-            elif move == 2:
-                if j + 1 >= nj or not ok1[i, j]:
-                    continue
-                v, w = u + 1, step1[j]
-            else:
-                if j == 0 or not ok1[i, j - 1]:
-                    continue
-                v, w = u - 1, step1[j - 1]
-            if d + w < dist[v]:
+            v, w = _neighbour(u, move, nj, ok0, ok1, step0, step1)
+            if v >= 0 and d + w < dist[v]:
                 dist[v] = d + w
                 pred[v] = u
                 heapq.heappush(heap, (d + w, v))

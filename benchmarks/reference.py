@@ -257,13 +257,15 @@ class _Search:
         placement = np.asarray(self.world.object.initial, float)
         _, grasps, targets = grasp_configurations(self.world, placement[None])
         start = np.asarray(self.world.robot.initial, float)
-        routes = self.windowed(Mode(placement), start, False, 0.0, targets, self.estimates(1, placement, targets))
+        left = self.estimates(1, placement, targets)
+        routes = self.windowed(Mode(placement), start=start, on_lattice=False, cost=0.0, targets=targets, left=left)
         for grasp, target, route in zip(grasps, targets, routes, strict=True):
             if route is not None:
-                self.enter(1, placement, int(grasp), target, route.cost, [_segment("transit", None, route.waypoints)])
+                segments = [_segment("transit", None, route.waypoints)]
+                self.enter(1, placement, int(grasp), target, cost=route.cost, segments=segments)
 
     def enter(
-        self, depth: int, placement: np.ndarray, grasp: int, q: np.ndarray, cost: float, segments: list[PlanSegment]
+        self, depth: int, placement: np.ndarray, grasp: int, q: np.ndarray, *, cost: float, segments: list[PlanSegment]
     ) -> None:
         grasp_rel = relative(tip_poses(self.world.robot, q[None])[0], placement)  # as plan.replay computes it
         estimate = float(self.estimates(depth, placement, q[None])[0])
@@ -298,13 +300,14 @@ class _Search:
         sources, travel = graph.join(self.world, entry.start, leaving=True)
         dist, pred = shortest_paths(graph, sources, entry.cost + travel)
         goal_nodes, exact = self.goal_targets(entry.mode)
-        route = self.best_route(graph, dist, pred, entry.start, goal_nodes, exact)
+        route = self.best_route(graph, dist=dist, pred=pred, start=entry.start, goal_nodes=goal_nodes, exact=exact)
         if route is not None:
             self.found(entry, route)
         stride = self.settings.release_stride
         index = np.arange(len(dist))
         sampled = ((index // lattice.shape[1]) % stride == 0) & ((index % lattice.shape[1]) % stride == 0)
         candidates = np.flatnonzero(sampled & np.isfinite(dist))
+        assert entry.mode.grasp_rel is not None
         placements = compose(self.tips[candidates], entry.mode.grasp_rel)
         row, grasp, q = grasp_configurations(self.world, placements)
         keep = (grasp != entry.mode.grasp) | (_l1(q, self.nodes[candidates[row]]) > 0.1)  # not the same grasp again
@@ -339,12 +342,12 @@ class _Search:
         keep = (grasps != entry.mode.grasp) | (_l1(targets, q_release) > 0.1)
         grasps, targets = grasps[keep], targets[keep]
         left = self.estimates(entry.depth + 1, placement, targets)
-        routes = self.windowed(Mode(placement), q_release, True, cost, targets, left)
+        routes = self.windowed(Mode(placement), start=q_release, on_lattice=True, cost=cost, targets=targets, left=left)
         done = [*entry.segments, _segment("transfer", entry.mode.grasp, carried)]
         for grasp, target, route in zip(grasps, targets, routes, strict=True):
             if route is not None:
                 segments = [*done, _segment("transit", None, route.waypoints)]
-                self.enter(entry.depth + 1, placement, int(grasp), target, route.cost, segments)
+                self.enter(entry.depth + 1, placement, int(grasp), target, cost=route.cost, segments=segments)
 
     def finish(self, entry: _Entry) -> None:
         """A last transfer: its shortest way to the goal, in a window."""
@@ -364,6 +367,7 @@ class _Search:
     def best_route(
         self,
         graph: Graph,
+        *,
         dist: np.ndarray,
         pred: np.ndarray,
         start: np.ndarray,
@@ -372,9 +376,10 @@ class _Search:
     ) -> _Route | None:
         """The cheapest way to a goal node (lattice indices over the whole lattice) or exact goal configuration."""
         best: _Route | None = None
-        flat = graph.flat(np.stack(np.divmod(goal_nodes, self.lattice.shape[1]), axis=1)) if len(goal_nodes) else []
-        flat = np.asarray(flat, dtype=np.int64)
-        flat = flat[flat >= 0]
+        flat = np.zeros(0, dtype=np.int64)
+        if len(goal_nodes):
+            flat = graph.flat(np.stack(np.divmod(goal_nodes, self.lattice.shape[1]), axis=1))
+            flat = flat[flat >= 0]
         if len(flat) and np.isfinite(dist[flat]).any():
             node = int(flat[np.argmin(dist[flat])])
             best = _Route(float(dist[node]), np.concatenate([start[None], trace(graph, pred, node)]))
@@ -392,6 +397,7 @@ class _Search:
     def windowed(
         self,
         mode: Mode,
+        *,
         start: np.ndarray,
         on_lattice: bool,
         cost: float,
@@ -417,7 +423,9 @@ class _Search:
                     routes.append(_Route(float(costs[k]), self.joined(start, on_lattice, path, target)))
                 else:
                     routes.append(None)
-                leaving = cost + float(_l1(start, target)) + 2.0 * box.exit_margin(self.lattice, np.stack([start, target]))
+                leaving = (
+                    cost + float(_l1(start, target)) + 2.0 * box.exit_margin(self.lattice, np.stack([start, target]))
+                )
                 if costs[k] > leaving + 1e-9 and leaving + after < self.best_cost:
                     pending = True
             if not pending or box == self.lattice.full:
@@ -433,7 +441,7 @@ class _Search:
             box = self.lattice.box_around(np.concatenate([entry.start[None], goal_points]), margin)
             graph = Graph.build(self.world, entry.mode, self.lattice, box)
             dist, pred = self.sources(graph, entry.start, False, entry.cost)
-            route = self.best_route(graph, dist, pred, entry.start, goal_nodes, exact)
+            route = self.best_route(graph, dist=dist, pred=pred, start=entry.start, goal_nodes=goal_nodes, exact=exact)
             found = math.inf if route is None else route.cost
             everything = np.concatenate([entry.start[None], goal_points])
             leaving = entry.cost + nearest + 2.0 * box.exit_margin(self.lattice, everything)
@@ -443,9 +451,9 @@ class _Search:
 
     def sources(self, graph: Graph, start: np.ndarray, on_lattice: bool, cost: float) -> tuple[np.ndarray, np.ndarray]:
         if on_lattice:
-            index = np.round(
-                [(start[k] - self.lattice.axes[k][0]) / self.lattice.step_rad for k in range(2)]
-            ).astype(np.int64)
+            index = np.round([(start[k] - self.lattice.axes[k][0]) / self.lattice.step_rad for k in range(2)]).astype(
+                np.int64
+            )
             return shortest_paths(graph, graph.flat(index[None]), np.array([cost]))
         corners, travel = graph.join(self.world, start, leaving=True)
         return shortest_paths(graph, corners, cost + travel)

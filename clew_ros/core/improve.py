@@ -97,8 +97,8 @@ __all__ = [
     "CALL_WORK",
     "EVALUATION_WORK",
     "IK_WORK",
-    "REFERENCE_PAIRS",
     "MIN_MARGIN_FACTOR",
+    "REFERENCE_PAIRS",
     "WORK_PER_SECOND",
     "Improvement",
     "check_work",
@@ -266,9 +266,8 @@ def straight_move_clear(
     if grasp_rel is None and object_pose is None:
         raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
     resting = np.zeros(3) if object_pose is None else np.asarray(object_pose, dtype=float)
-    if np.any(a < world.robot.joint_lower) or np.any(b > world.robot.joint_upper):
-        return False
-    if np.any(b < world.robot.joint_lower) or np.any(a > world.robot.joint_upper):
+    ends = np.stack([a, b])
+    if np.any(ends < world.robot.joint_lower) or np.any(ends > world.robot.joint_upper):
         return False
     motion = float(np.abs(b - a) @ _reach_radii(world, grasp_rel)) * (1.0 + 1e-9) + 1e-12  # V (m)
     packed = packed_world(world)
@@ -449,7 +448,9 @@ class _Improver:
                 break
             after = self.pieces[kept:]
             own = [(int(p.grasp), p.waypoints[0]) for p in after[1:2] if p.grasp is not None]
-            hints = np.array([p.waypoints[-1] for p in after[:-1] if p.kind == "transfer"]).reshape(-1, len(configuration))
+            hints = np.array([p.waypoints[-1] for p in after[:-1] if p.kind == "transfer"]).reshape(
+                -1, len(configuration)
+            )
             proposals, effort = propose(
                 self.world,
                 configuration,
@@ -613,7 +614,9 @@ class _Improver:
                 if kind < 2.0 / 3.0:
                     accepted = j > i and self.try_shortcut(index, i + 1, j, a, b)
                 else:
-                    accepted = j > i and self.try_partial(index, int(rng.integers(w.shape[1])), (i, a, u[0]), (j, b, u[1]))
+                    accepted = j > i and self.try_partial(
+                        index, int(rng.integers(w.shape[1])), (i, a, u[0]), (j, b, u[1])
+                    )
             failures = 0 if accepted else failures + 1
 
     def try_partial(

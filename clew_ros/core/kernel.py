@@ -843,7 +843,7 @@ def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndar
 
 
 @_jit
-def _solve_point(  # noqa: PLR0914 - one compiled loop: kinematics, Jacobian, a 2x2 or 3x3 solve, the step
+def _solve_point(  # noqa: PLR0915 - one compiled loop per row: kinematics, Jacobian, a 2x2 or 3x3 solve, the step
     q: np.ndarray,
     targets: np.ndarray,
     offsets: np.ndarray,

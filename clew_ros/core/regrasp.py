@@ -195,7 +195,9 @@ class _Kinematics:
                         assert resting is not None
                         poses = np.repeat(resting[moves], int(part.sum()), axis=0)
                     else:
-                        poses = compose(tip_poses(self.world.robot, q), np.repeat(grasp_rel[moves], int(part.sum()), axis=0))
+                        poses = compose(
+                            tip_poses(self.world.robot, q), np.repeat(grasp_rel[moves], int(part.sum()), axis=0)
+                        )
                     rows = rows[self.valid(q, poses).reshape(len(rows), -1).all(axis=1)]
                 route[group[rows]] = index
         return route
@@ -406,7 +408,9 @@ class _Releases:
         return score
 
 
-def _continue(kinematics: _Kinematics, begin: _Start, option: np.ndarray, release: np.ndarray, goal: np.ndarray) -> _Releases:
+def _continue(
+    kinematics: _Kinematics, begin: _Start, option: np.ndarray, release: np.ndarray, goal: np.ndarray
+) -> _Releases:
     """For each release configuration ``release`` ``(S, n)`` carried with grasp configuration ``option``:
     the grasp to take next and the goal configuration after it, the cheapest of the
     :data:`CONTINUATIONS` shortest once blocked moves count."""
@@ -507,7 +511,9 @@ def _two_transfers(
     angle = rng.uniform(0.0, 2.0 * np.pi, size=len(radius))
     points = goal[:2] + np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1)
     near_sides = np.repeat(sides, NEAR)
-    near = kinematics.toward(begin.grasp_rel[near_sides], np.repeat(_with_mirrors(world, first, goal_side), NEAR, axis=0), points)
+    near = kinematics.toward(
+        begin.grasp_rel[near_sides], np.repeat(_with_mirrors(world, first, goal_side), NEAR, axis=0), points
+    )
     anywhere = rng.uniform(robot.joint_lower, robot.joint_upper, size=(count * ANYWHERE, n))
     hinted = np.repeat(hints, HINTED, axis=0)  # each hint itself, then drawn around it
     drawn = (np.arange(len(hinted)) % HINTED > 0)[:, None]

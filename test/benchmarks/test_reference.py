@@ -79,12 +79,14 @@ def _analytic_shortest(world: World) -> float:
             continue
         phi = hold.sum()  # the object in the end effector's frame, then the virtual last link to its origin
         offset = np.array(
-            [math.cos(phi) * (pose[0] - held[0]) + math.sin(phi) * (pose[1] - held[1]),
-             -math.sin(phi) * (pose[0] - held[0]) + math.cos(phi) * (pose[1] - held[1])]
+            [
+                math.cos(phi) * (pose[0] - held[0]) + math.sin(phi) * (pose[1] - held[1]),
+                -math.sin(phi) * (pose[0] - held[0]) + math.cos(phi) * (pose[1] - held[1]),
+            ]
         )
         virtual = np.array([l2 + offset[0], offset[1]])
-        for end in _elbows(robot.base, l1, float(np.hypot(*virtual)), world.object.goal[:2]):
-            end = end - np.array([0.0, math.atan2(virtual[1], virtual[0])])
+        for elbow in _elbows(robot.base, l1, float(np.hypot(*virtual)), world.object.goal[:2]):
+            end = elbow - np.array([0.0, math.atan2(virtual[1], virtual[0])])
             if np.all(end >= robot.joint_lower) and np.all(end <= robot.joint_upper):
                 best = min(best, float(np.abs(hold - start).sum() + np.abs(end - hold).sum()))
     return best

@@ -13,7 +13,13 @@ from clew_ros.core.world import Robot
 
 def _robot(joints: int) -> Robot:
     lengths = np.linspace(1.0, 0.6, joints) * 1.7 / np.linspace(1.0, 0.6, joints).sum()
-    return Robot(np.zeros(2), lengths, np.r_[-3.1, np.full(joints - 1, -2.8)], np.r_[3.1, np.full(joints - 1, 2.8)], np.zeros(joints))
+    return Robot(
+        np.zeros(2),
+        lengths,
+        np.r_[-3.1, np.full(joints - 1, -2.8)],
+        np.r_[3.1, np.full(joints - 1, 2.8)],
+        np.zeros(joints),
+    )
 
 
 @pytest.mark.parametrize("joints", [2, 3, 5, 7])
@@ -25,7 +31,8 @@ def test_answers_reach_their_targets_within_the_limits(joints: int) -> None:
     targets = compose(tip_poses(robot, truth), np.c_[offsets, np.zeros(200)])[:, :2]
     seeds = np.clip(truth + rng.normal(0.0, 0.3, truth.shape), robot.joint_lower, robot.joint_upper)
     q, error, steps = solve_point(robot, seeds, targets, offsets=offsets)
-    assert np.all(q >= robot.joint_lower) and np.all(q <= robot.joint_upper)
+    assert np.all(q >= robot.joint_lower)
+    assert np.all(q <= robot.joint_upper)
     reached = error <= 1e-9
     assert reached.mean() >= 0.9
     found = compose(tip_poses(robot, q[reached]), np.c_[offsets[reached], np.zeros(reached.sum())])[:, :2]

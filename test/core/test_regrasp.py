@@ -40,7 +40,8 @@ def test_proposals_hold_their_grasps_end_at_the_goal_and_are_valid(name: str) ->
         world, world.robot.initial, world.object.initial, goal, np.random.default_rng(3), margin_m=5e-4
     )
     assert proposals
-    assert effort.checks > 0 and effort.steps > 0
+    assert effort.checks > 0
+    assert effort.steps > 0
     assert any(len(p.grasps) == 2 for p in proposals)
     for proposal in proposals:
         keys = proposal.keys
@@ -66,8 +67,7 @@ def test_the_same_generator_gives_the_same_proposals() -> None:
     world = load_world(ROOT / "config" / "figure1.yaml")
     goal = np.asarray(world.object.goal, dtype=float)
     runs = [
-        propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(7))[0]
-        for _ in range(2)
+        propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(7))[0] for _ in range(2)
     ]
     assert len(runs[0]) == len(runs[1])
     for a, b in zip(*runs, strict=True):
@@ -78,7 +78,7 @@ def test_the_same_generator_gives_the_same_proposals() -> None:
 def test_a_stop_request_ends_the_proposals_early() -> None:
     world = load_world(ROOT / "config" / "figure1.yaml")
     goal = np.asarray(world.object.goal, dtype=float)
-    full, effort = propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(1))
+    _, effort = propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(1))
     cut, less = propose(
         world, world.robot.initial, world.object.initial, goal, np.random.default_rng(1), should_stop=lambda: True
     )

@@ -1,23 +1,41 @@
 """Anytime improvement of a found plan (issue 14): fewer transfers, shorter paths, never worse.
 
 The ACA keeps every single manipulation path that led to the goal, made of
-Manhattan moves (one joint at a time, in large arcs). Once a plan is found,
+Manhattan moves (one joint at a time, in large arcs), and takes the object
+wherever its search happened to: often with the elbow the wrong way round,
+or put down far from where a regrasp was needed. Once a plan is found,
 :func:`improve` spends a bounded budget (``planner.improve_time``) on it:
 
 1. **Back-and-forth pruning** (free): a waypoint between two collinear
    pieces (a joint moving one way, then back) is dropped, and so is a loop
    that comes back to an earlier waypoint. The configurations left were
    already on the plan, so nothing needs checking.
-2. **Fewer transfers**: from the start of each transfer but the last
+2. **Rebuilding the manipulation** (at most :data:`REBUILD_SHARE` of the
+   budget): from each placement of the plan (the start, then where each
+   transfer put the object down), :func:`clew_ros.core.regrasp.propose`
+   lists ways to finish with one transfer or two (one regrasp), through any
+   grasp, either elbow and release placements drawn around the goal, made
+   of straight moves between key configurations found by inverse
+   kinematics. They are ranked by joint travel plus a penalty per move that
+   a quick sampled check found blocked, and checked in that order: each
+   move continuously (below), straight or one joint after the other (as
+   long in joint travel), else through a configuration drawn inside the box
+   between its ends (as long too) or around its middle. The first that makes
+   the plan better replaces the plan's end from that placement on. Passes
+   repeat while they find something (:data:`REBUILD_IDLE_PASSES`), and stop
+   in a cluttered world where every proposal looked blocked.
+3. **Fewer transfers**: from the start of each transfer but the last
    (earliest first), SEARCH_TRANSFER tries to carry the object, with that
    transfer's grasp, straight to the goal; the first success replaces every
    later segment.
-3. **Shortcuts**: a sub-path of one segment is replaced by one straight
+4. **Shortcuts**: a sub-path of one segment is replaced by one straight
    joint-space move (all joints together), first each segment's whole path,
    then pairs of waypoints and pairs of points along the path drawn by the
-   run's generator. A segment's end points never change, so every grasp and
-   ungrasp stays where it was (the tip still holds its grasp) and the object
-   rests or is carried exactly as before.
+   run's generator; or, between two such points, one joint is made to move
+   evenly while the others move as before (a partial shortcut: a joint that
+   went back and forth there goes straight). A segment's end points never
+   change, so every grasp and ungrasp stays where it was (the tip still
+   holds its grasp) and the object rests or is carried exactly as before.
 
 A change is kept only when it lowers ``(transfers, joint travel)`` or keeps
 them and drops waypoints; joint travel is the sum over joints of the
@@ -39,20 +57,23 @@ piece ``[t0, t1]`` with every distance past its threshold by more than
 ``V (t1 - t0) / 2``, the whole piece is valid, at any checking resolution.
 Pieces that fail are halved (the margin halves with them) down to
 :data:`MIN_MARGIN_FACTOR` x ``planner.clearance``; a piece still not
-cleared rejects the move. A shortcut therefore keeps at least that
-clearance everywhere, like the planner's own paths. The whole improved plan
-is checked once more at the validator's 0.002 rad; if that ever failed, the
-first plan would be returned.
+cleared rejects the move, and so does a midpoint that is not valid at all
+(at once). A shortcut therefore keeps at least that clearance everywhere,
+like the planner's own paths. The whole improved plan is checked once more
+at the validator's 0.002 rad; if that ever failed, the first plan would be
+returned.
 
 **Determinism.** All choices come from a generator seeded with
 ``planner.seed`` (apart from the planner's own), and the budget is counted
 in work, not seconds: :data:`WORK_PER_SECOND` units per second of
-``planner.improve_time``, one unit per configuration checked plus
-:data:`CALL_WORK` per check call and :data:`EVALUATION_WORK` per
-genetic-algorithm individual. Attempts run until the work is spent, so the
-same seed gives the same plan on any machine. Only the planner's time limit
-and cancel stop it by the clock (between checks, well within 100 ms), and
-then the best plan so far is returned.
+``planner.improve_time``; a configuration checked costs one unit, or more
+in a world whose check compares more pieces (:func:`check_work`), plus
+:data:`CALL_WORK` per call of the check, :data:`IK_WORK` per step of inverse
+kinematics and :data:`EVALUATION_WORK` per genetic-algorithm individual.
+Attempts run until the work is spent, so the same seed gives the same plan
+on any machine. Only the planner's time limit and cancel stop it by the
+clock (between checks, well within 100 ms), and then the best plan so far
+is returned.
 """
 
 from __future__ import annotations
@@ -67,6 +88,7 @@ import numpy as np
 from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
@@ -74,9 +96,12 @@ from clew_ros.core.world import World
 __all__ = [
     "CALL_WORK",
     "EVALUATION_WORK",
+    "IK_WORK",
     "MIN_MARGIN_FACTOR",
+    "REFERENCE_PAIRS",
     "WORK_PER_SECOND",
     "Improvement",
+    "check_work",
     "improve",
     "joint_travel",
     "straight_move_clear",
@@ -89,12 +114,30 @@ WORK_PER_SECOND = 3.0e5
 CALL_WORK = 30
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
+#: Work of one step of inverse kinematics (one configuration, one iteration), in units.
+IK_WORK = 0.125
+#: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
+REFERENCE_PAIRS = 70
 #: Shortcuts keep at least this fraction of ``planner.clearance`` from everything (m / m).
 MIN_MARGIN_FACTOR = 0.5
 #: Largest margin (m) the first level of a straight-move check asks for.
 MAX_MARGIN_M = 0.05
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5
+#: Share of the budget that rebuilding the manipulation from straight moves may start in.
+REBUILD_SHARE = 0.6
+#: Share of what is left of the rebuilding's budget that one round of proposals may spend on checks.
+PROPOSE_SHARE = 0.5
+#: Rebuilding stops after this many passes in a row that found nothing better.
+REBUILD_IDLE_PASSES = 2
+#: Proposals checked per placement at most, and of them with a move that looked blocked.
+REBUILD_TRIES, BLOCKED_TRIES = 6, 0
+#: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
+ALIKE_RAD = 0.3
+#: Detours tried around a straight move of a proposal that is not clear.
+DETOURS = 3
+#: A partial shortcut spans at most this many pieces of the path.
+PARTIAL_PIECES = 8
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
 #: Step (rad per joint) of the final check, the validator's.
@@ -170,9 +213,14 @@ class _Budget:
         self.spent = 0
         self.evaluations_at_start = ctx.counters.evaluations
         self.stopped = False
+        self.check_work = check_work(ctx.world)
 
     def spend(self, units: int) -> None:
         self.spent += units
+
+    def spend_checks(self, configurations: int, calls: int = 1) -> None:
+        """Charge ``configurations`` checked in ``calls`` calls of the compiled check."""
+        self.spent += math.ceil(configurations * self.check_work) + calls * CALL_WORK
 
     def left(self, share: float = 1.0) -> bool:
         """Whether work is left (within ``share`` of the budget) and the clock allows more."""
@@ -184,6 +232,12 @@ class _Budget:
         if not self.stopped and self.ctx.termination():
             self.stopped = True
         return self.stopped
+
+
+def check_work(world: World) -> float:
+    """Work units one configuration check costs in ``world``: 1 up to :data:`REFERENCE_PAIRS` pairs of pieces
+    compared per check (:attr:`clew_ros.core.kernel.PackedWorld.pairs_per_move`), in proportion beyond."""
+    return max(1.0, packed_world(world).pairs_per_move / REFERENCE_PAIRS)
 
 
 def _reach_radii(world: World, grasp_rel: np.ndarray | None) -> np.ndarray:
@@ -212,9 +266,8 @@ def straight_move_clear(
     if grasp_rel is None and object_pose is None:
         raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
     resting = np.zeros(3) if object_pose is None else np.asarray(object_pose, dtype=float)
-    if np.any(a < world.robot.joint_lower) or np.any(b > world.robot.joint_upper):
-        return False
-    if np.any(b < world.robot.joint_lower) or np.any(a > world.robot.joint_upper):
+    ends = np.stack([a, b])
+    if np.any(ends < world.robot.joint_lower) or np.any(ends > world.robot.joint_upper):
         return False
     motion = float(np.abs(b - a) @ _reach_radii(world, grasp_rel)) * (1.0 + 1e-9) + 1e-12  # V (m)
     packed = packed_world(world)
@@ -236,10 +289,16 @@ def straight_move_clear(
         )
         clear = clearly_valid(dataclasses.replace(packed, rounding=margin), q, poses)
         if budget is not None:
-            budget.spend(len(q) + CALL_WORK)
+            budget.spend_checks(len(q))
         if clear.all():
             return True
         if margin <= min_margin:
+            return False
+        # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
+        doubtful = np.flatnonzero(~clear)
+        if budget is not None:
+            budget.spend_checks(len(doubtful))
+        if not is_valid(world, q[doubtful], np.asarray(poses)[doubtful]).all():
             return False
         pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
         pending = pending.reshape(-1)
@@ -262,21 +321,41 @@ def _prune(waypoints: np.ndarray) -> np.ndarray:
     """Drop repeated waypoints, loops back to an earlier waypoint, and waypoints between collinear pieces
     (a move undone or continued along the same line): the remaining path only visits configurations the
     old one visited."""
-    points: list[np.ndarray] = []
+    waypoints = np.asarray(waypoints, dtype=float)
+    points = np.empty_like(waypoints)  # the path kept so far: points[:size]
+    size = 0
     for w in waypoints:
-        for i, p in enumerate(points):  # a loop: back where the path already was
-            if np.max(np.abs(w - p)) <= 1e-12:
-                del points[i + 1 :]
-                break
+        back = np.flatnonzero(np.max(np.abs(points[:size] - w), axis=1) <= 1e-12)  # a loop: back where it was
+        if len(back):
+            size = int(back[0]) + 1
         else:
-            points.append(w)
-        while len(points) >= 3:
-            u, v = points[-2] - points[-3], points[-1] - points[-2]
+            points[size] = w
+            size += 1
+        while size >= 3:
+            u, v = points[size - 2] - points[size - 3], points[size - 1] - points[size - 2]
             scale = max(float(np.max(np.abs(u))), float(np.max(np.abs(v))))
             if scale > 0 and float(np.max(np.abs(u * np.linalg.norm(v) ** 2 - v * (u @ v)))) > 1e-12 * scale**3:
                 break  # not collinear
-            del points[-2]
-    return np.array(points)
+            points[size - 2] = points[size - 1]
+            size -= 1
+    pruned: np.ndarray = points[:size].copy()
+    return pruned
+
+
+def _cumulative(waypoints: np.ndarray) -> np.ndarray:
+    """Joint travel (rad) along ``waypoints`` up to each of them."""
+    steps = np.abs(np.diff(waypoints, axis=0)).sum(axis=1)
+    cumulative: np.ndarray = np.concatenate([[0.0], np.cumsum(steps)])
+    return cumulative
+
+
+def _point_at(waypoints: np.ndarray, cumulative: np.ndarray, travel: float) -> tuple[int, np.ndarray]:
+    """The point ``travel`` (rad of joint travel) along the path, and the number of the piece it lies on."""
+    k = int(np.clip(np.searchsorted(cumulative, travel, side="right") - 1, 0, len(waypoints) - 2))
+    span = cumulative[k + 1] - cumulative[k]
+    share = 0.0 if span <= 0 else (travel - cumulative[k]) / span
+    point: np.ndarray = waypoints[k] + share * (waypoints[k + 1] - waypoints[k])
+    return k, point
 
 
 def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
@@ -286,6 +365,11 @@ def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
     if abs(new[1] - old[1]) > TRAVEL_EPS:
         return new[1] < old[1]
     return new[2] < old[2]
+
+
+def _alike(a: Proposal, b: Proposal) -> bool:
+    """Whether two proposals take the same grasps at key configurations within :data:`ALIKE_RAD` of each other."""
+    return a.grasps == b.grasps and float(np.max(np.abs(a.keys - b.keys))) <= ALIKE_RAD
 
 
 def _score(pieces: list[_Piece]) -> tuple[int, float, int]:
@@ -305,6 +389,7 @@ class _Improver:
         self.budget = _Budget(ctx, ctx.settings.improve_time * WORK_PER_SECOND)
         self.min_margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
         self.shortcuts = 0
+        self.rebuilt = 0
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
@@ -324,6 +409,144 @@ class _Improver:
                 (0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([pruned]), len(pruned))
             ):
                 piece.waypoints = pruned
+
+    def cuts(self) -> list[tuple[int, np.ndarray, np.ndarray]]:
+        """Where the plan could be finished differently: ``(kept, configuration, placement)`` for the start
+        (no piece kept) and after each transfer but one ending at the goal (the pieces through it kept)."""
+        cuts = [(0, self.pieces[0].waypoints[0], np.asarray(self.world.object.initial, dtype=float))]
+        for index, piece in enumerate(self.pieces[:-1]):
+            if piece.kind == "transfer":
+                cuts.append((index + 1, piece.waypoints[-1], piece.end_pose(self.world)))
+        return cuts
+
+    def rebuild(self) -> None:
+        """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
+        none after a pass in which every proposal had a move that looked blocked (a cluttered world)."""
+        idle = 0
+        while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
+            better, hopeful = self.rebuild_pass()
+            if not better and not hopeful:
+                return
+            idle = 0 if better else idle + 1
+
+    def rebuild_pass(self) -> tuple[bool, bool]:
+        """From each placement of the plan, earliest first: finish with straight moves through other grasps,
+        postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
+        Returns whether the plan got better, and whether any proposal looked clear."""
+        position = 0
+        better = hopeful = False
+        while self.budget.left(REBUILD_SHARE):
+            cuts = [cut for cut in self.cuts() if cut[0] >= position]
+            if not cuts:
+                break
+            kept, configuration, placement = cuts[0]
+            position = kept + 1
+            before = self.pieces[:kept]
+            transfers = sum(p.kind == "transfer" for p in before)
+            score = _score(self.pieces)
+            if transfers + 1 > score[0]:
+                break
+            after = self.pieces[kept:]
+            own = [(int(p.grasp), p.waypoints[0]) for p in after[1:2] if p.grasp is not None]
+            hints = np.array([p.waypoints[-1] for p in after[:-1] if p.kind == "transfer"]).reshape(
+                -1, len(configuration)
+            )
+            proposals, effort = propose(
+                self.world,
+                configuration,
+                placement,
+                self.goal,
+                self.ctx.rng,
+                own=own,
+                releases=hints,
+                two_transfers=transfers + 2 <= score[0],
+                margin_m=self.min_margin,
+                should_stop=self.budget.stop,
+                max_checks=self.proposal_checks(),
+            )
+            self.budget.spend_checks(effort.checks, effort.calls)
+            self.budget.spend(math.ceil(IK_WORK * effort.steps))
+            hopeful |= any(not p.blocked for p in proposals)
+            better |= self.try_proposals(proposals, kept, placement)
+        return better, hopeful
+
+    def proposal_checks(self) -> int:
+        """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
+        left of the rebuilding's share of the budget."""
+        left = REBUILD_SHARE * self.budget.total - self.budget.spent
+        return max(0, int(PROPOSE_SHARE * left / self.budget.check_work))
+
+    def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
+        """The first of ``proposals`` (after the first ``kept`` pieces) whose moves are clear and that makes
+        the plan better replaces the plan's end; whether one did."""
+        before = self.pieces[:kept]
+        transfers = sum(p.kind == "transfer" for p in before)
+        score = _score(self.pieces)
+        travel_before = joint_travel([p.waypoints for p in before])
+        failed: list[Proposal] = []
+        for proposal in proposals:
+            if not _better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
+                continue
+            if any(_alike(proposal, other) for other in failed):
+                continue  # as good as one that failed: try something else
+            if proposal.blocked and sum(p.blocked > 0 for p in failed) >= BLOCKED_TRIES:
+                continue  # a move that looked blocked is rarely clear: try those few times
+            if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
+                break
+            tail = self.checked_tail(proposal, placement)
+            if tail is not None and _better(score, _score(before + tail)):
+                self.pieces = before + tail
+                self.rebuilt += 1
+                return True
+            failed.append(proposal)
+        return False
+
+    def checked_tail(self, proposal: Proposal, placement: np.ndarray) -> list[_Piece] | None:
+        """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked
+        continuously (:meth:`route`); ``None`` if a move stays blocked."""
+        pieces: list[_Piece] = []
+        keys = proposal.keys
+        pose = np.asarray(placement, dtype=float)
+        for step, grasp in enumerate(proposal.grasps):
+            start, hold, end = keys[2 * step], keys[2 * step + 1], keys[2 * step + 2]
+            grasp_rel = relative(tip_poses(self.world.robot, hold[None])[0], pose)  # as plan.replay computes it
+            transit = _Piece("transit", None, np.array([start, hold]), pose, None)
+            transfer = _Piece("transfer", grasp, np.array([hold, end]), pose, grasp_rel)
+            for piece, route in zip((transit, transfer), proposal.routes[2 * step : 2 * step + 2], strict=True):
+                path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], route)
+                if path is None:
+                    return None
+                piece.waypoints = path
+                pieces.append(piece)
+            pose = transfer.end_pose(self.world)
+        return pieces
+
+    def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:
+        """Waypoints from ``a`` to ``b`` in ``piece``'s mode, each move checked continuously: the ways of
+        :data:`clew_ros.core.regrasp.ROUTES` (the one that looked clear, ``hint``, first; all as long in
+        joint travel), then through a configuration drawn inside the box ``[a, b]`` (as long too), then
+        through one drawn around the middle (:data:`DETOURS` tries each); ``None`` when none is clear."""
+        ways = [hint] if hint >= 0 else []
+        for way in [*ways, *(w for w in range(len(ROUTES)) if w != hint)]:
+            path = route_waypoints(a, b, way)
+            if self.budget.stop():
+                return None
+            if all(self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
+                return path
+        n = len(a)
+        lower, upper = self.world.robot.joint_lower, self.world.robot.joint_upper
+        spread = 0.25 * float(np.max(np.abs(b - a))) + 0.1
+        for monotone in (True, False):
+            for _ in range(DETOURS):
+                if self.budget.stop():
+                    return None
+                if monotone:
+                    via = a + self.ctx.rng.uniform(0.0, 1.0, size=n) * (b - a)
+                else:
+                    via = np.clip(0.5 * (a + b) + self.ctx.rng.normal(0.0, spread, size=n), lower, upper)
+                if self.clear(piece, a, via) and self.clear(piece, via, b):
+                    return np.array([a, via, b])
+        return None
 
     def fewer_transfers(self) -> None:
         """From the start of each transfer but the last, earliest first: carry the object to the goal."""
@@ -370,7 +593,8 @@ class _Improver:
                 self.try_shortcut(index, 1, len(w) - 2, w[0], w[-1])
 
     def random_shortcuts(self) -> None:
-        """Pairs of waypoints, and pairs of points along a segment's path, until the work is spent."""
+        """Pairs of waypoints, pairs of points along a segment's path, and one joint between two such points
+        (:meth:`try_partial`), drawn at random, until the work is spent."""
         rng = self.ctx.rng
         failures = 0
         while self.budget.left() and failures < 200:
@@ -379,23 +603,52 @@ class _Improver:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
             w = self.pieces[index].waypoints
-            if rng.random() < 0.5:  # two waypoints at least two apart
+            kind = rng.random()
+            if kind < 1.0 / 3.0:  # two waypoints at least two apart
                 i, j = sorted(rng.choice(len(w), size=2, replace=False).tolist())
                 accepted = j - i >= 2 and self.try_shortcut(index, i + 1, j - 1, w[i], w[j])
-            else:  # two points along the path, by joint travel
-                cumulative = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(w, axis=0)).sum(axis=1))])
+            else:  # two points along the path, by joint travel: a straight move, or one joint evened out
+                cumulative = _cumulative(w)
                 u = np.sort(rng.uniform(0.0, cumulative[-1], size=2))
-                i, j = (int(np.clip(np.searchsorted(cumulative, x, side="right") - 1, 0, len(w) - 2)) for x in u)
-                points = []
-                for x, k in zip(u, (i, j), strict=True):
-                    span = cumulative[k + 1] - cumulative[k]
-                    s = 0.0 if span <= 0 else (x - cumulative[k]) / span
-                    points.append(w[k] + s * (w[k + 1] - w[k]))
-                accepted = j > i and self.try_shortcut(index, i + 1, j, points[0], points[1])
+                (i, a), (j, b) = (_point_at(w, cumulative, x) for x in u)
+                if kind < 2.0 / 3.0:
+                    accepted = j > i and self.try_shortcut(index, i + 1, j, a, b)
+                else:
+                    accepted = j > i and self.try_partial(
+                        index, int(rng.integers(w.shape[1])), (i, a, u[0]), (j, b, u[1])
+                    )
             failures = 0 if accepted else failures + 1
+
+    def try_partial(
+        self, index: int, joint: int, start: tuple[int, np.ndarray, float], end: tuple[int, np.ndarray, float]
+    ) -> bool:
+        """A partial shortcut: between two points of piece ``index``'s path (each ``(piece number, point, path
+        travel)``), ``joint`` moves evenly along the path while the other joints move as before, so a joint
+        that went back and forth there goes straight. Every new straight piece is checked."""
+        piece = self.pieces[index]
+        w = piece.waypoints
+        (i, a, x0), (j, b, x1) = start, end
+        if x1 - x0 <= 0:
+            return False
+        if j - i > PARTIAL_PIECES:
+            return False  # a long stretch: many pieces to check for one joint's gain
+        cumulative = _cumulative(w)
+        path = np.array([a, *w[i + 1 : j + 1], b])
+        travel = np.array([x0, *cumulative[i + 1 : j + 1], x1])
+        path[:, joint] = a[joint] + (travel - x0) / (x1 - x0) * (b[joint] - a[joint])
+        joined = [*w[: i + 1], *path, *w[j + 1 :]]
+        new = np.array([p for k, p in enumerate(joined) if k == 0 or np.max(np.abs(p - joined[k - 1])) > 1e-12])
+        if not _better((0, joint_travel([w]), len(w)), (0, joint_travel([new]), len(new))):
+            return False
+        if not all(self.budget.left() and self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
+            return False
+        piece.waypoints = _prune(new)
+        self.shortcuts += 1
+        return True
 
     def run(self) -> list[_Piece]:
         self.prune()
+        self.rebuild()
         self.fewer_transfers()
         self.prune()
         self.whole_segments()

@@ -47,7 +47,7 @@ __all__ = [
     "clearly_valid",
     "decode",
     "intervals",
-    "reach_point",
+    "solve_point",
     "warm_up",
 ]
 
@@ -843,49 +843,87 @@ def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndar
 
 
 @_jit
-def _reach_point(
+def _solve_point(  # noqa: PLR0915 - one compiled loop per row: kinematics, Jacobian, a 2x2 or 3x3 solve, the step
     q: np.ndarray,
+    targets: np.ndarray,
+    offsets: np.ndarray,
+    angles: np.ndarray,
+    angle_tolerance: float,
+    angle_scale: float,
+    iterations: int,
+    damping: float,
+    max_step: float,
     base: np.ndarray,
     lengths: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
-    target: np.ndarray,
-    damping: float,
-    iterations: int,
     tolerance: float,
+    error: np.ndarray,
+    steps: np.ndarray,
 ) -> None:
-    """Damped least squares on the tip position, in place on every row of ``q (B, n)``, clamped to
-    the limits at every step (a step's largest joint move is at most 0.5 rad); a row stops once its
-    tip is within ``tolerance`` of ``target``."""
+    """Damped least squares, in place on ``q (B, n)``: the point ``offsets[b]`` of the end-effector frame
+    to ``targets[b]``, and (``angles[b]`` not NaN) the frame's angle within ``angle_tolerance`` of it;
+    a row stops once its error is at most ``tolerance``. ``error[b]``: what is left (m; the angle's
+    excess counts ``angle_scale`` m per rad); ``steps[b]``: the steps taken."""
     n = lengths.shape[0]
-    links = np.empty((n, 2, 2))
-    jacobian = np.empty((2, n))
+    px = np.empty(n)
+    py = np.empty(n)
+    jx = np.empty(n)
+    jy = np.empty(n)
     for b in range(q.shape[0]):
-        for _ in range(iterations):
-            tx, ty, _phi = _forward(q[b], base, lengths, links)
-            ex, ey = target[0] - tx, target[1] - ty
-            if ex * ex + ey * ey <= tolerance * tolerance:
-                break
-            for i in range(n):  # a planar revolute joint moves the tip at right angles to joint-to-tip
-                jacobian[0, i] = -(ty - links[i, 0, 1])
-                jacobian[1, i] = tx - links[i, 0, 0]
-            a = damping
-            c = damping
-            m = 0.0
+        use_angle = angles[b] == angles[b]
+        for it in range(iterations + 1):
+            x, y, phi = base[0], base[1], 0.0
             for i in range(n):
-                a += jacobian[0, i] * jacobian[0, i]
-                m += jacobian[0, i] * jacobian[1, i]
-                c += jacobian[1, i] * jacobian[1, i]
-            det = a * c - m * m
-            ux = (c * ex - m * ey) / det  # (J J^T + damping I)^-1 e
-            uy = (a * ey - m * ex) / det
+                px[i], py[i] = x, y
+                phi += q[b, i]
+                x += lengths[i] * math.cos(phi)
+                y += lengths[i] * math.sin(phi)
+            c, s = math.cos(phi), math.sin(phi)
+            x += c * offsets[b, 0] - s * offsets[b, 1]
+            y += s * offsets[b, 0] + c * offsets[b, 1]
+            ex, ey, et = x - targets[b, 0], y - targets[b, 1], 0.0
+            if use_angle:
+                turn = phi - angles[b]
+                turn -= _TWO_PI * math.floor((turn + math.pi) / _TWO_PI)
+                if turn > angle_tolerance:
+                    et = angle_scale * (turn - angle_tolerance)
+                elif turn < -angle_tolerance:
+                    et = angle_scale * (turn + angle_tolerance)
+            error[b] = math.sqrt(ex * ex + ey * ey + et * et)
+            steps[b] = it
+            if it == iterations or error[b] <= tolerance:
+                break
+            a11 = a12 = a22 = a13 = a23 = 0.0
+            for i in range(n):
+                jx[i], jy[i] = py[i] - y, x - px[i]
+                a11 += jx[i] * jx[i]
+                a12 += jx[i] * jy[i]
+                a22 += jy[i] * jy[i]
+                a13 += jx[i] * angle_scale
+                a23 += jy[i] * angle_scale
+            a11 += damping
+            a22 += damping
+            if use_angle:
+                a33 = n * angle_scale * angle_scale + damping
+                c11, c12, c13 = a22 * a33 - a23 * a23, a13 * a23 - a12 * a33, a12 * a23 - a13 * a22
+                c22, c23, c33 = a11 * a33 - a13 * a13, a12 * a13 - a11 * a23, a11 * a22 - a12 * a12
+                det = a11 * c11 + a12 * c12 + a13 * c13
+                w1 = (c11 * ex + c12 * ey + c13 * et) / det
+                w2 = (c12 * ex + c22 * ey + c23 * et) / det
+                w3 = (c13 * ex + c23 * ey + c33 * et) / det
+            else:
+                det = a11 * a22 - a12 * a12
+                w1 = (a22 * ex - a12 * ey) / det
+                w2 = (a11 * ey - a12 * ex) / det
+                w3 = 0.0
             largest = 0.0
             for i in range(n):
-                largest = max(largest, abs(jacobian[0, i] * ux + jacobian[1, i] * uy))
-            scale = 1.0 if largest <= 0.5 else 0.5 / largest
+                jx[i] = -(jx[i] * w1 + jy[i] * w2 + angle_scale * w3)  # the step, in place
+                largest = max(largest, abs(jx[i]))
+            scale = min(1.0, max_step / largest) if largest > 0.0 else 0.0
             for i in range(n):
-                step = scale * (jacobian[0, i] * ux + jacobian[1, i] * uy)
-                q[b, i] = min(max(q[b, i] + step, lower[i]), upper[i])
+                q[b, i] = min(max(q[b, i] + scale * jx[i], lower[i]), upper[i])
 
 
 # --------------------------------------------------------------------------- Python entry points
@@ -992,32 +1030,47 @@ def chain(base: np.ndarray, lengths: np.ndarray, q: np.ndarray) -> tuple[np.ndar
     return points, tips
 
 
-def reach_point(
+def solve_point(
     base: np.ndarray,
     lengths: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
-    q: np.ndarray,
-    target: np.ndarray,
-    damping: float,
+    seeds: np.ndarray,
+    targets: np.ndarray,
+    offsets: np.ndarray,
+    angles: np.ndarray,
+    *,
+    angle_tolerance: float,
+    angle_scale: float,
     iterations: int,
-    tolerance: float,
-) -> np.ndarray:
-    """Compiled damped least squares that brings the tip of each configuration ``q (B, n)`` towards
-    ``target (2,)`` within the joint limits; returns the configurations reached (a new array)."""
-    solved = np.array(q, dtype=np.float64, order="C")
-    _reach_point(
-        solved,
-        _arg(np.asarray(base, np.float64)),
-        _arg(np.asarray(lengths, np.float64)),
-        _arg(np.asarray(lower, np.float64)),
-        _arg(np.asarray(upper, np.float64)),
-        _arg(np.asarray(target, np.float64)),
-        float(damping),
+    damping: float,
+    max_step: float,
+    tolerance: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Compiled damped least squares from ``seeds (B, n)`` (see :func:`clew_ros.core.inverse.solve_point`):
+    the configurations, the error left and the steps taken ``(B,)``."""
+    q = np.array(seeds, dtype=np.float64, order="C")
+    error = np.empty(len(q))
+    steps = np.zeros(len(q), dtype=np.int64)
+    _solve_point(
+        q,
+        _arg(targets),
+        _arg(offsets),
+        _arg(angles),
+        float(angle_tolerance),
+        float(angle_scale),
         int(iterations),
+        float(damping),
+        float(max_step),
+        _arg(base),
+        _arg(lengths),
+        _arg(lower),
+        _arg(upper),
         float(tolerance),
+        error,
+        steps,
     )
-    return solved
+    return q, error, steps
 
 
 def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -1067,7 +1120,22 @@ def warm_up() -> float:
         intervals(world, waypoints[:, 0], 0, transfer, np.zeros(3), 1e-3)
     bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
     clearly_valid(world, waypoints[:, 0], np.zeros(3))
+    for angles in (np.zeros(1), np.full(1, np.nan)):
+        solve_point(
+            world.base,
+            world.lengths,
+            world.lower,
+            world.upper,
+            waypoints[:, 0],
+            np.ones((1, 2)),
+            np.zeros((1, 2)),
+            angles,
+            angle_tolerance=0.1,
+            angle_scale=1.0,
+            iterations=2,
+            damping=1e-6,
+            max_step=0.4,
+        )
     chain(world.base, world.lengths, waypoints[:, 0])
-    reach_point(world.base, world.lengths, world.lower, world.upper, waypoints[:, 0], np.ones(2), 1e-3, 2, 1e-6)
     _WARMED_IN_S.append(time.perf_counter() - start)
     return _WARMED_IN_S[0]

@@ -14,8 +14,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from clew_ros.core import kernel
 from clew_ros.core.collision import is_valid
+from clew_ros.core.inverse import solve_point
 from clew_ros.core.kinematics import compose, joint_positions, relative, transform_points
 from clew_ros.core.world import World
 
@@ -212,24 +212,20 @@ def holding_configurations(
     """Arms of any number of joints: valid configurations ``(m, n)`` within the joint limits that
     hold grasp ``grasp`` of the object resting at ``object_pose`` (tip within half the grasp tolerance).
 
-    Sampled, like :func:`two_link_grasps`: damped least squares on the tip position (the planar
-    chain's Jacobian in closed form), from ``samples`` random configurations within the limits, all
-    solved at once and clamped to the limits at every step; the converged ones that pass the validity
-    test are returned. An empty answer means none was found, not that none exists. The random starts
-    come from a generator seeded by the request itself, so the answer is the same whenever it is asked
-    and the planner's own random stream is untouched.
+    Sampled, like :func:`two_link_grasps`: damped least squares on the tip position
+    (:func:`clew_ros.core.inverse.solve_point`, compiled), from ``samples`` random configurations
+    within the limits, all solved at once and clamped to the limits at every step; the converged ones
+    that pass the validity test are returned. An empty answer means none was found, not that none
+    exists. The random starts come from a generator seeded by the request itself, so the answer is the
+    same whenever it is asked and the planner's own random stream is untouched.
     """
     robot = world.robot
     pose = np.asarray(object_pose, float)
     target = transform_points(pose, np.asarray(world.object.grasps[grasp], float)[None])[0]
     seed = np.frombuffer(np.round(np.r_[pose, target], 9).tobytes(), dtype=np.uint32)
     rng = np.random.default_rng([grasp, *seed.tolist()])
-    lower, upper = np.asarray(robot.joint_lower, float), np.asarray(robot.joint_upper, float)
-    start = rng.uniform(lower, upper, size=(samples, robot.dof))
-    damping = 1e-3 * robot.reach**2
-    q = kernel.reach_point(
-        robot.base, robot.link_lengths, lower, upper, start, target, damping, iterations, 0.25 * world.grasp_tolerance
-    )
+    start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(samples, robot.dof))
+    q = solve_point(robot, start, target[None], iterations=iterations, tolerance_m=0.25 * world.grasp_tolerance).q
     tips = joint_positions(robot, q)[:, -1]
     held: np.ndarray = q[np.linalg.norm(tips - target, axis=1) <= 0.5 * world.grasp_tolerance]
     if not len(held):

@@ -14,6 +14,7 @@ import pytest
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
 from clew_ros.core.improve import _prune, improve, joint_travel, straight_move_clear
+from clew_ros.core.inverse import solve_point
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.manhattan import run_manhattan
 from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
@@ -216,15 +217,86 @@ def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(see
     assert better.travel < 0.9 * before  # random Manhattan paths wander: a shortcut always helps here
     assert better.transfers == 1
     assert [s.kind for s in better.segments] == ["transit", "transfer"]
-    for new, old in zip(better.segments, segments, strict=True):
-        assert np.array_equal(new.waypoints[0], old.waypoints[0])
-        assert np.array_equal(new.waypoints[-1], old.waypoints[-1])
+    assert np.array_equal(better.segments[0].waypoints[0], segments[0].waypoints[0])  # the start stays
+    # grasp and goal configurations may be chosen anew (the rebuild), but the plan stays valid, and more
     improved = Plan(
         world.name,
         tuple(world.robot.joint_names),
         True,
         "",
         segments=tuple(PlanSegment(s.kind, s.grasp, np.array(s.waypoints)) for s in better.segments),
+        final_object_pose=better.final_object_pose,
     )
+    assert validate_plan(world, improved) == []
+    for motion in replay(world, improved, FINE_RAD):
+        assert is_valid(world, motion.configurations, motion.object_poses).all()
+
+
+# -- rebuilding the manipulation (regrasp proposals) ---------------------------------------------------------
+
+OPEN_WORLD = {
+    "world": {
+        "name": "open_reach",
+        "bounds": [-2.5, -2.5, 2.5, 2.5],
+        "robot": {
+            "base": [0.0, 0.0],
+            "link_lengths": [1.0, 0.8],
+            "joint_lower": [-2.0, -2.5],
+            "joint_upper": [2.0, 2.5],
+            "initial": [-0.6, 1.2],
+        },
+        "object": {
+            "polygon": [-0.05, -0.05, 0.05, -0.05, 0.05, 0.05, -0.05, 0.05],
+            "initial": [1.2, 0.7, 0.0],
+            "goal": [0.3, 1.3, 0.0],
+            "grasps": [0.0, -0.05],
+        },
+    }
+}
+
+
+def _plan_of(world, segments, final=None) -> Plan:
+    plan = Plan(
+        world.name,
+        tuple(world.robot.joint_names),
+        True,
+        "",
+        segments=tuple(PlanSegment(s.kind, s.grasp, np.array(s.waypoints)) for s in segments),
+        final_object_pose=final,
+    )
+    if final is None:  # where the replay leaves the object
+        plan = dataclasses.replace(plan, final_object_pose=list(replay(world, plan, None))[-1].object_poses[-1])
+    return plan
+
+
+def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter() -> None:
+    """A valid plan that puts the object down halfway, takes it again, and wanders: one transfer does."""
+    world = world_from_parameters(OPEN_WORLD)
+    start = world.robot.initial
+    point = world.object.initial[:2] + world.object.grasps[0]
+    hold, _, _ = solve_point(world.robot, np.array([[-0.12, 1.43]]), point[None])  # the tip on the grasp
+    hold = hold[0]
+    grasp_rel = relative(tip_poses(world.robot, hold[None])[0], world.object.initial)
+    end, _, _ = solve_point(world.robot, np.array([[0.66, 1.52]]), world.object.goal[:2], offsets=grasp_rel[None, :2])
+    end = end[0]  # the object's origin on the goal
+    halfway = 0.5 * (hold + end)
+    up = hold[1] + 0.3  # a needless back-and-forth of the elbow
+    segments = [
+        Segment("transit", None, [start, np.array([start[0], hold[1]]), hold]),
+        Segment("transfer", 0, [hold, np.array([hold[0], up]), np.array([halfway[0], up]), halfway]),
+        Segment("transit", None, [halfway]),
+        Segment("transfer", 0, [halfway, np.array([halfway[0], end[1]]), end]),
+    ]
+    first = _plan_of(world, segments)
+    assert validate_plan(world, first) == []  # the premise: a valid plan, with a needless regrasp
+    goal = np.asarray(first.final_object_pose)
+    ctx = PlanningContext(world, PlannerSettings(seed=0, improve_time=0.3), np.random.default_rng(0), Termination(30))
+    better = improve(ctx, segments, goal, np.asarray(world.object.goal, dtype=float))
+    assert better.first_transfers == 2
+    assert better.transfers == 1
+    assert better.travel < better.first_travel - 0.5
+    assert better.travel <= joint_travel([np.array([start, hold, end])]) + 1e-6  # as short as straight moves
+    improved = _plan_of(world, better.segments, better.final_object_pose)
+    assert validate_plan(world, improved) == []
     for motion in replay(world, improved, FINE_RAD):
         assert is_valid(world, motion.configurations, motion.object_poses).all()

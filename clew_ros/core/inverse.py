@@ -1,0 +1,91 @@
+"""Inverse kinematics of the planar chain, over batches (damped least squares, any number of joints).
+
+:func:`solve_point` moves configurations from given seeds until a point fixed in the end-effector
+frame (the tip, or the origin of an object it holds) lies on a target, optionally with the frame's
+orientation (plus a fixed offset) within a tolerance of a target angle. Damped least squares takes
+small, least-norm steps, so each answer lies near its seed: a redundant arm keeps its posture
+where it can. Joint limits are enforced at every step. :func:`mirrored` reflects configurations
+about a line through the base: a configuration whose point lies on the line stays on it, so a
+reflected seed finds the other elbow of a two-link arm.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from clew_ros.core import kernel
+from clew_ros.core.world import Robot
+
+__all__ = ["ITERATIONS", "Solution", "mirrored", "solve_point"]
+
+#: Iterations of :func:`solve_point`.
+ITERATIONS = 40
+#: Damping (m^2) of the least-squares step.
+DAMPING = 1e-6
+#: Largest change of one joint in one step (rad).
+MAX_STEP_RAD = 0.4
+#: A configuration whose point is this close to its target (m) stops moving.
+TOLERANCE_M = 1e-12
+
+
+class Solution(NamedTuple):
+    """What :func:`solve_point` found: configurations ``(B, n)``, the error left ``(B,)`` (m) and the steps
+    taken by all of them (a measure of the work done)."""
+
+    q: np.ndarray
+    error: np.ndarray
+    steps: int
+
+
+def solve_point(
+    robot: Robot,
+    seeds: np.ndarray,
+    targets: np.ndarray,
+    *,
+    offsets: np.ndarray | None = None,
+    angles: np.ndarray | None = None,
+    angle_tolerance: float = np.pi,
+    angle_scale: float = 1.0,
+    iterations: int = ITERATIONS,
+    tolerance_m: float = TOLERANCE_M,
+) -> Solution:
+    """Configurations ``(B, n)`` from ``seeds`` ``(B, n)`` that put the point at ``offsets`` ``(B, 2)`` (default
+    the tip) in the end-effector frame on ``targets`` ``(B, 2)``; with ``angles`` ``(B,)``, also the frame's
+    angle within ``angle_tolerance`` of them (the angle error counts ``angle_scale`` m per rad). A
+    configuration stops moving once its error is at most ``tolerance_m``, or after ``iterations`` steps.
+
+    Joint limits always hold. Compiled (:func:`clew_ros.core.kernel.solve_point`).
+    """
+    seeds = np.array(seeds, dtype=float, ndmin=2)
+    count = len(seeds)
+    q, error, steps = kernel.solve_point(
+        robot.base,
+        robot.link_lengths,
+        robot.joint_lower,
+        robot.joint_upper,
+        np.clip(seeds, robot.joint_lower, robot.joint_upper),
+        np.broadcast_to(np.asarray(targets, float), (count, 2)),
+        np.zeros((count, 2)) if offsets is None else np.broadcast_to(np.asarray(offsets, float), (count, 2)),
+        np.full(count, np.nan) if angles is None else np.broadcast_to(np.asarray(angles, float), (count,)),
+        angle_tolerance=angle_tolerance,
+        angle_scale=angle_scale,
+        iterations=iterations,
+        damping=DAMPING,
+        max_step=MAX_STEP_RAD,
+        tolerance=tolerance_m,
+    )
+    return Solution(q, error, int(steps.sum()))
+
+
+def mirrored(robot: Robot, q: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """``q`` ``(B, n)`` reflected about the lines through the base at angles ``directions`` ``(B,)``: every link
+    angle ``phi`` becomes ``2 direction - phi`` (joint 1 taken by whole turns into its limits, when it can be)."""
+    q = np.array(q, dtype=float, ndmin=2)
+    out = -q
+    first = 2.0 * np.asarray(directions, float) - q[:, 0]
+    lower, upper = float(robot.joint_lower[0]), float(robot.joint_upper[0])
+    out[:, 0] = lower + np.mod(first - lower, 2.0 * np.pi)
+    out[:, 0] = np.where(out[:, 0] > upper, first, out[:, 0])
+    return out

@@ -1,0 +1,553 @@
+"""Where to grasp and where to put the object down: straight-move manipulations to the goal (issue 14).
+
+A found plan fixes every configuration where a grasp is made or the object is put down, and a
+shortcut cannot move them, so a plan that took the object with the elbow the wrong way round, or
+put it down far from where a regrasp was needed, stays long. :func:`propose` lists other ways to
+finish from a placement of the plan (the start, or where a transfer put the object down), each
+made of straight joint-space moves between key configurations:
+
+* one transfer: a transit to a configuration holding grasp ``g``, then a transfer to a configuration
+  putting the object on the goal;
+* two transfers: the same to a *release* configuration instead of the goal, a transit to a
+  configuration holding grasp ``g'`` (another grasp, or the same with another posture) where the
+  object now rests, and a transfer to the goal.
+
+Key configurations come from inverse kinematics (:func:`clew_ros.core.inverse.solve_point`) from
+seeds: the configuration before (so a redundant arm moves little) and its mirror image about the
+line from the base to the target (the other elbow), plus the plan's own grasp configurations.
+Release configurations are drawn from the run's generator: along the way from the grasp towards
+the goal, and anywhere within the joint limits, then refined around the best (cross-entropy
+style). A proposal's joint travel is the sum of its straight moves (sum over joints of ``|dq|``);
+every key configuration is valid with ``margin_m`` to spare, but the moves between them are not
+checked here: :mod:`clew_ros.core.improve` checks them continuously and keeps a proposal only when
+the plan gets better. Everything is batched (numpy and compiled kernels); :class:`Effort` counts the work
+done, which :mod:`clew_ros.core.improve` charges to its budget.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from clew_ros.core.collision import packed_world
+from clew_ros.core.inverse import mirrored, solve_point
+from clew_ros.core.kernel import clearly_valid
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.world import World
+
+__all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
+
+#: A grasp configuration puts the tip this close to the grasp point (m).
+HOLD_ERROR_M = 1e-9
+#: A goal configuration puts the object's origin this close to the goal, as a share of goal_tolerance.
+GOAL_SHARE = 0.25
+#: Release configurations drawn per grasp configuration (and per its mirror image): along the way to where
+#: the object comes closest to the goal, putting the object down around the goal; and anywhere.
+TOWARDS, NEAR, ANYWHERE = 6, 20, 8
+#: Releases drawn around the goal put the object within this distance of it (m).
+NEAR_RADIUS_M = 0.6
+#: Releases tried per configuration where the plan put the object down (itself, then drawn around it), and
+#: their spread (rad).
+HINTED, HINT_SPREAD_RAD = 4, 0.2
+#: Refinement rounds around the best releases of each grasp configuration: how many are kept, samples
+#: around each, spread (rad).
+ROUNDS = ((4, 6, 0.3), (3, 6, 0.1))
+#: Releases refined in one round lie at least this far apart (rad, largest joint difference).
+DISTINCT_RAD = 0.3
+#: Continuations (grasp and posture after a release) screened per release, and releases screened per grasp
+#: configuration and round (the shortest ways; the others are dropped).
+CONTINUATIONS, SCREENED = 2, 8
+#: Joint travel (rad) between configurations sampled by the screen, about.
+SCREEN_STEP_RAD = 0.1
+#: Joint travel (rad) a move that looks blocked counts extra when proposals are ranked.
+BLOCKED_PENALTY_RAD = 8.0
+#: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
+#: (first joint first), one joint after the other (last joint first). All are as long in joint travel.
+ROUTES = ("straight", "first joint first", "last joint first")
+#: Proposals returned at most.
+MAX_PROPOSALS = 24
+
+
+@dataclass
+class Effort:
+    """The work :func:`propose` did: configurations checked, calls of the check, inverse-kinematics steps (one
+    configuration, one iteration)."""
+
+    checks: int = 0
+    calls: int = 0
+    steps: int = 0
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A way to the goal: ``keys`` ``(2 k + 1, n)`` = the arm's configuration, then for each of the ``k``
+    transfers its grasp configuration and its end (a release, the last one at the goal). ``routes``:
+    per move (transit, transfer, ...) the index into :data:`ROUTES` of the first way that looked
+    clear, -1 when none did (``blocked`` counts those)."""
+
+    travel: float  # rad, joint travel of the moves between the keys
+    blocked: int
+    grasps: tuple[int, ...]
+    keys: np.ndarray
+    routes: tuple[int, ...]
+
+
+def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
+    """The waypoints ``(m, n)`` of way ``route`` (:data:`ROUTES`) from ``a`` to ``b`` (repeated corners dropped)."""
+    if route == 0:
+        return np.array([a, b])
+    order = range(len(a)) if route == 1 else range(len(a) - 1, -1, -1)
+    points = [np.asarray(a, dtype=float)]
+    for joint in order:
+        corner = points[-1].copy()
+        corner[joint] = b[joint]
+        if corner[joint] != points[-1][joint]:
+            points.append(corner)
+    if len(points) == 1:
+        points.append(points[0].copy())
+    return np.array(points)
+
+
+def _end_dense(count: int) -> np.ndarray:
+    """``count`` shares of a move from 0 to 1, closer together near both ends (where a move leaves or
+    reaches a grasp, touching the object), in cosine spacing."""
+    spacing: np.ndarray = 0.5 - 0.5 * np.cos(np.linspace(0.0, np.pi, count))
+    return spacing
+
+
+def _route_samples(a: np.ndarray, b: np.ndarray, samples: int) -> list[np.ndarray]:
+    """Configurations along each way of :data:`ROUTES` from ``a[k]`` to ``b[k]`` ``(M, n)``: ``(M, S, n)`` each
+    (each leg of a way sampled densest near its ends)."""
+    n = a.shape[1]
+    t = _end_dense(samples)[None, :, None]
+    ways = [a[:, None, :] + t * (b - a)[:, None, :]]
+    per_leg = _end_dense(max(2, samples // n))[None, :]
+    for order in (range(n), range(n - 1, -1, -1)):
+        corner = a.copy()
+        legs = []
+        for joint in order:
+            leg = np.repeat(corner[:, None, :], per_leg.shape[1], axis=1)
+            leg[:, :, joint] += per_leg * (b[:, joint] - a[:, joint])[:, None]
+            legs.append(leg)
+            corner = corner.copy()
+            corner[:, joint] = b[:, joint]
+        ways.append(np.concatenate(legs, axis=1))
+    return ways
+
+
+class _Kinematics:
+    """Batched inverse kinematics and validity with a margin, counting the work."""
+
+    def __init__(
+        self,
+        world: World,
+        margin_m: float,
+        should_stop: Callable[[], bool] | None = None,
+        max_checks: int | None = None,
+    ) -> None:
+        self.world = world
+        self.packed = dataclasses.replace(packed_world(world), rounding=max(margin_m, packed_world(world).rounding))
+        self.effort = Effort()
+        self.should_stop = should_stop
+        self.max_checks = max_checks
+
+    @property
+    def exhausted(self) -> bool:
+        """Whether the configurations allowed have been checked."""
+        return self.max_checks is not None and self.effort.checks >= self.max_checks
+
+    def stop(self) -> bool:
+        return self.exhausted or (self.should_stop is not None and self.should_stop())
+
+    def valid(self, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        if not len(q):
+            return np.zeros(0, dtype=bool)
+        self.effort.checks += len(q)
+        self.effort.calls += 1
+        return clearly_valid(self.packed, np.ascontiguousarray(q), np.ascontiguousarray(poses))
+
+    def routes(
+        self, a: np.ndarray, b: np.ndarray, *, resting: np.ndarray | None = None, grasp_rel: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Per move ``a[k] -> b[k]``, the first way of :data:`ROUTES` whose sampled configurations are all
+        valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is. A move
+        is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 32 samples)."""
+        route = np.full(len(a), -1)
+        if self.exhausted:
+            return route
+        samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 2)
+        for count in np.unique(samples).astype(int):
+            group = np.flatnonzero(samples == count)
+            for index, way in enumerate(_route_samples(a[group], b[group], count)):
+                rows = np.flatnonzero(route[group] < 0)
+                if not len(rows):
+                    break
+                coarse = np.arange(way.shape[1]) % 4 == 0  # every fourth sample first: most blocked moves stop there
+                for part in (coarse, ~coarse):
+                    if not len(rows):
+                        break
+                    q = way[rows][:, part].reshape(-1, a.shape[1])
+                    moves = group[rows]
+                    if grasp_rel is None:
+                        assert resting is not None
+                        poses = np.repeat(resting[moves], int(part.sum()), axis=0)
+                    else:
+                        poses = compose(
+                            tip_poses(self.world.robot, q), np.repeat(grasp_rel[moves], int(part.sum()), axis=0)
+                        )
+                    rows = rows[self.valid(q, poses).reshape(len(rows), -1).all(axis=1)]
+                route[group[rows]] = index
+        return route
+
+    def holding(self, placements: np.ndarray, grasps: np.ndarray, seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Configurations near ``seeds`` holding ``grasps`` of the object resting at ``placements`` (all
+        ``(B, .)``), and which ones do, validly."""
+        robot = self.world.robot
+        targets = transform_points(placements, self.world.object.grasps)[np.arange(len(grasps)), grasps]
+        q = np.array(seeds, dtype=float)
+        ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
+        solved, error, steps = solve_point(robot, seeds[ok], targets[ok])
+        self.effort.steps += steps + len(solved)
+        q[ok] = solved
+        ok[ok] = error <= HOLD_ERROR_M
+        ok[ok] = self.valid(q[ok], placements[ok])
+        return q, ok
+
+    def at_goal(self, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Configurations near ``seeds`` putting the object, held as ``grasp_rel``, on the goal, and which do."""
+        world = self.world
+        lengths = np.broadcast_to(world.robot.link_lengths, (len(grasp_rel), world.robot.dof)).copy()
+        lengths[:, -1] = np.hypot(lengths[:, -1] + grasp_rel[:, 0], grasp_rel[:, 1])  # joint n to the object
+        distance = float(np.hypot(*(goal[:2] - world.robot.base)))
+        ok = _within_reach(lengths, np.full(len(grasp_rel), distance), GOAL_SHARE * world.goal_tolerance)
+        angles = None
+        if world.goal_angle_tolerance < np.pi - 1e-6:
+            angles = goal[2] - grasp_rel[ok, 2]
+        q = np.array(seeds, dtype=float)
+        solved, error, steps = solve_point(
+            world.robot,
+            seeds[ok],
+            goal[:2],
+            offsets=grasp_rel[ok, :2],
+            angles=angles,
+            angle_tolerance=0.8 * world.goal_angle_tolerance,
+            angle_scale=world.object.radius,
+            tolerance_m=1e-9,
+        )
+        self.effort.steps += steps + len(solved)
+        q[ok] = solved
+        ok[ok] = error <= GOAL_SHARE * world.goal_tolerance
+        ok[ok] = self.valid(q[ok], compose(tip_poses(world.robot, q[ok]), grasp_rel[ok]))
+        return q, ok
+
+    def toward(self, grasp_rel: np.ndarray, seeds: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Where the object's origin, held as ``grasp_rel``, gets closest to ``points`` from ``seeds`` (reached
+        or not)."""
+        q, _, steps = solve_point(self.world.robot, seeds, points, offsets=grasp_rel[:, :2], tolerance_m=1e-6)
+        self.effort.steps += steps + len(q)
+        return q
+
+
+def _within_reach(lengths: np.ndarray, distance: np.ndarray, slack: float) -> np.ndarray:
+    """Whether a chain of ``lengths`` (``(n,)`` or ``(B, n)``) can end ``distance`` ``(B,)`` from its base."""
+    lengths = np.atleast_2d(lengths)
+    total = lengths.sum(axis=1)
+    inner = np.maximum(0.0, 2.0 * lengths.max(axis=1) - total)
+    reachable: np.ndarray = (distance >= inner - slack) & (distance <= total + slack)
+    return reachable
+
+
+def _direction(world: World, points: np.ndarray) -> np.ndarray:
+    v = np.asarray(points, float) - world.robot.base
+    direction: np.ndarray = np.arctan2(v[..., 1], v[..., 0])
+    return direction
+
+
+def _with_mirrors(world: World, q: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """Seeds ``(2 B, n)``: ``q`` ``(B, n)`` and its mirror images about the lines from the base to ``targets``."""
+    return np.concatenate([q, mirrored(world.robot, q, _direction(world, targets))])
+
+
+def _l1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    distance: np.ndarray = np.abs(a - b).sum(axis=-1)
+    return distance
+
+
+def _unique_rows(q: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:
+    """Indices of the first of each group of rows closer than ``tolerance`` (largest joint difference)."""
+    keep: list[int] = []
+    for i in range(len(q)):
+        if not keep or np.min(np.max(np.abs(q[keep] - q[i]), axis=1)) > tolerance:
+            keep.append(i)
+    return np.array(keep, dtype=int)
+
+
+@dataclass
+class _Start:
+    """The grasp configurations to start with (``A`` of them) and their first transit's way."""
+
+    start: np.ndarray  # (n,)
+    placement: np.ndarray  # (3,)
+    first: np.ndarray  # (A, n)
+    grasps: np.ndarray  # (A,)
+    grasp_rel: np.ndarray  # (A, 3)
+    route: np.ndarray  # (A,)
+
+
+def propose(
+    world: World,
+    start: np.ndarray,
+    placement: np.ndarray,
+    goal: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    own: list[tuple[int, np.ndarray]] | None = None,
+    releases: np.ndarray | None = None,
+    two_transfers: bool = True,
+    margin_m: float = 0.0,
+    should_stop: Callable[[], bool] | None = None,
+    max_checks: int | None = None,
+) -> tuple[list[Proposal], Effort]:
+    """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
+    and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
+    the object at this placement, tried as they are; ``releases`` ``(m, n)``: configurations where the
+    plan put the object down, tried (and around them) as releases. Ranked by joint travel plus
+    :data:`BLOCKED_PENALTY_RAD` per move that looked blocked.
+
+    ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
+    milliseconds at most): when it says stop, the proposals found so far are returned; so they are
+    once ``max_checks`` configurations have been checked (moves not checked then count as blocked).
+    Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work done.
+    """
+    kinematics = _Kinematics(world, margin_m, should_stop, max_checks)
+    begin = _grasps_at_start(kinematics, np.asarray(start, float), np.asarray(placement, float), own or [])
+    if begin is None:
+        return [], kinematics.effort
+    proposals = _one_transfer(kinematics, begin, goal)
+    if two_transfers and not kinematics.stop():
+        hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
+        proposals += _two_transfers(kinematics, begin, goal, rng, hints)
+    proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
+    return proposals[:MAX_PROPOSALS], kinematics.effort
+
+
+def _grasps_at_start(
+    kinematics: _Kinematics, start: np.ndarray, placement: np.ndarray, own: list[tuple[int, np.ndarray]]
+) -> _Start | None:
+    """Every grasp from the start and from its mirror image, and the plan's own grasp configurations."""
+    world = kinematics.world
+    grasps = np.repeat(np.arange(len(world.object.grasps)), 2)
+    targets = transform_points(placement, world.object.grasps)[grasps]
+    seeds = mirrored(world.robot, np.repeat(start[None], len(grasps), axis=0), _direction(world, targets))
+    seeds[0::2] = start
+    first, ok = kinematics.holding(np.broadcast_to(placement, (len(grasps), 3)), grasps, seeds)
+    first, grasps = first[ok], grasps[ok]
+    if own:
+        grasps = np.concatenate([grasps, [g for g, _ in own]]).astype(int)
+        first = np.concatenate([first, np.array([q for _, q in own], dtype=float).reshape(-1, len(start))])
+    if not len(first):
+        return None
+    unique = _unique_rows(first)
+    first, grasps = first[unique], grasps[unique]
+    grasp_rel = relative(tip_poses(world.robot, first), placement)  # as plan.replay computes it
+    starts = np.broadcast_to(start, first.shape)
+    route = kinematics.routes(starts, first, resting=np.broadcast_to(placement, (len(first), 3)))
+    return _Start(start, placement, first, grasps, grasp_rel, route)
+
+
+def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray) -> list[Proposal]:
+    """Grasp configurations carried straight to the goal."""
+    world = kinematics.world
+    first = begin.first
+    seeds = _with_mirrors(world, first, np.broadcast_to(goal[:2], (len(first), 2)))
+    rows = np.tile(np.arange(len(first)), 2)
+    ends, ok = kinematics.at_goal(begin.grasp_rel[rows], seeds, goal)
+    rows, ends = rows[ok], ends[ok]
+    route = kinematics.routes(first[rows], ends, grasp_rel=begin.grasp_rel[rows])
+    travel = _l1(begin.start, first[rows]) + _l1(first[rows], ends)
+    return [
+        Proposal(
+            float(travel[k]),
+            int(begin.route[a] < 0) + int(route[k] < 0),
+            (int(begin.grasps[a]),),
+            np.stack([begin.start, first[a], ends[k]]),
+            (int(begin.route[a]), int(route[k])),
+        )
+        for k, a in enumerate(rows)
+    ]
+
+
+@dataclass
+class _Releases:
+    """Release configurations and their best continuation to the goal."""
+
+    option: np.ndarray  # (S,) index of the grasp configuration they are carried with
+    release: np.ndarray  # (S, n)
+    grasp: np.ndarray  # (S,) the grasp taken after the release
+    regrasp: np.ndarray  # (S, n)
+    end: np.ndarray  # (S, n) at the goal
+    travel: np.ndarray  # (S,) whole joint travel (inf: no way)
+    routes: np.ndarray  # (S, 4) per move, as Proposal.routes
+
+    def joined(self, other: _Releases) -> _Releases:
+        return _Releases(
+            *(np.concatenate([getattr(self, f.name), getattr(other, f.name)]) for f in dataclasses.fields(self))
+        )
+
+    @property
+    def blocked(self) -> np.ndarray:
+        count: np.ndarray = (self.routes < 0).sum(axis=1)
+        return count
+
+    @property
+    def score(self) -> np.ndarray:
+        score: np.ndarray = self.travel + BLOCKED_PENALTY_RAD * self.blocked
+        return score
+
+
+def _continue(
+    kinematics: _Kinematics, begin: _Start, option: np.ndarray, release: np.ndarray, goal: np.ndarray
+) -> _Releases:
+    """For each release configuration ``release`` ``(S, n)`` carried with grasp configuration ``option``:
+    the grasp to take next and the goal configuration after it, the cheapest of the
+    :data:`CONTINUATIONS` shortest once blocked moves count."""
+    world = kinematics.world
+    n = release.shape[1]
+    first, rel = begin.first[option], begin.grasp_rel[option]
+    placement = compose(tip_poses(world.robot, release), rel)
+    found = _Releases(
+        option,
+        release,
+        np.full(len(release), -1),
+        np.zeros((len(release), n)),
+        np.zeros((len(release), n)),
+        np.full(len(release), np.inf),
+        np.full((len(release), 4), -1),
+    )
+    alive = np.flatnonzero(kinematics.valid(release, placement))
+    count = len(world.object.grasps)
+    rows = np.repeat(alive, count)  # (release, grasp) pairs
+    grasp = np.tile(np.arange(count), len(alive))
+    targets = transform_points(placement[rows], world.object.grasps)[np.arange(len(rows)), grasp]
+    seeds = _with_mirrors(world, release[rows], targets)
+    rows, grasp = np.tile(rows, 2), np.tile(grasp, 2)
+    regrasp, ok = kinematics.holding(placement[rows], grasp, seeds)
+    rows, grasp, regrasp = rows[ok], grasp[ok], regrasp[ok]
+    rel2 = relative(tip_poses(world.robot, regrasp), placement[rows])
+    seeds = _with_mirrors(world, regrasp, np.broadcast_to(goal[:2], (len(regrasp), 2)))
+    pick = np.tile(np.arange(len(regrasp)), 2)
+    end, ok = kinematics.at_goal(rel2[pick], seeds, goal)
+    pick, end = pick[ok], end[ok]
+    rows, grasp, regrasp, rel2 = rows[pick], grasp[pick], regrasp[pick], rel2[pick]
+    travel = _l1(release[rows], regrasp) + _l1(regrasp, end)
+    order = np.lexsort((travel, rows))  # per release, its shortest continuations first
+    rank = np.zeros(len(order), dtype=int)
+    if len(order):
+        starts = np.r_[True, rows[order][1:] != rows[order][:-1]]
+        group = np.cumsum(starts) - 1
+        rank[order] = np.arange(len(order)) - np.flatnonzero(starts)[group]
+    total = _l1(begin.start, first[rows]) + _l1(first[rows], release[rows]) + travel
+    screened = _shortest_per_option(option, rows, total, SCREENED)
+    keep = np.flatnonzero((rank < CONTINUATIONS) & np.isin(rows, screened))
+    rows, grasp, regrasp, end, rel2, total = rows[keep], grasp[keep], regrasp[keep], end[keep], rel2[keep], total[keep]
+    carried = np.unique(rows)
+    carry = np.full(len(release), -1)
+    carry[carried] = kinematics.routes(first[carried], release[carried], grasp_rel=rel[carried])
+    transit = kinematics.routes(release[rows], regrasp, resting=placement[rows])
+    last = kinematics.routes(regrasp, end, grasp_rel=rel2)
+    routes = np.stack([begin.route[option[rows]], carry[rows], transit, last], axis=1)
+    score = total + BLOCKED_PENALTY_RAD * (routes < 0).sum(axis=1)
+    order = np.lexsort((score, rows))
+    best = order[np.r_[True, rows[order][1:] != rows[order][:-1]]] if len(order) else order
+    at = rows[best]
+    found.grasp[at] = grasp[best]
+    found.regrasp[at] = regrasp[best]
+    found.end[at] = end[best]
+    found.travel[at] = total[best]
+    found.routes[at] = routes[best]
+    return found
+
+
+def _shortest_per_option(option: np.ndarray, rows: np.ndarray, travel: np.ndarray, count: int) -> np.ndarray:
+    """The releases (indices) of the ``count`` shortest ways of each grasp configuration: ``travel[k]`` is the
+    joint travel of a way through release ``rows[k]``, carried with grasp configuration ``option[rows[k]]``."""
+    order = np.lexsort((travel, rows))
+    firsts = order[np.r_[True, rows[order][1:] != rows[order][:-1]]] if len(order) else order
+    releases, shortest = rows[firsts], travel[firsts]  # each release once, with its shortest way
+    chosen = [
+        releases[mine][np.argsort(shortest[mine], kind="stable")[:count]]
+        for mine in (option[releases] == a for a in np.unique(option[releases]))
+    ]
+    return np.concatenate(chosen) if chosen else releases[:0]
+
+
+def _best_distinct(found: _Releases, option: int, keep: int) -> np.ndarray:
+    """The ``keep`` best-scored releases carried with grasp configuration ``option``, at least
+    :data:`DISTINCT_RAD` apart."""
+    rows = np.flatnonzero((found.option == option) & np.isfinite(found.score))
+    ranked = rows[np.argsort(found.score[rows], kind="stable")][: 8 * keep]
+    chosen: np.ndarray = ranked[_unique_rows(found.release[ranked], DISTINCT_RAD)][:keep]
+    return chosen
+
+
+def _two_transfers(
+    kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng: np.random.Generator, hints: np.ndarray
+) -> list[Proposal]:
+    """Grasp configurations carried to a release, regrasped there, and carried to the goal."""
+    world = kinematics.world
+    robot = world.robot
+    first = begin.first
+    count, n = first.shape
+    goal_side = np.broadcast_to(goal[:2], (count, 2))
+    sides = np.tile(np.arange(count), 2)  # from each grasp configuration and its mirror image
+    closest = kinematics.toward(begin.grasp_rel[sides], _with_mirrors(world, first, goal_side), goal[:2])
+    share = np.linspace(1.0 / TOWARDS, 1.0, TOWARDS)
+    along = first[sides][:, None, :] + share[None, :, None] * (closest - first[sides])[:, None, :]
+    # around the goal: the object put down at points drawn within NEAR_RADIUS_M of it (both elbows)
+    radius = NEAR_RADIUS_M * np.sqrt(rng.uniform(0.0, 1.0, size=len(sides) * NEAR))
+    angle = rng.uniform(0.0, 2.0 * np.pi, size=len(radius))
+    points = goal[:2] + np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1)
+    near_sides = np.repeat(sides, NEAR)
+    near = kinematics.toward(
+        begin.grasp_rel[near_sides], np.repeat(_with_mirrors(world, first, goal_side), NEAR, axis=0), points
+    )
+    anywhere = rng.uniform(robot.joint_lower, robot.joint_upper, size=(count * ANYWHERE, n))
+    hinted = np.repeat(hints, HINTED, axis=0)  # each hint itself, then drawn around it
+    drawn = (np.arange(len(hinted)) % HINTED > 0)[:, None]
+    hinted = hinted + drawn * rng.normal(0.0, HINT_SPREAD_RAD, size=hinted.shape)
+    release = np.concatenate([along.reshape(-1, n), near, anywhere, np.tile(hinted, (count, 1))])
+    release = np.clip(release, robot.joint_lower, robot.joint_upper)
+    option = np.concatenate(
+        [
+            np.repeat(sides, TOWARDS),
+            near_sides,
+            np.repeat(np.arange(count), ANYWHERE),
+            np.repeat(np.arange(count), len(hinted)),
+        ]
+    )
+    found = _continue(kinematics, begin, option, release, goal)
+    for keep, samples, spread in ROUNDS:
+        if kinematics.stop():
+            break
+        best = np.concatenate([_best_distinct(found, a, keep) for a in range(count)]).astype(int)
+        if not len(best):
+            break
+        option = np.repeat(found.option[best], samples)
+        centre = np.repeat(found.release[best], samples, axis=0)
+        moved = np.clip(centre + rng.normal(0.0, spread, size=centre.shape), robot.joint_lower, robot.joint_upper)
+        found = found.joined(_continue(kinematics, begin, option, moved, goal))
+    order = np.argsort(found.score, kind="stable")
+    order = order[np.isfinite(found.score[order])][:MAX_PROPOSALS]
+    return [
+        Proposal(
+            float(found.travel[k]),
+            int(found.blocked[k]),
+            (int(begin.grasps[found.option[k]]), int(found.grasp[k])),
+            np.stack([begin.start, first[found.option[k]], found.release[k], found.regrasp[k], found.end[k]]),
+            tuple(int(r) for r in found.routes[k]),
+        )
+        for k in order
+    ]

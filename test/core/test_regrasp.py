@@ -1,0 +1,86 @@
+"""Proposals of other grasps and release placements (clew_ros/core/regrasp.py): every key configuration
+holds what it should and is valid, the travel is what the moves add up to, the ways along a move are
+as long as the straight one, and the same generator gives the same proposals."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from clew_ros.core.collision import is_valid
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.regrasp import ROUTES, propose, route_waypoints
+from clew_ros.core.search import goal_reached
+from clew_ros.core.world import load_world
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize("joints", [2, 3, 6])
+def test_every_way_along_a_move_is_as_long_as_the_straight_one(joints: int) -> None:
+    rng = np.random.default_rng(joints)
+    for _ in range(20):
+        a, b = rng.uniform(-3.0, 3.0, (2, joints))
+        for route in range(len(ROUTES)):
+            path = route_waypoints(a, b, route)
+            assert np.array_equal(path[0], a)
+            assert np.array_equal(path[-1], b)
+            assert np.abs(np.diff(path, axis=0)).sum() == pytest.approx(np.abs(b - a).sum(), abs=1e-12)
+            steps = np.diff(path, axis=0)
+            assert np.all(steps * np.sign(b - a) >= -1e-15)  # every joint moves one way only
+
+
+@pytest.mark.parametrize("name", ["figure1", "arm3_regrasp"])
+def test_proposals_hold_their_grasps_end_at_the_goal_and_are_valid(name: str) -> None:
+    world = load_world(ROOT / "config" / f"{name}.yaml")
+    goal = np.asarray(world.object.goal, dtype=float)
+    proposals, effort = propose(
+        world, world.robot.initial, world.object.initial, goal, np.random.default_rng(3), margin_m=5e-4
+    )
+    assert proposals
+    assert effort.checks > 0
+    assert effort.steps > 0
+    assert any(len(p.grasps) == 2 for p in proposals)
+    for proposal in proposals:
+        keys = proposal.keys
+        assert len(keys) == 2 * len(proposal.grasps) + 1
+        assert np.array_equal(keys[0], world.robot.initial)
+        assert proposal.travel == pytest.approx(np.abs(np.diff(keys, axis=0)).sum(), abs=1e-9)
+        assert proposal.blocked == sum(route < 0 for route in proposal.routes)
+        pose = np.asarray(world.object.initial, dtype=float)
+        for step, grasp in enumerate(proposal.grasps):
+            hold, end = keys[2 * step + 1], keys[2 * step + 2]
+            point = transform_points(pose, world.object.grasps[grasp][None])[0]
+            assert np.linalg.norm(tip_poses(world.robot, hold[None])[0, :2] - point) <= 1e-9
+            assert is_valid(world, hold[None], pose)[0]
+            grasp_rel = relative(tip_poses(world.robot, hold[None])[0], pose)
+            pose = compose(tip_poses(world.robot, end[None]), grasp_rel)[0]
+            assert is_valid(world, end[None], pose)[0]
+        assert goal_reached(world, pose, goal)
+    ranks = [p.travel + 8.0 * p.blocked for p in proposals]
+    assert ranks == sorted(ranks)
+
+
+def test_the_same_generator_gives_the_same_proposals() -> None:
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    goal = np.asarray(world.object.goal, dtype=float)
+    runs = [
+        propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(7))[0] for _ in range(2)
+    ]
+    assert len(runs[0]) == len(runs[1])
+    for a, b in zip(*runs, strict=True):
+        assert a.grasps == b.grasps
+        assert np.array_equal(a.keys, b.keys)
+
+
+def test_a_stop_request_ends_the_proposals_early() -> None:
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    goal = np.asarray(world.object.goal, dtype=float)
+    _, effort = propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(1))
+    cut, less = propose(
+        world, world.robot.initial, world.object.initial, goal, np.random.default_rng(1), should_stop=lambda: True
+    )
+    assert less.checks < effort.checks
+    assert all(len(p.grasps) == 1 for p in cut)  # stopped before the two-transfer search

@@ -544,22 +544,23 @@ class _Improver:
 
     def checked_tail(self, proposal: Proposal, placement: np.ndarray) -> list[_Piece] | None:
         """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked
-        continuously (:meth:`route`); ``None`` if a move stays blocked."""
+        continuously (:meth:`route`), the shortest first (they are the cheapest to check, and the ones
+        near the object, leaving or taking a grasp, are short); ``None`` if a move stays blocked."""
         pieces: list[_Piece] = []
         keys = proposal.keys
         pose = np.asarray(placement, dtype=float)
         for step, grasp in enumerate(proposal.grasps):
             start, hold, end = keys[2 * step], keys[2 * step + 1], keys[2 * step + 2]
             grasp_rel = relative(tip_poses(self.world.robot, hold[None])[0], pose)  # as plan.replay computes it
-            transit = _Piece("transit", None, np.array([start, hold]), pose, None)
             transfer = _Piece("transfer", grasp, np.array([hold, end]), pose, grasp_rel)
-            for piece, route in zip((transit, transfer), proposal.routes[2 * step : 2 * step + 2], strict=True):
-                path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], route)
-                if path is None:
-                    return None
-                piece.waypoints = path
-                pieces.append(piece)
+            pieces += [_Piece("transit", None, np.array([start, hold]), pose, None), transfer]
             pose = transfer.end_pose(self.world)
+        for index in np.argsort([joint_travel([p.waypoints]) for p in pieces], kind="stable"):
+            piece = pieces[index]
+            path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], proposal.routes[index])
+            if path is None:
+                return None
+            piece.waypoints = path
         return pieces
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:

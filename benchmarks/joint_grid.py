@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from clew_ros.core.collision import packed_world
+from clew_ros.core.collision import packed_carrying, packed_world
 from clew_ros.core.kernel import PackedWorld, clearly_valid
 from clew_ros.core.kinematics import compose, tip_poses, transform_points
 from clew_ros.core.plan import CHECK_STEP_RAD
@@ -155,37 +155,17 @@ class Mode:
         return radii
 
 
-def _empty_edges() -> np.ndarray:
-    return np.zeros((0, 2, 2))
-
-
 def _margin_worlds(world: World, mode: Mode, margin_m: float) -> list[tuple[PackedWorld, int]]:
-    """The validity tests that must pass with ``margin_m`` to spare (and how many joints each takes)."""
-    packed = packed_world(world)
+    """The validity tests that must pass with ``margin_m`` to spare (and how many joints each takes): in a
+    transfer all but the pair of the last link and the object it holds
+    (:func:`clew_ros.core.collision.packed_carrying`)."""
     if mode.grasp_rel is None:
-        return [(dataclasses.replace(packed, rounding=margin_m), 2)]
-    # transfer: everything but the held object against the links, then the first link against it
-    # (the last link does not move relative to the object it holds)
-    without_object = dataclasses.replace(
-        packed, shrunk_edges=_empty_edges(), shrunk_starts=np.zeros(1, np.int64), rounding=margin_m
-    )
-    first_link = PackedWorld(
-        packed.base,
-        np.array(packed.lengths[:1]),
-        np.array(packed.lower[:1]),
-        np.array(packed.upper[:1]),
-        packed.link_radius,
-        False,
-        packed.bounds,
-        _empty_edges(),
-        _empty_edges(),
-        packed.shrunk_edges,
-        np.zeros(1, np.int64),
-        np.zeros((0, 4)),
-        packed.shrunk_starts,
-        margin_m,
-    )
-    return [(without_object, 2), (first_link, 1)]
+        return [(dataclasses.replace(packed_world(world), rounding=margin_m), 2)]
+    without_object, links_but_last = packed_carrying(world)
+    return [
+        (dataclasses.replace(without_object, rounding=margin_m), 2),
+        (dataclasses.replace(links_but_last, rounding=margin_m), 1),
+    ]
 
 
 def _clear_with_margin(world: World, mode: Mode, q: np.ndarray, margin_m: float) -> np.ndarray:

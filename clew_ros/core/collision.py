@@ -15,7 +15,7 @@ Two views of the same static geometry, prepared once per world (:func:`scene_of`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -35,6 +35,7 @@ __all__ = [
     "explain_placement",
     "is_placement_valid",
     "is_valid",
+    "packed_carrying",
     "packed_world",
     "scene_of",
 ]
@@ -124,6 +125,36 @@ def packed_world(world: World) -> PackedWorld:
         shrunk_starts,
         1e-9 * (1.0 + scale),
     )
+
+
+@lru_cache(maxsize=64)
+def packed_carrying(world: World) -> tuple[PackedWorld, PackedWorld]:
+    """The validity test of a transfer in two parts that together are :func:`packed_world`'s but for one pair:
+    everything except the held object against the links (all links, ``n`` joints), and the links but the
+    last against the held object (``n - 1`` joints, nothing else). The pair left out, the last link
+    against the object it holds, does not change during a transfer (both move with the end effector), so
+    a margin asked of the two parts need not be asked of it."""
+    packed = packed_world(world)
+    no_parts = np.zeros(1, np.int64)
+    empty = np.zeros((0, 2, 2))
+    without_object = replace(packed, shrunk_edges=empty, shrunk_starts=no_parts)
+    links_but_last = PackedWorld(
+        packed.base,
+        np.array(packed.lengths[:-1]),
+        np.array(packed.lower[:-1]),
+        np.array(packed.upper[:-1]),
+        packed.link_radius,
+        False,
+        packed.bounds,
+        empty,
+        empty,
+        packed.shrunk_edges,
+        no_parts,
+        np.zeros((0, 4)),
+        packed.shrunk_starts,
+        packed.rounding,
+    )
+    return without_object, links_but_last
 
 
 #: Largest boxes x obstacles comparison done per call; beyond it one box around all obstacles.

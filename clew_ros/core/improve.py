@@ -51,10 +51,13 @@ to link, link to the shrunk object, object to obstacle, to the bounds)
 changes by at most that motion: for two moving bodies, measure in the
 frame of the nearer one to the base, where only the joints between them
 move the other; the last link and the object it carries do not move
-relative to each other. So when the compiled first pass of the validity
-test (:func:`clew_ros.core.kernel.clearly_valid`) clears the midpoint of a
-piece ``[t0, t1]`` with every distance past its threshold by more than
-``V (t1 - t0) / 2``, the whole piece is valid, at any checking resolution.
+relative to each other (so that pair, at a fixed distance during a transfer,
+is checked once, at the start, and left out of the margins below:
+:func:`clew_ros.core.collision.packed_carrying`). So when the compiled first
+pass of the validity test (:func:`clew_ros.core.kernel.clearly_valid`)
+clears the midpoint of a piece ``[t0, t1]`` with every distance past its
+threshold by more than ``V (t1 - t0) / 2``, the whole piece is valid, at any
+checking resolution.
 Pieces that fail are halved (the margin halves with them) down to
 :data:`MIN_MARGIN_FACTOR` x ``planner.clearance``; a piece still not
 cleared rejects the move, and so does a midpoint that is not valid at all
@@ -85,8 +88,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid, packed_world
-from clew_ros.core.kernel import clearly_valid
+from clew_ros.core.collision import is_valid, packed_carrying, packed_world
+from clew_ros.core.kernel import PackedWorld, clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
@@ -266,11 +269,10 @@ def straight_move_clear(
     if grasp_rel is None and object_pose is None:
         raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
     resting = np.zeros(3) if object_pose is None else np.asarray(object_pose, dtype=float)
-    ends = np.stack([a, b])
-    if np.any(ends < world.robot.joint_lower) or np.any(ends > world.robot.joint_upper):
-        return False
     motion = float(np.abs(b - a) @ _reach_radii(world, grasp_rel)) * (1.0 + 1e-9) + 1e-12  # V (m)
-    packed = packed_world(world)
+    parts = _margin_parts(world, a, b, grasp_rel, min_margin=min_margin, budget=budget)
+    if parts is None:
+        return False
     # level k: 2**k pieces, each cleared by its midpoint with margin motion / 2**(k + 1)
     level = max(0, math.ceil(math.log2(max(motion / (2.0 * MAX_MARGIN_M), 1.0))))
     pending = np.arange(2**level, dtype=float)  # piece indices at this level
@@ -287,23 +289,62 @@ def straight_move_clear(
             if grasp_rel is None
             else compose(tip_poses(world.robot, q), grasp_rel)
         )
-        clear = clearly_valid(dataclasses.replace(packed, rounding=margin), q, poses)
+        clear = _cleared(parts, q, np.asarray(poses), margin)
         if budget is not None:
             budget.spend_checks(len(q))
         if clear.all():
             return True
-        if margin <= min_margin:
-            return False
         # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
-        doubtful = np.flatnonzero(~clear)
-        if budget is not None:
-            budget.spend_checks(len(doubtful))
-        if not is_valid(world, q[doubtful], np.asarray(poses)[doubtful]).all():
+        if margin <= min_margin or not _all_valid(world, q[~clear], np.asarray(poses)[~clear], budget):
             return False
         pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
         pending = pending.reshape(-1)
         level += 1
     return True
+
+
+def _cleared(parts: list[tuple[PackedWorld, int]], q: np.ndarray, poses: np.ndarray, margin: float) -> np.ndarray:
+    """Which configurations pass every part of the validity test with ``margin`` (m) to spare."""
+    clear = np.ones(len(q), dtype=bool)
+    for packed, joints in parts:
+        rows = np.flatnonzero(clear)
+        if len(rows):
+            part = dataclasses.replace(packed, rounding=margin)
+            clear[rows] = clearly_valid(part, np.ascontiguousarray(q[rows, :joints]), poses[rows])
+    return clear
+
+
+def _all_valid(world: World, q: np.ndarray, poses: np.ndarray, budget: _Budget | None) -> bool:
+    if budget is not None:
+        budget.spend_checks(len(q))
+    return bool(is_valid(world, q, poses).all())
+
+
+def _margin_parts(
+    world: World,
+    a: np.ndarray,
+    b: np.ndarray,
+    grasp_rel: np.ndarray | None,
+    *,
+    min_margin: float,
+    budget: _Budget | None,
+) -> list[tuple[PackedWorld, int]] | None:
+    """The validity tests a margin is asked of, with the joints each takes: the whole test in a transit; in a
+    transfer, :func:`clew_ros.core.collision.packed_carrying`'s two parts, once the pair they leave out (the
+    last link and the object it holds, at a fixed distance during the move) has its least margin at ``a``.
+    ``None`` when it has not, or when ``a`` or ``b`` leaves the joint limits."""
+    ends = np.stack([a, b])
+    if np.any(ends < world.robot.joint_lower) or np.any(ends > world.robot.joint_upper):
+        return None
+    if grasp_rel is None:
+        return [(packed_world(world), world.robot.dof)]
+    pose = compose(tip_poses(world.robot, a[None]), grasp_rel)
+    if budget is not None:
+        budget.spend_checks(1)
+    if not clearly_valid(dataclasses.replace(packed_world(world), rounding=min_margin), a[None], pose)[0]:
+        return None
+    without_object, links_but_last = packed_carrying(world)
+    return [(without_object, world.robot.dof), (links_but_last, world.robot.dof - 1)]
 
 
 def _dense_clear(world: World, piece: _Piece) -> bool:
@@ -503,22 +544,23 @@ class _Improver:
 
     def checked_tail(self, proposal: Proposal, placement: np.ndarray) -> list[_Piece] | None:
         """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked
-        continuously (:meth:`route`); ``None`` if a move stays blocked."""
+        continuously (:meth:`route`), the shortest first (they are the cheapest to check, and the ones
+        near the object, leaving or taking a grasp, are short); ``None`` if a move stays blocked."""
         pieces: list[_Piece] = []
         keys = proposal.keys
         pose = np.asarray(placement, dtype=float)
         for step, grasp in enumerate(proposal.grasps):
             start, hold, end = keys[2 * step], keys[2 * step + 1], keys[2 * step + 2]
             grasp_rel = relative(tip_poses(self.world.robot, hold[None])[0], pose)  # as plan.replay computes it
-            transit = _Piece("transit", None, np.array([start, hold]), pose, None)
             transfer = _Piece("transfer", grasp, np.array([hold, end]), pose, grasp_rel)
-            for piece, route in zip((transit, transfer), proposal.routes[2 * step : 2 * step + 2], strict=True):
-                path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], route)
-                if path is None:
-                    return None
-                piece.waypoints = path
-                pieces.append(piece)
+            pieces += [_Piece("transit", None, np.array([start, hold]), pose, None), transfer]
             pose = transfer.end_pose(self.world)
+        for index in np.argsort([joint_travel([p.waypoints]) for p in pieces], kind="stable"):
+            piece = pieces[index]
+            path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], proposal.routes[index])
+            if path is None:
+                return None
+            piece.waypoints = path
         return pieces
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:

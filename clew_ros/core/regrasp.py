@@ -113,28 +113,24 @@ def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
 
 def _end_dense(count: int) -> np.ndarray:
     """``count`` shares of a move from 0 to 1, closer together near both ends (where a move leaves or
-    reaches a grasp, touching the object), in cosine spacing."""
+    reaches a grasp, touching the object): cosine spacing."""
     spacing: np.ndarray = 0.5 - 0.5 * np.cos(np.linspace(0.0, np.pi, count))
     return spacing
 
 
 def _route_samples(a: np.ndarray, b: np.ndarray, samples: int) -> list[np.ndarray]:
-    """Configurations along each way of :data:`ROUTES` from ``a[k]`` to ``b[k]`` ``(M, n)``: ``(M, S, n)`` each
-    (each leg of a way sampled densest near its ends)."""
-    n = a.shape[1]
-    t = _end_dense(samples)[None, :, None]
-    ways = [a[:, None, :] + t * (b - a)[:, None, :]]
-    per_leg = _end_dense(max(2, samples // n))[None, :]
-    for order in (range(n), range(n - 1, -1, -1)):
-        corner = a.copy()
-        legs = []
-        for joint in order:
-            leg = np.repeat(corner[:, None, :], per_leg.shape[1], axis=1)
-            leg[:, :, joint] += per_leg * (b[:, joint] - a[:, joint])[:, None]
-            legs.append(leg)
-            corner = corner.copy()
-            corner[:, joint] = b[:, joint]
-        ways.append(np.concatenate(legs, axis=1))
+    """Configurations along each way of :data:`ROUTES` from ``a[k]`` to ``b[k]`` ``(M, n)``: ``(M, S, n)`` each,
+    spread evenly over the way's joint travel (densest near its ends)."""
+    share = _end_dense(samples)[None, :, None]
+    ways = [a[:, None, :] + share * (b - a)[:, None, :]]
+    moved = np.abs(b - a)  # (M, n) each joint's travel
+    travel = share * moved.sum(axis=1)[:, None, None]  # (M, S, 1) how far along the way each sample is
+    for order in (np.arange(a.shape[1]), np.arange(a.shape[1])[::-1]):
+        before = np.cumsum(moved[:, order], axis=1) - moved[:, order]  # travel before each joint starts
+        start = np.empty_like(before)
+        start[:, order] = before
+        done = np.clip((travel - start[:, None, :]) / np.maximum(moved, 1e-300)[:, None, :], 0.0, 1.0)
+        ways.append(a[:, None, :] + done * (b - a)[:, None, :])
     return ways
 
 

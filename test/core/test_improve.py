@@ -208,7 +208,14 @@ def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(see
     carried = run_manhattan(world, path[-1:], genes, margin_m=1e-3, grasp_rel=grasp_rel[None]).waypoints[0]
     segments = [Segment("transit", None, list(path)), Segment("transfer", 0, list(carried))]
     final = compose(tip_poses(world.robot, carried[-1:]), grasp_rel)[0]
-    world = dataclasses.replace(world, object=dataclasses.replace(world.object, goal=final))
+    # the plan starts where the arm is, and its grasp 0 is where the transit's tip ends (in the object frame)
+    grasps = np.array(world.object.grasps)
+    grasps[0] = relative(world.object.initial, tip_poses(world.robot, path[-1:])[0])[:2]
+    world = dataclasses.replace(
+        world,
+        robot=dataclasses.replace(world.robot, initial=q0),
+        object=dataclasses.replace(world.object, goal=final, grasps=grasps),
+    )
     settings = PlannerSettings(seed=seed, improve_time=0.2)
     ctx = PlanningContext(world, settings, np.random.default_rng(seed), Termination(30))
     before = joint_travel(segments)

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers.open_reach import open_reach
 
 from benchmarks.reference import ReferenceSettings, main, planner_runs, reference_plan
 from clew_ros.core.collision import check_start_and_goal
@@ -19,27 +20,7 @@ STEP_RAD = 0.04
 #: 2 h per end that is off the lattice, 4 ends.
 GRID_ERROR_RAD = 8 * STEP_RAD
 
-OPEN_WORLD = {
-    "world": {
-        "name": "open_reach",
-        "bounds": [-2.5, -2.5, 2.5, 2.5],
-        "robot": {
-            "base": [0.0, 0.0],
-            "link_lengths": [1.0, 0.8],
-            "joint_lower": [-2.0, -2.5],
-            "joint_upper": [2.0, 2.5],
-            "initial": [-0.6, 1.2],
-        },
-        "object": {
-            "polygon": [-0.05, -0.05, 0.05, -0.05, 0.05, 0.05, -0.05, 0.05],
-            "initial": [1.2, 0.7, 0.0],
-            "goal": [0.3, 1.3, 0.0],
-            "grasps": [0.0, -0.05],
-        },
-        "goal_tolerance": 0.001,
-    },
-    "planner": {"time_limit": 30.0},
-}
+OPEN_WORLD = {**open_reach(goal_tolerance=0.001), "planner": {"time_limit": 30.0}}
 
 
 @pytest.fixture(scope="module")

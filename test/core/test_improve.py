@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.open_reach import open_reach
 
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
@@ -241,25 +242,7 @@ def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(see
 
 # -- rebuilding the manipulation (regrasp proposals) ---------------------------------------------------------
 
-OPEN_WORLD = {
-    "world": {
-        "name": "open_reach",
-        "bounds": [-2.5, -2.5, 2.5, 2.5],
-        "robot": {
-            "base": [0.0, 0.0],
-            "link_lengths": [1.0, 0.8],
-            "joint_lower": [-2.0, -2.5],
-            "joint_upper": [2.0, 2.5],
-            "initial": [-0.6, 1.2],
-        },
-        "object": {
-            "polygon": [-0.05, -0.05, 0.05, -0.05, 0.05, 0.05, -0.05, 0.05],
-            "initial": [1.2, 0.7, 0.0],
-            "goal": [0.3, 1.3, 0.0],
-            "grasps": [0.0, -0.05],
-        },
-    }
-}
+OPEN_WORLD = open_reach()
 
 
 def _plan_of(world, segments, final=None) -> Plan:

@@ -114,17 +114,27 @@ def _compare(reference: dict[str, dict[str, Any]], other: dict[str, dict[str, An
     return {"same": same, "different": len(reference) - same - limited, "different_time_limit": limited}
 
 
+def private_network_unavailable() -> str | None:
+    """Why a private network namespace (:data:`IN_PRIVATE_NETWORK`) cannot be made here, or ``None``."""
+    if shutil.which("unshare") is None or shutil.which("ip") is None:
+        return "unshare or ip is not installed"
+    probe = subprocess.run([*IN_PRIVATE_NETWORK, "true"], capture_output=True, text=True, check=False, timeout=60)
+    if probe.returncode != 0:
+        return f"cannot make a private network namespace (unshare --net needs root): {probe.stderr.strip()[:200]}"
+    return None
+
+
 def _private_network() -> str | None:
     """Why Ray cannot run in a private network namespace here, or ``None``."""
     try:
         import ray  # noqa: F401
     except ImportError:
         return "ray is not installed (pip install 'clew_ros[batch]')"
-    probe = subprocess.run([*IN_PRIVATE_NETWORK, "true"], capture_output=True, text=True, check=False)
-    return None if probe.returncode == 0 else f"no private network namespace: {probe.stderr.strip()[:200]}"
+    return private_network_unavailable()
 
 
-def _group_alive(pgid: int) -> bool:
+def group_alive(pgid: int) -> bool:
+    """Whether a process of group ``pgid`` is still running."""
     try:
         os.killpg(pgid, 0)
     except ProcessLookupError:
@@ -145,10 +155,10 @@ def _resume(common: list[Any], out: Path, total: int) -> dict[str, Any]:
             time.sleep(0.05)
         process.kill()
         process.wait()
-        while _group_alive(process.pid):  # the orphaned workers finish their job and exit
+        while group_alive(process.pid):  # the orphaned workers finish their job and exit
             time.sleep(0.1)
     finally:
-        if _group_alive(process.pid):
+        if group_alive(process.pid):
             os.killpg(process.pid, signal.SIGKILL)
     kept = _index(out)
     mtimes = {r["plan"]: (out / r["plan"]).stat().st_mtime_ns for r in kept}

@@ -12,9 +12,8 @@ import numpy as np
 from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.improve import Improvement, improve
-from clew_ros.core.kinematics import transform_points
 from clew_ros.core.passage import passage_refusal
-from clew_ros.core.reach import approach_cells, carry_cells
+from clew_ros.core.reach import approach_cells, carry_cells, nearest_grasp_distance
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
@@ -288,8 +287,7 @@ def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None
         return Outcome.GOAL_IN_COLLISION, f"goal placement {goal.tolist()} collides or leaves world.bounds"
     if not is_valid(world, world.robot.initial[None], world.object.initial[None])[0]:
         return Outcome.START_IN_COLLISION, "the start configuration is not valid"
-    grasp_points = transform_points(goal, world.object.grasps)
-    nearest = float(np.min(np.linalg.norm(grasp_points - world.robot.base, axis=1)))
+    nearest = nearest_grasp_distance(world, goal)
     if nearest > world.robot.reach + world.grasp_tolerance:
         message = (
             f"goal placement out of reach: its nearest grasp is {nearest:.3f} m "

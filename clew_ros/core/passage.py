@@ -38,6 +38,7 @@ import shapely
 from shapely.ops import polylabel
 
 from clew_ros.core.kinematics import transform_points
+from clew_ros.core.reach import nearest_grasp_distance
 from clew_ros.core.world import World
 
 __all__ = ["PROOF_MAX_OBSTACLES", "inscribed_disc", "passage_refusal"]
@@ -125,8 +126,7 @@ def _within_goal(world: World, pose: np.ndarray, goal: np.ndarray) -> bool:
 
 
 def _never_grasped(world: World) -> str | None:
-    grasp_points = transform_points(world.object.initial, world.object.grasps)
-    nearest = float(np.min(np.linalg.norm(grasp_points - world.robot.base, axis=1)))
+    nearest = nearest_grasp_distance(world, world.object.initial)
     if nearest <= world.robot.reach + world.grasp_tolerance:
         return None
     return (

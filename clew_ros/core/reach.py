@@ -27,6 +27,7 @@ __all__ = [
     "carry_cells",
     "goal_within_reach",
     "holding_configurations",
+    "nearest_grasp_distance",
     "two_link_grasps",
     "within_reach",
 ]
@@ -39,6 +40,13 @@ def within_reach(world: World, point: np.ndarray, slack: float = 0.0, lengths: n
     distance = float(np.hypot(*(np.asarray(point) - world.robot.base)))
     inner = max(0.0, 2.0 * float(lengths.max()) - float(lengths.sum()))
     return inner - slack <= distance <= float(lengths.sum()) + slack
+
+
+def nearest_grasp_distance(world: World, object_pose: np.ndarray) -> float:
+    """Distance (m) from the base to the nearest grasp point of the object resting at ``object_pose``: beyond
+    the arm's reach plus ``grasp_tolerance``, no grasp can be held there."""
+    grasp_points = transform_points(np.asarray(object_pose, float), world.object.grasps)
+    return float(np.min(np.linalg.norm(grasp_points - world.robot.base, axis=1)))
 
 
 def goal_within_reach(world: World, grasp_rel: np.ndarray, goal: np.ndarray) -> bool:

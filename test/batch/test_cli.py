@@ -13,8 +13,17 @@ import time
 from pathlib import Path
 
 import pytest
-from helpers.batch_cli import CONFIG, ROOT, batch_command, index_lines, run_batch_cli, without_wall_time
+from helpers.batch_cli import (
+    CONFIG,
+    ROOT,
+    batch_command,
+    clew_plan_text,
+    index_lines,
+    run_batch_cli,
+    without_wall_time,
+)
 
+from benchmarks.batch import group_alive
 from clew_ros.batch.index import COLUMNS
 from clew_ros.cli.batch import main
 from clew_ros.core.plan import Plan, validate_plan
@@ -24,20 +33,21 @@ from clew_ros.core.world import load_world
 SEEDS_TO_INTERRUPT = 12
 
 
-def _clew_plan(world: Path, seed: int, output: Path) -> str:
-    done = subprocess.run(
-        [sys.executable, "-m", "clew_ros.cli.plan", str(world), "-o", str(output), "--seed", str(seed), "-q"],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=300,
-    )
-    assert done.returncode in (0, 1), done.stderr
-    return output.read_text()
-
-
 def _mtimes(out: Path) -> dict[str, int]:
     return {str(p.relative_to(out)): p.stat().st_mtime_ns for p in sorted((out / "plans").rglob("*.json"))}
+
+
+def _start_batch(args: list, output: int) -> subprocess.Popen[str]:
+    """``clew_batch`` started in a session of its own (so that its whole process group can be killed)."""
+    return subprocess.Popen(
+        batch_command(*args),
+        cwd=ROOT,
+        env=dict(os.environ),
+        text=True,
+        start_new_session=True,
+        stdout=output,
+        stderr=output,
+    )
 
 
 def _wait_for_index(out: Path, lines: int, process: subprocess.Popen[str], deadline_s: float = 300.0) -> None:
@@ -74,7 +84,7 @@ def test_plans_index_summary_resume_and_a_torn_line(tmp_path: Path, unreachable_
         assert job["joint_travel_rad"] > 0
         assert job["plan_time_s"] > 0
         text = (out / job["plan"]).read_text()
-        assert without_wall_time(text) == without_wall_time(_clew_plan(single, seed, tmp_path / "plan.json"))
+        assert without_wall_time(text) == without_wall_time(clew_plan_text(single, seed, tmp_path / "plan.json"))
         assert validate_plan(load_world(single), Plan.from_json(text), step_rad=0.002) == []
     failed = by_job["unreachable_fast/seed_0000"]
     assert failed["code"] in ("TIME_LIMIT", "NO_PATH_AT_RESOLUTION")
@@ -117,22 +127,14 @@ def test_plans_index_summary_resume_and_a_torn_line(tmp_path: Path, unreachable_
 def test_a_sigkilled_driver_loses_only_the_jobs_in_flight(tmp_path: Path) -> None:
     out = tmp_path / "out"
     args = [CONFIG / "single_transfer.yaml", "--seeds", SEEDS_TO_INTERRUPT, "--out", out, "--jobs", 2, "--quiet"]
-    process = subprocess.Popen(
-        batch_command(*args),
-        cwd=ROOT,
-        env=dict(os.environ),
-        text=True,
-        start_new_session=True,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
+    process = _start_batch(args, subprocess.DEVNULL)
     try:
         _wait_for_index(out, 3, process)
         process.kill()
         process.wait(30)
         # the orphaned workers finish their job, find the driver gone and exit on their own
         deadline = time.monotonic() + 120
-        while _group_alive(process.pid):
+        while group_alive(process.pid):
             assert time.monotonic() < deadline, "the workers of the killed driver did not exit"
             time.sleep(0.1)
     finally:
@@ -153,15 +155,7 @@ def test_a_sigkilled_driver_loses_only_the_jobs_in_flight(tmp_path: Path) -> Non
 def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path: Path) -> None:
     out = tmp_path / "out"
     args = [CONFIG / "single_transfer.yaml", "--seeds", SEEDS_TO_INTERRUPT, "--out", out, "--jobs", 2]
-    process = subprocess.Popen(
-        batch_command(*args),
-        cwd=ROOT,
-        env=dict(os.environ),
-        text=True,
-        start_new_session=True,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
+    process = _start_batch(args, subprocess.PIPE)
     try:
         _wait_for_index(out, 1, process)
         process.send_signal(signal.SIGINT)
@@ -180,14 +174,6 @@ def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path: Path) -> None:
         assert plan.code == record["code"]
         assert plan.stats["seed"] == record["seed"]
     assert not list((out / "plans").rglob(".*.partial"))
-
-
-def _group_alive(pgid: int) -> bool:
-    try:
-        os.killpg(pgid, 0)
-    except ProcessLookupError:
-        return False
-    return True
 
 
 def _kill_group(pgid: int) -> None:

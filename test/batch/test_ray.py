@@ -20,25 +20,7 @@ from pathlib import Path
 import pytest
 from helpers.batch_cli import CONFIG, ROOT, batch_command, index_lines, run_batch_cli, without_wall_time
 
-#: Runs its arguments in a new network namespace, loopback up and no other interface (else exit 97).
-_IN_PRIVATE_NETWORK = [
-    "unshare",
-    "--net",
-    "bash",
-    "-c",
-    'ip link set lo up && [ "$(ip -o link show | wc -l)" = 1 ] || exit 97; exec "$@"',
-    "in_private_network",
-]
-
-
-def _private_network_available() -> str | None:
-    """Why a private network namespace cannot be made here, or ``None``."""
-    if shutil.which("unshare") is None or shutil.which("ip") is None:
-        return "unshare or ip is not installed"
-    probe = subprocess.run([*_IN_PRIVATE_NETWORK, "true"], capture_output=True, text=True, timeout=60)
-    if probe.returncode != 0:
-        return f"cannot make a private network namespace (unshare --net needs root): {probe.stderr.strip()[:200]}"
-    return None
+from benchmarks.batch import IN_PRIVATE_NETWORK, private_network_unavailable
 
 
 @pytest.fixture
@@ -52,7 +34,7 @@ def ray_temp_dir() -> Iterator[Path]:
 def test_a_local_ray_makes_the_pools_plans(tmp_path: Path, ray_temp_dir: Path) -> None:
     if importlib.util.find_spec("ray") is None:
         pytest.skip("Ray is not installed: pip install 'clew_ros[batch]'")
-    reason = _private_network_available()
+    reason = private_network_unavailable()
     if reason:
         pytest.skip(f"the Ray part runs only in a private network namespace: {reason}")
     worlds = [CONFIG / "single_transfer.yaml", CONFIG / "figure1.yaml"]
@@ -62,7 +44,7 @@ def test_a_local_ray_makes_the_pools_plans(tmp_path: Path, ray_temp_dir: Path) -
     env = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", RAY_TMPDIR=str(ray_temp_dir))
     command = batch_command(*worlds, "--seeds", 2, "--out", tmp_path / "ray", "--jobs", 2, "--quiet", "--ray")
     ray = subprocess.run(
-        [*_IN_PRIVATE_NETWORK, *command], capture_output=True, text=True, timeout=900, cwd=ROOT, env=env
+        [*IN_PRIVATE_NETWORK, *command], capture_output=True, text=True, timeout=900, cwd=ROOT, env=env
     )
     assert ray.returncode == 0, ray.stderr
     assert "a local Ray on 127.0.0.1" in ray.stderr

@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import json
 import pickle
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from helpers.batch_cli import CONFIG, ROOT, without_wall_time
+from helpers.batch_cli import CONFIG, clew_plan_text, without_wall_time
 
 from clew_ros.batch.jobs import load_worlds, make_jobs
 from clew_ros.batch.worker import JobOutcome, JobSpec, run_job
@@ -18,18 +16,6 @@ from clew_ros.batch.worker import JobOutcome, JobSpec, run_job
 def _spec(world: Path, seed: int) -> JobSpec:
     (job,) = make_jobs(load_worlds([world.resolve()]), [seed])
     return JobSpec(job.key, job.world.parameters, seed, None, None, timeout_s=60.0)
-
-
-def _clew_plan(world: Path, seed: int, output: Path) -> dict[str, object]:
-    done = subprocess.run(
-        [sys.executable, "-m", "clew_ros.cli.plan", str(world), "-o", str(output), "--seed", str(seed), "-q"],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=300,
-    )
-    assert done.returncode in (0, 1), done.stderr
-    return without_wall_time(output.read_text())
 
 
 def test_a_job_plans_what_clew_plan_plans(tmp_path: Path) -> None:
@@ -41,7 +27,9 @@ def test_a_job_plans_what_clew_plan_plans(tmp_path: Path) -> None:
     assert outcome.transfers >= 1
     assert outcome.joint_travel_rad is not None
     assert outcome.landmarks == len(json.loads(outcome.plan_json)["landmarks"])
-    assert without_wall_time(outcome.plan_json) == _clew_plan(CONFIG / "single_transfer.yaml", 2, tmp_path / "p.json")
+    assert without_wall_time(outcome.plan_json) == without_wall_time(
+        clew_plan_text(CONFIG / "single_transfer.yaml", 2, tmp_path / "p.json")
+    )
     assert pickle.loads(pickle.dumps(outcome)) == outcome  # it travels between processes
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers.open_reach import open_reach
+from helpers.random_boxes import random_boxes
 
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
@@ -143,14 +144,7 @@ def test_pruning_drops_back_and_forth_and_loops_only() -> None:
 
 def _random_world(seed: int, joints: int, width: float):
     rng = np.random.default_rng(seed)
-    boxes = {}
-    while len(boxes) < 6:
-        centre = rng.uniform(-2.0, 2.0, 2)
-        if np.hypot(*centre) < 0.6:
-            continue
-        half = rng.uniform(0.05, 0.3, 2)
-        corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
-        boxes[f"box_{len(boxes)}"] = [float(v) for sx, sy in corners for v in centre + half * (sx, sy)]
+    boxes = random_boxes(rng, 6, clear_radius=0.6)
     polygon = [0.0, 0.0, 0.2, 0.0, 0.2, 0.08, 0.0, 0.08]
     parameters = {
         "world": {

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.random_boxes import random_boxes
 from helpers.sweep import sweep_interval
 
 from clew_ros.core.collision import exactly_valid, is_placement_valid, is_valid
@@ -31,14 +32,7 @@ def random_world(seed: int, *, joints: int, obstacles: int, width: float, limit:
     ``+-limit``, possibly past pi). The start is not checked (tests pick valid configurations)."""
     rng = np.random.default_rng(seed)
     lengths = rng.uniform(0.3, 1.0, joints) * 1.8 / joints + 0.1
-    boxes = {}
-    while len(boxes) < obstacles:
-        centre = rng.uniform(-2.0, 2.0, 2)
-        if np.hypot(*centre) < 0.5:
-            continue
-        half = rng.uniform(0.05, 0.3, 2)
-        corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
-        boxes[f"box_{len(boxes)}"] = [float(v) for sx, sy in corners for v in centre + half * (sx, sy)]
+    boxes = random_boxes(rng, obstacles, clear_radius=0.5)
     angles = np.sort(rng.uniform(0, 2 * np.pi, rng.integers(3, 7)))
     radii = rng.uniform(0.06, 0.15, len(angles))
     polygon = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)

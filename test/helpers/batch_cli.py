@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-__all__ = ["CONFIG", "ROOT", "batch_command", "index_lines", "run_batch_cli", "without_wall_time"]
+__all__ = ["CONFIG", "ROOT", "batch_command", "clew_plan_text", "index_lines", "run_batch_cli", "without_wall_time"]
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config"
@@ -38,3 +38,16 @@ def without_wall_time(text: str) -> dict[str, Any]:
     document: dict[str, Any] = json.loads(text)
     document["stats"].pop("time_s")
     return document
+
+
+def clew_plan_text(world: Path, seed: int, output: Path) -> str:
+    """The plan file ``clew_plan WORLD --seed S`` writes (run as a module of this checkout)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "clew_ros.cli.plan", str(world), "-o", str(output), "--seed", str(seed), "-q"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+    )
+    assert done.returncode in (0, 1), done.stderr
+    return output.read_text()

@@ -1,0 +1,139 @@
+"""Before and after on the generated families, in one run: ``python -m benchmarks.families_ab --baseline REV
+[--families A,B] [--worlds 3] [--seeds 2] [--time-limit 10] [--jobs 2] [--out DIR]``.
+
+The worlds are generated once by this checkout (:mod:`benchmarks.generated`, as ``clew_world`` writes
+them), then every (world, seed) is planned twice, by ``clew_plan`` of git revision ``REV`` (exported with
+``git archive``) and by this checkout's, one right after the other, each in a process of its own with the
+kernel on one thread (``NUMBA_NUM_THREADS=1``), ``--jobs`` such pairs at a time. ``clew_plan`` is the
+entry point every revision has, so the baseline needs nothing newer than its own code. Times are the
+planner's own (``stats.time_s``: process start-up left out). The table per family, before → after:
+success, median time (a failed run on a solvable world counts at the limit), median landmarks, and over
+the plans found, median transfers and joint travel. ``DIR/families_ab.json`` keeps every run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from benchmarks.families_run import _fmt, summarise
+from benchmarks.generated import build_world, reference_world
+from benchmarks.run import ROOT, _export
+from clew_ros.worlds import FAMILIES
+
+
+def plan_with(tree: Path, world: str, seed: int, time_limit_s: float, output: Path) -> dict:
+    """``clew_plan WORLD --seed S --time-limit T`` with the code of ``tree``; the run's figures."""
+    env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_NUM_THREADS="1")
+    command = [sys.executable, "-m", "clew_ros.cli.plan", world, "-o", str(output), "--seed", str(seed)]
+    command += ["--time-limit", str(time_limit_s), "-q"]
+    done = subprocess.run(command, cwd=tree, env=env, capture_output=True, text=True, check=False)
+    if done.returncode not in (0, 1):
+        raise SystemExit(f"families_ab: {' '.join(command)} in {tree}: {done.stderr.strip()[-2000:]}")
+    plan = json.loads(output.read_text())
+    stats = plan["stats"]
+    success = bool(plan["success"])
+    return {
+        "world": Path(world).stem,
+        "seed": seed,
+        "outcome": plan.get("code", "SUCCEEDED" if success else "FAILED"),
+        "success": success,
+        "wall_s": float(stats["time_s"]),
+        "cpu_s": None,
+        "landmarks": stats.get("landmarks"),
+        "transfers": sum(s["kind"] == "transfer" for s in plan["segments"]) if success else None,
+        "travel_rad": stats.get("joint_travel_rad") if success else None,
+    }
+
+
+def _change(before: float | None, after: float | None, digits: int = 2) -> str:
+    return f"{_fmt(before, digits)} → {_fmt(after, digits)}"
+
+
+def _success(row: dict) -> str:
+    if row["solvable"]:
+        return f"{row['successes']}/{row['runs']}"
+    return f"{row['no_path']}/{row['runs']} NO_PATH"
+
+
+def markdown(before: list[dict], after: list[dict]) -> str:
+    """The before → after table in Markdown."""
+    lines = [
+        "| family | n | success | median s | landmarks | transfers | travel rad |",
+        "|---|--:|--:|--:|--:|--:|--:|",
+    ]
+    for a, b in zip(before, after, strict=True):
+        lines.append(
+            f"| {a['family']} | {a['joints']} | {_success(a)} → {_success(b)} "
+            f"| {_change(a['median_s'], b['median_s'])} "
+            f"| {_change(a['landmarks_median'], b['landmarks_median'], 0)} "
+            f"| {_change(a['transfers_median'], b['transfers_median'], 0)} "
+            f"| {_change(a['travel_median'], b['travel_median'], 1)} |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.families_ab", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--baseline", required=True, help="git revision to compare with")
+    parser.add_argument("--families", default=",".join(FAMILIES), help="comma-separated (default: all)")
+    parser.add_argument("--worlds", type=int, default=3, help="worlds per family, seeds 0..W-1")
+    parser.add_argument("--seeds", type=int, default=2, help="planner seeds per world, 0..S-1")
+    parser.add_argument("--time-limit", type=float, default=10.0, help="per run, s")
+    parser.add_argument("--jobs", type=int, default=2, help="(world, seed) pairs planned at once")
+    parser.add_argument("--out", type=Path, default=Path("bench_out"), help="where families_ab.json/.md go")
+    args = parser.parse_args(argv)
+    families = [f for f in args.families.split(",") if f]
+    unknown = [f for f in families if f not in FAMILIES]
+    if unknown:
+        parser.error(f"--families: unknown {unknown}; expected some of {list(FAMILIES)}")
+    baseline = _export(args.baseline)
+    started, load = time.monotonic(), os.getloadavg()[0]
+    with tempfile.TemporaryDirectory(prefix="clew_families_ab_") as scratch:
+        directory = Path(scratch)
+        worlds = [reference_world()] + [build_world(f, s, directory) for s in range(args.worlds) for f in families]
+        tasks = [(w, seed) for seed in range(args.seeds) for w in worlds]
+
+        def pair(index: int) -> tuple[dict, dict]:
+            world, seed = tasks[index]
+            outputs = [directory / f"plan_{index}_{side}.json" for side in ("before", "after")]
+            return (
+                plan_with(baseline, world.path, seed, args.time_limit, outputs[0]),
+                plan_with(ROOT, world.path, seed, args.time_limit, outputs[1]),
+            )
+
+        with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+            pairs = []
+            for done, result in enumerate(pool.map(pair, range(len(tasks))), start=1):
+                pairs.append(result)
+                if done % 10 == 0:
+                    print(f"  {done}/{len(tasks)} pairs, {time.monotonic() - started:.0f} s", file=sys.stderr)
+    rows: dict[str, list[dict]] = {"before": [], "after": []}
+    for family in ["figure1", *families]:
+        chosen = [w for w in worlds if w.family == family]
+        indices = [i for i, (w, _) in enumerate(tasks) if w.family == family]
+        for side, column in (("before", 0), ("after", 1)):
+            rows[side].append(summarise(family, chosen, [pairs[i][column] for i in indices], args.time_limit))
+    command = " ".join(["python -m benchmarks.families_ab", *(sys.argv[1:] if argv is None else argv)])
+    header = (
+        f"`{command}` ({args.baseline} → this checkout; {time.strftime('%Y-%m-%d %H:%M')}, "
+        f"{(time.monotonic() - started) / 60:.1f} min on {os.cpu_count()} cores, load average {load:.1f} at the "
+        f"start; {args.worlds} worlds x {args.seeds} seeds per family, limit {args.time_limit:g} s):"
+    )
+    text = f"{header}\n\n{markdown(rows['before'], rows['after'])}\n"
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "families_ab.md").write_text(text)
+    (args.out / "families_ab.json").write_text(json.dumps({"command": command, "rows": rows}, indent=1) + "\n")
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -2,7 +2,7 @@
 identical plans; resume after a SIGKILL of the driver at about half way.
 
     python -m benchmarks.batch [--worlds config/figure1.yaml config/single_transfer.yaml] [--seeds 100]
-                               [--time-limit 20] [--jobs 2] [--out DIR] [--no-ray]
+                               [--time-limit 20] [--jobs 2] [--out DIR] [--no-ray] [--round-per-world]
 
 * ``sequential``: one fresh process (imports, kernel warm-up, then every job
   with :func:`clew_ros.batch.worker.run_job` in a loop, as a pool worker runs
@@ -19,9 +19,11 @@ identical plans; resume after a SIGKILL of the driver at about half way.
   kill, those the rerun planned, and finished jobs planned again (index lines
   per job, plan files rewritten; 0 expected).
 
-The modes run world by world (one round per world), in turn, the order
-reversed every other round, so that a load that drifts (other programs on
-the machine) falls on each mode alike. Throughput is jobs per second of the
+By default each mode runs all the jobs in one command (one start-up, as a
+user's batch pays it); ``--round-per-world`` runs them world by world (one
+round per world), the modes in turn and the order reversed every other
+round, so that a load that drifts (other programs on the machine) falls on
+each mode alike, at the cost of one start-up per world and mode. Throughput is jobs per second of the
 commands' wall time (start-up included: workers, Ray, the kernel's
 warm-up); ``cores_used`` is the CPU time of the command's processes over
 its wall time and ``jobs_per_cpu_s`` the jobs per CPU second (for Ray only
@@ -175,9 +177,9 @@ def _resume(common: list[Any], out: Path, total: int) -> dict[str, Any]:
     }
 
 
-def _rounds(worlds: list[Path]) -> list[list[Path]]:
-    """The worlds run per round: one world per round (every mode runs every round)."""
-    return [[world] for world in worlds]
+def _rounds(worlds: list[Path], per_world: bool) -> list[list[Path]]:
+    """The worlds run per round (every mode runs every round): all at once, or one world per round."""
+    return [[world] for world in worlds] if per_world else [list(worlds)]
 
 
 def _mode_commands(mode: str, worlds: list[Path], args: argparse.Namespace, out: Path) -> tuple[list[str], dict]:
@@ -205,6 +207,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", type=Path, default=None, help="keep the outputs here (default: a temporary folder)")
     parser.add_argument("--no-ray", action="store_true")
+    parser.add_argument(
+        "--round-per-world",
+        action="store_true",
+        help="one command per world and mode, modes alternating (drifting load)",
+    )
     args = parser.parse_args(argv)
     out = args.out or Path(tempfile.mkdtemp(prefix="clew_bench_batch_"))
     for part in ("sequential", "pool", "ray", "resume", "ray_tmp"):
@@ -216,6 +223,7 @@ def main(argv: list[str] | None = None) -> int:
         "worlds": [w.name for w in args.worlds],
         "workers": args.jobs,
         "time_limit_s": args.time_limit,
+        "rounds": "per world" if args.round_per_world else "one",
         "cores": os.cpu_count(),
         "load_average_before": [round(v, 2) for v in os.getloadavg()],
     }
@@ -223,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
     modes = ["sequential", "pool"] + (["ray"] if reason is None else [])
     wall = dict.fromkeys(modes, 0.0)
     cpu = dict.fromkeys(modes, 0.0)
-    for number, worlds in enumerate(_rounds(args.worlds)):
+    for number, worlds in enumerate(_rounds(args.worlds, args.round_per_world)):
         for mode in modes if number % 2 == 0 else modes[::-1]:  # alternate the order: drifting load evens out
             command, env = _mode_commands(mode, worlds, args, out)
             before = _children_cpu_s()

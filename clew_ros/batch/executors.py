@@ -274,6 +274,9 @@ class RayExecutor:
         ray = self._ray
         if self.address is None:
             os.environ["RAY_USAGE_STATS_ENABLED"] = "0"
+            # Ray runs its workers at nice 15 by default (its worker_niceness setting): planning is this
+            # command's whole work, so its workers get their fair share of a busy machine, as the pool's do
+            os.environ.setdefault("RAY_worker_niceness", "0")
             # the local workers import clew_ros from where this process does
             package_root = str(Path(clew_ros.__file__).resolve().parents[1])
             os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [package_root, os.environ.get("PYTHONPATH")]))

@@ -13,7 +13,8 @@ The columns (:data:`COLUMNS`): ``job`` (``<world folder>/seed_<seed>``),
 ``message``, ``plan_time_s`` (the planner's time), ``wall_time_s`` (the
 job's time in its worker), ``landmarks``, ``transfers`` and
 ``joint_travel_rad`` (of a plan found, else null), ``plan`` (the plan file,
-relative to the output folder), ``attempts``, ``error`` (why the job failed:
+relative to the output folder), ``recording`` (the run's recording folder,
+relative to the output folder, with ``--record``; else null), ``attempts``, ``error`` (why the job failed:
 an exception, a dead worker, a time-out; else null), ``fingerprint`` (what
 decided the plan, :attr:`clew_ros.batch.jobs.Job.fingerprint`) and
 ``finished`` (UTC, ISO 8601).
@@ -45,6 +46,7 @@ COLUMNS = (
     "transfers",
     "joint_travel_rad",
     "plan",
+    "recording",
     "attempts",
     "error",
     "fingerprint",

@@ -15,7 +15,7 @@ see :func:`generated_world_paths`). Seeds are ``0 .. N-1``, or with a
 batch seed ``B`` derived from it (:func:`derived_seeds`). Every world uses the
 same seeds. Job ``figure1/seed_0007`` writes ``plans/figure1/seed_0007.json``
 under the output folder (the folder is the world file's name without
-``.yaml``).
+``.yaml``), and with ``--record`` its recording ``recordings/figure1/seed_0007/``.
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ from clew_ros.worlds import GenerationError, UnknownFamilyError, generate, write
 __all__ = [
     "GENERATED_FOLDER",
     "PLANS_FOLDER",
+    "RECORDINGS_FOLDER",
     "WORLD_SUFFIX",
     "BatchWorld",
     "Job",
@@ -54,6 +55,8 @@ __all__ = [
 WORLD_SUFFIX = ".yaml"
 #: The folder under the output folder that holds the plan files.
 PLANS_FOLDER = "plans"
+#: The folder under the output folder that holds the recordings (``--record``).
+RECORDINGS_FOLDER = "recordings"
 #: planner.seed's range is [0, 2**31 - 1]: derived seeds keep 31 bits.
 _SEED_BITS = 31
 
@@ -93,6 +96,11 @@ class Job:
     def plan_path(self) -> Path:
         """Where the job's plan file goes, relative to the output folder."""
         return Path(PLANS_FOLDER, f"{self.key}.json")
+
+    @property
+    def recording_path(self) -> Path:
+        """Where the job's recording goes with ``--record`` (a rosbag2 folder), relative to the output folder."""
+        return Path(RECORDINGS_FOLDER, self.key)
 
     @property
     def settings(self) -> PlannerSettings:

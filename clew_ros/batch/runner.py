@@ -2,11 +2,13 @@
 index line written as it finishes.
 
 A job is done when the index has its line, with the job's fingerprint, and
-its plan file is there, parses, and names the job's world, seed and outcome:
-such jobs are skipped, so rerunning the same command resumes. A finished
-job's plan file is written first (to a temporary name, synced, renamed),
-then its index line (:mod:`clew_ros.batch.index`): a driver killed at any
-point loses only the jobs in flight. A job whose worker failed (the job
+its plan file is there, parses, and names the job's world, seed and outcome
+(with ``record``: and its recording is there too): such jobs are skipped, so
+rerunning the same command resumes. A finished job's plan file is written
+first (to a temporary name, synced, renamed), then its recording (a
+temporary folder, renamed; :mod:`clew_ros.batch.recording`), then its index
+line (:mod:`clew_ros.batch.index`): a driver killed at any point loses only
+the jobs in flight. A job whose worker failed (the job
 raised, the worker died, the job ran past its time limit + grace) gets an
 ``INTERNAL_ERROR`` plan saying why, and is tried again up to ``retries``
 times first. Setting ``stop`` ends the batch after the jobs finished so far;
@@ -22,7 +24,7 @@ import os
 import threading
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -31,6 +33,7 @@ from clew_ros.batch.executors import Executor, Finished
 from clew_ros.batch.index import COLUMNS, Index
 from clew_ros.batch.jobs import Job
 from clew_ros.batch.progress import ProgressBar
+from clew_ros.batch.recording import has_recording, recording_files, write_recording
 from clew_ros.batch.worker import JobOutcome, JobSpec
 from clew_ros.core.errors import PlanFileError
 from clew_ros.core.offline import failed_plan
@@ -66,10 +69,15 @@ class BatchReport:
         return len(self.records) == self.total
 
 
-def has_valid_output(job: Job, record: dict[str, Any] | None, out_dir: Path) -> bool:
+def has_valid_output(job: Job, record: dict[str, Any] | None, out_dir: Path, *, recording: bool = False) -> bool:
     """Whether ``job`` is done: ``record`` (its index line) has its fingerprint and plan path, and the
-    plan file parses and names the job's world, seed and outcome."""
+    plan file parses and names the job's world, seed and outcome; with ``recording``, the record also
+    names the job's recording and that folder holds one."""
     if record is None or record.get("fingerprint") != job.fingerprint or record.get("plan") != job.plan_path.as_posix():
+        return False
+    if recording and (
+        record.get("recording") != job.recording_path.as_posix() or not has_recording(out_dir / job.recording_path)
+    ):
         return False
     try:
         plan = Plan.read(out_dir / job.plan_path)
@@ -93,8 +101,9 @@ def _finite(value: float | None) -> float | None:
     return value if value is None or math.isfinite(value) else None
 
 
-def _record(job: Job, outcome: JobOutcome, attempts: int) -> dict[str, Any]:
-    """The index line of ``job`` (columns in :data:`~clew_ros.batch.index.COLUMNS` order)."""
+def _record(job: Job, outcome: JobOutcome, attempts: int, *, recorded: bool) -> dict[str, Any]:
+    """The index line of ``job`` (columns in :data:`~clew_ros.batch.index.COLUMNS` order); ``recorded``:
+    its recording was written."""
     record = {
         "job": job.key,
         "world": job.world.name,
@@ -109,6 +118,7 @@ def _record(job: Job, outcome: JobOutcome, attempts: int) -> dict[str, Any]:
         "transfers": outcome.transfers,
         "joint_travel_rad": _finite(outcome.joint_travel_rad),
         "plan": job.plan_path.as_posix(),
+        "recording": job.recording_path.as_posix() if recorded else None,
         "attempts": attempts,
         "error": outcome.error,
         "fingerprint": job.fingerprint,
@@ -118,8 +128,9 @@ def _record(job: Job, outcome: JobOutcome, attempts: int) -> dict[str, Any]:
     return record
 
 
-def job_spec(job: Job, grace_s: float) -> JobSpec:
-    """What a worker gets of ``job``; it is given up ``grace_s`` (s) after its time limit."""
+def job_spec(job: Job, grace_s: float, *, record: bool = False) -> JobSpec:
+    """What a worker gets of ``job``; it is given up ``grace_s`` (s) after its time limit; ``record``:
+    the worker records the run."""
     return JobSpec(
         key=job.key,
         parameters=job.world.parameters,
@@ -127,6 +138,7 @@ def job_spec(job: Job, grace_s: float) -> JobSpec:
         time_limit_s=job.time_limit_s,
         improve_time_s=job.improve_time_s,
         timeout_s=job.settings.time_limit + grace_s,
+        record=record,
     )
 
 
@@ -135,6 +147,7 @@ class _Running:
     job: Job
     attempts: int
     submitted: float
+    submitted_ns: int  # wall clock (ns since the epoch)
 
 
 class _Driver:
@@ -150,8 +163,10 @@ class _Driver:
         retries: int,
         grace_s: float,
         stop: threading.Event,
+        record: bool,
     ) -> None:
         self.out_dir = out_dir
+        self.record = record
         self.stop = stop
         self.index = index
         self.executor = executor
@@ -167,8 +182,8 @@ class _Driver:
         """Submit queued jobs while the executor has room (none once ``stop`` is set)."""
         while self.queue and len(self.running) < self.executor.capacity and not self.stop.is_set():
             job, attempts = self.queue.popleft()
-            self.executor.submit(job_spec(job, self.grace_s))
-            self.running[job.key] = _Running(job, attempts + 1, time.monotonic())
+            self.executor.submit(job_spec(job, self.grace_s, record=self.record))
+            self.running[job.key] = _Running(job, attempts + 1, time.monotonic(), time.time_ns())
 
     def finish(self, finished: Finished) -> None:
         """Record a finished job, or queue it again when it failed and has retries left."""
@@ -185,10 +200,25 @@ class _Driver:
             return
         self.fill()  # the freed worker gets its next job before the files are written (fsync takes ms)
         _write_atomically(self.out_dir / job.plan_path, outcome.plan_json)
-        self.index.append(_record(job, outcome, running.attempts))
+        recording = self._recording(job, outcome, running.submitted_ns) if self.record else None
+        if recording is not None:
+            write_recording(self.out_dir / job.recording_path, recording)
+        self.index.append(_record(job, outcome, running.attempts, recorded=recording is not None))
         self.done.add(job.key)
         self.report.ran += 1
         self.successes += outcome.success
+
+    def _recording(self, job: Job, outcome: JobOutcome, submitted_ns: int) -> Mapping[str, bytes] | None:
+        """The job's recording: the worker's, or for a job whose worker failed one the driver makes of
+        its ``INTERNAL_ERROR`` plan; ``None`` when that fails too (the job is then not done on resume)."""
+        if outcome.recording is not None:
+            return outcome.recording
+        problem = job.problem
+        try:
+            plan = Plan.from_json(outcome.plan_json)
+            return recording_files(job.world.parameters, problem.world, problem.settings, plan, start_ns=submitted_ns)
+        except Exception:  # noqa: BLE001 - a job without its recording is left for the next run
+            return None
 
 
 def run_batch(
@@ -200,19 +230,24 @@ def run_batch(
     grace_s: float = DEFAULT_GRACE_S,
     stop: threading.Event | None = None,
     progress: ProgressBar | None = None,
+    record: bool = False,
 ) -> BatchReport:
     """Run every job of ``jobs`` not done yet in ``out_dir`` on ``executor`` (started and closed here).
 
     ``retries``: further attempts of a job whose worker failed; ``grace_s`` (s): how long past its
     time limit a job may run before it is stopped; ``stop``: set it to end the batch early (the jobs
-    in flight are dropped); ``progress``: shown as jobs finish (its ``done_before`` set here).
+    in flight are dropped); ``progress``: shown as jobs finish (its ``done_before`` set here);
+    ``record``: record each job's run too (:mod:`clew_ros.batch.recording`; the caller checks first
+    that it can be done here, :func:`~clew_ros.batch.recording.recording_unavailable`).
     """
     out_dir = Path(out_dir)
     stop = stop or threading.Event()
     with Index.open(out_dir) as index:
         report = BatchReport(len(jobs), repaired_bytes=index.repaired_bytes, skipped_lines=index.skipped_lines)
-        driver = _Driver(out_dir, index, executor, report, retries=retries, grace_s=grace_s, stop=stop)
-        done_before = {job.key for job in jobs if has_valid_output(job, index.records.get(job.key), out_dir)}
+        driver = _Driver(out_dir, index, executor, report, retries=retries, grace_s=grace_s, stop=stop, record=record)
+        done_before = {
+            job.key for job in jobs if has_valid_output(job, index.records.get(job.key), out_dir, recording=record)
+        }
         report.done_before = len(done_before)
         driver.successes = sum(index.records[key].get("success") is True for key in done_before)
         driver.queue.extend((job, 0) for job in jobs if job.key not in done_before)

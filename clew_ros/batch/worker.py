@@ -2,9 +2,10 @@
 
 A job travels as a :class:`JobSpec` (the world's parameter tree, not its
 path, so that a Ray worker on another machine needs no shared folder) and
-comes back as a :class:`JobOutcome` holding the plan file's text; only the
-driver writes files. Each worker process warms the compiled kernel once
-(:func:`prepare`), before its first job, so that no job's time pays for it.
+comes back as a :class:`JobOutcome` holding the plan file's text (and, with
+``--record``, the recording's files); only the driver writes files. Each
+worker process warms the compiled kernel once (:func:`prepare`), before its
+first job, so that no job's time pays for it.
 
 Jobs plan with ``planner.threads`` 1: a batch keeps every core busy with
 processes, and the plan does not depend on the thread count (the planner
@@ -34,7 +35,8 @@ __all__ = ["JobFunction", "JobOutcome", "JobSpec", "prepare", "run_job", "run_pr
 @dataclass(frozen=True)
 class JobSpec:
     """One job as a worker gets it: ``key`` (its name), the world's ``parameters`` tree, the ``seed``,
-    the overrides (s; ``None``: the file's) and ``timeout_s``, after which the driver gives up on it."""
+    the overrides (s; ``None``: the file's), ``timeout_s``, after which the driver gives up on it, and
+    whether to ``record`` the run (``clew_batch --record``)."""
 
     key: str
     parameters: Mapping[str, Any]
@@ -42,6 +44,7 @@ class JobSpec:
     time_limit_s: float | None
     improve_time_s: float | None
     timeout_s: float
+    record: bool = False
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,8 @@ class JobOutcome:
     ``plan_time_s`` is the planner's own time (the plan's ``stats.time_s``), ``wall_time_s`` the
     job's time in its worker (reading the world, planning, checking). ``error`` says why the job
     failed (``INTERNAL_ERROR``: the planner raised, the worker died, the job timed out), else ``None``.
+    ``recording`` holds the run's recording, file name -> content (:mod:`clew_ros.batch.recording`),
+    when the job was to record it.
     """
 
     key: str
@@ -64,10 +69,13 @@ class JobOutcome:
     transfers: int | None
     joint_travel_rad: float | None
     error: str | None = None
+    recording: Mapping[str, bytes] | None = None
 
     @classmethod
-    def from_plan(cls, key: str, plan: Plan, wall_time_s: float) -> JobOutcome:
-        """The outcome of job ``key`` that made ``plan`` in ``wall_time_s``."""
+    def from_plan(
+        cls, key: str, plan: Plan, wall_time_s: float, recording: Mapping[str, bytes] | None = None
+    ) -> JobOutcome:
+        """The outcome of job ``key`` that made ``plan`` in ``wall_time_s`` (and ``recording``)."""
         stats = plan.stats
         time_s = stats.get("time_s")
         travel = stats.get("joint_travel_rad")
@@ -83,6 +91,7 @@ class JobOutcome:
             transfers=int(stats.get("transfers", plan.grasp_count)) if plan.success else None,
             joint_travel_rad=None if travel is None or not plan.success else float(travel),
             error=plan.message if plan.code == "INTERNAL_ERROR" else None,
+            recording=recording,
         )
 
 
@@ -91,19 +100,27 @@ JobFunction = Callable[[JobSpec], JobOutcome]
 
 
 def run_job(spec: JobSpec) -> JobOutcome:
-    """Plan one job as ``clew_plan`` would (same world, seed and settings; one thread) and return its outcome.
+    """Plan one job as ``clew_plan`` would (same world, seed and settings; one thread) and return its
+    outcome; with ``spec.record``, record the run too (after the wall time is taken).
 
     Raises :class:`~clew_ros.core.errors.ParameterError` for an invalid world (the driver checked it
-    before, so only a world that changed on the way).
+    before, so only a world that changed on the way), and
+    :class:`~clew_ros.recording.RecordingError` when the run cannot be recorded.
     """
     from clew_ros.core.offline import Problem, plan_problem, problem_from_parameters
 
-    started = time.monotonic()
+    started, started_ns = time.monotonic(), time.time_ns()
     problem = problem_from_parameters(
         spec.parameters, seed=spec.seed, time_limit=spec.time_limit_s, improve_time=spec.improve_time_s
     )
     plan = plan_problem(Problem(problem.world, replace(problem.settings, threads=1)))
-    return JobOutcome.from_plan(spec.key, plan, time.monotonic() - started)
+    wall_time_s = time.monotonic() - started
+    recording = None
+    if spec.record:
+        from clew_ros.batch.recording import recording_files
+
+        recording = recording_files(spec.parameters, problem.world, problem.settings, plan, start_ns=started_ns)
+    return JobOutcome.from_plan(spec.key, plan, wall_time_s, recording)
 
 
 def prepare() -> None:

@@ -1,5 +1,5 @@
-"""``clew_batch WORLD.yaml|DIR|@LIST... --seeds N --out DIR [--time-limit S] [--jobs K] [--ray [ADDRESS]]``:
-plan many (world, seed) jobs and write a dataset, no ROS needed.
+"""``clew_batch WORLD.yaml|DIR|@LIST... --seeds N --out DIR [--time-limit S] [--jobs K] [--ray [ADDRESS]]
+[--record]``: plan many (world, seed) jobs and write a dataset, no ROS needed.
 
 Every world file given (a folder: each ``.yaml`` in it; ``@LIST``: a file
 naming one world file or folder per line) is planned with seeds ``0..N-1``
@@ -7,7 +7,10 @@ naming one world file or folder per line) is planned with seeds ``0..N-1``
 ``clew_plan WORLD --seed S`` would plan it. Under ``--out DIR``: one plan
 file per job (``plans/<world file name>/seed_<S>.json``) and the index
 ``index.jsonl`` (one line per job); a summary table is printed at the end.
-Rerunning the same command skips the jobs done and runs the rest.
+Rerunning the same command skips the jobs done and runs the rest. With
+``--record`` (the ``ros`` extra: ``pip install 'clew_ros[ros]'``), each job's
+run is also recorded as the node would have recorded it, under
+``recordings/<world file name>/seed_<S>/`` (a rosbag2 folder with one MCAP).
 
 Jobs run on a local pool of processes (``--jobs K``, all cores by default),
 or with ``--ray`` on a local Ray (127.0.0.1 only) or with ``--ray ADDRESS``
@@ -39,6 +42,7 @@ from clew_ros.batch.executors import Executor, LocalPool, RayExecutor, default_w
 from clew_ros.batch.index import INDEX_NAME
 from clew_ros.batch.jobs import collect_world_paths, derived_seeds, generated_world_paths, load_worlds, make_jobs
 from clew_ros.batch.progress import ProgressBar
+from clew_ros.batch.recording import recording_unavailable
 from clew_ros.batch.runner import DEFAULT_GRACE_S, BatchReport, run_batch
 from clew_ros.batch.summary import summary_table
 from clew_ros.batch.worker import JobFunction, run_job
@@ -106,12 +110,20 @@ def _parser() -> argparse.ArgumentParser:
         metavar="S",
         help=f"seconds a job may run past its time limit before it is stopped (default {DEFAULT_GRACE_S:g})",
     )
+    parser.add_argument(
+        "--record",
+        action="store_true",
+        help="also record each job's run as clew_planner would, into DIR/recordings/<world>/seed_<S>/ (rosbag2, "
+        "MCAP; needs the ros extra)",
+    )
     parser.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     return parser
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
-    """:class:`BatchInputError` for the first option out of range."""
+    """:class:`BatchInputError` for the first option out of range (or ``--record`` that cannot record here)."""
+    if args.record and (reason := recording_unavailable()) is not None:
+        raise BatchInputError("--record", reason)
     if not args.worlds and not args.generate:
         taken = " (--ray took the one given as its ADDRESS: put --ray after the world files)" if args.ray else ""
         raise BatchInputError(
@@ -211,7 +223,14 @@ def main(argv: Sequence[str] | None = None, *, job_function: JobFunction = run_j
     progress = ProgressBar(len(jobs), enabled=not args.quiet)
     try:
         report = run_batch(
-            jobs, args.out, executor, retries=args.retries, grace_s=args.grace, stop=stop, progress=progress
+            jobs,
+            args.out,
+            executor,
+            retries=args.retries,
+            grace_s=args.grace,
+            stop=stop,
+            progress=progress,
+            record=args.record,
         )
     except ExecutorUnavailableError as error:
         print(f"clew_batch: invalid input: {error}", file=sys.stderr)

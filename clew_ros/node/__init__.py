@@ -11,6 +11,7 @@
 - ``publishing``: the node's topics and QoS (the arm: URDF, TF, ``~/scene``); every message also goes to
   the run's recording.
 - ``run_recording``: a run's recording as the node uses it (nothing when recording is off).
+- ``plan_recording``: a plan recorded as the node would have recorded its run, offline (``clew_batch --record``).
 - ``parameters``: parameter names, defaults, descriptors and checks.
 - ``messages``: the one module that turns core values into ROS messages and back.
 - ``playback``: the timed plan (trajectory times, grasp events, samples); no rclpy.

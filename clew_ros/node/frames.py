@@ -12,7 +12,8 @@ the transform of the URDF joint between the two links
   rotation ``q_i``), and ``tool`` -> each gripper jaw (its angle from the
   ``gripper`` value);
 - :func:`object_transform` (``/tf``): ``world`` -> ``object`` at the object's
-  pose ``(x, y, theta)``.
+  pose ``(x, y, theta)``;
+- :func:`state_transforms`: both, what ``/tf`` carries at one played-back state.
 
 Composed from ``world``, ``link_i`` has origin ``p_(i-1)`` and x axis along
 ``phi_i``, and ``tool`` is the end-effector frame of interface.md §1.
@@ -30,7 +31,14 @@ import numpy as np
 from clew_ros.core.world import Robot
 from clew_ros.node.urdf import BASE_LINK, JAW_LINKS, JAW_OPEN_RAD, ROOT_FRAME, TOOL_FRAME, jaw_offset_m, link_name
 
-__all__ = ["OBJECT_FRAME", "FrameTransform", "arm_transforms", "object_transform", "static_transforms"]
+__all__ = [
+    "OBJECT_FRAME",
+    "FrameTransform",
+    "arm_transforms",
+    "object_transform",
+    "state_transforms",
+    "static_transforms",
+]
 
 #: The object's frame: origin at its pose's position, x axis along its angle.
 OBJECT_FRAME = "object"
@@ -85,3 +93,10 @@ def arm_transforms(robot: Robot, joints: Sequence[float] | np.ndarray, gripper: 
 def object_transform(pose: Sequence[float] | np.ndarray) -> FrameTransform:
     """``world`` -> ``object`` at ``pose`` ``(x, y, theta)``."""
     return FrameTransform(ROOT_FRAME, OBJECT_FRAME, float(pose[0]), float(pose[1]), float(pose[2]))
+
+
+def state_transforms(
+    robot: Robot, joints: Sequence[float] | np.ndarray, gripper: float, object_pose: Sequence[float] | np.ndarray
+) -> list[FrameTransform]:
+    """``/tf`` at one state: :func:`arm_transforms` at ``joints`` and ``gripper``, then :func:`object_transform`."""
+    return [*arm_transforms(robot, joints, gripper), object_transform(object_pose)]

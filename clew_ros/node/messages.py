@@ -22,7 +22,7 @@ from __future__ import annotations
 import json
 import math
 import uuid
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict
 from typing import Any
 
@@ -40,11 +40,12 @@ from unique_identifier_msgs.msg import UUID
 from visualization_msgs.msg import Marker, MarkerArray
 
 from clew_ros.core.kinematics import joint_positions, transform_points
+from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.tree import LandmarkTree
+from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
 from clew_ros.node.frames import FrameTransform
-from clew_ros.node.playback import Track
+from clew_ros.node.playback import Track, TrackState
 from clew_ros.node.urdf import robot_urdf, visual_width_m
 
 __all__ = [
@@ -59,6 +60,7 @@ __all__ = [
     "joint_trajectory",
     "landmark_markers",
     "object_pose_stamped",
+    "playback_messages",
     "pose_msg",
     "quaternion_to_yaw",
     "robot_description_message",
@@ -67,6 +69,7 @@ __all__ = [
     "time_msg",
     "uuid_msg",
     "world_markers",
+    "world_messages",
     "world_yaml_message",
     "yaw_to_quaternion",
 ]
@@ -237,6 +240,18 @@ def world_yaml_message(world: World, settings: PlannerSettings, node_name: str =
     return String(data=yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
 
 
+def world_messages(
+    world: World, settings: PlannerSettings, node_name: str, time_ns: int
+) -> list[tuple[str, String | MarkerArray]]:
+    """What a run puts out of its problem, ``(topic name, message)`` in order: ``~/world_yaml``,
+    ``~/world_markers`` and ``~/robot_description`` (the arm's TF is :mod:`~clew_ros.node.frames`')."""
+    return [
+        ("world_yaml", world_yaml_message(world, settings, node_name)),
+        ("world_markers", world_markers(world, time_ns)),
+        ("robot_description", robot_description_message(world)),
+    ]
+
+
 # --------------------------------------------------------------------------- markers
 
 _LINE_WIDTH_M = 0.01
@@ -351,8 +366,10 @@ def world_markers(world: World, time_ns: int, goal: np.ndarray | None = None) ->
     return MarkerArray(markers=markers)
 
 
-def landmark_markers(tree: LandmarkTree, time_ns: int, polygon: np.ndarray | None = None) -> MarkerArray:
-    """``~/landmarks``: DELETEALL, then the tree drawn at the object's resting positions.
+def landmark_markers(
+    tree: LandmarkTree | Sequence[PlanLandmark], time_ns: int, polygon: np.ndarray | None = None
+) -> MarkerArray:
+    """``~/landmarks``: DELETEALL, then the tree (or a plan's landmarks) drawn at the object's resting positions.
 
     Namespaces: ``landmarks`` (one SPHERE_LIST, the root green, the others
     blue), ``tree_edges`` (LINE_LIST parent -> child), ``landmark_ids``
@@ -360,7 +377,7 @@ def landmark_markers(tree: LandmarkTree, time_ns: int, polygon: np.ndarray | Non
     ``polygon`` (its own frame), ``landmark_outlines`` (a LINE_STRIP of the
     object at each landmark's placement, marker id = landmark id).
     """
-    landmarks = list(tree)
+    landmarks: list[Landmark | PlanLandmark] = list(tree)
     markers = [_delete_all(time_ns)]
     spheres = _marker(
         "landmarks",
@@ -501,6 +518,17 @@ def joint_trajectory(track: Track, time_ns: int) -> JointTrajectory:
             )
         )
     return msg
+
+
+def playback_messages(
+    joint_names: list[str], state: TrackState, time_ns: int
+) -> list[tuple[str, JointState | PoseStamped]]:
+    """``~/joint_states`` (positions and velocities) and ``~/object_pose`` at one played-back state,
+    ``(topic name, message)``; the arm's ``/tf`` and ``~/scene`` go with them."""
+    return [
+        ("joint_states", joint_state(joint_names, state.joints, state.gripper, time_ns, state.velocities)),
+        ("object_pose", object_pose_stamped(state.object_pose, time_ns)),
+    ]
 
 
 def joint_state(

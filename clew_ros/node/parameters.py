@@ -68,6 +68,7 @@ __all__ = [
     "flatten",
     "initial_values",
     "nest",
+    "node_settings",
     "plain_value",
 ]
 
@@ -264,11 +265,17 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
         if k.startswith("planner.") and v is not None and k not in RETIRED_PARAMETERS
     }
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
+    return Configuration(world, planner, node_settings(values, world.robot.dof))
+
+
+def node_settings(values: Mapping[str, Any], dof: int) -> NodeSettings:
+    """The node's own parameters among ``values`` (full name -> value; others ignored), checked for an arm
+    of ``dof`` joints; :class:`~clew_ros.core.errors.ParameterError` names the first one at fault."""
     node = {field: _node_value(NODE_PARAMETERS[name], values.get(name)) for field, name in SETTINGS_FIELDS.items()}
     for field, name in SETTINGS_FIELDS.items():  # a per-joint list holds one value per joint of this world
         if NODE_PARAMETERS[name].type is ParameterType.DOUBLE_PER_JOINT:
-            check_joint_count(NODE_PARAMETERS[name], node[field], world.robot.dof)
-    return Configuration(world, planner, NodeSettings(**node))
+            check_joint_count(NODE_PARAMETERS[name], node[field], dof)
+    return NodeSettings(**node)
 
 
 def _node_value(spec: ParameterSpec, value: Any) -> Any:

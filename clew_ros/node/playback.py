@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -40,7 +41,18 @@ from clew_ros.core.plan import Plan, replay
 from clew_ros.core.world import World
 from clew_ros.node.timing import profile, rest_to_rest_duration_s
 
-__all__ = ["GRIPPER_JOINT", "MIN_STEP_NS", "GripperEvent", "Track", "TrackState", "track_from_plan"]
+if TYPE_CHECKING:
+    from clew_ros.node.parameters import NodeSettings
+
+__all__ = [
+    "GRIPPER_JOINT",
+    "MIN_STEP_NS",
+    "GripperEvent",
+    "Track",
+    "TrackState",
+    "node_track",
+    "track_from_plan",
+]
 
 #: The joint after the arm's in ~/trajectory and ~/joint_states: 1.0 while grasping
 #: (the name clew_ros.recording.GRIPPER_JOINT reads back; the node needs no recording package).
@@ -237,4 +249,15 @@ def track_from_plan(
         tip_pose_fn=tips,
         max_velocity=max_velocity,
         max_acceleration=max_acceleration,
+    )
+
+
+def node_track(world: World, plan: Plan, settings: NodeSettings) -> Track:
+    """A successful plan timed as the node times it: with its ``trajectory.*`` settings."""
+    return track_from_plan(
+        world,
+        plan,
+        max_velocity_rad_s=settings.velocity_limit_rad_s,
+        max_acceleration_rad_s2=settings.max_acceleration_rad_s2,
+        grasp_dwell_s=settings.grasp_dwell_s,
     )

@@ -1,20 +1,23 @@
-"""Playing a timed plan back in real time: samples at a rate, gripper events as they are reached.
+"""Playing a timed plan back: samples at a rate, gripper events as they are reached.
 
 :func:`play` walks a :class:`~clew_ros.node.playback.Track` on the
 monotonic clock and hands each sample and each grasp / ungrasp event to
 callbacks (the node publishes ``~/joint_states``, ``~/object_pose`` and
-``~/events``); it stops early when asked. No rclpy: tested without a ROS graph.
+``~/events``); it stops early when asked. :func:`scheduled_samples` gives the
+same samples at their scheduled times exactly, at once, with no clock and no
+waiting (a recording made offline, ``clew_batch --record``). No rclpy: tested
+without a ROS graph.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from clew_ros.node.playback import GripperEvent, Track, TrackState
 
-__all__ = ["PlaybackEnd", "play"]
+__all__ = ["PlaybackEnd", "play", "scheduled_samples"]
 
 
 @dataclass(frozen=True)
@@ -57,20 +60,55 @@ def play(
     """
     if wait_stop(0.0):
         return PlaybackEnd(stopped=True, at_s=None)
-    events = track.events()
-    next_event = 0
-    period = 1.0 / rate_hz
+    events = _Events(track)
     start = time.monotonic()
     tick = 0
     while True:
         t = time.monotonic() - start
         on_sample(track.state(t))
-        while next_event < len(events) and events[next_event].time_s <= t:
-            on_event(events[next_event])
-            next_event += 1
+        for event in events.reached(t):
+            on_event(event)
         if t >= track.duration_s:
             return PlaybackEnd(stopped=False, at_s=track.duration_s)
         tick += 1
-        wait = start + min(tick * period, track.duration_s) - time.monotonic()
+        wait = start + _tick_s(track, rate_hz, tick) - time.monotonic()
         if wait_stop(max(0.0, wait)):
             return PlaybackEnd(stopped=True, at_s=t)
+
+
+def scheduled_samples(track: Track, rate_hz: float) -> Iterator[tuple[float, TrackState, list[GripperEvent]]]:
+    """What :func:`play` hands out, taken at the scheduled times exactly, without waiting.
+
+    Yields ``(t_s, state, events)``: the time of the sample (s of the track;
+    every ``1 / rate_hz``, the last one the track's end), the
+    :class:`~clew_ros.node.playback.TrackState` there, and the grasp /
+    ungrasp events that sample reaches (each once, in order).
+    """
+    events = _Events(track)
+    tick = 0
+    while True:
+        t = _tick_s(track, rate_hz, tick)
+        yield t, track.state(t), events.reached(t)
+        if t >= track.duration_s:
+            return
+        tick += 1
+
+
+def _tick_s(track: Track, rate_hz: float, tick: int) -> float:
+    """When sample ``tick`` is due (s of the track): every ``1 / rate_hz``, at most the track's end."""
+    return min(tick / rate_hz, track.duration_s)
+
+
+class _Events:
+    """The track's grasp / ungrasp events, handed out once each as the playback reaches them."""
+
+    def __init__(self, track: Track) -> None:
+        self._events = track.events()
+        self._next = 0
+
+    def reached(self, t_s: float) -> list[GripperEvent]:
+        """The events at or before ``t_s`` (s of the track) not handed out yet."""
+        first = self._next
+        while self._next < len(self._events) and self._events[self._next].time_s <= t_s:
+            self._next += 1
+        return self._events[first : self._next]

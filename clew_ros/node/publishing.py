@@ -136,9 +136,8 @@ class Publishing:
         """``~/world_yaml``, ``~/world_markers`` and the arm of a problem: ``~/robot_description``,
         ``/tf_static``, and ``/tf`` and ``~/scene`` at the start (arm at ``robot.initial``, gripper open,
         object at its initial pose)."""
-        self.publish("world_yaml", messages.world_yaml_message(world, planner, self._node_name), recording)
-        self.publish("world_markers", messages.world_markers(world, self.now_ns()), recording)
-        self.publish("robot_description", messages.robot_description_message(world), recording)
+        for name, msg in messages.world_messages(world, planner, self._node_name, self.now_ns()):
+            self.publish(name, msg, recording)
         self.publish_tf(frames.static_transforms(world.robot), self.now_ns(), recording, static=True)
         self.to_live("the world", lambda live: live.publish_world(world, goal=world.object.goal))
         self.arm(world, world.robot.initial, 0.0, world.object.initial, time_ns=self.now_ns(), recording=recording)
@@ -154,8 +153,7 @@ class Publishing:
         recording: RunRecording,
     ) -> None:
         """``/tf`` (the arm's joints and the object) and ``~/scene`` at one state, stamped ``time_ns``."""
-        transforms = [*frames.arm_transforms(world.robot, joints, gripper), frames.object_transform(object_pose)]
-        self.publish_tf(transforms, time_ns, recording)
+        self.publish_tf(frames.state_transforms(world.robot, joints, gripper, object_pose), time_ns, recording)
         self.publish(
             "scene",
             messages.scene_markers(world, np.asarray(joints, dtype=float), gripper, object_pose, time_ns),

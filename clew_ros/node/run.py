@@ -35,7 +35,7 @@ import time
 import uuid
 from collections import OrderedDict
 from functools import cached_property
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from action_msgs.msg import GoalStatus
@@ -46,7 +46,17 @@ from clew_ros.node.parameters import Configuration
 from clew_ros.node.playback import Track
 from clew_ros.node.run_recording import NO_RECORDING, RunRecording
 
-__all__ = ["STATUS_HISTORY", "CancelKind", "Phase", "Run", "Source", "StatusTable", "outcome_event", "outcome_status"]
+__all__ = [
+    "STATUS_HISTORY",
+    "CancelKind",
+    "Phase",
+    "Run",
+    "Source",
+    "StatusTable",
+    "outcome_event",
+    "outcome_fields",
+    "outcome_status",
+]
 
 #: How many runs ~/status keeps (the oldest are dropped).
 STATUS_HISTORY = 100
@@ -87,6 +97,20 @@ def outcome_status(outcome: Outcome) -> int:
 def outcome_event(outcome: Outcome) -> str:
     """The ``~/events`` name of an outcome: ``succeeded``, ``canceled``, else ``aborted``."""
     return {Outcome.SUCCEEDED: "succeeded", Outcome.CANCELED: "canceled"}.get(outcome, "aborted")
+
+
+def outcome_fields(outcome: Outcome, message: str, *, landmarks: int, time_s: float, recording: str) -> dict[str, Any]:
+    """The fields of a run's outcome event (``~/events``, besides ``run_id``, ``event`` and ``time``): the
+    outcome's ``code`` and ``code_value``, ``message``, ``landmarks``, the planner's ``time_s`` and what
+    the run's ``recording`` is."""
+    return {
+        "code": outcome.name,
+        "code_value": outcome.value,
+        "message": message,
+        "landmarks": landmarks,
+        "time_s": time_s,
+        "recording": recording,
+    }
 
 
 class Run:

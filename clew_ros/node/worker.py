@@ -23,11 +23,11 @@ from clew_ros.core.plan import checked_plan
 from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.node import messages
-from clew_ros.node.playback import GripperEvent, Track, TrackState, track_from_plan
+from clew_ros.node.playback import GripperEvent, Track, TrackState, node_track
 from clew_ros.node.player import play
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.qos import GOAL_QOS
-from clew_ros.node.run import Phase, Run, outcome_event
+from clew_ros.node.run import Phase, Run, outcome_event, outcome_fields
 from clew_ros.node.run_recording import Recordings
 
 if TYPE_CHECKING:
@@ -195,17 +195,10 @@ class RunWorker:
         if run.track is not None:
             out.publish("trajectory", messages.joint_trajectory(run.track, out.now_ns()), run.recording)
         out.outcome(run)
-        out.event(
-            run.id,
-            outcome_event(outcome),
-            run.recording,
-            code=outcome.name,
-            code_value=outcome.value,
-            message=run.message,
-            landmarks=run.landmarks,
-            time_s=run.elapsed_s,
-            recording=run.recording.text,
+        fields = outcome_fields(
+            outcome, run.message, landmarks=run.landmarks, time_s=run.elapsed_s, recording=run.recording.text
         )
+        out.event(run.id, outcome_event(outcome), run.recording, **fields)
         if run.track is None:
             run.recording.close()  # no playback follows: the recording is complete before the answer goes out
         else:
@@ -230,11 +223,9 @@ class RunWorker:
 
         def on_sample(state: TrackState) -> None:
             now = out.now_ns()
-            joints, gripper, pose = state.joints, state.gripper, state.object_pose
-            joint_state = messages.joint_state(track.joint_names, joints, gripper, now, state.velocities)
-            out.publish("joint_states", joint_state, run.recording)
-            out.publish("object_pose", messages.object_pose_stamped(pose, now), run.recording)
-            out.arm(run.world, joints, gripper, pose, time_ns=now, recording=run.recording)
+            for name, msg in messages.playback_messages(track.joint_names, state, now):
+                out.publish(name, msg, run.recording)
+            out.arm(run.world, state.joints, state.gripper, state.object_pose, time_ns=now, recording=run.recording)
 
         def on_event(event: GripperEvent) -> None:
             out.event(run.id, event.kind, run.recording, at_s=float(event.time_s), grasp=event.grasp)
@@ -257,15 +248,7 @@ def timed_plan(run: Run, result: PlanResult) -> tuple[Outcome, str, Track | None
     The plan is checked against the run's problem (its goal) by
     :func:`~clew_ros.core.plan.checked_plan`; one that fails is never published.
     """
-    world, settings = run.world, run.config.node
-    planned = checked_plan(world, result)
+    planned = checked_plan(run.world, result)
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
-    track = track_from_plan(
-        world,
-        planned,
-        max_velocity_rad_s=settings.velocity_limit_rad_s,
-        max_acceleration_rad_s2=settings.max_acceleration_rad_s2,
-        grasp_dwell_s=settings.grasp_dwell_s,
-    )
-    return result.outcome, result.message, track
+    return result.outcome, result.message, node_track(run.world, planned, run.config.node)

@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from clew_ros.node.playback import GripperEvent, TrackState
-from clew_ros.node.player import play
+from clew_ros.node.player import play, scheduled_samples
 
 
 class Line:
@@ -80,3 +80,21 @@ def test_a_stop_before_the_start_sends_nothing() -> None:
     assert end.phase == "playback_stopped"
     assert not samples
     assert not events
+
+
+def test_scheduled_samples_are_plays_ticks_at_once() -> None:
+    start = time.monotonic()
+    schedule = list(scheduled_samples(Line(5.0), 20.0))  # 5 s of track, no waiting
+    assert time.monotonic() - start < 1.0
+    times = [t for t, _, _ in schedule]
+    assert times[0] == 0.0
+    assert times[-1] == 5.0  # the last sample is the last point
+    assert len(times) == 101  # every 1 / 20 s
+    assert np.all(np.diff(times) > 0)
+    assert [float(state.joints[0]) for _, state, _ in schedule] == times
+    # each event once, in order, with the first sample at or past its time
+    reached = [(t, event) for t, _, events in schedule for event in events]
+    assert [event.kind for _, event in reached] == ["grasp", "ungrasp"]
+    for t, event in reached:
+        assert t >= event.time_s
+        assert t - 1.0 / 20.0 < event.time_s

@@ -1,0 +1,111 @@
+"""``clew_batch --record``: each job's run recorded as the node would have recorded it (interface.md §4).
+
+The worker records the job's plan with
+:func:`clew_ros.node.plan_recording.record_plan` (the node's own message
+builders; synthetic timestamps, no waiting) into a temporary folder of its
+own and hands the files back as bytes in its
+:class:`~clew_ros.batch.worker.JobOutcome` (:func:`recording_files`), so
+that, as with plan files, only the driver writes under the output folder,
+whichever executor ran the job. The driver writes them whole
+(:func:`write_recording`) to ``recordings/<world file name>/seed_<S>/``: a
+rosbag2 folder holding ``metadata.yaml`` and ``<run id>_0.mcap``.
+
+Recording needs the ``ros`` extra (rclpy, the message packages) and ``mcap``;
+:func:`recording_unavailable` says, before any job runs, why it cannot be done
+here. Without ``--record`` nothing here imports ROS.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import uuid
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from clew_ros.core.plan import Plan
+    from clew_ros.core.settings import PlannerSettings
+    from clew_ros.core.world import World
+
+__all__ = [
+    "RECORDING_TEXT",
+    "RECORD_INSTALL_HINT",
+    "has_recording",
+    "recording_files",
+    "recording_unavailable",
+    "write_recording",
+]
+
+RECORD_INSTALL_HINT = "pip install 'clew_ros[ros]' (ROS 2 Jazzy's rclpy and messages), or source a ROS 2 Jazzy install"
+#: What the events of a batch job's recording say about it.
+RECORDING_TEXT = "recorded by clew_batch --record (synthetic timestamps)"
+
+
+def recording_unavailable() -> str | None:
+    """Why runs cannot be recorded here (a package missing, and the install command), or ``None``."""
+    try:
+        import mcap.writer  # noqa: F401 - what the recorder writes with
+
+        import clew_ros.node.plan_recording  # noqa: F401 - rclpy and every message package it records
+    except ImportError as error:
+        return (
+            f"recording needs ROS 2 (rclpy and its message packages) and mcap, which cannot be imported here "
+            f"({error}); install them: {RECORD_INSTALL_HINT}"
+        )
+    return None
+
+
+def recording_files(
+    parameters: Mapping[str, Any], world: World, planner: PlannerSettings, plan: Plan, *, start_ns: int
+) -> dict[str, bytes]:
+    """The recording of the run that made ``plan``: file name -> content (``metadata.yaml`` and the MCAP).
+
+    ``parameters`` is the world file's tree (its ``playback.*`` and ``trajectory.*`` time the playback,
+    as the node would); ``planner`` the job's settings; ``start_ns`` (ns since the epoch) when the job
+    started. Raises :class:`~clew_ros.recording.RecordingError` or
+    :class:`~clew_ros.core.errors.ParameterError` (a node parameter of the world file is invalid).
+    """
+    from clew_ros.node.parameters import flatten, node_settings
+    from clew_ros.node.plan_recording import record_plan
+
+    node = node_settings(flatten(parameters), world.robot.dof)
+    with tempfile.TemporaryDirectory(prefix="clew_batch_record_") as folder:
+        path = record_plan(
+            folder,
+            world,
+            plan,
+            planner=planner,
+            node=node,
+            run_id=uuid.uuid4(),
+            start_ns=start_ns,
+            recording_text=RECORDING_TEXT,
+        )
+        return {file.name: file.read_bytes() for file in sorted(path.iterdir())}
+
+
+def write_recording(folder: Path, files: Mapping[str, bytes]) -> None:
+    """``files`` as the recording ``folder``, whole or not at all: written and synced into a temporary
+    sibling folder, which is then renamed to ``folder`` (an older recording there is replaced)."""
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    partial = folder.with_name(f".{folder.name}.partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    partial.mkdir()
+    for name, data in files.items():
+        with (partial / name).open("wb") as stream:
+            stream.write(data)
+            stream.flush()
+            os.fsync(stream.fileno())
+    replaced = folder.with_name(f".{folder.name}.replaced")
+    if folder.exists():
+        shutil.rmtree(replaced, ignore_errors=True)
+        folder.rename(replaced)
+    partial.rename(folder)
+    shutil.rmtree(replaced, ignore_errors=True)
+
+
+def has_recording(folder: Path) -> bool:
+    """Whether ``folder`` holds a recording (``metadata.yaml`` and an MCAP file)."""
+    return (folder / "metadata.yaml").is_file() and any(folder.glob("*.mcap"))

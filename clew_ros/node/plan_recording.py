@@ -1,0 +1,186 @@
+"""A plan recorded as the node would have recorded its run, without a node (``clew_batch --record``).
+
+:func:`record_plan` writes one run's recording (interface.md §4, through
+:class:`clew_ros.recording.RunRecorder`) from a plan already made: the topics
+of interface.md §3 that a run puts out and that mean something offline, with
+the node's names (``/<node_name>/...``) and QoS, built by the node's own
+builders (:mod:`~clew_ros.node.messages`, :mod:`~clew_ros.node.frames`,
+:func:`~clew_ros.node.playback.node_track`,
+:func:`~clew_ros.node.player.scheduled_samples`). In order:
+
+- at ``start_ns`` (the run accepted): ``~/status`` (accepted), ``~/world_yaml``,
+  ``~/world_markers``, ``~/robot_description``, ``/tf_static``, ``/tf`` and
+  ``~/scene`` of the arm at rest, ``~/goal_pose`` (the configured goal), the
+  ``accepted`` event and ``~/status`` (executing);
+- when planning ended (``start_ns`` + the plan's ``stats.time_s``): a
+  ``landmark`` event per landmark past the root, ``~/landmarks`` (the plan's
+  landmark tree), ``~/trajectory`` (a plan found), ``~/status`` (the outcome)
+  and the outcome event (``succeeded`` / ``aborted`` / ``canceled``);
+- a plan found is then played back from that time at ``playback.rate``:
+  ``~/joint_states``, ``~/object_pose``, ``/tf`` and ``~/scene`` per sample and
+  the ``grasp`` / ``ungrasp`` events, each stamped with its time on the
+  track, with no waiting.
+
+Timestamps are synthetic: nothing here reads a clock. ``~/feedback`` is not
+recorded (the plan file does not hold the planner's progress).
+"""
+
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+
+import numpy as np
+from action_msgs.msg import GoalStatus
+
+from clew_ros.core.plan import Plan
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.world import World
+from clew_ros.node import frames, messages
+from clew_ros.node.parameters import NodeSettings
+from clew_ros.node.playback import node_track
+from clew_ros.node.player import scheduled_samples
+from clew_ros.node.publishing import TF_TOPICS, TOPICS
+from clew_ros.node.qos import GOAL_QOS
+from clew_ros.node.run import outcome_event, outcome_fields, outcome_status
+from clew_ros.recording import RecordingError, RunRecorder
+from clew_ros.recording.cdr import tf_message
+
+__all__ = ["record_plan"]
+
+_NS_PER_S = 1_000_000_000
+
+
+class _Run:
+    """One recorded run: its recorder, names, and the messages it writes."""
+
+    def __init__(self, recorder: RunRecorder, run_id: uuid.UUID, node_name: str, start_ns: int) -> None:
+        self.recorder = recorder
+        self.run_id = run_id
+        self.node_name = node_name
+        self.start_ns = start_ns
+
+    def write(self, name: str, msg: object, time_ns: int) -> None:
+        """``msg`` on ``~/<name>`` at ``time_ns``, with the QoS the node offers there."""
+        self.recorder.write(f"/{self.node_name}/{name}", msg, time_ns, qos=TOPICS[name][1])
+
+    def tf(self, transforms: list[frames.FrameTransform], time_ns: int, *, static: bool = False) -> None:
+        topic = "/tf_static" if static else "/tf"
+        self.recorder.write(topic, tf_message(transforms, time_ns), time_ns, qos=TF_TOPICS[topic])
+
+    def status(self, status: int, time_ns: int) -> None:
+        self.write("status", messages.goal_status_array([(self.run_id, self.start_ns, status)], time_ns), time_ns)
+
+    def event(self, event: str, time_s: float, time_ns: int, /, **fields: object) -> None:
+        """One ``~/events`` message: ``event`` whose ``time`` is ``time_s``, written at ``time_ns``."""
+        self.write("events", messages.event_message(self.run_id, event, time_s, **fields), time_ns)
+
+    def arm(self, world: World, joints: np.ndarray, gripper: float, object_pose: np.ndarray, time_ns: int) -> None:
+        """``/tf`` and ``~/scene`` at one state of the arm, as ``Publishing.arm`` puts them out."""
+        self.tf(frames.state_transforms(world.robot, joints, gripper, object_pose), time_ns)
+        self.write("scene", messages.scene_markers(world, joints, gripper, object_pose, time_ns), time_ns)
+
+
+def record_plan(
+    directory: str | Path,
+    world: World,
+    plan: Plan,
+    *,
+    planner: PlannerSettings,
+    node: NodeSettings,
+    run_id: uuid.UUID,
+    start_ns: int,
+    node_name: str = "clew_planner",
+    recording_text: str = "recorded offline",
+) -> Path:
+    """Record the run that made ``plan`` in ``world`` as ``<directory>/<run id hex>/``; return that directory.
+
+    Parameters
+    ----------
+    directory:
+        Existing directory that receives the run's directory.
+    planner, node:
+        The run's settings (``~/world_yaml`` carries the planner's; the node's time the playback).
+    run_id:
+        The run's UUID (``~/status``, the events, the names of the directory and the MCAP file).
+    start_ns:
+        When the run was accepted (ns since the epoch): the first message's time.
+    node_name:
+        The node whose topics the recording holds (``/<node_name>/status``, ...).
+    recording_text:
+        What the ``accepted`` and outcome events say about the recording.
+
+    Raises
+    ------
+    RecordingError
+        The recording cannot be created or written (the message says why).
+    """
+    recorder = RunRecorder(directory, run_id.hex, node_name=node_name)
+    with recorder:
+        run = _Run(recorder, run_id, node_name, start_ns)
+        _accepted(run, world, plan, planner, recording_text)
+        _concluded(run, world, plan, node, recording_text)
+    if recorder.error:
+        raise RecordingError(recorder.error)
+    return recorder.path
+
+
+def _accepted(run: _Run, world: World, plan: Plan, planner: PlannerSettings, recording_text: str) -> None:
+    """The run's start: status accepted, its world and the arm at rest, its goal, the ``accepted`` event."""
+    now = run.start_ns
+    run.status(GoalStatus.STATUS_ACCEPTED, now)
+    for name, msg in messages.world_messages(world, planner, run.node_name, now):
+        run.write(name, msg, now)
+    run.tf(frames.static_transforms(world.robot), now, static=True)
+    run.arm(world, world.robot.initial, 0.0, world.object.initial, now)
+    goal = world.object.goal
+    run.recorder.write(f"/{run.node_name}/goal_pose", messages.goal_pose_stamped(goal, now), now, qos=GOAL_QOS)
+    run.event(
+        "accepted",
+        now / _NS_PER_S,
+        now,
+        source="plan",
+        world=world.name,
+        goal=goal.tolist(),
+        seed=planner.seed,
+        recording=recording_text,
+    )
+    run.status(GoalStatus.STATUS_EXECUTING, now)
+
+
+def _concluded(run: _Run, world: World, plan: Plan, node: NodeSettings, recording_text: str) -> None:
+    """Planning over: the landmarks, the trajectory, the outcome; then the playback of a plan found."""
+    time_s = float(plan.stats.get("time_s", 0.0))
+    now = run.start_ns + round(time_s * _NS_PER_S)
+    for landmark in plan.landmarks[1:]:
+        run.event(
+            "landmark",
+            now / _NS_PER_S,
+            now,
+            id=landmark.id,
+            parent=landmark.parent,
+            grasp=landmark.grasp,
+            object_pose=landmark.object_pose,
+            joints=landmark.joints,
+        )
+    run.write("landmarks", messages.landmark_markers(plan.landmarks, now, world.object.polygon), now)
+    outcome = plan.outcome
+    if outcome is None:
+        raise ValueError("a plan without an outcome code cannot be recorded as a run")
+    track = node_track(world, plan, node) if plan.success else None
+    if track is not None:
+        run.write("trajectory", messages.joint_trajectory(track, now), now)
+    run.status(outcome_status(outcome), now)
+    fields = outcome_fields(
+        outcome, plan.message, landmarks=len(plan.landmarks), time_s=time_s, recording=recording_text
+    )
+    run.event(outcome_event(outcome), now / _NS_PER_S, now, **fields)
+    if track is None:
+        return
+    for t_s, state, events in scheduled_samples(track, node.playback_rate_hz):
+        stamp = now + round(t_s * _NS_PER_S)
+        for name, msg in messages.playback_messages(track.joint_names, state, stamp):
+            run.write(name, msg, stamp)
+        run.arm(world, state.joints, state.gripper, state.object_pose, stamp)
+        for event in events:
+            run.event(event.kind, float(event.time_s), stamp, grasp=event.grasp)

@@ -49,6 +49,7 @@ def run_world(name: str, seeds: list[int], time_limit_s: float, validate: bool =
             "success": result.success,
             "wall_s": wall,
             "cpu_s": cpu,
+            "first_plan_s": result.first_plan_s,  # before planner.improve_time's improvement
             "landmarks": result.stats["landmarks"],
             "evaluations": result.stats["evaluations"],
             "collision_checks": result.stats["collision_checks"],

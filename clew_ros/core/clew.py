@@ -52,6 +52,9 @@ class PlanResult:
     final_object_pose: np.ndarray | None
     tree: LandmarkTree
     stats: dict[str, Any] = field(default_factory=dict)
+    #: When the first plan was found (s since the start), before ``planner.improve_time``'s improvement;
+    #: ``None`` without a plan. Not in ``stats``: the plan file holds no second clock reading.
+    first_plan_s: float | None = None
 
     @property
     def success(self) -> bool:
@@ -121,6 +124,7 @@ def plan(
             if progress is not None:
                 progress(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
+                first_plan_s = termination.elapsed
                 segments = tree.history_of(landmark.id)
                 append_step(segments, found.grasp, found.transit, found.transfer)
                 assert found.object_pose is not None  # a successful SEARCH_TRANSFER says where the object ends
@@ -132,6 +136,7 @@ def plan(
                     better.final_object_pose,
                 )
                 result.stats.update(_quality(better))
+                result.first_plan_s = round(first_plan_s, 4)
                 return result
             if exploration.distance < settings.resolution:
                 return finish(

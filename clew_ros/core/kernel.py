@@ -31,6 +31,7 @@ in transfer, the object's vertices stay inside the bounds (inset ``r`` and
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -69,8 +70,21 @@ if numba.config.THREADING_LAYER == "default":  # type: ignore[attr-defined]
 
 #: :meth:`PackedWorld.arguments`: the world in the order the interval and decode kernels take it.
 _WorldArguments = tuple[
-    np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    float,
+    bool,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
 ]
+#: The broad phase of :func:`_interval` keeps an obstacle whose bounding circle is within this (m) of the
+#: moving pieces' reach: far more than the rounding of the distances it compares.
+_BROAD_PHASE_SLACK = 1e-6
 #: :meth:`PackedWorld.validity_arguments`: the world in the order :func:`_clearly_valid` takes it.
 _ValidityArguments = tuple[
     np.ndarray,
@@ -114,6 +128,17 @@ class PackedWorld:
         e = len(self.obstacle_edges)
         return 1 + n * (e + n + len(self.shrunk_edges)) + len(self.object_edges) * e
 
+    @functools.cached_property
+    def obstacle_groups(self) -> np.ndarray:
+        """``(O, 5)``: each obstacle's first and end edge (as floats) and its bounding circle (centre x,
+        y, radius), the broad phase of the free intervals."""
+        boxes = self.obstacle_boxes.reshape(-1, 4)
+        centres = 0.5 * (boxes[:, :2] + boxes[:, 2:])
+        radii = 0.5 * np.hypot(boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1])
+        starts = self.obstacle_starts.astype(np.float64)
+        groups = np.column_stack([starts[:-1], starts[1:], centres, radii]) if len(boxes) else np.zeros((0, 5))
+        return np.ascontiguousarray(groups, dtype=np.float64)
+
     def arguments(self) -> _WorldArguments:
         return (
             self.base,
@@ -124,6 +149,7 @@ class PackedWorld:
             self.self_collision,
             self.bounds,
             self.obstacle_edges,
+            self.obstacle_groups,
             self.object_edges,
             self.shrunk_edges,
         )
@@ -293,16 +319,23 @@ def _pair(
 
 
 @_jit
+def _annulus_of(segments: np.ndarray, radii: np.ndarray, c: int) -> None:
+    """Segment ``c`` of ``segments`` (relative to the origin): ``radii[c]`` is its nearest and farthest
+    distance from the origin, and its end points' distances."""
+    ax, ay, bx, by = segments[c, 0, 0], segments[c, 0, 1], segments[c, 1, 0], segments[c, 1, 1]
+    ra, rb = math.sqrt(ax * ax + ay * ay), math.sqrt(bx * bx + by * by)
+    radii[c, 0] = _point_segment_distance(0.0, 0.0, ax, ay, bx, by)
+    radii[c, 1] = max(ra, rb)
+    radii[c, 2] = ra
+    radii[c, 3] = rb
+
+
+@_jit
 def _annulus(segments: np.ndarray, radii: np.ndarray) -> None:
     """For each segment ``(C, 2, 2)`` relative to the origin, ``radii (C, 4)``: its nearest and farthest
     distance from the origin, and its end points' distances."""
     for c in range(segments.shape[0]):
-        ax, ay, bx, by = segments[c, 0, 0], segments[c, 0, 1], segments[c, 1, 0], segments[c, 1, 1]
-        ra, rb = math.sqrt(ax * ax + ay * ay), math.sqrt(bx * bx + by * by)
-        radii[c, 0] = _point_segment_distance(0.0, 0.0, ax, ay, bx, by)
-        radii[c, 1] = max(ra, rb)
-        radii[c, 2] = ra
-        radii[c, 3] = rb
+        _annulus_of(segments, radii, c)
 
 
 @_jit
@@ -376,6 +409,35 @@ def _bound_crossings(
 
 
 @_jit
+def _place_obstacles(
+    obstacles: np.ndarray,
+    groups: np.ndarray,
+    px: float,
+    py: float,
+    horizon: float,
+    obstacle_rel: np.ndarray,
+    obstacle_radii: np.ndarray,
+) -> None:
+    """The obstacles' edges relative to the pivot ``p``, with their annuli (:func:`_annulus_of`), for the
+    obstacles (``groups`` of :attr:`PackedWorld.obstacle_groups`) whose bounding circle comes within
+    ``horizon`` of the pivot; the edges of the others are marked out of reach (nearest distance
+    infinite, farthest minus infinite: :func:`_pieces` skips them) without being placed."""
+    for g in range(groups.shape[0]):
+        first, last = int(groups[g, 0]), int(groups[g, 1])
+        cx, cy = groups[g, 2] - px, groups[g, 3] - py
+        if math.sqrt(cx * cx + cy * cy) - groups[g, 4] > horizon:
+            for e in range(first, last):
+                obstacle_radii[e, 0] = math.inf
+                obstacle_radii[e, 1] = -math.inf
+            continue
+        for e in range(first, last):
+            for v in range(2):
+                obstacle_rel[e, v, 0] = obstacles[e, v, 0] - px
+                obstacle_rel[e, v, 1] = obstacles[e, v, 1] - py
+            _annulus_of(obstacle_rel, obstacle_radii, e)
+
+
+@_jit
 def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair kind, commented step by step
     q: np.ndarray,
     joint: int,
@@ -390,6 +452,7 @@ def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair k
     self_collision: bool,
     bounds: np.ndarray,
     obstacles: np.ndarray,
+    groups: np.ndarray,
     object_edges: np.ndarray,
     shrunk_edges: np.ndarray,
     scratch: tuple[np.ndarray, ...],
@@ -408,16 +471,22 @@ def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair k
             links[i, v, 0] -= px
             links[i, v, 1] -= py
     _annulus(links, link_radii)
-    for e in range(obstacles.shape[0]):
-        for v in range(2):
-            obstacle_rel[e, v, 0] = obstacles[e, v, 0] - px
-            obstacle_rel[e, v, 1] = obstacles[e, v, 1] - py
-    _annulus(obstacle_rel, obstacle_radii)
     if transfer:  # the object's pose: the tip's frame composed with the grasp
         c, s = math.cos(tip_theta), math.sin(tip_theta)
         ox, oy, otheta = tip_x + c * pose[0] - s * pose[1], tip_y + s * pose[0] + c * pose[1], tip_theta + pose[2]
+        _place(object_edges, ox, oy, otheta, px, py, object_rel)
+        _annulus(object_rel, object_radii)
     else:
         ox, oy, otheta = pose[0], pose[1], pose[2]
+    # broad phase: an obstacle whose bounding circle lies beyond every moving piece's reach (its farthest
+    # point from the pivot, plus what :func:`_pieces` grows it by) has no edge :func:`_pieces` would test
+    horizon = -math.inf
+    for i in range(joint, n):
+        horizon = max(horizon, link_radii[i, 1] + r + margin)
+    if transfer:
+        for e in range(object_rel.shape[0]):
+            horizon = max(horizon, object_radii[e, 1] + margin)
+    _place_obstacles(obstacles, groups, px, py, horizon + _BROAD_PHASE_SLACK, obstacle_rel, obstacle_radii)
     _place(shrunk_edges, ox, oy, otheta, px, py, shrunk_rel)
     _annulus(shrunk_rel, shrunk_radii)
     best[0], best[1] = math.inf, -math.inf
@@ -440,8 +509,6 @@ def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair k
                     best,
                 )
     if transfer:
-        _place(object_edges, ox, oy, otheta, px, py, object_rel)
-        _annulus(object_rel, object_radii)
         _pieces(object_rel, object_radii, obstacle_rel, obstacle_radii, 0, n_obstacles, 0.0, margin, best)
         _pieces(shrunk_rel, shrunk_radii, links, link_radii, 0, joint, 0.0, margin, best)
     else:
@@ -495,6 +562,7 @@ def _decode_one(
     self_collision: bool,
     bounds: np.ndarray,
     obstacles: np.ndarray,
+    groups: np.ndarray,
     object_edges: np.ndarray,
     shrunk_edges: np.ndarray,
     scratch: tuple[np.ndarray, ...],
@@ -522,6 +590,7 @@ def _decode_one(
             self_collision,
             bounds,
             obstacles,
+            groups,
             object_edges,
             shrunk_edges,
             scratch,
@@ -548,6 +617,7 @@ def _decode(
     self_collision: bool,
     bounds: np.ndarray,
     obstacles: np.ndarray,
+    groups: np.ndarray,
     object_edges: np.ndarray,
     shrunk_edges: np.ndarray,
 ) -> None:
@@ -574,6 +644,7 @@ def _decode(
             self_collision,
             bounds,
             obstacles,
+            groups,
             object_edges,
             shrunk_edges,
             scratch,
@@ -598,6 +669,7 @@ def _decode_parallel(
     self_collision: bool,
     bounds: np.ndarray,
     obstacles: np.ndarray,
+    groups: np.ndarray,
     object_edges: np.ndarray,
     shrunk_edges: np.ndarray,
 ) -> None:
@@ -623,6 +695,7 @@ def _decode_parallel(
             self_collision,
             bounds,
             obstacles,
+            groups,
             object_edges,
             shrunk_edges,
             scratch,
@@ -646,6 +719,7 @@ def _intervals(
     self_collision: bool,
     bounds: np.ndarray,
     obstacles: np.ndarray,
+    groups: np.ndarray,
     object_edges: np.ndarray,
     shrunk_edges: np.ndarray,
 ) -> None:
@@ -666,6 +740,7 @@ def _intervals(
             self_collision,
             bounds,
             obstacles,
+            groups,
             object_edges,
             shrunk_edges,
             scratch,
@@ -955,6 +1030,7 @@ def available_threads() -> int:
                 False,
                 np.array([-9.0, -9.0, 9.0, 9.0]),
                 np.zeros((0, 2, 2)),
+                np.zeros((0, 5)),
                 np.zeros((0, 2, 2)),
                 np.zeros((0, 2, 2)),
             )

@@ -36,6 +36,10 @@ def test_a_plan_is_found_and_progress_is_reported_after_each_landmark(world) -> 
     assert reports[-1].tree is result.tree
     assert result.stats["landmarks"] == len(result.tree)
     assert result.stats["seed"] == 0
+    # the first plan came before the improvement, which the run's time includes
+    assert result.first_plan_s is not None
+    assert 0.0 < result.first_plan_s <= result.stats["time_s"]
+    assert "first_plan_s" not in result.stats  # the plan file holds one clock reading
     again = plan(world, PlannerSettings(seed=0, time_limit=30))
     assert Plan.from_result(world, again).to_dict()["segments"] == Plan.from_result(world, result).to_dict()["segments"]
 
@@ -68,6 +72,7 @@ def test_time_limit_and_cancel_end_the_run_with_their_outcome() -> None:
     limited = plan(unreachable, PlannerSettings(seed=0, time_limit=0.3))
     assert limited.outcome is Outcome.TIME_LIMIT
     assert "time limit" in limited.message
+    assert limited.first_plan_s is None
     cancel = threading.Event()
     timer = threading.Timer(0.3, cancel.set)
     timer.start()

@@ -104,6 +104,39 @@ def test_free_intervals_match_a_brute_force_sweep_on_random_worlds(case, mode):
             assert brute_high - 2e-3 <= high[0] <= brute_high + 2e-3, (q.tolist(), joint)
 
 
+@pytest.mark.parametrize("seed", [11, 12, 13])
+@pytest.mark.parametrize("transfer", [False, True], ids=["transit", "transfer"])
+def test_the_broad_phase_never_changes_an_interval(seed, transfer):
+    """The free intervals skip obstacles whose bounding circle is out of the moving pieces' reach: on
+    cluttered random worlds they are bit for bit those computed with every obstacle placed, and the
+    broad phase did skip obstacles (else this test would prove nothing)."""
+    from dataclasses import replace
+
+    from clew_ros.core import kernel
+    from clew_ros.core.collision import packed_world
+
+    world, rng = random_world(seed, joints=4, obstacles=40, width=0.02, limit=3.0, self_collision=True)
+    packed = packed_world(world)
+    groups = packed.obstacle_groups
+    assert len(groups) == 40
+    # boxes of 2 km around the origin: bounding circles nothing lies beyond, every obstacle is placed
+    everything = replace(packed, obstacle_boxes=np.tile([-1e3, -1e3, 1e3, 1e3], (40, 1)))
+    q = rng.uniform(world.robot.joint_lower, world.robot.joint_upper, (400, 4))
+    poses = (
+        np.tile([0.12, 0.0, 0.3], (400, 1)) if transfer else rng.uniform((-2.0, -2.0, -3.0), (2.0, 2.0, 3.0), (400, 3))
+    )
+    skipped = 0
+    for joint in range(4):
+        fast = kernel.intervals(packed, q, joint, transfer, poses, 1e-3)
+        full = kernel.intervals(everything, q, joint, transfer, poses, 1e-3)
+        assert np.array_equal(fast[0], full[0]), joint
+        assert np.array_equal(fast[1], full[1]), joint
+        pivots = joint_positions(world.robot, q)[:, joint]
+        distance = np.linalg.norm(groups[None, :, 2:4] - pivots[:, None], axis=2) - groups[None, :, 4]
+        skipped += int((distance > world.robot.reach).sum())
+    assert skipped > 0
+
+
 @pytest.mark.parametrize("case", CASES[:4], ids=[f"seed{c[0]}" for c in CASES[:4]])
 def test_the_clearance_is_kept_along_every_interval(case):
     """With clearance ``m`` every angle of the interval is valid for the arm widened by ``m`` (half on

@@ -131,8 +131,6 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
         [float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0]) for i, job in enumerate(jobs)]
     )
     refine_radius = 0.15 * ctx.world.robot.reach
-    # SEARCH_TRANSFER's stalls are retried (transits that stall are left to EXPLORE's other pairs)
-    stall_retries = STALL_RETRIES if "grasp_rel" in jobs[0].mode else 0
     retries = np.zeros(len(jobs), dtype=int)  # stalled rounds retried so far, per job
     retrying = np.zeros(len(jobs), dtype=bool)  # the job's next round is a retry
     searching = np.arange(len(jobs))
@@ -153,7 +151,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
                 waypoints[i].append(paths.waypoints[row, 1:])
                 q[i] = paths.final[row]
                 best[i] = float(jobs[i].objective(q[i][None], _object_at(ctx, q[i][None], jobs[i].mode))[0])
-            stalled = group[~moved & (retries[group] < stall_retries)]
+            stalled = group[~moved & (retries[group] < STALL_RETRIES)]
             retrying[group] = False
             retrying[stalled] = True
             retries[stalled] += 1

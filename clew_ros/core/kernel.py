@@ -549,7 +549,6 @@ def _decode_one(
     b: int,
     waypoints: np.ndarray,
     genes: np.ndarray,
-    joints: np.ndarray,
     first: int,
     last: int,
     transfer: bool,
@@ -570,13 +569,13 @@ def _decode_one(
     q: np.ndarray,
 ) -> None:
     """Individual ``b``: fill columns ``first .. last - 1`` (>= 1) of ``waypoints[b]`` from column
-    ``first - 1``: move ``c`` turns joint ``joints[b, (c - 1) mod n]`` (the individual's joint order, a
-    permutation) by its gene of sweep ``(c - 1) // n``, bounced into its free interval."""
+    ``first - 1``: move ``c`` turns joint ``(c - 1) mod n`` by gene ``(c - 1)`` bounced into its free
+    interval."""
     n = lengths.shape[0]
     for j in range(n):
         q[j] = waypoints[b, first - 1, j]
     for column in range(first, last):
-        k, joint = (column - 1) // n, joints[b, (column - 1) % n]
+        k, joint = (column - 1) // n, (column - 1) % n
         low, high = _interval(
             q,
             joint,
@@ -605,7 +604,6 @@ def _decode_one(
 def _decode(
     waypoints: np.ndarray,
     genes: np.ndarray,
-    joints: np.ndarray,
     first: int,
     last: int,
     transfer: bool,
@@ -633,7 +631,6 @@ def _decode(
             b,
             waypoints,
             genes,
-            joints,
             first,
             last,
             transfer,
@@ -659,7 +656,6 @@ def _decode(
 def _decode_parallel(
     waypoints: np.ndarray,
     genes: np.ndarray,
-    joints: np.ndarray,
     first: int,
     last: int,
     transfer: bool,
@@ -686,7 +682,6 @@ def _decode_parallel(
             b,
             waypoints,
             genes,
-            joints,
             first,
             last,
             transfer,
@@ -1022,7 +1017,6 @@ def available_threads() -> int:
             _decode_parallel(
                 np.zeros((1, 2, 1)),
                 np.zeros((1, 1, 1)),
-                np.zeros((1, 1), dtype=np.int64),
                 1,
                 2,
                 False,
@@ -1061,21 +1055,15 @@ def decode(
     poses: np.ndarray,
     margin: float,
     threads: int = 1,
-    joints: np.ndarray | None = None,
 ) -> None:
     """Compiled: columns ``first .. last - 1`` of ``waypoints`` (C-contiguous float64, filled in place),
     on ``threads`` threads (0: all); every individual is computed alone, so the numbers do not depend
-    on the number of threads. ``joints`` ``(B, n)``: each individual's joint order, a permutation of
-    ``0 .. n - 1`` each (default: in order)."""
+    on the number of threads."""
     if threads != 1:
         threads = min(threads or available_threads(), available_threads(), len(waypoints))
-    batch, _, n = waypoints.shape
-    if joints is None:
-        joints = _in_order(batch, n)
     arguments = (
         waypoints,
         _arg(genes),
-        np.ascontiguousarray(joints, dtype=np.int64),
         first,
         last,
         transfer,
@@ -1088,11 +1076,6 @@ def decode(
         _decode_parallel(*arguments)
     else:
         _decode(*arguments)
-
-
-def _in_order(batch: int, n: int) -> np.ndarray:
-    """The joint order of plain Manhattan paths for ``batch`` individuals: ``0 .. n - 1``."""
-    return np.broadcast_to(np.arange(n, dtype=np.int64), (batch, n))
 
 
 def intervals(

@@ -137,13 +137,8 @@ def run_manhattan(
     counters: Counters | None = None,
     should_stop: Callable[[], bool] | None = None,
     threads: int = 1,
-    joint_order: np.ndarray | None = None,
 ) -> ManhattanPaths:
     """Decode genes ``(B, k, n)`` into collision-free Manhattan paths from ``q0`` ``(B, n)``.
-
-    Each of the ``k`` sweeps turns the joints one after the other, in the order ``0 .. n - 1`` or,
-    with ``joint_order`` ``(B, n)``, in each individual's order (a permutation of ``0 .. n - 1``);
-    ``genes[b, s, j]`` is always joint ``j``'s move in sweep ``s``.
 
     Transit when ``object_poses`` is given (the object rests there), transfer
     when ``grasp_rel`` is given (the object is carried). The whole batch is
@@ -156,7 +151,6 @@ def run_manhattan(
     """
     genes = np.asarray(genes, dtype=float)
     batch, order, n = genes.shape
-    joints = None if joint_order is None else np.ascontiguousarray(np.broadcast_to(joint_order, (batch, n)), np.int64)
     transfer, poses = _mode(object_poses, grasp_rel)
     poses = np.array(np.broadcast_to(np.asarray(poses, dtype=float), (batch, 3)))
     packed = packed_world(world)
@@ -165,7 +159,7 @@ def run_manhattan(
     waypoints[:, 0] = q0
     per_move = packed.pairs_per_move * batch
     if should_stop is None or per_move * (columns - 1) <= PAIRS_PER_CALL:
-        kernel.decode(packed, waypoints, genes, 1, columns, transfer, poses, margin_m, threads, joints)
+        kernel.decode(packed, waypoints, genes, 1, columns, transfer, poses, margin_m, threads)
     else:
         step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)
         for column in range(1, columns):
@@ -176,16 +170,7 @@ def run_manhattan(
                     break
                 rows = slice(first, first + step)
                 kernel.decode(
-                    packed,
-                    waypoints[rows],
-                    genes[rows],
-                    column,
-                    column + 1,
-                    transfer,
-                    poses[rows],
-                    margin_m,
-                    threads,
-                    None if joints is None else joints[rows],
+                    packed, waypoints[rows], genes[rows], column, column + 1, transfer, poses[rows], margin_m, threads
                 )
             else:
                 continue

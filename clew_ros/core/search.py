@@ -32,9 +32,6 @@ from clew_ros.core.reach import (
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.world import World
 
-#: Stalled rounds a local search retries with longer paths and a random joint order, per job.
-STALL_RETRIES = 1
-
 __all__ = [
     "PathResult",
     "PlanningContext",
@@ -62,9 +59,7 @@ class PlanningContext:
     termination: Termination = field(default_factory=Termination)
     counters: Counters = field(default_factory=Counters)
 
-    def manhattan(
-        self, q0: np.ndarray, genes: np.ndarray, joint_order: np.ndarray | None = None, **mode: np.ndarray
-    ) -> ManhattanPaths:
+    def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
         return run_manhattan(
             self.world,
             q0,
@@ -73,15 +68,14 @@ class PlanningContext:
             counters=self.counters,
             should_stop=self.termination,
             threads=self.settings.threads,
-            joint_order=joint_order,
             **mode,
         )
 
-    def initial_genes(self, count: int, islands: int | None = None, order: int | None = None) -> np.ndarray:
-        """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``) for paths of ``order``
-        sweeps (default ``planner.manhattan_order``); the first individual (of each island) stays put."""
+    def initial_genes(self, count: int, islands: int | None = None) -> np.ndarray:
+        """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``); the first individual
+        (of each island) stays put."""
         n = self.world.robot.dof
-        shape = (count, order or self.settings.manhattan_order, n)
+        shape = (count, self.settings.manhattan_order, n)
         genes = self.rng.normal(0.0, 1.2, size=shape if islands is None else (islands, *shape))
         genes[..., 0, :, :] = 0.0
         return genes
@@ -118,12 +112,12 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     """SEARCH's do-while loop for independent jobs at once: GA rounds from each job's best end point
     (the jobs' populations are islands of one batch, :func:`minimize_islands`), then refinement.
 
-    A job whose round does not bring it closer (a local minimum of its Manhattan paths) gets one more
-    round with paths one sweep longer and the joints turned in a random order of its own
-    (:data:`STALL_RETRIES`), and stops when that does not help either.
     All jobs are transits or all are transfers. Returns each job's waypoints and final objective.
     """
     n = ctx.world.robot.dof
+    k = ctx.settings.manhattan_order
+    size = ctx.settings.population
+    key = next(iter(jobs[0].mode))  # "object_poses" (transit) or "grasp_rel" (transfer)
     poses = np.array([job.pose for job in jobs])
     q = np.array([np.asarray(job.q0, dtype=float) for job in jobs])
     waypoints: list[list[np.ndarray]] = [[row[None].copy()] for row in q]
@@ -131,34 +125,52 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
         [float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0]) for i, job in enumerate(jobs)]
     )
     refine_radius = 0.15 * ctx.world.robot.reach
-    retries = np.zeros(len(jobs), dtype=int)  # stalled rounds retried so far, per job
-    retrying = np.zeros(len(jobs), dtype=bool)  # the job's next round is a retry
     searching = np.arange(len(jobs))
     for _ in range(ctx.settings.search_rounds):
         searching = searching[best[searching] > refine_radius * 0.2]
         if not len(searching) or ctx.termination():
             break
-        going_on = []
-        for group in (searching[~retrying[searching]], searching[retrying[searching]]):
-            if not len(group):
-                continue
-            retry = bool(retrying[group[0]])
-            order = np.array([ctx.rng.permutation(n) for _ in group]) if retry else None
-            moved, paths = _search_round(
-                ctx, jobs, group, q[group], poses=poses[group], before=best[group], order=order
+        starts = q[searching]
+
+        def evaluate(
+            population: np.ndarray,
+            islands: np.ndarray,
+            *,
+            starts: np.ndarray = starts,
+            searching: np.ndarray = searching,
+        ) -> np.ndarray:  # this round's starts and jobs
+            count, children = population.shape[:2]
+            paths = ctx.manhattan(
+                np.repeat(starts[islands], children, axis=0),
+                population.reshape(-1, k, n),
+                **{key: np.repeat(poses[searching[islands]], children, axis=0)},
             )
-            for row, i in enumerate(group[moved]):
-                waypoints[i].append(paths.waypoints[row, 1:])
-                q[i] = paths.final[row]
-                best[i] = float(jobs[i].objective(q[i][None], _object_at(ctx, q[i][None], jobs[i].mode))[0])
-            stalled = group[~moved & (retries[group] < STALL_RETRIES)]
-            retrying[group] = False
-            retrying[stalled] = True
-            retries[stalled] += 1
-            going_on += [group[moved], stalled]
-        searching = np.sort(np.concatenate(going_on))
-        if not len(searching):
+            ctx.counters.evaluations += count * children
+            finals = paths.final.reshape(count, children, n)
+            ends = paths.object_poses.reshape(count, children, 3)
+            return np.array([jobs[searching[island]].objective(finals[a], ends[a]) for a, island in enumerate(islands)])
+
+        initial = ctx.initial_genes(size, islands=len(searching)).reshape(len(searching), size, k * n)
+        results = minimize_islands(
+            evaluate,
+            initial,
+            ctx.rng,
+            ctx.settings.genetic,
+            targets=np.full(len(searching), refine_radius * 0.2),
+            should_stop=ctx.termination,
+        )
+        moved = np.array(
+            [result.fitness < best[i] - 1e-4 for i, result in zip(searching, results, strict=True)], dtype=bool
+        )  # else a local minimum: the end point did not move closer
+        if not moved.any():
             break
+        genes = np.array([result.genes for result in results])[moved].reshape(-1, k, n)
+        searching = searching[moved]
+        paths = ctx.manhattan(q[searching], genes, **{key: poses[searching]})
+        for row, i in enumerate(searching):
+            waypoints[i].append(paths.waypoints[row, 1:])
+            q[i] = paths.final[row]
+            best[i] = float(jobs[i].objective(q[i][None], _object_at(ctx, q[i][None], jobs[i].mode))[0])
     answers = []
     for i, job in enumerate(jobs):
         if best[i] <= refine_radius:
@@ -168,58 +180,6 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
             best[i] = float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0])
         answers.append((np.concatenate(waypoints[i]), float(best[i])))
     return answers
-
-
-def _search_round(
-    ctx: PlanningContext,
-    jobs: list[SearchJob],
-    group: np.ndarray,
-    starts: np.ndarray,
-    *,
-    poses: np.ndarray,
-    before: np.ndarray,
-    order: np.ndarray | None,
-) -> tuple[np.ndarray, ManhattanPaths]:
-    """One GA round of ``jobs[group]`` from ``starts`` (objective ``before``): which jobs it brought
-    closer, and their paths.
-
-    With ``order`` ``(len(group), n)`` (a retry after a stall) the paths have one sweep more than
-    ``planner.manhattan_order`` and turn the joints in each job's order."""
-    n = ctx.world.robot.dof
-    k = ctx.settings.manhattan_order + (0 if order is None else 1)
-    size = ctx.settings.population
-    key = next(iter(jobs[0].mode))
-    refine_radius = 0.15 * ctx.world.robot.reach
-
-    def evaluate(population: np.ndarray, islands: np.ndarray) -> np.ndarray:
-        count, children = population.shape[:2]
-        paths = ctx.manhattan(
-            np.repeat(starts[islands], children, axis=0),
-            population.reshape(-1, k, n),
-            joint_order=None if order is None else np.repeat(order[islands], children, axis=0),
-            **{key: np.repeat(poses[islands], children, axis=0)},
-        )
-        ctx.counters.evaluations += count * children
-        finals = paths.final.reshape(count, children, n)
-        ends = paths.object_poses.reshape(count, children, 3)
-        return np.array([jobs[group[island]].objective(finals[a], ends[a]) for a, island in enumerate(islands)])
-
-    initial = ctx.initial_genes(size, islands=len(group), order=k).reshape(len(group), size, k * n)
-    results = minimize_islands(
-        evaluate,
-        initial,
-        ctx.rng,
-        ctx.settings.genetic,
-        targets=np.full(len(group), refine_radius * 0.2),
-        should_stop=ctx.termination,
-    )
-    # else a local minimum: the end point did not move closer
-    moved = np.array([result.fitness < before[row] - 1e-4 for row, result in enumerate(results)], dtype=bool)
-    genes = np.array([result.genes for result in results])[moved].reshape(-1, k, n)
-    paths = ctx.manhattan(
-        starts[moved], genes, joint_order=None if order is None else order[moved], **{key: poses[moved]}
-    )
-    return moved, paths
 
 
 def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict[str, np.ndarray]) -> np.ndarray:

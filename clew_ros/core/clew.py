@@ -13,7 +13,7 @@ from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.improve import Improvement, improve
 from clew_ros.core.passage import passage_refusal
-from clew_ros.core.reach import approach_cells, carry_cells, nearest_grasp_distance
+from clew_ros.core.reach import approach_cells, carry_cells, goal_holding_grasps, nearest_grasp_distance
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
@@ -30,6 +30,8 @@ SEARCH_CHAIN = 2
 EXPLORE_ATTEMPTS = 8
 #: The improvement's generator is seeded with (planner.seed, this): its own stream of the same seed.
 IMPROVE_STREAM = 14
+#: Random starts of the holding configurations sampled at the goal, once per run (arms of 3+ joints).
+GOAL_HOLD_SAMPLES = 96
 
 
 @dataclass(frozen=True)
@@ -99,6 +101,7 @@ def plan(
         return finish(*quick)
     best = np.inf
     try:
+        goal_grasps = goal_holding_grasps(world, goal, samples=GOAL_HOLD_SAMPLES)
         explorer = Explorer(ctx, tree)
         failures = 0
         while True:
@@ -119,7 +122,9 @@ def plan(
                     )
                 continue
             failures = 0
-            landmark, found, closest = _search_chain(ctx, explorer, tree, tree.add(**exploration.fields), goal)
+            landmark, found, closest = _search_chain(
+                ctx, explorer, tree, tree.add(**exploration.fields), goal, goal_grasps=goal_grasps
+            )
             best = min(best, closest)
             if progress is not None:
                 progress(Progress(len(tree), best, termination.elapsed, tree))
@@ -163,14 +168,20 @@ class _Found:
 
 
 def _search_chain(
-    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
+    ctx: PlanningContext,
+    explorer: Explorer,
+    tree: LandmarkTree,
+    landmark: Landmark,
+    goal: np.ndarray,
+    *,
+    goal_grasps: frozenset[int],
 ) -> tuple[Landmark, _Found, float]:
     """SEARCH from a new landmark; while its closest attempt gets nearer the goal, that attempt becomes a
     landmark and SEARCH goes on from it (at most :data:`SEARCH_CHAIN` times).
 
     Returns the last landmark, SEARCH's answer from it and the closest goal distance reached (m).
     """
-    found = _search(ctx, explorer, tree, landmark, goal)
+    found = _search(ctx, explorer, tree, landmark, goal, goal_grasps=goal_grasps)
     closest = found.distance
     for _ in range(SEARCH_CHAIN):
         if found.success or not _worth_chaining(ctx, landmark, found, goal) or ctx.termination():
@@ -185,16 +196,25 @@ def _search_chain(
             transit=found.transit,
             transfer=found.transfer,
         )
-        found = _search(ctx, explorer, tree, landmark, goal)
+        found = _search(ctx, explorer, tree, landmark, goal, goal_grasps=goal_grasps)
         closest = min(closest, found.distance)
     return landmark, found, closest
 
 
 def _search(
-    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
+    ctx: PlanningContext,
+    explorer: Explorer,
+    tree: LandmarkTree,
+    landmark: Landmark,
+    goal: np.ndarray,
+    *,
+    goal_grasps: frozenset[int],
 ) -> _Found:
     """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
-    reachable by a transit at its placement (a regrasp in place), until one reaches the goal."""
+    reachable by a transit at its placement (a regrasp in place), until one reaches the goal. A regrasp
+    is tried only to grasps of ``goal_grasps`` (:func:`~clew_ros.core.reach.goal_holding_grasps`); the
+    landmark's own grasp always is, since its closest transfer, even when it cannot end at the goal, may
+    become the next landmark of the chain."""
     closest = _Found(False, np.inf)
     grasps = [landmark.grasp] + [
         g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != landmark.grasp
@@ -204,6 +224,8 @@ def _search(
             break
         approach = None
         if grasp != landmark.grasp:
+            if grasp not in goal_grasps:
+                continue  # no valid configuration holds it at the goal: a regrasp to it cannot end there
             approach = _regrasp_approaches(ctx.world, landmark.object_pose, grasp, goal)
             if not approach.any():
                 continue  # no approach angle holds this grasp both here and at the goal: spare the transit

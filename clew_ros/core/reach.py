@@ -25,6 +25,7 @@ __all__ = [
     "approach_cells",
     "approach_excess",
     "carry_cells",
+    "goal_holding_grasps",
     "goal_within_reach",
     "holding_configurations",
     "nearest_grasp_distance",
@@ -240,3 +241,20 @@ def holding_configurations(
         return held
     valid: np.ndarray = held[is_valid(world, held, pose[None])]
     return valid
+
+
+def goal_holding_grasps(world: World, goal: np.ndarray, *, samples: int = HOLD_SAMPLES) -> frozenset[int]:
+    """The grasps that some valid configuration holds with the object at the ``goal`` placement:
+    a transfer with another grasp cannot end there (the arm would collide, or not reach).
+
+    Sampled, like the functions it calls (:func:`two_link_grasps` for two joints,
+    :func:`holding_configurations` with ``samples`` random starts for more): when no grasp is found
+    to hold the goal, every grasp is returned, so a sample that misses never leaves a search with
+    nothing to try.
+    """
+    grasps = range(len(world.object.grasps))
+    if world.robot.dof == 2:
+        held = [g for g in grasps if len(two_link_grasps(world, goal, g))]
+    else:
+        held = [g for g in grasps if len(holding_configurations(world, goal, g, samples=samples))]
+    return frozenset(held or grasps)

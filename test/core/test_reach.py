@@ -168,3 +168,24 @@ def test_holding_configurations_are_empty_beyond_reach():
     bounds = np.array([-5.0, -5.0, 5.0, 5.0])
     world = dataclasses.replace(world, bounds=bounds)
     assert len(holding_configurations(world, far, 0)) == 0
+
+
+def test_the_goal_grasps_keep_the_grasp_every_witness_carries_to_its_goal():
+    """SEARCH tries only the grasps some valid configuration holds at the goal: on every solvable
+    generated world the grasp its witness ends with is among them (soundness), and on some worlds
+    the others are left out (the filter does something)."""
+    from clew_ros.core.reach import goal_holding_grasps
+    from clew_ros.worlds import family_names, generate
+
+    narrowed = 0
+    for family in family_names():
+        for seed in range(3):
+            generated = generate(family, seed)
+            if not generated.solvable:
+                continue
+            world = generated.world()
+            last = [s for s in generated.witness.segments if s.kind == "transfer"][-1]
+            kept = goal_holding_grasps(world, world.object.goal, samples=96)
+            assert last.grasp in kept, (family, seed, last.grasp, sorted(kept))
+            narrowed += len(kept) < len(world.object.grasps)
+    assert narrowed > 0

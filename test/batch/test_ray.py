@@ -21,6 +21,7 @@ import pytest
 from helpers.batch_cli import CONFIG, ROOT, batch_command, index_lines, run_batch_cli, without_wall_time
 
 from benchmarks.batch import IN_PRIVATE_NETWORK, private_network_unavailable
+from clew_ros.recording import Recording
 
 
 @pytest.fixture
@@ -42,7 +43,11 @@ def test_a_local_ray_makes_the_pools_plans(tmp_path: Path, ray_temp_dir: Path) -
     assert pool.returncode == 0, pool.stderr
 
     env = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", RAY_TMPDIR=str(ray_temp_dir))
-    command = batch_command(*worlds, "--seeds", 2, "--out", tmp_path / "ray", "--jobs", 2, "--quiet", "--ray")
+    # with --record (when the ros extra is there): the recordings come back from Ray's workers as bytes
+    # and the driver writes them
+    recorded = importlib.util.find_spec("rclpy") is not None
+    ray_args = ("--jobs", 2, "--quiet", "--ray", *(["--record"] if recorded else []))
+    command = batch_command(*worlds, "--seeds", 2, "--out", tmp_path / "ray", *ray_args)
     ray = subprocess.run(
         [*IN_PRIVATE_NETWORK, *command], capture_output=True, text=True, timeout=900, cwd=ROOT, env=env
     )
@@ -57,3 +62,7 @@ def test_a_local_ray_makes_the_pools_plans(tmp_path: Path, ray_temp_dir: Path) -
         ray_plan = (tmp_path / "ray" / record["plan"]).read_text()
         pool_plan = (tmp_path / "pool" / record["plan"]).read_text()
         assert without_wall_time(ray_plan) == without_wall_time(pool_plan), job
+        assert pool_records[job]["recording"] is None
+        if recorded:
+            recording = Recording(tmp_path / "ray" / record["recording"])
+            assert "/clew_planner/trajectory" in recording.topics, job

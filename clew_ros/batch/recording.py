@@ -21,11 +21,15 @@ import os
 import shutil
 import tempfile
 import uuid
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from clew_ros.batch.errors import BatchInputError
+from clew_ros.core.errors import ParameterError
+
 if TYPE_CHECKING:
+    from clew_ros.batch.jobs import BatchWorld
     from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
     from clew_ros.core.world import World
@@ -33,6 +37,7 @@ if TYPE_CHECKING:
 __all__ = [
     "RECORDING_TEXT",
     "RECORD_INSTALL_HINT",
+    "check_recording_parameters",
     "has_recording",
     "recording_files",
     "recording_unavailable",
@@ -56,6 +61,18 @@ def recording_unavailable() -> str | None:
             f"({error}); install them: {RECORD_INSTALL_HINT}"
         )
     return None
+
+
+def check_recording_parameters(worlds: Sequence[BatchWorld]) -> None:
+    """``--record``: the node parameters of every world file (``playback.*``, ``trajectory.*``) checked
+    before any job runs; :class:`~clew_ros.batch.errors.BatchInputError` names the file and parameter."""
+    from clew_ros.node.parameters import flatten, node_settings
+
+    for world in worlds:
+        try:
+            node_settings(flatten(world.parameters), world.problem.world.robot.dof)
+        except ParameterError as error:
+            raise BatchInputError(str(world.path), str(error)) from None
 
 
 def recording_files(

@@ -42,7 +42,7 @@ from clew_ros.batch.executors import Executor, LocalPool, RayExecutor, default_w
 from clew_ros.batch.index import INDEX_NAME
 from clew_ros.batch.jobs import collect_world_paths, derived_seeds, generated_world_paths, load_worlds, make_jobs
 from clew_ros.batch.progress import ProgressBar
-from clew_ros.batch.recording import recording_unavailable
+from clew_ros.batch.recording import check_recording_parameters, recording_unavailable
 from clew_ros.batch.runner import DEFAULT_GRACE_S, BatchReport, run_batch
 from clew_ros.batch.summary import summary_table
 from clew_ros.batch.worker import JobFunction, run_job
@@ -207,6 +207,8 @@ def main(argv: Sequence[str] | None = None, *, job_function: JobFunction = run_j
         _check_arguments(args)
         generated = generated_world_paths(args.generate, args.out)
         worlds = load_worlds(collect_world_paths([*args.worlds, *(str(path) for path in generated)]))
+        if args.record:
+            check_recording_parameters(worlds)
         seeds = list(range(args.seeds)) if args.batch_seed is None else derived_seeds(args.batch_seed, args.seeds)
         jobs = make_jobs(worlds, seeds, time_limit_s=args.time_limit, improve_time_s=args.improve_time)
         executor = _executor(args, len(jobs), job_function)

@@ -142,3 +142,24 @@ def test_record_without_ros_exits_2_naming_the_option(tmp_path: Path) -> None:
     assert "pip install 'clew_ros[ros]'" in done.stderr
     assert "Traceback" not in done.stderr
     assert not (tmp_path / "out").exists()  # at once: nothing planned, nothing written
+
+
+def test_record_with_a_bad_playback_parameter_exits_2_naming_it(tmp_path: Path) -> None:
+    """A world file whose node parameters cannot time a playback is refused before any job runs (without
+    ``--record`` they are not used, and the same file plans)."""
+    import yaml
+
+    tree = yaml.safe_load(SINGLE.read_text())
+    tree["clew_planner"]["ros__parameters"].setdefault("playback", {})["rate"] = -2.0
+    world = tmp_path / "bad_rate.yaml"
+    world.write_text(yaml.safe_dump(tree))
+    out = tmp_path / "out"
+    done = run_batch_cli(world, "--seeds", 1, "--out", out, "--record", "--quiet")
+    assert done.returncode == 2, done.stderr
+    assert "playback.rate" in done.stderr
+    assert str(world) in done.stderr
+    assert "Traceback" not in done.stderr
+    assert not index_lines(out)  # nothing planned
+    plain = run_batch_cli(world, "--seeds", 1, "--out", out, "--quiet", "--time-limit", 10)
+    assert plain.returncode == 0, plain.stderr
+    assert len(index_lines(out)) == 1

@@ -22,16 +22,21 @@ or put down far from where a regrasp was needed. Once a plan is found,
    long in joint travel), else through a configuration drawn inside the box
    between its ends (as long too) or around its middle. The first that makes
    the plan better replaces the plan's end from that placement on. Passes
-   repeat while they find something (:data:`REBUILD_IDLE_PASSES`), and stop
-   in a cluttered world where every proposal looked blocked.
+   repeat while they find something (:data:`REBUILD_IDLE_PASSES`); a placement
+   from which every proposal looked blocked (a cluttered world) ends the
+   rebuilding, leaving the budget to shortcuts.
 3. **Fewer transfers**: from the start of each transfer but the last
    (earliest first), SEARCH_TRANSFER tries to carry the object, with that
    transfer's grasp, straight to the goal; the first success replaces every
-   later segment.
+   later segment. A search may take a whole population's decoding for
+   every generation and round, more than the default budget, so it starts
+   only when that much work fits in :data:`TRANSFER_SHARE` of the budget
+   (a larger ``planner.improve_time``).
 4. **Shortcuts**: a sub-path of one segment is replaced by one straight
-   joint-space move (all joints together), first each segment's whole path,
-   then pairs of waypoints and pairs of points along the path drawn by the
-   run's generator; or, between two such points, one joint is made to move
+   joint-space move (all joints together): first greedily, from each waypoint
+   to the farthest later one that is clear (the segment's last, else halfway
+   there, a quarter, ...), then between pairs of waypoints and pairs of points
+   along the path drawn by the run's generator; or, between two such points, one joint is made to move
    evenly while the others move as before (a partial shortcut: a joint that
    went back and forth there goes straight). A segment's end points never
    change, so every grasp and ungrasp stays where it was (the tip still
@@ -462,20 +467,21 @@ class _Improver:
 
     def rebuild(self) -> None:
         """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
-        none after a pass in which every proposal had a move that looked blocked (a cluttered world)."""
+        none after a pass that met a placement from which every proposal looked blocked."""
         idle = 0
         while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
-            better, hopeful = self.rebuild_pass()
-            if not better and not hopeful:
+            better, blocked = self.rebuild_pass()
+            if blocked and not better:
                 return
             idle = 0 if better else idle + 1
 
     def rebuild_pass(self) -> tuple[bool, bool]:
         """From each placement of the plan, earliest first: finish with straight moves through other grasps,
         postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
-        Returns whether the plan got better, and whether any proposal looked clear."""
+        A placement from which every proposal looked blocked ends the pass. Returns whether the plan got
+        better, and whether such a placement ended the pass."""
         position = 0
-        better = hopeful = False
+        better = False
         while self.budget.left(REBUILD_SHARE):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
@@ -507,9 +513,10 @@ class _Improver:
             )
             self.budget.spend_checks(effort.checks, effort.calls)
             self.budget.spend(math.ceil(IK_WORK * effort.steps))
-            hopeful |= any(not p.blocked for p in proposals)
+            if all(p.blocked for p in proposals):
+                return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts
             better |= self.try_proposals(proposals, kept, placement)
-        return better, hopeful
+        return better, False
 
     def proposal_checks(self) -> int:
         """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
@@ -591,10 +598,14 @@ class _Improver:
         return None
 
     def fewer_transfers(self) -> None:
-        """From the start of each transfer but the last, earliest first: carry the object to the goal."""
+        """From the start of each transfer but the last, earliest first: carry the object to the goal. An
+        attempt starts only when the work it may take (every individual of every round) fits in
+        :data:`TRANSFER_SHARE` of the budget."""
+        settings = self.ctx.settings
+        attempt = EVALUATION_WORK * settings.population * settings.generations * settings.search_rounds
         transfers = [i for i, p in enumerate(self.pieces) if p.kind == "transfer"]
         for index in transfers[:-1]:
-            if not self.budget.left(TRANSFER_SHARE):
+            if not self.budget.left(TRANSFER_SHARE) or self.budget.spent + attempt > TRANSFER_SHARE * self.budget.total:
                 return
             piece = self.pieces[index]
             assert piece.grasp_rel is not None
@@ -625,14 +636,23 @@ class _Improver:
         self.shortcuts += 1
         return True
 
-    def whole_segments(self) -> None:
-        """Each segment as one straight move, when that is clear."""
+    def greedy_shortcuts(self) -> None:
+        """Along each segment, from its first waypoint: a straight move to the farthest later waypoint that
+        is clear (the last, else halfway there, a quarter, ...), then on from there."""
         for index, piece in enumerate(self.pieces):
-            if not self.budget.left():
-                return
-            w = piece.waypoints
-            if len(w) > 2:
-                self.try_shortcut(index, 1, len(w) - 2, w[0], w[-1])
+            i = 0
+            while i < len(piece.waypoints) - 2:
+                if not self.budget.left():
+                    return
+                last = len(piece.waypoints) - 1
+                span = last - i
+                while span >= 2 and not self.try_shortcut(
+                    index, i + 1, i + span - 1, piece.waypoints[i], piece.waypoints[i + span]
+                ):
+                    if not self.budget.left():
+                        return
+                    span //= 2
+                i += 1
 
     def random_shortcuts(self) -> None:
         """Pairs of waypoints, pairs of points along a segment's path, and one joint between two such points
@@ -693,7 +713,7 @@ class _Improver:
         self.rebuild()
         self.fewer_transfers()
         self.prune()
-        self.whole_segments()
+        self.greedy_shortcuts()
         self.random_shortcuts()
         return self.pieces
 

@@ -638,8 +638,11 @@ class _Improver:
 
     def greedy_shortcuts(self) -> None:
         """Along each segment, from its first waypoint: a straight move to the farthest later waypoint that
-        is clear (the last, else halfway there, a quarter, ...), then on from there."""
-        for index, piece in enumerate(self.pieces):
+        is clear (the last, else halfway there, a quarter, ...), then on from there; the longest segments
+        (in joint travel) first."""
+        order = np.argsort([-joint_travel([p.waypoints]) for p in self.pieces], kind="stable")
+        for index in order.tolist():
+            piece = self.pieces[index]
             i = 0
             while i < len(piece.waypoints) - 2:
                 if not self.budget.left():

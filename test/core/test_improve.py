@@ -18,7 +18,7 @@ from clew_ros.core.inverse import solve_point
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.manhattan import run_manhattan
 from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
-from clew_ros.core.search import PlanningContext
+from clew_ros.core.search import PlanningContext, goal_reached
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Segment
 from clew_ros.core.world import load_world, world_from_parameters
@@ -65,7 +65,7 @@ def test_improvement_gains_on_figure1_and_is_deterministic() -> None:
     world = _world("figure1")
     a = _plan(world, 0, 0.3)
     b = _plan(world, 0, 0.3)
-    assert a.stats["joint_travel_rad"] < 0.8 * a.stats["first_joint_travel_rad"]
+    assert a.stats["joint_travel_rad"] < 0.5 * a.stats["first_joint_travel_rad"]  # the target: 2x shorter
     assert "first plan" in a.message
     plan_a, plan_b = Plan.from_result(world, a).to_dict(), Plan.from_result(world, b).to_dict()
     plan_a["stats"].pop("time_s")
@@ -196,7 +196,11 @@ def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(see
     carried = run_manhattan(world, path[-1:], genes, margin_m=1e-3, grasp_rel=grasp_rel[None]).waypoints[0]
     segments = [Segment("transit", None, list(path)), Segment("transfer", 0, list(carried))]
     final = compose(tip_poses(world.robot, carried[-1:]), grasp_rel)[0]
-    world = dataclasses.replace(world, object=dataclasses.replace(world.object, goal=final))
+    world = dataclasses.replace(
+        world,
+        robot=dataclasses.replace(world.robot, initial=q0),
+        object=dataclasses.replace(world.object, goal=final),
+    )
     settings = PlannerSettings(seed=seed, improve_time=0.2)
     ctx = PlanningContext(world, settings, np.random.default_rng(seed), Termination(30))
     before = joint_travel(segments)
@@ -206,16 +210,17 @@ def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(see
     assert better.transfers == 1
     assert [s.kind for s in better.segments] == ["transit", "transfer"]
     assert np.array_equal(better.segments[0].waypoints[0], segments[0].waypoints[0])  # the start stays
-    # grasp and goal configurations may be chosen anew (the rebuild), but the plan stays valid, and more
+    # grasp and goal configurations may be chosen anew (the rebuild); every configuration stays valid, the
+    # object ends on the goal (the first plan takes the object wherever its tip is: not at a grasp point,
+    # so validate_plan's grasp test does not apply to it)
+    assert goal_reached(world, better.final_object_pose, final)
     improved = Plan(
         world.name,
         tuple(world.robot.joint_names),
         True,
         "",
         segments=tuple(PlanSegment(s.kind, s.grasp, np.array(s.waypoints)) for s in better.segments),
-        final_object_pose=better.final_object_pose,
     )
-    assert validate_plan(world, improved) == []
     for motion in replay(world, improved, FINE_RAD):
         assert is_valid(world, motion.configurations, motion.object_poses).all()
 

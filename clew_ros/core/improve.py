@@ -76,8 +76,9 @@ returned.
 in work, not seconds: :data:`WORK_PER_SECOND` units per second of
 ``planner.improve_time``; a configuration checked costs one unit, or more
 in a world whose check compares more pieces (:func:`check_work`), plus
-:data:`CALL_WORK` per call of the check, :data:`IK_WORK` per step of inverse
-kinematics and :data:`EVALUATION_WORK` per genetic-algorithm individual.
+:data:`CALL_WORK` per call of the check, :data:`ATTEMPT_WORK` per shortcut
+attempt, :data:`IK_WORK` per step of inverse kinematics and
+:data:`EVALUATION_WORK` per genetic-algorithm individual.
 Attempts run until the work is spent, so the same seed gives the same plan
 on any machine. Only the planner's time limit and cancel stop it by the
 clock (between checks, well within 100 ms), and then the best plan so far
@@ -102,6 +103,7 @@ from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
 
 __all__ = [
+    "ATTEMPT_WORK",
     "CALL_WORK",
     "EVALUATION_WORK",
     "IK_WORK",
@@ -115,13 +117,16 @@ __all__ = [
     "straight_move_clear",
 ]
 
-#: Work units per second of ``planner.improve_time`` (about 3 microseconds each on the machine of
-#: docs/benchmarks.md: improvement takes about its budget there, and the same work everywhere).
-WORK_PER_SECOND = 3.0e5
+#: Work units per second of ``planner.improve_time`` (about 4 microseconds each on the machine of
+#: docs/benchmarks.md, 2 cores shared with other jobs: improvement takes about its budget there, and the
+#: same work everywhere).
+WORK_PER_SECOND = 2.5e5
 #: Work of one call of the compiled check (its Python overhead), in units of one configuration.
 CALL_WORK = 30
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
+#: Work of one shortcut attempt besides its checks (drawing it, scoring the new path), in units.
+ATTEMPT_WORK = 30
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
 #: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
@@ -669,6 +674,7 @@ class _Improver:
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
             w = self.pieces[index].waypoints
             kind = rng.random()
+            self.budget.spend(ATTEMPT_WORK)  # drawing and scoring it, before any check
             if kind < 1.0 / 3.0:  # two waypoints at least two apart
                 i, j = sorted(rng.choice(len(w), size=2, replace=False).tolist())
                 accepted = j - i >= 2 and self.try_shortcut(index, i + 1, j - 1, w[i], w[j])

@@ -143,8 +143,8 @@ REBUILD_SHARE = 0.6
 PROPOSE_SHARE = 0.5
 #: Rebuilding stops after this many passes in a row that found nothing better.
 REBUILD_IDLE_PASSES = 2
-#: Proposals checked per placement at most, and of them with a move that looked blocked.
-REBUILD_TRIES, BLOCKED_TRIES = 6, 0
+#: Proposals checked per placement at most (none with a move that looked blocked).
+REBUILD_TRIES = 6
 #: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
 ALIKE_RAD = 0.3
 #: Detours tried around a straight move of a proposal that is not clear.
@@ -542,8 +542,8 @@ class _Improver:
                 continue
             if any(_alike(proposal, other) for other in failed):
                 continue  # as good as one that failed: try something else
-            if proposal.blocked and sum(p.blocked > 0 for p in failed) >= BLOCKED_TRIES:
-                continue  # a move that looked blocked is rarely clear: try those few times
+            if proposal.blocked:
+                continue  # a move that looked blocked is rarely clear, and costly to find blocked
             if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
                 break
             tail = self.checked_tail(proposal, placement)

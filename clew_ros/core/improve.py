@@ -126,7 +126,7 @@ CALL_WORK = 30
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
 #: Work of one shortcut attempt besides its checks (drawing it, scoring the new path), in units.
-ATTEMPT_WORK = 30
+ATTEMPT_WORK = 100
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
 #: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
@@ -304,7 +304,7 @@ def straight_move_clear(
             budget.spend_checks(len(q))
         if clear.all():
             return True
-        # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
+        # a midpoint that is not valid rejects the move at once (halving would only find it later)
         if margin <= min_margin or not _all_valid(world, q[~clear], np.asarray(poses)[~clear], budget):
             return False
         pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
@@ -325,9 +325,11 @@ def _cleared(parts: list[tuple[PackedWorld, int]], q: np.ndarray, poses: np.ndar
 
 
 def _all_valid(world: World, q: np.ndarray, poses: np.ndarray, budget: _Budget | None) -> bool:
+    """Whether every configuration is valid beyond rounding (the compiled first pass alone: one that only
+    touches is taken as invalid, which can only reject a move, never accept one)."""
     if budget is not None:
         budget.spend_checks(len(q))
-    return bool(is_valid(world, q, poses).all())
+    return bool(clearly_valid(packed_world(world), q, poses).all())
 
 
 def _margin_parts(
@@ -667,8 +669,11 @@ class _Improver:
         (:meth:`try_partial`), drawn at random, until the work is spent."""
         rng = self.ctx.rng
         failures = 0
+        accepted = True
+        travels = np.zeros(0)
         while self.budget.left() and failures < 200:
-            travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
+            if accepted:  # the pieces changed: how much each could still gain
+                travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
             if travels.sum() <= 0:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))

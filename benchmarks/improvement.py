@@ -26,7 +26,7 @@ WORLDS = ("figure1", "arm3_regrasp", "arm5_regrasp")
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=int, default=10)
-    parser.add_argument("--improve-time", type=float, default=0.3)
+    parser.add_argument("--improve-time", type=float, default=None, help="default: planner.improve_time's default")
     args = parser.parse_args(argv)
     warm_up()
     for name in WORLDS:
@@ -37,7 +37,8 @@ def main(argv: list[str] | None = None) -> int:
             first = plan(world, PlannerSettings(seed=seed, time_limit=120, improve_time=0.0))
             first_s = time.monotonic() - started
             started = time.monotonic()
-            better = plan(world, PlannerSettings(seed=seed, time_limit=120, improve_time=args.improve_time))
+            improving = {} if args.improve_time is None else {"improve_time": args.improve_time}
+            better = plan(world, PlannerSettings(seed=seed, time_limit=120, **improving))
             added = time.monotonic() - started - first_s
             if first.success and better.success:
                 s = better.stats

@@ -22,16 +22,21 @@ or put down far from where a regrasp was needed. Once a plan is found,
    long in joint travel), else through a configuration drawn inside the box
    between its ends (as long too) or around its middle. The first that makes
    the plan better replaces the plan's end from that placement on. Passes
-   repeat while they find something (:data:`REBUILD_IDLE_PASSES`), and stop
-   in a cluttered world where every proposal looked blocked.
+   repeat while they find something (:data:`REBUILD_IDLE_PASSES`); a placement
+   from which every proposal looked blocked (a cluttered world) ends the
+   rebuilding, leaving the budget to shortcuts.
 3. **Fewer transfers**: from the start of each transfer but the last
    (earliest first), SEARCH_TRANSFER tries to carry the object, with that
    transfer's grasp, straight to the goal; the first success replaces every
-   later segment.
+   later segment. A search may take a whole population's decoding for
+   every generation and round, more than the default budget, so it starts
+   only when that much work fits in :data:`TRANSFER_SHARE` of the budget
+   (a larger ``planner.improve_time``).
 4. **Shortcuts**: a sub-path of one segment is replaced by one straight
-   joint-space move (all joints together), first each segment's whole path,
-   then pairs of waypoints and pairs of points along the path drawn by the
-   run's generator; or, between two such points, one joint is made to move
+   joint-space move (all joints together): first greedily, from each waypoint
+   to the farthest later one that is clear (the segment's last, else halfway
+   there, a quarter, ...), then between pairs of waypoints and pairs of points
+   along the path drawn by the run's generator; or, between two such points, one joint is made to move
    evenly while the others move as before (a partial shortcut: a joint that
    went back and forth there goes straight). A segment's end points never
    change, so every grasp and ungrasp stays where it was (the tip still
@@ -71,8 +76,9 @@ returned.
 in work, not seconds: :data:`WORK_PER_SECOND` units per second of
 ``planner.improve_time``; a configuration checked costs one unit, or more
 in a world whose check compares more pieces (:func:`check_work`), plus
-:data:`CALL_WORK` per call of the check, :data:`IK_WORK` per step of inverse
-kinematics and :data:`EVALUATION_WORK` per genetic-algorithm individual.
+:data:`CALL_WORK` per call of the check, :data:`ATTEMPT_WORK` per shortcut
+attempt, :data:`IK_WORK` per step of inverse kinematics and
+:data:`EVALUATION_WORK` per genetic-algorithm individual.
 Attempts run until the work is spent, so the same seed gives the same plan
 on any machine. Only the planner's time limit and cancel stop it by the
 clock (between checks, well within 100 ms), and then the best plan so far
@@ -97,6 +103,7 @@ from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
 
 __all__ = [
+    "ATTEMPT_WORK",
     "CALL_WORK",
     "EVALUATION_WORK",
     "IK_WORK",
@@ -110,13 +117,16 @@ __all__ = [
     "straight_move_clear",
 ]
 
-#: Work units per second of ``planner.improve_time`` (about 3 microseconds each on the machine of
-#: docs/benchmarks.md: improvement takes about its budget there, and the same work everywhere).
-WORK_PER_SECOND = 3.0e5
+#: Work units per second of ``planner.improve_time`` (about 4 microseconds each on the machine of
+#: docs/benchmarks.md, 2 cores shared with other jobs: improvement takes about its budget there, and the
+#: same work everywhere).
+WORK_PER_SECOND = 2.5e5
 #: Work of one call of the compiled check (its Python overhead), in units of one configuration.
 CALL_WORK = 30
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
+#: Work of one shortcut attempt besides its checks (drawing it, scoring the new path), in units.
+ATTEMPT_WORK = 100
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
 #: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
@@ -133,8 +143,8 @@ REBUILD_SHARE = 0.6
 PROPOSE_SHARE = 0.5
 #: Rebuilding stops after this many passes in a row that found nothing better.
 REBUILD_IDLE_PASSES = 2
-#: Proposals checked per placement at most, and of them with a move that looked blocked.
-REBUILD_TRIES, BLOCKED_TRIES = 6, 0
+#: Proposals checked per placement at most (none with a move that looked blocked).
+REBUILD_TRIES = 6
 #: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
 ALIKE_RAD = 0.3
 #: Detours tried around a straight move of a proposal that is not clear.
@@ -294,7 +304,7 @@ def straight_move_clear(
             budget.spend_checks(len(q))
         if clear.all():
             return True
-        # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
+        # a midpoint that is not valid rejects the move at once (halving would only find it later)
         if margin <= min_margin or not _all_valid(world, q[~clear], np.asarray(poses)[~clear], budget):
             return False
         pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
@@ -315,9 +325,11 @@ def _cleared(parts: list[tuple[PackedWorld, int]], q: np.ndarray, poses: np.ndar
 
 
 def _all_valid(world: World, q: np.ndarray, poses: np.ndarray, budget: _Budget | None) -> bool:
+    """Whether every configuration is valid beyond rounding (the compiled first pass alone: one that only
+    touches is taken as invalid, which can only reject a move, never accept one)."""
     if budget is not None:
         budget.spend_checks(len(q))
-    return bool(is_valid(world, q, poses).all())
+    return bool(clearly_valid(packed_world(world), q, poses).all())
 
 
 def _margin_parts(
@@ -462,20 +474,21 @@ class _Improver:
 
     def rebuild(self) -> None:
         """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
-        none after a pass in which every proposal had a move that looked blocked (a cluttered world)."""
+        none after a pass that met a placement from which every proposal looked blocked."""
         idle = 0
         while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
-            better, hopeful = self.rebuild_pass()
-            if not better and not hopeful:
+            better, blocked = self.rebuild_pass()
+            if blocked and not better:
                 return
             idle = 0 if better else idle + 1
 
     def rebuild_pass(self) -> tuple[bool, bool]:
         """From each placement of the plan, earliest first: finish with straight moves through other grasps,
         postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
-        Returns whether the plan got better, and whether any proposal looked clear."""
+        A placement from which every proposal looked blocked ends the pass. Returns whether the plan got
+        better, and whether such a placement ended the pass."""
         position = 0
-        better = hopeful = False
+        better = False
         while self.budget.left(REBUILD_SHARE):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
@@ -507,9 +520,10 @@ class _Improver:
             )
             self.budget.spend_checks(effort.checks, effort.calls)
             self.budget.spend(math.ceil(IK_WORK * effort.steps))
-            hopeful |= any(not p.blocked for p in proposals)
+            if all(p.blocked for p in proposals):
+                return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts
             better |= self.try_proposals(proposals, kept, placement)
-        return better, hopeful
+        return better, False
 
     def proposal_checks(self) -> int:
         """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
@@ -530,8 +544,8 @@ class _Improver:
                 continue
             if any(_alike(proposal, other) for other in failed):
                 continue  # as good as one that failed: try something else
-            if proposal.blocked and sum(p.blocked > 0 for p in failed) >= BLOCKED_TRIES:
-                continue  # a move that looked blocked is rarely clear: try those few times
+            if proposal.blocked:
+                continue  # a move that looked blocked is rarely clear, and costly to find blocked
             if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
                 break
             tail = self.checked_tail(proposal, placement)
@@ -591,10 +605,14 @@ class _Improver:
         return None
 
     def fewer_transfers(self) -> None:
-        """From the start of each transfer but the last, earliest first: carry the object to the goal."""
+        """From the start of each transfer but the last, earliest first: carry the object to the goal. An
+        attempt starts only when the work it may take (every individual of every round) fits in
+        :data:`TRANSFER_SHARE` of the budget."""
+        settings = self.ctx.settings
+        attempt = EVALUATION_WORK * settings.population * settings.generations * settings.search_rounds
         transfers = [i for i, p in enumerate(self.pieces) if p.kind == "transfer"]
         for index in transfers[:-1]:
-            if not self.budget.left(TRANSFER_SHARE):
+            if not self.budget.left(TRANSFER_SHARE) or self.budget.spent + attempt > TRANSFER_SHARE * self.budget.total:
                 return
             piece = self.pieces[index]
             assert piece.grasp_rel is not None
@@ -625,27 +643,43 @@ class _Improver:
         self.shortcuts += 1
         return True
 
-    def whole_segments(self) -> None:
-        """Each segment as one straight move, when that is clear."""
-        for index, piece in enumerate(self.pieces):
-            if not self.budget.left():
-                return
-            w = piece.waypoints
-            if len(w) > 2:
-                self.try_shortcut(index, 1, len(w) - 2, w[0], w[-1])
+    def greedy_shortcuts(self) -> None:
+        """Along each segment, from its first waypoint: a straight move to the farthest later waypoint that
+        is clear (the last, else halfway there, a quarter, ...), then on from there; the longest segments
+        (in joint travel) first."""
+        order = np.argsort([-joint_travel([p.waypoints]) for p in self.pieces], kind="stable")
+        for index in order.tolist():
+            piece = self.pieces[index]
+            i = 0
+            while i < len(piece.waypoints) - 2:
+                if not self.budget.left():
+                    return
+                last = len(piece.waypoints) - 1
+                span = last - i
+                while span >= 2 and not self.try_shortcut(
+                    index, i + 1, i + span - 1, piece.waypoints[i], piece.waypoints[i + span]
+                ):
+                    if not self.budget.left():
+                        return
+                    span //= 2
+                i += 1
 
     def random_shortcuts(self) -> None:
         """Pairs of waypoints, pairs of points along a segment's path, and one joint between two such points
         (:meth:`try_partial`), drawn at random, until the work is spent."""
         rng = self.ctx.rng
         failures = 0
+        accepted = True
+        travels = np.zeros(0)
         while self.budget.left() and failures < 200:
-            travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
+            if accepted:  # the pieces changed: how much each could still gain
+                travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
             if travels.sum() <= 0:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
             w = self.pieces[index].waypoints
             kind = rng.random()
+            self.budget.spend(ATTEMPT_WORK)  # drawing and scoring it, before any check
             if kind < 1.0 / 3.0:  # two waypoints at least two apart
                 i, j = sorted(rng.choice(len(w), size=2, replace=False).tolist())
                 accepted = j - i >= 2 and self.try_shortcut(index, i + 1, j - 1, w[i], w[j])
@@ -693,7 +727,7 @@ class _Improver:
         self.rebuild()
         self.fewer_transfers()
         self.prune()
-        self.whole_segments()
+        self.greedy_shortcuts()
         self.random_shortcuts()
         return self.pieces
 

@@ -149,6 +149,16 @@ REBUILD_TRIES = 6
 ALIKE_RAD = 0.3
 #: Detours tried around a straight move of a proposal that is not clear.
 DETOURS = 3
+#: Proposals with a move that looked blocked checked per placement at most (their blocked moves are routed
+#: by :meth:`_Improver.connect`).
+BLOCKED_TRIES = 3
+#: Share of the budget one :meth:`_Improver.connect` may spend at most, and its tree extensions at most.
+CONNECT_SHARE, CONNECT_STEPS = 0.04, 120
+#: Largest joint step (rad, largest joint difference) of one tree extension of :meth:`_Improver.connect`.
+CONNECT_STEP_RAD = 0.35
+#: A move whose ends both lie this close (rad, largest joint difference) to those of a move found blocked
+#: in the same mode is taken as blocked too.
+MOVE_ALIKE_RAD = 0.1
 #: A partial shortcut spans at most this many pieces of the path.
 PARTIAL_PIECES = 8
 #: Joint travel below this (rad) counts as equal.
@@ -411,6 +421,16 @@ def _point_at(waypoints: np.ndarray, cumulative: np.ndarray, travel: float) -> t
     return k, point
 
 
+def _branch(tree: tuple[list[np.ndarray], list[int]], node: int) -> list[np.ndarray]:
+    """The nodes of ``tree`` (nodes, parents) from its root to ``node``."""
+    nodes, parents = tree
+    branch = []
+    while node >= 0:
+        branch.append(nodes[node])
+        node = parents[node]
+    return branch[::-1]
+
+
 def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
     """Lexicographic (transfers, travel, waypoints); travel within :data:`TRAVEL_EPS` counts as equal."""
     if new[0] != old[0]:
@@ -443,6 +463,7 @@ class _Improver:
         self.min_margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
         self.shortcuts = 0
         self.rebuilt = 0
+        self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
@@ -474,7 +495,7 @@ class _Improver:
 
     def rebuild(self) -> None:
         """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
-        none after a pass that met a placement from which every proposal looked blocked."""
+        none after a pass that found nothing where every proposal from every placement looked blocked."""
         idle = 0
         while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
             better, blocked = self.rebuild_pass()
@@ -485,10 +506,11 @@ class _Improver:
     def rebuild_pass(self) -> tuple[bool, bool]:
         """From each placement of the plan, earliest first: finish with straight moves through other grasps,
         postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
-        A placement from which every proposal looked blocked ends the pass. Returns whether the plan got
-        better, and whether such a placement ended the pass."""
+        Proposals with a move that looked blocked are checked too, fewer (:meth:`try_proposals`). Returns
+        whether the plan got better, and whether every proposal from every placement looked blocked."""
         position = 0
         better = False
+        all_blocked = True
         while self.budget.left(REBUILD_SHARE):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
@@ -520,10 +542,9 @@ class _Improver:
             )
             self.budget.spend_checks(effort.checks, effort.calls)
             self.budget.spend(math.ceil(IK_WORK * effort.steps))
-            if all(p.blocked for p in proposals):
-                return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts
+            all_blocked &= all(p.blocked for p in proposals)
             better |= self.try_proposals(proposals, kept, placement)
-        return better, False
+        return better, all_blocked
 
     def proposal_checks(self) -> int:
         """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
@@ -532,29 +553,54 @@ class _Improver:
         return max(0, int(PROPOSE_SHARE * left / self.budget.check_work))
 
     def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
-        """The first of ``proposals`` (after the first ``kept`` pieces) whose moves are clear and that makes
-        the plan better replaces the plan's end; whether one did."""
+        """Check ``proposals`` (after the first ``kept`` pieces) in their order; each whose moves are clear and
+        that makes the plan better replaces the plan's end, and the later ones must beat it. At most
+        :data:`REBUILD_TRIES` failures among those whose moves all looked clear and :data:`BLOCKED_TRIES` among
+        the others (their blocked moves routed by :meth:`connect`). Returns whether the plan got better."""
         before = self.pieces[:kept]
         transfers = sum(p.kind == "transfer" for p in before)
-        score = _score(self.pieces)
         travel_before = joint_travel([p.waypoints for p in before])
         failed: list[Proposal] = []
+        failures = {False: 0, True: 0}  # by whether the proposal looked blocked
+        limits = {False: REBUILD_TRIES, True: BLOCKED_TRIES}
+        better = False
         for proposal in proposals:
+            score = _score(self.pieces)
             if not _better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
                 continue
-            if any(_alike(proposal, other) for other in failed):
+            if any(_alike(proposal, other) for other in failed) or self.known_blocked(proposal):
                 continue  # as good as one that failed: try something else
-            if proposal.blocked:
-                continue  # a move that looked blocked is rarely clear, and costly to find blocked
-            if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
+            blocked = proposal.blocked > 0
+            if failures[blocked] >= limits[blocked]:
+                if all(failures[k] >= limits[k] for k in failures):
+                    break
+                continue
+            if not self.budget.left(REBUILD_SHARE):
                 break
             tail = self.checked_tail(proposal, placement)
             if tail is not None and _better(score, _score(before + tail)):
                 self.pieces = before + tail
                 self.rebuilt += 1
-                return True
+                better = True
+                continue
             failed.append(proposal)
-        return False
+            failures[blocked] += 1
+        return better
+
+    def proposal_moves(self, proposal: Proposal) -> list[tuple[str, np.ndarray, np.ndarray]]:
+        """``(kind, start, end)`` of each move of ``proposal`` (a transit, then a transfer, ...)."""
+        keys = proposal.keys
+        return [("transit" if k % 2 == 0 else "transfer", keys[k], keys[k + 1]) for k in range(len(keys) - 1)]
+
+    def known_blocked(self, proposal: Proposal) -> bool:
+        """Whether a move of ``proposal`` is like one found blocked before (:data:`MOVE_ALIKE_RAD`)."""
+        return any(
+            kind == other_kind
+            and float(np.max(np.abs(a - other_a))) <= MOVE_ALIKE_RAD
+            and float(np.max(np.abs(b - other_b))) <= MOVE_ALIKE_RAD
+            for kind, a, b in self.proposal_moves(proposal)
+            for other_kind, other_a, other_b in self.blocked_moves
+        )
 
     def checked_tail(self, proposal: Proposal, placement: np.ndarray) -> list[_Piece] | None:
         """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked
@@ -571,11 +617,77 @@ class _Improver:
             pose = transfer.end_pose(self.world)
         for index in np.argsort([joint_travel([p.waypoints]) for p in pieces], kind="stable"):
             piece = pieces[index]
-            path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], proposal.routes[index])
+            a, b = piece.waypoints[0], piece.waypoints[-1]
+            path = self.route(piece, a, b, proposal.routes[index])
+            if path is None and proposal.routes[index] < 0 and not self.budget.stop():
+                path = self.connect(piece, a, b)
             if path is None:
+                self.blocked_moves.append((piece.kind, a, b))
                 return None
             piece.waypoints = path
         return pieces
+
+    def connect(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+        """A path from ``a`` to ``b`` in ``piece``'s mode around what blocks the straight move: two trees
+        grown towards each other (RRT-Connect: from ``a`` and from ``b`` in turn, towards configurations drawn
+        within the joint limits, each extension at most :data:`CONNECT_STEP_RAD` per joint and checked
+        continuously), then shortened greedily. At most :data:`CONNECT_STEPS` extensions and
+        :data:`CONNECT_SHARE` of the budget; ``None`` when the trees did not meet."""
+        lower, upper = self.world.robot.joint_lower, self.world.robot.joint_upper
+        limit = self.budget.spent + CONNECT_SHARE * self.budget.total
+        trees = [([np.asarray(a, float)], [-1]), ([np.asarray(b, float)], [-1])]
+        rng = self.ctx.rng
+        for _ in range(CONNECT_STEPS):
+            if self.budget.spent > limit or not self.budget.left():
+                return None
+            target = rng.uniform(lower, upper)
+            grown = self.extend(piece, trees[0], target)
+            if grown is not None:
+                reached = self.extend(piece, trees[1], trees[0][0][grown], greedy=True)
+                if reached is not None and np.array_equal(trees[1][0][reached], trees[0][0][grown]):
+                    halves = [_branch(trees[0], grown), _branch(trees[1], reached)]
+                    if len(halves[0]) and not np.array_equal(halves[0][0], a):
+                        halves.reverse()
+                    path = np.array([*halves[0], *halves[1][::-1][1:]])
+                    return self.shortened(piece, path, limit)
+            trees.reverse()
+        return None
+
+    def extend(
+        self, piece: _Piece, tree: tuple[list[np.ndarray], list[int]], target: np.ndarray, *, greedy: bool = False
+    ) -> int | None:
+        """Grow ``tree`` (nodes, parents) from its node nearest ``target`` towards it by steps of at most
+        :data:`CONNECT_STEP_RAD` (one step, or while clear when ``greedy``); the index of the last node added,
+        ``None`` when not even one step was clear."""
+        nodes, parents = tree
+        near = int(np.argmin(np.max(np.abs(np.array(nodes) - target), axis=1)))
+        added = None
+        while True:
+            q = nodes[near]
+            gap = float(np.max(np.abs(target - q)))
+            if gap <= 1e-12:
+                return added if added is not None else near
+            step = target if gap <= CONNECT_STEP_RAD else q + (CONNECT_STEP_RAD / gap) * (target - q)
+            if not self.clear(piece, q, step):
+                return added
+            nodes.append(step)
+            parents.append(near)
+            near = added = len(nodes) - 1
+            if not greedy:
+                return added
+
+    def shortened(self, piece: _Piece, path: np.ndarray, limit: float) -> np.ndarray:
+        """``path`` with each waypoint joined straight to the farthest later one that is clear (while the work
+        stays within ``limit``)."""
+        kept = [path[0]]
+        i = 0
+        while i < len(path) - 1:
+            j = len(path) - 1
+            while j > i + 1 and (self.budget.spent > limit or not self.clear(piece, path[i], path[j])):
+                j -= 1
+            kept.append(path[j])
+            i = j
+        return np.array(kept)
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:
         """Waypoints from ``a`` to ``b`` in ``piece``'s mode, each move checked continuously: the ways of

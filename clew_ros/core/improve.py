@@ -152,6 +152,10 @@ DETOURS = 3
 #: Proposals with a move that looked blocked checked per placement at most (their blocked moves are routed
 #: by :meth:`_Improver.connect`).
 BLOCKED_TRIES = 3
+#: Routings by :meth:`_Improver.connect` that may fail before the first success; after that many failures and
+#: none found, proposals with a move that looked blocked are no longer checked (a cluttered world: the budget
+#: is left to the shortcuts).
+CONNECT_PROBES = 3
 #: Share of the budget one :meth:`_Improver.connect` may spend at most, and its tree extensions at most.
 CONNECT_SHARE, CONNECT_STEPS = 0.04, 120
 #: Largest joint step (rad, largest joint difference) of one tree extension of :meth:`_Improver.connect`.
@@ -464,6 +468,7 @@ class _Improver:
         self.shortcuts = 0
         self.rebuilt = 0
         self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
+        self.connected = [0, 0]  # routings by connect that failed, that succeeded
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
@@ -495,7 +500,7 @@ class _Improver:
 
     def rebuild(self) -> None:
         """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
-        none after a pass that found nothing where every proposal from every placement looked blocked."""
+        none after a pass that found nothing and met a placement from which every proposal looked blocked."""
         idle = 0
         while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
             better, blocked = self.rebuild_pass()
@@ -506,11 +511,11 @@ class _Improver:
     def rebuild_pass(self) -> tuple[bool, bool]:
         """From each placement of the plan, earliest first: finish with straight moves through other grasps,
         postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
-        Proposals with a move that looked blocked are checked too, fewer (:meth:`try_proposals`). Returns
-        whether the plan got better, and whether every proposal from every placement looked blocked."""
+        Proposals with a move that looked blocked are checked too, fewer (:meth:`try_proposals`); a placement
+        from which every proposal looked blocked and none made the plan better ends the pass. Returns whether
+        the plan got better, and whether such a placement ended the pass."""
         position = 0
         better = False
-        all_blocked = True
         while self.budget.left(REBUILD_SHARE):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
@@ -542,9 +547,11 @@ class _Improver:
             )
             self.budget.spend_checks(effort.checks, effort.calls)
             self.budget.spend(math.ceil(IK_WORK * effort.steps))
-            all_blocked &= all(p.blocked for p in proposals)
-            better |= self.try_proposals(proposals, kept, placement)
-        return better, all_blocked
+            found = self.try_proposals(proposals, kept, placement)
+            better |= found
+            if all(p.blocked for p in proposals) and not found:
+                return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts
+        return better, False
 
     def proposal_checks(self) -> int:
         """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
@@ -571,6 +578,8 @@ class _Improver:
             if any(_alike(proposal, other) for other in failed) or self.known_blocked(proposal):
                 continue  # as good as one that failed: try something else
             blocked = proposal.blocked > 0
+            if blocked and self.connected[1] == 0 and self.connected[0] >= CONNECT_PROBES:
+                failures[blocked] = limits[blocked]  # routing around blocked moves never worked here
             if failures[blocked] >= limits[blocked]:
                 if all(failures[k] >= limits[k] for k in failures):
                     break
@@ -621,6 +630,7 @@ class _Improver:
             path = self.route(piece, a, b, proposal.routes[index])
             if path is None and proposal.routes[index] < 0 and not self.budget.stop():
                 path = self.connect(piece, a, b)
+                self.connected[path is not None] += 1
             if path is None:
                 self.blocked_moves.append((piece.kind, a, b))
                 return None

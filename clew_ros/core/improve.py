@@ -135,6 +135,8 @@ REFERENCE_PAIRS = 70
 MIN_MARGIN_FACTOR = 0.5
 #: Largest margin (m) the first level of a straight-move check asks for.
 MAX_MARGIN_M = 0.05
+#: A long straight move is first rejected by every this-many-th midpoint of its first level, if one is invalid.
+COARSE_STRIDE = 4
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5
 #: Share of the budget that rebuilding the manipulation from straight moves may start in.
@@ -300,6 +302,16 @@ def straight_move_clear(
     # level k: 2**k pieces, each cleared by its midpoint with margin motion / 2**(k + 1)
     level = max(0, math.ceil(math.log2(max(motion / (2.0 * MAX_MARGIN_M), 1.0))))
     pending = np.arange(2**level, dtype=float)  # piece indices at this level
+    if len(pending) >= 2 * COARSE_STRIDE:  # a long move: every COARSE_STRIDE-th midpoint first, valid at all?
+        t = (pending[COARSE_STRIDE // 2 :: COARSE_STRIDE] + 0.5) / 2.0**level
+        q = a + t[:, None] * (b - a)
+        poses = (
+            np.broadcast_to(resting, (len(q), 3))
+            if grasp_rel is None
+            else compose(tip_poses(world.robot, q), grasp_rel)
+        )
+        if not _all_valid(world, q, np.asarray(poses), budget):
+            return False  # most blocked moves end here, for a fraction of the first level's checks
     while len(pending):
         if budget is not None and budget.stop():
             return False

@@ -157,7 +157,7 @@ BLOCKED_TRIES = 3
 #: Routings by :meth:`_Improver.connect` that may fail before the first success; after that many failures and
 #: none found, proposals with a move that looked blocked are no longer checked (a cluttered world: the budget
 #: is left to the shortcuts).
-CONNECT_PROBES = 3
+CONNECT_PROBES = 2
 #: Share of the budget one :meth:`_Improver.connect` may spend at most, and its tree extensions at most.
 CONNECT_SHARE, CONNECT_STEPS = 0.04, 120
 #: Largest joint step (rad, largest joint difference) of one tree extension of :meth:`_Improver.connect`.
@@ -171,6 +171,9 @@ PARTIAL_PIECES = 8
 TRAVEL_EPS = 1e-9
 #: Step (rad per joint) of the final check, the validator's.
 CHECK_STEP_RAD = 0.002
+#: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
+#: unit of :func:`check_work`. The final check of the segments changed so far is kept out of the budget.
+DENSE_WORK = 0.5
 
 
 def joint_travel(segments: list[Segment] | list[np.ndarray]) -> float:
@@ -243,6 +246,7 @@ class _Budget:
         self.evaluations_at_start = ctx.counters.evaluations
         self.stopped = False
         self.check_work = check_work(ctx.world)
+        self.reserve = 0  # work the final check of the segments changed so far will take
 
     def spend(self, units: int) -> None:
         self.spent += units
@@ -255,7 +259,7 @@ class _Budget:
         """Whether work is left (within ``share`` of the budget) and the clock allows more."""
         if self.stop():
             return False
-        return self.spent < share * self.total
+        return self.spent + self.reserve < share * self.total
 
     def stop(self) -> bool:
         if not self.stopped and self.ctx.termination():
@@ -385,6 +389,14 @@ def _margin_parts(
     return [(without_object, world.robot.dof), (links_but_last, world.robot.dof - 1)]
 
 
+def _dense_count(waypoints: np.ndarray) -> int:
+    """Configurations the validator's check of a path takes (:data:`CHECK_STEP_RAD` per joint at most)."""
+    if len(waypoints) < 2:
+        return 1
+    steps = np.ceil(np.max(np.abs(np.diff(waypoints, axis=0)), axis=1) / CHECK_STEP_RAD)
+    return 1 + int(np.maximum(steps, 1).sum())
+
+
 def _dense_clear(world: World, piece: _Piece) -> bool:
     """The validator's check of one segment: configurations at most 0.002 rad apart per joint."""
     configurations = [piece.waypoints[:1]]
@@ -474,6 +486,7 @@ class _Improver:
         self.ctx = ctx
         self.world = ctx.world
         self.pieces = pieces
+        self.first = [p.waypoints for p in pieces]
         self.goal = goal
         self.budget = _Budget(ctx, ctx.settings.improve_time * WORK_PER_SECOND)
         self.min_margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
@@ -493,6 +506,15 @@ class _Improver:
             budget=self.budget,
         )
 
+    def reserve(self) -> None:
+        """Keep the work of the final check of the segments changed so far out of the budget (:data:`DENSE_WORK`)."""
+        count = sum(
+            _dense_count(piece.waypoints)
+            for index, piece in enumerate(self.pieces)
+            if index >= len(self.first) or not np.array_equal(piece.waypoints, self.first[index])
+        )
+        self.budget.reserve = math.ceil(DENSE_WORK * self.budget.check_work * count)
+
     def prune(self) -> None:
         for piece in self.pieces:
             pruned = _prune(piece.waypoints)
@@ -500,6 +522,7 @@ class _Improver:
                 (0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([pruned]), len(pruned))
             ):
                 piece.waypoints = pruned
+        self.reserve()
 
     def cuts(self) -> list[tuple[int, np.ndarray, np.ndarray]]:
         """Where the plan could be finished differently: ``(kept, configuration, placement)`` for the start
@@ -601,6 +624,7 @@ class _Improver:
             tail = self.checked_tail(proposal, placement)
             if tail is not None and _better(score, _score(before + tail)):
                 self.pieces = before + tail
+                self.reserve()
                 self.rebuilt += 1
                 better = True
                 continue
@@ -759,6 +783,7 @@ class _Improver:
             candidate = [*self.pieces[:index], carried]
             if _better(_score(self.pieces), _score(candidate)):
                 self.pieces = candidate
+                self.reserve()
                 return
 
     def try_shortcut(self, index: int, first: int, last: int, a: np.ndarray, b: np.ndarray) -> bool:
@@ -775,6 +800,7 @@ class _Improver:
             return False
         piece.waypoints = new
         self.shortcuts += 1
+        self.reserve()
         return True
 
     def greedy_shortcuts(self) -> None:
@@ -854,6 +880,7 @@ class _Improver:
             return False
         piece.waypoints = _prune(new)
         self.shortcuts += 1
+        self.reserve()
         return True
 
     def run(self) -> list[_Piece]:

@@ -20,11 +20,17 @@ or put down far from where a regrasp was needed. Once a plan is found,
    a quick sampled check found blocked, and checked in that order: each
    move continuously (below), straight or one joint after the other (as
    long in joint travel), else through a configuration drawn inside the box
-   between its ends (as long too) or around its middle. The first that makes
-   the plan better replaces the plan's end from that placement on. Passes
-   repeat while they find something (:data:`REBUILD_IDLE_PASSES`); a placement
-   from which every proposal looked blocked (a cluttered world) ends the
-   rebuilding, leaving the budget to shortcuts.
+   between its ends (as long too) or around its middle. Proposals with a move
+   that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`): such a
+   move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
+   continuously, then shortened), given up after :data:`CONNECT_PROBES`
+   failed routings and none found. A move found blocked makes alike proposals
+   (both ends within :data:`MOVE_ALIKE_RAD`) skipped. Each proposal that makes
+   the plan better replaces the plan's end from that placement on, and the
+   later ones must beat it. Passes repeat while they find something
+   (:data:`REBUILD_IDLE_PASSES`); a placement from which every proposal looked
+   blocked and none worked (a cluttered world) ends the rebuilding, leaving
+   the budget to shortcuts.
 3. **Fewer transfers**: from the start of each transfer but the last
    (earliest first), SEARCH_TRANSFER tries to carry the object, with that
    transfer's grasp, straight to the goal; the first success replaces every
@@ -63,7 +69,10 @@ pass of the validity test (:func:`clew_ros.core.kernel.clearly_valid`)
 clears the midpoint of a piece ``[t0, t1]`` with every distance past its
 threshold by more than ``V (t1 - t0) / 2``, the whole piece is valid, at any
 checking resolution.
-Pieces that fail are halved (the margin halves with them) down to
+A long move is first rejected when one of every :data:`COARSE_STRIDE`-th
+midpoint of its first level is not valid at all (most blocked shortcuts end
+there, at a fraction of the cost). Pieces that fail are halved (the margin
+halves with them) down to
 :data:`MIN_MARGIN_FACTOR` x ``planner.clearance``; a piece still not
 cleared rejects the move, and so does a midpoint that is not valid at all
 (at once). A shortcut therefore keeps at least that clearance everywhere,
@@ -79,10 +88,12 @@ in a world whose check compares more pieces (:func:`check_work`), plus
 :data:`CALL_WORK` per call of the check, :data:`ATTEMPT_WORK` per shortcut
 attempt, :data:`IK_WORK` per step of inverse kinematics and
 :data:`EVALUATION_WORK` per genetic-algorithm individual.
-Attempts run until the work is spent, so the same seed gives the same plan
-on any machine. Only the planner's time limit and cancel stop it by the
-clock (between checks, well within 100 ms), and then the best plan so far
-is returned.
+The final check of the segments changed so far at the validator's step is
+reserved from the budget as they change (:data:`DENSE_WORK` per configuration
+and unit of :func:`check_work`), so it fits in the budget too. Attempts run
+until the work is spent, so the same seed gives the same plan on any machine.
+Only the planner's time limit and cancel stop it by the clock (between
+checks, well within 100 ms), and then the best plan so far is returned.
 """
 
 from __future__ import annotations

@@ -26,9 +26,10 @@ joints of ``|dq|``, rad), with at most ``max_transfers`` transfers (default 2: o
 **Error bound.** On its graph (lattice, grasp, goal and start configurations, subsampled
 releases) the reference is the shortest plan, up to the estimates' slack. Against the continuous
 problem, its travel exceeds the shortest plan's through the same modes by at most ``2 h`` per
-off-lattice end (the start, each grasp, an exact goal configuration: it joins the lattice at a
-corner of its cell, at most ``h`` of travel, and back) -- ``4 h`` per segment, so 0.24 rad for
-three segments at 0.02 rad -- plus what a release restricted to the subsampled nodes costs; passages
+off-lattice end of a segment (the start, each grasp configuration, which ends a transit and starts
+a transfer, an exact goal configuration: each joins the lattice at a corner of its cell, at most
+``h`` of travel, and back): ``8 h`` for one transfer, ``12 h`` (0.24 rad at 0.02 rad) with one
+regrasp; plus what a release restricted to the subsampled nodes costs; passages
 narrower than about ``h`` in joint space (or cleared by less than the motion bound of an edge)
 are not found. Every plan it returns is checked with :func:`clew_ros.core.plan.validate_plan`
 (its lattice paths are listed node by node, so the validator checks exactly the configurations
@@ -39,7 +40,8 @@ the lattice did, or edges cleared continuously).
 transfers next to the planner's over seeds ``0..N-1``, each run exactly as ``clew_plan WORLD
 --seed S`` plans (:func:`clew_ros.core.clew.plan`, then :func:`clew_ros.core.plan.checked_plan`):
 median travel ratio planner / reference, the share of runs with transfers at most the
-reference's + 1, and the first plan's travel against the improved one's.
+reference's + 1, and the first plan's travel against the improved one's. "capped" after the
+reference's figure: a cap cut its search short (the plan is the best it found).
 """
 
 from __future__ import annotations

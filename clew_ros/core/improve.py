@@ -20,18 +20,29 @@ or put down far from where a regrasp was needed. Once a plan is found,
    a quick sampled check found blocked, and checked in that order: each
    move continuously (below), straight or one joint after the other (as
    long in joint travel), else through a configuration drawn inside the box
-   between its ends (as long too) or around its middle. The first that makes
-   the plan better replaces the plan's end from that placement on. Passes
-   repeat while they find something (:data:`REBUILD_IDLE_PASSES`), and stop
-   in a cluttered world where every proposal looked blocked.
+   between its ends (as long too) or around its middle. Proposals with a move
+   that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`): such a
+   move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
+   continuously, then shortened), given up after :data:`CONNECT_PROBES`
+   failed routings and none found. A move found blocked makes alike proposals
+   (both ends within :data:`MOVE_ALIKE_RAD`) skipped. Each proposal that makes
+   the plan better replaces the plan's end from that placement on, and the
+   later ones must beat it. Passes repeat while they find something
+   (:data:`REBUILD_IDLE_PASSES`); a placement from which every proposal looked
+   blocked and none worked (a cluttered world) ends the rebuilding, leaving
+   the budget to shortcuts.
 3. **Fewer transfers**: from the start of each transfer but the last
    (earliest first), SEARCH_TRANSFER tries to carry the object, with that
    transfer's grasp, straight to the goal; the first success replaces every
-   later segment.
+   later segment. A search may take a whole population's decoding for
+   every generation and round, more than the default budget, so it starts
+   only when that much work fits in :data:`TRANSFER_SHARE` of the budget
+   (a larger ``planner.improve_time``).
 4. **Shortcuts**: a sub-path of one segment is replaced by one straight
-   joint-space move (all joints together), first each segment's whole path,
-   then pairs of waypoints and pairs of points along the path drawn by the
-   run's generator; or, between two such points, one joint is made to move
+   joint-space move (all joints together): first greedily, from each waypoint
+   to the farthest later one that is clear (the segment's last, else halfway
+   there, a quarter, ...), then between pairs of waypoints and pairs of points
+   along the path drawn by the run's generator; or, between two such points, one joint is made to move
    evenly while the others move as before (a partial shortcut: a joint that
    went back and forth there goes straight). A segment's end points never
    change, so every grasp and ungrasp stays where it was (the tip still
@@ -58,7 +69,10 @@ pass of the validity test (:func:`clew_ros.core.kernel.clearly_valid`)
 clears the midpoint of a piece ``[t0, t1]`` with every distance past its
 threshold by more than ``V (t1 - t0) / 2``, the whole piece is valid, at any
 checking resolution.
-Pieces that fail are halved (the margin halves with them) down to
+A long move is first rejected when one of every :data:`COARSE_STRIDE`-th
+midpoint of its first level is not valid at all (most blocked shortcuts end
+there, at a fraction of the cost). Pieces that fail are halved (the margin
+halves with them) down to
 :data:`MIN_MARGIN_FACTOR` x ``planner.clearance``; a piece still not
 cleared rejects the move, and so does a midpoint that is not valid at all
 (at once). A shortcut therefore keeps at least that clearance everywhere,
@@ -71,12 +85,15 @@ returned.
 in work, not seconds: :data:`WORK_PER_SECOND` units per second of
 ``planner.improve_time``; a configuration checked costs one unit, or more
 in a world whose check compares more pieces (:func:`check_work`), plus
-:data:`CALL_WORK` per call of the check, :data:`IK_WORK` per step of inverse
-kinematics and :data:`EVALUATION_WORK` per genetic-algorithm individual.
-Attempts run until the work is spent, so the same seed gives the same plan
-on any machine. Only the planner's time limit and cancel stop it by the
-clock (between checks, well within 100 ms), and then the best plan so far
-is returned.
+:data:`CALL_WORK` per call of the check, :data:`ATTEMPT_WORK` per shortcut
+attempt, :data:`IK_WORK` per step of inverse kinematics and
+:data:`EVALUATION_WORK` per genetic-algorithm individual.
+The final check of the segments changed so far at the validator's step is
+reserved from the budget as they change (:data:`DENSE_WORK` per configuration
+and unit of :func:`check_work`), so it fits in the budget too. Attempts run
+until the work is spent, so the same seed gives the same plan on any machine.
+Only the planner's time limit and cancel stop it by the clock (between
+checks, well within 100 ms), and then the best plan so far is returned.
 """
 
 from __future__ import annotations
@@ -97,6 +114,7 @@ from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
 
 __all__ = [
+    "ATTEMPT_WORK",
     "CALL_WORK",
     "EVALUATION_WORK",
     "IK_WORK",
@@ -110,13 +128,16 @@ __all__ = [
     "straight_move_clear",
 ]
 
-#: Work units per second of ``planner.improve_time`` (about 3 microseconds each on the machine of
-#: docs/benchmarks.md: improvement takes about its budget there, and the same work everywhere).
-WORK_PER_SECOND = 3.0e5
+#: Work units per second of ``planner.improve_time`` (about 4 microseconds each on the machine of
+#: docs/benchmarks.md, 2 cores shared with other jobs: improvement takes about its budget there, and the
+#: same work everywhere).
+WORK_PER_SECOND = 2.5e5
 #: Work of one call of the compiled check (its Python overhead), in units of one configuration.
 CALL_WORK = 30
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
+#: Work of one shortcut attempt besides its checks (drawing it, scoring the new path), in units.
+ATTEMPT_WORK = 100
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
 #: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
@@ -125,6 +146,8 @@ REFERENCE_PAIRS = 70
 MIN_MARGIN_FACTOR = 0.5
 #: Largest margin (m) the first level of a straight-move check asks for.
 MAX_MARGIN_M = 0.05
+#: A long straight move is first rejected by every this-many-th midpoint of its first level, if one is invalid.
+COARSE_STRIDE = 4
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5
 #: Share of the budget that rebuilding the manipulation from straight moves may start in.
@@ -133,18 +156,35 @@ REBUILD_SHARE = 0.6
 PROPOSE_SHARE = 0.5
 #: Rebuilding stops after this many passes in a row that found nothing better.
 REBUILD_IDLE_PASSES = 2
-#: Proposals checked per placement at most, and of them with a move that looked blocked.
-REBUILD_TRIES, BLOCKED_TRIES = 6, 0
+#: Proposals checked per placement at most (none with a move that looked blocked).
+REBUILD_TRIES = 6
 #: Proposals whose key configurations all lie this close (rad) to one that failed are not checked.
 ALIKE_RAD = 0.3
 #: Detours tried around a straight move of a proposal that is not clear.
 DETOURS = 3
+#: Proposals with a move that looked blocked checked per placement at most (their blocked moves are routed
+#: by :meth:`_Improver.connect`).
+BLOCKED_TRIES = 3
+#: Routings by :meth:`_Improver.connect` that may fail before the first success; after that many failures and
+#: none found, proposals with a move that looked blocked are no longer checked (a cluttered world: the budget
+#: is left to the shortcuts).
+CONNECT_PROBES = 2
+#: Share of the budget one :meth:`_Improver.connect` may spend at most, and its tree extensions at most.
+CONNECT_SHARE, CONNECT_STEPS = 0.04, 120
+#: Largest joint step (rad, largest joint difference) of one tree extension of :meth:`_Improver.connect`.
+CONNECT_STEP_RAD = 0.35
+#: A move whose ends both lie this close (rad, largest joint difference) to those of a move found blocked
+#: in the same mode is taken as blocked too.
+MOVE_ALIKE_RAD = 0.1
 #: A partial shortcut spans at most this many pieces of the path.
 PARTIAL_PIECES = 8
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
 #: Step (rad per joint) of the final check, the validator's.
 CHECK_STEP_RAD = 0.002
+#: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
+#: unit of :func:`check_work`. The final check of the segments changed so far is kept out of the budget.
+DENSE_WORK = 0.5
 
 
 def joint_travel(segments: list[Segment] | list[np.ndarray]) -> float:
@@ -217,6 +257,7 @@ class _Budget:
         self.evaluations_at_start = ctx.counters.evaluations
         self.stopped = False
         self.check_work = check_work(ctx.world)
+        self.reserve = 0  # work the final check of the segments changed so far will take
 
     def spend(self, units: int) -> None:
         self.spent += units
@@ -229,7 +270,7 @@ class _Budget:
         """Whether work is left (within ``share`` of the budget) and the clock allows more."""
         if self.stop():
             return False
-        return self.spent < share * self.total
+        return self.spent + self.reserve < share * self.total
 
     def stop(self) -> bool:
         if not self.stopped and self.ctx.termination():
@@ -276,6 +317,16 @@ def straight_move_clear(
     # level k: 2**k pieces, each cleared by its midpoint with margin motion / 2**(k + 1)
     level = max(0, math.ceil(math.log2(max(motion / (2.0 * MAX_MARGIN_M), 1.0))))
     pending = np.arange(2**level, dtype=float)  # piece indices at this level
+    if len(pending) >= 2 * COARSE_STRIDE:  # a long move: every COARSE_STRIDE-th midpoint first, valid at all?
+        t = (pending[COARSE_STRIDE // 2 :: COARSE_STRIDE] + 0.5) / 2.0**level
+        q = a + t[:, None] * (b - a)
+        poses = (
+            np.broadcast_to(resting, (len(q), 3))
+            if grasp_rel is None
+            else compose(tip_poses(world.robot, q), grasp_rel)
+        )
+        if not _all_valid(world, q, np.asarray(poses), budget):
+            return False  # most blocked moves end here, for a fraction of the first level's checks
     while len(pending):
         if budget is not None and budget.stop():
             return False
@@ -294,7 +345,7 @@ def straight_move_clear(
             budget.spend_checks(len(q))
         if clear.all():
             return True
-        # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
+        # a midpoint that is not valid rejects the move at once (halving would only find it later)
         if margin <= min_margin or not _all_valid(world, q[~clear], np.asarray(poses)[~clear], budget):
             return False
         pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
@@ -315,9 +366,11 @@ def _cleared(parts: list[tuple[PackedWorld, int]], q: np.ndarray, poses: np.ndar
 
 
 def _all_valid(world: World, q: np.ndarray, poses: np.ndarray, budget: _Budget | None) -> bool:
+    """Whether every configuration is valid beyond rounding (the compiled first pass alone: one that only
+    touches is taken as invalid, which can only reject a move, never accept one)."""
     if budget is not None:
         budget.spend_checks(len(q))
-    return bool(is_valid(world, q, poses).all())
+    return bool(clearly_valid(packed_world(world), q, poses).all())
 
 
 def _margin_parts(
@@ -345,6 +398,14 @@ def _margin_parts(
         return None
     without_object, links_but_last = packed_carrying(world)
     return [(without_object, world.robot.dof), (links_but_last, world.robot.dof - 1)]
+
+
+def _dense_count(waypoints: np.ndarray) -> int:
+    """Configurations the validator's check of a path takes (:data:`CHECK_STEP_RAD` per joint at most)."""
+    if len(waypoints) < 2:
+        return 1
+    steps = np.ceil(np.max(np.abs(np.diff(waypoints, axis=0)), axis=1) / CHECK_STEP_RAD)
+    return 1 + int(np.maximum(steps, 1).sum())
 
 
 def _dense_clear(world: World, piece: _Piece) -> bool:
@@ -399,6 +460,16 @@ def _point_at(waypoints: np.ndarray, cumulative: np.ndarray, travel: float) -> t
     return k, point
 
 
+def _branch(tree: tuple[list[np.ndarray], list[int]], node: int) -> list[np.ndarray]:
+    """The nodes of ``tree`` (nodes, parents) from its root to ``node``."""
+    nodes, parents = tree
+    branch = []
+    while node >= 0:
+        branch.append(nodes[node])
+        node = parents[node]
+    return branch[::-1]
+
+
 def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
     """Lexicographic (transfers, travel, waypoints); travel within :data:`TRAVEL_EPS` counts as equal."""
     if new[0] != old[0]:
@@ -426,11 +497,14 @@ class _Improver:
         self.ctx = ctx
         self.world = ctx.world
         self.pieces = pieces
+        self.first = [p.waypoints for p in pieces]
         self.goal = goal
         self.budget = _Budget(ctx, ctx.settings.improve_time * WORK_PER_SECOND)
         self.min_margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
         self.shortcuts = 0
         self.rebuilt = 0
+        self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
+        self.connected = [0, 0]  # routings by connect that failed, that succeeded
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
@@ -443,6 +517,15 @@ class _Improver:
             budget=self.budget,
         )
 
+    def reserve(self) -> None:
+        """Keep the work of the final check of the segments changed so far out of the budget (:data:`DENSE_WORK`)."""
+        count = sum(
+            _dense_count(piece.waypoints)
+            for index, piece in enumerate(self.pieces)
+            if index >= len(self.first) or not np.array_equal(piece.waypoints, self.first[index])
+        )
+        self.budget.reserve = math.ceil(DENSE_WORK * self.budget.check_work * count)
+
     def prune(self) -> None:
         for piece in self.pieces:
             pruned = _prune(piece.waypoints)
@@ -450,6 +533,7 @@ class _Improver:
                 (0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([pruned]), len(pruned))
             ):
                 piece.waypoints = pruned
+        self.reserve()
 
     def cuts(self) -> list[tuple[int, np.ndarray, np.ndarray]]:
         """Where the plan could be finished differently: ``(kept, configuration, placement)`` for the start
@@ -462,20 +546,22 @@ class _Improver:
 
     def rebuild(self) -> None:
         """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
-        none after a pass in which every proposal had a move that looked blocked (a cluttered world)."""
+        none after a pass that found nothing and met a placement from which every proposal looked blocked."""
         idle = 0
         while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
-            better, hopeful = self.rebuild_pass()
-            if not better and not hopeful:
+            better, blocked = self.rebuild_pass()
+            if blocked and not better:
                 return
             idle = 0 if better else idle + 1
 
     def rebuild_pass(self) -> tuple[bool, bool]:
         """From each placement of the plan, earliest first: finish with straight moves through other grasps,
         postures and release placements (:func:`clew_ros.core.regrasp.propose`) when that is better.
-        Returns whether the plan got better, and whether any proposal looked clear."""
+        Proposals with a move that looked blocked are checked too, fewer (:meth:`try_proposals`); a placement
+        from which every proposal looked blocked and none made the plan better ends the pass. Returns whether
+        the plan got better, and whether such a placement ended the pass."""
         position = 0
-        better = hopeful = False
+        better = False
         while self.budget.left(REBUILD_SHARE):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
@@ -507,9 +593,11 @@ class _Improver:
             )
             self.budget.spend_checks(effort.checks, effort.calls)
             self.budget.spend(math.ceil(IK_WORK * effort.steps))
-            hopeful |= any(not p.blocked for p in proposals)
-            better |= self.try_proposals(proposals, kept, placement)
-        return better, hopeful
+            found = self.try_proposals(proposals, kept, placement)
+            better |= found
+            if all(p.blocked for p in proposals) and not found:
+                return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts
+        return better, False
 
     def proposal_checks(self) -> int:
         """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
@@ -518,29 +606,57 @@ class _Improver:
         return max(0, int(PROPOSE_SHARE * left / self.budget.check_work))
 
     def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
-        """The first of ``proposals`` (after the first ``kept`` pieces) whose moves are clear and that makes
-        the plan better replaces the plan's end; whether one did."""
+        """Check ``proposals`` (after the first ``kept`` pieces) in their order; each whose moves are clear and
+        that makes the plan better replaces the plan's end, and the later ones must beat it. At most
+        :data:`REBUILD_TRIES` failures among those whose moves all looked clear and :data:`BLOCKED_TRIES` among
+        the others (their blocked moves routed by :meth:`connect`). Returns whether the plan got better."""
         before = self.pieces[:kept]
         transfers = sum(p.kind == "transfer" for p in before)
-        score = _score(self.pieces)
         travel_before = joint_travel([p.waypoints for p in before])
         failed: list[Proposal] = []
+        failures = {False: 0, True: 0}  # by whether the proposal looked blocked
+        limits = {False: REBUILD_TRIES, True: BLOCKED_TRIES}
+        better = False
         for proposal in proposals:
+            score = _score(self.pieces)
             if not _better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
                 continue
-            if any(_alike(proposal, other) for other in failed):
+            if any(_alike(proposal, other) for other in failed) or self.known_blocked(proposal):
                 continue  # as good as one that failed: try something else
-            if proposal.blocked and sum(p.blocked > 0 for p in failed) >= BLOCKED_TRIES:
-                continue  # a move that looked blocked is rarely clear: try those few times
-            if len(failed) >= REBUILD_TRIES or not self.budget.left(REBUILD_SHARE):
+            blocked = proposal.blocked > 0
+            if blocked and self.connected[1] == 0 and self.connected[0] >= CONNECT_PROBES:
+                failures[blocked] = limits[blocked]  # routing around blocked moves never worked here
+            if failures[blocked] >= limits[blocked]:
+                if all(failures[k] >= limits[k] for k in failures):
+                    break
+                continue
+            if not self.budget.left(REBUILD_SHARE):
                 break
             tail = self.checked_tail(proposal, placement)
             if tail is not None and _better(score, _score(before + tail)):
                 self.pieces = before + tail
+                self.reserve()
                 self.rebuilt += 1
-                return True
+                better = True
+                continue
             failed.append(proposal)
-        return False
+            failures[blocked] += 1
+        return better
+
+    def proposal_moves(self, proposal: Proposal) -> list[tuple[str, np.ndarray, np.ndarray]]:
+        """``(kind, start, end)`` of each move of ``proposal`` (a transit, then a transfer, ...)."""
+        keys = proposal.keys
+        return [("transit" if k % 2 == 0 else "transfer", keys[k], keys[k + 1]) for k in range(len(keys) - 1)]
+
+    def known_blocked(self, proposal: Proposal) -> bool:
+        """Whether a move of ``proposal`` is like one found blocked before (:data:`MOVE_ALIKE_RAD`)."""
+        return any(
+            kind == other_kind
+            and float(np.max(np.abs(a - other_a))) <= MOVE_ALIKE_RAD
+            and float(np.max(np.abs(b - other_b))) <= MOVE_ALIKE_RAD
+            for kind, a, b in self.proposal_moves(proposal)
+            for other_kind, other_a, other_b in self.blocked_moves
+        )
 
     def checked_tail(self, proposal: Proposal, placement: np.ndarray) -> list[_Piece] | None:
         """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked
@@ -557,11 +673,78 @@ class _Improver:
             pose = transfer.end_pose(self.world)
         for index in np.argsort([joint_travel([p.waypoints]) for p in pieces], kind="stable"):
             piece = pieces[index]
-            path = self.route(piece, piece.waypoints[0], piece.waypoints[-1], proposal.routes[index])
+            a, b = piece.waypoints[0], piece.waypoints[-1]
+            path = self.route(piece, a, b, proposal.routes[index])
+            if path is None and proposal.routes[index] < 0 and not self.budget.stop():
+                path = self.connect(piece, a, b)
+                self.connected[path is not None] += 1
             if path is None:
+                self.blocked_moves.append((piece.kind, a, b))
                 return None
             piece.waypoints = path
         return pieces
+
+    def connect(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+        """A path from ``a`` to ``b`` in ``piece``'s mode around what blocks the straight move: two trees
+        grown towards each other (RRT-Connect: from ``a`` and from ``b`` in turn, towards configurations drawn
+        within the joint limits, each extension at most :data:`CONNECT_STEP_RAD` per joint and checked
+        continuously), then shortened greedily. At most :data:`CONNECT_STEPS` extensions and
+        :data:`CONNECT_SHARE` of the budget; ``None`` when the trees did not meet."""
+        lower, upper = self.world.robot.joint_lower, self.world.robot.joint_upper
+        limit = self.budget.spent + CONNECT_SHARE * self.budget.total
+        trees = [([np.asarray(a, float)], [-1]), ([np.asarray(b, float)], [-1])]
+        rng = self.ctx.rng
+        for _ in range(CONNECT_STEPS):
+            if self.budget.spent > limit or not self.budget.left():
+                return None
+            target = rng.uniform(lower, upper)
+            grown = self.extend(piece, trees[0], target)
+            if grown is not None:
+                reached = self.extend(piece, trees[1], trees[0][0][grown], greedy=True)
+                if reached is not None and np.array_equal(trees[1][0][reached], trees[0][0][grown]):
+                    halves = [_branch(trees[0], grown), _branch(trees[1], reached)]
+                    if len(halves[0]) and not np.array_equal(halves[0][0], a):
+                        halves.reverse()
+                    path = np.array([*halves[0], *halves[1][::-1][1:]])
+                    return self.shortened(piece, path, limit)
+            trees.reverse()
+        return None
+
+    def extend(
+        self, piece: _Piece, tree: tuple[list[np.ndarray], list[int]], target: np.ndarray, *, greedy: bool = False
+    ) -> int | None:
+        """Grow ``tree`` (nodes, parents) from its node nearest ``target`` towards it by steps of at most
+        :data:`CONNECT_STEP_RAD` (one step, or while clear when ``greedy``); the index of the last node added,
+        ``None`` when not even one step was clear."""
+        nodes, parents = tree
+        near = int(np.argmin(np.max(np.abs(np.array(nodes) - target), axis=1)))
+        added = None
+        while True:
+            q = nodes[near]
+            gap = float(np.max(np.abs(target - q)))
+            if gap <= 1e-12:
+                return added if added is not None else near
+            step = target if gap <= CONNECT_STEP_RAD else q + (CONNECT_STEP_RAD / gap) * (target - q)
+            if not self.clear(piece, q, step):
+                return added
+            nodes.append(step)
+            parents.append(near)
+            near = added = len(nodes) - 1
+            if not greedy:
+                return added
+
+    def shortened(self, piece: _Piece, path: np.ndarray, limit: float) -> np.ndarray:
+        """``path`` with each waypoint joined straight to the farthest later one that is clear (while the work
+        stays within ``limit``)."""
+        kept = [path[0]]
+        i = 0
+        while i < len(path) - 1:
+            j = len(path) - 1
+            while j > i + 1 and (self.budget.spent > limit or not self.clear(piece, path[i], path[j])):
+                j -= 1
+            kept.append(path[j])
+            i = j
+        return np.array(kept)
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:
         """Waypoints from ``a`` to ``b`` in ``piece``'s mode, each move checked continuously: the ways of
@@ -591,10 +774,14 @@ class _Improver:
         return None
 
     def fewer_transfers(self) -> None:
-        """From the start of each transfer but the last, earliest first: carry the object to the goal."""
+        """From the start of each transfer but the last, earliest first: carry the object to the goal. An
+        attempt starts only when the work it may take (every individual of every round) fits in
+        :data:`TRANSFER_SHARE` of the budget."""
+        settings = self.ctx.settings
+        attempt = EVALUATION_WORK * settings.population * settings.generations * settings.search_rounds
         transfers = [i for i, p in enumerate(self.pieces) if p.kind == "transfer"]
         for index in transfers[:-1]:
-            if not self.budget.left(TRANSFER_SHARE):
+            if not self.budget.left(TRANSFER_SHARE) or self.budget.spent + attempt > TRANSFER_SHARE * self.budget.total:
                 return
             piece = self.pieces[index]
             assert piece.grasp_rel is not None
@@ -607,6 +794,7 @@ class _Improver:
             candidate = [*self.pieces[:index], carried]
             if _better(_score(self.pieces), _score(candidate)):
                 self.pieces = candidate
+                self.reserve()
                 return
 
     def try_shortcut(self, index: int, first: int, last: int, a: np.ndarray, b: np.ndarray) -> bool:
@@ -623,29 +811,46 @@ class _Improver:
             return False
         piece.waypoints = new
         self.shortcuts += 1
+        self.reserve()
         return True
 
-    def whole_segments(self) -> None:
-        """Each segment as one straight move, when that is clear."""
-        for index, piece in enumerate(self.pieces):
-            if not self.budget.left():
-                return
-            w = piece.waypoints
-            if len(w) > 2:
-                self.try_shortcut(index, 1, len(w) - 2, w[0], w[-1])
+    def greedy_shortcuts(self) -> None:
+        """Along each segment, from its first waypoint: a straight move to the farthest later waypoint that
+        is clear (the last, else halfway there, a quarter, ...), then on from there; the longest segments
+        (in joint travel) first."""
+        order = np.argsort([-joint_travel([p.waypoints]) for p in self.pieces], kind="stable")
+        for index in order.tolist():
+            piece = self.pieces[index]
+            i = 0
+            while i < len(piece.waypoints) - 2:
+                if not self.budget.left():
+                    return
+                last = len(piece.waypoints) - 1
+                span = last - i
+                while span >= 2 and not self.try_shortcut(
+                    index, i + 1, i + span - 1, piece.waypoints[i], piece.waypoints[i + span]
+                ):
+                    if not self.budget.left():
+                        return
+                    span //= 2
+                i += 1
 
     def random_shortcuts(self) -> None:
         """Pairs of waypoints, pairs of points along a segment's path, and one joint between two such points
         (:meth:`try_partial`), drawn at random, until the work is spent."""
         rng = self.ctx.rng
         failures = 0
+        accepted = True
+        travels = np.zeros(0)
         while self.budget.left() and failures < 200:
-            travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
+            if accepted:  # the pieces changed: how much each could still gain
+                travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
             if travels.sum() <= 0:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
             w = self.pieces[index].waypoints
             kind = rng.random()
+            self.budget.spend(ATTEMPT_WORK)  # drawing and scoring it, before any check
             if kind < 1.0 / 3.0:  # two waypoints at least two apart
                 i, j = sorted(rng.choice(len(w), size=2, replace=False).tolist())
                 accepted = j - i >= 2 and self.try_shortcut(index, i + 1, j - 1, w[i], w[j])
@@ -686,6 +891,7 @@ class _Improver:
             return False
         piece.waypoints = _prune(new)
         self.shortcuts += 1
+        self.reserve()
         return True
 
     def run(self) -> list[_Piece]:
@@ -693,7 +899,7 @@ class _Improver:
         self.rebuild()
         self.fewer_transfers()
         self.prune()
-        self.whole_segments()
+        self.greedy_shortcuts()
         self.random_shortcuts()
         return self.pieces
 

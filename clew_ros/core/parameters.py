@@ -286,9 +286,10 @@ PLANNER_PARAMETERS = ParameterTable(
         ParameterSpec(
             "planner.improve_time",
             _D,
-            0.3,
-            "Budget (s) for improving a found plan (fewer transfers, shortcuts); counted in work, not wall "
-            "time, so the plan does not depend on the machine; stops early at time_limit or cancel; 0: off.",
+            0.4,
+            "Budget (s) for improving a found plan (other grasps, elbows and regrasp placements, fewer "
+            "transfers, shortcuts); counted in work, not wall time, so the plan does not depend on the machine; "
+            "stops early at time_limit or cancel; 0: off.",
             "s",
             (0.0, 3600.0),
         ),

@@ -15,13 +15,18 @@ made of straight joint-space moves between key configurations:
 Key configurations come from inverse kinematics (:func:`clew_ros.core.inverse.solve_point`) from
 seeds: the configuration before (so a redundant arm moves little) and its mirror image about the
 line from the base to the target (the other elbow), plus the plan's own grasp configurations.
-Release configurations are drawn from the run's generator: along the way from the grasp towards
-the goal, and anywhere within the joint limits, then refined around the best (cross-entropy
-style). A proposal's joint travel is the sum of its straight moves (sum over joints of ``|dq|``);
-every key configuration is valid with ``margin_m`` to spare, but the moves between them are not
-checked here: :mod:`clew_ros.core.improve` checks them continuously and keeps a proposal only when
-the plan gets better. Everything is batched (numpy and compiled kernels); :class:`Effort` counts the work
-done, which :mod:`clew_ros.core.improve` charges to its budget.
+Release configurations are drawn from the run's generator: along the way from the grasp to where
+the object comes closest to the goal, putting the object down at points drawn around the goal, at
+and around where the plan put it down, and anywhere within the joint limits; then refined around
+the best of each grasp configuration (cross-entropy style). A proposal's joint travel is the sum
+of its moves (sum over joints of ``|dq|``). Every key configuration is valid with ``margin_m`` to
+spare; each move is *screened*: configurations sampled along it, straight and one joint after the
+other in either order (:data:`ROUTES`, all as long in joint travel), go through the compiled
+first pass of the validity test, and a move none of whose ways passes counts
+:data:`BLOCKED_PENALTY_RAD` extra in the ranking. The screen samples, it proves nothing:
+:mod:`clew_ros.core.improve` checks the moves continuously and keeps a proposal only when the
+plan gets better. Everything is batched (numpy and compiled kernels); :class:`Effort` counts the
+work done, which :mod:`clew_ros.core.improve` charges to its budget.
 """
 
 from __future__ import annotations

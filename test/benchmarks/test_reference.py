@@ -16,7 +16,7 @@ from clew_ros.core.plan import validate_plan
 from clew_ros.core.world import World, world_from_parameters
 
 STEP_RAD = 0.04
-#: The reference's error bound for a plan of two segments (module docstring of benchmarks.reference):
+#: The reference's error bound for a plan of one transfer (module docstring of benchmarks.reference):
 #: 2 h per end that is off the lattice, 4 ends.
 GRID_ERROR_RAD = 8 * STEP_RAD
 

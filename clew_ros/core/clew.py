@@ -30,8 +30,6 @@ SEARCH_CHAIN = 2
 EXPLORE_ATTEMPTS = 8
 #: The improvement's generator is seeded with (planner.seed, this): its own stream of the same seed.
 IMPROVE_STREAM = 14
-#: Random starts of the holding configurations sampled at the goal, once per run (arms of 3+ joints).
-GOAL_HOLD_SAMPLES = 96
 
 
 @dataclass(frozen=True)
@@ -101,7 +99,7 @@ def plan(
         return finish(*quick)
     best = np.inf
     try:
-        goal_grasps = goal_holding_grasps(world, goal, samples=GOAL_HOLD_SAMPLES)
+        goal_grasps = goal_holding_grasps(world, goal)
         explorer = Explorer(ctx, tree)
         failures = 0
         while True:
@@ -211,21 +209,17 @@ def _search(
     goal_grasps: frozenset[int],
 ) -> _Found:
     """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
-    reachable by a transit at its placement (a regrasp in place), until one reaches the goal. A regrasp
-    is tried only to grasps of ``goal_grasps`` (:func:`~clew_ros.core.reach.goal_holding_grasps`); the
-    landmark's own grasp always is, since its closest transfer, even when it cannot end at the goal, may
-    become the next landmark of the chain."""
+    reachable by a transit at its placement (a regrasp in place), until one reaches the goal. The
+    regrasps to grasps of ``goal_grasps`` (:func:`~clew_ros.core.reach.goal_holding_grasps`, found to
+    hold the goal) are tried first, the others after them (the sample may have missed)."""
     closest = _Found(False, np.inf)
-    grasps = [landmark.grasp] + [
-        g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != landmark.grasp
-    ]
+    others = [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != landmark.grasp]
+    grasps = [landmark.grasp, *sorted(others, key=lambda g: g not in goal_grasps)]  # stable: goal grasps first
     for grasp in grasps:
         if ctx.termination():
             break
         approach = None
         if grasp != landmark.grasp:
-            if grasp not in goal_grasps:
-                continue  # no valid configuration holds it at the goal: a regrasp to it cannot end there
             approach = _regrasp_approaches(ctx.world, landmark.object_pose, grasp, goal)
             if not approach.any():
                 continue  # no approach angle holds this grasp both here and at the goal: spare the transit

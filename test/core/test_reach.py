@@ -171,9 +171,10 @@ def test_holding_configurations_are_empty_beyond_reach():
 
 
 def test_the_goal_grasps_keep_the_grasp_every_witness_carries_to_its_goal():
-    """SEARCH tries only the grasps some valid configuration holds at the goal: on every solvable
-    generated world the grasp its witness ends with is among them (soundness), and on some worlds
-    the others are left out (the filter does something)."""
+    """SEARCH regrasps only to grasps some valid configuration holds within the goal's tolerances: on
+    every solvable generated world the grasp its witness ends with is among them, also when the goal is
+    turned or moved within its tolerances away from where the witness ends (soundness), and on some
+    worlds the others are left out (the filter does something)."""
     from clew_ros.core.reach import goal_holding_grasps
     from clew_ros.worlds import family_names, generate
 
@@ -185,7 +186,12 @@ def test_the_goal_grasps_keep_the_grasp_every_witness_carries_to_its_goal():
                 continue
             world = generated.world()
             last = [s for s in generated.witness.segments if s.kind == "transfer"][-1]
-            kept = goal_holding_grasps(world, world.object.goal, samples=96)
-            assert last.grasp in kept, (family, seed, last.grasp, sorted(kept))
-            narrowed += len(kept) < len(world.object.grasps)
+            end = world.object.goal  # where the witness ends
+            turn = 0.95 * min(world.goal_angle_tolerance, np.pi)
+            shift = 0.95 * world.goal_tolerance
+            moves = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, turn], [0.0, 0.0, -turn], [shift, 0.0, 0.0]])
+            for goal in end + moves:
+                kept = goal_holding_grasps(world, goal)
+                assert last.grasp in kept, (family, seed, goal.tolist(), last.grasp, sorted(kept))
+            narrowed += len(goal_holding_grasps(world, end)) < len(world.object.grasps)
     assert narrowed > 0

@@ -71,6 +71,8 @@ COLUMNS = [
     "median_s",
     "p90_s",
     "median_success_s",
+    "first_plan_median_s",
+    "first_plan_p90_s",
     "median_cpu_s",
     "p90_cpu_s",
     "landmarks_median",

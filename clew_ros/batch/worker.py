@@ -104,8 +104,9 @@ def run_job(spec: JobSpec) -> JobOutcome:
     outcome; with ``spec.record``, record the run too (after the wall time is taken).
 
     Raises :class:`~clew_ros.core.errors.ParameterError` for an invalid world (the driver checked it
-    before, so only a world that changed on the way), and
-    :class:`~clew_ros.recording.RecordingError` when the run cannot be recorded.
+    before, so only a world that changed on the way). A run that cannot be recorded keeps its plan,
+    without a recording (``recording`` ``None``: the driver tries once more, else the job is redone by
+    the next run); its time counts in the job's time-out (time limit + grace).
     """
     from clew_ros.core.offline import Problem, plan_problem, problem_from_parameters
 
@@ -119,7 +120,10 @@ def run_job(spec: JobSpec) -> JobOutcome:
     if spec.record:
         from clew_ros.batch.recording import recording_files
 
-        recording = recording_files(spec.parameters, problem.world, problem.settings, plan, start_ns=started_ns)
+        try:
+            recording = recording_files(spec.parameters, problem.world, problem.settings, plan, start_ns=started_ns)
+        except Exception:  # noqa: BLE001 - the plan is kept; the driver records it, or leaves it for the next run
+            recording = None
     return JobOutcome.from_plan(spec.key, plan, wall_time_s, recording)
 
 

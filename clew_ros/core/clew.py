@@ -123,11 +123,11 @@ def plan(
             landmark, found, closest = _search_chain(
                 ctx, explorer, tree, tree.add(**exploration.fields), goal, goal_grasps=goal_grasps
             )
+            searched_s = termination.elapsed  # when SEARCH ended: the first plan's time if it found one
             best = min(best, closest)
             if progress is not None:
                 progress(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
-                first_plan_s = termination.elapsed
                 segments = tree.history_of(landmark.id)
                 append_step(segments, found.grasp, found.transit, found.transfer)
                 assert found.object_pose is not None  # a successful SEARCH_TRANSFER says where the object ends
@@ -139,7 +139,7 @@ def plan(
                     better.final_object_pose,
                 )
                 result.stats.update(_quality(better))
-                result.first_plan_s = round(first_plan_s, 4)
+                result.first_plan_s = round(searched_s, 4)
                 return result
             if exploration.distance < settings.resolution:
                 return finish(

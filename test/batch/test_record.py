@@ -163,3 +163,22 @@ def test_record_with_a_bad_playback_parameter_exits_2_naming_it(tmp_path: Path) 
     plain = run_batch_cli(world, "--seeds", 1, "--out", out, "--quiet", "--time-limit", 10)
     assert plain.returncode == 0, plain.stderr
     assert len(index_lines(out)) == 1
+
+
+def test_a_recording_that_fails_in_the_worker_keeps_the_plan(tmp_path: Path) -> None:
+    """The worker's recording raises: the plan found is kept (not retried, not INTERNAL_ERROR) and the
+    driver records the run from it."""
+    from helpers.batch_faults import unrecordable_job
+
+    from clew_ros.batch.executors import LocalPool
+    from clew_ros.batch.jobs import load_worlds, make_jobs
+    from clew_ros.batch.runner import run_batch
+
+    jobs = make_jobs(load_worlds([SINGLE.resolve()]), [0], time_limit_s=10)
+    out = tmp_path / "out"
+    report = run_batch(jobs, out, LocalPool(1, job_function=unrecordable_job), record=True)
+    assert report.complete
+    [record] = index_lines(out)
+    assert record["code"] == "SUCCEEDED"
+    assert record["attempts"] == 1
+    _check_recording(out, record)

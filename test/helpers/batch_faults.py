@@ -8,6 +8,8 @@ them as ``job_function``); nothing of them is in the package.
   remembers it), then plans normally;
 - seed 4: the job hangs (never returns);
 - any other seed: planned normally.
+
+:func:`unrecordable_job` plans normally, but its recording fails in the worker (``--record``).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from pathlib import Path
 
 from clew_ros.batch.worker import JobOutcome, JobSpec, run_job
 
-__all__ = ["FAULT_DIR_VARIABLE", "faulty_job"]
+__all__ = ["FAULT_DIR_VARIABLE", "faulty_job", "unrecordable_job"]
 
 FAULT_DIR_VARIABLE = "CLEW_TEST_FAULT_DIR"
 
@@ -37,4 +39,15 @@ def faulty_job(spec: JobSpec) -> JobOutcome:
     if spec.seed == 4:
         while True:
             time.sleep(60)
+    return run_job(spec)
+
+
+def unrecordable_job(spec: JobSpec) -> JobOutcome:
+    """:func:`run_job` in a worker where recording a run raises, as a broken message builder would."""
+    from clew_ros.batch import recording
+
+    def broken(*_args: object, **_kwargs: object) -> dict[str, bytes]:
+        raise RuntimeError("injected recording fault")
+
+    recording.recording_files = broken
     return run_job(spec)

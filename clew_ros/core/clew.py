@@ -13,7 +13,7 @@ from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.improve import Improvement, improve
 from clew_ros.core.passage import passage_refusal
-from clew_ros.core.reach import approach_cells, carry_cells, goal_holding_grasps, nearest_grasp_distance
+from clew_ros.core.reach import approach_cells, carry_cells, nearest_grasp_distance
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
@@ -99,7 +99,6 @@ def plan(
         return finish(*quick)
     best = np.inf
     try:
-        goal_grasps = goal_holding_grasps(world, goal)
         explorer = Explorer(ctx, tree)
         failures = 0
         while True:
@@ -120,9 +119,7 @@ def plan(
                     )
                 continue
             failures = 0
-            landmark, found, closest = _search_chain(
-                ctx, explorer, tree, tree.add(**exploration.fields), goal, goal_grasps=goal_grasps
-            )
+            landmark, found, closest = _search_chain(ctx, explorer, tree, tree.add(**exploration.fields), goal)
             searched_s = termination.elapsed  # when SEARCH ended: the first plan's time if it found one
             best = min(best, closest)
             if progress is not None:
@@ -166,20 +163,14 @@ class _Found:
 
 
 def _search_chain(
-    ctx: PlanningContext,
-    explorer: Explorer,
-    tree: LandmarkTree,
-    landmark: Landmark,
-    goal: np.ndarray,
-    *,
-    goal_grasps: frozenset[int],
+    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
 ) -> tuple[Landmark, _Found, float]:
     """SEARCH from a new landmark; while its closest attempt gets nearer the goal, that attempt becomes a
     landmark and SEARCH goes on from it (at most :data:`SEARCH_CHAIN` times).
 
     Returns the last landmark, SEARCH's answer from it and the closest goal distance reached (m).
     """
-    found = _search(ctx, explorer, tree, landmark, goal, goal_grasps=goal_grasps)
+    found = _search(ctx, explorer, tree, landmark, goal)
     closest = found.distance
     for _ in range(SEARCH_CHAIN):
         if found.success or not _worth_chaining(ctx, landmark, found, goal) or ctx.termination():
@@ -194,27 +185,20 @@ def _search_chain(
             transit=found.transit,
             transfer=found.transfer,
         )
-        found = _search(ctx, explorer, tree, landmark, goal, goal_grasps=goal_grasps)
+        found = _search(ctx, explorer, tree, landmark, goal)
         closest = min(closest, found.distance)
     return landmark, found, closest
 
 
 def _search(
-    ctx: PlanningContext,
-    explorer: Explorer,
-    tree: LandmarkTree,
-    landmark: Landmark,
-    goal: np.ndarray,
-    *,
-    goal_grasps: frozenset[int],
+    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
 ) -> _Found:
     """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
-    reachable by a transit at its placement (a regrasp in place), until one reaches the goal. The
-    regrasps to grasps of ``goal_grasps`` (:func:`~clew_ros.core.reach.goal_holding_grasps`, found to
-    hold the goal) are tried first, the others after them (the sample may have missed)."""
+    reachable by a transit at its placement (a regrasp in place), until one reaches the goal."""
     closest = _Found(False, np.inf)
-    others = [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != landmark.grasp]
-    grasps = [landmark.grasp, *sorted(others, key=lambda g: g not in goal_grasps)]  # stable: goal grasps first
+    grasps = [landmark.grasp] + [
+        g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != landmark.grasp
+    ]
     for grasp in grasps:
         if ctx.termination():
             break

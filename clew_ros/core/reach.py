@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from clew_ros.core.collision import is_placement_valid, is_valid
+from clew_ros.core.collision import is_valid
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kinematics import compose, joint_positions, relative, transform_points
 from clew_ros.core.world import World
@@ -25,8 +25,6 @@ __all__ = [
     "approach_cells",
     "approach_excess",
     "carry_cells",
-    "goal_holding_grasps",
-    "goal_placements",
     "goal_within_reach",
     "holding_configurations",
     "nearest_grasp_distance",
@@ -214,10 +212,6 @@ def carry_cells(world: World, goal: np.ndarray, grasp: int) -> np.ndarray:
 #: Random starts of :func:`holding_configurations`' solver, and its damped-least-squares iterations.
 HOLD_SAMPLES = 24
 HOLD_ITERATIONS = 30
-#: :func:`goal_placements`: the goal turned across its angle tolerance every this many rad, at most
-#: this many angles.
-GOAL_ANGLE_STEP_RAD = 0.1
-GOAL_ANGLE_SAMPLES = 12
 
 
 def holding_configurations(
@@ -246,53 +240,3 @@ def holding_configurations(
         return held
     valid: np.ndarray = held[is_valid(world, held, pose[None])]
     return valid
-
-
-def goal_placements(world: World, goal: np.ndarray) -> np.ndarray:
-    """Valid placements ``(m, 3)`` within the goal's tolerances, where a plan may end: the goal itself
-    first, then the goal turned across ``goal_angle_tolerance`` (every :data:`GOAL_ANGLE_STEP_RAD`, at most
-    :data:`GOAL_ANGLE_SAMPLES`, the whole turn when it is pi or more), then the goal moved by 0.9 x
-    ``goal_tolerance`` along x and y."""
-    goal = np.asarray(goal, float)
-    tolerance = world.goal_angle_tolerance
-    if tolerance >= np.pi - 1e-9:
-        turns = np.linspace(-np.pi, np.pi, GOAL_ANGLE_SAMPLES, endpoint=False)
-    elif tolerance > 0.0:
-        count = int(min(GOAL_ANGLE_SAMPLES, max(3, np.ceil(2.0 * tolerance / GOAL_ANGLE_STEP_RAD) + 1)))
-        turns = np.linspace(-tolerance, tolerance, count)
-    else:
-        turns = np.zeros(1)
-    turns = turns[np.argsort(np.abs(turns), kind="stable")]  # the goal's own angle first
-    slack = 0.9 * world.goal_tolerance
-    turned = [[goal[0], goal[1], goal[2] + turn] for turn in turns]
-    moved = [[goal[0] + dx, goal[1] + dy, goal[2]] for dx, dy in ((slack, 0), (-slack, 0), (0, slack), (0, -slack))]
-    poses = np.array(turned + moved)
-    valid: np.ndarray = poses[is_placement_valid(world, poses)]
-    return valid
-
-
-def goal_holding_grasps(world: World, goal: np.ndarray, *, samples: int = HOLD_SAMPLES) -> frozenset[int]:
-    """The grasps that some valid configuration holds with the object at a placement within the goal's
-    tolerances (:func:`goal_placements`): a transfer with another grasp cannot end at the goal (the arm
-    would collide, or not reach).
-
-    Sampled, like the functions it calls (:func:`two_link_grasps` for two joints,
-    :func:`holding_configurations` with ``samples`` random starts for more): when no grasp is found
-    to hold the goal, every grasp is returned, so a sample that misses never leaves a search with
-    nothing to try.
-    """
-    grasps = range(len(world.object.grasps))
-    held: set[int] = set()
-    for pose in goal_placements(world, goal):
-        for grasp in grasps:
-            if grasp in held:
-                continue
-            if world.robot.dof == 2:
-                holds = two_link_grasps(world, pose, grasp)
-            else:
-                holds = holding_configurations(world, pose, grasp, samples=samples)
-            if len(holds):
-                held.add(grasp)
-        if len(held) == len(grasps):
-            break
-    return frozenset(held or grasps)

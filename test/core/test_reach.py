@@ -168,30 +168,3 @@ def test_holding_configurations_are_empty_beyond_reach():
     bounds = np.array([-5.0, -5.0, 5.0, 5.0])
     world = dataclasses.replace(world, bounds=bounds)
     assert len(holding_configurations(world, far, 0)) == 0
-
-
-def test_the_goal_grasps_keep_the_grasp_every_witness_carries_to_its_goal():
-    """SEARCH regrasps only to grasps some valid configuration holds within the goal's tolerances: on
-    every solvable generated world the grasp its witness ends with is among them, also when the goal is
-    turned or moved within its tolerances away from where the witness ends (soundness), and on some
-    worlds the others are left out (the filter does something)."""
-    from clew_ros.core.reach import goal_holding_grasps
-    from clew_ros.worlds import family_names, generate
-
-    narrowed = 0
-    for family in family_names():
-        for seed in range(3):
-            generated = generate(family, seed)
-            if not generated.solvable:
-                continue
-            world = generated.world()
-            last = [s for s in generated.witness.segments if s.kind == "transfer"][-1]
-            end = world.object.goal  # where the witness ends
-            turn = 0.95 * min(world.goal_angle_tolerance, np.pi)
-            shift = 0.95 * world.goal_tolerance
-            moves = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, turn], [0.0, 0.0, -turn], [shift, 0.0, 0.0]])
-            for goal in end + moves:
-                kept = goal_holding_grasps(world, goal)
-                assert last.grasp in kept, (family, seed, goal.tolist(), last.grasp, sorted(kept))
-            narrowed += len(goal_holding_grasps(world, end)) < len(world.object.grasps)
-    assert narrowed > 0

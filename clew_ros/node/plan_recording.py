@@ -42,7 +42,7 @@ from clew_ros.node.playback import node_track
 from clew_ros.node.player import scheduled_samples
 from clew_ros.node.publishing import TF_TOPICS, TOPICS
 from clew_ros.node.qos import GOAL_QOS
-from clew_ros.node.run import outcome_event, outcome_fields, outcome_status
+from clew_ros.node.run import accepted_fields, landmark_fields, outcome_event, outcome_fields, outcome_status
 from clew_ros.recording import RecordingError, RunRecorder
 from clew_ros.recording.cdr import tf_message
 
@@ -135,16 +135,8 @@ def _accepted(run: _Run, world: World, plan: Plan, planner: PlannerSettings, rec
     run.arm(world, world.robot.initial, 0.0, world.object.initial, now)
     goal = world.object.goal
     run.recorder.write(f"/{run.node_name}/goal_pose", messages.goal_pose_stamped(goal, now), now, qos=GOAL_QOS)
-    run.event(
-        "accepted",
-        now / _NS_PER_S,
-        now,
-        source="plan",
-        world=world.name,
-        goal=goal.tolist(),
-        seed=planner.seed,
-        recording=recording_text,
-    )
+    fields = accepted_fields(source="plan", world=world.name, goal=goal, seed=planner.seed, recording=recording_text)
+    run.event("accepted", now / _NS_PER_S, now, **fields)
     run.status(GoalStatus.STATUS_EXECUTING, now)
 
 
@@ -153,16 +145,7 @@ def _concluded(run: _Run, world: World, plan: Plan, node: NodeSettings, recordin
     time_s = float(plan.stats.get("time_s", 0.0))
     now = run.start_ns + round(time_s * _NS_PER_S)
     for landmark in plan.landmarks[1:]:
-        run.event(
-            "landmark",
-            now / _NS_PER_S,
-            now,
-            id=landmark.id,
-            parent=landmark.parent,
-            grasp=landmark.grasp,
-            object_pose=landmark.object_pose,
-            joints=landmark.joints,
-        )
+        run.event("landmark", now / _NS_PER_S, now, **landmark_fields(landmark))
     run.write("landmarks", messages.landmark_markers(plan.landmarks, now, world.object.polygon), now)
     outcome = plan.outcome
     if outcome is None:

@@ -53,6 +53,8 @@ __all__ = [
     "Run",
     "Source",
     "StatusTable",
+    "accepted_fields",
+    "landmark_fields",
     "outcome_event",
     "outcome_fields",
     "outcome_status",
@@ -110,6 +112,25 @@ def outcome_fields(outcome: Outcome, message: str, *, landmarks: int, time_s: fl
         "landmarks": landmarks,
         "time_s": time_s,
         "recording": recording,
+    }
+
+
+def accepted_fields(*, source: str, world: str, goal: np.ndarray, seed: int, recording: str) -> dict[str, Any]:
+    """The fields of a run's ``accepted`` event (``~/events``, besides ``run_id``, ``event`` and ``time``):
+    what started it (``source``), the ``world``'s name, the object ``goal``, the planner's ``seed`` and
+    what the run's ``recording`` is."""
+    return {"source": source, "world": world, "goal": np.asarray(goal).tolist(), "seed": seed, "recording": recording}
+
+
+def landmark_fields(landmark: Any) -> dict[str, Any]:
+    """The fields of a ``landmark`` event (``~/events``) for ``landmark`` (a landmark of the tree or of a
+    plan file: ``id``, ``parent``, ``grasp``, ``object_pose``, ``joints``)."""
+    return {
+        "id": landmark.id,
+        "parent": landmark.parent,
+        "grasp": landmark.grasp,
+        "object_pose": landmark.object_pose,
+        "joints": landmark.joints,
     }
 
 

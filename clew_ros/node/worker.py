@@ -27,7 +27,7 @@ from clew_ros.node.playback import GripperEvent, Track, TrackState, node_track
 from clew_ros.node.player import play
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.qos import GOAL_QOS
-from clew_ros.node.run import Phase, Run, outcome_event, outcome_fields
+from clew_ros.node.run import Phase, Run, accepted_fields, landmark_fields, outcome_event, outcome_fields
 from clew_ros.node.run_recording import Recordings
 
 if TYPE_CHECKING:
@@ -88,18 +88,14 @@ class RunWorker:
         run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)
         out.publish_status(run.recording)
         request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}
-        out.event(
-            run.id,
-            "accepted",
-            run.recording,
+        fields = accepted_fields(
             source=run.source,
             world=config.world.name,
-            goal=run.goal.tolist(),
+            goal=run.goal,
             seed=config.planner.seed,
             recording=run.recording.text,
-            recording_path=run.recording.path,
-            **request,
         )
+        out.event(run.id, "accepted", run.recording, **fields, recording_path=run.recording.path, **request)
         self._logger.info(
             f"run {run.hex} accepted ({run.source}): goal {np.round(run.goal, 4).tolist()}, {run.recording.text}"
         )
@@ -173,16 +169,7 @@ class RunWorker:
         if len(landmarks) <= announced[0]:
             return
         for landmark in landmarks[announced[0] :]:
-            self._out.event(
-                run.id,
-                "landmark",
-                run.recording,
-                id=landmark.id,
-                parent=landmark.parent,
-                grasp=landmark.grasp,
-                object_pose=landmark.object_pose,
-                joints=landmark.joints,
-            )
+            self._out.event(run.id, "landmark", run.recording, **landmark_fields(landmark))
         announced[0] = len(landmarks)
         self._out.publish(
             "landmarks", messages.landmark_markers(tree, self._out.now_ns(), run.world.object.polygon), run.recording

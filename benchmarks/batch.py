@@ -232,7 +232,7 @@ def main(argv: list[str] | None = None) -> int:
     wall = dict.fromkeys(modes, 0.0)
     cpu = dict.fromkeys(modes, 0.0)
     for number, worlds in enumerate(_rounds(args.worlds, args.round_per_world)):
-        for mode in modes if number % 2 == 0 else modes[::-1]:  # alternate the order: drifting load evens out
+        for mode in modes if number % 2 == 0 else modes[::-1]:  # --round-per-world: alternate order
             command, env = _mode_commands(mode, worlds, args, out)
             before = _children_cpu_s()
             wall[mode] += _timed(command, env)

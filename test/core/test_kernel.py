@@ -133,7 +133,9 @@ def test_the_broad_phase_never_changes_an_interval(seed, transfer):
         assert np.array_equal(fast[1], full[1]), joint
         pivots = joint_positions(world.robot, q)[:, joint]
         distance = np.linalg.norm(groups[None, :, 2:4] - pivots[:, None], axis=2) - groups[None, :, 4]
-        skipped += int((distance > world.robot.reach).sum())
+        # beyond the whole arm plus the carried object (0.12 m offset, radius under 0.15 m) and clearances:
+        # obstacles the broad phase certainly left out
+        skipped += int((distance > world.robot.reach + 0.5).sum())
     assert skipped > 0
 
 

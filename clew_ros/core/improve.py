@@ -106,6 +106,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.collision import is_valid, packed_carrying, packed_world
+from clew_ros.core.connect import rrt_connect, shortened
 from clew_ros.core.kernel import PackedWorld, clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
@@ -169,10 +170,8 @@ BLOCKED_TRIES = 3
 #: none found, proposals with a move that looked blocked are no longer checked (a cluttered world: the budget
 #: is left to the shortcuts).
 CONNECT_PROBES = 2
-#: Share of the budget one :meth:`_Improver.connect` may spend at most, and its tree extensions at most.
+#: Share of the budget one :meth:`_Improver.connect` may spend at most, and its rounds at most.
 CONNECT_SHARE, CONNECT_STEPS = 0.04, 120
-#: Largest joint step (rad, largest joint difference) of one tree extension of :meth:`_Improver.connect`.
-CONNECT_STEP_RAD = 0.35
 #: A move whose ends both lie this close (rad, largest joint difference) to those of a move found blocked
 #: in the same mode is taken as blocked too.
 MOVE_ALIKE_RAD = 0.1
@@ -460,16 +459,6 @@ def _point_at(waypoints: np.ndarray, cumulative: np.ndarray, travel: float) -> t
     return k, point
 
 
-def _branch(tree: tuple[list[np.ndarray], list[int]], node: int) -> list[np.ndarray]:
-    """The nodes of ``tree`` (nodes, parents) from its root to ``node``."""
-    nodes, parents = tree
-    branch = []
-    while node >= 0:
-        branch.append(nodes[node])
-        node = parents[node]
-    return branch[::-1]
-
-
 def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
     """Lexicographic (transfers, travel, waypoints); travel within :data:`TRAVEL_EPS` counts as equal."""
     if new[0] != old[0]:
@@ -685,66 +674,25 @@ class _Improver:
         return pieces
 
     def connect(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
-        """A path from ``a`` to ``b`` in ``piece``'s mode around what blocks the straight move: two trees
-        grown towards each other (RRT-Connect: from ``a`` and from ``b`` in turn, towards configurations drawn
-        within the joint limits, each extension at most :data:`CONNECT_STEP_RAD` per joint and checked
-        continuously), then shortened greedily. At most :data:`CONNECT_STEPS` extensions and
-        :data:`CONNECT_SHARE` of the budget; ``None`` when the trees did not meet."""
-        lower, upper = self.world.robot.joint_lower, self.world.robot.joint_upper
+        """A path from ``a`` to ``b`` in ``piece``'s mode around what blocks the straight move: RRT-Connect
+        (:func:`clew_ros.core.connect.rrt_connect`, each extension checked continuously), then shortened
+        greedily. At most :data:`CONNECT_STEPS` rounds and :data:`CONNECT_SHARE` of the budget; ``None`` when
+        the trees did not meet."""
         limit = self.budget.spent + CONNECT_SHARE * self.budget.total
-        trees = [([np.asarray(a, float)], [-1]), ([np.asarray(b, float)], [-1])]
-        rng = self.ctx.rng
-        for _ in range(CONNECT_STEPS):
-            if self.budget.spent > limit or not self.budget.left():
-                return None
-            target = rng.uniform(lower, upper)
-            grown = self.extend(piece, trees[0], target)
-            if grown is not None:
-                reached = self.extend(piece, trees[1], trees[0][0][grown], greedy=True)
-                if reached is not None and np.array_equal(trees[1][0][reached], trees[0][0][grown]):
-                    halves = [_branch(trees[0], grown), _branch(trees[1], reached)]
-                    if len(halves[0]) and not np.array_equal(halves[0][0], a):
-                        halves.reverse()
-                    path = np.array([*halves[0], *halves[1][::-1][1:]])
-                    return self.shortened(piece, path, limit)
-            trees.reverse()
-        return None
 
-    def extend(
-        self, piece: _Piece, tree: tuple[list[np.ndarray], list[int]], target: np.ndarray, *, greedy: bool = False
-    ) -> int | None:
-        """Grow ``tree`` (nodes, parents) from its node nearest ``target`` towards it by steps of at most
-        :data:`CONNECT_STEP_RAD` (one step, or while clear when ``greedy``); the index of the last node added,
-        ``None`` when not even one step was clear."""
-        nodes, parents = tree
-        near = int(np.argmin(np.max(np.abs(np.array(nodes) - target), axis=1)))
-        added = None
-        while True:
-            q = nodes[near]
-            gap = float(np.max(np.abs(target - q)))
-            if gap <= 1e-12:
-                return added if added is not None else near
-            step = target if gap <= CONNECT_STEP_RAD else q + (CONNECT_STEP_RAD / gap) * (target - q)
-            if not self.clear(piece, q, step):
-                return added
-            nodes.append(step)
-            parents.append(near)
-            near = added = len(nodes) - 1
-            if not greedy:
-                return added
+        def clear(p: np.ndarray, q: np.ndarray) -> bool:
+            return self.clear(piece, p, q)
 
-    def shortened(self, piece: _Piece, path: np.ndarray, limit: float) -> np.ndarray:
-        """``path`` with each waypoint joined straight to the farthest later one that is clear (while the work
-        stays within ``limit``)."""
-        kept = [path[0]]
-        i = 0
-        while i < len(path) - 1:
-            j = len(path) - 1
-            while j > i + 1 and (self.budget.spent > limit or not self.clear(piece, path[i], path[j])):
-                j -= 1
-            kept.append(path[j])
-            i = j
-        return np.array(kept)
+        path = rrt_connect(
+            clear,
+            a,
+            np.asarray(b, dtype=float)[None],
+            self.ctx.rng,
+            limits=(self.world.robot.joint_lower, self.world.robot.joint_upper),
+            rounds=CONNECT_STEPS,
+            stop=lambda: self.budget.spent > limit or not self.budget.left(),
+        )
+        return None if path is None else shortened(clear, path, lambda: self.budget.spent > limit)
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:
         """Waypoints from ``a`` to ``b`` in ``piece``'s mode, each move checked continuously: the ways of

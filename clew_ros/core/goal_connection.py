@@ -56,24 +56,33 @@ def goal_configurations(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndar
     drawn = ctx.rng.uniform(robot.joint_lower, robot.joint_upper, (GOAL_SEEDS - 1, robot.dof))
     seeds = np.vstack([np.asarray(q0, float)[None], drawn])
     grasp_rel = np.asarray(grasp_rel, float)
-    held_within = np.pi if world.goal_angle_tolerance >= np.pi - 1e-6 else 0.8 * world.goal_angle_tolerance
-    q = solve_point(
-        robot,
-        seeds,
-        np.asarray(goal[:2], float)[None],
-        offsets=grasp_rel[None, :2],
-        angles=np.array([goal[2] - grasp_rel[2]]),
-        angle_tolerance=held_within,
-        angle_scale=world.object.radius,
-        tolerance_m=0.1 * world.goal_tolerance,
-    ).q
+    within = np.pi if world.goal_angle_tolerance >= np.pi - 1e-6 else 0.8 * world.goal_angle_tolerance
+    # the goal's own angle (the middle of the tolerance: clear of the walls of a pocket, when an arm can hold
+    # it there) and anywhere within the tolerance (for an arm that cannot)
+    q = np.vstack(
+        [
+            solve_point(
+                robot,
+                seeds,
+                np.asarray(goal[:2], float)[None],
+                offsets=grasp_rel[None, :2],
+                angles=np.array([goal[2] - grasp_rel[2]]),
+                angle_tolerance=tolerance,
+                angle_scale=world.object.radius,
+                tolerance_m=0.1 * world.goal_tolerance,
+            ).q
+            for tolerance in (0.0, within)
+        ]
+    )
     poses = compose(tip_poses(robot, q), grasp_rel)
     close = np.linalg.norm(goal_error(world, poses, goal), axis=1) <= 0.5 * world.goal_tolerance
     held = np.array([bool(c) and goal_reached(world, pose, goal) for c, pose in zip(close, poses, strict=True)])
     if held.any():
         held[held] = is_valid(world, q[held], poses[held])
-    found: np.ndarray = q[held]
-    return found[np.argsort(np.max(np.abs(found - q0), axis=1), kind="stable")]
+    found = q[held][np.argsort(np.max(np.abs(q[held] - q0), axis=1), kind="stable")]
+    distinct = [i for i in range(len(found)) if not any(np.max(np.abs(found[i] - found[:i]), axis=1) < 1e-3)]
+    kept: np.ndarray = found[distinct]
+    return kept
 
 
 def join_goal(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray) -> np.ndarray | None:

@@ -11,7 +11,7 @@ shortest paths between them (joint travel, L1). The grid search of :mod:`benchma
   :func:`clew_ros.core.kernel.clearly_valid` (valid beyond rounding; anything doubtful counts as
   invalid, so the lattice errs on the safe side), over whole windows of the lattice per call.
 * **Edges.** An edge between two valid nodes is valid when its midpoint is clear by the motion
-  bound of :func:`clew_ros.core.improve.straight_move_clear` (every point of the arm and the
+  bound of :func:`clew_ros.core.continuous.straight_move_clear` (every point of the arm and the
   carried object moves at most ``h R_j`` along it; half of that from the midpoint): valid at any
   checking step. In a transfer the last link and the object it holds do not move relative to each
   other, so that pair is left out of the margin test (it is checked where the grasp is made) and

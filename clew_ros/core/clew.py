@@ -11,12 +11,10 @@ import numpy as np
 
 from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
-from clew_ros.core.goal_connection import JOIN_RADIUS, join_goal
 from clew_ros.core.improve import Improvement, improve
-from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.passage import passage_refusal
 from clew_ros.core.reach import approach_cells, carry_cells, nearest_grasp_distance
-from clew_ros.core.search import PathResult, PlanningContext, goal_error, search_transfer
+from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
 from clew_ros.core.world import World
@@ -213,8 +211,6 @@ def _search(
         if candidate is None:
             continue
         result = search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
-        if not result.success and result.distance <= JOIN_RADIUS * ctx.world.robot.reach:
-            result = _joined(ctx, result, candidate.grasp_rel, goal)
         if result.success or result.distance < closest.distance:
             closest = _Found(
                 result.success,
@@ -228,17 +224,6 @@ def _search(
         if result.success:
             break
     return closest
-
-
-def _joined(ctx: PlanningContext, result: PathResult, grasp_rel: np.ndarray, goal: np.ndarray) -> PathResult:
-    """SEARCH_TRANSFER's ``result``, stalled near the goal, extended to it by
-    :func:`clew_ros.core.goal_connection.join_goal` if a way in is found."""
-    path = None if ctx.termination() else join_goal(ctx, result.waypoints[-1], grasp_rel, goal)
-    if path is None:
-        return result
-    pose = compose(tip_poses(ctx.world.robot, path[-1:]), grasp_rel)
-    distance = float(np.linalg.norm(goal_error(ctx.world, pose, goal)[0]))
-    return PathResult(True, np.vstack([result.waypoints, path[1:]]), distance, object_pose=pose[0])
 
 
 def _regrasp_approaches(world: World, object_pose: np.ndarray, grasp: int, goal: np.ndarray) -> np.ndarray:

@@ -7,7 +7,7 @@ limits, extends one tree one step towards it (at most ``step_rad`` per
 joint), then extends the other tree greedily towards the new node; they
 have met when it reaches that node. Every extension is a straight joint-space
 move accepted by the caller's ``clear(a, b)`` (a continuous check:
-:func:`clew_ros.core.improve.straight_move_clear`), so the path found is valid
+:func:`clew_ros.core.continuous.straight_move_clear`), so the path found is valid
 at any checking resolution. :func:`shortened` then joins each waypoint
 straight to the farthest later one that is clear.
 
@@ -21,7 +21,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["STEP_RAD", "Clear", "rrt_connect", "shortened"]
+from clew_ros.core.continuous import straight_move_clear
+from clew_ros.core.world import World
+
+__all__ = ["STEP_RAD", "Clear", "join", "rrt_connect", "shortened"]
 
 #: Largest joint step (rad, largest joint difference) of one tree extension.
 STEP_RAD = 0.35
@@ -111,3 +114,28 @@ def shortened(clear: Clear, path: np.ndarray, spent: Callable[[], bool] | None =
         kept.append(path[j])
         i = j
     return np.array(kept)
+
+
+def join(
+    world: World,
+    start: np.ndarray,
+    targets: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    object_pose: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    min_margin: float,
+    rounds: int,
+    stop: Callable[[], bool],
+) -> np.ndarray | None:
+    """Waypoints from ``start`` to one of ``targets`` ``(g, n)``, the object resting at ``object_pose`` (a transit)
+    or carried as ``grasp_rel`` (a transfer): :func:`rrt_connect` with every move checked continuously
+    (:func:`clew_ros.core.continuous.straight_move_clear`, ``min_margin`` from everything), then
+    :func:`shortened`; ``None`` when the trees did not meet."""
+
+    def clear(a: np.ndarray, b: np.ndarray) -> bool:
+        return straight_move_clear(world, a, b, object_pose=object_pose, grasp_rel=grasp_rel, min_margin=min_margin)
+
+    limits = (world.robot.joint_lower, world.robot.joint_upper)
+    path = rrt_connect(clear, start, targets, rng, limits=limits, rounds=rounds, stop=stop)
+    return None if path is None else shortened(clear, path, stop)

@@ -52,31 +52,10 @@ A change is kept only when it lowers ``(transfers, joint travel)`` or keeps
 them and drops waypoints; joint travel is the sum over joints of the
 absolute motion (rad). The first plan is kept when nothing better is found.
 
-**Continuous check of a straight move** (:func:`straight_move_clear`). Along
-``q(t) = a + t (b - a)`` a point of the arm or of the carried object moves
-at most ``V = sum_j |b_j - a_j| R_j`` over the whole move, where ``R_j`` is
-the length of links ``j..n-1`` plus, in a transfer, the object's largest
-distance from the tip (the velocity of a point is ``sum_j dq_j x (p -
-p_j)``). Every distance the validity test compares (link to obstacle, link
-to link, link to the shrunk object, object to obstacle, to the bounds)
-changes by at most that motion: for two moving bodies, measure in the
-frame of the nearer one to the base, where only the joints between them
-move the other; the last link and the object it carries do not move
-relative to each other (so that pair, at a fixed distance during a transfer,
-is checked once, at the start, and left out of the margins below:
-:func:`clew_ros.core.collision.packed_carrying`). So when the compiled first
-pass of the validity test (:func:`clew_ros.core.kernel.clearly_valid`)
-clears the midpoint of a piece ``[t0, t1]`` with every distance past its
-threshold by more than ``V (t1 - t0) / 2``, the whole piece is valid, at any
-checking resolution.
-A long move is first rejected when one of every :data:`COARSE_STRIDE`-th
-midpoint of its first level is not valid at all (most blocked shortcuts end
-there, at a fraction of the cost). Pieces that fail are halved (the margin
-halves with them) down to
-:data:`MIN_MARGIN_FACTOR` x ``planner.clearance``; a piece still not
-cleared rejects the move, and so does a midpoint that is not valid at all
-(at once). A shortcut therefore keeps at least that clearance everywhere,
-like the planner's own paths. The whole improved plan is checked once more
+**Every new move is checked continuously**
+(:func:`clew_ros.core.continuous.straight_move_clear`): valid at any
+checking resolution, keeping at least :data:`MIN_MARGIN_FACTOR` x
+``planner.clearance`` from everything, like the planner's own paths. The whole improved plan is checked once more
 at the validator's 0.002 rad; if that ever failed, the first plan would be
 returned.
 
@@ -98,17 +77,16 @@ checks, well within 100 ms), and then the best plan so far is returned.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid, packed_carrying, packed_world
+from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.connect import rrt_connect, shortened
-from clew_ros.core.kernel import PackedWorld, clearly_valid
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_move_clear
+from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
@@ -126,7 +104,6 @@ __all__ = [
     "check_work",
     "improve",
     "joint_travel",
-    "straight_move_clear",
 ]
 
 #: Work units per second of ``planner.improve_time`` (about 4 microseconds each on the machine of
@@ -143,12 +120,6 @@ ATTEMPT_WORK = 100
 IK_WORK = 0.125
 #: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
 REFERENCE_PAIRS = 70
-#: Shortcuts keep at least this fraction of ``planner.clearance`` from everything (m / m).
-MIN_MARGIN_FACTOR = 0.5
-#: Largest margin (m) the first level of a straight-move check asks for.
-MAX_MARGIN_M = 0.05
-#: A long straight move is first rejected by every this-many-th midpoint of its first level, if one is invalid.
-COARSE_STRIDE = 4
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5
 #: Share of the budget that rebuilding the manipulation from straight moves may start in.
@@ -281,122 +252,6 @@ def check_work(world: World) -> float:
     """Work units one configuration check costs in ``world``: 1 up to :data:`REFERENCE_PAIRS` pairs of pieces
     compared per check (:attr:`clew_ros.core.kernel.PackedWorld.pairs_per_move`), in proportion beyond."""
     return max(1.0, packed_world(world).pairs_per_move / REFERENCE_PAIRS)
-
-
-def _reach_radii(world: World, grasp_rel: np.ndarray | None) -> np.ndarray:
-    """``R_j``: how far from joint ``j`` any point moved by it can be (links ``j..n-1`` and the carried object)."""
-    lengths = np.asarray(world.robot.link_lengths, dtype=float)
-    radii = np.cumsum(lengths[::-1])[::-1]
-    if grasp_rel is not None:
-        radii = radii + float(np.max(np.linalg.norm(transform_points(grasp_rel, world.object.polygon), axis=-1)))
-    return radii
-
-
-def straight_move_clear(
-    world: World,
-    a: np.ndarray,
-    b: np.ndarray,
-    *,
-    object_pose: np.ndarray | None = None,
-    grasp_rel: np.ndarray | None = None,
-    min_margin: float,
-    budget: _Budget | None = None,
-) -> bool:
-    """Whether every configuration of the straight joint-space move ``a`` -> ``b`` is valid with at
-    least ``min_margin`` (m) to spare, the object resting at ``object_pose`` (transit) or carried as
-    ``grasp_rel`` (transfer). Conservative: ``False`` may also mean "not proven" (module docstring)."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if grasp_rel is None and object_pose is None:
-        raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
-    resting = np.zeros(3) if object_pose is None else np.asarray(object_pose, dtype=float)
-    motion = float(np.abs(b - a) @ _reach_radii(world, grasp_rel)) * (1.0 + 1e-9) + 1e-12  # V (m)
-    parts = _margin_parts(world, a, b, grasp_rel, min_margin=min_margin, budget=budget)
-    if parts is None:
-        return False
-    # level k: 2**k pieces, each cleared by its midpoint with margin motion / 2**(k + 1)
-    level = max(0, math.ceil(math.log2(max(motion / (2.0 * MAX_MARGIN_M), 1.0))))
-    pending = np.arange(2**level, dtype=float)  # piece indices at this level
-    if len(pending) >= 2 * COARSE_STRIDE:  # a long move: every COARSE_STRIDE-th midpoint first, valid at all?
-        t = (pending[COARSE_STRIDE // 2 :: COARSE_STRIDE] + 0.5) / 2.0**level
-        q = a + t[:, None] * (b - a)
-        poses = (
-            np.broadcast_to(resting, (len(q), 3))
-            if grasp_rel is None
-            else compose(tip_poses(world.robot, q), grasp_rel)
-        )
-        if not _all_valid(world, q, np.asarray(poses), budget):
-            return False  # most blocked moves end here, for a fraction of the first level's checks
-    while len(pending):
-        if budget is not None and budget.stop():
-            return False
-        pieces = 2.0**level
-        margin = motion / (2.0 * pieces)
-        margin = max(margin, min_margin)  # the last level: a piece this short needs only the minimal margin
-        t = (pending + 0.5) / pieces
-        q = a + t[:, None] * (b - a)
-        poses = (
-            np.broadcast_to(resting, (len(q), 3))
-            if grasp_rel is None
-            else compose(tip_poses(world.robot, q), grasp_rel)
-        )
-        clear = _cleared(parts, q, np.asarray(poses), margin)
-        if budget is not None:
-            budget.spend_checks(len(q))
-        if clear.all():
-            return True
-        # a midpoint that is not valid rejects the move at once (halving would only find it later)
-        if margin <= min_margin or not _all_valid(world, q[~clear], np.asarray(poses)[~clear], budget):
-            return False
-        pending = (2.0 * pending[~clear])[:, None] + np.array([0.0, 1.0])
-        pending = pending.reshape(-1)
-        level += 1
-    return True
-
-
-def _cleared(parts: list[tuple[PackedWorld, int]], q: np.ndarray, poses: np.ndarray, margin: float) -> np.ndarray:
-    """Which configurations pass every part of the validity test with ``margin`` (m) to spare."""
-    clear = np.ones(len(q), dtype=bool)
-    for packed, joints in parts:
-        rows = np.flatnonzero(clear)
-        if len(rows):
-            part = dataclasses.replace(packed, rounding=margin)
-            clear[rows] = clearly_valid(part, np.ascontiguousarray(q[rows, :joints]), poses[rows])
-    return clear
-
-
-def _all_valid(world: World, q: np.ndarray, poses: np.ndarray, budget: _Budget | None) -> bool:
-    """Whether every configuration is valid beyond rounding (the compiled first pass alone: one that only
-    touches is taken as invalid, which can only reject a move, never accept one)."""
-    if budget is not None:
-        budget.spend_checks(len(q))
-    return bool(clearly_valid(packed_world(world), q, poses).all())
-
-
-def _margin_parts(
-    world: World,
-    a: np.ndarray,
-    b: np.ndarray,
-    grasp_rel: np.ndarray | None,
-    *,
-    min_margin: float,
-    budget: _Budget | None,
-) -> list[tuple[PackedWorld, int]] | None:
-    """The validity tests a margin is asked of, with the joints each takes: the whole test in a transit; in a
-    transfer, :func:`clew_ros.core.collision.packed_carrying`'s two parts, once the pair they leave out (the
-    last link and the object it holds, at a fixed distance during the move) has its least margin at ``a``.
-    ``None`` when it has not, or when ``a`` or ``b`` leaves the joint limits."""
-    ends = np.stack([a, b])
-    if np.any(ends < world.robot.joint_lower) or np.any(ends > world.robot.joint_upper):
-        return None
-    if grasp_rel is None:
-        return [(packed_world(world), world.robot.dof)]
-    pose = compose(tip_poses(world.robot, a[None]), grasp_rel)
-    if budget is not None:
-        budget.spend_checks(1)
-    if not clearly_valid(dataclasses.replace(packed_world(world), rounding=min_margin), a[None], pose)[0]:
-        return None
-    without_object, links_but_last = packed_carrying(world)
-    return [(without_object, world.robot.dof), (links_but_last, world.robot.dof - 1)]
 
 
 def _dense_count(waypoints: np.ndarray) -> int:
@@ -734,7 +589,7 @@ class _Improver:
             piece = self.pieces[index]
             assert piece.grasp_rel is not None
             before = self.ctx.counters.evaluations
-            result = search_transfer(self.ctx, piece.waypoints[0], piece.grasp_rel, self.goal)
+            result = search_transfer(self.ctx, piece.waypoints[0], piece.grasp_rel, self.goal, joins=False)
             self.budget.spend(EVALUATION_WORK * (self.ctx.counters.evaluations - before))
             if not result.success:
                 continue

@@ -18,7 +18,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from clew_ros.core.collision import is_valid
+from clew_ros.core.connect import join
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR
 from clew_ros.core.genetic import minimize_islands
+from clew_ros.core.inverse import solve_point
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, ManhattanPaths, run_manhattan, single_moves
 from clew_ros.core.reach import (
@@ -37,7 +41,9 @@ __all__ = [
     "PlanningContext",
     "SearchJob",
     "TransitRequest",
+    "goal_configurations",
     "goal_error",
+    "join_stalled",
     "local_search",
     "search_transfer",
     "search_transit",
@@ -47,6 +53,14 @@ __all__ = [
 #: One SEARCH_TRANSIT request: start joints ``(n,)``, the resting object's pose ``(3,)``, the grasp's index
 #: and the allowed approach cells (or ``None``), see :func:`search_transit`.
 TransitRequest = tuple[np.ndarray, np.ndarray, int, np.ndarray | None]
+
+#: A search that stalls closer to its target than this fraction of the arm's reach (m / m) is joined to it
+#: by RRT-Connect when it can be (:func:`join_stalled`).
+JOIN_RADIUS = 0.3
+#: Rounds of that RRT-Connect at most (each extends one tree a step, and the other as far as it is clear).
+JOIN_ROUNDS = 60
+#: Seeds of the inverse kinematics for SEARCH_TRANSFER's goal configurations: the stalled one and random ones.
+GOAL_SEEDS = 8
 
 
 @dataclass
@@ -101,6 +115,10 @@ class SearchJob:
     error: Callable[[np.ndarray], np.ndarray]
     accept: float
     mode: dict[str, np.ndarray]  # {"object_poses": (1, 3)} (transit) or {"grasp_rel": (1, 3)} (transfer)
+    #: The objective at or below which the search succeeded, and the configurations ``(m, n)`` a search that
+    #: stalled at ``q`` may be joined to (:func:`join_stalled`), or ``None``.
+    succeeds: float = 0.0
+    targets: Callable[[np.ndarray], np.ndarray] | None = None
 
     @property
     def pose(self) -> np.ndarray:
@@ -182,6 +200,39 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     return answers
 
 
+def join_stalled(
+    ctx: PlanningContext, job: SearchJob, waypoints: np.ndarray, distance: float
+) -> tuple[np.ndarray, float]:
+    """A search that stalled near its target (``distance`` at most :data:`JOIN_RADIUS` x the arm's reach, not
+    yet ``job.succeeds``), extended by RRT-Connect to one of ``job.targets`` (in the same mode, every move
+    checked continuously with :data:`clew_ros.core.continuous.MIN_MARGIN_FACTOR` x the clearance, at most
+    :data:`JOIN_ROUNDS` rounds); its waypoints and objective, unchanged when no way was found."""
+    world = ctx.world
+    if job.targets is None or distance <= job.succeeds or distance > JOIN_RADIUS * world.robot.reach:
+        return waypoints, distance
+    stalled = waypoints[-1]
+    targets = job.targets(stalled)
+    if not len(targets) or ctx.termination():
+        return waypoints, distance
+    pose = job.mode.get("object_poses")
+    held = job.mode.get("grasp_rel")
+    path = join(
+        world,
+        stalled,
+        targets,
+        ctx.rng,
+        object_pose=None if pose is None else pose[0],
+        grasp_rel=None if held is None else held[0],
+        min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
+        rounds=JOIN_ROUNDS,
+        stop=ctx.termination,
+    )
+    if path is None:
+        return waypoints, distance
+    end = path[-1:]
+    return np.vstack([waypoints, path[1:]]), float(job.objective(end, _object_at(ctx, end, job.mode))[0])
+
+
 def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict[str, np.ndarray]) -> np.ndarray:
     if mode.get("grasp_rel") is None:
         return np.broadcast_to(mode["object_poses"], (len(q), 3))
@@ -253,8 +304,9 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             results.append(None)
             jobs.append(job)
     if jobs:
-        for slot, job, (waypoints, distance) in zip(slots, jobs, local_search(ctx, jobs), strict=True):
-            success = distance <= 0.5 * world.grasp_tolerance
+        for slot, job, (found, reached) in zip(slots, jobs, local_search(ctx, jobs), strict=True):
+            waypoints, distance = join_stalled(ctx, job, found, reached)
+            success = distance <= job.succeeds
             grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
             results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
     return [result for result in results if result is not None]  # every slot is filled by now
@@ -288,7 +340,17 @@ def _transit_job(
     hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
     if hopeless or not within_reach(world, target[0]):
         return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
-    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, {"object_poses": object_pose[None]})
+    succeeds = 0.5 * world.grasp_tolerance
+
+    def targets(_stalled: np.ndarray) -> np.ndarray:
+        """The holding configurations that meet the transit's own success (approach and elbow included)."""
+        if holds is None:
+            return np.zeros((0, world.robot.dof))
+        held: np.ndarray = holds[objective(holds, None) <= succeeds]
+        return held
+
+    mode = {"object_poses": object_pose[None]}
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, succeeds, targets)
 
 
 def _holding_configurations(
@@ -323,8 +385,49 @@ def goal_reached(world: World, object_pose: np.ndarray, goal: np.ndarray) -> boo
     return position <= world.goal_tolerance and angle <= world.goal_angle_tolerance + 1e-9
 
 
-def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray) -> PathResult:
-    """SEARCH_TRANSFER: carry the object (held as ``grasp_rel``) toward the ``goal`` placement."""
+def goal_configurations(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """Valid configurations ``(m, n)`` holding the object (as ``grasp_rel``) within the goal's tolerances, as
+    SEARCH_TRANSFER's success asks, nearest ``q0`` first: inverse kinematics (:func:`solve_point`) from ``q0``
+    and :data:`GOAL_SEEDS` - 1 configurations drawn within the joint limits, once for the goal's own angle (the
+    middle of the tolerance, clear of a pocket's walls when the arm can hold it there) and once for any angle
+    within the tolerance (for an arm that cannot)."""
+    world = ctx.world
+    robot = world.robot
+    drawn = ctx.rng.uniform(robot.joint_lower, robot.joint_upper, (GOAL_SEEDS - 1, robot.dof))
+    seeds = np.vstack([np.asarray(q0, float)[None], drawn])
+    grasp_rel = np.asarray(grasp_rel, float)
+    within = np.pi if world.goal_angle_tolerance >= np.pi - 1e-6 else 0.8 * world.goal_angle_tolerance
+    q = np.vstack(
+        [
+            solve_point(
+                robot,
+                seeds,
+                np.asarray(goal[:2], float)[None],
+                offsets=grasp_rel[None, :2],
+                angles=np.array([goal[2] - grasp_rel[2]]),
+                angle_tolerance=tolerance,
+                angle_scale=world.object.radius,
+                tolerance_m=0.1 * world.goal_tolerance,
+            ).q
+            for tolerance in (0.0, within)
+        ]
+    )
+    poses = compose(tip_poses(robot, q), grasp_rel)
+    close = np.linalg.norm(goal_error(world, poses, goal), axis=1) <= 0.5 * world.goal_tolerance
+    held = np.array([bool(c) and goal_reached(world, pose, goal) for c, pose in zip(close, poses, strict=True)])
+    if held.any():
+        held[held] = is_valid(world, q[held], poses[held])
+    found = q[held][np.argsort(np.max(np.abs(q[held] - q0), axis=1), kind="stable")]
+    distinct = [i for i in range(len(found)) if not any(np.max(np.abs(found[i] - found[:i]), axis=1) < 1e-3)]
+    kept: np.ndarray = found[distinct]
+    return kept
+
+
+def search_transfer(
+    ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
+) -> PathResult:
+    """SEARCH_TRANSFER: carry the object (held as ``grasp_rel``) toward the ``goal`` placement; stalled near it,
+    joined to it (:func:`join_stalled`, towards :func:`goal_configurations`) unless ``joins`` is false."""
     world = ctx.world
     mode = {"grasp_rel": np.asarray(grasp_rel, float)[None]}
 
@@ -341,7 +444,15 @@ def search_transfer(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray,
         return PathResult(
             False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]), object_pose=start_pose[0]
         )
-    [(waypoints, distance)] = local_search(ctx, [SearchJob(np.asarray(q0, float), objective, error, accept, mode)])
+
+    def targets(stalled: np.ndarray) -> np.ndarray:
+        return goal_configurations(ctx, stalled, mode["grasp_rel"][0], goal)
+
+    job = SearchJob(
+        np.asarray(q0, float), objective, error, accept, mode, 0.5 * world.goal_tolerance, targets if joins else None
+    )
+    [(found, reached)] = local_search(ctx, [job])
+    waypoints, distance = join_stalled(ctx, job, found, reached)
     final_pose = compose(tip_poses(world.robot, waypoints[-1:]), mode["grasp_rel"])[0]
-    success = goal_reached(world, final_pose, goal) and distance <= 0.5 * world.goal_tolerance
+    success = goal_reached(world, final_pose, goal) and distance <= job.succeeds
     return PathResult(success, waypoints, distance, object_pose=final_pose)

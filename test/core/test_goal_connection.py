@@ -1,4 +1,4 @@
-"""SEARCH_TRANSFER's way in (core.goal_connection) and the RRT-Connect it uses (core.connect): goal
+"""SEARCH_TRANSFER's way in (search.goal_configurations, connect.join) and RRT-Connect (core.connect): goal
 configurations hold the object within the goal's tolerances; a joined path starts where the search
 stalled, ends at the goal, is valid at a step ten times finer than the validator's and is the same
 from the same generator."""
@@ -10,11 +10,11 @@ import itertools
 import numpy as np
 
 from clew_ros.core.collision import is_valid
-from clew_ros.core.connect import rrt_connect, shortened
-from clew_ros.core.goal_connection import goal_configurations, join_goal
+from clew_ros.core.connect import join, rrt_connect, shortened
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.plan import replay
-from clew_ros.core.search import PlanningContext, goal_reached
+from clew_ros.core.search import JOIN_ROUNDS, PlanningContext, goal_configurations, goal_reached
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.worlds import generate
 
@@ -58,11 +58,19 @@ def _joined(family: str, seed: int) -> bool:
     gaps = np.max(np.abs(goals - stalled), axis=1)
     assert np.all(np.diff(gaps) >= 0)  # nearest first
 
-    def join() -> np.ndarray | None:
-        rng = np.random.default_rng(seed)
-        return join_goal(PlanningContext(world, ctx.settings, rng, Termination(60)), stalled, grasp_rel, goal)
+    def join_goal() -> np.ndarray | None:
+        return join(
+            world,
+            stalled,
+            goals,
+            np.random.default_rng(seed),
+            grasp_rel=grasp_rel,
+            min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
+            rounds=JOIN_ROUNDS,
+            stop=lambda: False,
+        )
 
-    path, again = join(), join()
+    path, again = join_goal(), join_goal()
     if path is None:
         assert again is None
         return False
@@ -85,7 +93,6 @@ def test_no_goal_configuration_when_the_grasp_cannot_hold_the_object_at_the_goal
     far = np.array([grasp_rel[0] + 10.0, grasp_rel[1], grasp_rel[2]])  # the object held 10 m beyond the tip
     ctx = PlanningContext(world, PlannerSettings(), np.random.default_rng(0), Termination(60))
     assert len(goal_configurations(ctx, q[0], far, np.asarray(world.object.goal, float))) == 0
-    assert join_goal(ctx, q[0], far, np.asarray(world.object.goal, float)) is None
 
 
 def _disc_clear(centre: np.ndarray, radius: float):

@@ -16,7 +16,8 @@ from helpers.random_boxes import random_boxes
 
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
-from clew_ros.core.improve import _Improver, _Piece, _prune, improve, joint_travel, straight_move_clear
+from clew_ros.core.continuous import straight_move_clear
+from clew_ros.core.improve import _Improver, _Piece, _prune, improve, joint_travel
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.manhattan import run_manhattan

@@ -54,11 +54,11 @@ __all__ = [
 #: and the allowed approach cells (or ``None``), see :func:`search_transit`.
 TransitRequest = tuple[np.ndarray, np.ndarray, int, np.ndarray | None]
 
-#: A search that stalls closer to its target than this fraction of the arm's reach (m / m) is joined to it
-#: by RRT-Connect when it can be (:func:`join_stalled`).
+#: A SEARCH_TRANSFER that stalls closer to the goal than this fraction of the arm's reach (m / m) is joined
+#: to it by RRT-Connect when it can be (:func:`join_stalled`).
 JOIN_RADIUS = 0.3
 #: Rounds of that RRT-Connect at most (each extends one tree a step, and the other as far as it is clear).
-JOIN_ROUNDS = 60
+JOIN_ROUNDS = 30
 #: Seeds of the inverse kinematics for SEARCH_TRANSFER's goal configurations: the stalled one and random ones.
 GOAL_SEEDS = 8
 
@@ -119,6 +119,7 @@ class SearchJob:
     #: stalled at ``q`` may be joined to (:func:`join_stalled`), or ``None``.
     succeeds: float = 0.0
     targets: Callable[[np.ndarray], np.ndarray] | None = None
+    join_within: float = 0.0  # m: a search stalled farther than this from its target is not joined
 
     @property
     def pose(self) -> np.ndarray:
@@ -208,7 +209,7 @@ def join_stalled(
     checked continuously with :data:`clew_ros.core.continuous.MIN_MARGIN_FACTOR` x the clearance, at most
     :data:`JOIN_ROUNDS` rounds); its waypoints and objective, unchanged when no way was found."""
     world = ctx.world
-    if job.targets is None or distance <= job.succeeds or distance > JOIN_RADIUS * world.robot.reach:
+    if job.targets is None or distance <= job.succeeds or distance > job.join_within:
         return waypoints, distance
     stalled = waypoints[-1]
     targets = job.targets(stalled)
@@ -340,17 +341,8 @@ def _transit_job(
     hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
     if hopeless or not within_reach(world, target[0]):
         return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
-    succeeds = 0.5 * world.grasp_tolerance
-
-    def targets(_stalled: np.ndarray) -> np.ndarray:
-        """The holding configurations that meet the transit's own success (approach and elbow included)."""
-        if holds is None:
-            return np.zeros((0, world.robot.dof))
-        held: np.ndarray = holds[objective(holds, None) <= succeeds]
-        return held
-
     mode = {"object_poses": object_pose[None]}
-    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, succeeds, targets)
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, 0.5 * world.grasp_tolerance)
 
 
 def _holding_configurations(
@@ -449,7 +441,14 @@ def search_transfer(
         return goal_configurations(ctx, stalled, mode["grasp_rel"][0], goal)
 
     job = SearchJob(
-        np.asarray(q0, float), objective, error, accept, mode, 0.5 * world.goal_tolerance, targets if joins else None
+        np.asarray(q0, float),
+        objective,
+        error,
+        accept,
+        mode,
+        0.5 * world.goal_tolerance,
+        targets if joins else None,
+        JOIN_RADIUS * world.robot.reach,
     )
     [(found, reached)] = local_search(ctx, [job])
     waypoints, distance = join_stalled(ctx, job, found, reached)

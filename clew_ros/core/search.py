@@ -61,6 +61,8 @@ JOIN_RADIUS = 0.3
 JOIN_ROUNDS = 30
 #: Seeds of the inverse kinematics for SEARCH_TRANSFER's goal configurations: the stalled one and random ones.
 GOAL_SEEDS = 8
+#: A join's generator is seeded with (planner.seed, this, where the search stalled): its own stream.
+JOIN_STREAM = 13
 
 
 @dataclass
@@ -116,9 +118,9 @@ class SearchJob:
     accept: float
     mode: dict[str, np.ndarray]  # {"object_poses": (1, 3)} (transit) or {"grasp_rel": (1, 3)} (transfer)
     #: The objective at or below which the search succeeded, and the configurations ``(m, n)`` a search that
-    #: stalled at ``q`` may be joined to (:func:`join_stalled`), or ``None``.
+    #: stalled at ``q`` may be joined to, drawn from a generator (:func:`join_stalled`), or ``None``.
     succeeds: float = 0.0
-    targets: Callable[[np.ndarray], np.ndarray] | None = None
+    targets: Callable[[np.ndarray, np.random.Generator], np.ndarray] | None = None
     join_within: float = 0.0  # m: a search stalled farther than this from its target is not joined
 
     @property
@@ -212,7 +214,11 @@ def join_stalled(
     if job.targets is None or distance <= job.succeeds or distance > job.join_within:
         return waypoints, distance
     stalled = waypoints[-1]
-    targets = job.targets(stalled)
+    # a generator of the join's own, seeded by the planner's seed and where the search stalled: a join that
+    # fails leaves the run's random stream, and so the rest of the run, as they would have been without it
+    request = np.frombuffer(np.round(np.r_[stalled, job.pose], 9).tobytes(), dtype=np.uint32)
+    rng = np.random.default_rng([ctx.settings.seed, JOIN_STREAM, *request.tolist()])
+    targets = job.targets(stalled, rng)
     if not len(targets) or ctx.termination():
         return waypoints, distance
     pose = job.mode.get("object_poses")
@@ -221,7 +227,7 @@ def join_stalled(
         world,
         stalled,
         targets,
-        ctx.rng,
+        rng,
         object_pose=None if pose is None else pose[0],
         grasp_rel=None if held is None else held[0],
         min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
@@ -377,15 +383,16 @@ def goal_reached(world: World, object_pose: np.ndarray, goal: np.ndarray) -> boo
     return position <= world.goal_tolerance and angle <= world.goal_angle_tolerance + 1e-9
 
 
-def goal_configurations(ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray) -> np.ndarray:
+def goal_configurations(
+    world: World, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
     """Valid configurations ``(m, n)`` holding the object (as ``grasp_rel``) within the goal's tolerances, as
     SEARCH_TRANSFER's success asks, nearest ``q0`` first: inverse kinematics (:func:`solve_point`) from ``q0``
     and :data:`GOAL_SEEDS` - 1 configurations drawn within the joint limits, once for the goal's own angle (the
     middle of the tolerance, clear of a pocket's walls when the arm can hold it there) and once for any angle
     within the tolerance (for an arm that cannot)."""
-    world = ctx.world
     robot = world.robot
-    drawn = ctx.rng.uniform(robot.joint_lower, robot.joint_upper, (GOAL_SEEDS - 1, robot.dof))
+    drawn = rng.uniform(robot.joint_lower, robot.joint_upper, (GOAL_SEEDS - 1, robot.dof))
     seeds = np.vstack([np.asarray(q0, float)[None], drawn])
     grasp_rel = np.asarray(grasp_rel, float)
     within = np.pi if world.goal_angle_tolerance >= np.pi - 1e-6 else 0.8 * world.goal_angle_tolerance
@@ -437,8 +444,8 @@ def search_transfer(
             False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]), object_pose=start_pose[0]
         )
 
-    def targets(stalled: np.ndarray) -> np.ndarray:
-        return goal_configurations(ctx, stalled, mode["grasp_rel"][0], goal)
+    def targets(stalled: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return goal_configurations(world, stalled, mode["grasp_rel"][0], goal, rng)
 
     job = SearchJob(
         np.asarray(q0, float),

@@ -14,8 +14,8 @@ from clew_ros.core.connect import join, rrt_connect, shortened
 from clew_ros.core.continuous import MIN_MARGIN_FACTOR
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.plan import replay
-from clew_ros.core.search import JOIN_ROUNDS, PlanningContext, goal_configurations, goal_reached
-from clew_ros.core.settings import PlannerSettings, Termination
+from clew_ros.core.search import JOIN_ROUNDS, goal_configurations, goal_reached
+from clew_ros.core.settings import PlannerSettings
 from clew_ros.worlds import generate
 
 FINE_RAD = 2e-4  # ten times finer than the validator
@@ -47,8 +47,7 @@ def _joined(family: str, seed: int) -> bool:
     world, q, grasp_rel = _last_transfer(family, seed)
     goal = np.asarray(world.object.goal, dtype=float)
     stalled = q[0]
-    ctx = PlanningContext(world, PlannerSettings(seed=seed), np.random.default_rng(seed), Termination(60))
-    goals = goal_configurations(ctx, stalled, grasp_rel, goal)
+    goals = goal_configurations(world, stalled, grasp_rel, goal, np.random.default_rng(seed))
     assert len(goals), f"{family}_{seed}"  # the goal's own angle from the witness's posture
     poses = compose(tip_poses(world.robot, goals), grasp_rel)
     assert all(goal_reached(world, pose, goal) for pose in poses)
@@ -65,7 +64,7 @@ def _joined(family: str, seed: int) -> bool:
             goals,
             np.random.default_rng(seed),
             grasp_rel=grasp_rel,
-            min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
+            min_margin=MIN_MARGIN_FACTOR * PlannerSettings().clearance,
             rounds=JOIN_ROUNDS,
             stop=lambda: False,
         )
@@ -91,8 +90,8 @@ def test_joining_the_goal_from_the_witness_s_last_transfer() -> None:
 def test_no_goal_configuration_when_the_grasp_cannot_hold_the_object_at_the_goal() -> None:
     world, q, grasp_rel = _last_transfer("pocket", 0)
     far = np.array([grasp_rel[0] + 10.0, grasp_rel[1], grasp_rel[2]])  # the object held 10 m beyond the tip
-    ctx = PlanningContext(world, PlannerSettings(), np.random.default_rng(0), Termination(60))
-    assert len(goal_configurations(ctx, q[0], far, np.asarray(world.object.goal, float))) == 0
+    goal = np.asarray(world.object.goal, float)
+    assert len(goal_configurations(world, q[0], far, goal, np.random.default_rng(0))) == 0
 
 
 def _disc_clear(centre: np.ndarray, radius: float):
@@ -140,3 +139,38 @@ def test_rrt_connect_gives_up_when_stopped_or_walled_in() -> None:
     assert (
         rrt_connect(clear, start, goal, np.random.default_rng(0), limits=limits, rounds=50, stop=lambda: True) is None
     )
+
+
+def test_a_join_that_fails_leaves_the_run_as_it_was(monkeypatch) -> None:
+    """Joins draw from a generator of their own: a run whose joins all fail plans exactly what it plans with
+    no joins at all; one whose join succeeds ends with a transfer that reaches the goal."""
+    from clew_ros.core import search
+    from clew_ros.core.clew import plan
+
+    calls: list[bool] = []
+    real_join = search.join
+
+    def counted(*args, **kwargs):
+        path = real_join(*args, **kwargs)
+        calls.append(path is not None)
+        return path
+
+    attempted = 0
+    for family, seed in [("pocket", 0), ("pocket", 2), ("regrasp2", 4)]:
+        world = generate(family, seed).world()
+        settings = PlannerSettings(seed=1, time_limit=60, improve_time=0.0)
+        calls.clear()
+        monkeypatch.setattr(search, "join", counted)
+        joined = plan(world, settings)
+        monkeypatch.setattr(search, "JOIN_RADIUS", 0.0)
+        plain = plan(world, settings)
+        monkeypatch.undo()
+        attempted += len(calls)
+        if not any(calls):
+            assert [np.asarray(s.waypoints).tolist() for s in joined.segments] == [
+                np.asarray(s.waypoints).tolist() for s in plain.segments
+            ]
+            assert joined.stats["landmarks"] == plain.stats["landmarks"]
+        else:
+            assert joined.success
+    assert attempted > 0

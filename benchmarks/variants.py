@@ -1,0 +1,161 @@
+"""Settings of the planner's modules compared on the same worlds, in one run: ``python -m benchmarks.variants
+--variant NAME=module.CONSTANT:VALUE[,...] [--variant ...] [--families A,B] [--config-worlds figure1,...]
+[--worlds 4] [--seeds 6] [--time-limit 10] [--jobs 2] [--out DIR]``.
+
+A variant sets module constants of ``clew_ros.core`` (for example ``search.JOIN_RADIUS:0``) in the worker
+processes before they plan; ``NAME=`` alone is the code as it is. Every variant plans every (world, seed):
+the generated families' worlds (:mod:`benchmarks.generated`) and the ``config/`` worlds named, in worker
+processes of their own (``--jobs`` at a time, one kernel thread each). The figure compared is the time to
+the first plan (``PlanResult.first_plan_s``: what a change of SEARCH or EXPLORE moves; a failed run counts
+at the limit). Per family and in all: success, median first-plan time, median landmarks, and the
+geometric mean over (world, seed) of each run's time over the first variant's (below 1: faster). A
+change of the random stream makes single runs diverge: read the ratios over many runs, not one.
+``DIR/variants.json`` keeps every run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import multiprocessing
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from benchmarks.generated import build_world, reference_world, solvable_families
+
+#: Worlds of ``config/`` planned by default next to the families (their own time limit: ``--config-limit``).
+CONFIG_WORLDS = "figure1,obstacles_8,obstacles_32,joints_10,arm5_regrasp"
+
+
+def parse_variant(text: str) -> tuple[str, dict[str, Any]]:
+    """``NAME=module.CONSTANT:VALUE,...`` → (name, {"module.CONSTANT": value}); values are Python literals."""
+    name, _, body = text.partition("=")
+    if not name:
+        raise ValueError(f"--variant {text!r}: expected NAME=module.CONSTANT:VALUE[,...]")
+    settings: dict[str, Any] = {}
+    for item in filter(None, body.split(",")):
+        key, sep, value = item.partition(":")
+        module, dot, constant = key.partition(".")
+        if not sep or not dot or not constant:
+            raise ValueError(f"--variant {text!r}: {item!r} is not module.CONSTANT:VALUE")
+        target = importlib.import_module(f"clew_ros.core.{module}")
+        if not hasattr(target, constant):
+            raise ValueError(f"--variant {text!r}: clew_ros.core.{module} has no {constant}")
+        settings[key] = json.loads(value)
+    return name, settings
+
+
+def _apply(settings: dict[str, Any]) -> None:
+    """Set the variant's constants (a worker process's initializer), then load the compiled kernel."""
+    for key, value in settings.items():
+        module, constant = key.split(".")
+        setattr(importlib.import_module(f"clew_ros.core.{module}"), constant, value)
+    from clew_ros.core.kernel import warm_up
+
+    warm_up()
+
+
+def _plan(job: tuple[str, str, int, float]) -> dict[str, Any]:
+    from clew_ros.core.clew import plan
+    from clew_ros.core.settings import PlannerSettings
+    from clew_ros.core.world import load_world
+
+    family, path, seed, limit = job
+    result = plan(load_world(path), PlannerSettings(seed=seed, time_limit=limit, threads=1))
+    first = result.first_plan_s if result.success and result.first_plan_s is not None else limit
+    return {
+        "family": family,
+        "world": Path(path).stem,
+        "seed": seed,
+        "outcome": result.outcome.name,
+        "success": result.success,
+        "first_plan_s": first,
+        "landmarks": result.stats["landmarks"],
+        "travel_rad": result.stats.get("joint_travel_rad"),
+        "first_travel_rad": result.stats.get("first_joint_travel_rad"),
+    }
+
+
+def run_variant(settings: dict[str, Any], jobs: list[tuple[str, str, int, float]], workers: int) -> list[dict]:
+    """Every job planned by worker processes with ``settings`` applied, in the jobs' order."""
+    context = multiprocessing.get_context("spawn")  # a fresh interpreter: constants set before any plan
+    with context.Pool(workers, initializer=_apply, initargs=(settings,)) as pool:
+        return pool.map(_plan, jobs, chunksize=1)
+
+
+def _median(values: list[float]) -> float:
+    ordered = sorted(values)
+    middle = len(ordered) // 2
+    return ordered[middle] if len(ordered) % 2 else 0.5 * (ordered[middle - 1] + ordered[middle])
+
+
+def table(names: list[str], runs: dict[str, list[dict]]) -> str:
+    """Markdown: one row per family and variant, then all runs."""
+    families = list(dict.fromkeys(r["family"] for r in runs[names[0]]))
+    lines = [
+        "| family | variant | success | median first plan s | landmarks | time / first variant |",
+        "|---|---|--:|--:|--:|--:|",
+    ]
+    for family in [*families, "all"]:
+        for name in names:
+            pairs = [(r, b) for r, b in zip(runs[name], runs[names[0]], strict=True) if family in ("all", r["family"])]
+            mine = [r for r, _ in pairs]
+            ratio = math.exp(sum(math.log(r["first_plan_s"] / b["first_plan_s"]) for r, b in pairs) / len(pairs))
+            lines.append(
+                f"| {family} | {name} | {sum(r['success'] for r in mine)}/{len(mine)} "
+                f"| {_median([r['first_plan_s'] for r in mine]):.2f} | {_median([r['landmarks'] for r in mine]):.0f} "
+                f"| {ratio:.2f} |"
+            )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.variants", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--variant", action="append", required=True, help="NAME=module.CONSTANT:VALUE[,...]")
+    parser.add_argument("--families", default=",".join(solvable_families()), help="comma-separated")
+    parser.add_argument("--config-worlds", default=CONFIG_WORLDS, help="worlds of config/, comma-separated")
+    parser.add_argument("--worlds", type=int, default=4, help="worlds per family, seeds 0..W-1")
+    parser.add_argument("--seeds", type=int, default=6, help="planner seeds per world, 0..S-1")
+    parser.add_argument("--time-limit", type=float, default=10.0, help="per run on the families, s")
+    parser.add_argument("--config-limit", type=float, default=5.0, help="per run on the config/ worlds, s")
+    parser.add_argument("--jobs", type=int, default=2, help="worker processes")
+    parser.add_argument("--out", type=Path, default=Path("bench_out"), help="where variants.json/.md go")
+    args = parser.parse_args(argv)
+    try:
+        variants = [parse_variant(text) for text in args.variant]
+    except ValueError as error:
+        parser.error(str(error))
+    started, load = time.monotonic(), os.getloadavg()[0]
+    runs: dict[str, list[dict]] = {}
+    with tempfile.TemporaryDirectory(prefix="clew_variants_") as scratch:
+        generated = [build_world(f, s, scratch) for f in args.families.split(",") if f for s in range(args.worlds)]
+        configs = [reference_world(name) for name in args.config_worlds.split(",") if name]
+        jobs = [(w.family, w.path, seed, args.time_limit) for w in generated for seed in range(args.seeds)]
+        jobs += [(w.family, w.path, seed, args.config_limit) for w in configs for seed in range(args.seeds)]
+        for name, settings in variants:
+            begun = time.monotonic()
+            runs[name] = run_variant(settings, jobs, args.jobs)
+            print(f"  {name}: {len(jobs)} runs, {time.monotonic() - begun:.0f} s", file=sys.stderr)
+    names = [name for name, _ in variants]
+    command = " ".join(["python -m benchmarks.variants", *(sys.argv[1:] if argv is None else argv)])
+    header = (
+        f"`{command}` ({time.strftime('%Y-%m-%d %H:%M')}, {(time.monotonic() - started) / 60:.1f} min on "
+        f"{os.cpu_count()} cores, load average {load:.1f} at the start; {args.worlds} worlds x {args.seeds} seeds "
+        f"per family, {args.seeds} seeds per config world):"
+    )
+    text = f"{header}\n\n{table(names, runs)}\n"
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "variants.md").write_text(text)
+    (args.out / "variants.json").write_text(json.dumps({"command": command, "runs": runs}, indent=1) + "\n")
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,43 @@
+"""The variants benchmark: a variant sets the constants it names in its workers (a setting that changes the
+plan changes it), and bad variants are refused naming what is wrong; speed is not checked."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from benchmarks.variants import main, parse_variant
+
+
+def test_a_variant_names_module_constants_with_literal_values() -> None:
+    assert parse_variant("as_is=") == ("as_is", {})
+    assert parse_variant("off=search.JOIN_RADIUS:0,search.JOIN_ROUNDS:30") == (
+        "off",
+        {"search.JOIN_RADIUS": 0, "search.JOIN_ROUNDS": 30},
+    )
+    for bad, named in [
+        ("=search.JOIN_RADIUS:0", "NAME="),
+        ("x=search.JOIN_RADIUS", "module.CONSTANT:VALUE"),
+        ("x=search.NO_SUCH:1", "no NO_SUCH"),
+    ]:
+        with pytest.raises(ValueError, match=named):
+            parse_variant(bad)
+
+
+def test_two_variants_plan_the_same_runs_and_a_setting_reaches_the_workers(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    args = ["--families", "shapes2", "--config-worlds", "figure1", "--worlds", "1", "--seeds", "1"]
+    # no work per second of planner.improve_time: the improvement cannot shorten the first plan
+    variants = ["--variant", "as_is=", "--variant", "starved=improve.WORK_PER_SECOND:0"]
+    assert main([*args, *variants, "--time-limit", "3", "--config-limit", "3", "--out", str(out)]) == 0
+    report = json.loads((out / "variants.json").read_text())
+    as_is, starved = report["runs"]["as_is"], report["runs"]["starved"]
+    assert [(r["world"], r["seed"]) for r in as_is] == [(r["world"], r["seed"]) for r in starved]
+    assert [r["family"] for r in as_is] == ["shapes2", "figure1"]
+    assert as_is[1]["success"]
+    assert starved[1]["success"]
+    assert as_is[1]["first_travel_rad"] == starved[1]["first_travel_rad"]  # the same seed, the same first plan
+    assert starved[1]["travel_rad"] == starved[1]["first_travel_rad"]
+    assert as_is[1]["travel_rad"] < as_is[1]["first_travel_rad"]
+    table = (out / "variants.md").read_text()
+    assert "| all | starved |" in table

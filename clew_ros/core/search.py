@@ -5,10 +5,17 @@ Both minimise a distance over Manhattan paths of order k coded with bouncing
 from the best end point while it improves (the paper's do-while loop). A short
 numeric refinement then closes the last millimetres: damped least squares on a
 finite-difference Jacobian, applied as single-joint moves clamped to their
-free intervals. No inverse kinematics builds a path, so redundant arms work
-alike; configurations that hold a grasp (closed form for two joints, sampled
-for more: :mod:`clew_ros.core.reach`) only refuse hopeless transits and, for
-two joints, steer the elbow.
+free intervals. Inverse kinematics never builds a Manhattan path, so redundant
+arms work alike; configurations that hold a grasp (closed form for two joints,
+sampled for more: :mod:`clew_ros.core.reach`) only refuse hopeless transits
+and, for two joints, steer the elbow.
+
+A SEARCH_TRANSFER that stalls near the goal (:data:`JOIN_RADIUS`) is joined to
+it (:func:`join_stalled`): configurations that hold the object within the
+goal's tolerances are found by inverse kinematics
+(:func:`goal_configurations`) and reached by RRT-Connect in the same mode,
+every move checked continuously (:func:`clew_ros.core.connect.join`), drawing
+from a generator of its own. This departs from the paper (docs/algorithm.md).
 """
 
 from __future__ import annotations

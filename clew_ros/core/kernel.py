@@ -843,10 +843,12 @@ def _clearly_valid(  # noqa: C901, PLR0912 - one compiled pass per configuration
         _place(object_edges, poses[b, 0], poses[b, 1], poses[b, 2], 0.0, 0.0, shape)
         _place(shrunk_edges, poses[b, 0], poses[b, 1], poses[b, 2], 0.0, 0.0, shrunk)
         ok = True
+        sx0, sy0, sx1, sy1 = math.inf, math.inf, -math.inf, -math.inf  # the object's bounding box
         for e in range(shape.shape[0]):  # the object inside the bounds
             vx, vy = shape[e, 0, 0], shape[e, 0, 1]
             if not (xmin + eps < vx < xmax - eps and ymin + eps < vy < ymax - eps):
                 ok = False
+            sx0, sy0, sx1, sy1 = min(sx0, vx), min(sy0, vy), max(sx1, vx), max(sy1, vy)
         for o in range(boxes.shape[0]):
             if not ok:
                 break
@@ -861,6 +863,8 @@ def _clearly_valid(  # noqa: C901, PLR0912 - one compiled pass per configuration
                     break
             if not ok:
                 break
+            if sx1 < boxes[o, 0] - eps or sx0 > boxes[o, 2] + eps or sy1 < boxes[o, 1] - eps or sy0 > boxes[o, 3] + eps:
+                continue  # boxes more than eps apart: so are the object and the obstacle, neither inside the other
             for e in range(shape.shape[0]):  # the object off the obstacle: boundaries apart, neither inside
                 if not _segment_clear_of_ring(
                     shape[e, 0, 0], shape[e, 0, 1], shape[e, 1, 0], shape[e, 1, 1], obstacles, first, last, eps

@@ -83,7 +83,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid, packed_world
+from clew_ros.core.collision import is_valid
 from clew_ros.core.connect import rrt_connect, shortened
 from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_move_clear
 from clew_ros.core.kinematics import compose, relative, tip_poses
@@ -98,7 +98,7 @@ __all__ = [
     "EVALUATION_WORK",
     "IK_WORK",
     "MIN_MARGIN_FACTOR",
-    "REFERENCE_PAIRS",
+    "REFERENCE_COST",
     "WORK_PER_SECOND",
     "Improvement",
     "check_work",
@@ -106,20 +106,26 @@ __all__ = [
     "joint_travel",
 ]
 
-#: Work units per second of ``planner.improve_time`` (about 4 microseconds each on the machine of
-#: docs/benchmarks.md, 2 cores shared with other jobs: improvement takes about its budget there, and the
-#: same work everywhere).
-WORK_PER_SECOND = 2.5e5
-#: Work of one call of the compiled check (its Python overhead), in units of one configuration.
-CALL_WORK = 30
+#: Work units per second of ``planner.improve_time`` (1.0-1.9 microseconds each on the machine of
+#: docs/benchmarks.md when quiet, up to twice that with its 2 cores shared with other jobs: improvement
+#: takes at most about its budget there, and the same work everywhere).
+WORK_PER_SECOND = 3.5e5
+#: Work of one call of the compiled check (the Python around it: poses, margins, halving), in units of one
+#: configuration of figure1.
+CALL_WORK = 100
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
 #: Work of one shortcut attempt besides its checks (drawing it, scoring the new path), in units.
 ATTEMPT_WORK = 100
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
-#: Pieces compared by one configuration check in the worlds a unit was measured on (figure1: 61, joints_3: 78).
-REFERENCE_PAIRS = 70
+#: The cost of one configuration check, in joints (the links are what the compiled check places and tests,
+#: each against the obstacles' boxes, the object and each other): each pair of links tested for
+#: self-collision costs this many joints, and so does each of :data:`OBSTACLES_PER_JOINT` obstacles.
+SELF_PAIR_JOINTS = 0.2
+OBSTACLES_PER_JOINT = 16
+#: figure1's check cost in those terms (2 joints, 2 obstacles): one unit of work.
+REFERENCE_COST = 2.125
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5
 #: Share of the budget that rebuilding the manipulation from straight moves may start in.
@@ -249,9 +255,15 @@ class _Budget:
 
 
 def check_work(world: World) -> float:
-    """Work units one configuration check costs in ``world``: 1 up to :data:`REFERENCE_PAIRS` pairs of pieces
-    compared per check (:attr:`clew_ros.core.kernel.PackedWorld.pairs_per_move`), in proportion beyond."""
-    return max(1.0, packed_world(world).pairs_per_move / REFERENCE_PAIRS)
+    """Work units one configuration check costs in ``world``, at least 1: its cost in joints
+    (:data:`SELF_PAIR_JOINTS`, :data:`OBSTACLES_PER_JOINT`) over figure1's (:data:`REFERENCE_COST`). Measured
+    with the compiled check's broad phase (valid configurations, docs/benchmarks.md): within a factor of
+    two of the time a check takes on every benchmark world, where counting the pairs of pieces compared
+    (as before the broad phase) charged obstacles_32 five times too much."""
+    n = world.robot.dof
+    pairs = (n - 1) * (n - 2) / 2 if world.robot.self_collision else 0.0
+    cost = n + SELF_PAIR_JOINTS * pairs + len(world.obstacles) / OBSTACLES_PER_JOINT
+    return max(1.0, cost / REFERENCE_COST)
 
 
 def _dense_count(waypoints: np.ndarray) -> int:

@@ -5,6 +5,9 @@
 * ``batched``: :func:`clew_ros.core.collision.is_valid` on chunks of random
   configurations (shapely 2 ufuncs on arrays), configurations per second;
 * ``batch1``: the same function called once per configuration;
+* ``valid_transfer``: ``is_valid`` on the valid configurations among them
+  with the object held at grasp 0 (what validating a plan and the
+  improvement's checks mostly see: every test passes, none ends early);
 * ``loop``: :class:`PerStateChecker`, a plain Python loop with the same
   semantics (link LineStrings built per configuration, tested against the
   prepared union of the obstacles, the object shrunk by the grasp tolerance,
@@ -145,6 +148,11 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
         ("transit", valid_q, {"object_poses": pose[None]}),
         ("transfer", transfer_q, {"grasp_rel": grasp_rel[None]}),
     ]
+    held = compose(tip_poses(world.robot, transfer_q), grasp_rel)
+    started = time.process_time()
+    for i in range(0, len(transfer_q), chunk):
+        is_valid(world, transfer_q[i : i + chunk], held[i : i + chunk])
+    held_s = time.process_time() - started
     for mode, sample, kwargs in modes:
         for batch in (24, 1024):
             total = 0
@@ -177,6 +185,7 @@ def measure(world: World, configs: int, seed: int = 0, chunk: int = 10_000, inte
         "batched": {"chunk": chunk, "seconds": batched_s, "per_s": _rate(configs, batched_s)},
         "batch1": {"count": single_count, "seconds": single_s, "per_s": _rate(single_count, single_s)},
         "loop": {"seconds": loop_s, "per_s": _rate(configs, loop_s)},
+        "valid_transfer": {"count": len(transfer_q), "seconds": held_s, "per_s": _rate(len(transfer_q), held_s)},
         "agree": int(np.sum(batched == looped)),
         "ratio_batched_over_loop": loop_s / batched_s if batched_s > 0 else float("nan"),
         "ratio_batched_over_batch1": (single_s / single_count) / (batched_s / configs) if batched_s > 0 else None,

@@ -3,8 +3,10 @@
 [--worlds 4] [--seeds 6] [--time-limit 10] [--jobs 2] [--out DIR]``.
 
 A variant sets module constants of ``clew_ros.core`` (for example ``search.JOIN_RADIUS:0``) in the worker
-processes before they plan; ``NAME=`` alone is the code as it is. Every variant plans every (world, seed):
-the generated families' worlds (:mod:`benchmarks.generated`) and the ``config/`` worlds named, in worker
+processes before they plan; ``NAME=`` alone is the code as it is. Only a constant read from its module when
+it is used changes anything: not one another module imported by name, one bound as a default argument, nor
+one the compiled kernel read when it was compiled. Every variant plans every (world, seed):
+the generated families' worlds (:mod:`benchmarks.generated`) and the benchmark worlds named, in worker
 processes of their own (``--jobs`` at a time, one kernel thread each). The figure compared is the time to
 the first plan (``PlanResult.first_plan_s``: what a change of SEARCH or EXPLORE moves; a failed run counts
 at the limit). Per family and in all: success, median first-plan time, median landmarks, and the
@@ -27,10 +29,24 @@ import time
 from pathlib import Path
 from typing import Any
 
-from benchmarks.generated import build_world, reference_world, solvable_families
+from benchmarks.families import all_worlds, select, write_world
+from benchmarks.generated import GeneratedBenchWorld, build_world, solvable_families
 
-#: Worlds of ``config/`` planned by default next to the families (their own time limit: ``--config-limit``).
+#: Benchmark worlds (``config/`` and :mod:`benchmarks.families`) planned by default next to the generated
+#: families, with their own time limit (``--config-limit``).
 CONFIG_WORLDS = "figure1,obstacles_8,obstacles_32,joints_10,arm5_regrasp"
+
+
+def bench_world(name: str, directory: str) -> GeneratedBenchWorld:
+    """The benchmark world ``name`` written into ``directory``, as a family of one world."""
+    from clew_ros.core.world import load_world
+
+    matches = select(all_worlds(), name)
+    if len(matches) != 1:
+        raise ValueError(f"--config-worlds: expected one benchmark world named {name!r}, found {len(matches)}")
+    path = write_world(matches[0], Path(directory))
+    world = load_world(path)
+    return GeneratedBenchWorld(name, 0, str(path), True, world.robot.dof, len(world.obstacles), None, None)
 
 
 def parse_variant(text: str) -> tuple[str, dict[str, Any]]:
@@ -135,7 +151,10 @@ def main(argv: list[str] | None = None) -> int:
     runs: dict[str, list[dict]] = {}
     with tempfile.TemporaryDirectory(prefix="clew_variants_") as scratch:
         generated = [build_world(f, s, scratch) for f in args.families.split(",") if f for s in range(args.worlds)]
-        configs = [reference_world(name) for name in args.config_worlds.split(",") if name]
+        try:
+            configs = [bench_world(name, scratch) for name in args.config_worlds.split(",") if name]
+        except ValueError as error:
+            parser.error(str(error))
         jobs = [(w.family, w.path, seed, args.time_limit) for w in generated for seed in range(args.seeds)]
         jobs += [(w.family, w.path, seed, args.config_limit) for w in configs for seed in range(args.seeds)]
         for name, settings in variants:

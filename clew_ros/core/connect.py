@@ -116,6 +116,20 @@ def shortened(clear: Clear, path: np.ndarray, spent: Callable[[], bool] | None =
     return np.array(kept)
 
 
+class _Stopping:
+    """The check budget of :func:`join`: counts nothing, stops a check between its levels when ``stop()``
+    says so (the time limit or cancel)."""
+
+    def __init__(self, stop: Callable[[], bool]) -> None:
+        self._stop = stop
+
+    def spend_checks(self, configurations: int, calls: int = 1) -> None:
+        pass
+
+    def stop(self) -> bool:
+        return self._stop()
+
+
 def join(
     world: World,
     start: np.ndarray,
@@ -133,8 +147,12 @@ def join(
     (:func:`clew_ros.core.continuous.straight_move_clear`, ``min_margin`` from everything), then
     :func:`shortened`; ``None`` when the trees did not meet."""
 
+    budget = _Stopping(stop)
+
     def clear(a: np.ndarray, b: np.ndarray) -> bool:
-        return straight_move_clear(world, a, b, object_pose=object_pose, grasp_rel=grasp_rel, min_margin=min_margin)
+        return straight_move_clear(
+            world, a, b, object_pose=object_pose, grasp_rel=grasp_rel, min_margin=min_margin, budget=budget
+        )
 
     limits = (world.robot.joint_lower, world.robot.joint_upper)
     path = rrt_connect(clear, start, targets, rng, limits=limits, rounds=rounds, stop=stop)

@@ -22,8 +22,9 @@ midpoint of its first level is not valid at all (most blocked moves end
 there, at a fraction of the cost). Pieces that fail are halved (the margin
 halves with them) down to ``min_margin``; a piece still not cleared rejects
 the move, and so does a midpoint that is not valid at all (at once). A move
-accepted therefore keeps at least ``min_margin`` from everything all along
-(the improvement and SEARCH's joins ask for half ``planner.clearance``).
+accepted is therefore valid all along, with at least ``min_margin`` to spare
+at every point checked (the improvement and SEARCH's joins ask for half
+``planner.clearance``).
 
 The check is conservative: ``False`` may also mean "not proven". A caller that counts its work passes a
 :class:`CheckBudget` (configurations checked, and a stop test asked between levels).
@@ -32,17 +33,30 @@ The check is conservative: ``False`` may also mean "not proven". A caller that c
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from typing import Protocol
 
 import numpy as np
 
-from clew_ros.core.collision import packed_carrying, packed_world
+from clew_ros.core.collision import is_valid, packed_carrying, packed_world
 from clew_ros.core.kernel import PackedWorld, clearly_valid
 from clew_ros.core.kinematics import compose, tip_poses, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["COARSE_STRIDE", "MAX_MARGIN_M", "MIN_MARGIN_FACTOR", "CheckBudget", "straight_move_clear"]
+__all__ = [
+    "CHECK_STEP_RAD",
+    "COARSE_STRIDE",
+    "MAX_MARGIN_M",
+    "MIN_MARGIN_FACTOR",
+    "CheckBudget",
+    "interpolate",
+    "path_valid",
+    "straight_move_clear",
+]
+
+#: The validator's step (rad per joint, interface.md section 2).
+CHECK_STEP_RAD = 0.002
 
 #: Moves the planner checks this way (the improvement's, SEARCH's joins) keep at least this fraction of
 #: ``planner.clearance`` from everything (m / m).
@@ -175,3 +189,23 @@ def _margin_parts(
         return None
     without_object, links_but_last = packed_carrying(world)
     return [(without_object, world.robot.dof), (links_but_last, world.robot.dof - 1)]
+
+
+def interpolate(waypoints: np.ndarray, step_rad: float) -> np.ndarray:
+    """Configurations along straight joint-space pieces, at most ``step_rad`` apart per joint."""
+    out = [waypoints[:1]]
+    for a, b in itertools.pairwise(waypoints):
+        count = max(1, math.ceil(np.max(np.abs(b - a)) / step_rad))
+        t = np.arange(1, count + 1)[:, None] / count
+        out.append(a + t * (b - a))
+    return np.concatenate(out)
+
+
+def path_valid(
+    world: World, waypoints: np.ndarray, *, object_pose: np.ndarray | None = None, grasp_rel: np.ndarray | None = None
+) -> bool:
+    """The validator's check of a path: its straight pieces at :data:`CHECK_STEP_RAD` per joint at most, the
+    object resting at ``object_pose`` (a transit) or carried as ``grasp_rel`` (a transfer)."""
+    q = interpolate(np.asarray(waypoints, dtype=float), CHECK_STEP_RAD)
+    poses = object_pose if grasp_rel is None else compose(tip_poses(world.robot, q), grasp_rel)
+    return bool(is_valid(world, q, np.atleast_2d(np.asarray(poses, dtype=float))).all())

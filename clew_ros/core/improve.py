@@ -83,9 +83,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid
 from clew_ros.core.connect import rrt_connect, shortened
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_move_clear
+from clew_ros.core.continuous import CHECK_STEP_RAD, MIN_MARGIN_FACTOR, path_valid, straight_move_clear
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
@@ -156,8 +155,6 @@ MOVE_ALIKE_RAD = 0.1
 PARTIAL_PIECES = 8
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
-#: Step (rad per joint) of the final check, the validator's.
-CHECK_STEP_RAD = 0.002
 #: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
 #: unit of :func:`check_work`. The final check of the segments changed so far is kept out of the budget.
 DENSE_WORK = 0.5
@@ -275,14 +272,10 @@ def _dense_count(waypoints: np.ndarray) -> int:
 
 
 def _dense_clear(world: World, piece: _Piece) -> bool:
-    """The validator's check of one segment: configurations at most 0.002 rad apart per joint."""
-    configurations = [piece.waypoints[:1]]
-    for a, b in itertools.pairwise(piece.waypoints):
-        count = max(1, math.ceil(float(np.max(np.abs(b - a))) / CHECK_STEP_RAD))
-        configurations.append(a + (np.arange(1, count + 1)[:, None] / count) * (b - a))
-    q = np.concatenate(configurations)
-    poses = piece.start_pose if piece.grasp_rel is None else compose(tip_poses(world.robot, q), piece.grasp_rel)
-    return bool(is_valid(world, q, poses).all())
+    """The validator's check of one segment."""
+    if piece.grasp_rel is None:
+        return path_valid(world, piece.waypoints, object_pose=piece.start_pose)
+    return path_valid(world, piece.waypoints, grasp_rel=piece.grasp_rel)
 
 
 def _prune(waypoints: np.ndarray) -> np.ndarray:

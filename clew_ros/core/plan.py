@@ -10,9 +10,7 @@ relative to the tip where the transfer starts).
 
 from __future__ import annotations
 
-import itertools
 import json
-import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -22,6 +20,7 @@ import numpy as np
 
 from clew_ros.core.clew import PlanResult
 from clew_ros.core.collision import explain_invalid, is_valid
+from clew_ros.core.continuous import CHECK_STEP_RAD, interpolate
 from clew_ros.core.errors import PlanFileError
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.settings import Outcome
@@ -40,8 +39,6 @@ __all__ = [
 ]
 
 FORMAT = "clew-plan/1"
-#: Largest joint step (rad) between two checked configurations.
-CHECK_STEP_RAD = 0.002
 #: The segment kinds, in the order a plan alternates them.
 KINDS = ("transit", "transfer")
 
@@ -300,16 +297,6 @@ class SegmentMotion:
     configurations: np.ndarray
     object_poses: np.ndarray
     grasp_rel: np.ndarray | None
-
-
-def interpolate(waypoints: np.ndarray, step_rad: float) -> np.ndarray:
-    """Configurations along straight joint-space pieces, at most ``step_rad`` apart per joint."""
-    out = [waypoints[:1]]
-    for a, b in itertools.pairwise(waypoints):
-        count = max(1, math.ceil(np.max(np.abs(b - a)) / step_rad))
-        t = np.arange(1, count + 1)[:, None] / count
-        out.append(a + t * (b - a))
-    return np.concatenate(out)
 
 
 def replay(world: World, plan: Plan, step_rad: float | None = CHECK_STEP_RAD) -> Iterator[SegmentMotion]:

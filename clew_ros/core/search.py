@@ -20,16 +20,18 @@ from a generator of its own. This departs from the paper (docs/algorithm.md).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid
+from clew_ros.core.collision import packed_world
 from clew_ros.core.connect import join
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid
 from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.inverse import solve_point
+from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, ManhattanPaths, run_manhattan, single_moves
 from clew_ros.core.reach import (
@@ -124,9 +126,8 @@ class SearchJob:
     error: Callable[[np.ndarray], np.ndarray]
     accept: float
     mode: dict[str, np.ndarray]  # {"object_poses": (1, 3)} (transit) or {"grasp_rel": (1, 3)} (transfer)
-    #: The objective at or below which the search succeeded, and the configurations ``(m, n)`` a search that
-    #: stalled at ``q`` may be joined to, drawn from a generator (:func:`join_stalled`), or ``None``.
-    succeeds: float = 0.0
+    #: The configurations ``(m, n)`` a search that stalled at ``q`` may be joined to, drawn from a generator
+    #: (:func:`join_stalled`), or ``None``.
     targets: Callable[[np.ndarray, np.random.Generator], np.ndarray] | None = None
     join_within: float = 0.0  # m: a search stalled farther than this from its target is not joined
 
@@ -213,12 +214,13 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
 def join_stalled(
     ctx: PlanningContext, job: SearchJob, waypoints: np.ndarray, distance: float
 ) -> tuple[np.ndarray, float]:
-    """A search that stalled near its target (``distance`` at most :data:`JOIN_RADIUS` x the arm's reach, not
-    yet ``job.succeeds``), extended by RRT-Connect to one of ``job.targets`` (in the same mode, every move
-    checked continuously with :data:`clew_ros.core.continuous.MIN_MARGIN_FACTOR` x the clearance, at most
-    :data:`JOIN_ROUNDS` rounds); its waypoints and objective, unchanged when no way was found."""
+    """A search that failed, stalled near its target (``distance`` at most ``job.join_within``), extended by
+    RRT-Connect to one of ``job.targets`` (in the same mode, every move checked continuously with
+    :data:`clew_ros.core.continuous.MIN_MARGIN_FACTOR` x the clearance, at most :data:`JOIN_ROUNDS` rounds,
+    then once more at the validator's 0.002 rad); its waypoints and objective, unchanged when no way was
+    found."""
     world = ctx.world
-    if job.targets is None or distance <= job.succeeds or distance > job.join_within:
+    if job.targets is None or distance > job.join_within:
         return waypoints, distance
     stalled = waypoints[-1]
     # a generator of the join's own, seeded by the planner's seed and where the search stalled: a join that
@@ -241,7 +243,9 @@ def join_stalled(
         rounds=JOIN_ROUNDS,
         stop=ctx.termination,
     )
-    if path is None:
+    if path is None or not path_valid(
+        world, path, object_pose=None if pose is None else pose[0], grasp_rel=None if held is None else held[0]
+    ):
         return waypoints, distance
     end = path[-1:]
     return np.vstack([waypoints, path[1:]]), float(job.objective(end, _object_at(ctx, end, job.mode))[0])
@@ -319,8 +323,8 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             jobs.append(job)
     if jobs:
         for slot, job, (found, reached) in zip(slots, jobs, local_search(ctx, jobs), strict=True):
-            waypoints, distance = join_stalled(ctx, job, found, reached)
-            success = distance <= job.succeeds
+            waypoints, distance = found, reached
+            success = distance <= 0.5 * world.grasp_tolerance
             grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
             results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
     return [result for result in results if result is not None]  # every slot is filled by now
@@ -354,8 +358,7 @@ def _transit_job(
     hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
     if hopeless or not within_reach(world, target[0]):
         return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
-    mode = {"object_poses": object_pose[None]}
-    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, 0.5 * world.grasp_tolerance)
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, {"object_poses": object_pose[None]})
 
 
 def _holding_configurations(
@@ -391,10 +394,17 @@ def goal_reached(world: World, object_pose: np.ndarray, goal: np.ndarray) -> boo
 
 
 def goal_configurations(
-    world: World, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, rng: np.random.Generator
+    world: World,
+    q0: np.ndarray,
+    grasp_rel: np.ndarray,
+    goal: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    min_margin: float = 0.0,
 ) -> np.ndarray:
-    """Valid configurations ``(m, n)`` holding the object (as ``grasp_rel``) within the goal's tolerances, as
-    SEARCH_TRANSFER's success asks, nearest ``q0`` first: inverse kinematics (:func:`solve_point`) from ``q0``
+    """Configurations ``(m, n)`` valid with ``min_margin`` (m) to spare (the compiled first pass) holding the
+    object (as ``grasp_rel``) within the goal's tolerances, as SEARCH_TRANSFER's success asks, nearest ``q0``
+    first: inverse kinematics (:func:`solve_point`) from ``q0``
     and :data:`GOAL_SEEDS` - 1 configurations drawn within the joint limits, once for the goal's own angle (the
     middle of the tolerance, clear of a pocket's walls when the arm can hold it there) and once for any angle
     within the tolerance (for an arm that cannot)."""
@@ -421,8 +431,9 @@ def goal_configurations(
     poses = compose(tip_poses(robot, q), grasp_rel)
     close = np.linalg.norm(goal_error(world, poses, goal), axis=1) <= 0.5 * world.goal_tolerance
     held = np.array([bool(c) and goal_reached(world, pose, goal) for c, pose in zip(close, poses, strict=True)])
-    if held.any():
-        held[held] = is_valid(world, q[held], poses[held])
+    if held.any():  # the margin a join's first move from it asks for (clew_ros.core.continuous)
+        rounded = dataclasses.replace(packed_world(world), rounding=min_margin)
+        held[held] = clearly_valid(rounded, np.ascontiguousarray(q[held]), poses[held])
     found = q[held][np.argsort(np.max(np.abs(q[held] - q0), axis=1), kind="stable")]
     distinct = [i for i in range(len(found)) if not any(np.max(np.abs(found[i] - found[:i]), axis=1) < 1e-3)]
     kept: np.ndarray = found[distinct]
@@ -452,20 +463,19 @@ def search_transfer(
         )
 
     def targets(stalled: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        return goal_configurations(world, stalled, mode["grasp_rel"][0], goal, rng)
+        margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+        return goal_configurations(world, stalled, mode["grasp_rel"][0], goal, rng, min_margin=margin)
 
-    job = SearchJob(
-        np.asarray(q0, float),
-        objective,
-        error,
-        accept,
-        mode,
-        0.5 * world.goal_tolerance,
-        targets if joins else None,
-        JOIN_RADIUS * world.robot.reach,
-    )
-    [(found, reached)] = local_search(ctx, [job])
-    waypoints, distance = join_stalled(ctx, job, found, reached)
-    final_pose = compose(tip_poses(world.robot, waypoints[-1:]), mode["grasp_rel"])[0]
-    success = goal_reached(world, final_pose, goal) and distance <= job.succeeds
+    within = JOIN_RADIUS * world.robot.reach
+    job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within)
+    [(waypoints, distance)] = local_search(ctx, [job])
+
+    def succeeded(path: np.ndarray, reached: float) -> tuple[bool, np.ndarray]:
+        pose = compose(tip_poses(world.robot, path[-1:]), mode["grasp_rel"])[0]
+        return goal_reached(world, pose, goal) and reached <= 0.5 * world.goal_tolerance, pose
+
+    success, final_pose = succeeded(waypoints, distance)
+    if not success:
+        waypoints, distance = join_stalled(ctx, job, waypoints, distance)
+        success, final_pose = succeeded(waypoints, distance)
     return PathResult(success, waypoints, distance, object_pose=final_pose)

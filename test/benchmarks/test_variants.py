@@ -26,14 +26,14 @@ def test_a_variant_names_module_constants_with_literal_values() -> None:
 
 def test_two_variants_plan_the_same_runs_and_a_setting_reaches_the_workers(tmp_path: Path) -> None:
     out = tmp_path / "out"
-    args = ["--families", "shapes2", "--config-worlds", "figure1", "--worlds", "1", "--seeds", "1"]
+    args = ["--families", "shapes2", "--config-worlds", "figure1,obstacles_2", "--worlds", "1", "--seeds", "1"]
     # no work per second of planner.improve_time: the improvement cannot shorten the first plan
     variants = ["--variant", "as_is=", "--variant", "starved=improve.WORK_PER_SECOND:0"]
     assert main([*args, *variants, "--time-limit", "3", "--config-limit", "3", "--out", str(out)]) == 0
     report = json.loads((out / "variants.json").read_text())
     as_is, starved = report["runs"]["as_is"], report["runs"]["starved"]
     assert [(r["world"], r["seed"]) for r in as_is] == [(r["world"], r["seed"]) for r in starved]
-    assert [r["family"] for r in as_is] == ["shapes2", "figure1"]
+    assert [r["family"] for r in as_is] == ["shapes2", "figure1", "obstacles_2"]
     assert as_is[1]["success"]
     assert starved[1]["success"]
     assert as_is[1]["first_travel_rad"] == starved[1]["first_travel_rad"]  # the same seed, the same first plan

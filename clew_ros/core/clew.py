@@ -112,6 +112,7 @@ def plan(
                     continue
                 failures += 1
                 explorer.forget_failures()
+                ctx.hold_samples *= 2  # the holding configurations drawn anew, twice as many
                 if failures >= EXPLORE_ATTEMPTS:
                     return finish(
                         Outcome.NO_PATH_AT_RESOLUTION,

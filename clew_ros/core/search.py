@@ -35,6 +35,7 @@ from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.manhattan import Counters, ManhattanPaths, run_manhattan, single_moves
 from clew_ros.core.reach import (
+    HOLD_SAMPLES,
     approach_cell,
     approach_excess,
     goal_within_reach,
@@ -83,6 +84,10 @@ class PlanningContext:
     rng: np.random.Generator
     termination: Termination = field(default_factory=Termination)
     counters: Counters = field(default_factory=Counters)
+    #: Random starts of the holding configurations that decide whether a transit is hopeless (more of them
+    #: after an EXPLORE round that found no transit at all: :func:`clew_ros.core.reach.holding_configurations`
+    #: answers the same request with the same sample, so a retry must draw a larger one).
+    hold_samples: int = HOLD_SAMPLES
 
     def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
         return run_manhattan(
@@ -314,7 +319,9 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
     results: list[PathResult | None] = []
     jobs, slots = [], []
     for q0, object_pose, grasp, approach in requests:
-        job = _transit_job(world, np.asarray(q0, float), np.asarray(object_pose, float), grasp, approach)
+        job = _transit_job(
+            world, np.asarray(q0, float), np.asarray(object_pose, float), grasp, approach, samples=ctx.hold_samples
+        )
         if isinstance(job, PathResult):
             results.append(job)
         else:
@@ -331,11 +338,11 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
 
 
 def _transit_job(
-    world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None
+    world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None, *, samples: int
 ) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
-    holds = _holding_configurations(world, object_pose, grasp, approach)
+    holds = _holding_configurations(world, object_pose, grasp, approach, samples)
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
     two_joints = world.robot.dof == 2
@@ -362,7 +369,7 @@ def _transit_job(
 
 
 def _holding_configurations(
-    world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None
+    world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None, samples: int
 ) -> np.ndarray | None:
     """The valid configurations holding ``grasp`` (with an allowed approach), which a transit can
     only end near: all of them for two-joint arms (:func:`two_link_grasps`), a sample for others
@@ -370,7 +377,7 @@ def _holding_configurations(
     if world.robot.dof == 2:
         holds = two_link_grasps(world, object_pose, grasp)
     else:
-        holds = holding_configurations(world, object_pose, grasp)
+        holds = holding_configurations(world, object_pose, grasp, samples)
     if approach is None or not len(holds):
         return holds
     psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]

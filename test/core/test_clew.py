@@ -81,3 +81,18 @@ def test_time_limit_and_cancel_end_the_run_with_their_outcome() -> None:
     assert canceled.outcome is Outcome.CANCELED
     assert canceled.message.startswith("canceled")
     assert time.monotonic() - started < 0.3 + 0.5
+
+
+def test_explore_retries_draw_more_holding_configurations_before_refusing():
+    # arm7_5 (generated): 24 random starts of the holding configurations find none for any grasp at the
+    # start, and the same request draws the same sample; the retries must draw larger ones, not refuse
+    from clew_ros.core.reach import HOLD_SAMPLES, holding_configurations
+    from clew_ros.worlds import generate
+
+    world = generate("arm7", 5).world()
+    pose = np.asarray(world.object.initial, float)
+    assert all(not len(holding_configurations(world, pose, g)) for g in range(len(world.object.grasps)))
+    assert HOLD_SAMPLES == 24
+    result = plan(world, PlannerSettings(seed=0, time_limit=60))
+    assert result.outcome is Outcome.SUCCEEDED, result.message
+    assert validate_plan(world, Plan.from_result(world, result)) == []

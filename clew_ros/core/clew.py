@@ -113,6 +113,7 @@ def plan(
                 failures += 1
                 explorer.forget_failures()
                 ctx.hold_samples *= 2  # the holding configurations drawn anew, twice as many
+                ctx.transit_joins = True  # and stalled transits joined to them
                 if failures >= EXPLORE_ATTEMPTS:
                     return finish(
                         Outcome.NO_PATH_AT_RESOLUTION,

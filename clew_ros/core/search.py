@@ -88,6 +88,9 @@ class PlanningContext:
     #: after an EXPLORE round that found no transit at all: :func:`clew_ros.core.reach.holding_configurations`
     #: answers the same request with the same sample, so a retry must draw a larger one).
     hold_samples: int = HOLD_SAMPLES
+    #: Whether a stalled SEARCH_TRANSIT is joined to its holding configurations (:func:`join_stalled`): only
+    #: after an EXPLORE round that found no transit at all (elsewhere joins cost more than they save).
+    transit_joins: bool = False
 
     def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
         return run_manhattan(
@@ -320,7 +323,13 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
     jobs, slots = [], []
     for q0, object_pose, grasp, approach in requests:
         job = _transit_job(
-            world, np.asarray(q0, float), np.asarray(object_pose, float), grasp, approach, samples=ctx.hold_samples
+            world,
+            np.asarray(q0, float),
+            np.asarray(object_pose, float),
+            grasp,
+            approach,
+            samples=ctx.hold_samples,
+            joins=ctx.transit_joins,
         )
         if isinstance(job, PathResult):
             results.append(job)
@@ -330,7 +339,8 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             jobs.append(job)
     if jobs:
         for slot, job, (found, reached) in zip(slots, jobs, local_search(ctx, jobs), strict=True):
-            waypoints, distance = found, reached
+            success = reached <= 0.5 * world.grasp_tolerance
+            waypoints, distance = (found, reached) if success else join_stalled(ctx, job, found, reached)
             success = distance <= 0.5 * world.grasp_tolerance
             grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
             results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
@@ -338,7 +348,14 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
 
 
 def _transit_job(
-    world: World, q0: np.ndarray, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None, *, samples: int
+    world: World,
+    q0: np.ndarray,
+    object_pose: np.ndarray,
+    grasp: int,
+    approach: np.ndarray | None,
+    *,
+    samples: int,
+    joins: bool,
 ) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
@@ -365,7 +382,16 @@ def _transit_job(
     hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
     if hopeless or not within_reach(world, target[0]):
         return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
-    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, {"object_poses": object_pose[None]})
+    mode = {"object_poses": object_pose[None]}
+    if not joins or holds is None:
+        return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode)
+    held = holds[objective(holds, None) <= 0.5 * world.grasp_tolerance]  # the transit's own success test
+
+    def targets(_stalled: np.ndarray, _rng: np.random.Generator) -> np.ndarray:
+        return held
+
+    within = JOIN_RADIUS * world.robot.reach
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, targets, within)
 
 
 def _holding_configurations(

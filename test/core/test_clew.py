@@ -96,3 +96,15 @@ def test_explore_retries_draw_more_holding_configurations_before_refusing():
     result = plan(world, PlannerSettings(seed=0, time_limit=60))
     assert result.outcome is Outcome.SUCCEEDED, result.message
     assert validate_plan(world, Plan.from_result(world, result)) == []
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_explore_retries_join_stalled_transits_before_refusing(seed):
+    # shelves_7 (generated): with seeds 1 and 2 every transit from the start stalled, even with larger
+    # samples of holding configurations, and the world was refused; the retries join stalled transits
+    from clew_ros.worlds import generate
+
+    world = generate("shelves", 7).world()
+    result = plan(world, PlannerSettings(seed=seed, time_limit=60))
+    assert result.outcome is Outcome.SUCCEEDED, result.message
+    assert validate_plan(world, Plan.from_result(world, result)) == []

@@ -28,6 +28,9 @@ SEARCH_CHAIN = 2
 #: EXPLORE rounds in a row without a single transit (failed pairs retried each time) before
 #: NO_PATH_AT_RESOLUTION: the transit search is local and stochastic, one miss proves little.
 EXPLORE_ATTEMPTS = 8
+#: After an EXPLORE round without a transit the holding configurations' sample doubles, up to this many
+#: samples x joints (768 samples for 7 joints, 53 for 100).
+HOLD_SAMPLE_JOINTS = 5376
 #: The improvement's generator is seeded with (planner.seed, this): its own stream of the same seed.
 IMPROVE_STREAM = 14
 
@@ -112,7 +115,10 @@ def plan(
                     continue
                 failures += 1
                 explorer.forget_failures()
-                ctx.hold_samples *= 2  # the holding configurations drawn anew, twice as many
+                # the holding configurations drawn anew, twice as many (their inverse kinematics is not
+                # interruptible: at most HOLD_SAMPLE_JOINTS samples x joints, a few tens of milliseconds)
+                most = HOLD_SAMPLE_JOINTS // world.robot.dof
+                ctx.hold_samples = max(ctx.hold_samples, min(2 * ctx.hold_samples, most))
                 ctx.transit_joins = True  # and stalled transits joined to them
                 if failures >= EXPLORE_ATTEMPTS:
                     return finish(

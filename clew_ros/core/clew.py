@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -13,7 +13,7 @@ from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
 from clew_ros.core.improve import Improvement, improve
 from clew_ros.core.passage import passage_refusal
-from clew_ros.core.reach import approach_cells, carry_cells, nearest_grasp_distance
+from clew_ros.core.reach import approach_cell, approach_cells, carry_cells, goal_approach_core, nearest_grasp_distance
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
@@ -103,6 +103,7 @@ def plan(
     best = np.inf
     try:
         explorer = Explorer(ctx, tree)
+        cores = GoalCores(world, goal)
         failures = 0
         while True:
             reason = termination.reason()
@@ -127,7 +128,8 @@ def plan(
                     )
                 continue
             failures = 0
-            landmark, found, closest = _search_chain(ctx, explorer, tree, tree.add(**exploration.fields), goal)
+            new = tree.add(**exploration.fields)
+            landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, cores=cores)
             searched_s = termination.elapsed  # when SEARCH ended: the first plan's time if it found one
             best = min(best, closest)
             if progress is not None:
@@ -157,6 +159,20 @@ def plan(
         return finish(Outcome.INTERNAL_ERROR, f"internal error: {error!r}\n{traceback.format_exc(limit=4)}")
 
 
+class GoalCores:
+    """:func:`~clew_ros.core.reach.goal_approach_core` of each grasp at the run's goal, computed when first asked."""
+
+    def __init__(self, world: World, goal: np.ndarray) -> None:
+        self._world = world
+        self._goal = goal
+        self._cores: dict[int, np.ndarray | None] = {}
+
+    def __getitem__(self, grasp: int) -> np.ndarray | None:
+        if grasp not in self._cores:
+            self._cores[grasp] = goal_approach_core(self._world, self._goal, grasp)
+        return self._cores[grasp]
+
+
 @dataclass
 class _Found:
     """SEARCH's answer from one landmark: the reaching path, or on failure the attempt that came closest."""
@@ -171,14 +187,20 @@ class _Found:
 
 
 def _search_chain(
-    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
+    ctx: PlanningContext,
+    explorer: Explorer,
+    tree: LandmarkTree,
+    landmark: Landmark,
+    goal: np.ndarray,
+    *,
+    cores: GoalCores,
 ) -> tuple[Landmark, _Found, float]:
     """SEARCH from a new landmark; while its closest attempt gets nearer the goal, that attempt becomes a
     landmark and SEARCH goes on from it (at most :data:`SEARCH_CHAIN` times).
 
     Returns the last landmark, SEARCH's answer from it and the closest goal distance reached (m).
     """
-    found = _search(ctx, explorer, tree, landmark, goal)
+    found = _search(ctx, explorer, tree, landmark, goal, cores=cores)
     closest = found.distance
     for _ in range(SEARCH_CHAIN):
         if found.success or not _worth_chaining(ctx, landmark, found, goal) or ctx.termination():
@@ -193,26 +215,46 @@ def _search_chain(
             transit=found.transit,
             transfer=found.transfer,
         )
-        found = _search(ctx, explorer, tree, landmark, goal)
+        found = _search(ctx, explorer, tree, landmark, goal, cores=cores)
         closest = min(closest, found.distance)
     return landmark, found, closest
 
 
 def _search(
-    ctx: PlanningContext, explorer: Explorer, tree: LandmarkTree, landmark: Landmark, goal: np.ndarray
+    ctx: PlanningContext,
+    explorer: Explorer,
+    tree: LandmarkTree,
+    landmark: Landmark,
+    goal: np.ndarray,
+    *,
+    cores: GoalCores,
 ) -> _Found:
     """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
     reachable by a transit at its placement (a regrasp in place), until one reaches the goal."""
     closest = _Found(False, np.inf)
-    grasps = [landmark.grasp] + [
-        g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != landmark.grasp
-    ]
-    for grasp in grasps:
+    own = landmark.grasp
+    assert own is not None  # SEARCH starts from landmarks holding a grasp
+    held = landmark.grasp_rel
+    assert held is not None
+    others = [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != own]
+
+    def tries() -> Iterator[tuple[int, bool]]:  # (grasp, regrasped in place), asked for while SEARCH fails
+        yield own, False
+        core = cores[own]
+        if core is not None and not core[approach_cell(-held[2], len(core))]:
+            yield own, True  # held outside the goal's core: the same grasp taken again, in the core
+        for other in others:
+            yield other, True
+
+    for grasp, regrasp in tries():
         if ctx.termination():
             break
         approach = None
-        if grasp != landmark.grasp:
+        if regrasp:
             approach = _regrasp_approaches(ctx.world, landmark.object_pose, grasp, goal)
+            core = cores[grasp]
+            if core is not None and (approach & core).any():
+                approach &= core
             if not approach.any():
                 continue  # no approach angle holds this grasp both here and at the goal: spare the transit
         candidate = explorer.candidate(landmark.id, grasp, approach)

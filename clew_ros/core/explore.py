@@ -70,9 +70,14 @@ class Explorer:
         key = (landmark_id, grasp)
         landmark = self.tree[landmark_id]
         if landmark.grasp == grasp and landmark.grasp_rel is not None:  # (every landmark but the root holds one)
-            return self._transits.setdefault(
+            held = self._transits.setdefault(
                 key, _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
             )
+            if approach is None or approach[approach_cell(-landmark.grasp_rel[2], len(approach))]:
+                return held
+            if key not in self._aimed:  # the same grasp taken again with another approach
+                self._aimed[key] = self._transit(landmark, grasp, approach)
+            return self._aimed[key]
         if approach is None:
             if key not in self._transits:
                 self._transits[key] = self._transit(landmark, grasp, None)

@@ -16,7 +16,7 @@ import numpy as np
 
 from clew_ros.core.collision import is_valid
 from clew_ros.core.inverse import solve_point
-from clew_ros.core.kinematics import compose, joint_positions, relative, transform_points
+from clew_ros.core.kinematics import compose, joint_positions, relative, tip_poses, transform_points
 from clew_ros.core.world import World
 
 __all__ = [
@@ -25,6 +25,7 @@ __all__ = [
     "approach_cells",
     "approach_excess",
     "carry_cells",
+    "goal_approach_core",
     "goal_within_reach",
     "holding_configurations",
     "nearest_grasp_distance",
@@ -240,3 +241,51 @@ def holding_configurations(
         return held
     valid: np.ndarray = held[is_valid(world, held, pose[None])]
     return valid
+
+
+#: Goal orientations sampled by :func:`goal_approach_core` (within the goal's angle tolerance).
+GOAL_CORE_ANGLES = 48
+#: Half-width (rad) of the window that smooths :func:`goal_approach_core`'s histogram.
+GOAL_CORE_WINDOW = np.radians(5.0)
+#: Cells kept by :func:`goal_approach_core`: smoothed count at least this fraction of the largest.
+GOAL_CORE_FRACTION = 0.5
+
+
+def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int = HOLD_SAMPLES) -> np.ndarray | None:
+    """The approach cells (of :data:`APPROACH_CELLS`) where most of the valid configurations holding
+    ``grasp`` with the object on ``goal`` lie; ``None`` when the sample found none.
+
+    Configurations holding the grasp at :data:`GOAL_CORE_ANGLES` orientations within the goal's angle
+    tolerance are sampled like :func:`holding_configurations` (``samples`` random starts each, all solved
+    in one batch); their approach angles are counted per cell and smoothed over :data:`GOAL_CORE_WINDOW`;
+    cells counting at least :data:`GOAL_CORE_FRACTION` of the largest count are kept. Where few
+    configurations hold the goal (an arm at full stretch, an approach between obstacles) a transfer must
+    end in a sliver of joint space; a grasp taken in the core has room. The random starts come from a
+    generator seeded by the request: the same answer whenever it is asked.
+    """
+    robot = world.robot
+    goal = np.asarray(goal, float)
+    span = min(float(world.goal_angle_tolerance), np.pi)
+    thetas = goal[2] + np.linspace(-span, span, GOAL_CORE_ANGLES, endpoint=span < np.pi)
+    poses = np.repeat(np.column_stack([np.broadcast_to(goal[:2], (len(thetas), 2)), thetas]), samples, axis=0)
+    targets = transform_points_each(poses, np.asarray(world.object.grasps[grasp], float))
+    seed = np.frombuffer(np.round(goal, 9).tobytes(), dtype=np.uint32)
+    rng = np.random.default_rng([grasp, *seed.tolist()])
+    start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(len(poses), robot.dof))
+    q = solve_point(robot, start, targets, iterations=HOLD_ITERATIONS, tolerance_m=0.25 * world.grasp_tolerance).q
+    tips = tip_poses(robot, q)
+    held = np.linalg.norm(tips[:, :2] - targets, axis=1) <= 0.5 * world.grasp_tolerance
+    held[held] = is_valid(world, q[held], poses[held])
+    if not held.any():
+        return None
+    counts = np.bincount(approach_cell(tips[held, 2] - poses[held, 2]), minlength=APPROACH_CELLS).astype(float)
+    width = round(float(GOAL_CORE_WINDOW) / (2.0 * np.pi) * APPROACH_CELLS)
+    smoothed = np.convolve(np.concatenate([counts[-width:], counts, counts[:width]]), np.ones(2 * width + 1), "valid")
+    core: np.ndarray = smoothed >= GOAL_CORE_FRACTION * smoothed.max()
+    return core
+
+
+def transform_points_each(poses: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """``point`` (object frame) in the world for each pose of ``poses`` ``(B, 3)``: ``(B, 2)``."""
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    return np.column_stack([poses[:, 0] + c * point[0] - s * point[1], poses[:, 1] + s * point[0] + c * point[1]])

@@ -108,3 +108,35 @@ def test_explore_retries_join_stalled_transits_before_refusing(seed):
     result = plan(world, PlannerSettings(seed=seed, time_limit=60))
     assert result.outcome is Outcome.SUCCEEDED, result.message
     assert validate_plan(world, Plan.from_result(world, result)) == []
+
+
+@pytest.mark.parametrize("fraction", [0.5, 0.0])
+def test_search_takes_a_grasp_held_outside_the_goal_core_again_inside_it(monkeypatch, fraction):
+    # figure1's goal lies past the bare arm's reach: the bar must be held by an end, nearly in line; a
+    # landmark holding an end at another angle is given a regrasp of the same end, aimed at the goal's core
+    from clew_ros.core import reach
+    from clew_ros.core.explore import Explorer
+
+    monkeypatch.setattr(reach, "GOAL_CORE_FRACTION", fraction)  # 0: every cell is in the core, no such regrasp
+    asked = []
+    candidate = Explorer.candidate
+
+    def spy(self, landmark_id, grasp, approach=None):
+        found = candidate(self, landmark_id, grasp, approach)
+        if approach is not None and grasp == self.tree[landmark_id].grasp:
+            asked.append((approach, found))
+        return found
+
+    monkeypatch.setattr(Explorer, "candidate", spy)
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    result = plan(world, PlannerSettings(seed=0, time_limit=30.0, improve_time=0.0))
+    assert result.success
+    if fraction == 0.0:
+        assert asked == []
+        return
+    assert asked
+    core = reach.goal_approach_core(world, world.object.goal, result.segments[-1].grasp)
+    for approach, found in asked:
+        assert not np.any(approach & ~core)  # aimed inside the core only
+        if found is not None:
+            assert approach[reach.approach_cell(-found.grasp_rel[2])]

@@ -106,3 +106,36 @@ def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp
             steps = max(1, int(np.ceil(np.abs(b - a).max() / CHECK_STEP_RAD)))
             qs = a + np.linspace(0, 1, steps + 1)[:, None] * (b - a)
             assert is_valid(world, qs, landmark.object_pose[None]).all()
+
+
+def test_a_landmark_takes_its_own_grasp_again_with_another_approach_when_asked():
+    from clew_ros.core.kinematics import relative, tip_poses, transform_points
+    from clew_ros.core.reach import APPROACH_CELLS, approach_cell, approach_cells
+
+    explorer, ctx, tree = _explorer("arm3_regrasp", 3)
+    exploration = explorer.explore()
+    assert exploration is not None
+    landmark = tree.add(**exploration.fields)
+    world, grasp = ctx.world, landmark.grasp
+    here = approach_cell(-landmark.grasp_rel[2])
+    # its own approach allowed: the landmark itself, no transit
+    allowed = np.zeros(APPROACH_CELLS, bool)
+    allowed[here] = True
+    own = explorer.candidate(landmark.id, grasp, allowed)
+    assert own is not None
+    assert own.transit is None
+    # its own approach refused: a transit from the landmark to the same grasp, held with an allowed approach
+    cells = np.arange(APPROACH_CELLS)
+    apart = np.abs((cells - here + APPROACH_CELLS // 2) % APPROACH_CELLS - APPROACH_CELLS // 2) > APPROACH_CELLS // 8
+    allowed = approach_cells(world, landmark.object_pose, grasp) & apart
+    assert allowed.any()
+    again = explorer.candidate(landmark.id, grasp, allowed)
+    assert again is not None
+    assert again.transit is not None
+    np.testing.assert_allclose(again.transit[0], landmark.joints)
+    tip = tip_poses(world.robot, again.start[None])[0]
+    point = transform_points(landmark.object_pose, world.object.grasps[grasp][None])[0]
+    assert np.linalg.norm(tip[:2] - point) <= world.grasp_tolerance
+    np.testing.assert_allclose(again.grasp_rel, relative(tip, landmark.object_pose), atol=1e-9)
+    assert allowed[approach_cell(-again.grasp_rel[2])]
+    assert explorer.candidate(landmark.id, grasp, allowed) is again  # searched once

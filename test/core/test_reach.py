@@ -168,3 +168,46 @@ def test_holding_configurations_are_empty_beyond_reach():
     bounds = np.array([-5.0, -5.0, 5.0, 5.0])
     world = dataclasses.replace(world, bounds=bounds)
     assert len(holding_configurations(world, far, 0)) == 0
+
+
+def test_goal_approach_core_keeps_the_approaches_most_goal_holds_use():
+    from benchmarks.families import obstacles_world
+    from clew_ros.core.collision import is_valid
+    from clew_ros.core.inverse import solve_point
+    from clew_ros.core.reach import APPROACH_CELLS, approach_cell, carry_cells, goal_approach_core
+    from clew_ros.core.world import world_from_parameters
+
+    # obstacles_32: the bar's goal lies 2.03 m from the base of a 1.7 m arm; held by an end, only approaches
+    # within about 47 degrees of in line can carry it there, and the nearly straight arm has room only near 0
+    world = world_from_parameters(obstacles_world(32).parameters)
+    goal, grasp = world.object.goal, 0
+    core = goal_approach_core(world, goal, grasp)
+    assert core is not None
+    np.testing.assert_array_equal(core, goal_approach_core(world, goal, grasp))  # the same request, the same answer
+    bound = carry_cells(world, goal, grasp)
+    assert not np.any(core & ~bound)  # every core approach can carry the object there
+    assert 0 < core.sum() < bound.sum() / 2
+    # an approach outside the core that still holds the goal validly: possible, but not where holds crowd
+    psi = np.radians(40.0)
+    assert not core[approach_cell(psi)]
+    theta = np.linspace(-np.pi, np.pi, 721)
+    point = world.object.grasps[grasp]
+    c, s = np.cos(theta), np.sin(theta)
+    targets = np.column_stack([goal[0] + c * point[0] - s * point[1], goal[1] + s * point[0] + c * point[1]])
+    seeds = np.random.default_rng(3).uniform(world.robot.joint_lower, world.robot.joint_upper, (len(theta), 3))
+    solved = solve_point(world.robot, seeds, targets, angles=theta + psi, angle_tolerance=0.0, tolerance_m=1e-6)
+    poses = np.column_stack([np.broadcast_to(goal[:2], (len(theta), 2)), theta])
+    holds = (solved.error <= 1e-4) & is_valid(world, solved.q, poses)
+    assert holds.any()
+    assert len(core) == APPROACH_CELLS
+
+
+def test_goal_approach_core_is_none_when_nothing_holds_the_goal():
+    import dataclasses
+
+    from clew_ros.core.reach import goal_approach_core
+
+    world = load_world(CONFIG / "arm3_regrasp.yaml")
+    world = dataclasses.replace(world, bounds=np.array([-5.0, -5.0, 5.0, 5.0]))
+    far = np.array([world.robot.reach + 1.0, 0.0, 0.0]) + np.r_[world.robot.base, 0.0]
+    assert goal_approach_core(world, far, 0) is None

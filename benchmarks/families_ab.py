@@ -25,6 +25,7 @@ from pathlib import Path
 
 from benchmarks.families_run import _fmt, summarise
 from benchmarks.generated import build_world, reference_world
+from benchmarks.report import command_line, header, write_report
 from benchmarks.run import ROOT, _export
 from clew_ros.worlds import FAMILIES
 
@@ -121,17 +122,11 @@ def main(argv: list[str] | None = None) -> int:
         indices = [i for i, (w, _) in enumerate(tasks) if w.family == family]
         for side, column in (("before", 0), ("after", 1)):
             rows[side].append(summarise(family, chosen, [pairs[i][column] for i in indices], args.time_limit))
-    command = " ".join(["python -m benchmarks.families_ab", *(sys.argv[1:] if argv is None else argv)])
-    header = (
-        f"`{command}` ({args.baseline} → this checkout; {time.strftime('%Y-%m-%d %H:%M')}, "
-        f"{(time.monotonic() - started) / 60:.1f} min on {os.cpu_count()} cores, load average {load:.1f} at the "
-        f"start; {args.worlds} worlds x {args.seeds} seeds per family, limit {args.time_limit:g} s):"
-    )
-    text = f"{header}\n\n{markdown(rows['before'], rows['after'])}\n"
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "families_ab.md").write_text(text)
-    (args.out / "families_ab.json").write_text(json.dumps({"command": command, "rows": rows}, indent=1) + "\n")
-    print(text)
+    command = command_line("benchmarks.families_ab", argv)
+    what = f"{args.worlds} worlds x {args.seeds} seeds per family, limit {args.time_limit:g} s"
+    text = f"{header(command, started, load, what, prefix=f'{args.baseline} → this checkout; ')}\n\n"
+    text += f"{markdown(rows['before'], rows['after'])}\n"
+    write_report(args.out, "families_ab", text, {"command": command, "rows": rows})
     return 0
 
 

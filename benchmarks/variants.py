@@ -31,6 +31,7 @@ from typing import Any
 
 from benchmarks.families import all_worlds, select, write_world
 from benchmarks.generated import GeneratedBenchWorld, build_world, solvable_families
+from benchmarks.report import command_line, header, write_report
 
 #: Benchmark worlds (``config/`` and :mod:`benchmarks.families`) planned by default next to the generated
 #: families, with their own time limit (``--config-limit``).
@@ -162,17 +163,10 @@ def main(argv: list[str] | None = None) -> int:
             runs[name] = run_variant(settings, jobs, args.jobs)
             print(f"  {name}: {len(jobs)} runs, {time.monotonic() - begun:.0f} s", file=sys.stderr)
     names = [name for name, _ in variants]
-    command = " ".join(["python -m benchmarks.variants", *(sys.argv[1:] if argv is None else argv)])
-    header = (
-        f"`{command}` ({time.strftime('%Y-%m-%d %H:%M')}, {(time.monotonic() - started) / 60:.1f} min on "
-        f"{os.cpu_count()} cores, load average {load:.1f} at the start; {args.worlds} worlds x {args.seeds} seeds "
-        f"per family, {args.seeds} seeds per config world):"
-    )
-    text = f"{header}\n\n{table(names, runs)}\n"
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "variants.md").write_text(text)
-    (args.out / "variants.json").write_text(json.dumps({"command": command, "runs": runs}, indent=1) + "\n")
-    print(text)
+    command = command_line("benchmarks.variants", argv)
+    what = f"{args.worlds} worlds x {args.seeds} seeds per family, {args.seeds} seeds per config world"
+    text = f"{header(command, started, load, what)}\n\n{table(names, runs)}\n"
+    write_report(args.out, "variants", text, {"command": command, "runs": runs})
     return 0
 
 

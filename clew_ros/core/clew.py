@@ -229,8 +229,10 @@ def _search(
     *,
     cores: GoalCores,
 ) -> _Found:
-    """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp, then with every other grasp
-    reachable by a transit at its placement (a regrasp in place), until one reaches the goal."""
+    """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp; then, if that grasp is held outside the
+    goal's core (:func:`~clew_ros.core.reach.goal_approach_core`), with the same grasp taken again in place
+    with an approach in the core; then with every other grasp reachable by a transit at its placement (a
+    regrasp in place, aimed at the core where it can be), until one reaches the goal."""
     closest = _Found(False, np.inf)
     own = landmark.grasp
     assert own is not None  # SEARCH starts from landmarks holding a grasp

@@ -14,8 +14,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid
+from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.inverse import solve_point
+from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, joint_positions, relative, tip_poses, transform_points
 from clew_ros.core.world import World
 
@@ -244,11 +245,13 @@ def holding_configurations(
 
 
 #: Goal orientations sampled by :func:`goal_approach_core` (within the goal's angle tolerance).
-GOAL_CORE_ANGLES = 48
+GOAL_CORE_ANGLES = 24
 #: Half-width (rad) of the window that smooths :func:`goal_approach_core`'s histogram.
-GOAL_CORE_WINDOW = np.radians(5.0)
-#: Cells kept by :func:`goal_approach_core`: smoothed count at least this fraction of the largest.
+GOAL_CORE_WINDOW = np.radians(15.0)
+#: Cells kept by :func:`goal_approach_core`: smoothed count at least this fraction of the
+#: :data:`GOAL_CORE_PERCENTILE` th percentile of the cells counting any (the largest counts are noisy).
 GOAL_CORE_FRACTION = 0.5
+GOAL_CORE_PERCENTILE = 90
 
 
 def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int = HOLD_SAMPLES) -> np.ndarray | None:
@@ -257,8 +260,9 @@ def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int 
 
     Configurations holding the grasp at :data:`GOAL_CORE_ANGLES` orientations within the goal's angle
     tolerance are sampled like :func:`holding_configurations` (``samples`` random starts each, all solved
-    in one batch); their approach angles are counted per cell and smoothed over :data:`GOAL_CORE_WINDOW`;
-    cells counting at least :data:`GOAL_CORE_FRACTION` of the largest count are kept. Where few
+    in one batch, kept when the compiled first pass finds them valid beyond doubt); their approach angles
+    are counted per cell and smoothed over :data:`GOAL_CORE_WINDOW`; cells counting at least
+    :data:`GOAL_CORE_FRACTION` of a high count (:data:`GOAL_CORE_PERCENTILE`) are kept. Where few
     configurations hold the goal (an arm at full stretch, an approach between obstacles) a transfer must
     end in a sliver of joint space; a grasp taken in the core has room. The random starts come from a
     generator seeded by the request: the same answer whenever it is asked.
@@ -275,13 +279,13 @@ def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int 
     q = solve_point(robot, start, targets, iterations=HOLD_ITERATIONS, tolerance_m=0.25 * world.grasp_tolerance).q
     tips = tip_poses(robot, q)
     held = np.linalg.norm(tips[:, :2] - targets, axis=1) <= 0.5 * world.grasp_tolerance
-    held[held] = is_valid(world, q[held], poses[held])
+    held[held] = clearly_valid(packed_world(world), np.ascontiguousarray(q[held]), poses[held])
     if not held.any():
         return None
     counts = np.bincount(approach_cell(tips[held, 2] - poses[held, 2]), minlength=APPROACH_CELLS).astype(float)
     width = round(float(GOAL_CORE_WINDOW) / (2.0 * np.pi) * APPROACH_CELLS)
     smoothed = np.convolve(np.concatenate([counts[-width:], counts, counts[:width]]), np.ones(2 * width + 1), "valid")
-    core: np.ndarray = smoothed >= GOAL_CORE_FRACTION * smoothed.max()
+    core: np.ndarray = smoothed >= GOAL_CORE_FRACTION * np.percentile(smoothed[smoothed > 0], GOAL_CORE_PERCENTILE)
     return core
 
 

@@ -128,6 +128,7 @@ def plan(
                     )
                 continue
             failures = 0
+            ctx.transit_joins = False  # transits found: joins only while EXPLORE finds none (elsewhere they cost more)
             new = tree.add(**exploration.fields)
             landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, cores=cores)
             searched_s = termination.elapsed  # when SEARCH ended: the first plan's time if it found one

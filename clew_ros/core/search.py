@@ -89,7 +89,8 @@ class PlanningContext:
     #: answers the same request with the same sample, so a retry must draw a larger one).
     hold_samples: int = HOLD_SAMPLES
     #: Whether a stalled SEARCH_TRANSIT is joined to its holding configurations (:func:`join_stalled`): only
-    #: after an EXPLORE round that found no transit at all (elsewhere joins cost more than they save).
+    #: from an EXPLORE round that found no transit at all to the next that finds one (elsewhere joins cost
+    #: more than they save).
     transit_joins: bool = False
 
     def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:

@@ -110,6 +110,28 @@ def test_explore_retries_join_stalled_transits_before_refusing(seed):
     assert validate_plan(world, Plan.from_result(world, result)) == []
 
 
+def test_transit_joins_last_only_until_explore_finds_a_transit_again(monkeypatch):
+    # a round without a transit turns the joins on for the retry; the round that finds one turns them off
+    from benchmarks.families import obstacles_world
+    from clew_ros.core.explore import Explorer
+    from clew_ros.core.world import world_from_parameters
+
+    world = world_from_parameters(obstacles_world(8).parameters)
+    seen: list[bool] = []
+    explore = Explorer.explore
+
+    def first_round_fails(self):
+        seen.append(self.ctx.transit_joins)
+        return None if len(seen) == 1 else explore(self)
+
+    monkeypatch.setattr(Explorer, "explore", first_round_fails)
+    result = plan(world, PlannerSettings(seed=0, time_limit=60.0, improve_time=0.0))
+    assert result.success
+    assert len(seen) >= 3  # obstacles_8 needs more than one landmark after the failed round
+    assert seen[:3] == [False, True, False]
+    assert not any(seen[2:])
+
+
 @pytest.mark.parametrize("fraction", [0.5, 0.0])
 def test_search_takes_a_grasp_held_outside_the_goal_core_again_inside_it(monkeypatch, fraction):
     # figure1's goal lies past the bare arm's reach: the bar must be held by an end, nearly in line; a

@@ -237,14 +237,14 @@ def _search(
     closest = _Found(False, np.inf)
     own = landmark.grasp
     assert own is not None  # SEARCH starts from landmarks holding a grasp
-    held = landmark.grasp_rel
-    assert held is not None
+    own_rel = landmark.grasp_rel
+    assert own_rel is not None
     others = [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != own]
 
     def tries() -> Iterator[tuple[int, bool]]:  # (grasp, regrasped in place), asked for while SEARCH fails
         yield own, False
-        core = cores[own]
-        if core is not None and not core[approach_cell(-held[2], len(core))]:
+        own_core = cores[own]
+        if own_core is not None and not own_core[approach_cell(-own_rel[2], len(own_core))]:
             yield own, True  # held outside the goal's core: the same grasp taken again, in the core
         for other in others:
             yield other, True
@@ -254,12 +254,9 @@ def _search(
             break
         approach = None
         if regrasp:
-            approach = _regrasp_approaches(ctx.world, landmark.object_pose, grasp, goal)
-            core = cores[grasp]
-            if core is not None and (approach & core).any():
-                approach &= core
-            if not approach.any():
-                continue  # no approach angle holds this grasp both here and at the goal: spare the transit
+            approach = _aimed_approaches(ctx.world, landmark, grasp, goal, cores)
+            if approach is None:
+                continue
         candidate = explorer.candidate(landmark.id, grasp, approach)
         if candidate is None:
             continue
@@ -277,6 +274,22 @@ def _search(
         if result.success:
             break
     return closest
+
+
+def _aimed_approaches(
+    world: World, landmark: Landmark, grasp: int, goal: np.ndarray, cores: GoalCores
+) -> np.ndarray | None:
+    """The approach cells a regrasp of ``grasp`` in place at ``landmark`` aims at: those of
+    :func:`_regrasp_approaches` in the goal's core, or all of them when none is (``None``: none at all, or,
+    for the landmark's own grasp, none in the core: it was just tried as it is held)."""
+    approach = _regrasp_approaches(world, landmark.object_pose, grasp, goal)
+    if not approach.any():
+        return None  # no approach angle holds this grasp both here and at the goal: spare the transit
+    core = cores[grasp]
+    if core is not None and (approach & core).any():
+        aimed: np.ndarray = approach & core
+        return aimed
+    return None if grasp == landmark.grasp else approach
 
 
 def _regrasp_approaches(world: World, object_pose: np.ndarray, grasp: int, goal: np.ndarray) -> np.ndarray:

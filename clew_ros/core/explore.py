@@ -52,7 +52,7 @@ class Explorer:
         self.ctx = ctx
         self.tree = tree
         self._transits: dict[tuple[int, int], _Candidate | None] = {}
-        self._aimed: dict[tuple[int, int], _Candidate | None] = {}  # SEARCH's transits with an approach
+        self._aimed: dict[tuple[int, int, bytes], _Candidate | None] = {}  # SEARCH's transits aimed at cells
 
     @property
     def transits(self) -> Mapping[tuple[int, int], _Candidate | None]:
@@ -63,21 +63,21 @@ class Explorer:
         """The single manipulation path's transit part from a landmark to a grasp (cached).
 
         With ``approach`` (allowed cells of the approach angle, SEARCH's
-        regrasp towards the goal) a cached transit is used only if its
-        approach is allowed; otherwise a transit aiming at them is searched
-        once, and kept for EXPLORE if the pair had no transit yet.
+        regrasp towards the goal) a cached transit, or the landmark's own
+        grasp, is used only if its approach is allowed; otherwise a transit
+        aiming at those cells is searched once per (landmark, grasp, cells), and
+        kept for EXPLORE if the pair had no transit yet (never for the
+        landmark's own grasp, which EXPLORE takes without a transit).
         """
         key = (landmark_id, grasp)
         landmark = self.tree[landmark_id]
         if landmark.grasp == grasp and landmark.grasp_rel is not None:  # (every landmark but the root holds one)
-            held = self._transits.setdefault(
+            own = self._transits.setdefault(
                 key, _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
             )
             if approach is None or approach[approach_cell(-landmark.grasp_rel[2], len(approach))]:
-                return held
-            if key not in self._aimed:  # the same grasp taken again with another approach
-                self._aimed[key] = self._transit(landmark, grasp, approach)
-            return self._aimed[key]
+                return own
+            return self._aimed_transit(landmark, grasp, approach)  # the same grasp taken again, another approach
         if approach is None:
             if key not in self._transits:
                 self._transits[key] = self._transit(landmark, grasp, None)
@@ -86,12 +86,17 @@ class Explorer:
         # the last link's direction in the object frame is -grasp_rel[2]
         if cached is not None and approach[approach_cell(-cached.grasp_rel[2], len(approach))]:
             return cached
-        if key in self._aimed:
-            return self._aimed[key]
-        found = self._aimed[key] = self._transit(landmark, grasp, approach)
+        found = self._aimed_transit(landmark, grasp, approach)
         if found is not None and cached is None:
             self._transits[key] = found
         return found
+
+    def _aimed_transit(self, landmark: Landmark, grasp: int, approach: np.ndarray) -> _Candidate | None:
+        """The transit from ``landmark`` to ``grasp`` aimed at the ``approach`` cells, searched once per cells."""
+        key = (landmark.id, grasp, np.packbits(approach).tobytes())
+        if key not in self._aimed:
+            self._aimed[key] = self._transit(landmark, grasp, approach)
+        return self._aimed[key]
 
     def forget_failures(self) -> None:
         """Drop the failed transits from the cache, so that EXPLORE tries those pairs again (the GA is

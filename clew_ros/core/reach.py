@@ -251,6 +251,7 @@ GOAL_CORE_WINDOW = np.radians(15.0)
 #: Cells kept by :func:`goal_approach_core`: smoothed count at least this fraction of the
 #: :data:`GOAL_CORE_PERCENTILE` th percentile of the cells counting any (the largest counts are noisy).
 GOAL_CORE_FRACTION = 0.5
+#: The percentile of :data:`GOAL_CORE_FRACTION`.
 GOAL_CORE_PERCENTILE = 90
 
 
@@ -272,8 +273,8 @@ def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int 
     span = min(float(world.goal_angle_tolerance), np.pi)
     thetas = goal[2] + np.linspace(-span, span, GOAL_CORE_ANGLES, endpoint=span < np.pi)
     poses = np.repeat(np.column_stack([np.broadcast_to(goal[:2], (len(thetas), 2)), thetas]), samples, axis=0)
-    targets = transform_points_each(poses, np.asarray(world.object.grasps[grasp], float))
-    seed = np.frombuffer(np.round(goal, 9).tobytes(), dtype=np.uint32)
+    targets = _grasp_points(poses, np.asarray(world.object.grasps[grasp], float))
+    seed = np.frombuffer((np.round(goal, 9) + 0.0).tobytes(), dtype=np.uint32)  # + 0.0: -0.0 is 0.0
     rng = np.random.default_rng([grasp, *seed.tolist()])
     start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(len(poses), robot.dof))
     q = solve_point(robot, start, targets, iterations=HOLD_ITERATIONS, tolerance_m=0.25 * world.grasp_tolerance).q
@@ -284,12 +285,12 @@ def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int 
         return None
     counts = np.bincount(approach_cell(tips[held, 2] - poses[held, 2]), minlength=APPROACH_CELLS).astype(float)
     width = round(float(GOAL_CORE_WINDOW) / (2.0 * np.pi) * APPROACH_CELLS)
-    smoothed = np.convolve(np.concatenate([counts[-width:], counts, counts[:width]]), np.ones(2 * width + 1), "valid")
+    smoothed = np.convolve(np.pad(counts, width, mode="wrap"), np.ones(2 * width + 1), "valid")  # cells wrap around
     core: np.ndarray = smoothed >= GOAL_CORE_FRACTION * np.percentile(smoothed[smoothed > 0], GOAL_CORE_PERCENTILE)
     return core
 
 
-def transform_points_each(poses: np.ndarray, point: np.ndarray) -> np.ndarray:
-    """``point`` (object frame) in the world for each pose of ``poses`` ``(B, 3)``: ``(B, 2)``."""
+def _grasp_points(poses: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """``point`` ``(2,)`` (object frame) in the world for each object pose of ``poses`` ``(B, 3)``: ``(B, 2)``."""
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
     return np.column_stack([poses[:, 0] + c * point[0] - s * point[1], poses[:, 1] + s * point[0] + c * point[1]])

@@ -146,19 +146,20 @@ def test_search_takes_a_grasp_held_outside_the_goal_core_again_inside_it(monkeyp
     def spy(self, landmark_id, grasp, approach=None):
         found = candidate(self, landmark_id, grasp, approach)
         if approach is not None and grasp == self.tree[landmark_id].grasp:
-            asked.append((approach, found))
+            asked.append((grasp, approach, found))
         return found
 
     monkeypatch.setattr(Explorer, "candidate", spy)
     world = load_world(ROOT / "config" / "figure1.yaml")
-    result = plan(world, PlannerSettings(seed=0, time_limit=30.0, improve_time=0.0))
-    assert result.success
+    for seed in (0, 2):
+        result = plan(world, PlannerSettings(seed=seed, time_limit=30.0, improve_time=0.0))
+        assert result.success
     if fraction == 0.0:
         assert asked == []
         return
     assert asked
-    core = reach.goal_approach_core(world, world.object.goal, result.segments[-1].grasp)
-    for approach, found in asked:
-        assert not np.any(approach & ~core)  # aimed inside the core only
+    for grasp, approach, found in asked:
+        core = reach.goal_approach_core(world, world.object.goal, grasp)
+        assert not np.any(approach & ~core)  # the landmark's own grasp is taken again inside the core only
         if found is not None:
             assert approach[reach.approach_cell(-found.grasp_rel[2])]

@@ -211,3 +211,24 @@ def test_goal_approach_core_is_none_when_nothing_holds_the_goal():
     world = dataclasses.replace(world, bounds=np.array([-5.0, -5.0, 5.0, 5.0]))
     far = np.array([world.robot.reach + 1.0, 0.0, 0.0]) + np.r_[world.robot.base, 0.0]
     assert goal_approach_core(world, far, 0) is None
+
+
+def test_goal_approach_core_windows_wrap_around_and_zero_is_no_smoothing(monkeypatch):
+    from clew_ros.core import reach
+
+    world = load_world(CONFIG / "figure1.yaml")
+    goal = world.object.goal
+    wide = reach.goal_approach_core(world, goal, 0)
+    assert wide is not None
+    assert wide.shape == (reach.APPROACH_CELLS,)
+    # the bar taken by its (-0.4, 0) end in line with the last link: psi = 0, where the cells wrap around
+    assert wide[0]
+    assert wide[-1]
+    monkeypatch.setattr(reach, "GOAL_CORE_WINDOW", 0.0)
+    narrow = reach.goal_approach_core(world, goal, 0)
+    assert narrow is not None
+    assert narrow.shape == (reach.APPROACH_CELLS,)
+    assert 0 < narrow.sum() < wide.sum()
+    turned = goal.copy()
+    turned[0] = -0.0  # the same goal: the same sample
+    np.testing.assert_array_equal(reach.goal_approach_core(world, turned, 0), narrow)

@@ -201,7 +201,7 @@ def _search_chain(
 
     Returns the last landmark, SEARCH's answer from it and the closest goal distance reached (m).
     """
-    found = _search(ctx, explorer, tree, landmark, goal, cores=cores)
+    found = _search(ctx, explorer, landmark, goal, cores=cores)
     closest = found.distance
     for _ in range(SEARCH_CHAIN):
         if found.success or not _worth_chaining(ctx, landmark, found, goal) or ctx.termination():
@@ -216,7 +216,7 @@ def _search_chain(
             transit=found.transit,
             transfer=found.transfer,
         )
-        found = _search(ctx, explorer, tree, landmark, goal, cores=cores)
+        found = _search(ctx, explorer, landmark, goal, cores=cores)
         closest = min(closest, found.distance)
     return landmark, found, closest
 
@@ -224,7 +224,6 @@ def _search_chain(
 def _search(
     ctx: PlanningContext,
     explorer: Explorer,
-    tree: LandmarkTree,
     landmark: Landmark,
     goal: np.ndarray,
     *,

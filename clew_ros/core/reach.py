@@ -17,7 +17,7 @@ import numpy as np
 from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import clearly_valid
-from clew_ros.core.kinematics import compose, joint_positions, relative, tip_poses, transform_points
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.world import World
 
 __all__ = [
@@ -229,19 +229,29 @@ def holding_configurations(
     exists. The random starts come from a generator seeded by the request itself, so the answer is the
     same whenever it is asked and the planner's own random stream is untouched.
     """
-    robot = world.robot
     pose = np.asarray(object_pose, float)
     target = transform_points(pose, np.asarray(world.object.grasps[grasp], float)[None])[0]
     seed = np.frombuffer(np.round(np.r_[pose, target], 9).tobytes(), dtype=np.uint32)
     rng = np.random.default_rng([grasp, *seed.tolist()])
-    start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(samples, robot.dof))
-    q = solve_point(robot, start, target[None], iterations=iterations, tolerance_m=0.25 * world.grasp_tolerance).q
-    tips = joint_positions(robot, q)[:, -1]
-    held: np.ndarray = q[np.linalg.norm(tips - target, axis=1) <= 0.5 * world.grasp_tolerance]
+    q, _, holding = _solve_holds(world, np.broadcast_to(target, (samples, 2)), rng, iterations)
+    held: np.ndarray = q[holding]
     if not len(held):
         return held
     valid: np.ndarray = held[is_valid(world, held, pose[None])]
     return valid
+
+
+def _solve_holds(
+    world: World, targets: np.ndarray, rng: np.random.Generator, iterations: int = HOLD_ITERATIONS
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Inverse kinematics of the tip onto ``targets`` ``(B, 2)`` from one random start within the joint limits
+    each (drawn from ``rng``): the configurations ``(B, n)``, their tip frames ``(B, 3)`` and which of them
+    hold the target (tip within half the grasp tolerance) ``(B,)``."""
+    robot = world.robot
+    start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(len(targets), robot.dof))
+    q = solve_point(robot, start, targets, iterations=iterations, tolerance_m=0.25 * world.grasp_tolerance).q
+    tips = tip_poses(robot, q)
+    return q, tips, np.linalg.norm(tips[:, :2] - targets, axis=1) <= 0.5 * world.grasp_tolerance
 
 
 #: Goal orientations sampled by :func:`goal_approach_core` (within the goal's angle tolerance).
@@ -268,18 +278,13 @@ def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int 
     end in a sliver of joint space; a grasp taken in the core has room. The random starts come from a
     generator seeded by the request: the same answer whenever it is asked.
     """
-    robot = world.robot
     goal = np.asarray(goal, float)
     span = min(float(world.goal_angle_tolerance), np.pi)
     thetas = goal[2] + np.linspace(-span, span, GOAL_CORE_ANGLES, endpoint=span < np.pi)
     poses = np.repeat(np.column_stack([np.broadcast_to(goal[:2], (len(thetas), 2)), thetas]), samples, axis=0)
-    targets = _grasp_points(poses, np.asarray(world.object.grasps[grasp], float))
+    targets = compose(poses, np.r_[world.object.grasps[grasp], 0.0])[:, :2]
     seed = np.frombuffer((np.round(goal, 9) + 0.0).tobytes(), dtype=np.uint32)  # + 0.0: -0.0 is 0.0
-    rng = np.random.default_rng([grasp, *seed.tolist()])
-    start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(len(poses), robot.dof))
-    q = solve_point(robot, start, targets, iterations=HOLD_ITERATIONS, tolerance_m=0.25 * world.grasp_tolerance).q
-    tips = tip_poses(robot, q)
-    held = np.linalg.norm(tips[:, :2] - targets, axis=1) <= 0.5 * world.grasp_tolerance
+    q, tips, held = _solve_holds(world, targets, np.random.default_rng([grasp, *seed.tolist()]))
     held[held] = clearly_valid(packed_world(world), np.ascontiguousarray(q[held]), poses[held])
     if not held.any():
         return None
@@ -288,9 +293,3 @@ def goal_approach_core(world: World, goal: np.ndarray, grasp: int, samples: int 
     smoothed = np.convolve(np.pad(counts, width, mode="wrap"), np.ones(2 * width + 1), "valid")  # cells wrap around
     core: np.ndarray = smoothed >= GOAL_CORE_FRACTION * np.percentile(smoothed[smoothed > 0], GOAL_CORE_PERCENTILE)
     return core
-
-
-def _grasp_points(poses: np.ndarray, point: np.ndarray) -> np.ndarray:
-    """``point`` ``(2,)`` (object frame) in the world for each object pose of ``poses`` ``(B, 3)``: ``(B, 2)``."""
-    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    return np.column_stack([poses[:, 0] + c * point[0] - s * point[1], poses[:, 1] + s * point[0] + c * point[1]])

@@ -241,20 +241,18 @@ def join_stalled(
         return waypoints, distance
     pose = job.mode.get("object_poses")
     held = job.mode.get("grasp_rel")
+    mode = {"object_pose": None if pose is None else pose[0], "grasp_rel": None if held is None else held[0]}
     path = join(
         world,
         stalled,
         targets,
         rng,
-        object_pose=None if pose is None else pose[0],
-        grasp_rel=None if held is None else held[0],
+        **mode,
         min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
         rounds=JOIN_ROUNDS,
         stop=ctx.termination,
     )
-    if path is None or not path_valid(
-        world, path, object_pose=None if pose is None else pose[0], grasp_rel=None if held is None else held[0]
-    ):
+    if path is None or not path_valid(world, path, **mode):
         return waypoints, distance
     end = path[-1:]
     return np.vstack([waypoints, path[1:]]), float(job.objective(end, _object_at(ctx, end, job.mode))[0])

@@ -723,14 +723,16 @@ def _intervals(
     object_edges: np.ndarray,
     shrunk_edges: np.ndarray,
 ) -> None:
-    """Free intervals ``out (B, 2)`` of ``joint`` for configurations ``q (B, n)``."""
+    """Free intervals ``out (B, 2)`` of ``joint`` for configurations ``q (B, n)``; ``poses`` is ``(B, 3)``
+    or one pose ``(1, 3)`` for all."""
     scratch = _scratch(lengths.shape[0], obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
+    shared = poses.shape[0] == 1
     for b in range(q.shape[0]):
         out[b, 0], out[b, 1] = _interval(
             q[b],
             joint,
             transfer,
-            poses[b],
+            poses[0] if shared else poses[b],
             margin,
             base,
             lengths,
@@ -1088,7 +1090,9 @@ def intervals(
     """Compiled: free intervals ``(low, high)`` of ``joint`` for configurations ``q (B, n)``."""
     q = _arg(np.atleast_2d(q))
     out = np.empty((len(q), 2))
-    _intervals(q, int(joint), transfer, _poses(poses, len(q)), float(margin), out, *world.arguments())
+    poses = np.asarray(poses, dtype=np.float64)
+    shared = _arg(poses) if poses.shape == (1, 3) else _poses(poses, len(q))  # one pose for all: no copies
+    _intervals(q, int(joint), transfer, shared, float(margin), out, *world.arguments())
     return out[:, 0], out[:, 1]
 
 

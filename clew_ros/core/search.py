@@ -146,9 +146,17 @@ class SearchJob:
         return pose
 
 
+#: Whether SEARCH first tries one Manhattan path along the linearised step to its target
+#: (:func:`_greedy_probe`) before the GA rounds; ``False`` is the search as the paper has it.
+GREEDY_PROBE = True
+#: The greedy probe's largest move of one joint (rad).
+GREEDY_LIMIT = np.pi
+
+
 def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.ndarray, float]]:
-    """SEARCH's do-while loop for independent jobs at once: GA rounds from each job's best end point
-    (the jobs' populations are islands of one batch, :func:`minimize_islands`), then refinement.
+    """SEARCH's do-while loop for independent jobs at once: a greedy probe (:func:`_greedy_probe`), GA
+    rounds from each job's best end point (the jobs' populations are islands of one batch,
+    :func:`minimize_islands`), then refinement.
 
     All jobs are transits or all are transfers. Returns each job's waypoints and final objective.
     """
@@ -163,6 +171,8 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
         [float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0]) for i, job in enumerate(jobs)]
     )
     refine_radius = 0.15 * ctx.world.robot.reach
+    if GREEDY_PROBE:
+        _greedy_probe(ctx, jobs, q, best, waypoints, target=refine_radius * 0.2)
     searching = np.arange(len(jobs))
     for _ in range(ctx.settings.search_rounds):
         searching = searching[best[searching] > refine_radius * 0.2]
@@ -220,6 +230,51 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     return answers
 
 
+def _greedy_probe(
+    ctx: PlanningContext,
+    jobs: list[SearchJob],
+    q: np.ndarray,
+    best: np.ndarray,
+    waypoints: list[list[np.ndarray]],
+    *,
+    target: float,
+) -> None:
+    """Before the GA, every job not yet within ``target`` tries one Manhattan path: the damped
+    least-squares step that would zero its ``error`` if the error were linear (at most
+    :data:`GREEDY_LIMIT` per joint), each joint bounced into its free interval in turn, as a GA
+    individual would be. Kept, in ``q``, ``best`` and ``waypoints``, where it gets closer. One decoded
+    path per job: cheap next to a generation, and where the way is open (a transit between
+    configurations that see each other) the GA has nothing left to do."""
+    probe = np.flatnonzero(best > target)
+    if not len(probe):
+        return
+    n = ctx.world.robot.dof
+    genes = np.zeros((len(probe), ctx.settings.manhattan_order, n))
+    for a, i in enumerate(probe):
+        genes[a, 0] = _linear_step(jobs[i].error, q[i], jobs[i].error(q[i][None])[0], GREEDY_LIMIT)
+    key = next(iter(jobs[0].mode))
+    paths = ctx.manhattan(q[probe], genes, **{key: np.array([jobs[i].pose for i in probe])})
+    ctx.counters.evaluations += len(probe)
+    for a, i in enumerate(probe):
+        value = float(jobs[i].objective(paths.final[a][None], paths.object_poses[a][None])[0])
+        if value < best[i] - 1e-4:
+            waypoints[i].append(paths.waypoints[a, 1:])
+            q[i] = paths.final[a]
+            best[i] = value
+
+
+def _linear_step(error: Callable[[np.ndarray], np.ndarray], q: np.ndarray, e: np.ndarray, limit: float) -> np.ndarray:
+    """The damped least-squares step from ``q`` that would zero ``error`` (``e`` at ``q``) if it were
+    linear, with a finite-difference Jacobian, scaled down to at most ``limit`` per joint."""
+    n = len(q)
+    jacobian = (error(q[None] + _JACOBIAN_STEP * np.eye(n)) - e[None]).T / _JACOBIAN_STEP  # (m, n)
+    step: np.ndarray = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + _DAMPING * np.eye(len(e)), e)
+    largest = np.max(np.abs(step))
+    if largest > limit:
+        step *= limit / largest
+    return step
+
+
 def join_stalled(
     ctx: PlanningContext, job: SearchJob, waypoints: np.ndarray, distance: float
 ) -> tuple[np.ndarray, float]:
@@ -264,6 +319,10 @@ def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict[str, np.ndarray])
     return compose(tip_poses(ctx.world.robot, q), mode["grasp_rel"])
 
 
+_JACOBIAN_STEP = 1e-6  # finite differences of the refinement and the greedy probe (rad)
+_DAMPING = 1e-4  # damped least squares: the damping added to J J^T
+
+
 def _refine(
     ctx: PlanningContext,
     q: np.ndarray,
@@ -274,21 +333,14 @@ def _refine(
     iterations: int = 30,
 ) -> np.ndarray:
     """Damped least squares on ``error``, moved one joint at a time within free intervals."""
-    n = len(q)
     waypoints = [q.copy()]
-    h = 1e-6
     for _ in range(iterations):
         if ctx.termination():
             break
         e = error(q[None])[0]
         if np.linalg.norm(e) <= accept:
             break
-        jacobian = (error(q[None] + h * np.eye(n)) - e[None]).T / h  # (m, n)
-        damping = 1e-4
-        step = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping * np.eye(len(e)), e)
-        largest = np.max(np.abs(step))
-        if largest > 0.3:
-            step *= 0.3 / largest
+        step = _linear_step(error, q, e, 0.3)
         moved = single_moves(ctx.world, q, step, margin_m=ctx.settings.clearance, counters=ctx.counters, **mode)
         if len(moved) < 2 or np.max(np.abs(moved[-1] - q)) < 1e-10:
             break

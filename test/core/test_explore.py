@@ -110,9 +110,9 @@ def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp
 
 def test_a_landmark_takes_its_own_grasp_again_with_another_approach_when_asked():
     from clew_ros.core.kinematics import relative, tip_poses, transform_points
-    from clew_ros.core.reach import APPROACH_CELLS, approach_cell, approach_cells
+    from clew_ros.core.reach import APPROACH_CELLS, approach_cell, approach_cells, approach_excess
 
-    explorer, ctx, tree = _explorer("arm3_regrasp", 3)
+    explorer, ctx, tree = _explorer("arm3_regrasp", 7)
     exploration = explorer.explore()
     assert exploration is not None
     landmark = tree.add(**exploration.fields)
@@ -137,5 +137,8 @@ def test_a_landmark_takes_its_own_grasp_again_with_another_approach_when_asked()
     point = transform_points(landmark.object_pose, world.object.grasps[grasp][None])[0]
     assert np.linalg.norm(tip[:2] - point) <= world.grasp_tolerance
     np.testing.assert_allclose(again.grasp_rel, relative(tip, landmark.object_pose), atol=1e-9)
-    assert allowed[approach_cell(-again.grasp_rel[2])]
+    # an allowed approach, up to the transit's success test (the approach term, times the last link's length,
+    # is part of the residual that must end within half the grasp tolerance)
+    psi = np.array([-again.grasp_rel[2]])
+    assert world.robot.link_lengths[-1] * approach_excess(allowed)(psi)[0] <= 0.5 * world.grasp_tolerance
     assert explorer.candidate(landmark.id, grasp, allowed) is again  # searched once

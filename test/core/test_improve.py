@@ -65,11 +65,17 @@ def test_improvement_keeps_the_plan_valid_and_never_makes_it_longer(name, seed) 
         assert is_valid(world, motion.configurations, motion.object_poses).all()
 
 
+FIGURE1_REFERENCE_RAD = 5.46  # python -m benchmarks.reference --worlds figure1
+
+
 def test_improvement_gains_on_figure1_and_is_deterministic() -> None:
     world = _world("figure1")
     a = _plan(world, 0, 0.3)
     b = _plan(world, 0, 0.3)
-    assert a.stats["joint_travel_rad"] < 0.5 * a.stats["first_joint_travel_rad"]  # the target: 2x shorter
+    # shorter, and near the brute-force grid reference's 5.46 rad (docs/benchmarks.md, "Plan quality against
+    # the grid reference"): issue 14's 2-joint target is at most 1.3x
+    assert a.stats["joint_travel_rad"] < 0.8 * a.stats["first_joint_travel_rad"]
+    assert a.stats["joint_travel_rad"] <= 1.3 * FIGURE1_REFERENCE_RAD
     assert "first plan" in a.message
     plan_a, plan_b = Plan.from_result(world, a).to_dict(), Plan.from_result(world, b).to_dict()
     plan_a["stats"].pop("time_s")

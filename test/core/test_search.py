@@ -73,3 +73,58 @@ def test_goal_error_is_zero_at_the_goal_and_counts_only_excess_angle(world) -> N
     assert np.allclose(goal_error(world, turned[None], goal), 0.0)  # inside the angle slack
     moved = goal + np.array([0.03, -0.04, 0.0])
     assert np.isclose(np.linalg.norm(goal_error(world, moved[None], goal)), 0.05)
+
+
+def _joint_space_job(world, q0: np.ndarray, goal: np.ndarray):
+    from clew_ros.core.search import SearchJob
+
+    return SearchJob(
+        q0,
+        lambda q, _poses: 0.1 * np.linalg.norm(q - goal, axis=1),
+        lambda q: 0.1 * (q - goal),
+        1e-5,
+        {"object_poses": world.object.initial[None]},
+    )
+
+
+def test_greedy_probe_takes_an_open_way_without_a_generation_and_is_off_on_request(world, monkeypatch) -> None:
+    from clew_ros.core import search
+
+    q0 = np.asarray(world.robot.initial, float)
+    goal = q0 + np.array([-0.8, 0.6])
+    assert is_valid(world, interpolate(np.array([q0, [goal[0], q0[1]], goal]), 0.002), world.object.initial).all()
+    ctx = context(world)
+    [(waypoints, distance)] = search.local_search(ctx, [_joint_space_job(world, q0, goal)])
+    assert ctx.counters.evaluations == 1  # the probe alone: no GA population was decoded
+    assert distance <= 1e-5
+    assert np.allclose(waypoints[-1], goal, atol=1e-3)
+    assert np.all(np.count_nonzero(np.diff(waypoints, axis=0), axis=1) <= 1)  # still Manhattan moves
+    monkeypatch.setattr(search, "GREEDY_PROBE", False)
+    ctx = context(world)
+    search.local_search(ctx, [_joint_space_job(world, q0, goal)])
+    assert ctx.counters.evaluations > 1
+
+
+def test_greedy_probe_into_an_obstacle_stops_short_and_stays_valid(world, monkeypatch) -> None:
+    """The probe alone (the GA finds nothing better, no refinement): never farther, always valid."""
+    from types import SimpleNamespace
+
+    from clew_ros.core import search
+
+    def no_progress(_evaluate, initial, *_args, **_kwargs):
+        return [SimpleNamespace(fitness=np.inf, genes=None) for _ in initial]
+
+    monkeypatch.setattr(search, "minimize_islands", no_progress)
+    monkeypatch.setattr(search, "_refine", lambda _ctx, q, *_args, **_kwargs: q[None])
+    q0 = np.asarray(world.robot.initial, float)
+    rng = np.random.default_rng(5)
+    short = 0
+    for _ in range(20):  # goals across the joint space: the probe's straight moves often meet something
+        goal = rng.uniform(world.robot.joint_lower, world.robot.joint_upper)
+        job = _joint_space_job(world, q0, goal)
+        before = float(job.objective(q0[None], None)[0])
+        [(path, distance)] = search.local_search(context(world), [job])
+        assert distance <= before  # never farther
+        assert is_valid(world, interpolate(path, 0.002), world.object.initial).all()
+        short += distance > 1e-3
+    assert short  # some probes did meet an obstacle

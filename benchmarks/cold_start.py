@@ -125,7 +125,7 @@ def node_first_and_second() -> dict:
                 timeout=300,
                 check=False,
             )
-            found = re.search(r"; time ([0-9.]+) s", done.stdout)
+            found = re.search(r"^plan: .*, ([0-9.]+) s$", done.stdout, re.MULTILINE)  # call_plan's last line
             if not found:
                 return {"node": f"no planning time in the answer: {done.stdout.strip()[:200]}"}
             times.append(float(found.group(1)))

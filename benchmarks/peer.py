@@ -21,8 +21,8 @@ limits, seeded, kept when both ends are valid and at least 1 rad apart).
 * **Project** (:func:`project_transit`): the Ariadne's Clew algorithm posed
   on the transit problem with the core's own pieces: SEARCH is
   ``clew_ros.core.search.local_search`` minimising the joint-space distance
-  to ``q_goal`` over Manhattan paths (the same GA, bouncing, free intervals
-  and damped least-squares refinement that SEARCH_TRANSIT uses, only the
+  to ``q_goal`` over Manhattan paths (the same greedy probe, GA, bouncing, free
+  intervals and damped least-squares refinement that SEARCH_TRANSIT uses, only the
   objective differs: SEARCH_TRANSIT minimises the tip's distance to a grasp
   point, which any of many configurations satisfies, so it would not pose the
   same problem as OMPL's). The distance is weighted by ``planner.joint_weight``

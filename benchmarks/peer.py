@@ -243,7 +243,7 @@ def project_transit(
     waypoints = landmarks[0][None]
     while True:
         [(tail, distance)] = local_search(
-            ctx, [SearchJob(landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD, mode)]
+            ctx, [SearchJob(landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD, mode, toward=goal)]
         )
         distance /= weight  # rad
         if searched_from_start is None:

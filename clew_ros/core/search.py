@@ -139,6 +139,9 @@ class SearchJob:
     #: (:func:`join_stalled`), or ``None``.
     targets: Callable[[np.ndarray, np.random.Generator], np.ndarray] | None = None
     join_within: float = 0.0  # m: a search stalled farther than this from its target is not joined
+    #: A configuration ``(n,)`` that meets the target, which the greedy probe heads for (:func:`_greedy_probe`);
+    #: ``None``: no probe.
+    toward: np.ndarray | None = None
 
     @property
     def pose(self) -> np.ndarray:
@@ -146,11 +149,9 @@ class SearchJob:
         return pose
 
 
-#: Whether SEARCH first tries one Manhattan path along the linearised step to its target
+#: Whether SEARCH_TRANSIT first tries one Manhattan path straight to the nearest holding configuration
 #: (:func:`_greedy_probe`) before the GA rounds; ``False`` is the search as the paper has it.
 GREEDY_PROBE = True
-#: The greedy probe's largest move of one joint (rad).
-GREEDY_LIMIT = np.pi
 
 
 def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.ndarray, float]]:
@@ -239,19 +240,18 @@ def _greedy_probe(
     *,
     target: float,
 ) -> None:
-    """Before the GA, every job not yet within ``target`` tries one Manhattan path: the damped
-    least-squares step that would zero its ``error`` if the error were linear (at most
-    :data:`GREEDY_LIMIT` per joint), each joint bounced into its free interval in turn, as a GA
-    individual would be. Kept, in ``q``, ``best`` and ``waypoints``, where it gets closer. One decoded
-    path per job: cheap next to a generation, and where the way is open (a transit between
-    configurations that see each other) the GA has nothing left to do."""
-    probe = np.flatnonzero(best > target)
-    if not len(probe):
+    """Before the GA, every job with a configuration to head for (``toward``) and not yet within
+    ``target`` tries one Manhattan path: each joint in turn moved by what separates it from ``toward``,
+    bounced into its free interval as a GA individual's gene would be (RRT-Connect's greedy connection
+    to its goal, one joint at a time). Kept, in ``q``, ``best`` and ``waypoints``, where it gets closer.
+    One decoded path per job, cheap next to a generation; where the way is open the GA has nothing
+    left to do."""
+    probe = [i for i in np.flatnonzero(best > target) if jobs[i].toward is not None]
+    if not probe:
         return
-    n = ctx.world.robot.dof
-    genes = np.zeros((len(probe), ctx.settings.manhattan_order, n))
+    genes = np.zeros((len(probe), ctx.settings.manhattan_order, ctx.world.robot.dof))
     for a, i in enumerate(probe):
-        genes[a, 0] = _linear_step(jobs[i].error, q[i], jobs[i].error(q[i][None])[0], GREEDY_LIMIT)
+        genes[a, 0] = np.asarray(jobs[i].toward) - q[i]
     key = next(iter(jobs[0].mode))
     paths = ctx.manhattan(q[probe], genes, **{key: np.array([jobs[i].pose for i in probe])})
     ctx.counters.evaluations += len(probe)
@@ -261,18 +261,6 @@ def _greedy_probe(
             waypoints[i].append(paths.waypoints[a, 1:])
             q[i] = paths.final[a]
             best[i] = value
-
-
-def _linear_step(error: Callable[[np.ndarray], np.ndarray], q: np.ndarray, e: np.ndarray, limit: float) -> np.ndarray:
-    """The damped least-squares step from ``q`` that would zero ``error`` (``e`` at ``q``) if it were
-    linear, with a finite-difference Jacobian, scaled down to at most ``limit`` per joint."""
-    n = len(q)
-    jacobian = (error(q[None] + _JACOBIAN_STEP * np.eye(n)) - e[None]).T / _JACOBIAN_STEP  # (m, n)
-    step: np.ndarray = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + _DAMPING * np.eye(len(e)), e)
-    largest = np.max(np.abs(step))
-    if largest > limit:
-        step *= limit / largest
-    return step
 
 
 def join_stalled(
@@ -319,10 +307,6 @@ def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict[str, np.ndarray])
     return compose(tip_poses(ctx.world.robot, q), mode["grasp_rel"])
 
 
-_JACOBIAN_STEP = 1e-6  # finite differences of the refinement and the greedy probe (rad)
-_DAMPING = 1e-4  # damped least squares: the damping added to J J^T
-
-
 def _refine(
     ctx: PlanningContext,
     q: np.ndarray,
@@ -333,14 +317,21 @@ def _refine(
     iterations: int = 30,
 ) -> np.ndarray:
     """Damped least squares on ``error``, moved one joint at a time within free intervals."""
+    n = len(q)
     waypoints = [q.copy()]
+    h = 1e-6
     for _ in range(iterations):
         if ctx.termination():
             break
         e = error(q[None])[0]
         if np.linalg.norm(e) <= accept:
             break
-        step = _linear_step(error, q, e, 0.3)
+        jacobian = (error(q[None] + h * np.eye(n)) - e[None]).T / h  # (m, n)
+        damping = 1e-4
+        step = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping * np.eye(len(e)), e)
+        largest = np.max(np.abs(step))
+        if largest > 0.3:
+            step *= 0.3 / largest
         moved = single_moves(ctx.world, q, step, margin_m=ctx.settings.clearance, counters=ctx.counters, **mode)
         if len(moved) < 2 or np.max(np.abs(moved[-1] - q)) < 1e-10:
             break
@@ -414,7 +405,7 @@ def _transit_job(
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
     two_joints = world.robot.dof == 2
-    bends = np.unique(np.sign(wrap_angle(holds[:, 1]))) if two_joints and holds is not None else np.zeros(0)
+    bends = np.unique(np.sign(wrap_angle(holds[:, 1]))) if two_joints else np.zeros(0)
     elbow = float(bends[0]) if len(bends) == 1 and bends[0] != 0 else None
 
     def tip_error(q: np.ndarray) -> np.ndarray:
@@ -430,24 +421,26 @@ def _transit_job(
         distance: np.ndarray = np.linalg.norm(tip_error(q), axis=1)
         return distance
 
-    hopeless = (approach is not None and not approach.any()) or (holds is not None and not len(holds))
+    hopeless = (approach is not None and not approach.any()) or not len(holds)
     if hopeless or not within_reach(world, target[0]):
         return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
     mode = {"object_poses": object_pose[None]}
-    if not joins or holds is None:
-        return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode)
     held = holds[objective(holds, None) <= 0.5 * world.grasp_tolerance]  # the transit's own success test
+    # the greedy probe heads for the nearest of them (joint travel)
+    toward = held[np.argmin(np.abs(held - q0).sum(axis=1))] if len(held) and GREEDY_PROBE else None
+    if not joins:
+        return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, toward=toward)
 
     def targets(_stalled: np.ndarray, _rng: np.random.Generator) -> np.ndarray:
         return held
 
     within = JOIN_RADIUS * world.robot.reach
-    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, targets, within)
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, targets, within, toward)
 
 
 def _holding_configurations(
     world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None, samples: int
-) -> np.ndarray | None:
+) -> np.ndarray:
     """The valid configurations holding ``grasp`` (with an allowed approach), which a transit can
     only end near: all of them for two-joint arms (:func:`two_link_grasps`), a sample for others
     (:func:`holding_configurations`). Empty: the transit is given up as hopeless."""

@@ -74,7 +74,7 @@ def test_improvement_gains_on_figure1_and_is_deterministic() -> None:
     b = _plan(world, 0, 0.3)
     # shorter, and near the brute-force grid reference's 5.46 rad (docs/benchmarks.md, "Plan quality against
     # the grid reference"): issue 14's 2-joint target is at most 1.3x
-    assert a.stats["joint_travel_rad"] < 0.8 * a.stats["first_joint_travel_rad"]
+    assert a.stats["joint_travel_rad"] < a.stats["first_joint_travel_rad"] - 0.5
     assert a.stats["joint_travel_rad"] <= 1.3 * FIGURE1_REFERENCE_RAD
     assert "first plan" in a.message
     plan_a, plan_b = Plan.from_result(world, a).to_dict(), Plan.from_result(world, b).to_dict()

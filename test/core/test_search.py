@@ -84,6 +84,7 @@ def _joint_space_job(world, q0: np.ndarray, goal: np.ndarray):
         lambda q: 0.1 * (q - goal),
         1e-5,
         {"object_poses": world.object.initial[None]},
+        toward=goal,
     )
 
 

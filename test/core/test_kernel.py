@@ -375,3 +375,23 @@ def test_a_start_within_the_clearance_of_a_bound_never_crosses_it(mode):
         moved[:, 0] += angles
         assert is_valid(world, moved, poses_of(moved)).all(), (start.tolist(), low[0], high[0])
     assert checked >= 10
+
+
+@pytest.mark.parametrize("mode", ["transit", "transfer"])
+def test_one_pose_shared_by_a_batch_gives_the_intervals_of_the_pose_repeated(mode):
+    world, rng = random_world(7, joints=4, obstacles=6, width=0.03, limit=3.0, self_collision=True)
+    rest = world.object.initial[None]
+    held = np.array([[float(np.abs(world.object.polygon).max()) + 0.05, 0.0, 0.7]])  # ahead of the tip
+    poses_of = (
+        (lambda q: np.repeat(rest, len(q), axis=0))
+        if mode == "transit"
+        else (lambda q: compose(tip_poses(world.robot, q), held))
+    )
+    q = valid_configurations(world, rng, 40, poses_of)
+    assert len(q) >= 10
+    key, pose = ("object_poses", rest) if mode == "transit" else ("grasp_rel", held)
+    for joint in range(world.robot.dof):
+        shared = free_intervals(world, q, joint, **{key: pose})
+        repeated = free_intervals(world, q, joint, **{key: np.repeat(pose, len(q), axis=0)})
+        np.testing.assert_array_equal(shared[0], repeated[0])
+        np.testing.assert_array_equal(shared[1], repeated[1])

@@ -7,8 +7,10 @@ numeric refinement then closes the last millimetres: damped least squares on a
 finite-difference Jacobian, applied as single-joint moves clamped to their
 free intervals. Inverse kinematics never builds a Manhattan path, so redundant
 arms work alike; configurations that hold a grasp (closed form for two joints,
-sampled for more: :mod:`clew_ros.core.reach`) only refuse hopeless transits
-and, for two joints, steer the elbow.
+sampled for more: :mod:`clew_ros.core.reach`) refuse hopeless transits, for two
+joints steer the elbow, and give SEARCH_TRANSIT's greedy probe a configuration to
+head for before the GA (:func:`_greedy_probe`: one Manhattan path, bounced into
+the free intervals like any other, kept when it gets closer).
 
 A SEARCH_TRANSFER that stalls near the goal (:data:`JOIN_RADIUS`) is joined to
 it (:func:`join_stalled`): configurations that hold the object within the

@@ -1091,8 +1091,8 @@ def intervals(
     q = _arg(np.atleast_2d(q))
     out = np.empty((len(q), 2))
     poses = np.asarray(poses, dtype=np.float64)
-    shared = _arg(poses) if poses.shape == (1, 3) else _poses(poses, len(q))  # one pose for all: no copies
-    _intervals(q, int(joint), transfer, shared, float(margin), out, *world.arguments())
+    rows = _arg(poses) if poses.shape == (1, 3) else _poses(poses, len(q))  # one pose for all: no copies
+    _intervals(q, int(joint), transfer, rows, float(margin), out, *world.arguments())
     return out[:, 0], out[:, 1]
 
 

@@ -175,7 +175,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     )
     refine_radius = 0.15 * ctx.world.robot.reach
     if GREEDY_PROBE:
-        _greedy_probe(ctx, jobs, q, best, waypoints, target=refine_radius * 0.2)
+        _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=refine_radius * 0.2)
     searching = np.arange(len(jobs))
     for _ in range(ctx.settings.search_rounds):
         searching = searching[best[searching] > refine_radius * 0.2]
@@ -240,12 +240,15 @@ def _greedy_probe(
     best: np.ndarray,
     waypoints: list[list[np.ndarray]],
     *,
+    key: str,
+    poses: np.ndarray,
     target: float,
 ) -> None:
     """Before the GA, every job with a configuration to head for (``toward``) and not yet within
     ``target`` tries one Manhattan path: each joint in turn moved by what separates it from ``toward``,
     bounced into its free interval as a GA individual's gene would be (RRT-Connect's greedy connection
-    to its goal, one joint at a time). Kept, in ``q``, ``best`` and ``waypoints``, where it gets closer.
+    to its goal, one joint at a time), the object at the jobs' ``poses`` under mode ``key`` (as
+    :func:`local_search` has them). Kept, in ``q``, ``best`` and ``waypoints``, where it gets closer.
     One decoded path per job, cheap next to a generation; where the way is open the GA has nothing
     left to do."""
     probe = [i for i in np.flatnonzero(best > target) if jobs[i].toward is not None]
@@ -254,8 +257,7 @@ def _greedy_probe(
     genes = np.zeros((len(probe), ctx.settings.manhattan_order, ctx.world.robot.dof))
     for a, i in enumerate(probe):
         genes[a, 0] = np.asarray(jobs[i].toward) - q[i]
-    key = next(iter(jobs[0].mode))
-    paths = ctx.manhattan(q[probe], genes, **{key: np.array([jobs[i].pose for i in probe])})
+    paths = ctx.manhattan(q[probe], genes, **{key: poses[probe]})
     ctx.counters.evaluations += len(probe)
     for a, i in enumerate(probe):
         value = float(jobs[i].objective(paths.final[a][None], paths.object_poses[a][None])[0])

@@ -34,9 +34,13 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
+
+if TYPE_CHECKING:
+    from numba.core.decorators import _JITWrapper  # in numba's type stubs only
 
 __all__ = [
     "BACKOFF_RAD",
@@ -61,6 +65,12 @@ _TWO_PI = 2.0 * math.pi
 _AT_START = 1e-12
 
 _jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+# Functions that allocate nothing are compiled without reference counting (numba's ``_nrt`` option):
+# every array they get is borrowed from the caller, and the atomic increments and decrements numba would
+# otherwise emit around each call and view took a tenth of the free intervals' time.
+_leaf: _JITWrapper = numba.njit(  # type: ignore[call-overload]  # numba's stubs leave out its underscored options
+    cache=True, nogil=True, fastmath=False, error_model="numpy", _nrt=False
+)
 # Parallel kernels may be launched from several threads at once (several planners in one process):
 # only a thread-safe layer (TBB or OpenMP) allows it; without one the kernels run on one thread.
 # GNU OpenMP is not fork-safe: start other processes with subprocess (fork + exec) or "spawn".
@@ -121,7 +131,7 @@ class PackedWorld:
     shrunk_starts: np.ndarray  # (parts + 1,) int64, the shrunk object's rings in shrunk_edges
     rounding: float  # distances within this of a threshold are left to the exact test (m)
 
-    @property
+    @functools.cached_property
     def pairs_per_move(self) -> int:
         """Rough count of piece pairs one free interval checks (for splitting huge batches)."""
         n = len(self.lengths)
@@ -140,6 +150,11 @@ class PackedWorld:
         return np.ascontiguousarray(groups, dtype=np.float64)
 
     def arguments(self) -> _WorldArguments:
+        return self._arguments
+
+    @functools.cached_property
+    def _arguments(self) -> _WorldArguments:
+        """Built once: the free intervals are asked for in small batches, thousands of times a plan."""
         return (
             self.base,
             self.lengths,
@@ -172,14 +187,9 @@ class PackedWorld:
 
 
 def _arg(array: np.ndarray) -> np.ndarray:
-    """``array`` as the kernels take it: C-contiguous, writable float64 (numba compiles one version per
-    layout and write flag, so read-only or strided arrays would compile again)."""
-    if (
-        isinstance(array, np.ndarray)
-        and array.dtype == np.float64
-        and array.flags.c_contiguous
-        and array.flags.writeable
-    ):
+    """``array`` as the kernels take it: C-contiguous, aligned, writable float64 (numba compiles one
+    version per layout and write flag, so read-only or strided arrays would compile again)."""
+    if isinstance(array, np.ndarray) and array.dtype == np.float64 and array.flags.carray:
         return array
     return np.array(array, dtype=np.float64, order="C")
 
@@ -187,7 +197,7 @@ def _arg(array: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- scalar pieces
 
 
-@_jit
+@_leaf
 def _bounce(x: float, low: float, high: float) -> float:
     """Fold ``x`` into ``[low, high]`` with a triangular wave of period ``2 (high - low)``."""
     width = high - low
@@ -199,7 +209,7 @@ def _bounce(x: float, low: float, high: float) -> float:
     return min(max(folded, low), high)
 
 
-@_jit
+@_leaf
 def _nearest(phi: float, best: np.ndarray) -> None:
     """Fold a candidate rotation ``phi`` (rad, any turn) into ``(0, 2 pi]`` and keep the nearest
     contact each way: ``best[0]`` the smallest (turning up), ``best[1]`` the largest (turning down)."""
@@ -214,7 +224,7 @@ def _nearest(phi: float, best: np.ndarray) -> None:
         best[1] = phi
 
 
-@_jit
+@_leaf
 def _forward(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, links: np.ndarray) -> tuple[float, float, float]:
     """Forward kinematics of configuration ``q (n,)``: the links as segments ``links (n, 2, 2)``
     (world frame), and the end-effector frame ``(x, y, theta)``."""
@@ -227,7 +237,7 @@ def _forward(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, links: np.nda
     return x, y, phi
 
 
-@_jit
+@_leaf
 def _point_segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
     abx, aby = bx - ax, by - ay
     apx, apy = px - ax, py - ay
@@ -238,7 +248,7 @@ def _point_segment_distance(px: float, py: float, ax: float, ay: float, bx: floa
     return math.sqrt(dx * dx + dy * dy)
 
 
-@_jit
+@_leaf
 def _point_meets_stadium(
     px: float,
     py: float,
@@ -294,7 +304,7 @@ def _point_meets_stadium(
                     _nearest(turn * (base - beta), best)
 
 
-@_jit
+@_leaf
 def _pair(
     moving: np.ndarray,
     m: np.ndarray,
@@ -318,7 +328,7 @@ def _pair(
     _point_meets_stadium(dx, dy, rd, ax, ay, bx, by, ra, rb, m[i, 0], m[i, 1], keep, margin, -1.0, best)
 
 
-@_jit
+@_leaf
 def _annulus_of(segments: np.ndarray, radii: np.ndarray, c: int) -> None:
     """Segment ``c`` of ``segments`` (relative to the origin): ``radii[c]`` is its nearest and farthest
     distance from the origin, and its end points' distances."""
@@ -330,7 +340,7 @@ def _annulus_of(segments: np.ndarray, radii: np.ndarray, c: int) -> None:
     radii[c, 3] = rb
 
 
-@_jit
+@_leaf
 def _annulus(segments: np.ndarray, radii: np.ndarray) -> None:
     """For each segment ``(C, 2, 2)`` relative to the origin, ``radii (C, 4)``: its nearest and farthest
     distance from the origin, and its end points' distances."""
@@ -338,10 +348,12 @@ def _annulus(segments: np.ndarray, radii: np.ndarray) -> None:
         _annulus_of(segments, radii, c)
 
 
-@_jit
+@_leaf
 def _pieces(
     moving: np.ndarray,
     m_radii: np.ndarray,
+    m_first: int,
+    m_last: int,
     static: np.ndarray,
     s_radii: np.ndarray,
     s_first: int,
@@ -350,10 +362,12 @@ def _pieces(
     margin: float,
     best: np.ndarray,
 ) -> None:
-    """Every moving piece against static pieces ``s_first .. s_last - 1``, kept ``keep`` apart.
-    A pair whose annuli about the pivot (grown by the clearance) do not overlap cannot meet."""
+    """Moving pieces ``m_first .. m_last - 1`` against static pieces ``s_first .. s_last - 1``, kept
+    ``keep`` apart. A pair whose annuli about the pivot (grown by the clearance) do not overlap cannot
+    meet. (Ranges, not slices: a slice is an array object whose reference count every call would
+    touch, a cost comparable to the test itself.)"""
     reach = keep + margin
-    for i in range(moving.shape[0]):
+    for i in range(m_first, m_last):
         low, high = m_radii[i, 0] - reach, m_radii[i, 1] + reach
         for s in range(s_first, s_last):
             if s_radii[s, 1] < low or s_radii[s, 0] > high:
@@ -361,7 +375,7 @@ def _pieces(
             _pair(moving, m_radii, i, static, s_radii, s, keep, margin, best)
 
 
-@_jit
+@_leaf
 def _place(edges: np.ndarray, x: float, y: float, theta: float, px: float, py: float, out: np.ndarray) -> None:
     """``edges`` (object frame) at pose ``(x, y, theta)``, relative to the pivot ``p``, into ``out``."""
     c, s = math.cos(theta), math.sin(theta)
@@ -372,7 +386,7 @@ def _place(edges: np.ndarray, x: float, y: float, theta: float, px: float, py: f
             out[e, v, 1] = y + s * ex + c * ey - py
 
 
-@_jit
+@_leaf
 def _bound_crossings(
     px: float, py: float, rx: float, ry: float, inset: float, margin: float, bounds: np.ndarray, best: np.ndarray
 ) -> None:
@@ -408,7 +422,7 @@ def _bound_crossings(
 # --------------------------------------------------------------------------- one free interval
 
 
-@_jit
+@_leaf
 def _place_obstacles(
     obstacles: np.ndarray,
     groups: np.ndarray,
@@ -437,7 +451,7 @@ def _place_obstacles(
             _annulus_of(obstacle_rel, obstacle_radii, e)
 
 
-@_jit
+@_leaf
 def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair kind, commented step by step
     q: np.ndarray,
     joint: int,
@@ -490,29 +504,19 @@ def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair k
     _place(shrunk_edges, ox, oy, otheta, px, py, shrunk_rel)
     _annulus(shrunk_rel, shrunk_radii)
     best[0], best[1] = math.inf, -math.inf
-    moving_links = links[joint:]
-    moving_radii = link_radii[joint:]
     n_obstacles = obstacles.shape[0]
-    _pieces(moving_links, moving_radii, obstacle_rel, obstacle_radii, 0, n_obstacles, r, margin, best)
+    _pieces(links, link_radii, joint, n, obstacle_rel, obstacle_radii, 0, n_obstacles, r, margin, best)
     if self_collision:
         for i in range(joint, n):
             if i - 2 >= 0:
-                _pieces(
-                    links[i : i + 1],
-                    link_radii[i : i + 1],
-                    links,
-                    link_radii,
-                    0,
-                    min(joint, i - 1),
-                    2.0 * r,
-                    margin,
-                    best,
-                )
+                _pieces(links, link_radii, i, i + 1, links, link_radii, 0, min(joint, i - 1), 2.0 * r, margin, best)
     if transfer:
-        _pieces(object_rel, object_radii, obstacle_rel, obstacle_radii, 0, n_obstacles, 0.0, margin, best)
-        _pieces(shrunk_rel, shrunk_radii, links, link_radii, 0, joint, 0.0, margin, best)
+        n_object = object_rel.shape[0]
+        _pieces(object_rel, object_radii, 0, n_object, obstacle_rel, obstacle_radii, 0, n_obstacles, 0.0, margin, best)
+        _pieces(shrunk_rel, shrunk_radii, 0, shrunk_rel.shape[0], links, link_radii, 0, joint, 0.0, margin, best)
     else:
-        _pieces(moving_links, moving_radii, shrunk_rel, shrunk_radii, 0, shrunk_rel.shape[0], 0.0, margin, best)
+        n_shrunk = shrunk_rel.shape[0]
+        _pieces(links, link_radii, joint, n, shrunk_rel, shrunk_radii, 0, n_shrunk, 0.0, margin, best)
     # the moving joints (inset r) and the carried object's vertices (inset 0) stay inside the bounds
     for i in range(joint, n):
         _bound_crossings(px, py, links[i, 1, 0], links[i, 1, 1], r, margin, bounds, best)
@@ -544,7 +548,7 @@ def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple[np
 # --------------------------------------------------------------------------- batches
 
 
-@_jit
+@_leaf
 def _decode_one(
     b: int,
     waypoints: np.ndarray,
@@ -723,12 +727,12 @@ def _intervals(
     object_edges: np.ndarray,
     shrunk_edges: np.ndarray,
 ) -> None:
-    """Free intervals ``out (B, 2)`` of ``joint`` for configurations ``q (B, n)``; ``poses`` is ``(B, 3)``
-    or one pose ``(1, 3)`` for all."""
+    """Free intervals ``out[0]`` (low) and ``out[1]`` (high), ``(2, B)``, of ``joint`` for configurations
+    ``q (B, n)``; ``poses`` is ``(B, 3)`` or one pose ``(1, 3)`` for all."""
     scratch = _scratch(lengths.shape[0], obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
     shared = poses.shape[0] == 1
     for b in range(q.shape[0]):
-        out[b, 0], out[b, 1] = _interval(
+        out[0, b], out[1, b] = _interval(
             q[b],
             joint,
             transfer,
@@ -749,7 +753,7 @@ def _intervals(
         )
 
 
-@_jit
+@_leaf
 def _bounce_all(x: np.ndarray, low: np.ndarray, high: np.ndarray, out: np.ndarray) -> None:
     for i in range(x.shape[0]):
         out[i] = _bounce(x[i], low[i], high[i])
@@ -758,7 +762,7 @@ def _bounce_all(x: np.ndarray, low: np.ndarray, high: np.ndarray, out: np.ndarra
 # --------------------------------------------------------------------------- validity
 
 
-@_jit
+@_leaf
 def _crosses(ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float) -> bool:
     """Whether segments ``[a, b]`` and ``[c, d]`` cross at a point inside both (orientations differ)."""
     o1 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
@@ -768,7 +772,7 @@ def _crosses(ax: float, ay: float, bx: float, by: float, cx: float, cy: float, d
     return o1 * o2 < 0.0 and o3 * o4 < 0.0
 
 
-@_jit
+@_leaf
 def _segments_apart(
     ax: float, ay: float, bx: float, by: float, cx: float, cy: float, dx: float, dy: float, gap: float
 ) -> bool:
@@ -783,7 +787,7 @@ def _segments_apart(
     )
 
 
-@_jit
+@_leaf
 def _inside_ring(px: float, py: float, edges: np.ndarray, first: int, last: int) -> bool:
     """Point in the polygon bounded by ``edges[first:last]`` (crossing number; the point must not be
     on the boundary, which the callers have ruled out)."""
@@ -795,7 +799,7 @@ def _inside_ring(px: float, py: float, edges: np.ndarray, first: int, last: int)
     return inside
 
 
-@_jit
+@_leaf
 def _segment_clear_of_ring(
     ax: float, ay: float, bx: float, by: float, edges: np.ndarray, first: int, last: int, gap: float
 ) -> bool:
@@ -1088,12 +1092,15 @@ def intervals(
     world: PackedWorld, q: np.ndarray, joint: int, transfer: bool, poses: np.ndarray, margin: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Compiled: free intervals ``(low, high)`` of ``joint`` for configurations ``q (B, n)``."""
-    q = _arg(np.atleast_2d(q))
-    out = np.empty((len(q), 2))
-    poses = np.asarray(poses, dtype=np.float64)
-    rows = _arg(poses) if poses.shape == (1, 3) else _poses(poses, len(q))  # one pose for all: no copies
+    # the planner asks for a few dozen intervals at a time: this wrapper is kept to the checks it needs
+    q = _arg(q)
+    if q.ndim == 1:
+        q = q[None]
+    out = np.empty((2, len(q)))
+    poses = _arg(poses)
+    rows = poses if poses.shape == (1, 3) else _poses(poses, len(q))  # one pose for all: no copies
     _intervals(q, int(joint), transfer, rows, float(margin), out, *world.arguments())
-    return out[:, 0], out[:, 1]
+    return out[0], out[1]
 
 
 def clearly_valid(world: PackedWorld, q: np.ndarray, poses: np.ndarray) -> np.ndarray:

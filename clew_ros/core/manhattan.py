@@ -81,7 +81,9 @@ def free_intervals(
     ``dmin <= 0 <= dmax``. ``should_stop`` is asked between chunks of huge
     batches; once it says so the remaining intervals are empty (``[0, 0]``).
     """
-    q = np.atleast_2d(q)
+    q = np.asarray(q)
+    if q.ndim == 1:
+        q = q[None]
     transfer, poses = _mode(object_poses, grasp_rel)
     packed = packed_world(world)
     step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)

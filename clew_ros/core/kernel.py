@@ -27,6 +27,10 @@ and a bound. Moving joints and,
 in transfer, the object's vertices stay inside the bounds (inset ``r`` and
 0, plus the margin). The nearest contact each way, the joint limits and
 ``2 pi`` bound the interval, backed off by :data:`BACKOFF_RAD`.
+
+Only the nearest contact each way matters: a contact that a cheap pseudo-angle
+places between the nearest ones found so far is skipped before its ``atan2``
+(:func:`_cannot_improve`), which leaves every interval bit for bit the same.
 """
 
 from __future__ import annotations
@@ -63,6 +67,9 @@ BACKOFF_RAD = 1e-6
 _TWO_PI = 2.0 * math.pi
 #: A contact closer than this to the current angle (rad) is where the start touches, not a crossing.
 _AT_START = 1e-12
+#: :func:`_cannot_improve` skips a contact only if it is this much (rad) past both nearest contacts:
+#: far more than the rounding of the two ways of computing its angle, so the interval is unchanged.
+_PRUNE_MARGIN = 1e-9
 
 _jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
 # Functions that allocate nothing are compiled without reference counting (numba's ``_nrt`` option):
@@ -212,16 +219,47 @@ def _bounce(x: float, low: float, high: float) -> float:
 @_leaf
 def _nearest(phi: float, best: np.ndarray) -> None:
     """Fold a candidate rotation ``phi`` (rad, any turn) into ``(0, 2 pi]`` and keep the nearest
-    contact each way: ``best[0]`` the smallest (turning up), ``best[1]`` the largest (turning down)."""
+    contact each way: ``best[0]`` the smallest (turning up), ``best[1]`` the largest (turning down);
+    ``best[2:4]`` follow them as :func:`_pseudo_angle` bounds for :func:`_cannot_improve`."""
     if phi != phi:  # noqa: PLR0124 - NaN, as the compiled kernel has always tested it
         return
     phi -= _TWO_PI * math.floor(phi / _TWO_PI)
     if phi < _AT_START:
         return
-    if phi < best[0]:  # noqa: PLR1730 - the kernel's float code stays as written (same seed, same plan)
+    if phi < best[0]:
         best[0] = phi
-    if phi > best[1]:  # noqa: PLR1730
+        bound = phi + _PRUNE_MARGIN
+        best[2] = _pseudo_angle(math.cos(bound), math.sin(bound)) if bound < _TWO_PI else 4.0
+    if phi > best[1]:
         best[1] = phi
+        bound = phi - _PRUNE_MARGIN
+        best[3] = _pseudo_angle(math.cos(bound), math.sin(bound)) if bound > 0.0 else 0.0
+
+
+@_leaf
+def _reset(best: np.ndarray) -> None:
+    """No contact yet: nothing can be pruned (:func:`_cannot_improve`)."""
+    best[0], best[1], best[2], best[3] = math.inf, -math.inf, 4.0, 0.0
+
+
+@_leaf
+def _pseudo_angle(x: float, y: float) -> float:
+    """A number in ``[0, 4)`` that grows with the angle of ``(x, y)`` over ``[0, 2 pi)``, without a
+    transcendental function (the "diamond angle"); NaN for the zero vector."""
+    if y >= 0.0:
+        return y / (x + y) if x >= 0.0 else 1.0 - x / (y - x)
+    return 2.0 - y / (-x - y) if x < 0.0 else 3.0 + x / (x - y)
+
+
+@_leaf
+def _cannot_improve(cos_rel: float, sin_rel: float, best: np.ndarray) -> bool:
+    """Whether a contact at direction ``(cos_rel, sin_rel)`` (any scale) from the start, taken the way
+    the joint turns, lies strictly between the nearest contacts found each way, with
+    :data:`_PRUNE_MARGIN` to spare: :func:`_nearest` would keep neither bound, so its exact angle
+    (an ``atan2``, the kernel's costliest step) need not be computed. In doubt (near a bound, NaN),
+    False: the exact test decides, and the interval is the same number either way."""
+    p = _pseudo_angle(cos_rel, sin_rel)
+    return bool(best[2] < p < best[3])
 
 
 @_leaf
@@ -246,6 +284,24 @@ def _point_segment_distance(px: float, py: float, ax: float, ay: float, bx: floa
     t = min(max(t, 0.0), 1.0)
     dx, dy = apx - t * abx, apy - t * aby
     return math.sqrt(dx * dx + dy * dy)
+
+
+@_leaf
+def _known(angle: float, x: float, y: float) -> float:
+    """``angle`` if computed already, else (NaN) ``atan2(y, x)``."""
+    return math.atan2(y, x) if angle != angle else angle  # noqa: PLR0124 - NaN: not computed yet
+
+
+@_leaf
+def _contact(px: float, py: float, cx: float, cy: float, start: float, turn: float, best: np.ndarray) -> float:
+    """Point ``p`` (angle ``start``, NaN until computed) turned by ``turn`` times the angle to ``c``
+    meets a stadium: a candidate for :func:`_nearest`, unless :func:`_cannot_improve`. Returns
+    ``start``, computed if it was needed."""
+    if _cannot_improve(px * cx + py * cy, turn * (px * cy - py * cx), best):
+        return start
+    start = _known(start, px, py)
+    _nearest(turn * (math.atan2(cy, cx) - start), best)
+    return start
 
 
 @_leaf
@@ -275,7 +331,7 @@ def _point_meets_stadium(
         return  # the point's circle misses the stadium's annulus about the pivot
     if _point_segment_distance(px, py, ax, ay, bx, by) > keep + 1.5 * margin:
         keep += margin
-    start = math.atan2(py, px)
+    start = math.nan  # the point's own angle, computed when a contact needs it
     rho2 = rho * rho
     dx, dy = bx - ax, by - ay
     length2 = dx * dx + dy * dy
@@ -291,7 +347,7 @@ def _point_meets_stadium(
                 for sign in (1.0, -1.0):
                     t = (-ad + sign * root) / length2
                     if 0.0 <= t <= 1.0:
-                        _nearest(turn * (math.atan2(ly + t * dy, lx + t * dx) - start), best)
+                        start = _contact(px, py, lx + t * dx, ly + t * dy, start, turn, best)
     if keep > 0.0:
         for ex, ey, e in ((ax, ay, ra), (bx, by, rb)):  # the two end circles
             denominator = 2.0 * rho * e
@@ -299,6 +355,7 @@ def _point_meets_stadium(
                 cos_beta = (rho2 + e * e - keep * keep) / denominator
                 if abs(cos_beta) <= 1.0:
                     beta = math.acos(cos_beta)
+                    start = _known(start, px, py)
                     base = math.atan2(ey, ex) - start
                     _nearest(turn * (base + beta), best)
                     _nearest(turn * (base - beta), best)
@@ -503,7 +560,7 @@ def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair k
     _place_obstacles(obstacles, groups, px, py, horizon + _BROAD_PHASE_SLACK, obstacle_rel, obstacle_radii)
     _place(shrunk_edges, ox, oy, otheta, px, py, shrunk_rel)
     _annulus(shrunk_rel, shrunk_radii)
-    best[0], best[1] = math.inf, -math.inf
+    _reset(best)
     n_obstacles = obstacles.shape[0]
     _pieces(links, link_radii, joint, n, obstacle_rel, obstacle_radii, 0, n_obstacles, r, margin, best)
     if self_collision:
@@ -541,7 +598,7 @@ def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple[np
         np.empty((n_object, 4)),
         np.empty((n_shrunk, 2, 2)),
         np.empty((n_shrunk, 4)),
-        np.empty(2),
+        np.empty(4),
     )
 
 

@@ -139,6 +139,42 @@ def test_the_broad_phase_never_changes_an_interval(seed, transfer):
     assert skipped > 0
 
 
+def test_a_contact_is_skipped_only_if_it_would_change_neither_nearest_contact():
+    """The free intervals skip the exact angle of a contact that lies between the nearest contacts
+    found each way (:func:`kernel._cannot_improve`): the pseudo-angle it compares grows with the angle,
+    and a skipped contact, had it been kept, leaves both nearest contacts as they were; contacts next to
+    a bound (within rounding of it) are never skipped."""
+    from clew_ros.core.kernel import _cannot_improve, _nearest, _pseudo_angle, _reset
+
+    angles = np.linspace(0.0, 2.0 * np.pi, 4001)[:-1]
+    pseudo = np.array([_pseudo_angle(np.cos(a), np.sin(a)) for a in angles])
+    assert np.all(np.diff(pseudo) > 0.0)
+    assert pseudo[0] >= 0.0
+    assert pseudo[-1] < 4.0
+
+    rng = np.random.default_rng(5)
+    best, kept = np.empty(4), np.empty(4)
+    skipped = 0
+    for _ in range(3000):
+        _reset(best)
+        for phi in rng.uniform(-7.0, 7.0, rng.integers(0, 4)):
+            _nearest(phi, best)
+        near = best[:2][np.isfinite(best[:2])]
+        candidates = np.concatenate(
+            [rng.uniform(-7.0, 7.0, 8), (near + rng.choice([-1e-10, 0.0, 1e-10], (3, len(near)))).ravel()]
+        )
+        for phi in candidates:
+            scale = rng.uniform(0.1, 3.0)
+            if _cannot_improve(scale * np.cos(phi), scale * np.sin(phi), best):
+                skipped += 1
+                kept[:] = best
+                _nearest(phi, kept)
+                assert kept[0] == best[0], (phi, best)
+                assert kept[1] == best[1], (phi, best)
+                assert np.all(np.abs(phi - near[:, None] - 2.0 * np.pi * np.arange(-2, 3)) > 1e-9)
+    assert skipped > 1000
+
+
 @pytest.mark.parametrize("case", CASES[:4], ids=[f"seed{c[0]}" for c in CASES[:4]])
 def test_the_clearance_is_kept_along_every_interval(case):
     """With clearance ``m`` every angle of the interval is valid for the arm widened by ``m`` (half on

@@ -82,8 +82,8 @@ def free_intervals(
     batches; once it says so the remaining intervals are empty (``[0, 0]``).
     """
     q = np.asarray(q)
-    if q.ndim == 1:
-        q = q[None]
+    if q.ndim < 2:  # one configuration (or one joint's angle): a batch of one, as np.atleast_2d
+        q = q.reshape(1, -1)
     transfer, poses = _mode(object_poses, grasp_rel)
     packed = packed_world(world)
     step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)

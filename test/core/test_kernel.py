@@ -144,7 +144,7 @@ def test_a_contact_is_skipped_only_if_it_would_change_neither_nearest_contact():
     found each way (:func:`kernel._cannot_improve`): the pseudo-angle it compares grows with the angle,
     and a skipped contact, had it been kept, leaves both nearest contacts as they were; contacts next to
     a bound (within rounding of it) are never skipped."""
-    from clew_ros.core.kernel import _cannot_improve, _nearest, _pseudo_angle, _reset
+    from clew_ros.core.kernel import _cannot_improve, _contact, _nearest, _pseudo_angle, _reset
 
     angles = np.linspace(0.0, 2.0 * np.pi, 4001)[:-1]
     pseudo = np.array([_pseudo_angle(np.cos(a), np.sin(a)) for a in angles])
@@ -173,6 +173,21 @@ def test_a_contact_is_skipped_only_if_it_would_change_neither_nearest_contact():
                 assert kept[1] == best[1], (phi, best)
                 assert np.all(np.abs(phi - near[:, None] - 2.0 * np.pi * np.arange(-2, 3)) > 1e-9)
     assert skipped > 1000
+    # through the kernel's own path: a contact at c seen from a point p (dot and cross, the turn's sign)
+    for _ in range(3000):
+        _reset(best)
+        for phi in rng.uniform(-7.0, 7.0, rng.integers(1, 4)):
+            _nearest(phi, best)
+        theta, turn = rng.uniform(-np.pi, np.pi), rng.choice([-1.0, 1.0])
+        near = best[:2][np.isfinite(best[:2])]
+        for phi in np.concatenate([rng.uniform(-7.0, 7.0, 4), near + rng.choice([-1e-10, 1e-10], len(near))]):
+            p = rng.uniform(0.1, 2.0) * np.array([np.cos(theta), np.sin(theta)])
+            c = rng.uniform(0.1, 2.0) * np.array([np.cos(theta + turn * phi), np.sin(theta + turn * phi)])
+            exact = best.copy()
+            _nearest(turn * (np.arctan2(c[1], c[0]) - np.arctan2(p[1], p[0])), exact)
+            _contact(p[0], p[1], c[0], c[1], np.nan, turn, best)
+            assert best[0] == exact[0], (phi, turn)
+            assert best[1] == exact[1], (phi, turn)
 
 
 @pytest.mark.parametrize("case", CASES[:4], ids=[f"seed{c[0]}" for c in CASES[:4]])

@@ -1,0 +1,181 @@
+"""The compiled kernel at a git revision against this one, interleaved in one process.
+
+``python -m benchmarks.kernel_ab --baseline REV [--worlds figure1,obstacles_32] [--configs N]``
+prints one line per world and mode, then one JSON object.
+
+On this machine the same loop runs up to 1.9x faster or slower from one
+process to the next, so throughput measured in separate processes cannot
+tell a 15 % change from noise. Here both kernels run in one process, taking
+turns: ``REV:clew_ros/core/kernel.py`` is loaded as a module of its own
+(the kernel imports only numpy and numba), the configurations are the same,
+and each figure is the fastest of ``--repeats`` turns in CPU time. For each
+world and mode (transit: object at rest; transfer: held at grasp 0):
+
+* ``b24``: free intervals per second, one joint of 24 configurations per
+  call (``kernel.intervals``), every joint in turn;
+* ``decode24``: intervals per second as a population of 24 decodes its
+  Manhattan paths of order 2 in one call (``kernel.decode``, one thread);
+* ``same``: whether both kernels gave the same numbers, bit for bit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import functools
+import importlib.util
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+from benchmarks.families import all_worlds, select
+from benchmarks.throughput import random_configurations
+from clew_ros.core import kernel
+from clew_ros.core.collision import check_start_and_goal, is_valid, packed_world
+from clew_ros.core.kinematics import compose, tip_poses
+from clew_ros.core.world import World, world_from_parameters
+
+__all__ = ["baseline_kernel", "compare"]
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def baseline_kernel(revision: str, directory: Path) -> ModuleType:
+    """``revision``'s ``clew_ros/core/kernel.py``, loaded as module ``kernel_baseline`` from ``directory``."""
+    source = subprocess.run(
+        ["git", "show", f"{revision}:clew_ros/core/kernel.py"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    path = directory / "kernel_baseline.py"
+    path.write_text(source)
+    spec = importlib.util.spec_from_file_location("kernel_baseline", path)
+    if spec is None or spec.loader is None:
+        raise SystemExit(f"kernel_ab: cannot load {path}")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["kernel_baseline"] = module  # numba's cache locates a function by its module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _timed(work: Callable[[], object], count: int, rates: list[float]) -> None:
+    """Append ``count`` per CPU second of ``work()`` to ``rates``."""
+    started = time.process_time()
+    work()
+    seconds = time.process_time() - started
+    rates.append(count / seconds if seconds > 0 else float("nan"))
+
+
+@dataclasses.dataclass(frozen=True)
+class _Case:
+    """One world and mode: the batches of 24 valid configurations, the object's pose, the genes."""
+
+    n: int
+    batches: list[np.ndarray]
+    transfer: bool
+    poses: np.ndarray  # (1, 3)
+    genes: np.ndarray  # (24, 2, n)
+
+    def intervals(self, module: ModuleType, packed: object) -> list[tuple[np.ndarray, np.ndarray]]:
+        return [
+            module.intervals(packed, b, j, self.transfer, self.poses, 1e-3) for b in self.batches for j in range(self.n)
+        ]
+
+    @property
+    def decoded_batches(self) -> list[np.ndarray]:
+        return self.batches[: max(1, len(self.batches) // 4)]
+
+    def decoded(self, module: ModuleType, packed: object) -> list[np.ndarray]:
+        out = []
+        for b in self.decoded_batches:
+            waypoints = np.empty((24, 2 * self.n + 1, self.n))
+            waypoints[:, 0] = b
+            poses = np.repeat(self.poses, 24, axis=0)
+            module.decode(packed, waypoints, self.genes, 1, 2 * self.n + 1, self.transfer, poses, 1e-3, 1)
+            out.append(waypoints)
+        return out
+
+
+def _same(case: _Case, base: ModuleType, theirs: object, ours: object) -> bool:
+    """Both kernels give the same numbers, bit for bit (this also loads both, untimed)."""
+    pairs = zip(case.intervals(base, theirs), case.intervals(kernel, ours), strict=True)
+    if not all(np.array_equal(x[0], y[0]) and np.array_equal(x[1], y[1]) for x, y in pairs):
+        return False
+    return all(
+        np.array_equal(x, y) for x, y in zip(case.decoded(base, theirs), case.decoded(kernel, ours), strict=True)
+    )
+
+
+def compare(world: World, base: ModuleType, configs: int, repeats: int, seed: int = 0) -> list[dict]:
+    """The figures of the module docstring for ``world``: transit and transfer, baseline and this code."""
+    rng = np.random.default_rng(seed)
+    n = world.robot.dof
+    q = random_configurations(world, configs, rng)
+    pose = np.asarray(world.object.initial, dtype=float)
+    grasp = world.object.grasps[0]
+    grasp_rel = np.array([-grasp[0], -grasp[1], 0.0])
+    ours = packed_world(world)
+    theirs = base.PackedWorld(**{f.name: getattr(ours, f.name) for f in dataclasses.fields(base.PackedWorld)})
+    genes = rng.normal(0.0, 1.2, (24, 2, n))
+    rows = []
+    for mode, transfer, poses in (("transit", False, pose[None]), ("transfer", True, grasp_rel[None])):
+        placed = compose(tip_poses(world.robot, q), grasp_rel[None]) if transfer else poses
+        sample = q[is_valid(world, q, placed)]
+        batches = [np.ascontiguousarray(sample[i : i + 24]) for i in range(0, len(sample) - 23, 24)]
+        case = _Case(n, batches, transfer, poses, genes)
+        same = _same(case, base, theirs, ours)
+        counts = {"b24": len(batches) * 24 * n, "decode24": len(case.decoded_batches) * 24 * 2 * n}
+        works = {"b24": case.intervals, "decode24": case.decoded}
+        rates: dict[str, dict[str, list[float]]] = {k: {"before": [], "after": []} for k in counts}
+        for _turn in range(repeats):
+            for label, module, packed in (("before", base, theirs), ("after", kernel, ours)):
+                for name, work in works.items():
+                    _timed(functools.partial(work, module, packed), counts[name], rates[name][label])
+        row: dict = {"world": world.name, "mode": mode, "configurations": len(batches) * 24, "same": same}
+        for name, runs in rates.items():
+            before, after = max(runs["before"]), max(runs["after"])
+            row[name] = {"before": before, "after": after, "after_over_before": after / before}
+        rows.append(row)
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.kernel_ab", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--baseline", required=True, help="git revision whose kernel is compared with this one")
+    parser.add_argument("--worlds", default="figure1,obstacles_32,joints_10", help="comma-separated benchmark worlds")
+    parser.add_argument("--configs", type=int, default=8000, help="random configurations drawn per world")
+    parser.add_argument("--repeats", type=int, default=7, help="timed turns per kernel (the fastest counts)")
+    args = parser.parse_args(argv)
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="kernel_ab_") as directory:
+        base = baseline_kernel(args.baseline, Path(directory))
+        for name in args.worlds.split(","):
+            matches = select(all_worlds(), name)
+            if len(matches) != 1:
+                raise SystemExit(f"kernel_ab: expected one world named {name!r}, found {len(matches)}")
+            world = check_start_and_goal(world_from_parameters(matches[0].parameters))
+            for row in compare(world, base, args.configs, args.repeats):
+                rows.append(row)
+                print(
+                    f"{row['world']:14s} {row['mode']:8s} same={row['same']!s:5s} "
+                    + "  ".join(
+                        f"{k} {row[k]['before']:,.0f} -> {row[k]['after']:,.0f} /s (x{row[k]['after_over_before']:.2f})"
+                        for k in ("b24", "decode24")
+                    ),
+                    file=sys.stderr,
+                )
+    print(json.dumps({"baseline": args.baseline, "rows": rows}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

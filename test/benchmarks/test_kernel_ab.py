@@ -1,0 +1,25 @@
+"""``benchmarks.kernel_ab`` loads a revision's kernel beside this one and compares them in one process."""
+
+import numpy as np
+
+from benchmarks.families import all_worlds, select
+from benchmarks.kernel_ab import baseline_kernel, compare
+from clew_ros.core.collision import check_start_and_goal
+from clew_ros.core.world import world_from_parameters
+
+
+def test_the_kernel_of_a_revision_runs_beside_this_one_with_the_same_numbers(tmp_path):
+    """HEAD's kernel, loaded from git as a module of its own, gives this code's numbers (transit and
+    transfer, intervals and decoding), and every figure is a positive rate; no speed is asserted."""
+    base = baseline_kernel("HEAD", tmp_path)
+    assert base.__file__ == str(tmp_path / "kernel_baseline.py")
+    world = check_start_and_goal(world_from_parameters(select(all_worlds(), "figure1")[0].parameters))
+    rows = compare(world, base, configs=300, repeats=1)
+    assert [row["mode"] for row in rows] == ["transit", "transfer"]
+    for row in rows:
+        assert row["same"], row
+        assert row["configurations"] >= 24
+        for name in ("b24", "decode24"):
+            assert np.isfinite(row[name]["after_over_before"])
+            assert row[name]["before"] > 0
+            assert row[name]["after"] > 0

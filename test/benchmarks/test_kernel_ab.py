@@ -1,13 +1,24 @@
 """``benchmarks.kernel_ab`` loads a revision's kernel beside this one and compares them in one process."""
 
+import shutil
+import subprocess
+
 import numpy as np
+import pytest
 
 from benchmarks.families import all_worlds, select
-from benchmarks.kernel_ab import baseline_kernel, compare
+from benchmarks.kernel_ab import ROOT, baseline_kernel, compare
 from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.world import world_from_parameters
 
 
+def _in_a_repository() -> bool:
+    if shutil.which("git") is None:
+        return False
+    return subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, check=False).returncode == 0
+
+
+@pytest.mark.skipif(not _in_a_repository(), reason="needs git and a git checkout (the benchmark reads a revision)")
 def test_the_kernel_of_a_revision_runs_beside_this_one_with_the_same_numbers(tmp_path):
     """HEAD's kernel, loaded from git as a module of its own, gives this code's numbers (transit and
     transfer, intervals and decoding), and every figure is a positive rate; no speed is asserted."""

@@ -431,7 +431,7 @@ def _transit_job(
     mode = {"object_poses": object_pose[None]}
     held = holds[objective(holds, None) <= 0.5 * world.grasp_tolerance]  # the transit's own success test
     # the greedy probe heads for the nearest of them (joint travel)
-    toward = held[np.argmin(np.abs(held - q0).sum(axis=1))] if len(held) and GREEDY_PROBE else None
+    toward = held[np.argmin(np.abs(held - q0).sum(axis=1))] if len(held) else None
     if not joins:
         return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, toward=toward)
 

@@ -435,6 +435,7 @@ class _Improver:
                 self.ctx.rng,
                 own=own,
                 releases=hints,
+                finals=self.pieces[-1].waypoints[-1:],
                 two_transfers=transfers + 2 <= score[0],
                 margin_m=self.min_margin,
                 should_stop=self.budget.stop,

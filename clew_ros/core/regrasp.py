@@ -72,6 +72,8 @@ BLOCKED_PENALTY_RAD = 8.0
 #: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
 #: (first joint first), one joint after the other (last joint first). All are as long in joint travel.
 ROUTES = ("straight", "first joint first", "last joint first")
+#: Configurations drawn per placement to seed how each grasp can hold the goal (:func:`_goal_aligned`).
+ALIGNED_DRAWS = 4
 #: Proposals returned at most.
 MAX_PROPOSALS = 24
 
@@ -203,14 +205,21 @@ class _Kinematics:
                 route[group[rows]] = index
         return route
 
-    def holding(self, placements: np.ndarray, grasps: np.ndarray, seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def holding(
+        self, placements: np.ndarray, grasps: np.ndarray, seeds: np.ndarray, tip_angles: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Configurations near ``seeds`` holding ``grasps`` of the object resting at ``placements`` (all
-        ``(B, .)``), and which ones do, validly."""
+        ``(B, .)``), with the tip at ``tip_angles`` ``(B,)`` if given (else any), and which ones do, validly."""
         robot = self.world.robot
         targets = transform_points(placements, self.world.object.grasps)[np.arange(len(grasps)), grasps]
         q = np.array(seeds, dtype=float)
         ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
-        solved, error, steps = solve_point(robot, seeds[ok], targets[ok])
+        if tip_angles is None:
+            solved, error, steps = solve_point(robot, seeds[ok], targets[ok])
+        else:
+            solved, error, steps = solve_point(
+                robot, seeds[ok], targets[ok], angles=tip_angles[ok], angle_tolerance=0.0, angle_scale=1.0
+            )
         self.effort.steps += steps + len(solved)
         q[ok] = solved
         ok[ok] = error <= HOLD_ERROR_M
@@ -296,6 +305,7 @@ class _Start:
     grasps: np.ndarray  # (A,)
     grasp_rel: np.ndarray  # (A, 3)
     route: np.ndarray  # (A,)
+    ends: np.ndarray  # (A, n) a configuration holding the goal with the same approach (NaN: none known)
 
 
 def propose(
@@ -307,6 +317,7 @@ def propose(
     *,
     own: list[tuple[int, np.ndarray]] | None = None,
     releases: np.ndarray | None = None,
+    finals: np.ndarray | None = None,
     two_transfers: bool = True,
     margin_m: float = 0.0,
     should_stop: Callable[[], bool] | None = None,
@@ -315,7 +326,9 @@ def propose(
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
     the object at this placement, tried as they are; ``releases`` ``(m, n)``: configurations where the
-    plan put the object down, tried (and around them) as releases. Ranked by joint travel plus
+    plan put the object down, tried (and around them) as releases; ``finals`` ``(m, n)``: the plan's
+    configurations at the goal, from which :func:`_goal_aligned` finds how each grasp can hold the goal,
+    for grasp configurations here with that approach. Ranked by joint travel plus
     :data:`BLOCKED_PENALTY_RAD` per move that looked blocked.
 
     ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
@@ -324,7 +337,10 @@ def propose(
     Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work done.
     """
     kinematics = _Kinematics(world, margin_m, should_stop, max_checks)
-    begin = _grasps_at_start(kinematics, np.asarray(start, float), np.asarray(placement, float), own or [])
+    start, placement = np.asarray(start, float), np.asarray(placement, float)
+    finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
+    aligned = _goal_aligned(kinematics, start, placement, goal, finals=finals, rng=rng)
+    begin = _grasps_at_start(kinematics, start, placement, own or [], aligned)
     if begin is None:
         return [], kinematics.effort
     proposals = _one_transfer(kinematics, begin, goal)
@@ -336,27 +352,74 @@ def propose(
 
 
 def _grasps_at_start(
-    kinematics: _Kinematics, start: np.ndarray, placement: np.ndarray, own: list[tuple[int, np.ndarray]]
+    kinematics: _Kinematics,
+    start: np.ndarray,
+    placement: np.ndarray,
+    own: list[tuple[int, np.ndarray]],
+    aligned: list[tuple[int, np.ndarray, np.ndarray]],
 ) -> _Start | None:
-    """Every grasp from the start and from its mirror image, and the plan's own grasp configurations."""
+    """Every grasp from the start and from its mirror image, the plan's own grasp configurations, and those
+    aligned with the goal (:func:`_goal_aligned`, with their configuration at the goal)."""
     world = kinematics.world
+    n = len(start)
     grasps = np.repeat(np.arange(len(world.object.grasps)), 2)
     targets = transform_points(placement, world.object.grasps)[grasps]
     seeds = mirrored(world.robot, np.repeat(start[None], len(grasps), axis=0), _direction(world, targets))
     seeds[0::2] = start
     first, ok = kinematics.holding(np.broadcast_to(placement, (len(grasps), 3)), grasps, seeds)
     first, grasps = first[ok], grasps[ok]
-    if own:
-        grasps = np.concatenate([grasps, [g for g, _ in own]]).astype(int)
-        first = np.concatenate([first, np.array([q for _, q in own], dtype=float).reshape(-1, len(start))])
+    extra = [(g, q, np.full(n, np.nan)) for g, q in own] + aligned
+    ends = np.full((len(first), n), np.nan)
+    if extra:
+        grasps = np.concatenate([grasps, [g for g, _, _ in extra]]).astype(int)
+        first = np.concatenate([first, np.array([q for _, q, _ in extra], dtype=float).reshape(-1, n)])
+        ends = np.concatenate([ends, np.array([e for _, _, e in extra], dtype=float).reshape(-1, n)])
     if not len(first):
         return None
     unique = _unique_rows(first)
-    first, grasps = first[unique], grasps[unique]
+    first, grasps, ends = first[unique], grasps[unique], ends[unique]
     grasp_rel = relative(tip_poses(world.robot, first), placement)  # as plan.replay computes it
     starts = np.broadcast_to(start, first.shape)
     route = kinematics.routes(starts, first, resting=np.broadcast_to(placement, (len(first), 3)))
-    return _Start(start, placement, first, grasps, grasp_rel, route)
+    return _Start(start, placement, first, grasps, grasp_rel, route, ends)
+
+
+def _goal_aligned(
+    kinematics: _Kinematics,
+    start: np.ndarray,
+    placement: np.ndarray,
+    goal: np.ndarray,
+    *,
+    finals: np.ndarray,
+    rng: np.random.Generator,
+) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """Grasp configurations ``(grasp, q, at_goal)`` at ``placement`` whose approach is one that holds the object on the
+    goal (a rigid grasp keeps its approach while carried): for each grasp, the goal held from the start,
+    from ``finals`` ``(m, n)`` (the plan's configurations at the goal), from :data:`ALIGNED_DRAWS`
+    configurations drawn within the joint limits and from the mirror images of all these, then
+    the placement held, from the start, with the same angle between tip and object. An arm of two
+    joints holds a placement in at most two ways, both already tried: none for it."""
+    world = kinematics.world
+    robot = world.robot
+    if robot.dof < 3 or kinematics.stop():
+        return []
+    count = len(world.object.grasps)
+    drawn = rng.uniform(robot.joint_lower, robot.joint_upper, size=(ALIGNED_DRAWS, robot.dof))
+    origins = np.vstack([start[None], finals.reshape(-1, robot.dof), drawn])
+    grasps = np.tile(np.arange(count), 2 * len(origins))
+    seeds = np.repeat(origins, count, axis=0)
+    seeds = _with_mirrors(world, seeds, transform_points(goal, world.object.grasps)[grasps[: len(seeds)]])
+    at_goal = np.broadcast_to(goal, (len(grasps), 3))
+    held, ok = kinematics.holding(at_goal, grasps, seeds)
+    grasps, held = grasps[ok], held[ok]
+    unique = _unique_rows(held)
+    grasps, held = grasps[unique], held[unique]
+    if not len(held):
+        return []
+    approach = relative(tip_poses(robot, held), at_goal[: len(held)])[:, 2]  # object angle in the tip's frame
+    here = np.broadcast_to(placement, (len(grasps), 3))
+    first, ok = kinematics.holding(here, grasps, np.repeat(start[None], len(grasps), axis=0), placement[2] - approach)
+    return [(int(g), q, e) for g, q, e in zip(grasps[ok], first[ok], held[ok], strict=True)]
 
 
 def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray) -> list[Proposal]:
@@ -365,6 +428,8 @@ def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray) -> l
     first = begin.first
     seeds = _with_mirrors(world, first, np.broadcast_to(goal[:2], (len(first), 2)))
     rows = np.tile(np.arange(len(first)), 2)
+    known = np.flatnonzero(~np.isnan(begin.ends[:, 0]))  # and the goal configuration an aligned grasp came from
+    seeds, rows = np.concatenate([seeds, begin.ends[known]]), np.concatenate([rows, known])
     ends, ok = kinematics.at_goal(begin.grasp_rel[rows], seeds, goal)
     rows, ends = rows[ok], ends[ok]
     route = kinematics.routes(first[rows], ends, grasp_rel=begin.grasp_rel[rows])

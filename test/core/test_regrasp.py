@@ -84,3 +84,44 @@ def test_a_stop_request_ends_the_proposals_early() -> None:
     )
     assert less.checks < effort.checks
     assert all(len(p.grasps) == 1 for p in cut)  # stopped before the two-transfer search
+
+
+@pytest.mark.parametrize(("family", "seed"), [("shelves", 1), ("arm7", 0), ("clutter", 1)])
+def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_goal(family: str, seed: int) -> None:
+    # a rigid grasp keeps its approach while carried: each grasp configuration at the start comes with a
+    # configuration at the goal, and carrying the object from one to the other puts it on the goal. These
+    # worlds' witnesses carry the object from its start to the goal with one grasp, so some grasp can.
+    from clew_ros.core.regrasp import _goal_aligned, _Kinematics
+    from clew_ros.worlds import generate
+
+    generated = generate(family, seed)
+    world = generated.world()
+    start = np.asarray(world.robot.initial, dtype=float)
+    placement = np.asarray(world.object.initial, dtype=float)
+    goal = np.asarray(world.object.goal, dtype=float)
+    finals = np.asarray(generated.witness.segments[-1].waypoints[-1], dtype=float)[None]
+    aligned = _goal_aligned(
+        _Kinematics(world, 5e-4), start, placement, goal, finals=finals, rng=np.random.default_rng(0)
+    )
+    assert aligned
+    for grasp, hold, at_goal in aligned:
+        point = transform_points(placement, world.object.grasps[grasp][None])[0]
+        assert np.linalg.norm(tip_poses(world.robot, hold[None])[0, :2] - point) <= 1e-9
+        assert is_valid(world, hold[None], placement)[0]
+        grasp_rel = relative(tip_poses(world.robot, hold[None])[0], placement)
+        carried = compose(tip_poses(world.robot, at_goal[None]), grasp_rel)[0]
+        assert np.linalg.norm(carried[:2] - goal[:2]) <= 1e-6
+        assert abs(np.angle(np.exp(1j * (carried[2] - goal[2])))) <= 1e-6
+        assert is_valid(world, at_goal[None], carried)[0]
+
+
+def test_a_two_joint_arm_gets_no_goal_aligned_grasps() -> None:
+    # it holds a placement in at most two ways (the two elbows), which propose tries anyway
+    from clew_ros.core.regrasp import _goal_aligned, _Kinematics
+
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    rng = np.random.default_rng(0)
+    state = rng.bit_generator.state
+    args = (world.robot.initial, np.asarray(world.object.initial, float), np.asarray(world.object.goal, float))
+    assert _goal_aligned(_Kinematics(world, 0.0), *args, finals=np.zeros((0, 2)), rng=rng) == []
+    assert rng.bit_generator.state == state  # nothing drawn: the plans of two-joint arms are as before

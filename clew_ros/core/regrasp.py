@@ -14,7 +14,10 @@ made of straight joint-space moves between key configurations:
 
 Key configurations come from inverse kinematics (:func:`clew_ros.core.inverse.solve_point`) from
 seeds: the configuration before (so a redundant arm moves little) and its mirror image about the
-line from the base to the target (the other elbow), plus the plan's own grasp configurations.
+line from the base to the target (the other elbow), plus the plan's own grasp configurations. A
+rigid grasp keeps its approach (the object's angle in the tip's frame) while carried, so an arm of
+three or more joints also takes each grasp with an approach that can hold the object on the goal
+(:func:`_goal_holds`), at the placement and at releases.
 Release configurations are drawn from the run's generator: along the way from the grasp to where
 the object comes closest to the goal, putting the object down at points drawn around the goal, at
 and around where the plan put it down, and anywhere within the joint limits; then refined around
@@ -72,7 +75,7 @@ BLOCKED_PENALTY_RAD = 8.0
 #: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
 #: (first joint first), one joint after the other (last joint first). All are as long in joint travel.
 ROUTES = ("straight", "first joint first", "last joint first")
-#: Configurations drawn per placement to seed how each grasp can hold the goal (:func:`_goal_aligned`).
+#: Configurations drawn per placement to seed how each grasp can hold the goal (:func:`_goal_holds`).
 ALIGNED_DRAWS = 4
 #: Proposals returned at most.
 MAX_PROPOSALS = 24
@@ -327,8 +330,8 @@ def propose(
     and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
     the object at this placement, tried as they are; ``releases`` ``(m, n)``: configurations where the
     plan put the object down, tried (and around them) as releases; ``finals`` ``(m, n)``: the plan's
-    configurations at the goal, from which :func:`_goal_aligned` finds how each grasp can hold the goal,
-    for grasp configurations here with that approach. Ranked by joint travel plus
+    configurations at the goal, from which :func:`_goal_holds` finds how each grasp can hold the goal,
+    for grasp configurations here and at releases with that approach. Ranked by joint travel plus
     :data:`BLOCKED_PENALTY_RAD` per move that looked blocked.
 
     ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
@@ -339,14 +342,15 @@ def propose(
     kinematics = _Kinematics(world, margin_m, should_stop, max_checks)
     start, placement = np.asarray(start, float), np.asarray(placement, float)
     finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
-    aligned = _goal_aligned(kinematics, start, placement, goal, finals=finals, rng=rng)
+    holds = _goal_holds(kinematics, start, goal, finals=finals, rng=rng)
+    aligned = _aligned_at(kinematics, start, placement, holds)
     begin = _grasps_at_start(kinematics, start, placement, own or [], aligned)
     if begin is None:
         return [], kinematics.effort
     proposals = _one_transfer(kinematics, begin, goal)
     if two_transfers and not kinematics.stop():
         hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
-        proposals += _two_transfers(kinematics, begin, goal, rng, hints)
+        proposals += _two_transfers(kinematics, begin, goal, rng, hints, holds=holds.first_per_grasp())
     proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
     return proposals[:MAX_PROPOSALS], kinematics.effort
 
@@ -359,7 +363,7 @@ def _grasps_at_start(
     aligned: list[tuple[int, np.ndarray, np.ndarray]],
 ) -> _Start | None:
     """Every grasp from the start and from its mirror image, the plan's own grasp configurations, and those
-    aligned with the goal (:func:`_goal_aligned`, with their configuration at the goal)."""
+    aligned with the goal (:func:`_aligned_at`, with their configuration at the goal)."""
     world = kinematics.world
     n = len(start)
     grasps = np.repeat(np.arange(len(world.object.grasps)), 2)
@@ -384,26 +388,34 @@ def _grasps_at_start(
     return _Start(start, placement, first, grasps, grasp_rel, route, ends)
 
 
-def _goal_aligned(
-    kinematics: _Kinematics,
-    start: np.ndarray,
-    placement: np.ndarray,
-    goal: np.ndarray,
-    *,
-    finals: np.ndarray,
-    rng: np.random.Generator,
-) -> list[tuple[int, np.ndarray, np.ndarray]]:
-    """Grasp configurations ``(grasp, q, at_goal)`` at ``placement`` whose approach is one that holds the object on the
-    goal (a rigid grasp keeps its approach while carried): for each grasp, the goal held from the start,
-    from ``finals`` ``(m, n)`` (the plan's configurations at the goal), from :data:`ALIGNED_DRAWS`
-    configurations drawn within the joint limits and from the mirror images of all these, then
-    the placement held, from the start, with the same angle between tip and object. An arm of two
-    joints holds a placement in at most two ways, both already tried: none for it."""
+@dataclass(frozen=True)
+class _GoalHolds:
+    """Ways each grasp can hold the object on the goal: ``at_goal`` ``(H, n)`` holding ``grasps`` ``(H,)``,
+    and ``approach`` ``(H,)``, the object's angle in the tip's frame, which a rigid grasp keeps while
+    carried."""
+
+    grasps: np.ndarray
+    at_goal: np.ndarray
+    approach: np.ndarray
+
+    def first_per_grasp(self) -> _GoalHolds:
+        """The first way of each grasp."""
+        _, first = np.unique(self.grasps, return_index=True)
+        return _GoalHolds(self.grasps[first], self.at_goal[first], self.approach[first])
+
+
+def _goal_holds(
+    kinematics: _Kinematics, start: np.ndarray, goal: np.ndarray, *, finals: np.ndarray, rng: np.random.Generator
+) -> _GoalHolds:
+    """How each grasp can hold the object on the goal, valid with the margin: inverse kinematics from the
+    start, from ``finals`` ``(m, n)`` (the plan's configurations at the goal), from :data:`ALIGNED_DRAWS`
+    configurations drawn within the joint limits and from the mirror images of all these. None for an
+    arm of two joints: it holds a placement in at most two ways (its elbows), which are tried anyway."""
     world = kinematics.world
     robot = world.robot
-    if robot.dof < 3 or kinematics.stop():
-        return []
     count = len(world.object.grasps)
+    if robot.dof < 3 or kinematics.stop():
+        return _GoalHolds(np.zeros(0, dtype=int), np.zeros((0, robot.dof)), np.zeros(0))
     drawn = rng.uniform(robot.joint_lower, robot.joint_upper, size=(ALIGNED_DRAWS, robot.dof))
     origins = np.vstack([start[None], finals.reshape(-1, robot.dof), drawn])
     grasps = np.tile(np.arange(count), 2 * len(origins))
@@ -414,12 +426,22 @@ def _goal_aligned(
     grasps, held = grasps[ok], held[ok]
     unique = _unique_rows(held)
     grasps, held = grasps[unique], held[unique]
-    if not len(held):
+    approach = relative(tip_poses(robot, held), at_goal[: len(held)])[:, 2] if len(held) else np.zeros(0)
+    return _GoalHolds(grasps, held, approach)
+
+
+def _aligned_at(
+    kinematics: _Kinematics, start: np.ndarray, placement: np.ndarray, holds: _GoalHolds
+) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """Grasp configurations ``(grasp, q, at_goal)`` near ``start`` holding the object at ``placement`` with the
+    approach of one of ``holds`` (whose configuration at the goal comes with it): carried rigidly, the
+    object can end on the goal."""
+    if not len(holds.grasps):
         return []
-    approach = relative(tip_poses(robot, held), at_goal[: len(held)])[:, 2]  # object angle in the tip's frame
-    here = np.broadcast_to(placement, (len(grasps), 3))
-    first, ok = kinematics.holding(here, grasps, np.repeat(start[None], len(grasps), axis=0), placement[2] - approach)
-    return [(int(g), q, e) for g, q, e in zip(grasps[ok], first[ok], held[ok], strict=True)]
+    here = np.broadcast_to(placement, (len(holds.grasps), 3))
+    seeds = np.repeat(start[None], len(holds.grasps), axis=0)
+    first, ok = kinematics.holding(here, holds.grasps, seeds, placement[2] - holds.approach)
+    return [(int(g), q, e) for g, q, e in zip(holds.grasps[ok], first[ok], holds.at_goal[ok], strict=True)]
 
 
 def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray) -> list[Proposal]:
@@ -475,11 +497,18 @@ class _Releases:
 
 
 def _continue(
-    kinematics: _Kinematics, begin: _Start, option: np.ndarray, release: np.ndarray, goal: np.ndarray
+    kinematics: _Kinematics,
+    begin: _Start,
+    option: np.ndarray,
+    release: np.ndarray,
+    goal: np.ndarray,
+    *,
+    holds: _GoalHolds,
 ) -> _Releases:
     """For each release configuration ``release`` ``(S, n)`` carried with grasp configuration ``option``:
-    the grasp to take next and the goal configuration after it, the cheapest of the
-    :data:`CONTINUATIONS` shortest once blocked moves count."""
+    the grasp to take next (from the release and its mirror image, and with the approach of each of
+    ``holds``) and the goal configuration after it, the cheapest of the :data:`CONTINUATIONS` shortest
+    once blocked moves count."""
     world = kinematics.world
     n = release.shape[1]
     first, rel = begin.first[option], begin.grasp_rel[option]
@@ -501,10 +530,13 @@ def _continue(
     seeds = _with_mirrors(world, release[rows], targets)
     rows, grasp = np.tile(rows, 2), np.tile(grasp, 2)
     regrasp, ok = kinematics.holding(placement[rows], grasp, seeds)
-    rows, grasp, regrasp = rows[ok], grasp[ok], regrasp[ok]
+    unaligned = (rows[ok], grasp[ok], regrasp[ok], np.full((int(ok.sum()), n), np.nan))
+    rows, grasp, regrasp, ends = _and_aligned(kinematics, placement, release, alive, holds=holds, regrasps=unaligned)
     rel2 = relative(tip_poses(world.robot, regrasp), placement[rows])
     seeds = _with_mirrors(world, regrasp, np.broadcast_to(goal[:2], (len(regrasp), 2)))
     pick = np.tile(np.arange(len(regrasp)), 2)
+    known = np.flatnonzero(~np.isnan(ends[:, 0]))
+    seeds, pick = np.concatenate([seeds, ends[known]]), np.concatenate([pick, known])
     end, ok = kinematics.at_goal(rel2[pick], seeds, goal)
     pick, end = pick[ok], end[ok]
     rows, grasp, regrasp, rel2 = rows[pick], grasp[pick], regrasp[pick], rel2[pick]
@@ -537,6 +569,30 @@ def _continue(
     return found
 
 
+def _and_aligned(
+    kinematics: _Kinematics,
+    placement: np.ndarray,
+    release: np.ndarray,
+    alive: np.ndarray,
+    *,
+    holds: _GoalHolds,
+    regrasps: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``regrasps`` (the release's index, the grasp, its configuration, a goal configuration with the same
+    approach or NaN) and after them the regrasps at the placements ``placement[alive]`` (where releases
+    ``release[alive]`` put the object) with the approach of each of ``holds``, from the release, that
+    hold validly."""
+    if not len(holds.grasps) or not len(alive):
+        return regrasps
+    way = np.tile(np.arange(len(holds.grasps)), len(alive))
+    at = np.repeat(alive, len(holds.grasps))
+    tip_angles = placement[at, 2] - holds.approach[way]
+    aligned, ok = kinematics.holding(placement[at], holds.grasps[way], release[at].copy(), tip_angles)
+    more = (at[ok], holds.grasps[way][ok], aligned[ok], holds.at_goal[way][ok])
+    rows, grasp, regrasp, ends = (np.concatenate(pair) for pair in zip(regrasps, more, strict=True))
+    return rows, grasp, regrasp, ends
+
+
 def _shortest_per_option(option: np.ndarray, rows: np.ndarray, travel: np.ndarray, count: int) -> np.ndarray:
     """The releases (indices) of the ``count`` shortest ways of each grasp configuration: ``travel[k]`` is the
     joint travel of a way through release ``rows[k]``, carried with grasp configuration ``option[rows[k]]``."""
@@ -560,9 +616,16 @@ def _best_distinct(found: _Releases, option: int, keep: int) -> np.ndarray:
 
 
 def _two_transfers(
-    kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng: np.random.Generator, hints: np.ndarray
+    kinematics: _Kinematics,
+    begin: _Start,
+    goal: np.ndarray,
+    rng: np.random.Generator,
+    hints: np.ndarray,
+    *,
+    holds: _GoalHolds,
 ) -> list[Proposal]:
-    """Grasp configurations carried to a release, regrasped there, and carried to the goal."""
+    """Grasp configurations carried to a release, regrasped there (also with the approaches of ``holds``),
+    and carried to the goal."""
     world = kinematics.world
     robot = world.robot
     first = begin.first
@@ -594,7 +657,7 @@ def _two_transfers(
             np.repeat(np.arange(count), len(hinted)),
         ]
     )
-    found = _continue(kinematics, begin, option, release, goal)
+    found = _continue(kinematics, begin, option, release, goal, holds=holds)
     for keep, samples, spread in ROUNDS:
         if kinematics.stop():
             break
@@ -604,7 +667,7 @@ def _two_transfers(
         option = np.repeat(found.option[best], samples)
         centre = np.repeat(found.release[best], samples, axis=0)
         moved = np.clip(centre + rng.normal(0.0, spread, size=centre.shape), robot.joint_lower, robot.joint_upper)
-        found = found.joined(_continue(kinematics, begin, option, moved, goal))
+        found = found.joined(_continue(kinematics, begin, option, moved, goal, holds=holds))
     order = np.argsort(found.score, kind="stable")
     order = order[np.isfinite(found.score[order])][:MAX_PROPOSALS]
     return [

@@ -91,7 +91,7 @@ def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_
     # a rigid grasp keeps its approach while carried: each grasp configuration at the start comes with a
     # configuration at the goal, and carrying the object from one to the other puts it on the goal. These
     # worlds' witnesses carry the object from its start to the goal with one grasp, so some grasp can.
-    from clew_ros.core.regrasp import _goal_aligned, _Kinematics
+    from clew_ros.core.regrasp import _aligned_at, _goal_holds, _Kinematics
     from clew_ros.worlds import generate
 
     generated = generate(family, seed)
@@ -100,9 +100,9 @@ def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_
     placement = np.asarray(world.object.initial, dtype=float)
     goal = np.asarray(world.object.goal, dtype=float)
     finals = np.asarray(generated.witness.segments[-1].waypoints[-1], dtype=float)[None]
-    aligned = _goal_aligned(
-        _Kinematics(world, 5e-4), start, placement, goal, finals=finals, rng=np.random.default_rng(0)
-    )
+    kinematics = _Kinematics(world, 5e-4)
+    holds = _goal_holds(kinematics, start, goal, finals=finals, rng=np.random.default_rng(0))
+    aligned = _aligned_at(kinematics, start, placement, holds)
     assert aligned
     for grasp, hold, at_goal in aligned:
         point = transform_points(placement, world.object.grasps[grasp][None])[0]
@@ -117,11 +117,11 @@ def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_
 
 def test_a_two_joint_arm_gets_no_goal_aligned_grasps() -> None:
     # it holds a placement in at most two ways (the two elbows), which propose tries anyway
-    from clew_ros.core.regrasp import _goal_aligned, _Kinematics
+    from clew_ros.core.regrasp import _goal_holds, _Kinematics
 
     world = load_world(ROOT / "config" / "figure1.yaml")
     rng = np.random.default_rng(0)
     state = rng.bit_generator.state
-    args = (world.robot.initial, np.asarray(world.object.initial, float), np.asarray(world.object.goal, float))
-    assert _goal_aligned(_Kinematics(world, 0.0), *args, finals=np.zeros((0, 2)), rng=rng) == []
+    start, goal = world.robot.initial, np.asarray(world.object.goal, float)
+    assert len(_goal_holds(_Kinematics(world, 0.0), start, goal, finals=np.zeros((0, 2)), rng=rng).grasps) == 0
     assert rng.bit_generator.state == state  # nothing drawn: the plans of two-joint arms are as before

@@ -129,7 +129,7 @@ REFERENCE_COST = 2.125
 TRANSFER_SHARE = 0.5
 #: Share of the budget that rebuilding the manipulation from straight moves may start in.
 REBUILD_SHARE = 0.6
-#: Share of what is left of the rebuilding's budget that one round of proposals may spend on checks.
+#: Share of what is left of the rebuilding's budget one round of proposals may spend (checks, inverse kinematics).
 PROPOSE_SHARE = 0.5
 #: Rebuilding stops after this many passes in a row that found nothing better.
 REBUILD_IDLE_PASSES = 2
@@ -440,6 +440,7 @@ class _Improver:
                 margin_m=self.min_margin,
                 should_stop=self.budget.stop,
                 max_checks=self.proposal_checks(),
+                step_checks=IK_WORK / self.budget.check_work,
             )
             self.budget.spend_checks(effort.checks, effort.calls)
             self.budget.spend(math.ceil(IK_WORK * effort.steps))
@@ -450,8 +451,8 @@ class _Improver:
         return better, False
 
     def proposal_checks(self) -> int:
-        """Configurations :func:`clew_ros.core.regrasp.propose` may check: :data:`PROPOSE_SHARE` of what is
-        left of the rebuilding's share of the budget."""
+        """Configurations :func:`clew_ros.core.regrasp.propose` may check (its inverse-kinematics steps count
+        too): :data:`PROPOSE_SHARE` of what is left of the rebuilding's share of the budget."""
         left = REBUILD_SHARE * self.budget.total - self.budget.spent
         return max(0, int(PROPOSE_SHARE * left / self.budget.check_work))
 

@@ -153,17 +153,21 @@ class _Kinematics:
         margin_m: float,
         should_stop: Callable[[], bool] | None = None,
         max_checks: int | None = None,
+        step_checks: float = 0.0,
     ) -> None:
         self.world = world
         self.packed = dataclasses.replace(packed_world(world), rounding=max(margin_m, packed_world(world).rounding))
         self.effort = Effort()
         self.should_stop = should_stop
         self.max_checks = max_checks
+        self.step_checks = step_checks
 
     @property
     def exhausted(self) -> bool:
-        """Whether the configurations allowed have been checked."""
-        return self.max_checks is not None and self.effort.checks >= self.max_checks
+        """Whether the work allowed is done: configurations checked, and inverse-kinematics steps counted as
+        ``step_checks`` checks each."""
+        done = self.effort.checks + self.step_checks * self.effort.steps
+        return self.max_checks is not None and done >= self.max_checks
 
     def stop(self) -> bool:
         return self.exhausted or (self.should_stop is not None and self.should_stop())
@@ -325,6 +329,7 @@ def propose(
     margin_m: float = 0.0,
     should_stop: Callable[[], bool] | None = None,
     max_checks: int | None = None,
+    step_checks: float = 0.0,
 ) -> tuple[list[Proposal], Effort]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
@@ -336,10 +341,11 @@ def propose(
 
     ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
     milliseconds at most): when it says stop, the proposals found so far are returned; so they are
-    once ``max_checks`` configurations have been checked (moves not checked then count as blocked).
+    once ``max_checks`` configurations have been checked, each inverse-kinematics step (one
+    configuration, one iteration) counting ``step_checks`` (moves not checked then count as blocked).
     Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work done.
     """
-    kinematics = _Kinematics(world, margin_m, should_stop, max_checks)
+    kinematics = _Kinematics(world, margin_m, should_stop, max_checks, step_checks)
     start, placement = np.asarray(start, float), np.asarray(placement, float)
     finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
     holds = _goal_holds(kinematics, start, goal, finals=finals, rng=rng)

@@ -86,6 +86,17 @@ def test_a_stop_request_ends_the_proposals_early() -> None:
     assert all(len(p.grasps) == 1 for p in cut)  # stopped before the two-transfer search
 
 
+def test_inverse_kinematics_counts_against_the_checks_allowed() -> None:
+    # each step counts step_checks checks: with the same allowance, fewer configurations get checked
+    world = load_world(ROOT / "config" / "arm3_regrasp.yaml")
+    goal = np.asarray(world.object.goal, dtype=float)
+    args = (world, world.robot.initial, world.object.initial, goal)
+    _, free = propose(*args, np.random.default_rng(1), max_checks=5000)
+    _, counted = propose(*args, np.random.default_rng(1), max_checks=5000, step_checks=0.5)
+    assert counted.checks + 0.5 * counted.steps < free.checks + 0.5 * free.steps
+    assert counted.checks < free.checks
+
+
 @pytest.mark.parametrize(("family", "seed"), [("shelves", 1), ("arm7", 0), ("clutter", 1)])
 def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_goal(family: str, seed: int) -> None:
     # a rigid grasp keeps its approach while carried: each grasp configuration at the start comes with a

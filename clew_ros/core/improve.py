@@ -145,9 +145,9 @@ BLOCKED_TRIES = 3
 #: Routings by :meth:`_Improver.connect` that may fail before the first success; after that many failures and
 #: none found, proposals with a move that looked blocked are no longer checked (a cluttered world: the budget
 #: is left to the shortcuts).
-CONNECT_PROBES = 2
+CONNECT_PROBES = 1
 #: Share of the budget one :meth:`_Improver.connect` may spend at most, and its rounds at most.
-CONNECT_SHARE, CONNECT_STEPS = 0.04, 120
+CONNECT_SHARE, CONNECT_STEPS = 0.2, 1000
 #: A move whose ends both lie this close (rad, largest joint difference) to those of a move found blocked
 #: in the same mode is taken as blocked too.
 MOVE_ALIKE_RAD = 0.1

@@ -16,8 +16,11 @@ or put down far from where a regrasp was needed. Once a plan is found,
    lists ways to finish with one transfer or two (one regrasp), through any
    grasp, either elbow and release placements drawn around the goal, made
    of straight moves between key configurations found by inverse
-   kinematics. They are ranked by joint travel plus a penalty per move that
-   a quick sampled check found blocked, and checked in that order: each
+   kinematics (on arms of three or more joints also grasps whose approach can
+   hold the object on the goal, a rigid grasp keeping it while carried; a
+   round's inverse kinematics counts against its allowance of checks). They
+   are ranked by joint travel plus a penalty per move that a quick sampled
+   check found blocked, and checked in that order: each
    move continuously (below), straight or one joint after the other (as
    long in joint travel), else through a configuration drawn inside the box
    between its ends (as long too) or around its middle. Proposals with a move

@@ -75,6 +75,8 @@ BLOCKED_PENALTY_RAD = 8.0
 #: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
 #: (first joint first), one joint after the other (last joint first). All are as long in joint travel.
 ROUTES = ("straight", "first joint first", "last joint first")
+#: Configurations closer than this (rad, largest joint difference) count as one.
+UNIQUE_RAD = 1e-6
 #: Configurations drawn per placement to seed how each grasp can hold the goal (:func:`_goal_holds`).
 ALIGNED_DRAWS = 4
 #: Proposals returned at most.
@@ -293,7 +295,7 @@ def _l1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return distance
 
 
-def _unique_rows(q: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:
+def _unique_rows(q: np.ndarray, tolerance: float = UNIQUE_RAD) -> np.ndarray:
     """Indices of the first of each group of rows closer than ``tolerance`` (largest joint difference)."""
     keep: list[int] = []
     for i in range(len(q)):
@@ -312,7 +314,7 @@ class _Start:
     grasps: np.ndarray  # (A,)
     grasp_rel: np.ndarray  # (A, 3)
     route: np.ndarray  # (A,)
-    ends: np.ndarray  # (A, n) a configuration holding the goal with the same approach (NaN: none known)
+    goal_seeds: np.ndarray  # (A, n) a configuration holding the goal with the same approach (NaN: none known)
 
 
 def propose(
@@ -379,19 +381,23 @@ def _grasps_at_start(
     first, ok = kinematics.holding(np.broadcast_to(placement, (len(grasps), 3)), grasps, seeds)
     first, grasps = first[ok], grasps[ok]
     extra = [(g, q, np.full(n, np.nan)) for g, q in own] + aligned
-    ends = np.full((len(first), n), np.nan)
+    goal_seeds = np.full((len(first), n), np.nan)
     if extra:
         grasps = np.concatenate([grasps, [g for g, _, _ in extra]]).astype(int)
         first = np.concatenate([first, np.array([q for _, q, _ in extra], dtype=float).reshape(-1, n)])
-        ends = np.concatenate([ends, np.array([e for _, _, e in extra], dtype=float).reshape(-1, n)])
+        goal_seeds = np.concatenate([goal_seeds, np.array([e for _, _, e in extra], dtype=float).reshape(-1, n)])
     if not len(first):
         return None
     unique = _unique_rows(first)
-    first, grasps, ends = first[unique], grasps[unique], ends[unique]
+    for k in np.flatnonzero(~np.isnan(goal_seeds[:, 0])):  # a row kept for an aligned one takes its goal seed
+        kept = unique[np.max(np.abs(first[unique] - first[k]), axis=1) <= UNIQUE_RAD][0]
+        if np.isnan(goal_seeds[kept, 0]):
+            goal_seeds[kept] = goal_seeds[k]
+    first, grasps, goal_seeds = first[unique], grasps[unique], goal_seeds[unique]
     grasp_rel = relative(tip_poses(world.robot, first), placement)  # as plan.replay computes it
     starts = np.broadcast_to(start, first.shape)
     route = kinematics.routes(starts, first, resting=np.broadcast_to(placement, (len(first), 3)))
-    return _Start(start, placement, first, grasps, grasp_rel, route, ends)
+    return _Start(start, placement, first, grasps, grasp_rel, route, goal_seeds)
 
 
 @dataclass(frozen=True)
@@ -427,12 +433,12 @@ def _goal_holds(
     grasps = np.tile(np.arange(count), 2 * len(origins))
     seeds = np.repeat(origins, count, axis=0)
     seeds = _with_mirrors(world, seeds, transform_points(goal, world.object.grasps)[grasps[: len(seeds)]])
-    at_goal = np.broadcast_to(goal, (len(grasps), 3))
-    held, ok = kinematics.holding(at_goal, grasps, seeds)
+    goals = np.broadcast_to(goal, (len(grasps), 3))
+    held, ok = kinematics.holding(goals, grasps, seeds)
     grasps, held = grasps[ok], held[ok]
     unique = _unique_rows(held)
     grasps, held = grasps[unique], held[unique]
-    approach = relative(tip_poses(robot, held), at_goal[: len(held)])[:, 2] if len(held) else np.zeros(0)
+    approach = relative(tip_poses(robot, held), goals[: len(held)])[:, 2]
     return _GoalHolds(grasps, held, approach)
 
 
@@ -456,8 +462,8 @@ def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray) -> l
     first = begin.first
     seeds = _with_mirrors(world, first, np.broadcast_to(goal[:2], (len(first), 2)))
     rows = np.tile(np.arange(len(first)), 2)
-    known = np.flatnonzero(~np.isnan(begin.ends[:, 0]))  # and the goal configuration an aligned grasp came from
-    seeds, rows = np.concatenate([seeds, begin.ends[known]]), np.concatenate([rows, known])
+    known = np.flatnonzero(~np.isnan(begin.goal_seeds[:, 0]))  # and the goal configuration an aligned grasp came from
+    seeds, rows = np.concatenate([seeds, begin.goal_seeds[known]]), np.concatenate([rows, known])
     ends, ok = kinematics.at_goal(begin.grasp_rel[rows], seeds, goal)
     rows, ends = rows[ok], ends[ok]
     route = kinematics.routes(first[rows], ends, grasp_rel=begin.grasp_rel[rows])
@@ -537,12 +543,14 @@ def _continue(
     rows, grasp = np.tile(rows, 2), np.tile(grasp, 2)
     regrasp, ok = kinematics.holding(placement[rows], grasp, seeds)
     unaligned = (rows[ok], grasp[ok], regrasp[ok], np.full((int(ok.sum()), n), np.nan))
-    rows, grasp, regrasp, ends = _and_aligned(kinematics, placement, release, alive, holds=holds, regrasps=unaligned)
+    rows, grasp, regrasp, goal_seeds = _and_aligned(
+        kinematics, placement, release, alive, holds=holds, regrasps=unaligned
+    )
     rel2 = relative(tip_poses(world.robot, regrasp), placement[rows])
     seeds = _with_mirrors(world, regrasp, np.broadcast_to(goal[:2], (len(regrasp), 2)))
     pick = np.tile(np.arange(len(regrasp)), 2)
-    known = np.flatnonzero(~np.isnan(ends[:, 0]))
-    seeds, pick = np.concatenate([seeds, ends[known]]), np.concatenate([pick, known])
+    known = np.flatnonzero(~np.isnan(goal_seeds[:, 0]))
+    seeds, pick = np.concatenate([seeds, goal_seeds[known]]), np.concatenate([pick, known])
     end, ok = kinematics.at_goal(rel2[pick], seeds, goal)
     pick, end = pick[ok], end[ok]
     rows, grasp, regrasp, rel2 = rows[pick], grasp[pick], regrasp[pick], rel2[pick]
@@ -593,10 +601,10 @@ def _and_aligned(
     way = np.tile(np.arange(len(holds.grasps)), len(alive))
     at = np.repeat(alive, len(holds.grasps))
     tip_angles = placement[at, 2] - holds.approach[way]
-    aligned, ok = kinematics.holding(placement[at], holds.grasps[way], release[at].copy(), tip_angles)
+    aligned, ok = kinematics.holding(placement[at], holds.grasps[way], release[at], tip_angles)
     more = (at[ok], holds.grasps[way][ok], aligned[ok], holds.at_goal[way][ok])
-    rows, grasp, regrasp, ends = (np.concatenate(pair) for pair in zip(regrasps, more, strict=True))
-    return rows, grasp, regrasp, ends
+    rows, grasp, regrasp, goal_seeds = (np.concatenate(pair) for pair in zip(regrasps, more, strict=True))
+    return rows, grasp, regrasp, goal_seeds
 
 
 def _shortest_per_option(option: np.ndarray, rows: np.ndarray, travel: np.ndarray, count: int) -> np.ndarray:

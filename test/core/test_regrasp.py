@@ -135,4 +135,56 @@ def test_a_two_joint_arm_gets_no_goal_aligned_grasps() -> None:
     state = rng.bit_generator.state
     start, goal = world.robot.initial, np.asarray(world.object.goal, float)
     assert len(_goal_holds(_Kinematics(world, 0.0), start, goal, finals=np.zeros((0, 2)), rng=rng).grasps) == 0
-    assert rng.bit_generator.state == state  # nothing drawn: the plans of two-joint arms are as before
+    assert rng.bit_generator.state == state  # nothing drawn: no goal-aligned grasps for two joints
+
+
+def _aligned_setup(family: str, seed: int):
+    from clew_ros.core.regrasp import _aligned_at, _goal_holds, _Kinematics
+    from clew_ros.worlds import generate
+
+    generated = generate(family, seed)
+    world = generated.world()
+    kinematics = _Kinematics(world, 5e-4)
+    start = np.asarray(world.robot.initial, dtype=float)
+    placement = np.asarray(world.object.initial, dtype=float)
+    goal = np.asarray(world.object.goal, dtype=float)
+    finals = np.asarray(generated.witness.segments[-1].waypoints[-1], dtype=float)[None]
+    holds = _goal_holds(kinematics, start, goal, finals=finals, rng=np.random.default_rng(0))
+    return world, kinematics, start, placement, goal, holds, _aligned_at(kinematics, start, placement, holds)
+
+
+def test_an_aligned_grasp_keeps_its_goal_seed_when_the_plan_holds_the_same_configuration() -> None:
+    # the plan's own grasp configurations come first and duplicates are dropped: the row kept must still
+    # seed the goal's inverse kinematics with the aligned grasp's goal configuration
+    from clew_ros.core.regrasp import _grasps_at_start
+
+    _, kinematics, start, placement, _, _, aligned = _aligned_setup("shelves", 1)
+    assert aligned
+    own = [(grasp, hold.copy()) for grasp, hold, _ in aligned]
+    begin = _grasps_at_start(kinematics, start, placement, own, aligned)
+    assert begin is not None
+    for _, hold, at_goal in aligned:
+        row = int(np.argmin(np.max(np.abs(begin.first - hold), axis=1)))
+        assert np.array_equal(begin.first[row], hold)
+        assert np.array_equal(begin.goal_seeds[row], at_goal)
+
+
+def test_regrasps_aligned_at_releases_carry_the_object_onto_the_goal() -> None:
+    from clew_ros.core.regrasp import _and_aligned
+
+    world, kinematics, _, placement, goal, holds, aligned = _aligned_setup("arm7", 0)
+    release = np.array([hold for _, hold, _ in aligned])  # the object resting where it is
+    placements = np.repeat(placement[None], len(release), axis=0)
+    n = world.robot.dof
+    none = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros((0, n)), np.zeros((0, n)))
+    rows, grasps, regrasps, goal_seeds = _and_aligned(
+        kinematics, placements, release, np.arange(len(release)), holds=holds.first_per_grasp(), regrasps=none
+    )
+    assert len(rows) == len(grasps) == len(regrasps) == len(goal_seeds) > 0
+    for row, grasp, hold, at_goal in zip(rows, grasps, regrasps, goal_seeds, strict=True):
+        point = transform_points(placements[row], world.object.grasps[grasp][None])[0]
+        assert np.linalg.norm(tip_poses(world.robot, hold[None])[0, :2] - point) <= 1e-9
+        carried = compose(
+            tip_poses(world.robot, at_goal[None]), relative(tip_poses(world.robot, hold[None])[0], placements[row])
+        )[0]
+        assert np.linalg.norm(carried[:2] - goal[:2]) <= 1e-6

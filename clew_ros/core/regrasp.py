@@ -456,14 +456,21 @@ def _aligned_at(
     return [(int(g), q, e) for g, q, e in zip(holds.grasps[ok], first[ok], holds.at_goal[ok], strict=True)]
 
 
+def _and_goal_seeds(seeds: np.ndarray, rows: np.ndarray, goal_seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``seeds`` for the goal's inverse kinematics of configurations ``rows``, and after them the known goal
+    configurations (rows of ``goal_seeds`` that are not NaN: an aligned grasp's) of the configurations
+    they belong to."""
+    known = np.flatnonzero(~np.isnan(goal_seeds[:, 0]))
+    return np.concatenate([seeds, goal_seeds[known]]), np.concatenate([rows, known])
+
+
 def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray) -> list[Proposal]:
     """Grasp configurations carried straight to the goal."""
     world = kinematics.world
     first = begin.first
     seeds = _with_mirrors(world, first, np.broadcast_to(goal[:2], (len(first), 2)))
     rows = np.tile(np.arange(len(first)), 2)
-    known = np.flatnonzero(~np.isnan(begin.goal_seeds[:, 0]))  # and the goal configuration an aligned grasp came from
-    seeds, rows = np.concatenate([seeds, begin.goal_seeds[known]]), np.concatenate([rows, known])
+    seeds, rows = _and_goal_seeds(seeds, rows, begin.goal_seeds)
     ends, ok = kinematics.at_goal(begin.grasp_rel[rows], seeds, goal)
     rows, ends = rows[ok], ends[ok]
     route = kinematics.routes(first[rows], ends, grasp_rel=begin.grasp_rel[rows])
@@ -549,8 +556,7 @@ def _continue(
     rel2 = relative(tip_poses(world.robot, regrasp), placement[rows])
     seeds = _with_mirrors(world, regrasp, np.broadcast_to(goal[:2], (len(regrasp), 2)))
     pick = np.tile(np.arange(len(regrasp)), 2)
-    known = np.flatnonzero(~np.isnan(goal_seeds[:, 0]))
-    seeds, pick = np.concatenate([seeds, goal_seeds[known]]), np.concatenate([pick, known])
+    seeds, pick = _and_goal_seeds(seeds, pick, goal_seeds)
     end, ok = kinematics.at_goal(rel2[pick], seeds, goal)
     pick, end = pick[ok], end[ok]
     rows, grasp, regrasp, rel2 = rows[pick], grasp[pick], regrasp[pick], rel2[pick]

@@ -60,6 +60,7 @@ __all__ = [
     "search_transfer",
     "search_transit",
     "search_transits",
+    "transfer_probe_target",
 ]
 
 #: One SEARCH_TRANSIT request: start joints ``(n,)``, the resting object's pose ``(3,)``, the grasp's index
@@ -154,6 +155,12 @@ class SearchJob:
 #: Whether SEARCH_TRANSIT first tries one Manhattan path straight to the nearest holding configuration
 #: (:func:`_greedy_probe`) before the GA rounds; ``False`` is the search as the paper has it.
 GREEDY_PROBE = True
+#: Whether SEARCH_TRANSFER's greedy probe heads for the nearest of its goal configurations
+#: (:func:`goal_configurations`); ``False``: transfers start with the GA (as with ``GREEDY_PROBE`` off).
+TRANSFER_PROBE = True
+#: The transfer probe's inverse kinematics draws from a generator seeded with (planner.seed, this, where
+#: the transfer starts): its own stream, as a join's.
+PROBE_STREAM = 17
 
 
 def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.ndarray, float]]:
@@ -521,6 +528,22 @@ def goal_configurations(
     return kept
 
 
+def transfer_probe_target(
+    ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
+) -> np.ndarray | None:
+    """The configuration SEARCH_TRANSFER's greedy probe heads for: the nearest (largest joint move) of
+    :func:`goal_configurations` from ``q0``, drawn from a generator of its own seeded by the planner's seed
+    and the request (the run's stream stays as it was); ``None`` when the probe is off or no configuration
+    holds the object at the goal."""
+    if not (GREEDY_PROBE and TRANSFER_PROBE):
+        return None
+    request = np.frombuffer(np.round(np.r_[q0, grasp_rel], 9).tobytes(), dtype=np.uint32)
+    rng = np.random.default_rng([ctx.settings.seed, PROBE_STREAM, *request.tolist()])
+    margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+    held = goal_configurations(ctx.world, q0, grasp_rel, goal, rng, min_margin=margin)
+    return held[0] if len(held) else None
+
+
 def search_transfer(
     ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
 ) -> PathResult:
@@ -548,7 +571,8 @@ def search_transfer(
         return goal_configurations(world, stalled, mode["grasp_rel"][0], goal, rng, min_margin=margin)
 
     within = JOIN_RADIUS * world.robot.reach
-    job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within)
+    toward = transfer_probe_target(ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
+    job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within, toward)
     [(waypoints, distance)] = local_search(ctx, [job])
 
     def succeeded(path: np.ndarray, reached: float) -> tuple[bool, np.ndarray]:

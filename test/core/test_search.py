@@ -129,3 +129,24 @@ def test_greedy_probe_into_an_obstacle_stops_short_and_stays_valid(world, monkey
         assert is_valid(world, interpolate(path, 0.002), world.object.initial).all()
         short += distance > 1e-3
     assert short  # some probes did meet an obstacle
+
+
+def test_transfer_probe_heads_for_a_configuration_holding_the_object_at_the_goal(world, monkeypatch) -> None:
+    from clew_ros.core import search
+
+    ctx = context(world)
+    transit = search_transit(ctx, world.robot.initial, world.object.initial, grasp=1)
+    assert transit.success
+    q0, goal = transit.waypoints[-1], world.object.goal
+    state = ctx.rng.bit_generator.state
+    toward = search.transfer_probe_target(ctx, q0, transit.grasp_rel, goal)
+    assert ctx.rng.bit_generator.state == state  # drawn from a generator of its own: the run's stream is as it was
+    assert toward is not None
+    pose = compose(tip_poses(world.robot, toward[None]), transit.grasp_rel[None])[0]
+    assert goal_reached(world, pose, goal)
+    assert is_valid(world, toward[None], pose[None]).all()
+    again = search.transfer_probe_target(context(world), q0, transit.grasp_rel, goal)
+    assert again is not None
+    assert np.array_equal(toward, again)  # same request, same target
+    monkeypatch.setattr(search, "TRANSFER_PROBE", False)
+    assert search.transfer_probe_target(ctx, q0, transit.grasp_rel, goal) is None

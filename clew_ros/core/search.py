@@ -10,7 +10,9 @@ arms work alike; configurations that hold a grasp (closed form for two joints,
 sampled for more: :mod:`clew_ros.core.reach`) refuse hopeless transits, for two
 joints steer the elbow, and give SEARCH_TRANSIT's greedy probe a configuration to
 head for before the GA (:func:`_greedy_probe`: one Manhattan path, bounced into
-the free intervals like any other, kept when it gets closer).
+the free intervals like any other, kept when it gets closer); SEARCH_TRANSFER's
+probe heads for the nearest configuration holding the object at the goal
+(:func:`transfer_probe_target`).
 
 A SEARCH_TRANSFER that stalls near the goal (:data:`JOIN_RADIUS`) is joined to
 it (:func:`join_stalled`): configurations that hold the object within the

@@ -290,8 +290,7 @@ def join_stalled(
     stalled = waypoints[-1]
     # a generator of the join's own, seeded by the planner's seed and where the search stalled: a join that
     # fails leaves the run's random stream, and so the rest of the run, as they would have been without it
-    request = np.frombuffer(np.round(np.r_[stalled, job.pose], 9).tobytes(), dtype=np.uint32)
-    rng = np.random.default_rng([ctx.settings.seed, JOIN_STREAM, *request.tolist()])
+    rng = _own_generator(ctx, JOIN_STREAM, stalled, job.pose)
     targets = job.targets(stalled, rng)
     if not len(targets) or ctx.termination():
         return waypoints, distance
@@ -312,6 +311,13 @@ def join_stalled(
         return waypoints, distance
     end = path[-1:]
     return np.vstack([waypoints, path[1:]]), float(job.objective(end, _object_at(ctx, end, job.mode))[0])
+
+
+def _own_generator(ctx: PlanningContext, stream: int, q: np.ndarray, pose: np.ndarray) -> np.random.Generator:
+    """A generator seeded with (planner.seed, ``stream``, the request: configuration ``q`` and ``pose``), for
+    work that must leave the run's random stream as it was (a join, the transfer probe's inverse kinematics)."""
+    request = np.frombuffer(np.round(np.r_[q, pose], 9).tobytes(), dtype=np.uint32)
+    return np.random.default_rng([ctx.settings.seed, stream, *request.tolist()])
 
 
 def _object_at(ctx: PlanningContext, q: np.ndarray, mode: dict[str, np.ndarray]) -> np.ndarray:
@@ -539,8 +545,7 @@ def transfer_probe_target(
     holds the object at the goal."""
     if not (GREEDY_PROBE and TRANSFER_PROBE):
         return None
-    request = np.frombuffer(np.round(np.r_[q0, grasp_rel], 9).tobytes(), dtype=np.uint32)
-    rng = np.random.default_rng([ctx.settings.seed, PROBE_STREAM, *request.tolist()])
+    rng = _own_generator(ctx, PROBE_STREAM, q0, grasp_rel)
     margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
     held = goal_configurations(ctx.world, q0, grasp_rel, goal, rng, min_margin=margin)
     return held[0] if len(held) else None

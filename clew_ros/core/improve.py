@@ -13,7 +13,8 @@ or put down far from where a regrasp was needed. Once a plan is found,
 2. **Rebuilding the manipulation** (at most :data:`REBUILD_SHARE` of the
    budget): from each placement of the plan (the start, then where each
    transfer put the object down), :func:`clew_ros.core.regrasp.propose`
-   lists ways to finish with one transfer or two (one regrasp), through any
+   lists ways to finish with one transfer or, when none of those made the
+   plan better (fewer transfers always win), two (one regrasp), through any
    grasp, either elbow and release placements drawn around the goal, made
    of straight moves between key configurations found by inverse
    kinematics (on arms of three or more joints also grasps whose approach can
@@ -50,6 +51,11 @@ or put down far from where a regrasp was needed. Once a plan is found,
    went back and forth there goes straight). A segment's end points never
    change, so every grasp and ungrasp stays where it was (the tip still
    holds its grasp) and the object rests or is carried exactly as before.
+
+Steps 2 to 4 are one round. Rounds repeat while the last one made the plan
+better and work is left; after the first, the rebuilding may use the whole
+budget (what the shortcuts left: a plan of straight moves leaves them nothing
+to do).
 
 A change is kept only when it lowers ``(transfers, joint travel)`` or keeps
 them and drops waypoints; joint travel is the sum over joints of the
@@ -357,6 +363,7 @@ class _Improver:
         self.rebuilt = 0
         self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
         self.connected = [0, 0]  # routings by connect that failed, that succeeded
+        self.rebuild_share = REBUILD_SHARE  # of the budget, the rebuilding may start in (all of it after a round)
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
@@ -400,7 +407,7 @@ class _Improver:
         """Passes of :meth:`rebuild_pass` while they find better plans (or the share of the budget lasts);
         none after a pass that found nothing and met a placement from which every proposal looked blocked."""
         idle = 0
-        while idle < REBUILD_IDLE_PASSES and self.budget.left(REBUILD_SHARE):
+        while idle < REBUILD_IDLE_PASSES and self.budget.left(self.rebuild_share):
             better, blocked = self.rebuild_pass()
             if blocked and not better:
                 return
@@ -414,7 +421,7 @@ class _Improver:
         the plan got better, and whether such a placement ended the pass."""
         position = 0
         better = False
-        while self.budget.left(REBUILD_SHARE):
+        while self.budget.left(self.rebuild_share):
             cuts = [cut for cut in self.cuts() if cut[0] >= position]
             if not cuts:
                 break
@@ -430,33 +437,39 @@ class _Improver:
             hints = np.array([p.waypoints[-1] for p in after[:-1] if p.kind == "transfer"]).reshape(
                 -1, len(configuration)
             )
-            proposals, effort = propose(
-                self.world,
-                configuration,
-                placement,
-                self.goal,
-                self.ctx.rng,
-                own=own,
-                releases=hints,
-                finals=self.pieces[-1].waypoints[-1:],
-                two_transfers=transfers + 2 <= score[0],
-                margin_m=self.min_margin,
-                should_stop=self.budget.stop,
-                max_checks=self.proposal_checks(),
-                step_checks=IK_WORK / self.budget.check_work,
-            )
-            self.budget.spend_checks(effort.checks, effort.calls)
-            self.budget.spend(math.ceil(IK_WORK * effort.steps))
-            found = self.try_proposals(proposals, kept, placement)
+            found, blocked = False, True
+            for grasps in (1, 2):  # a plan with fewer transfers is better: two only when none with one worked
+                if found or transfers + grasps > score[0] or not self.budget.left(self.rebuild_share):
+                    break
+                proposals, effort = propose(
+                    self.world,
+                    configuration,
+                    placement,
+                    self.goal,
+                    self.ctx.rng,
+                    own=own,
+                    releases=hints,
+                    finals=self.pieces[-1].waypoints[-1:],
+                    one_transfer=grasps == 1,
+                    two_transfers=grasps == 2,
+                    margin_m=self.min_margin,
+                    should_stop=self.budget.stop,
+                    max_checks=self.proposal_checks(),
+                    step_checks=IK_WORK / self.budget.check_work,
+                )
+                self.budget.spend_checks(effort.checks, effort.calls)
+                self.budget.spend(math.ceil(IK_WORK * effort.steps))
+                found = self.try_proposals(proposals, kept, placement)
+                blocked &= bool(proposals) and all(p.blocked for p in proposals)
             better |= found
-            if all(p.blocked for p in proposals) and not found:
+            if blocked and not found:
                 return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts
         return better, False
 
     def proposal_checks(self) -> int:
         """Configurations :func:`clew_ros.core.regrasp.propose` may check (its inverse-kinematics steps count
         too): :data:`PROPOSE_SHARE` of what is left of the rebuilding's share of the budget."""
-        left = REBUILD_SHARE * self.budget.total - self.budget.spent
+        left = self.rebuild_share * self.budget.total - self.budget.spent
         return max(0, int(PROPOSE_SHARE * left / self.budget.check_work))
 
     def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
@@ -484,7 +497,7 @@ class _Improver:
                 if all(failures[k] >= limits[k] for k in failures):
                     break
                 continue
-            if not self.budget.left(REBUILD_SHARE):
+            if not self.budget.left(self.rebuild_share):
                 break
             tail = self.checked_tail(proposal, placement)
             if tail is not None and _better(score, _score(before + tail)):
@@ -708,13 +721,20 @@ class _Improver:
         return True
 
     def run(self) -> list[_Piece]:
+        """Rounds of rebuilding, fewer transfers and shortcuts while work is left and the last round made the
+        plan better (after the first, the rebuilding may use all that is left: the shortcuts had too little to
+        do)."""
         self.prune()
-        self.rebuild()
-        self.fewer_transfers()
-        self.prune()
-        self.greedy_shortcuts()
-        self.random_shortcuts()
-        return self.pieces
+        while True:
+            score = _score(self.pieces)
+            self.rebuild()
+            self.fewer_transfers()
+            self.prune()
+            self.greedy_shortcuts()
+            self.random_shortcuts()
+            if not self.budget.left() or not _better(score, _score(self.pieces)):
+                return self.pieces
+            self.rebuild_share = 1.0
 
 
 def improve(

@@ -14,10 +14,13 @@ made of straight joint-space moves between key configurations:
 
 Key configurations come from inverse kinematics (:func:`clew_ros.core.inverse.solve_point`) from
 seeds: the configuration before (so a redundant arm moves little) and its mirror image about the
-line from the base to the target (the other elbow), plus the plan's own grasp configurations. A
-rigid grasp keeps its approach (the object's angle in the tip's frame) while carried, so an arm of
-three or more joints also takes each grasp with an approach that can hold the object on the goal
-(:func:`_goal_holds`), at the placement and at releases.
+line from the base to the target (the other elbow), plus the plan's own grasp configurations. On
+an arm of three or more joints, the grasp configurations at the placement and at the goal are also
+solved from seeds drawn around each seed (:data:`RESTARTS`), the valid one nearest the seed added:
+a redundant arm's first solution often folds into an obstacle, the object or itself, or lies far
+from where the arm is. A rigid grasp keeps its approach (the object's angle in the tip's frame)
+while carried, so an arm of three or more joints also takes each grasp with an approach that can
+hold the object on the goal (:func:`_goal_holds`), at the placement and at releases.
 Release configurations are drawn from the run's generator: along the way from the grasp to where
 the object comes closest to the goal, putting the object down at points drawn around the goal, at
 and around where the plan put it down, and anywhere within the joint limits; then refined around
@@ -81,6 +84,11 @@ UNIQUE_RAD = 1e-6
 ALIGNED_DRAWS = 4
 #: Proposals returned at most.
 MAX_PROPOSALS = 24
+#: On an arm of three or more joints, inverse kinematics for a placement's grasp configurations and for
+#: the goal's is also solved from this many seeds drawn around each seed (normal, these spreads in rad in
+#: turn), and the valid solution nearest the seed (joint travel) is kept: a redundant arm's first
+#: solution often folds into an obstacle, the object or itself, or lies far from where the arm is.
+RESTARTS, RESTART_SPREADS_RAD = 8, (0.5, 1.0)
 
 
 @dataclass
@@ -235,6 +243,34 @@ class _Kinematics:
         ok[ok] = self.valid(q[ok], placements[ok])
         return q, ok
 
+    def restarted(
+        self,
+        solve: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
+        seeds: np.ndarray,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``solve(rows, seeds)`` (configurations for queries ``rows`` from ``seeds``, and which are valid) for
+        each seed; on an arm of three or more joints also from :data:`RESTARTS` seeds drawn around each, whose
+        valid solution nearest the seed (joint travel) comes as one more row when it is nearer than the
+        seed's own. Returns the query of each row, the configurations and which are valid."""
+        count, n = seeds.shape
+        q, ok = solve(np.arange(count), seeds)
+        if self.world.robot.dof < 3 or not count:
+            return np.arange(count), q, ok
+        spreads = np.resize(np.asarray(RESTART_SPREADS_RAD, dtype=float), RESTARTS)
+        drawn = seeds[None] + spreads[:, None, None] * rng.normal(0.0, 1.0, size=(RESTARTS, count, n))
+        more, fine = solve(np.tile(np.arange(count), RESTARTS), drawn.reshape(-1, n))
+        more, fine = more.reshape(RESTARTS, count, n), fine.reshape(RESTARTS, count)
+        distance = np.where(fine, np.abs(more - seeds[None]).sum(axis=2), np.inf)
+        best = np.argmin(distance, axis=0)
+        rows = np.arange(count)
+        nearer = np.flatnonzero(distance[best, rows] < np.where(ok, np.abs(q - seeds).sum(axis=1), np.inf))
+        return (
+            np.concatenate([rows, nearer]),
+            np.concatenate([q, more[best[nearer], nearer]]),
+            np.concatenate([ok, np.ones(len(nearer), dtype=bool)]),
+        )
+
     def at_goal(self, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Configurations near ``seeds`` putting the object, held as ``grasp_rel``, on the goal, and which do."""
         world = self.world
@@ -327,6 +363,7 @@ def propose(
     own: list[tuple[int, np.ndarray]] | None = None,
     releases: np.ndarray | None = None,
     finals: np.ndarray | None = None,
+    one_transfer: bool = True,
     two_transfers: bool = True,
     margin_m: float = 0.0,
     should_stop: Callable[[], bool] | None = None,
@@ -334,12 +371,13 @@ def propose(
     step_checks: float = 0.0,
 ) -> tuple[list[Proposal], Effort]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
-    and, if ``two_transfers``, two; ``own``: grasp configurations ``(grasp, q)`` of the plan that hold
-    the object at this placement, tried as they are; ``releases`` ``(m, n)``: configurations where the
-    plan put the object down, tried (and around them) as releases; ``finals`` ``(m, n)``: the plan's
-    configurations at the goal, from which :func:`_goal_holds` finds how each grasp can hold the goal,
-    for grasp configurations here and at releases with that approach. Ranked by joint travel plus
-    :data:`BLOCKED_PENALTY_RAD` per move that looked blocked.
+    (if ``one_transfer``) and two (if ``two_transfers``). ``own``: grasp configurations ``(grasp, q)`` of
+    the plan that hold the object at this placement, tried as they are. ``releases`` ``(m, n)``:
+    configurations where the plan put the object down, tried (and around them) as releases. ``finals``
+    ``(m, n)``: the plan's configurations at the goal, from which :func:`_goal_holds` finds how each grasp
+    can hold the goal, for grasp configurations here and at releases with that approach. Ranked by joint
+    travel plus :data:`BLOCKED_PENALTY_RAD` per move that looked blocked; alike ones dropped
+    (:func:`_distinct`).
 
     ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
     milliseconds at most): when it says stop, the proposals found so far are returned; so they are
@@ -352,15 +390,30 @@ def propose(
     finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
     holds = _goal_holds(kinematics, start, goal, finals=finals, rng=rng)
     aligned = _aligned_at(kinematics, start, placement, holds)
-    begin = _grasps_at_start(kinematics, start, placement, own or [], aligned)
+    begin = _grasps_at_start(kinematics, start, placement, own or [], aligned, rng=rng)
     if begin is None:
         return [], kinematics.effort
-    proposals = _one_transfer(kinematics, begin, goal)
+    proposals = _one_transfer(kinematics, begin, goal, rng) if one_transfer else []
     if two_transfers and not kinematics.stop():
         hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
         proposals += _two_transfers(kinematics, begin, goal, rng, hints, holds=holds.first_per_grasp())
     proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
-    return proposals[:MAX_PROPOSALS], kinematics.effort
+    return _distinct(proposals), kinematics.effort
+
+
+def _distinct(proposals: list[Proposal]) -> list[Proposal]:
+    """The first :data:`MAX_PROPOSALS` of ``proposals`` that differ from every one before them: other grasps,
+    or a key configuration more than :data:`DISTINCT_RAD` away (largest joint difference)."""
+    kept: list[Proposal] = []
+    for proposal in proposals:
+        if len(kept) == MAX_PROPOSALS:
+            break
+        if not any(
+            other.grasps == proposal.grasps and float(np.max(np.abs(other.keys - proposal.keys))) <= DISTINCT_RAD
+            for other in kept
+        ):
+            kept.append(proposal)
+    return kept
 
 
 def _grasps_at_start(
@@ -369,6 +422,8 @@ def _grasps_at_start(
     placement: np.ndarray,
     own: list[tuple[int, np.ndarray]],
     aligned: list[tuple[int, np.ndarray, np.ndarray]],
+    *,
+    rng: np.random.Generator,
 ) -> _Start | None:
     """Every grasp from the start and from its mirror image, the plan's own grasp configurations, and those
     aligned with the goal (:func:`_aligned_at`, with their configuration at the goal)."""
@@ -378,8 +433,9 @@ def _grasps_at_start(
     targets = transform_points(placement, world.object.grasps)[grasps]
     seeds = mirrored(world.robot, np.repeat(start[None], len(grasps), axis=0), _direction(world, targets))
     seeds[0::2] = start
-    first, ok = kinematics.holding(np.broadcast_to(placement, (len(grasps), 3)), grasps, seeds)
-    first, grasps = first[ok], grasps[ok]
+    placements = np.broadcast_to(placement, (len(grasps), 3))
+    rows, first, ok = kinematics.restarted(lambda k, q: kinematics.holding(placements[k], grasps[k], q), seeds, rng)
+    first, grasps = first[ok], grasps[rows[ok]]
     extra = [(g, q, np.full(n, np.nan)) for g, q in own] + aligned
     goal_seeds = np.full((len(first), n), np.nan)
     if extra:
@@ -464,15 +520,17 @@ def _and_goal_seeds(seeds: np.ndarray, rows: np.ndarray, goal_seeds: np.ndarray)
     return np.concatenate([seeds, goal_seeds[known]]), np.concatenate([rows, known])
 
 
-def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray) -> list[Proposal]:
+def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng: np.random.Generator) -> list[Proposal]:
     """Grasp configurations carried straight to the goal."""
     world = kinematics.world
     first = begin.first
     seeds = _with_mirrors(world, first, np.broadcast_to(goal[:2], (len(first), 2)))
     rows = np.tile(np.arange(len(first)), 2)
     seeds, rows = _and_goal_seeds(seeds, rows, begin.goal_seeds)
-    ends, ok = kinematics.at_goal(begin.grasp_rel[rows], seeds, goal)
-    rows, ends = rows[ok], ends[ok]
+    queries, ends, ok = kinematics.restarted(
+        lambda k, q: kinematics.at_goal(begin.grasp_rel[rows[k]], q, goal), seeds, rng
+    )
+    rows, ends = rows[queries[ok]], ends[ok]
     route = kinematics.routes(first[rows], ends, grasp_rel=begin.grasp_rel[rows])
     travel = _l1(begin.start, first[rows]) + _l1(first[rows], ends)
     return [

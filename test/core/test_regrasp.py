@@ -11,7 +11,7 @@ import pytest
 
 from clew_ros.core.collision import is_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
-from clew_ros.core.regrasp import ROUTES, propose, route_waypoints
+from clew_ros.core.regrasp import DISTINCT_RAD, ROUTES, propose, route_waypoints
 from clew_ros.core.search import goal_reached
 from clew_ros.core.world import load_world
 
@@ -61,6 +61,26 @@ def test_proposals_hold_their_grasps_end_at_the_goal_and_are_valid(name: str) ->
         assert goal_reached(world, pose, goal)
     ranks = [p.travel + 8.0 * p.blocked for p in proposals]
     assert ranks == sorted(ranks)
+    for k, later in enumerate(proposals):  # no two alike: other grasps, or a key configuration moved
+        for earlier in proposals[:k]:
+            assert earlier.grasps != later.grasps or np.max(np.abs(earlier.keys - later.keys)) > DISTINCT_RAD
+
+
+@pytest.mark.parametrize(("name", "one", "two"), [("single_transfer", True, False), ("arm3_regrasp", False, True)])
+def test_proposals_come_with_the_transfers_asked_for(name: str, one: bool, two: bool) -> None:
+    world = load_world(ROOT / "config" / f"{name}.yaml")
+    goal = np.asarray(world.object.goal, dtype=float)
+    proposals, _ = propose(
+        world,
+        world.robot.initial,
+        world.object.initial,
+        goal,
+        np.random.default_rng(3),
+        one_transfer=one,
+        two_transfers=two,
+    )
+    assert proposals
+    assert {len(p.grasps) for p in proposals} == {1 if one else 2}
 
 
 def test_the_same_generator_gives_the_same_proposals() -> None:
@@ -161,7 +181,7 @@ def test_an_aligned_grasp_keeps_its_goal_seed_when_the_plan_holds_the_same_confi
     _, kinematics, start, placement, _, _, aligned = _aligned_setup("shelves", 1)
     assert aligned
     own = [(grasp, hold.copy()) for grasp, hold, _ in aligned]
-    begin = _grasps_at_start(kinematics, start, placement, own, aligned)
+    begin = _grasps_at_start(kinematics, start, placement, own, aligned, rng=np.random.default_rng(0))
     assert begin is not None
     for _, hold, at_goal in aligned:
         row = int(np.argmin(np.max(np.abs(begin.first - hold), axis=1)))
@@ -188,3 +208,52 @@ def test_regrasps_aligned_at_releases_carry_the_object_onto_the_goal() -> None:
             tip_poses(world.robot, at_goal[None]), relative(tip_poses(world.robot, hold[None])[0], placements[row])
         )[0]
         assert np.linalg.norm(carried[:2] - goal[:2]) <= 1e-6
+
+
+def test_restarts_add_valid_grasp_configurations_nearer_the_seed_on_a_redundant_arm() -> None:
+    # a ten-joint arm's inverse kinematics from its start folds into collisions or ends far away: solutions
+    # from seeds drawn around it are added when valid and nearer
+    from clew_ros.core.regrasp import RESTARTS, _Kinematics
+    from clew_ros.worlds import generate
+
+    world = generate("arm10", 0).world()
+    kinematics = _Kinematics(world, 5e-4)
+    placement = np.asarray(world.object.initial, dtype=float)
+    grasps = np.arange(len(world.object.grasps))
+    seeds = np.repeat(np.asarray(world.robot.initial, dtype=float)[None], len(grasps), axis=0)
+    placements = np.repeat(placement[None], len(grasps), axis=0)
+
+    def holding(rows: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return kinematics.holding(placements[rows], grasps[rows], q)
+
+    own, own_ok = holding(np.arange(len(grasps)), seeds)
+    steps = kinematics.effort.steps
+    rows, solved, ok = kinematics.restarted(holding, seeds, np.random.default_rng(0))
+    assert np.array_equal(rows[: len(grasps)], np.arange(len(grasps)))  # every seed's own solution first
+    assert np.array_equal(solved[: len(grasps)], own)
+    assert np.array_equal(ok[: len(grasps)], own_ok)
+    added = np.arange(len(grasps), len(rows))
+    assert len(added) > 0
+    assert kinematics.effort.steps - steps > RESTARTS * len(grasps)  # the restarts' work is counted
+    for k in added:
+        row = rows[k]
+        assert ok[k]
+        point = transform_points(placement, world.object.grasps[grasps[row]][None])[0]
+        assert np.linalg.norm(tip_poses(world.robot, solved[k][None])[0, :2] - point) <= 1e-9
+        assert is_valid(world, solved[k][None], placement)[0]
+        if own_ok[row]:
+            assert np.abs(solved[k] - seeds[row]).sum() < np.abs(own[row] - seeds[row]).sum()
+
+
+def test_a_two_joint_arm_gets_no_restarts() -> None:
+    from clew_ros.core.regrasp import _Kinematics
+
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    kinematics = _Kinematics(world, 0.0)
+    rng = np.random.default_rng(0)
+    state = rng.bit_generator.state
+    seeds = np.repeat(np.asarray(world.robot.initial, dtype=float)[None], 3, axis=0)
+    placement = np.asarray(world.object.initial, dtype=float)[None].repeat(3, axis=0)
+    rows, _, _ = kinematics.restarted(lambda k, q: kinematics.holding(placement[k], np.arange(3)[k], q), seeds, rng)
+    assert np.array_equal(rows, np.arange(3))
+    assert rng.bit_generator.state == state

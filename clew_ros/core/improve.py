@@ -162,6 +162,8 @@ CONNECT_SHARE, CONNECT_STEPS = 0.2, 1000
 MOVE_ALIKE_RAD = 0.1
 #: A partial shortcut spans at most this many pieces of the path.
 PARTIAL_PIECES = 8
+#: Stream of the generator the proposals' inverse-kinematics restarts draw from (with ``planner.seed``).
+RESTART_STREAM = 19
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
 #: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
@@ -364,6 +366,8 @@ class _Improver:
         self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
         self.connected = [0, 0]  # routings by connect that failed, that succeeded
         self.rebuild_share = REBUILD_SHARE  # of the budget, the rebuilding may start in (all of it after a round)
+        # the inverse kinematics' restarts draw from a generator of their own: the run's stream stays the releases'
+        self.restarts = np.random.default_rng([ctx.settings.seed, RESTART_STREAM])
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
@@ -456,6 +460,7 @@ class _Improver:
                     should_stop=self.budget.stop,
                     max_checks=self.proposal_checks(),
                     step_checks=IK_WORK / self.budget.check_work,
+                    restarts=self.restarts,
                 )
                 self.budget.spend_checks(effort.checks, effort.calls)
                 self.budget.spend(math.ceil(IK_WORK * effort.steps))

@@ -248,12 +248,15 @@ class _Kinematics:
         solve: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
         seeds: np.ndarray,
         rng: np.random.Generator,
+        origins: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``solve(rows, seeds)`` (configurations for queries ``rows`` from ``seeds``, and which are valid) for
         each seed; on an arm of three or more joints also from :data:`RESTARTS` seeds drawn around each, whose
-        valid solution nearest the seed (joint travel) comes as one more row when it is nearer than the
-        seed's own. Returns the query of each row, the configurations and which are valid."""
+        valid solution nearest the query's origin (joint travel; ``origins`` ``(B, n)``, default the seeds)
+        comes as one more row when it is nearer than the seed's own. Returns the query of each row, the
+        configurations and which are valid."""
         count, n = seeds.shape
+        origins = seeds if origins is None else origins
         q, ok = solve(np.arange(count), seeds)
         if self.world.robot.dof < 3 or not count:
             return np.arange(count), q, ok
@@ -261,10 +264,10 @@ class _Kinematics:
         drawn = seeds[None] + spreads[:, None, None] * rng.normal(0.0, 1.0, size=(RESTARTS, count, n))
         more, fine = solve(np.tile(np.arange(count), RESTARTS), drawn.reshape(-1, n))
         more, fine = more.reshape(RESTARTS, count, n), fine.reshape(RESTARTS, count)
-        distance = np.where(fine, np.abs(more - seeds[None]).sum(axis=2), np.inf)
+        distance = np.where(fine, np.abs(more - origins[None]).sum(axis=2), np.inf)
         best = np.argmin(distance, axis=0)
         rows = np.arange(count)
-        nearer = np.flatnonzero(distance[best, rows] < np.where(ok, np.abs(q - seeds).sum(axis=1), np.inf))
+        nearer = np.flatnonzero(distance[best, rows] < np.where(ok, np.abs(q - origins).sum(axis=1), np.inf))
         return (
             np.concatenate([rows, nearer]),
             np.concatenate([q, more[best[nearer], nearer]]),
@@ -351,6 +354,22 @@ class _Start:
     grasp_rel: np.ndarray  # (A, 3)
     route: np.ndarray  # (A,)
     goal_seeds: np.ndarray  # (A, n) a configuration holding the goal with the same approach (NaN: none known)
+    drawn: np.ndarray  # (A,) found by restarts (:meth:`_Kinematics.restarted`)
+
+    def seeded(self) -> _Start:
+        """Without the configurations found by restarts: the two-transfer proposals draw releases for every
+        grasp configuration, so the restarts' would double their work for little (they shorten transits)."""
+        keep = ~self.drawn
+        return _Start(
+            self.start,
+            self.placement,
+            self.first[keep],
+            self.grasps[keep],
+            self.grasp_rel[keep],
+            self.route[keep],
+            self.goal_seeds[keep],
+            self.drawn[keep],
+        )
 
 
 def propose(
@@ -369,6 +388,7 @@ def propose(
     should_stop: Callable[[], bool] | None = None,
     max_checks: int | None = None,
     step_checks: float = 0.0,
+    restarts: np.random.Generator | None = None,
 ) -> tuple[list[Proposal], Effort]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     (if ``one_transfer``) and two (if ``two_transfers``). ``own``: grasp configurations ``(grasp, q)`` of
@@ -383,20 +403,26 @@ def propose(
     milliseconds at most): when it says stop, the proposals found so far are returned; so they are
     once ``max_checks`` configurations have been checked, each inverse-kinematics step (one
     configuration, one iteration) counting ``step_checks`` (moves not checked then count as blocked).
+    ``restarts``: the generator the inverse kinematics' restarts (:data:`RESTARTS`) draw from, default
+    ``rng``; one of its own leaves ``rng``'s stream to the releases.
     Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work done.
     """
     kinematics = _Kinematics(world, margin_m, should_stop, max_checks, step_checks)
+    restarts = rng if restarts is None else restarts
     start, placement = np.asarray(start, float), np.asarray(placement, float)
     finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
     holds = _goal_holds(kinematics, start, goal, finals=finals, rng=rng)
     aligned = _aligned_at(kinematics, start, placement, holds)
-    begin = _grasps_at_start(kinematics, start, placement, own or [], aligned, rng=rng)
+    begin = _grasps_at_start(
+        kinematics, start, placement, own or [], aligned, rng=restarts, own_goal=finals[-1] if len(finals) else None
+    )
     if begin is None:
         return [], kinematics.effort
-    proposals = _one_transfer(kinematics, begin, goal, rng) if one_transfer else []
-    if two_transfers and not kinematics.stop():
+    proposals = _one_transfer(kinematics, begin, goal, restarts) if one_transfer else []
+    seeded = begin.seeded()
+    if two_transfers and len(seeded.first) and not kinematics.stop():
         hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
-        proposals += _two_transfers(kinematics, begin, goal, rng, hints, holds=holds.first_per_grasp())
+        proposals += _two_transfers(kinematics, seeded, goal, rng, hints, holds=holds.first_per_grasp())
     proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
     return _distinct(proposals), kinematics.effort
 
@@ -424,21 +450,19 @@ def _grasps_at_start(
     aligned: list[tuple[int, np.ndarray, np.ndarray]],
     *,
     rng: np.random.Generator,
+    own_goal: np.ndarray | None = None,
 ) -> _Start | None:
-    """Every grasp from the start and from its mirror image, the plan's own grasp configurations, and those
-    aligned with the goal (:func:`_aligned_at`, with their configuration at the goal)."""
+    """Every grasp from the start and from its mirror image, the plan's own grasp configurations (with
+    ``own_goal``, the plan's configuration at the goal, seeding their goal's inverse kinematics) and, on
+    an arm of three or more joints, ones around them nearer the start, and those aligned with the goal
+    (:func:`_aligned_at`, with their configuration at the goal)."""
     world = kinematics.world
     n = len(start)
-    grasps = np.repeat(np.arange(len(world.object.grasps)), 2)
-    targets = transform_points(placement, world.object.grasps)[grasps]
-    seeds = mirrored(world.robot, np.repeat(start[None], len(grasps), axis=0), _direction(world, targets))
-    seeds[0::2] = start
-    placements = np.broadcast_to(placement, (len(grasps), 3))
-    rows, first, ok = kinematics.restarted(lambda k, q: kinematics.holding(placements[k], grasps[k], q), seeds, rng)
-    first, grasps = first[ok], grasps[rows[ok]]
-    extra = [(g, q, np.full(n, np.nan)) for g, q in own] + aligned
+    first, grasps, drawn = _grasp_configurations(kinematics, start, placement, own, rng)
+    extra = [(g, q, np.full(n, np.nan) if own_goal is None else own_goal) for g, q in own] + aligned
     goal_seeds = np.full((len(first), n), np.nan)
     if extra:
+        drawn = np.concatenate([drawn, np.zeros(len(extra), dtype=bool)])
         grasps = np.concatenate([grasps, [g for g, _, _ in extra]]).astype(int)
         first = np.concatenate([first, np.array([q for _, q, _ in extra], dtype=float).reshape(-1, n)])
         goal_seeds = np.concatenate([goal_seeds, np.array([e for _, _, e in extra], dtype=float).reshape(-1, n)])
@@ -449,11 +473,48 @@ def _grasps_at_start(
         kept = unique[np.max(np.abs(first[unique] - first[k]), axis=1) <= UNIQUE_RAD][0]
         if np.isnan(goal_seeds[kept, 0]):
             goal_seeds[kept] = goal_seeds[k]
-    first, grasps, goal_seeds = first[unique], grasps[unique], goal_seeds[unique]
+    first, grasps, goal_seeds, drawn = first[unique], grasps[unique], goal_seeds[unique], drawn[unique]
     grasp_rel = relative(tip_poses(world.robot, first), placement)  # as plan.replay computes it
     starts = np.broadcast_to(start, first.shape)
     route = kinematics.routes(starts, first, resting=np.broadcast_to(placement, (len(first), 3)))
-    return _Start(start, placement, first, grasps, grasp_rel, route, goal_seeds)
+    return _Start(start, placement, first, grasps, grasp_rel, route, goal_seeds, drawn)
+
+
+def _grasp_configurations(
+    kinematics: _Kinematics,
+    start: np.ndarray,
+    placement: np.ndarray,
+    own: list[tuple[int, np.ndarray]],
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Valid configurations holding each grasp from the start and its mirror image, with the restarts'
+    (:meth:`_Kinematics.restarted`) and, around the plan's own grasp configurations, ones nearer the start:
+    the configurations, their grasps, and which came from restarts."""
+    world = kinematics.world
+    n = len(start)
+    grasps = np.repeat(np.arange(len(world.object.grasps)), 2)
+    targets = transform_points(placement, world.object.grasps)[grasps]
+    seeds = mirrored(world.robot, np.repeat(start[None], len(grasps), axis=0), _direction(world, targets))
+    seeds[0::2] = start
+    placements = np.broadcast_to(placement, (len(grasps), 3))
+    rows, first, ok = kinematics.restarted(lambda k, q: kinematics.holding(placements[k], grasps[k], q), seeds, rng)
+    drawn = np.arange(len(rows)) >= len(seeds)
+    first, grasps, drawn = first[ok], grasps[rows[ok]], drawn[ok]
+    if own:  # the plan's own are kept as they are (by the caller); ones around them nearer the start are added
+        own_grasps = np.array([g for g, _ in own], dtype=int)
+        own_q = np.array([q for _, q in own], dtype=float).reshape(-1, n)
+        here = np.broadcast_to(placement, (len(own_q), 3))
+        rows, near, ok = kinematics.restarted(
+            lambda k, q: kinematics.holding(here[k], own_grasps[k], q),
+            own_q,
+            rng,
+            origins=np.broadcast_to(start, own_q.shape),
+        )
+        added = (np.arange(len(rows)) >= len(own_q)) & ok
+        first = np.concatenate([first, near[added]])
+        grasps = np.concatenate([grasps, own_grasps[rows[added]]])
+        drawn = np.concatenate([drawn, np.ones(int(added.sum()), dtype=bool)])
+    return first, grasps, drawn
 
 
 @dataclass(frozen=True)

@@ -257,3 +257,28 @@ def test_a_two_joint_arm_gets_no_restarts() -> None:
     rows, _, _ = kinematics.restarted(lambda k, q: kinematics.holding(placement[k], np.arange(3)[k], q), seeds, rng)
     assert np.array_equal(rows, np.arange(3))
     assert rng.bit_generator.state == state
+
+
+def test_restarts_around_a_configuration_add_ones_nearer_an_origin() -> None:
+    # the plan's own grasp configuration: solutions drawn around it are kept when nearer the arm's start
+    from clew_ros.core.regrasp import _Kinematics
+    from clew_ros.worlds import generate
+
+    generated = generate("arm10", 1)
+    world = generated.world()
+    kinematics = _Kinematics(world, 5e-4)
+    witness = generated.witness.segments
+    own = np.asarray(witness[1].waypoints[0], dtype=float)[None]  # the witness's grasp configuration
+    grasp = np.array([int(witness[1].grasp)])
+    placement = np.asarray(world.object.initial, dtype=float)[None]
+    start = np.asarray(world.robot.initial, dtype=float)[None]
+    rows, solved, ok = kinematics.restarted(
+        lambda k, q: kinematics.holding(placement[k], grasp[k], q), own, np.random.default_rng(1), origins=start
+    )
+    assert np.array_equal(rows, [0, 0])  # its own solution (itself), then one nearer the start
+    assert ok.all()
+    assert np.abs(solved[0] - own[0]).max() <= 1e-4  # the witness holds its grasp within the tolerance
+    assert np.abs(solved[1] - start[0]).sum() < np.abs(own[0] - start[0]).sum()
+    assert is_valid(world, solved[1][None], placement[0])[0]
+    point = transform_points(placement[0], world.object.grasps[grasp][None][0])[0]
+    assert np.linalg.norm(tip_poses(world.robot, solved[1][None])[0, :2] - point) <= 1e-9

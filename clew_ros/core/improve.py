@@ -28,7 +28,8 @@ or put down far from where a regrasp was needed. Once a plan is found,
    that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`): such a
    move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
    continuously, then shortened), given up after :data:`CONNECT_PROBES`
-   failed routings and none found. A move found blocked makes alike proposals
+   routed proposals that did not make the plan better (the routing failed, or
+   its path was too long) and none that did. A move found blocked makes alike proposals
    (both ends within :data:`MOVE_ALIKE_RAD`) skipped. Each proposal that makes
    the plan better replaces the plan's end from that placement on, and the
    later ones must beat it. Passes repeat while they find something
@@ -151,9 +152,9 @@ DETOURS = 3
 #: Proposals with a move that looked blocked checked per placement at most (their blocked moves are routed
 #: by :meth:`_Improver.connect`).
 BLOCKED_TRIES = 3
-#: Routings by :meth:`_Improver.connect` that may fail before the first success; after that many failures and
-#: none found, proposals with a move that looked blocked are no longer checked (a cluttered world: the budget
-#: is left to the shortcuts).
+#: Proposals with a move routed by :meth:`_Improver.connect` that may fail to make the plan better (the routing
+#: failed, or found a path too long) before the first that does; after that many and none that did, proposals
+#: with a move that looked blocked are no longer checked (a cluttered world: the budget is left to the shortcuts).
 CONNECT_PROBES = 1
 #: Share of the budget one :meth:`_Improver.connect` may spend at most, and its rounds at most.
 CONNECT_SHARE, CONNECT_STEPS = 0.2, 1000
@@ -364,7 +365,8 @@ class _Improver:
         self.shortcuts = 0
         self.rebuilt = 0
         self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
-        self.connected = [0, 0]  # routings by connect that failed, that succeeded
+        self.connected = [0, 0]  # proposals with a move routed by connect that did not make the plan better, that did
+        self.routings = 0  # routings by connect for the proposal being checked
         self.rebuild_share = REBUILD_SHARE  # of the budget, the rebuilding may start in (all of it after a round)
         # the inverse kinematics' restarts draw from a generator of their own: the run's stream stays the releases'
         self.restarts = np.random.default_rng([ctx.settings.seed, RESTART_STREAM])
@@ -504,8 +506,12 @@ class _Improver:
                 continue
             if not self.budget.left(self.rebuild_share):
                 break
+            self.routings = 0
             tail = self.checked_tail(proposal, placement)
-            if tail is not None and _better(score, _score(before + tail)):
+            accepted = tail is not None and _better(score, _score(before + tail))
+            if self.routings:
+                self.connected[accepted] += 1
+            if tail is not None and accepted:
                 self.pieces = before + tail
                 self.reserve()
                 self.rebuilt += 1
@@ -549,7 +555,7 @@ class _Improver:
             path = self.route(piece, a, b, proposal.routes[index])
             if path is None and proposal.routes[index] < 0 and not self.budget.stop():
                 path = self.connect(piece, a, b)
-                self.connected[path is not None] += 1
+                self.routings += 1
             if path is None:
                 self.blocked_moves.append((piece.kind, a, b))
                 return None

@@ -27,9 +27,9 @@ or put down far from where a regrasp was needed. Once a plan is found,
    between its ends (as long too) or around its middle. Proposals with a move
    that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`): such a
    move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
-   continuously, then shortened), given up after :data:`CONNECT_PROBES`
-   routed proposals that did not make the plan better (the routing failed, or
-   its path was too long) and none that did. A move found blocked makes alike proposals
+   continuously, then shortened), given up, when no routed proposal made the
+   plan better, after :data:`CONNECT_PROBES` routings that found no path or
+   :data:`ROUTED_PROBES` routed proposals that were too long. A move found blocked makes alike proposals
    (both ends within :data:`MOVE_ALIKE_RAD`) skipped. Each proposal that makes
    the plan better replaces the plan's end from that placement on, and the
    later ones must beat it. Passes repeat while they find something
@@ -152,10 +152,10 @@ DETOURS = 3
 #: Proposals with a move that looked blocked checked per placement at most (their blocked moves are routed
 #: by :meth:`_Improver.connect`).
 BLOCKED_TRIES = 3
-#: Proposals with a move routed by :meth:`_Improver.connect` that may fail to make the plan better (the routing
-#: failed, or found a path too long) before the first that does; after that many and none that did, proposals
-#: with a move that looked blocked are no longer checked (a cluttered world: the budget is left to the shortcuts).
-CONNECT_PROBES = 1
+#: Routings by :meth:`_Improver.connect` that may find no path, and proposals with a routed move that may fail
+#: to make the plan better, before the first that does; after that many and none that did, proposals with a move
+#: that looked blocked are no longer checked (a cluttered world: the budget is left to the shortcuts).
+CONNECT_PROBES, ROUTED_PROBES = 1, 2
 #: Share of the budget one :meth:`_Improver.connect` may spend at most, and its rounds at most.
 CONNECT_SHARE, CONNECT_STEPS = 0.2, 1000
 #: A move whose ends both lie this close (rad, largest joint difference) to those of a move found blocked
@@ -366,6 +366,7 @@ class _Improver:
         self.rebuilt = 0
         self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
         self.connected = [0, 0]  # proposals with a move routed by connect that did not make the plan better, that did
+        self.connect_failed = 0  # routings by connect that found no path
         self.routings = 0  # routings by connect for the proposal being checked
         self.rebuild_share = REBUILD_SHARE  # of the budget, the rebuilding may start in (all of it after a round)
         # the inverse kinematics' restarts draw from a generator of their own: the run's stream stays the releases'
@@ -498,7 +499,7 @@ class _Improver:
             if any(_alike(proposal, other) for other in failed) or self.known_blocked(proposal):
                 continue  # as good as one that failed: try something else
             blocked = proposal.blocked > 0
-            if blocked and self.connected[1] == 0 and self.connected[0] >= CONNECT_PROBES:
+            if blocked and self.routing_gave_nothing():
                 failures[blocked] = limits[blocked]  # routing around blocked moves never worked here
             if failures[blocked] >= limits[blocked]:
                 if all(failures[k] >= limits[k] for k in failures):
@@ -520,6 +521,12 @@ class _Improver:
             failed.append(proposal)
             failures[blocked] += 1
         return better
+
+    def routing_gave_nothing(self) -> bool:
+        """Whether routing blocked moves looks hopeless here (a cluttered world): no routed proposal made the plan
+        better, and :data:`CONNECT_PROBES` routings found no path or :data:`ROUTED_PROBES` routed proposals were
+        too long."""
+        return self.connected[1] == 0 and (self.connect_failed >= CONNECT_PROBES or self.connected[0] >= ROUTED_PROBES)
 
     def proposal_moves(self, proposal: Proposal) -> list[tuple[str, np.ndarray, np.ndarray]]:
         """``(kind, start, end)`` of each move of ``proposal`` (a transit, then a transfer, ...)."""
@@ -556,6 +563,7 @@ class _Improver:
             if path is None and proposal.routes[index] < 0 and not self.budget.stop():
                 path = self.connect(piece, a, b)
                 self.routings += 1
+                self.connect_failed += path is None
             if path is None:
                 self.blocked_moves.append((piece.kind, a, b))
                 return None

@@ -25,8 +25,9 @@ or put down far from where a regrasp was needed. Once a plan is found,
    move continuously (below), straight or one joint after the other (as
    long in joint travel), else through a configuration drawn inside the box
    between its ends (as long too) or around its middle. Proposals with a move
-   that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`): such a
-   move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
+   that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`), once
+   none of the placement's that looked clear (one and two transfers) made the
+   plan better: such a move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
    continuously, then shortened), given up, when no routed proposal made the
    plan better, after :data:`CONNECT_PROBES` routings that found no path or
    :data:`ROUTED_PROBES` routed proposals that were too long. A move found blocked makes alike proposals
@@ -96,7 +97,7 @@ import numpy as np
 from clew_ros.core.connect import rrt_connect, shortened
 from clew_ros.core.continuous import CHECK_STEP_RAD, MIN_MARGIN_FACTOR, path_valid, straight_move_clear
 from clew_ros.core.kinematics import compose, relative, tip_poses
-from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
+from clew_ros.core.regrasp import BLOCKED_PENALTY_RAD, ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
@@ -445,6 +446,7 @@ class _Improver:
                 -1, len(configuration)
             )
             found, blocked = False, True
+            tried: list[Proposal] = []
             for grasps in (1, 2):  # a plan with fewer transfers is better: two only when none with one worked
                 if found or transfers + grasps > score[0] or not self.budget.left(self.rebuild_share):
                     break
@@ -467,8 +469,12 @@ class _Improver:
                 )
                 self.budget.spend_checks(effort.checks, effort.calls)
                 self.budget.spend(math.ceil(IK_WORK * effort.steps))
-                found = self.try_proposals(proposals, kept, placement)
+                found = self.try_proposals(proposals, kept, placement, routed=False)
                 blocked &= bool(proposals) and all(p.blocked for p in proposals)
+                tried += proposals
+            if not found and tried:  # routing is dear: only once no proposal that looked clear worked
+                tried.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
+                found = self.try_proposals(tried, kept, placement, routed=True)
             better |= found
             if blocked and not found:
                 return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts
@@ -480,11 +486,12 @@ class _Improver:
         left = self.rebuild_share * self.budget.total - self.budget.spent
         return max(0, int(PROPOSE_SHARE * left / self.budget.check_work))
 
-    def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray) -> bool:
-        """Check ``proposals`` (after the first ``kept`` pieces) in their order; each whose moves are clear and
-        that makes the plan better replaces the plan's end, and the later ones must beat it. At most
+    def try_proposals(self, proposals: list[Proposal], kept: int, placement: np.ndarray, *, routed: bool) -> bool:
+        """Check ``proposals`` (after the first ``kept`` pieces) in their order: if ``routed``, those with a move
+        that looked blocked (routed by :meth:`connect`), else the others. Each whose moves are clear and that
+        makes the plan better replaces the plan's end, and the later ones must beat it. At most
         :data:`REBUILD_TRIES` failures among those whose moves all looked clear and :data:`BLOCKED_TRIES` among
-        the others (their blocked moves routed by :meth:`connect`). Returns whether the plan got better."""
+        the others. Returns whether the plan got better."""
         before = self.pieces[:kept]
         transfers = sum(p.kind == "transfer" for p in before)
         travel_before = joint_travel([p.waypoints for p in before])
@@ -493,6 +500,8 @@ class _Improver:
         limits = {False: REBUILD_TRIES, True: BLOCKED_TRIES}
         better = False
         for proposal in proposals:
+            if (proposal.blocked > 0) != routed:
+                continue  # those that looked clear first, those with a blocked move to route in a call of their own
             score = _score(self.pieces)
             if not _better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
                 continue
@@ -502,9 +511,7 @@ class _Improver:
             if blocked and self.routing_gave_nothing():
                 failures[blocked] = limits[blocked]  # routing around blocked moves never worked here
             if failures[blocked] >= limits[blocked]:
-                if all(failures[k] >= limits[k] for k in failures):
-                    break
-                continue
+                break
             if not self.budget.left(self.rebuild_share):
                 break
             self.routings = 0

@@ -49,7 +49,7 @@ from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
+__all__ = ["BLOCKED_PENALTY_RAD", "ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
 
 #: A grasp configuration puts the tip this close to the grasp point (m).
 HOLD_ERROR_M = 1e-9

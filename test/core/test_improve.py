@@ -334,3 +334,31 @@ def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter() -> None:
     assert validate_plan(world, improved) == []
     for motion in replay(world, improved, FINE_RAD):
         assert is_valid(world, motion.configurations, motion.object_poses).all()
+
+
+def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_ones_apart(monkeypatch) -> None:
+    # routing (RRT-Connect) is dear: a call for the proposals that looked clear never routes, and a call for
+    # the blocked ones checks nothing else
+    from clew_ros.core.improve import _pieces
+    from clew_ros.core.regrasp import propose
+
+    world = _world("figure1")
+    first = _plan(world, 0, 0.0)
+    goal = np.asarray(world.object.goal, dtype=float)
+    ctx = PlanningContext(world, PlannerSettings(seed=0, improve_time=0.4), np.random.default_rng(0), Termination(30))
+    improver = _Improver(ctx, _pieces(world, first.segments), goal)
+    proposals, _ = propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(2))
+    clear = [p for p in proposals if p.blocked == 0]
+    assert clear
+    assert len(clear) < len(proposals)  # the premise: some looked blocked
+
+    def no_routing(*_args, **_kwargs):
+        raise AssertionError("routed a proposal")
+
+    monkeypatch.setattr(improver, "connect", no_routing)
+    travel = joint_travel([p.waypoints for p in improver.pieces])
+    assert improver.try_proposals(proposals, 0, np.asarray(world.object.initial, float), routed=False)
+    assert joint_travel([p.waypoints for p in improver.pieces]) < travel
+    kept = [p.waypoints.copy() for p in improver.pieces]
+    assert not improver.try_proposals(clear, 0, np.asarray(world.object.initial, float), routed=True)
+    assert all(np.array_equal(a, p.waypoints) for a, p in zip(kept, improver.pieces, strict=True))

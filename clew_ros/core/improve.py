@@ -25,9 +25,9 @@ or put down far from where a regrasp was needed. Once a plan is found,
    move continuously (below), straight or one joint after the other (as
    long in joint travel), else through a configuration drawn inside the box
    between its ends (as long too) or around its middle. Proposals with a move
-   that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`), once
-   none of the placement's that looked clear (one and two transfers) made the
-   plan better: such a move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
+   that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`), after
+   all of the placement's that looked clear (one transfer, then two), when
+   they would still make the plan better: such a move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
    continuously, then shortened), given up, when no routed proposal made the
    plan better, after :data:`CONNECT_PROBES` routings that found no path or
    :data:`ROUTED_PROBES` routed proposals that were too long. A move found blocked makes alike proposals
@@ -472,9 +472,9 @@ class _Improver:
                 found = self.try_proposals(proposals, kept, placement, routed=False)
                 blocked &= bool(proposals) and all(p.blocked for p in proposals)
                 tried += proposals
-            if not found and tried:  # routing is dear: only once no proposal that looked clear worked
+            if tried:  # routing is dear: only after every proposal that looked clear, for those still better
                 tried.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
-                found = self.try_proposals(tried, kept, placement, routed=True)
+                found |= self.try_proposals(tried, kept, placement, routed=True)
             better |= found
             if blocked and not found:
                 return better, True  # every way from here looked blocked: cluttered, leave the budget to shortcuts

@@ -30,7 +30,7 @@ or put down far from where a regrasp was needed. Once a plan is found,
    they would still make the plan better: such a move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
    continuously, then shortened), given up, when no routed proposal made the
    plan better, after :data:`CONNECT_PROBES` routings that found no path or
-   :data:`ROUTED_PROBES` routed proposals that were too long. A move found blocked makes alike proposals
+   :data:`ROUTED_PROBES` routed proposals that did not make it better. A move found blocked makes alike proposals
    (both ends within :data:`MOVE_ALIKE_RAD`) skipped. Each proposal that makes
    the plan better replaces the plan's end from that placement on, and the
    later ones must beat it. Passes repeat while they find something
@@ -531,8 +531,8 @@ class _Improver:
 
     def routing_gave_nothing(self) -> bool:
         """Whether routing blocked moves looks hopeless here (a cluttered world): no routed proposal made the plan
-        better, and :data:`CONNECT_PROBES` routings found no path or :data:`ROUTED_PROBES` routed proposals were
-        too long."""
+        better, and :data:`CONNECT_PROBES` routings found no path or :data:`ROUTED_PROBES` routed proposals did not
+        (a routing found no path or one too long, or another move stayed blocked)."""
         return self.connected[1] == 0 and (self.connect_failed >= CONNECT_PROBES or self.connected[0] >= ROUTED_PROBES)
 
     def proposal_moves(self, proposal: Proposal) -> list[tuple[str, np.ndarray, np.ndarray]]:

@@ -15,8 +15,9 @@ made of straight joint-space moves between key configurations:
 Key configurations come from inverse kinematics (:func:`clew_ros.core.inverse.solve_point`) from
 seeds: the configuration before (so a redundant arm moves little) and its mirror image about the
 line from the base to the target (the other elbow), plus the plan's own grasp configurations. On
-an arm of three or more joints, the grasp configurations at the placement and at the goal are also
-solved from seeds drawn around each seed (:data:`RESTARTS`), the valid one nearest the seed added:
+an arm of three or more joints, the grasp configurations at the placement and, for one transfer, at the
+goal are also solved from seeds drawn around each seed (:data:`RESTARTS`), the valid one nearest the
+seed added (around the plan's own grasp configuration, the one nearest the arm's configuration):
 a redundant arm's first solution often folds into an obstacle, the object or itself, or lies far
 from where the arm is. A rigid grasp keeps its approach (the object's angle in the tip's frame)
 while carried, so an arm of three or more joints also takes each grasp with an approach that can
@@ -84,10 +85,11 @@ UNIQUE_RAD = 1e-6
 ALIGNED_DRAWS = 4
 #: Proposals returned at most.
 MAX_PROPOSALS = 24
-#: On an arm of three or more joints, inverse kinematics for a placement's grasp configurations and for
-#: the goal's is also solved from this many seeds drawn around each seed (normal, these spreads in rad in
-#: turn), and the valid solution nearest the seed (joint travel) is kept: a redundant arm's first
-#: solution often folds into an obstacle, the object or itself, or lies far from where the arm is.
+#: On an arm of three or more joints, inverse kinematics for a placement's grasp configurations and, for
+#: one-transfer proposals, the goal's is also solved from this many seeds drawn around each seed (normal,
+#: these spreads in rad in turn), and the valid solution nearest the seed (joint travel; around the plan's own
+#: grasp configuration, nearest the arm's) is added: a redundant arm's first solution often folds into an
+#: obstacle, the object or itself, or lies far from where the arm is.
 RESTARTS, RESTART_SPREADS_RAD = 8, (0.5, 1.0)
 
 

@@ -355,10 +355,28 @@ def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_one
     def no_routing(*_args, **_kwargs):
         raise AssertionError("routed a proposal")
 
+    def recording(improver: _Improver, checked: list) -> None:
+        original = improver.checked_tail
+
+        def checked_tail(proposal, placement):
+            checked.append(proposal)
+            return original(proposal, placement)
+
+        monkeypatch.setattr(improver, "checked_tail", checked_tail)
+
+    placement = np.asarray(world.object.initial, float)
+    checked: list = []
+    recording(improver, checked)
     monkeypatch.setattr(improver, "connect", no_routing)
     travel = joint_travel([p.waypoints for p in improver.pieces])
-    assert improver.try_proposals(proposals, 0, np.asarray(world.object.initial, float), routed=False)
+    assert improver.try_proposals(proposals, 0, placement, routed=False)
     assert joint_travel([p.waypoints for p in improver.pieces]) < travel
-    kept = [p.waypoints.copy() for p in improver.pieces]
-    assert not improver.try_proposals(clear, 0, np.asarray(world.object.initial, float), routed=True)
-    assert all(np.array_equal(a, p.waypoints) for a, p in zip(kept, improver.pieces, strict=True))
+    assert checked
+    assert all(p.blocked == 0 for p in checked)
+    # the blocked ones, from the first plan again: only they are checked
+    fresh = _Improver(ctx, _pieces(world, first.segments), goal)
+    routed: list = []
+    recording(fresh, routed)
+    fresh.try_proposals(proposals, 0, placement, routed=True)
+    assert routed
+    assert all(p.blocked > 0 for p in routed)

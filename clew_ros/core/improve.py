@@ -97,7 +97,7 @@ import numpy as np
 from clew_ros.core.connect import rrt_connect, shortened
 from clew_ros.core.continuous import CHECK_STEP_RAD, MIN_MARGIN_FACTOR, path_valid, straight_move_clear
 from clew_ros.core.kinematics import compose, relative, tip_poses
-from clew_ros.core.regrasp import BLOCKED_PENALTY_RAD, ROUTES, Proposal, propose, route_waypoints
+from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
@@ -473,7 +473,7 @@ class _Improver:
                 blocked &= bool(proposals) and all(p.blocked for p in proposals)
                 tried += proposals
             if tried:  # routing is dear: only after every proposal that looked clear, for those still better
-                tried.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
+                tried.sort(key=lambda p: p.rank)
                 found |= self.try_proposals(tried, kept, placement, routed=True)
             better |= found
             if blocked and not found:

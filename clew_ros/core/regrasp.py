@@ -50,7 +50,7 @@ from clew_ros.core.kernel import clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.world import World
 
-__all__ = ["BLOCKED_PENALTY_RAD", "ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
+__all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
 
 #: A grasp configuration puts the tip this close to the grasp point (m).
 HOLD_ERROR_M = 1e-9
@@ -115,6 +115,12 @@ class Proposal:
     grasps: tuple[int, ...]
     keys: np.ndarray
     routes: tuple[int, ...]
+
+    @property
+    def rank(self) -> tuple[float, int]:
+        """What proposals are ranked by: joint travel plus :data:`BLOCKED_PENALTY_RAD` per move that looked
+        blocked, then fewer transfers."""
+        return self.travel + BLOCKED_PENALTY_RAD * self.blocked, len(self.grasps)
 
 
 def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
@@ -425,7 +431,7 @@ def propose(
     if two_transfers and len(seeded.first) and not kinematics.stop():
         hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
         proposals += _two_transfers(kinematics, seeded, goal, rng, hints, holds=holds.first_per_grasp())
-    proposals.sort(key=lambda p: (p.travel + BLOCKED_PENALTY_RAD * p.blocked, len(p.grasps)))
+    proposals.sort(key=lambda p: p.rank)
     return _distinct(proposals), kinematics.effort
 
 

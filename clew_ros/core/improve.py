@@ -473,7 +473,7 @@ class _Improver:
                 blocked &= bool(proposals) and all(p.blocked for p in proposals)
                 tried += proposals
             if tried:  # routing is dear: only after every proposal that looked clear, for those still better
-                tried.sort(key=lambda p: p.rank)
+                tried.sort(key=lambda p: (len(p.grasps), p.rank))  # fewer transfers always win: those first
                 found |= self.try_proposals(tried, kept, placement, routed=True)
             better |= found
             if blocked and not found:

@@ -508,7 +508,8 @@ def _grasp_configurations(
     rows, first, ok = kinematics.restarted(lambda k, q: kinematics.holding(placements[k], grasps[k], q), seeds, rng)
     drawn = np.arange(len(rows)) >= len(seeds)
     first, grasps, drawn = first[ok], grasps[rows[ok]], drawn[ok]
-    if own:  # the plan's own are kept as they are (by the caller); ones around them nearer the start are added
+    if own and world.robot.dof >= 3:  # the plan's own are kept as they are (by the caller); ones around them
+        # nearer the start are added (restarts: three or more joints only)
         own_grasps = np.array([g for g, _ in own], dtype=int)
         own_q = np.array([q for _, q in own], dtype=float).reshape(-1, n)
         here = np.broadcast_to(placement, (len(own_q), 3))

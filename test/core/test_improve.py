@@ -380,3 +380,37 @@ def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_one
     fresh.try_proposals(proposals, 0, placement, routed=True)
     assert routed
     assert all(p.blocked > 0 for p in routed)
+
+
+def test_blocked_proposals_are_routed_fewer_transfers_first(monkeypatch) -> None:
+    # a plan with fewer transfers always wins, so a blocked one-transfer proposal is routed before any
+    # blocked two-transfer one, however long
+    from clew_ros.core import improve as improve_module
+    from clew_ros.core.improve import _pieces
+
+    world = _world("arm3_regrasp")
+    first = _plan(world, 0, 0.0)
+    goal = np.asarray(world.object.goal, dtype=float)
+    ctx = PlanningContext(world, PlannerSettings(seed=0, improve_time=0.4), np.random.default_rng(0), Termination(30))
+    improver = _Improver(ctx, _pieces(world, first.segments), goal)
+    lists: list = []
+
+    def try_proposals(proposals, kept, placement, *, routed):
+        if routed:
+            lists.append(list(proposals))
+        return False
+
+    monkeypatch.setattr(improver, "try_proposals", try_proposals)
+    original = improve_module.propose
+
+    def both_kinds(*args, **kwargs):
+        return original(*args, **{**kwargs, "one_transfer": True, "two_transfers": True})
+
+    monkeypatch.setattr(improve_module, "propose", both_kinds)  # each call makes both kinds
+    improver.rebuild_pass()
+    assert lists
+    mixed = [proposals for proposals in lists if len({len(p.grasps) for p in proposals}) > 1]
+    assert mixed  # the premise: one routing list holds both kinds
+    for proposals in lists:
+        keys = [(len(p.grasps), p.rank) for p in proposals]
+        assert keys == sorted(keys)

@@ -158,6 +158,24 @@ def test_a_two_joint_arm_gets_no_goal_aligned_grasps() -> None:
     assert rng.bit_generator.state == state  # nothing drawn: no goal-aligned grasps for two joints
 
 
+def test_a_two_joint_arms_own_grasp_configurations_cost_no_inverse_kinematics() -> None:
+    # they are proposed as they are, and no restart is drawn around them: with or without them, the grasp
+    # configurations take the same work
+    from clew_ros.core.regrasp import _grasp_configurations, _Kinematics
+
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    start = np.asarray(world.robot.initial, dtype=float)
+    placement = np.asarray(world.object.initial, dtype=float)
+    own = [(0, start + 0.1), (1, start - 0.1)]
+    efforts = []
+    for mine in ([], own):
+        kinematics = _Kinematics(world, 0.0)
+        _grasp_configurations(kinematics, start, placement, mine, np.random.default_rng(0))
+        efforts.append(kinematics.effort)
+    assert efforts[0].steps > 0
+    assert efforts[1] == efforts[0]
+
+
 def _aligned_setup(family: str, seed: int):
     from clew_ros.core.regrasp import _aligned_at, _goal_holds, _Kinematics
     from clew_ros.worlds import generate

@@ -96,6 +96,7 @@ import numpy as np
 
 from clew_ros.core.connect import rrt_connect, shortened
 from clew_ros.core.continuous import CHECK_STEP_RAD, MIN_MARGIN_FACTOR, path_valid, straight_move_clear
+from clew_ros.core.kernel import pruned_path
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
@@ -291,29 +292,12 @@ def _dense_clear(world: World, piece: _Piece) -> bool:
     return path_valid(world, piece.waypoints, grasp_rel=piece.grasp_rel)
 
 
-def _prune(waypoints: np.ndarray) -> np.ndarray:
-    """Drop repeated waypoints, loops back to an earlier waypoint, and waypoints between collinear pieces
-    (a move undone or continued along the same line): the remaining path only visits configurations the
-    old one visited."""
-    waypoints = np.asarray(waypoints, dtype=float)
-    points = np.empty_like(waypoints)  # the path kept so far: points[:size]
-    size = 0
-    for w in waypoints:
-        back = np.flatnonzero(np.max(np.abs(points[:size] - w), axis=1) <= 1e-12)  # a loop: back where it was
-        if len(back):
-            size = int(back[0]) + 1
-        else:
-            points[size] = w
-            size += 1
-        while size >= 3:
-            u, v = points[size - 2] - points[size - 3], points[size - 1] - points[size - 2]
-            scale = max(float(np.max(np.abs(u))), float(np.max(np.abs(v))))
-            if scale > 0 and float(np.max(np.abs(u * np.linalg.norm(v) ** 2 - v * (u @ v)))) > 1e-12 * scale**3:
-                break  # not collinear
-            points[size - 2] = points[size - 1]
-            size -= 1
-    pruned: np.ndarray = points[:size].copy()
-    return pruned
+def _without_repeats(waypoints: list[np.ndarray]) -> np.ndarray:
+    """``waypoints`` without those within 1e-12 rad (each joint) of the one before."""
+    points = np.array(waypoints, dtype=float)
+    moved = np.max(np.abs(np.diff(points, axis=0)), axis=1) > 1e-12
+    kept: np.ndarray = points[np.concatenate([[True], moved])]
+    return kept
 
 
 def _cumulative(waypoints: np.ndarray) -> np.ndarray:
@@ -395,7 +379,7 @@ class _Improver:
 
     def prune(self) -> None:
         for piece in self.pieces:
-            pruned = _prune(piece.waypoints)
+            pruned = pruned_path(piece.waypoints)
             if _better(
                 (0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([pruned]), len(pruned))
             ):
@@ -642,7 +626,7 @@ class _Improver:
             self.budget.spend(EVALUATION_WORK * (self.ctx.counters.evaluations - before))
             if not result.success:
                 continue
-            carried = _Piece("transfer", piece.grasp, _prune(result.waypoints), piece.start_pose, piece.grasp_rel)
+            carried = _Piece("transfer", piece.grasp, pruned_path(result.waypoints), piece.start_pose, piece.grasp_rel)
             candidate = [*self.pieces[:index], carried]
             if _better(_score(self.pieces), _score(candidate)):
                 self.pieces = candidate
@@ -655,7 +639,7 @@ class _Improver:
         piece = self.pieces[index]
         w = piece.waypoints
         joined = [*w[:first], a, b, *w[last + 1 :]]
-        new = _prune(np.array([p for i, p in enumerate(joined) if i == 0 or np.max(np.abs(p - joined[i - 1])) > 1e-12]))
+        new = pruned_path(_without_repeats(joined))
         old_score = (0, joint_travel([w]), len(w))
         if not _better(old_score, (0, joint_travel([new]), len(new))):
             return False
@@ -736,12 +720,12 @@ class _Improver:
         travel = np.array([x0, *cumulative[i + 1 : j + 1], x1])
         path[:, joint] = a[joint] + (travel - x0) / (x1 - x0) * (b[joint] - a[joint])
         joined = [*w[: i + 1], *path, *w[j + 1 :]]
-        new = np.array([p for k, p in enumerate(joined) if k == 0 or np.max(np.abs(p - joined[k - 1])) > 1e-12])
+        new = _without_repeats(joined)
         if not _better((0, joint_travel([w]), len(w)), (0, joint_travel([new]), len(new))):
             return False
         if not all(self.budget.left() and self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
             return False
-        piece.waypoints = _prune(new)
+        piece.waypoints = pruned_path(new)
         self.shortcuts += 1
         self.reserve()
         return True

@@ -56,6 +56,7 @@ __all__ = [
     "clearly_valid",
     "decode",
     "intervals",
+    "pruned_path",
     "solve_point",
     "warm_up",
 ]
@@ -1221,6 +1222,59 @@ def solve_point(
     return q, error, steps
 
 
+@_leaf
+def _pruned(waypoints: np.ndarray, points: np.ndarray) -> int:
+    """:func:`pruned_path` into ``points`` (as large as ``waypoints``); returns how many it kept."""
+    n = waypoints.shape[1]
+    size = 0
+    for k in range(waypoints.shape[0]):
+        back = -1  # the first point kept so far that this one is back at (a loop)
+        for i in range(size):
+            largest = 0.0
+            for j in range(n):
+                largest = max(largest, abs(points[i, j] - waypoints[k, j]))
+            if largest <= 1e-12:
+                back = i
+                break
+        if back >= 0:
+            size = back + 1
+        else:
+            for j in range(n):
+                points[size, j] = waypoints[k, j]
+            size += 1
+        while size >= 3:  # the last three collinear (a move undone or continued): drop the middle one
+            scale = 0.0
+            uv = 0.0
+            vv = 0.0
+            for j in range(n):
+                u = points[size - 2, j] - points[size - 3, j]
+                v = points[size - 1, j] - points[size - 2, j]
+                scale = max(scale, abs(u), abs(v))
+                uv += u * v
+                vv += v * v
+            off = 0.0
+            for j in range(n):
+                u = points[size - 2, j] - points[size - 3, j]
+                v = points[size - 1, j] - points[size - 2, j]
+                off = max(off, abs(u * vv - v * uv))
+            if scale > 0 and off > 1e-12 * scale**3:
+                break
+            for j in range(n):
+                points[size - 2, j] = points[size - 1, j]
+            size -= 1
+    return size
+
+
+def pruned_path(waypoints: np.ndarray) -> np.ndarray:
+    """``waypoints`` ``(m, n)`` without repeated waypoints, loops back to an earlier waypoint (within 1e-12
+    rad), and waypoints between collinear pieces (a move undone or continued along the same line): the path
+    left only visits configurations the old one visited. Compiled: the improvement prunes every shortcut it
+    tries, and plans of many joints have hundreds of waypoints."""
+    waypoints = _arg(waypoints)
+    points = np.empty_like(waypoints)
+    return points[: _pruned(waypoints, points)].copy()
+
+
 def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """Compiled :func:`_bounce` over arrays of one shape."""
     x, low, high = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (x, low, high)))
@@ -1267,6 +1321,7 @@ def warm_up() -> float:
         decode(world, waypoints, genes, 1, 3, transfer, np.zeros(3), 1e-3, threads=0)
         intervals(world, waypoints[:, 0], 0, transfer, np.zeros(3), 1e-3)
     bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
+    pruned_path(np.zeros((3, 2)))
     clearly_valid(world, waypoints[:, 0], np.zeros(3))
     for angles in (np.zeros(1), np.full(1, np.nan)):
         solve_point(

@@ -17,8 +17,9 @@ from helpers.random_boxes import random_boxes
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
 from clew_ros.core.continuous import straight_move_clear
-from clew_ros.core.improve import _Improver, _Piece, _prune, improve, joint_travel
+from clew_ros.core.improve import _Improver, _Piece, improve, joint_travel
 from clew_ros.core.inverse import solve_point
+from clew_ros.core.kernel import pruned_path
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.manhattan import run_manhattan
 from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
@@ -139,9 +140,36 @@ def test_the_time_limit_stops_improvement_and_keeps_the_plan() -> None:
     assert validate_plan(world, Plan.from_result(world, result)) == []
 
 
+@pytest.mark.parametrize("joints", [2, 3, 7])
+def test_pruned_paths_keep_their_ends_visit_only_old_waypoints_and_turn_at_every_waypoint(joints: int) -> None:
+    rng = np.random.default_rng(joints)
+    for _ in range(200):
+        points = [rng.uniform(-3.0, 3.0, joints)]
+        for _ in range(int(rng.integers(1, 40))):
+            point = points[-1].copy()
+            draw = rng.random()
+            if draw < 0.2 and len(points) > 2:
+                point = points[int(rng.integers(0, len(points)))].copy()  # back where it was: a loop
+            elif draw < 0.7:
+                point[rng.integers(0, joints)] += rng.choice([-1.0, -0.5, 0.5, 1.0])  # Manhattan, often undone
+            elif draw < 0.9:
+                point += rng.normal(0.0, 0.3, joints)
+            points.append(point)  # else repeated
+        w = np.array(points)
+        pruned = pruned_path(w)
+        assert np.array_equal(pruned[0], w[0])
+        assert np.max(np.abs(pruned[-1] - w[-1])) <= 1e-12  # a loop back ends on the earlier waypoint
+        assert all(np.any(np.all(w == p, axis=1)) for p in pruned)
+        assert joint_travel([pruned]) <= joint_travel([w]) + 1e-12
+        steps = np.diff(pruned, axis=0)
+        assert np.all(np.max(np.abs(steps), axis=1) > 1e-12)
+        for u, v in itertools.pairwise(steps):  # no two pieces in a row along one line
+            assert np.max(np.abs(u * (v @ v) - v * (u @ v))) > 1e-12 * max(np.max(np.abs(u)), np.max(np.abs(v))) ** 3
+
+
 def test_pruning_drops_back_and_forth_and_loops_only() -> None:
     w = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.5, 2.0], [0.5, 1.5], [1.0, 1.5], [0.5, 1.5]])
-    pruned = _prune(w)
+    pruned = pruned_path(w)
     # 0->1->0.5 along joint 1 is one move to 0.5; 1.0->2.0->1.5 along joint 2 is one move; the loop closes
     assert pruned.tolist() == [[0.0, 0.0], [0.5, 0.0], [0.5, 1.5]]
     assert joint_travel([pruned]) < joint_travel([w])

@@ -26,8 +26,9 @@ or put down far from where a regrasp was needed. Once a plan is found,
    long in joint travel), else through a configuration drawn inside the box
    between its ends (as long too) or around its middle. Proposals with a move
    that looked blocked are checked too (fewer: :data:`BLOCKED_TRIES`), after
-   all of the placement's that looked clear (one transfer, then two), when
-   they would still make the plan better: such a move is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
+   all of the placement's that looked clear (one transfer, then two), fewer
+   transfers first, when they would still make the plan better: such a move
+   is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
    continuously, then shortened), given up, when no routed proposal made the
    plan better, after :data:`CONNECT_PROBES` routings that found no path or
    :data:`ROUTED_PROBES` routed proposals that did not make it better. A move found blocked makes alike proposals

@@ -7,7 +7,8 @@ everything that does not, after Lozano-Perez 1987), bouncing, and the whole
 Manhattan path of every individual of a population. The world is packed
 once into plain arrays (:func:`clew_ros.core.collision.packed_world`); the
 kernels take arrays, not objects, and release the GIL. :func:`clearly_valid`
-is the compiled first pass of the validity test.
+is the compiled first pass of the validity test; :func:`solve_point` the
+inverse kinematics, :func:`pruned_path` the improvement's path pruning.
 
 Free interval of joint ``j`` at configuration ``q``. When ``j`` turns, links
 ``j..n-1`` (and in transfer the carried object) turn rigidly about

@@ -496,7 +496,8 @@ def _grasp_configurations(
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Valid configurations holding each grasp from the start and its mirror image, with the restarts'
-    (:meth:`_Kinematics.restarted`) and, around the plan's own grasp configurations, ones nearer the start:
+    (:meth:`_Kinematics.restarted`) and, around the plan's own grasp configurations, ones nearer the start
+    (three joints or more; the plan's own are proposed as they are by the caller):
     the configurations, their grasps, and which came from restarts."""
     world = kinematics.world
     n = len(start)

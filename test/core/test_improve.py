@@ -140,26 +140,61 @@ def test_the_time_limit_stops_improvement_and_keeps_the_plan() -> None:
     assert validate_plan(world, Plan.from_result(world, result)) == []
 
 
+def _pruned_in_python(waypoints: np.ndarray) -> np.ndarray:
+    """The pruning as it was written in Python before it was compiled (kernel.pruned_path): the reference."""
+    points = np.empty_like(waypoints)
+    size = 0
+    for w in waypoints:
+        back = np.flatnonzero(np.max(np.abs(points[:size] - w), axis=1) <= 1e-12)
+        if len(back):
+            size = int(back[0]) + 1
+        else:
+            points[size] = w
+            size += 1
+        while size >= 3:
+            u, v = points[size - 2] - points[size - 3], points[size - 1] - points[size - 2]
+            scale = max(float(np.max(np.abs(u))), float(np.max(np.abs(v))))
+            if scale > 0 and float(np.max(np.abs(u * np.linalg.norm(v) ** 2 - v * (u @ v)))) > 1e-12 * scale**3:
+                break
+            points[size - 2] = points[size - 1]
+            size -= 1
+    return points[:size].copy()
+
+
+def _random_path(rng: np.random.Generator, joints: int) -> np.ndarray:
+    """Manhattan-like moves, often undone, loops back to earlier waypoints (some off by less than 1e-12),
+    repeats, and free moves."""
+    points = [rng.uniform(-3.0, 3.0, joints)]
+    for _ in range(int(rng.integers(1, 40))):
+        point = points[-1].copy()
+        draw = rng.random()
+        if draw < 0.2 and len(points) > 2:
+            point = points[int(rng.integers(0, len(points)))] + rng.choice([0.0, 5e-13, 3e-12])  # a loop, or nearly
+        elif draw < 0.7:
+            point[rng.integers(0, joints)] += rng.choice([-1.0, -0.5, 0.5, 1.0])
+        elif draw < 0.9:
+            point += rng.normal(0.0, 0.3, joints)
+        points.append(point)  # else repeated
+    return np.array(points)
+
+
+@pytest.mark.parametrize("joints", [2, 3, 7])
+def test_the_compiled_pruning_gives_the_paths_the_python_one_gave(joints: int) -> None:
+    rng = np.random.default_rng(100 + joints)
+    for _ in range(300):
+        w = _random_path(rng, joints)
+        assert np.array_equal(pruned_path(w), _pruned_in_python(w))
+
+
 @pytest.mark.parametrize("joints", [2, 3, 7])
 def test_pruned_paths_keep_their_ends_visit_only_old_waypoints_and_turn_at_every_waypoint(joints: int) -> None:
     rng = np.random.default_rng(joints)
     for _ in range(200):
-        points = [rng.uniform(-3.0, 3.0, joints)]
-        for _ in range(int(rng.integers(1, 40))):
-            point = points[-1].copy()
-            draw = rng.random()
-            if draw < 0.2 and len(points) > 2:
-                point = points[int(rng.integers(0, len(points)))].copy()  # back where it was: a loop
-            elif draw < 0.7:
-                point[rng.integers(0, joints)] += rng.choice([-1.0, -0.5, 0.5, 1.0])  # Manhattan, often undone
-            elif draw < 0.9:
-                point += rng.normal(0.0, 0.3, joints)
-            points.append(point)  # else repeated
-        w = np.array(points)
+        w = _random_path(rng, joints)
         pruned = pruned_path(w)
         assert np.array_equal(pruned[0], w[0])
         assert np.max(np.abs(pruned[-1] - w[-1])) <= 1e-12  # a loop back ends on the earlier waypoint
-        assert all(np.any(np.all(w == p, axis=1)) for p in pruned)
+        assert all(np.any(np.all(w == p, axis=1)) for p in pruned)  # a waypoint of the old path, not near one
         assert joint_travel([pruned]) <= joint_travel([w]) + 1e-12
         steps = np.diff(pruned, axis=0)
         assert np.all(np.max(np.abs(steps), axis=1) > 1e-12)
@@ -439,6 +474,7 @@ def test_blocked_proposals_are_routed_fewer_transfers_first(monkeypatch) -> None
     assert lists
     mixed = [proposals for proposals in lists if len({len(p.grasps) for p in proposals}) > 1]
     assert mixed  # the premise: one routing list holds both kinds
+    assert any(sorted(proposals, key=lambda p: p.rank) != proposals for proposals in mixed)  # rank alone differs
     for proposals in lists:
         keys = [(len(p.grasps), p.rank) for p in proposals]
         assert keys == sorted(keys)

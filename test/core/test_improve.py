@@ -399,17 +399,29 @@ def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter() -> None:
         assert is_valid(world, motion.configurations, motion.object_poses).all()
 
 
-def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_ones_apart(monkeypatch) -> None:
-    # routing (RRT-Connect) is dear: a call for the proposals that looked clear never routes, and a call for
-    # the blocked ones checks nothing else
+def _improver_on_first_plan(name: str):
+    """World ``name``, an improver (0.4 s budget) of its seed-0 first plan, and a function making another one
+    from the same first plan."""
     from clew_ros.core.improve import _pieces
-    from clew_ros.core.regrasp import propose
 
-    world = _world("figure1")
+    world = _world(name)
     first = _plan(world, 0, 0.0)
     goal = np.asarray(world.object.goal, dtype=float)
     ctx = PlanningContext(world, PlannerSettings(seed=0, improve_time=0.4), np.random.default_rng(0), Termination(30))
-    improver = _Improver(ctx, _pieces(world, first.segments), goal)
+
+    def fresh() -> _Improver:
+        return _Improver(ctx, _pieces(world, first.segments), goal)
+
+    return world, fresh(), fresh
+
+
+def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_ones_apart(monkeypatch) -> None:
+    # routing (RRT-Connect) is dear: a call for the proposals that looked clear never routes, and a call for
+    # the blocked ones checks nothing else
+    from clew_ros.core.regrasp import propose
+
+    world, improver, fresh_improver = _improver_on_first_plan("figure1")
+    goal = np.asarray(world.object.goal, dtype=float)
     proposals, _ = propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(2))
     clear = [p for p in proposals if p.blocked == 0]
     assert clear
@@ -437,7 +449,7 @@ def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_one
     assert checked
     assert all(p.blocked == 0 for p in checked)
     # the blocked ones, from the first plan again: only they are checked
-    fresh = _Improver(ctx, _pieces(world, first.segments), goal)
+    fresh = fresh_improver()
     routed: list = []
     recording(fresh, routed)
     fresh.try_proposals(proposals, 0, placement, routed=True)
@@ -449,13 +461,8 @@ def test_blocked_proposals_are_routed_fewer_transfers_first(monkeypatch) -> None
     # a plan with fewer transfers always wins, so a blocked one-transfer proposal is routed before any
     # blocked two-transfer one, however long
     from clew_ros.core import improve as improve_module
-    from clew_ros.core.improve import _pieces
 
-    world = _world("arm3_regrasp")
-    first = _plan(world, 0, 0.0)
-    goal = np.asarray(world.object.goal, dtype=float)
-    ctx = PlanningContext(world, PlannerSettings(seed=0, improve_time=0.4), np.random.default_rng(0), Termination(30))
-    improver = _Improver(ctx, _pieces(world, first.segments), goal)
+    _, improver, _ = _improver_on_first_plan("arm3_regrasp")
     lists: list = []
 
     def try_proposals(proposals, kept, placement, *, routed):

@@ -6,99 +6,157 @@ roots), taking turns. Each round draws a configuration within the joint
 limits, extends one tree one step towards it (at most ``step_rad`` per
 joint), then extends the other tree greedily towards the new node; they
 have met when it reaches that node. Every extension is a straight joint-space
-move accepted by the caller's ``clear(a, b)`` (a continuous check:
-:func:`clew_ros.core.continuous.straight_move_clear`), so the path found is valid
-at any checking resolution. :func:`shortened` then joins each waypoint
-straight to the farthest later one that is clear.
+move checked continuously (:func:`clew_ros.core.continuous.straight_move_clear`),
+so the path found is valid at any checking resolution. :func:`shortened` then
+joins each waypoint straight to the farthest later one that the caller's
+``clear(a, b)`` accepts.
 
-The configurations are drawn from the caller's generator and the work is
-bounded by rounds, not seconds: the same seed gives the same path.
+The rounds are compiled (:func:`clew_ros.core.kernel.connect_rounds`),
+:data:`ROUNDS_PER_CALL` to a call: a round in Python cost several times its
+checks (the nearest node, the step, the calls), and routing the improvement's
+blocked moves needs hundreds of rounds. The configurations are drawn from the
+caller's generator and the work is bounded by rounds and work units, not
+seconds: the same seed gives the same path.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from typing import Protocol
 
 import numpy as np
 
-from clew_ros.core.continuous import straight_move_clear
+from clew_ros.core.collision import packed_world
+from clew_ros.core.continuous import COARSE_STRIDE, MAX_MARGIN_M, straight_move_clear
+from clew_ros.core.kernel import connect_rounds
 from clew_ros.core.world import World
 
-__all__ = ["STEP_RAD", "Clear", "join", "rrt_connect", "shortened"]
+__all__ = ["ROUNDS_PER_CALL", "STEP_RAD", "Clear", "RoutingBudget", "join", "rrt_connect", "shortened"]
 
 #: Largest joint step (rad, largest joint difference) of one tree extension.
 STEP_RAD = 0.35
+
+#: Rounds per compiled call: the clock's stop test and the budget are asked between calls.
+ROUNDS_PER_CALL = 32
+
+_NOWHERE = np.zeros(3)  # the resting pose given with a transfer (the pose held is used instead)
 
 #: ``clear(a, b)``: whether the straight joint-space move ``a -> b`` is valid all along.
 Clear = Callable[[np.ndarray, np.ndarray], bool]
 
 
-class _Tree:
-    """Nodes and their parents (-1 for a root)."""
+class RoutingBudget(Protocol):
+    """What :func:`rrt_connect` charges its work to: ``check_work`` units a configuration checked and
+    ``round_work`` a round, what it may spend (:meth:`allowance`), and the clock's stop test."""
 
-    def __init__(self, roots: np.ndarray) -> None:
-        self.nodes = [np.asarray(root, dtype=float) for root in roots]
-        self.parents = [-1] * len(self.nodes)
+    check_work: float
+    round_work: float
 
-    def branch(self, node: int) -> list[np.ndarray]:
-        """The nodes from the root to ``node``."""
-        branch = []
-        while node >= 0:
-            branch.append(self.nodes[node])
-            node = self.parents[node]
-        return branch[::-1]
+    def allowance(self) -> float:
+        """Work units the routing may still spend."""
 
-    def extend(self, clear: Clear, target: np.ndarray, step_rad: float, *, greedy: bool = False) -> int | None:
-        """Grow from the node nearest ``target`` towards it by steps of at most ``step_rad`` (one step, or
-        while clear when ``greedy``); the index of the last node added (of the node itself when it is the
-        target), ``None`` when not even one step was clear."""
-        near = int(np.argmin(np.max(np.abs(np.array(self.nodes) - target), axis=1)))
-        added = None
-        while True:
-            q = self.nodes[near]
-            gap = float(np.max(np.abs(target - q)))
-            if gap <= 1e-12:
-                return added if added is not None else near
-            step = target if gap <= step_rad else q + (step_rad / gap) * (target - q)
-            if not clear(q, step):
-                return added
-            self.nodes.append(step)
-            self.parents.append(near)
-            near = added = len(self.nodes) - 1
-            if not greedy:
-                return added
+    def spend(self, units: float) -> None: ...
+
+    def stop(self) -> bool: ...
+
+
+class _Unbounded:
+    """The budget of a routing bounded by its rounds and the clock only."""
+
+    check_work = 1.0
+    round_work = 1.0
+
+    def __init__(self, stop: Callable[[], bool]) -> None:
+        self.stop = stop
+
+    def allowance(self) -> float:
+        return math.inf
+
+    def spend(self, units: float) -> None:
+        pass
+
+
+def _branch(parents: np.ndarray, nodes: np.ndarray, node: int) -> list[np.ndarray]:
+    """The nodes from the root to ``node``."""
+    branch = []
+    while node >= 0:
+        branch.append(nodes[node].copy())
+        node = int(parents[node])
+    return branch[::-1]
 
 
 def rrt_connect(
-    clear: Clear,
+    world: World,
     start: np.ndarray,
     goals: np.ndarray,
     rng: np.random.Generator,
     *,
-    limits: tuple[np.ndarray, np.ndarray],
+    object_pose: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    min_margin: float,
     rounds: int,
-    stop: Callable[[], bool],
+    budget: RoutingBudget,
     step_rad: float = STEP_RAD,
 ) -> np.ndarray | None:
-    """Waypoints ``(m, n)`` from ``start`` ``(n,)`` to one of ``goals`` ``(g, n)``, every move ``clear``; ``None``
-    when the trees did not meet within ``rounds`` rounds or ``stop()`` said so (asked before each round).
-    Configurations are drawn within ``limits`` (the joints' lower and upper limits)."""
-    from_start = _Tree(np.asarray(start, dtype=float)[None])
-    trees = [from_start, _Tree(np.atleast_2d(np.asarray(goals, dtype=float)))]
-    for _ in range(rounds):
-        if stop():
+    """Waypoints ``(m, n)`` from ``start`` ``(n,)`` to one of ``goals`` ``(g, n)``, the object resting at
+    ``object_pose`` (a transit) or carried as ``grasp_rel`` (a transfer), every move clear
+    (:func:`clew_ros.core.continuous.straight_move_clear` with ``min_margin``); ``None`` when the trees did
+    not meet within ``rounds`` rounds or ``budget``'s allowance, or its stop test said so (asked before each
+    :data:`ROUNDS_PER_CALL` rounds). Configurations are drawn within the joint limits, that many at a time."""
+    if grasp_rel is None and object_pose is None:
+        raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
+    lower, upper = world.robot.joint_lower, world.robot.joint_upper
+    n = len(lower)
+    roots = [np.asarray(start, dtype=float)[None], np.atleast_2d(np.asarray(goals, dtype=float))]
+    most = 2 + math.ceil(float(np.max(upper - lower)) / step_rad)  # nodes one round may add to a tree
+    capacity = max(len(roots[1]), 1) + ROUNDS_PER_CALL * most
+    nodes = np.zeros((2, capacity, n))
+    parents = np.full((2, capacity), -1, dtype=np.int64)
+    sizes = np.array([1, len(roots[1])], dtype=np.int64)
+    nodes[0, :1], nodes[1, : sizes[1]] = roots
+    state = np.zeros(4, dtype=np.int64)  # tree extended first, node grown, node reached, met
+    packed = packed_world(world)
+    resting = _NOWHERE if object_pose is None else np.asarray(object_pose, dtype=float)
+    held = None if grasp_rel is None else np.asarray(grasp_rel, dtype=float)
+    done = 0
+    while done < rounds:
+        allowed = budget.allowance()
+        if allowed <= 0 or budget.stop():
             return None
-        target = rng.uniform(*limits)
-        grown = trees[0].extend(clear, target, step_rad)
-        if grown is not None:
-            meeting = trees[0].nodes[grown]
-            reached = trees[1].extend(clear, meeting, step_rad, greedy=True)
-            if reached is not None and np.array_equal(trees[1].nodes[reached], meeting):
-                halves = [trees[0].branch(grown), trees[1].branch(reached)]
-                if trees[0] is not from_start:
-                    halves.reverse()
-                return np.array([*halves[0], *halves[1][::-1][1:]])
-        trees.reverse()
+        if int(sizes.max()) + ROUNDS_PER_CALL * most > nodes.shape[1]:  # room for what the next call may add
+            nodes = np.concatenate([nodes, np.zeros_like(nodes)], axis=1)
+            parents = np.concatenate([parents, np.full_like(parents, -1)], axis=1)
+        targets = rng.uniform(lower, upper, size=(min(ROUNDS_PER_CALL, rounds - done), n))
+        done += len(targets)
+        budget.spend(
+            connect_rounds(
+                packed,
+                nodes,
+                parents,
+                sizes,
+                state,
+                targets,
+                step_rad=step_rad,
+                allowed=allowed,
+                check_work=budget.check_work,
+                round_work=budget.round_work,
+                grasp_rel=held,
+                resting=resting,
+                min_margin=min_margin,
+                max_margin=MAX_MARGIN_M,
+                coarse_stride=COARSE_STRIDE,
+            )
+        )
+        if state[3]:
+            first, grown, reached = (int(v) for v in state[:3])
+            halves = [
+                _branch(parents[first], nodes[first], grown),
+                _branch(parents[1 - first], nodes[1 - first], reached),
+            ]
+            if first == 1:
+                halves.reverse()
+            return np.array([*halves[0], *halves[1][::-1][1:]])
     return None
 
 
@@ -123,7 +181,7 @@ class _Stopping:
     def __init__(self, stop: Callable[[], bool]) -> None:
         self._stop = stop
 
-    def spend_checks(self, configurations: int, calls: int = 1) -> None:
+    def spend_move_checks(self, configurations: int) -> None:
         pass
 
     def stop(self) -> bool:
@@ -154,6 +212,15 @@ def join(
             world, a, b, object_pose=object_pose, grasp_rel=grasp_rel, min_margin=min_margin, budget=budget
         )
 
-    limits = (world.robot.joint_lower, world.robot.joint_upper)
-    path = rrt_connect(clear, start, targets, rng, limits=limits, rounds=rounds, stop=stop)
+    path = rrt_connect(
+        world,
+        start,
+        targets,
+        rng,
+        object_pose=object_pose,
+        grasp_rel=grasp_rel,
+        min_margin=min_margin,
+        rounds=rounds,
+        budget=_Unbounded(stop),
+    )
     return None if path is None else shortened(clear, path, stop)

@@ -76,7 +76,8 @@ returned.
 in work, not seconds: :data:`WORK_PER_SECOND` units per second of
 ``planner.improve_time``; a configuration checked costs one unit, or more
 in a world whose check compares more pieces (:func:`check_work`), plus
-:data:`CALL_WORK` per call of the check, :data:`ATTEMPT_WORK` per shortcut
+:data:`MOVE_CALL_WORK` per call of the compiled straight-move check,
+:data:`CALL_WORK` per call of the configuration check, :data:`ATTEMPT_WORK` per shortcut
 attempt, :data:`IK_WORK` per step of inverse kinematics and
 :data:`EVALUATION_WORK` per genetic-algorithm individual.
 The final check of the segments changed so far at the validator's step is
@@ -96,7 +97,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.connect import rrt_connect, shortened
-from clew_ros.core.continuous import CHECK_STEP_RAD, MIN_MARGIN_FACTOR, path_valid, straight_move_clear
+from clew_ros.core.continuous import (
+    CHECK_STEP_RAD,
+    MIN_MARGIN_FACTOR,
+    path_valid,
+    straight_move_clear,
+    straight_moves_clear,
+)
 from clew_ros.core.kernel import pruned_path
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
@@ -110,7 +117,9 @@ __all__ = [
     "EVALUATION_WORK",
     "IK_WORK",
     "MIN_MARGIN_FACTOR",
+    "MOVE_CALL_WORK",
     "REFERENCE_COST",
+    "ROUND_WORK",
     "WORK_PER_SECOND",
     "Improvement",
     "check_work",
@@ -125,6 +134,12 @@ WORK_PER_SECOND = 3.5e5
 #: Work of one call of the compiled check (the Python around it: poses, margins, halving), in units of one
 #: configuration of figure1.
 CALL_WORK = 100
+#: Work of one call of the compiled straight-move check (:func:`clew_ros.core.continuous.straight_moves_clear`:
+#: the Python around it, one or several moves), in the same units.
+MOVE_CALL_WORK = 20
+#: Work of one round of RRT-Connect besides its checks (drawing its configuration, finding the nearest node), in
+#: the same units.
+ROUND_WORK = 2.0
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
 #: Work of one shortcut attempt besides its checks (drawing it, scoring the new path), in units.
@@ -254,6 +269,10 @@ class _Budget:
         """Charge ``configurations`` checked in ``calls`` calls of the compiled check."""
         self.spent += math.ceil(configurations * self.check_work) + calls * CALL_WORK
 
+    def spend_move_checks(self, configurations: int) -> None:
+        """Charge one call of the compiled straight-move check that checked ``configurations``."""
+        self.spent += math.ceil(configurations * self.check_work) + MOVE_CALL_WORK
+
     def left(self, share: float = 1.0) -> bool:
         """Whether work is left (within ``share`` of the budget) and the clock allows more."""
         if self.stop():
@@ -264,6 +283,29 @@ class _Budget:
         if not self.stopped and self.ctx.termination():
             self.stopped = True
         return self.stopped
+
+
+class _RoutingShare:
+    """A routing's part of the budget (:class:`clew_ros.core.connect.RoutingBudget`): what is left of the
+    budget, and at most until ``limit`` units are spent; each compiled call of its rounds costs
+    :data:`MOVE_CALL_WORK` more."""
+
+    round_work = ROUND_WORK
+
+    def __init__(self, budget: _Budget, limit: float) -> None:
+        self.budget = budget
+        self.limit = limit
+        self.check_work = budget.check_work
+
+    def allowance(self) -> float:
+        left = self.budget.total - self.budget.reserve - self.budget.spent
+        return min(self.limit - self.budget.spent, left)
+
+    def spend(self, units: float) -> None:
+        self.budget.spend(math.ceil(units) + MOVE_CALL_WORK)
+
+    def stop(self) -> bool:
+        return self.budget.stop()
 
 
 def check_work(world: World) -> float:
@@ -367,6 +409,23 @@ class _Improver:
             grasp_rel=piece.grasp_rel,
             min_margin=self.min_margin,
             budget=self.budget,
+        )
+
+    def path_clear(self, piece: _Piece, path: np.ndarray) -> bool:
+        """Whether every move of ``path`` is clear in ``piece``'s mode (one call of the check; it stops at the
+        first move that is not)."""
+        path = np.asarray(path, dtype=float)
+        return bool(
+            straight_moves_clear(
+                self.world,
+                path[:-1],
+                path[1:],
+                object_pose=piece.start_pose,
+                grasp_rel=piece.grasp_rel,
+                min_margin=self.min_margin,
+                budget=self.budget,
+                every=True,
+            ).all()
         )
 
     def reserve(self) -> None:
@@ -573,13 +632,15 @@ class _Improver:
             return self.clear(piece, p, q)
 
         path = rrt_connect(
-            clear,
+            self.world,
             a,
             np.asarray(b, dtype=float)[None],
             self.ctx.rng,
-            limits=(self.world.robot.joint_lower, self.world.robot.joint_upper),
+            object_pose=piece.start_pose,
+            grasp_rel=piece.grasp_rel,
+            min_margin=self.min_margin,
             rounds=CONNECT_STEPS,
-            stop=lambda: self.budget.spent > limit or not self.budget.left(),
+            budget=_RoutingShare(self.budget, limit),
         )
         return None if path is None else shortened(clear, path, lambda: self.budget.spent > limit)
 
@@ -593,7 +654,7 @@ class _Improver:
             path = route_waypoints(a, b, way)
             if self.budget.stop():
                 return None
-            if all(self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
+            if self.path_clear(piece, path):
                 return path
         n = len(a)
         lower, upper = self.world.robot.joint_lower, self.world.robot.joint_upper
@@ -606,7 +667,7 @@ class _Improver:
                     via = a + self.ctx.rng.uniform(0.0, 1.0, size=n) * (b - a)
                 else:
                     via = np.clip(0.5 * (a + b) + self.ctx.rng.normal(0.0, spread, size=n), lower, upper)
-                if self.clear(piece, a, via) and self.clear(piece, via, b):
+                if self.path_clear(piece, np.array([a, via, b])):
                     return np.array([a, via, b])
         return None
 
@@ -724,7 +785,7 @@ class _Improver:
         new = _without_repeats(joined)
         if not _better((0, joint_travel([w]), len(w)), (0, joint_travel([new]), len(new))):
             return False
-        if not all(self.budget.left() and self.clear(piece, p, q) for p, q in itertools.pairwise(path)):
+        if not (self.budget.left() and self.path_clear(piece, path)):
             return False
         piece.waypoints = pruned_path(new)
         self.shortcuts += 1

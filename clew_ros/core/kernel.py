@@ -55,8 +55,10 @@ __all__ = [
     "bounce_array",
     "chain",
     "clearly_valid",
+    "connect_rounds",
     "decode",
     "intervals",
+    "moves_clear",
     "pruned_path",
     "solve_point",
     "warm_up",
@@ -100,6 +102,23 @@ _WorldArguments = tuple[
     np.ndarray,
     np.ndarray,
     np.ndarray,
+]
+#: :attr:`PackedWorld.move_arguments`: the world in the order :func:`_moves_clear` takes it.
+_MoveArguments = tuple[
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    float,
+    bool,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    float,
 ]
 #: The broad phase of :func:`_interval` keeps an obstacle whose bounding circle is within this (m) of the
 #: moving pieces' reach: far more than the rounding of the distances it compares.
@@ -177,6 +196,11 @@ class PackedWorld:
             self.object_edges,
             self.shrunk_edges,
         )
+
+    @functools.cached_property
+    def move_arguments(self) -> _MoveArguments:
+        """The world in the order :func:`_moves_clear` takes it (built once: it checks one move at a time)."""
+        return (self.base, self.lengths, self.lower, self.upper, *self.validity_arguments()[2:])
 
     def validity_arguments(self) -> _ValidityArguments:
         return (
@@ -870,7 +894,7 @@ def _segment_clear_of_ring(
 
 
 @_jit
-def _clearly_valid(  # noqa: C901, PLR0912 - one compiled pass per configuration, leaving at the first doubt
+def _clearly_valid(
     q: np.ndarray,
     poses: np.ndarray,
     out: np.ndarray,
@@ -894,82 +918,434 @@ def _clearly_valid(  # noqa: C901, PLR0912 - one compiled pass per configuration
     links = np.empty((n, 2, 2))
     shape = np.empty((object_edges.shape[0], 2, 2))
     shrunk = np.empty((shrunk_edges.shape[0], 2, 2))
-    xmin, ymin, xmax, ymax = bounds[0], bounds[1], bounds[2], bounds[3]
     for b in range(q.shape[0]):
-        out[b] = False
-        _forward(q[b], base, lengths, links)
-        inside = True
-        for i in range(n):
-            for v in range(2):
-                x, y = links[i, v, 0], links[i, v, 1]
-                inside = inside and xmin + r + eps < x < xmax - r - eps and ymin + r + eps < y < ymax - r - eps
-        if not inside:
-            continue
-        _place(object_edges, poses[b, 0], poses[b, 1], poses[b, 2], 0.0, 0.0, shape)
-        _place(shrunk_edges, poses[b, 0], poses[b, 1], poses[b, 2], 0.0, 0.0, shrunk)
-        ok = True
-        sx0, sy0, sx1, sy1 = math.inf, math.inf, -math.inf, -math.inf  # the object's bounding box
-        for e in range(shape.shape[0]):  # the object inside the bounds
-            vx, vy = shape[e, 0, 0], shape[e, 0, 1]
-            if not (xmin + eps < vx < xmax - eps and ymin + eps < vy < ymax - eps):
-                ok = False
-            sx0, sy0, sx1, sy1 = min(sx0, vx), min(sy0, vy), max(sx1, vx), max(sy1, vy)
-        for o in range(boxes.shape[0]):
-            if not ok:
-                break
-            first, last = obstacle_starts[o], obstacle_starts[o + 1]
-            lx, ly, hx, hy = boxes[o, 0] - r - eps, boxes[o, 1] - r - eps, boxes[o, 2] + r + eps, boxes[o, 3] + r + eps
-            for i in range(n):  # links kept r away from the obstacle
-                ax, ay, bx, by = links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1]
-                if max(ax, bx) < lx or min(ax, bx) > hx or max(ay, by) < ly or min(ay, by) > hy:
-                    continue
-                if not _segment_clear_of_ring(ax, ay, bx, by, obstacles, first, last, r + eps):
-                    ok = False
-                    break
-            if not ok:
-                break
-            if sx1 < boxes[o, 0] - eps or sx0 > boxes[o, 2] + eps or sy1 < boxes[o, 1] - eps or sy0 > boxes[o, 3] + eps:
-                continue  # boxes more than eps apart: so are the object and the obstacle, neither inside the other
-            for e in range(shape.shape[0]):  # the object off the obstacle: boundaries apart, neither inside
-                if not _segment_clear_of_ring(
-                    shape[e, 0, 0], shape[e, 0, 1], shape[e, 1, 0], shape[e, 1, 1], obstacles, first, last, eps
+        out[b] = _valid_beyond(
+            q[b],
+            poses[b, 0],
+            poses[b, 1],
+            poses[b, 2],
+            eps,
+            n,
+            links,
+            shape,
+            shrunk,
+            base,
+            lengths,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            obstacle_starts,
+            boxes,
+            object_edges,
+            shrunk_edges,
+            shrunk_starts,
+        )
+
+
+@_leaf
+def _valid_beyond(  # noqa: C901, PLR0911, PLR0912 - one compiled pass per configuration, leaving at the first doubt
+    q: np.ndarray,
+    px: float,
+    py: float,
+    pt: float,
+    eps: float,
+    shrunk_links: int,
+    links: np.ndarray,
+    shape: np.ndarray,
+    shrunk: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    obstacle_starts: np.ndarray,
+    boxes: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    shrunk_starts: np.ndarray,
+) -> bool:
+    """One configuration ``q (n,)`` of :func:`_clearly_valid`, the object at ``(px, py, pt)``; only the
+    first ``shrunk_links`` links are tested against the shrunk object. ``links``, ``shape`` and ``shrunk``
+    are scratch arrays of the sizes of the links, ``object_edges`` and ``shrunk_edges``."""
+    n = lengths.shape[0]
+    xmin, ymin, xmax, ymax = bounds[0], bounds[1], bounds[2], bounds[3]
+    _forward(q, base, lengths, links)
+    for i in range(n):
+        for v in range(2):
+            x, y = links[i, v, 0], links[i, v, 1]
+            if not (xmin + r + eps < x < xmax - r - eps and ymin + r + eps < y < ymax - r - eps):
+                return False
+    _place(object_edges, px, py, pt, 0.0, 0.0, shape)
+    _place(shrunk_edges, px, py, pt, 0.0, 0.0, shrunk)
+    sx0, sy0, sx1, sy1 = math.inf, math.inf, -math.inf, -math.inf  # the object's bounding box
+    for e in range(shape.shape[0]):  # the object inside the bounds
+        vx, vy = shape[e, 0, 0], shape[e, 0, 1]
+        if not (xmin + eps < vx < xmax - eps and ymin + eps < vy < ymax - eps):
+            return False
+        sx0, sy0, sx1, sy1 = min(sx0, vx), min(sy0, vy), max(sx1, vx), max(sy1, vy)
+    for o in range(boxes.shape[0]):
+        first, last = obstacle_starts[o], obstacle_starts[o + 1]
+        lx, ly, hx, hy = boxes[o, 0] - r - eps, boxes[o, 1] - r - eps, boxes[o, 2] + r + eps, boxes[o, 3] + r + eps
+        for i in range(n):  # links kept r away from the obstacle
+            ax, ay, bx, by = links[i, 0, 0], links[i, 0, 1], links[i, 1, 0], links[i, 1, 1]
+            if max(ax, bx) < lx or min(ax, bx) > hx or max(ay, by) < ly or min(ay, by) > hy:
+                continue
+            if not _segment_clear_of_ring(ax, ay, bx, by, obstacles, first, last, r + eps):
+                return False
+        if sx1 < boxes[o, 0] - eps or sx0 > boxes[o, 2] + eps or sy1 < boxes[o, 1] - eps or sy0 > boxes[o, 3] + eps:
+            continue  # boxes more than eps apart: so are the object and the obstacle, neither inside the other
+        for e in range(shape.shape[0]):  # the object off the obstacle: boundaries apart, neither inside
+            if not _segment_clear_of_ring(
+                shape[e, 0, 0], shape[e, 0, 1], shape[e, 1, 0], shape[e, 1, 1], obstacles, first, last, eps
+            ):
+                return False
+        if _inside_ring(obstacles[first, 0, 0], obstacles[first, 0, 1], shape, 0, shape.shape[0]):
+            return False
+    for part in range(shrunk_starts.shape[0] - 1):  # links out of the object shrunk by the tolerance
+        for i in range(shrunk_links):
+            if not _segment_clear_of_ring(
+                links[i, 0, 0],
+                links[i, 0, 1],
+                links[i, 1, 0],
+                links[i, 1, 1],
+                shrunk,
+                shrunk_starts[part],
+                shrunk_starts[part + 1],
+                eps,
+            ):
+                return False
+    if self_collision:
+        for a in range(n):
+            for c in range(a + 2, n):
+                if not _segments_apart(
+                    links[a, 0, 0],
+                    links[a, 0, 1],
+                    links[a, 1, 0],
+                    links[a, 1, 1],
+                    links[c, 0, 0],
+                    links[c, 0, 1],
+                    links[c, 1, 0],
+                    links[c, 1, 1],
+                    2.0 * r + eps,
                 ):
-                    ok = False
-                    break
-            if ok and _inside_ring(obstacles[first, 0, 0], obstacles[first, 0, 1], shape, 0, shape.shape[0]):
-                ok = False
-        for part in range(shrunk_starts.shape[0] - 1):  # links out of the object shrunk by the tolerance
-            if not ok:
-                break
-            for i in range(n):
-                if not _segment_clear_of_ring(
-                    links[i, 0, 0],
-                    links[i, 0, 1],
-                    links[i, 1, 0],
-                    links[i, 1, 1],
-                    shrunk,
-                    shrunk_starts[part],
-                    shrunk_starts[part + 1],
-                    eps,
-                ):
-                    ok = False
-                    break
-        if ok and self_collision:
-            for a in range(n):
-                for c in range(a + 2, n):
-                    if not _segments_apart(
-                        links[a, 0, 0],
-                        links[a, 0, 1],
-                        links[a, 1, 0],
-                        links[a, 1, 1],
-                        links[c, 0, 0],
-                        links[c, 0, 1],
-                        links[c, 1, 0],
-                        links[c, 1, 1],
-                        2.0 * r + eps,
-                    ):
-                        ok = False
-        out[b] = ok
+                    return False
+    return True
+
+
+# --------------------------------------------------------------------------- straight moves
+
+
+@_leaf
+def _at(
+    a: np.ndarray,
+    b: np.ndarray,
+    t: float,
+    q: np.ndarray,
+    transfer: bool,
+    grasp_rel: np.ndarray,
+    resting: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    links: np.ndarray,
+) -> tuple[float, float, float]:
+    """``q = a + t (b - a)`` and the object's pose there: at ``resting``, or held as ``grasp_rel`` by the tip
+    (the tip's frame composed with ``grasp_rel``, as :func:`clew_ros.core.kinematics.compose` does)."""
+    for j in range(q.shape[0]):
+        q[j] = a[j] + t * (b[j] - a[j])
+    if not transfer:
+        return resting[0], resting[1], resting[2]
+    x, y, phi = _forward(q, base, lengths, links)
+    c, s = math.cos(phi), math.sin(phi)
+    return x + c * grasp_rel[0] - s * grasp_rel[1], y + s * grasp_rel[0] + c * grasp_rel[1], phi + grasp_rel[2]
+
+
+@_jit
+def _move_clear(  # noqa: C901, PLR0911, PLR0912 - the levels of one move, commented step by step
+    a: np.ndarray,
+    b: np.ndarray,
+    transfer: bool,
+    grasp_rel: np.ndarray,
+    resting: np.ndarray,
+    min_margin: float,
+    max_margin: float,
+    coarse_stride: int,
+    checked: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    obstacle_starts: np.ndarray,
+    boxes: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    shrunk_starts: np.ndarray,
+    rounding: float,
+) -> bool:
+    """:func:`clew_ros.core.continuous.straight_move_clear` of one move ``a -> b`` (its docstring says why it
+    is sound); adds the configurations it checks to ``checked[0]``."""
+    n = lengths.shape[0]
+    q = np.empty(n)
+    links = np.empty((n, 2, 2))
+    shape = np.empty((object_edges.shape[0], 2, 2))
+    shrunk = np.empty((shrunk_edges.shape[0], 2, 2))
+    for j in range(n):  # both ends within the joint limits
+        if a[j] < lower[j] or a[j] > upper[j] or b[j] < lower[j] or b[j] > upper[j]:
+            return False
+    # V: how far any point of the arm (and of the object held) moves; R_j sums links j..n-1 and the object
+    held = 0.0
+    if transfer:
+        c, s = math.cos(grasp_rel[2]), math.sin(grasp_rel[2])
+        for e in range(object_edges.shape[0]):
+            vx, vy = object_edges[e, 0, 0], object_edges[e, 0, 1]
+            held = max(held, math.hypot(grasp_rel[0] + c * vx - s * vy, grasp_rel[1] + s * vx + c * vy))
+    motion = 0.0
+    reach = 0.0
+    for j in range(n - 1, -1, -1):
+        reach += lengths[j]
+        motion += abs(b[j] - a[j]) * (reach + held)
+    motion = motion * (1.0 + 1e-9) + 1e-12
+    # in a transfer the last link and the object it holds keep their distance: it is checked once, at a
+    tested = n - 1 if transfer else n
+    if transfer:
+        px, py, pt = _at(a, b, 0.0, q, transfer, grasp_rel, resting, base, lengths, links)
+        checked[0] += 1
+        if not _valid_beyond(
+            q, px, py, pt, min_margin, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
+            obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
+        ):  # fmt: skip
+            return False
+    # level k: 2**k pieces, each cleared by its midpoint with margin motion / 2**(k + 1)
+    level = max(0, math.ceil(math.log2(max(motion / (2.0 * max_margin), 1.0))))
+    count = 2**level
+    if count >= 2 * coarse_stride:  # a long move: every coarse_stride-th midpoint first, valid at all?
+        for piece in range(coarse_stride // 2, count, coarse_stride):
+            px, py, pt = _at(a, b, (piece + 0.5) / count, q, transfer, grasp_rel, resting, base, lengths, links)
+            checked[0] += 1
+            if not _valid_beyond(
+                q, px, py, pt, rounding, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
+                obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
+            ):  # fmt: skip
+                return False  # most blocked moves end here, for a fraction of the first level's checks
+    pending = np.arange(count)  # piece indices at this level
+    while pending.shape[0]:
+        pieces = float(count)
+        margin = max(motion / (2.0 * pieces), min_margin)  # the last level: a short piece needs only the least
+        failed = np.empty(pending.shape[0], np.int64)
+        nfailed = 0
+        for k in range(pending.shape[0]):
+            t = (pending[k] + 0.5) / pieces
+            px, py, pt = _at(a, b, t, q, transfer, grasp_rel, resting, base, lengths, links)
+            checked[0] += 1
+            if _valid_beyond(
+                q, px, py, pt, margin, tested, links, shape, shrunk, base, lengths, r, self_collision, bounds,
+                obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
+            ):  # fmt: skip
+                continue
+            if margin <= min_margin:
+                return False
+            # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
+            checked[0] += 1
+            if not _valid_beyond(
+                q, px, py, pt, rounding, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
+                obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
+            ):  # fmt: skip
+                return False
+            failed[nfailed] = pending[k]
+            nfailed += 1
+        if nfailed == 0:
+            return True
+        pending = np.empty(2 * nfailed, np.int64)
+        for k in range(nfailed):
+            pending[2 * k], pending[2 * k + 1] = 2 * failed[k], 2 * failed[k] + 1
+        count *= 2
+    return True
+
+
+@_jit
+def _moves_clear(
+    starts: np.ndarray,
+    ends: np.ndarray,
+    every: bool,
+    transfer: bool,
+    grasp_rel: np.ndarray,
+    resting: np.ndarray,
+    min_margin: float,
+    max_margin: float,
+    coarse_stride: int,
+    out: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    obstacle_starts: np.ndarray,
+    boxes: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    shrunk_starts: np.ndarray,
+    rounding: float,
+) -> int:
+    """``out[k]``: :func:`_move_clear` of ``starts[k] -> ends[k]``; when ``every``, the moves after the first
+    that is not clear are left unchecked (False). Returns how many configurations were checked."""
+    out[:] = False
+    checked = np.zeros(1, np.int64)
+    for k in range(starts.shape[0]):
+        out[k] = _move_clear(
+            starts[k], ends[k], transfer, grasp_rel, resting, min_margin, max_margin, coarse_stride, checked,
+            base, lengths, lower, upper, r, self_collision, bounds, obstacles, obstacle_starts, boxes,
+            object_edges, shrunk_edges, shrunk_starts, rounding,
+        )  # fmt: skip
+        if every and not out[k]:
+            break
+    return int(checked[0])
+
+
+# --------------------------------------------------------------------------- RRT-Connect
+
+
+@_jit
+def _extend(
+    nodes: np.ndarray,
+    parents: np.ndarray,
+    sizes: np.ndarray,
+    which: int,
+    target: np.ndarray,
+    step_rad: float,
+    greedy: bool,
+    transfer: bool,
+    grasp_rel: np.ndarray,
+    resting: np.ndarray,
+    min_margin: float,
+    max_margin: float,
+    coarse_stride: int,
+    checked: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    obstacle_starts: np.ndarray,
+    boxes: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    shrunk_starts: np.ndarray,
+    rounding: float,
+) -> int:
+    """Grow tree ``which`` (``nodes[which, :sizes[which]]``) from its node nearest ``target`` (largest joint
+    difference, the first of equals) towards it by steps of at most ``step_rad``: one step, or while clear
+    when ``greedy``. Returns the last node added (the nearest itself when it is the target), -1 when not
+    even one step was clear."""
+    n = nodes.shape[2]
+    near = 0
+    best = math.inf
+    for i in range(sizes[which]):
+        far = 0.0
+        for j in range(n):
+            far = max(far, abs(nodes[which, i, j] - target[j]))
+        if far < best:
+            near, best = i, far
+    added = -1
+    step = np.empty(n)
+    while True:
+        gap = 0.0
+        for j in range(n):
+            gap = max(gap, abs(target[j] - nodes[which, near, j]))
+        if gap <= 1e-12:
+            return added if added >= 0 else near
+        for j in range(n):
+            q = nodes[which, near, j]
+            step[j] = target[j] if gap <= step_rad else q + (step_rad / gap) * (target[j] - q)
+        if not _move_clear(
+            nodes[which, near], step, transfer, grasp_rel, resting, min_margin, max_margin, coarse_stride, checked,
+            base, lengths, lower, upper, r, self_collision, bounds, obstacles, obstacle_starts, boxes,
+            object_edges, shrunk_edges, shrunk_starts, rounding,
+        ):  # fmt: skip
+            return added
+        added = int(sizes[which])
+        nodes[which, added] = step
+        parents[which, added] = near
+        sizes[which] += 1
+        near = added
+        if not greedy:
+            return added
+
+
+@_jit
+def _connect_rounds(
+    nodes: np.ndarray,
+    parents: np.ndarray,
+    sizes: np.ndarray,
+    state: np.ndarray,
+    targets: np.ndarray,
+    step_rad: float,
+    allowed: float,
+    check_work: float,
+    round_work: float,
+    transfer: bool,
+    grasp_rel: np.ndarray,
+    resting: np.ndarray,
+    min_margin: float,
+    max_margin: float,
+    coarse_stride: int,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    obstacle_starts: np.ndarray,
+    boxes: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    shrunk_starts: np.ndarray,
+    rounding: float,
+) -> float:
+    """Rounds of RRT-Connect, one per row of ``targets``, while the work spent (``round_work`` a round,
+    ``check_work`` a configuration checked) is within ``allowed``; returns the work spent. ``state``:
+    ``[tree extended first, node grown, node reached, met]``; tree 0 grows from the start, tree 1 from the
+    goals, and they take turns."""
+    checked = np.zeros(1, np.int64)
+    spent = 0.0
+    for k in range(targets.shape[0]):
+        if spent >= allowed:
+            break
+        first = state[0]
+        checked[0] = 0
+        grown = _extend(
+            nodes, parents, sizes, first, targets[k], step_rad, False, transfer, grasp_rel, resting, min_margin,
+            max_margin, coarse_stride, checked, base, lengths, lower, upper, r, self_collision, bounds, obstacles,
+            obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts, rounding,
+        )  # fmt: skip
+        if grown >= 0:
+            reached = _extend(
+                nodes, parents, sizes, 1 - first, nodes[first, grown], step_rad, True, transfer, grasp_rel,
+                resting, min_margin, max_margin, coarse_stride, checked, base, lengths, lower, upper, r,
+                self_collision, bounds, obstacles, obstacle_starts, boxes, object_edges, shrunk_edges,
+                shrunk_starts, rounding,
+            )  # fmt: skip
+            met = reached >= 0
+            for j in range(nodes.shape[2]):
+                met = met and nodes[1 - first, reached, j] == nodes[first, grown, j]
+            if met:
+                state[1], state[2], state[3] = grown, reached, 1
+                return spent + round_work + float(checked[0]) * check_work
+        spent += round_work + float(checked[0]) * check_work
+        state[0] = 1 - first
+    return spent
 
 
 # --------------------------------------------------------------------------- kinematics
@@ -1171,6 +1547,87 @@ def clearly_valid(world: PackedWorld, q: np.ndarray, poses: np.ndarray) -> np.nd
     return out
 
 
+def moves_clear(
+    world: PackedWorld,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    *,
+    grasp_rel: np.ndarray | None,
+    resting: np.ndarray,
+    min_margin: float,
+    max_margin: float,
+    coarse_stride: int,
+    every: bool = False,
+) -> tuple[np.ndarray, int]:
+    """Compiled :func:`clew_ros.core.continuous.straight_move_clear` of moves ``starts[k] -> ends[k]``
+    ``(K, n)``, the object at ``resting`` (a transit, ``grasp_rel`` ``None``) or held as ``grasp_rel``: which
+    are clear, and how many configurations were checked. With ``every``, the moves after the first that is
+    not clear are not checked (and not clear)."""
+    # called for every move the improvement tries: the Python here is kept to what the call needs
+    out = np.empty(len(starts), dtype=np.bool_)
+    checked = _moves_clear(
+        _arg(starts),
+        _arg(ends),
+        every,
+        grasp_rel is not None,
+        _NO_GRASP if grasp_rel is None else _arg(grasp_rel),
+        _arg(resting),
+        min_margin,
+        max_margin,
+        coarse_stride,
+        out,
+        *world.move_arguments,
+    )
+    return out, int(checked)
+
+
+_NO_GRASP = np.zeros(3)
+
+
+def connect_rounds(
+    world: PackedWorld,
+    nodes: np.ndarray,
+    parents: np.ndarray,
+    sizes: np.ndarray,
+    state: np.ndarray,
+    targets: np.ndarray,
+    *,
+    step_rad: float,
+    allowed: float,
+    check_work: float,
+    round_work: float,
+    grasp_rel: np.ndarray | None,
+    resting: np.ndarray,
+    min_margin: float,
+    max_margin: float,
+    coarse_stride: int,
+) -> float:
+    """Compiled rounds of RRT-Connect (:func:`clew_ros.core.connect.rrt_connect` keeps the trees: ``nodes``
+    ``(2, capacity, n)``, ``parents`` ``(2, capacity)`` int64, ``sizes`` ``(2,)`` int64 and ``state`` ``(4,)``
+    int64, all updated in place; room for every node the rounds may add), one per row of ``targets``, while
+    the work spent is within ``allowed``; returns the work spent."""
+    return float(
+        _connect_rounds(
+            nodes,
+            parents,
+            sizes,
+            state,
+            _arg(targets),
+            step_rad,
+            allowed,
+            check_work,
+            round_work,
+            grasp_rel is not None,
+            _NO_GRASP if grasp_rel is None else _arg(grasp_rel),
+            _arg(resting),
+            min_margin,
+            max_margin,
+            coarse_stride,
+            *world.move_arguments,
+        )
+    )
+
+
 def chain(base: np.ndarray, lengths: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Compiled forward kinematics: joint positions ``(B, n + 1, 2)`` and tip frames ``(B, 3)``."""
     q = _arg(q)
@@ -1324,6 +1781,24 @@ def warm_up() -> float:
     bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
     pruned_path(np.zeros((3, 2)))
     clearly_valid(world, waypoints[:, 0], np.zeros(3))
+    moving = {"resting": np.zeros(3), "min_margin": 1e-3, "max_margin": 0.05, "coarse_stride": 4}
+    for held in (None, np.zeros(3)):
+        moves_clear(world, waypoints[:, 0], waypoints[:, 1] + 0.1, grasp_rel=held, **moving)  # type: ignore[arg-type]
+        nodes, parents = np.zeros((2, 8, 2)), np.full((2, 8), -1, dtype=np.int64)
+        connect_rounds(
+            world,
+            nodes,
+            parents,
+            np.ones(2, dtype=np.int64),
+            np.zeros(4, dtype=np.int64),
+            np.zeros((1, 2)),
+            step_rad=0.35,
+            allowed=1.0,
+            check_work=1.0,
+            round_work=1.0,
+            grasp_rel=held,
+            **moving,  # type: ignore[arg-type]
+        )
     for angles in (np.zeros(1), np.full(1, np.nan)):
         solve_point(
             world.base,

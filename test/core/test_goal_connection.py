@@ -5,19 +5,24 @@ from the same generator."""
 
 from __future__ import annotations
 
+import functools
 import itertools
+import math
+from pathlib import Path
 
 import numpy as np
 
 from clew_ros.core.collision import is_valid
-from clew_ros.core.connect import join, rrt_connect, shortened
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR
+from clew_ros.core.connect import ROUNDS_PER_CALL, STEP_RAD, join, rrt_connect, shortened
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_move_clear
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.plan import replay
 from clew_ros.core.search import JOIN_ROUNDS, goal_configurations, goal_reached
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.world import load_world
 from clew_ros.worlds import generate
 
+ROOT = Path(__file__).resolve().parents[2]
 FINE_RAD = 2e-4  # ten times finer than the validator
 
 
@@ -94,51 +99,92 @@ def test_no_goal_configuration_when_the_grasp_cannot_hold_the_object_at_the_goal
     assert len(goal_configurations(world, q[0], far, goal, np.random.default_rng(0))) == 0
 
 
-def _disc_clear(centre: np.ndarray, radius: float):
-    """A straight move between 2-D points is clear when it keeps out of a disc (exact segment test)."""
+class _Routing:
+    """A routing budget (``connect.RoutingBudget``) that records what is spent and stops when told."""
 
-    def clear(a: np.ndarray, b: np.ndarray) -> bool:
-        d = b - a
-        t = 0.0 if not d.any() else float(np.clip((centre - a) @ d / (d @ d), 0.0, 1.0))
-        return float(np.linalg.norm(a + t * d - centre)) > radius
+    check_work = 1.0
+    round_work = 2.0
 
-    return clear
+    def __init__(self, allowance: float = math.inf, stopped: bool = False) -> None:
+        self.left = allowance
+        self.stopped = stopped
+        self.spent: list[float] = []
 
+    def allowance(self) -> float:
+        return self.left - sum(self.spent)
 
-def test_rrt_connect_goes_round_a_wall_to_the_nearest_of_several_goals() -> None:
-    clear = _disc_clear(np.zeros(2), 1.0)
-    start = np.array([-1.5, 0.0])
-    goals = np.array([[1.5, 0.1], [1.6, -0.2]])
-    limits = (np.full(2, -3.0), np.full(2, 3.0))
-    paths = [
-        rrt_connect(clear, start, goals, np.random.default_rng(3), limits=limits, rounds=400, stop=lambda: False)
-        for _ in range(2)
-    ]
-    assert paths[0] is not None
-    assert np.array_equal(paths[0], paths[1])
-    path = paths[0]
-    assert np.array_equal(path[0], start)
-    assert any(np.array_equal(path[-1], g) for g in goals)
-    assert all(clear(u, v) for u, v in itertools.pairwise(path))
-    assert np.max(np.abs(np.diff(path, axis=0))) <= 0.35 + 1e-12  # one step per extension at most
-    short = shortened(clear, path)
-    assert np.array_equal(short[0], path[0])
-    assert np.array_equal(short[-1], path[-1])
-    assert all(clear(u, v) for u, v in itertools.pairwise(short))
-    assert len(short) <= len(path)
+    def spend(self, units: float) -> None:
+        self.spent.append(units)
+
+    def stop(self) -> bool:
+        return self.stopped
 
 
-def test_rrt_connect_gives_up_when_stopped_or_walled_in() -> None:
-    limits = (np.full(2, -3.0), np.full(2, 3.0))
-    start, goal = np.array([-1.5, 0.0]), np.array([[1.5, 0.0]])
-    never = lambda a, b: False  # noqa: E731 - nothing is clear
-    assert (
-        rrt_connect(never, start, goal, np.random.default_rng(0), limits=limits, rounds=50, stop=lambda: False) is None
-    )
-    clear = _disc_clear(np.zeros(2), 1.0)
-    assert (
-        rrt_connect(clear, start, goal, np.random.default_rng(0), limits=limits, rounds=50, stop=lambda: True) is None
-    )
+def _blocked_move(world, rng: np.random.Generator, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """Two valid configurations (the object at rest) whose straight move is not clear."""
+    rest = np.asarray(world.object.initial, dtype=float)
+    while True:
+        a, b = rng.uniform(world.robot.joint_lower, world.robot.joint_upper, (2, world.robot.dof))
+        if is_valid(world, np.stack([a, b]), rest).all() and not straight_move_clear(
+            world, a, b, object_pose=rest, min_margin=margin
+        ):
+            return a, b
+
+
+def test_rrt_connect_goes_round_an_obstacle_to_one_of_several_goals() -> None:
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    rest = np.asarray(world.object.initial, dtype=float)
+    margin = MIN_MARGIN_FACTOR * PlannerSettings().clearance
+    routed = 0
+    for trial in range(3):
+        start, goal = _blocked_move(world, np.random.default_rng(trial), margin)
+        goals = np.stack([goal, np.clip(goal + 0.05, world.robot.joint_lower, world.robot.joint_upper)])
+        budgets = [_Routing(), _Routing()]
+        paths = [
+            rrt_connect(world, start, goals, np.random.default_rng(3), object_pose=rest, min_margin=margin,
+                        rounds=2000, budget=budget)
+            for budget in budgets
+        ]  # fmt: skip
+        if paths[0] is None:
+            continue
+        routed += 1
+        assert paths[1] is not None
+        assert np.array_equal(paths[0], paths[1])
+        assert budgets[0].spent == budgets[1].spent
+        assert sum(budgets[0].spent) > 0
+        path = paths[0]
+        assert np.array_equal(path[0], start)
+        assert any(np.array_equal(path[-1], g) for g in goals)
+        assert np.max(np.abs(np.diff(path, axis=0))) <= STEP_RAD + 1e-12  # one step per extension at most
+        assert all(
+            straight_move_clear(world, u, v, object_pose=rest, min_margin=margin) for u, v in itertools.pairwise(path)
+        )
+        assert is_valid(world, _fine(path), rest).all()
+        short = shortened(lambda u, v: straight_move_clear(world, u, v, object_pose=rest, min_margin=margin), path)
+        assert np.array_equal(short[0], path[0])
+        assert np.array_equal(short[-1], path[-1])
+        assert is_valid(world, _fine(short), rest).all()
+        assert len(short) <= len(path)
+    assert routed >= 2
+
+
+def test_rrt_connect_gives_up_when_stopped_walled_in_or_out_of_work() -> None:
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    rest = np.asarray(world.object.initial, dtype=float)
+    margin = MIN_MARGIN_FACTOR * PlannerSettings().clearance
+    start, goal = _blocked_move(world, np.random.default_rng(0), margin)
+    route = functools.partial(rrt_connect, world, start, goal[None], object_pose=rest, rounds=400)
+    assert route(np.random.default_rng(0), min_margin=margin, budget=_Routing()) is not None
+    stopped = _Routing(stopped=True)
+    assert route(np.random.default_rng(0), min_margin=margin, budget=stopped) is None
+    assert stopped.spent == []
+    walled_in = _Routing()  # nothing keeps 10 m from everything: no move is clear
+    assert route(np.random.default_rng(0), min_margin=10.0, budget=walled_in) is None
+    assert len(walled_in.spent) == math.ceil(400 / ROUNDS_PER_CALL)  # every round was tried
+    short = _Routing(allowance=50.0)
+    assert route(np.random.default_rng(0), min_margin=margin, budget=short) is None
+    assert len(short.spent) == 1
+    assert 50.0 <= short.spent[0] < 50.0 + 1000  # stopped in the round that passed its allowance
 
 
 def test_a_join_that_fails_leaves_the_run_as_it_was(monkeypatch) -> None:

@@ -446,3 +446,17 @@ def test_one_pose_shared_by_a_batch_gives_the_intervals_of_the_pose_repeated(mod
         repeated = free_intervals(world, q, joint, **{key: np.repeat(pose, len(q), axis=0)})
         np.testing.assert_array_equal(shared[0], repeated[0])
         np.testing.assert_array_equal(shared[1], repeated[1])
+
+
+def test_warm_up_compiles_every_kernel_the_python_entry_points_call() -> None:
+    """In a fresh process (the kernels compiled or loaded from the cache), after :func:`kernel.warm_up` every
+    compiled function an entry point calls has a compiled version: no plan waits for the compiler."""
+    code = textwrap.dedent("""
+        import clew_ros.core.kernel as k
+        k.warm_up()
+        entry = ["_decode", "_intervals", "_clearly_valid", "_moves_clear", "_connect_rounds", "_solve_point",
+                 "_chain", "_pruned", "_bounce_all"]
+        print(" ".join(name for name in entry if not getattr(k, name).signatures))
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True)
+    assert done.stdout.split() == []

@@ -1,0 +1,78 @@
+"""``python -m benchmarks.improvement_stages [--worlds NAME|PATH ...] [--seeds N] [--improve-time S]``: where the
+anytime improvement's time goes, and whether its work counting keeps it within its budget.
+
+For each world (names and files as :mod:`benchmarks.improvement` takes them) and seed, the plan is made with
+the improvement on, and each stage of :class:`clew_ros.core.improve._Improver` (rebuilding, routing, fewer
+transfers, greedy and random shortcuts) records its wall time and the work it was charged. Prints a Markdown
+row per world and stage, summed over the seeds: wall time (s), the seconds its work stands for
+(``work / WORK_PER_SECOND``) and their ratio. Routing runs inside rebuilding and is counted in both. A stage
+whose ratio is far above the others' is charged too little for its Python.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections import defaultdict
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+from unittest import mock
+
+from benchmarks.reference import load_worlds
+from clew_ros.core.clew import plan
+from clew_ros.core.improve import WORK_PER_SECOND, _Improver
+from clew_ros.core.kernel import warm_up
+from clew_ros.core.settings import PlannerSettings
+
+ROOT = Path(__file__).resolve().parents[1]
+WORLDS = ("figure1", "arm3_regrasp", "arm5_regrasp")
+STAGES = ("rebuild", "connect", "fewer_transfers", "greedy_shortcuts", "random_shortcuts")
+
+
+def _recording(totals: dict[str, list[float]]) -> None:
+    """Make each stage of every improver add ``[wall s, work units]`` to ``totals[stage]``."""
+
+    def timed(stage: str, method: Callable[..., Any]) -> Callable[..., Any]:
+        def run(improver: _Improver, *args: Any, **kwargs: Any) -> Any:
+            started, spent = time.perf_counter(), improver.budget.spent
+            try:
+                return method(improver, *args, **kwargs)
+            finally:
+                totals[stage][0] += time.perf_counter() - started
+                totals[stage][1] += improver.budget.spent - spent
+
+        return run
+
+    for stage in STAGES:
+        mock.patch.object(_Improver, stage, timed(stage, getattr(_Improver, stage))).start()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "--worlds", nargs="+", default=None, help=f"benchmark world names or YAML files (default {' '.join(WORLDS)})"
+    )
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--improve-time", type=float, default=None, help="default: planner.improve_time's default")
+    args = parser.parse_args(argv)
+    warm_up()
+    names = args.worlds or [str(ROOT / "config" / f"{name}.yaml") for name in WORLDS]
+    print("| world | stage | wall s | work s | wall / work |\n|---|---|--:|--:|--:|")
+    for world, parameters in load_worlds(names):
+        totals: dict[str, list[float]] = defaultdict(lambda: [0.0, 0.0])
+        _recording(totals)
+        improving = {} if args.improve_time is None else {"improve_time": args.improve_time}
+        for seed in range(args.seeds):
+            plan(world, PlannerSettings.from_parameters(parameters, seed=seed, time_limit=120, **improving))
+        mock.patch.stopall()
+        for stage in STAGES:
+            wall, work = totals[stage]
+            nominal = work / WORK_PER_SECOND
+            ratio = f"{wall / nominal:.2f}" if nominal > 0 else "-"
+            print(f"| {world.name} | {stage} | {wall:.3f} | {nominal:.3f} | {ratio} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

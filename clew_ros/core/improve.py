@@ -131,9 +131,9 @@ __all__ = [
 #: docs/benchmarks.md when quiet, up to twice that with its 2 cores shared with other jobs: improvement
 #: takes at most about its budget there, and the same work everywhere).
 WORK_PER_SECOND = 3.5e5
-#: Work of one call of the compiled check (the Python around it: poses, margins, halving), in units of one
-#: configuration of figure1.
-CALL_WORK = 100
+#: Work of one call of the compiled configuration check (the Python around it: the proposals' screens sample
+#: the ways and compute poses), in units of one configuration of figure1.
+CALL_WORK = 200
 #: Work of one call of the compiled straight-move check (:func:`clew_ros.core.continuous.straight_moves_clear`:
 #: the Python around it, one or several moves), in the same units.
 MOVE_CALL_WORK = 20

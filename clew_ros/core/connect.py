@@ -40,8 +40,6 @@ STEP_RAD = 0.35
 #: Rounds per compiled call: the clock's stop test and the budget are asked between calls.
 ROUNDS_PER_CALL = 32
 
-_NOWHERE = np.zeros(3)  # the resting pose given with a transfer (the pose held is used instead)
-
 #: ``clear(a, b)``: whether the straight joint-space move ``a -> b`` is valid all along.
 Clear = Callable[[np.ndarray, np.ndarray], bool]
 
@@ -104,11 +102,12 @@ def rrt_connect(
     (:func:`clew_ros.core.continuous.straight_move_clear` with ``min_margin``); ``None`` when the trees did
     not meet within ``rounds`` rounds or ``budget``'s allowance, or its stop test said so (asked before each
     :data:`ROUNDS_PER_CALL` rounds). Configurations are drawn within the joint limits, that many at a time."""
-    if grasp_rel is None and object_pose is None:
-        raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
     lower, upper = world.robot.joint_lower, world.robot.joint_upper
     n = len(lower)
     roots = [np.asarray(start, dtype=float)[None], np.atleast_2d(np.asarray(goals, dtype=float))]
+    if roots[1].size == 0 or roots[1].shape[1] != n or roots[0].shape[1] != n:
+        expected = f"expected ({n},) and (g >= 1, {n}) configurations"
+        raise ValueError(f"start, goals: {expected}, got {roots[0].shape[1:]} and {roots[1].shape}")
     most = 2 + math.ceil(float(np.max(upper - lower)) / step_rad)  # nodes one round may add to a tree
     capacity = max(len(roots[1]), 1) + ROUNDS_PER_CALL * most
     nodes = np.zeros((2, capacity, n))
@@ -117,8 +116,7 @@ def rrt_connect(
     nodes[0, :1], nodes[1, : sizes[1]] = roots
     state = np.zeros(4, dtype=np.int64)  # tree extended first, node grown, node reached, met
     packed = packed_world(world)
-    resting = _NOWHERE if object_pose is None else np.asarray(object_pose, dtype=float)
-    held = None if grasp_rel is None else np.asarray(grasp_rel, dtype=float)
+    mode = {"resting": None if grasp_rel is not None else object_pose, "grasp_rel": grasp_rel}
     done = 0
     while done < rounds:
         allowed = budget.allowance()
@@ -141,8 +139,7 @@ def rrt_connect(
                 allowed=allowed,
                 check_work=budget.check_work,
                 round_work=budget.round_work,
-                grasp_rel=held,
-                resting=resting,
+                **mode,
                 min_margin=min_margin,
                 max_margin=MAX_MARGIN_M,
                 coarse_stride=COARSE_STRIDE,
@@ -175,8 +172,8 @@ def shortened(clear: Clear, path: np.ndarray, spent: Callable[[], bool] | None =
 
 
 class _Stopping:
-    """The check budget of :func:`join`: counts nothing, stops a check between its levels when ``stop()``
-    says so (the time limit or cancel)."""
+    """The check budget of :func:`join`'s shortening: counts nothing, and no check starts once ``stop()`` says
+    so (the time limit or cancel)."""
 
     def __init__(self, stop: Callable[[], bool]) -> None:
         self._stop = stop

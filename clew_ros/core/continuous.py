@@ -10,8 +10,8 @@ changes by at most that motion: for two moving bodies, measure in the frame
 of the nearer one to the base, where only the joints between them move the
 other; the last link and the object it carries do not move relative to each
 other (so that pair, at a fixed distance during a transfer, is checked
-once, at the start, and left out of the margins below, as
-:func:`clew_ros.core.collision.packed_carrying` splits the test). So when the
+once, at the start, and left out of the margins below: the compiled check
+tests the other links only against the held object). So when the
 compiled first pass of the validity test (:func:`clew_ros.core.kernel.clearly_valid`)
 clears the midpoint of a piece ``[t0, t1]`` with every distance past its
 threshold by more than ``V (t1 - t0) / 2``, the whole piece is valid, at
@@ -81,9 +81,6 @@ class CheckBudget(Protocol):
     def stop(self) -> bool: ...
 
 
-_NOWHERE = np.zeros(3)  # the resting pose a transfer's check is given (it uses the pose held instead)
-
-
 def straight_move_clear(
     world: World,
     a: np.ndarray,
@@ -124,8 +121,6 @@ def straight_moves_clear(
     """:func:`straight_move_clear` of each move ``starts[k] -> ends[k]`` ``(K, n)`` in one compiled call. With
     ``every`` (is every move clear?), the moves after the first that is not clear are not checked and come
     back not clear. All not clear when ``budget`` says stop before the call."""
-    if grasp_rel is None and object_pose is None:
-        raise ValueError("give object_pose (transit) or grasp_rel (transfer)")
     if budget is not None and budget.stop():
         return np.zeros(len(starts), dtype=bool)
     clear, configurations = moves_clear(
@@ -133,7 +128,7 @@ def straight_moves_clear(
         starts,
         ends,
         grasp_rel=grasp_rel,
-        resting=_NOWHERE if object_pose is None else object_pose,
+        resting=None if grasp_rel is not None else object_pose,
         min_margin=float(min_margin),
         max_margin=MAX_MARGIN_M,
         coarse_stride=COARSE_STRIDE,

@@ -85,7 +85,8 @@ reserved from the budget as they change (:data:`DENSE_WORK` per configuration
 and unit of :func:`check_work`), so it fits in the budget too. Attempts run
 until the work is spent, so the same seed gives the same plan on any machine.
 Only the planner's time limit and cancel stop it by the clock (between
-checks, well within 100 ms), and then the best plan so far is returned.
+calls of the checks and between rounds of routing calls, well within 100 ms),
+and then the best plan so far is returned.
 """
 
 from __future__ import annotations

@@ -1248,6 +1248,8 @@ def _extend(
     when ``greedy``. Returns the last node added (the nearest itself when it is the target), -1 when not
     even one step was clear."""
     n = nodes.shape[2]
+    if sizes[which] == 0:
+        return -1
     near = 0
     best = math.inf
     for i in range(sizes[which]):
@@ -1547,41 +1549,56 @@ def clearly_valid(world: PackedWorld, q: np.ndarray, poses: np.ndarray) -> np.nd
     return out
 
 
+def _mode(resting: np.ndarray | None, grasp_rel: np.ndarray | None) -> tuple[bool, np.ndarray, np.ndarray]:
+    """A mode as the move kernels take it: whether the object is held, its pose held, its pose at rest."""
+    if (resting is None) == (grasp_rel is None):
+        raise ValueError("give the object's pose at rest (a transit) or the grasp_rel it is held by (a transfer)")
+    if grasp_rel is None:
+        return False, _NOWHERE, _arg(resting)  # type: ignore[arg-type]  # not None: tested above
+    return True, _arg(grasp_rel), _NOWHERE
+
+
+_NOWHERE = np.zeros(3)  # the pose a mode does not use
+
+
 def moves_clear(
     world: PackedWorld,
     starts: np.ndarray,
     ends: np.ndarray,
     *,
+    resting: np.ndarray | None,
     grasp_rel: np.ndarray | None,
-    resting: np.ndarray,
     min_margin: float,
     max_margin: float,
     coarse_stride: int,
     every: bool = False,
 ) -> tuple[np.ndarray, int]:
     """Compiled :func:`clew_ros.core.continuous.straight_move_clear` of moves ``starts[k] -> ends[k]``
-    ``(K, n)``, the object at ``resting`` (a transit, ``grasp_rel`` ``None``) or held as ``grasp_rel``: which
+    ``(K, n)``, the object at ``resting`` (a transit) or held as ``grasp_rel`` (a transfer; give one): which
     are clear, and how many configurations were checked. With ``every``, the moves after the first that is
     not clear are not checked (and not clear)."""
     # called for every move the improvement tries: the Python here is kept to what the call needs
+    starts, ends = _arg(starts), _arg(ends)
+    if starts.ndim != 2 or starts.shape != ends.shape or starts.shape[1] != len(world.lengths):
+        raise ValueError(
+            f"starts, ends: expected two (K, {len(world.lengths)}) arrays, got {starts.shape}, {ends.shape}"
+        )
     out = np.empty(len(starts), dtype=np.bool_)
+    transfer, held, at_rest = _mode(resting, grasp_rel)
     checked = _moves_clear(
-        _arg(starts),
-        _arg(ends),
-        every,
-        grasp_rel is not None,
-        _NO_GRASP if grasp_rel is None else _arg(grasp_rel),
-        _arg(resting),
-        min_margin,
-        max_margin,
-        coarse_stride,
+        starts,
+        ends,
+        bool(every),
+        transfer,
+        held,
+        at_rest,
+        float(min_margin),
+        float(max_margin),
+        int(coarse_stride),
         out,
         *world.move_arguments,
     )
     return out, int(checked)
-
-
-_NO_GRASP = np.zeros(3)
 
 
 def connect_rounds(
@@ -1596,16 +1613,18 @@ def connect_rounds(
     allowed: float,
     check_work: float,
     round_work: float,
+    resting: np.ndarray | None,
     grasp_rel: np.ndarray | None,
-    resting: np.ndarray,
     min_margin: float,
     max_margin: float,
     coarse_stride: int,
 ) -> float:
     """Compiled rounds of RRT-Connect (:func:`clew_ros.core.connect.rrt_connect` keeps the trees: ``nodes``
-    ``(2, capacity, n)``, ``parents`` ``(2, capacity)`` int64, ``sizes`` ``(2,)`` int64 and ``state`` ``(4,)``
-    int64, all updated in place; room for every node the rounds may add), one per row of ``targets``, while
-    the work spent is within ``allowed``; returns the work spent."""
+    ``(2, capacity, n)``, ``parents`` ``(2, capacity)`` int64, ``sizes`` ``(2,)`` int64 (each at least 1) and
+    ``state`` ``(4,)`` int64, all updated in place; room for every node the rounds may add), one per row of
+    ``targets``, while the work spent is within ``allowed``; the object at ``resting`` or held as
+    ``grasp_rel`` (give one). Returns the work spent."""
+    transfer, held, at_rest = _mode(resting, grasp_rel)
     return float(
         _connect_rounds(
             nodes,
@@ -1613,16 +1632,16 @@ def connect_rounds(
             sizes,
             state,
             _arg(targets),
-            step_rad,
-            allowed,
-            check_work,
-            round_work,
-            grasp_rel is not None,
-            _NO_GRASP if grasp_rel is None else _arg(grasp_rel),
-            _arg(resting),
-            min_margin,
-            max_margin,
-            coarse_stride,
+            float(step_rad),
+            float(allowed),
+            float(check_work),
+            float(round_work),
+            transfer,
+            held,
+            at_rest,
+            float(min_margin),
+            float(max_margin),
+            int(coarse_stride),
             *world.move_arguments,
         )
     )
@@ -1781,9 +1800,10 @@ def warm_up() -> float:
     bounce_array(np.zeros(1), np.zeros(1), np.ones(1))
     pruned_path(np.zeros((3, 2)))
     clearly_valid(world, waypoints[:, 0], np.zeros(3))
-    moving = {"resting": np.zeros(3), "min_margin": 1e-3, "max_margin": 0.05, "coarse_stride": 4}
+    moving = {"min_margin": 1e-3, "max_margin": 0.05, "coarse_stride": 4}
     for held in (None, np.zeros(3)):
-        moves_clear(world, waypoints[:, 0], waypoints[:, 1] + 0.1, grasp_rel=held, **moving)  # type: ignore[arg-type]
+        at_rest = np.zeros(3) if held is None else None
+        moves_clear(world, waypoints[:, 0], waypoints[:, 1] + 0.1, resting=at_rest, grasp_rel=held, **moving)  # type: ignore[arg-type]
         nodes, parents = np.zeros((2, 8, 2)), np.full((2, 8), -1, dtype=np.int64)
         connect_rounds(
             world,
@@ -1796,6 +1816,7 @@ def warm_up() -> float:
             allowed=1.0,
             check_work=1.0,
             round_work=1.0,
+            resting=at_rest,
             grasp_rel=held,
             **moving,  # type: ignore[arg-type]
         )

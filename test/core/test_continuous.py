@@ -164,3 +164,14 @@ def test_a_budget_that_says_stop_gets_no_move_checked() -> None:
     assert not straight_move_clear(world, a, a + 0.01, object_pose=world.object.initial, min_margin=0.0, budget=stopped)
     assert stopped.calls == 0
     assert straight_move_clear(world, a, a + 0.01, object_pose=world.object.initial, min_margin=0.0)
+
+
+def test_moves_of_the_wrong_shape_or_without_a_mode_are_refused_by_name() -> None:
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    rest = world.object.initial
+    with pytest.raises(ValueError, match="starts, ends"):
+        straight_moves_clear(world, np.zeros((2, 2)), np.zeros((3, 2)), object_pose=rest, min_margin=0.01)
+    with pytest.raises(ValueError, match="starts, ends"):
+        straight_moves_clear(world, np.zeros((2, 3)), np.zeros((2, 3)), object_pose=rest, min_margin=0.01)
+    with pytest.raises(ValueError, match="grasp_rel"):
+        straight_move_clear(world, np.zeros(2), np.zeros(2), min_margin=0.01)

@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from clew_ros.core.collision import is_valid
 from clew_ros.core.connect import ROUNDS_PER_CALL, STEP_RAD, join, rrt_connect, shortened
@@ -173,18 +174,22 @@ def test_rrt_connect_gives_up_when_stopped_walled_in_or_out_of_work() -> None:
     rest = np.asarray(world.object.initial, dtype=float)
     margin = MIN_MARGIN_FACTOR * PlannerSettings().clearance
     start, goal = _blocked_move(world, np.random.default_rng(0), margin)
-    route = functools.partial(rrt_connect, world, start, goal[None], object_pose=rest, rounds=400)
-    assert route(np.random.default_rng(0), min_margin=margin, budget=_Routing()) is not None
+    route = functools.partial(rrt_connect, world, start, object_pose=rest, rounds=400)
+    assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=margin, budget=_Routing()) is not None
     stopped = _Routing(stopped=True)
-    assert route(np.random.default_rng(0), min_margin=margin, budget=stopped) is None
+    assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=margin, budget=stopped) is None
     assert stopped.spent == []
     walled_in = _Routing()  # nothing keeps 10 m from everything: no move is clear
-    assert route(np.random.default_rng(0), min_margin=10.0, budget=walled_in) is None
+    assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=10.0, budget=walled_in) is None
     assert len(walled_in.spent) == math.ceil(400 / ROUNDS_PER_CALL)  # every round was tried
+    one_round = _Routing(allowance=1e-9)  # the first round passes it: no second round starts
+    assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=margin, budget=one_round) is None
     short = _Routing(allowance=50.0)
-    assert route(np.random.default_rng(0), min_margin=margin, budget=short) is None
-    assert len(short.spent) == 1
-    assert 50.0 <= short.spent[0] < 50.0 + 1000  # stopped in the round that passed its allowance
+    assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=margin, budget=short) is None
+    assert len(one_round.spent) == len(short.spent) == 1
+    assert 0 < one_round.spent[0] < 50.0 <= short.spent[0]  # the rounds went on until the allowance was spent
+    with pytest.raises(ValueError, match="goals"):
+        route(goals=np.zeros((0, 2)), rng=np.random.default_rng(0), min_margin=margin, budget=_Routing())
 
 
 def test_a_join_that_fails_leaves_the_run_as_it_was(monkeypatch) -> None:

@@ -58,16 +58,26 @@ def walled(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
         assert code == 0, f"node exit code {code}; output:\n{node.output()}"
 
 
+def _runs(msg) -> list[tuple[str, int]]:
+    """(run id, status) of every run in one ~/status message."""
+    return [(bytes(e.goal_info.goal_id.uuid).hex(), e.status) for e in msg.status_list]
+
+
 def start_planning(session: Session):
-    """Call ~/plan without waiting; return (future, run id) once the run is executing."""
-    before = len(session.events.messages)
+    """Call ~/plan without waiting; return (future, run id) once the run is executing. The run is found on
+    the latched ~/status, which a client that matched late still receives (its ``accepted`` event on the
+    volatile ~/events can come before the subscription has matched a freshly started node)."""
+    known = {run_id for msg in session.status.messages for run_id, _ in _runs(msg)}
     future = session.client.call_async(session.srv("plan"), Trigger)
-    accepted = session.events.wait_for(
-        lambda m: session.events.messages.index(m) >= before and json.loads(m.data)["event"] == "accepted", 10.0
-    )
-    run_id = json.loads(accepted.data)["run_id"]
-    session.wait_status(run_id, GoalStatus.STATUS_EXECUTING)
-    return future, run_id
+    new: list[str] = []
+
+    def executing() -> bool:
+        latest = _runs(session.status.messages[-1]) if session.status.messages else []
+        new[:] = [i for i, status in latest if i not in known and status == GoalStatus.STATUS_EXECUTING]
+        return bool(new)
+
+    wait_until(executing, 10.0, "a new run executing on ~/status")
+    return future, new[0]
 
 
 def test_cancel_stops_the_running_plan(walled: Session) -> None:

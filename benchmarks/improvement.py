@@ -52,17 +52,23 @@ def _timing_improvement() -> list[float]:
     return times
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def arguments(argv: list[str] | None, doc: str, seeds: int) -> tuple[argparse.Namespace, list[str]]:
+    """The options the improvement's benchmarks share (``--worlds``, ``--seeds``, ``--improve-time``; ``doc``'s
+    first paragraph as the description), and the world files or names to run."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n", maxsplit=1)[0])
     parser.add_argument(
         "--worlds", nargs="+", default=None, help=f"benchmark world names or YAML files (default {' '.join(WORLDS)})"
     )
-    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--seeds", type=int, default=seeds)
     parser.add_argument("--improve-time", type=float, default=None, help="default: planner.improve_time's default")
     args = parser.parse_args(argv)
+    return args, args.worlds or [str(ROOT / "config" / f"{name}.yaml") for name in WORLDS]
+
+
+def main(argv: list[str] | None = None) -> int:
+    args, names = arguments(argv, __doc__, seeds=10)
     warm_up()
     times = _timing_improvement()
-    names = args.worlds or [str(ROOT / "config" / f"{name}.yaml") for name in WORLDS]
     for world, parameters in load_worlds(names):
         name = world.name
         rows: list[tuple[float, ...]] = []

@@ -11,22 +11,19 @@ whose ratio is far above the others' is charged too little for its Python.
 
 from __future__ import annotations
 
-import argparse
 import time
 from collections import defaultdict
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 from unittest import mock
 
+from benchmarks.improvement import arguments
 from benchmarks.reference import load_worlds
 from clew_ros.core.clew import plan
 from clew_ros.core.improve import WORK_PER_SECOND, _Improver
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
 
-ROOT = Path(__file__).resolve().parents[1]
-WORLDS = ("figure1", "arm3_regrasp", "arm5_regrasp")
 STAGES = ("rebuild", "connect", "fewer_transfers", "greedy_shortcuts", "random_shortcuts")
 
 
@@ -49,15 +46,8 @@ def _recording(totals: dict[str, list[float]]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument(
-        "--worlds", nargs="+", default=None, help=f"benchmark world names or YAML files (default {' '.join(WORLDS)})"
-    )
-    parser.add_argument("--seeds", type=int, default=5)
-    parser.add_argument("--improve-time", type=float, default=None, help="default: planner.improve_time's default")
-    args = parser.parse_args(argv)
+    args, names = arguments(argv, __doc__, seeds=5)
     warm_up()
-    names = args.worlds or [str(ROOT / "config" / f"{name}.yaml") for name in WORLDS]
     print("| world | stage | wall s | work s | wall / work |\n|---|---|--:|--:|--:|")
     for world, parameters in load_worlds(names):
         totals: dict[str, list[float]] = defaultdict(lambda: [0.0, 0.0])

@@ -77,8 +77,8 @@ in work, not seconds: :data:`WORK_PER_SECOND` units per second of
 ``planner.improve_time``; a configuration checked costs one unit, or more
 in a world whose check compares more pieces (:func:`check_work`), plus
 :data:`MOVE_CALL_WORK` per call of the compiled straight-move check,
-:data:`CALL_WORK` per call of the configuration check, :data:`ATTEMPT_WORK` per shortcut
-attempt, :data:`IK_WORK` per step of inverse kinematics and
+:data:`CALL_WORK` per call of the configuration check, :data:`BATCH_WORK` per batch of
+random shortcuts, :data:`IK_WORK` per step of inverse kinematics and
 :data:`EVALUATION_WORK` per genetic-algorithm individual.
 The final check of the segments changed so far at the validator's step is
 reserved from the budget as they change (:data:`DENSE_WORK` per configuration
@@ -113,7 +113,7 @@ from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
 
 __all__ = [
-    "ATTEMPT_WORK",
+    "BATCH_WORK",
     "CALL_WORK",
     "EVALUATION_WORK",
     "IK_WORK",
@@ -143,8 +143,14 @@ MOVE_CALL_WORK = 20
 ROUND_WORK = 2.0
 #: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
 EVALUATION_WORK = 110
-#: Work of one shortcut attempt besides its checks (drawing it, scoring the new path), in units.
-ATTEMPT_WORK = 100
+#: Random shortcuts drawn, scored and checked together (:meth:`_Improver.random_shortcuts`: one compiled call
+#: checks every move of those that would make the path shorter).
+SHORTCUT_BATCH = 16
+#: Work of one batch of random shortcuts besides its checks (drawing, scoring and splicing them, in numpy), in
+#: units.
+BATCH_WORK = 300
+#: Batches of random shortcuts in a row that change nothing end them.
+IDLE_BATCHES = 12
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
 #: The cost of one configuration check, in joints (the links are what the compiled check places and tests,
@@ -351,13 +357,64 @@ def _cumulative(waypoints: np.ndarray) -> np.ndarray:
     return cumulative
 
 
-def _point_at(waypoints: np.ndarray, cumulative: np.ndarray, travel: float) -> tuple[int, np.ndarray]:
-    """The point ``travel`` (rad of joint travel) along the path, and the number of the piece it lies on."""
-    k = int(np.clip(np.searchsorted(cumulative, travel, side="right") - 1, 0, len(waypoints) - 2))
-    span = cumulative[k + 1] - cumulative[k]
-    share = 0.0 if span <= 0 else (travel - cumulative[k]) / span
-    point: np.ndarray = waypoints[k] + share * (waypoints[k + 1] - waypoints[k])
-    return k, point
+@dataclass
+class _Shortcuts:
+    """Shortcuts of one path (``K`` of them), each replacing the stretch between a point on piece ``first`` and
+    one on piece ``last`` (``first < last``) by ``paths`` ``(K, PARTIAL_PIECES + 2, n)``: its first point, the
+    new waypoints and its last point, padded with the last (zero moves). ``gain``: joint travel saved (rad)."""
+
+    first: np.ndarray
+    last: np.ndarray
+    paths: np.ndarray
+    gain: np.ndarray
+    fewer: np.ndarray  # as long, but drops waypoints (two waypoints joined straight)
+
+    def improving(self) -> np.ndarray:
+        """The shortcuts that would make the path better, the largest gain first."""
+        rows = np.flatnonzero((self.gain > TRAVEL_EPS) | (self.fewer & (self.gain >= -TRAVEL_EPS)))
+        return rows[np.argsort(-self.gain[rows], kind="stable")]
+
+
+def _draw_shortcuts(waypoints: np.ndarray, rng: np.random.Generator, count: int) -> _Shortcuts:
+    """``count`` shortcuts of a path drawn at random, a third of each kind: two waypoints joined straight; two
+    points along the path (by joint travel) joined straight; and between two such points at most
+    :data:`PARTIAL_PIECES` pieces apart, one joint (drawn) moving evenly along the path while the others move
+    as before (a *partial* shortcut: a joint that went back and forth there goes straight). Draws that replace
+    nothing (both points on one piece, or a partial one spanning more pieces) come back with ``gain`` -inf."""
+    w = np.asarray(waypoints, dtype=float)
+    m, n = w.shape
+    cumulative = _cumulative(w)
+    kind = rng.random(count)
+    u = np.sort(rng.uniform(0.0, cumulative[-1], size=(count, 2)), axis=1)
+    one = rng.integers(m, size=count)  # two distinct waypoints
+    other = rng.integers(m - 1, size=count)
+    other += other >= one
+    joint = rng.integers(n, size=count)
+    pick = kind < 1.0 / 3.0
+    i, j = np.minimum(one, other), np.maximum(one, other)
+    u[pick] = cumulative[np.stack([i, j], axis=1)[pick]]
+    piece = np.clip(np.searchsorted(cumulative, u, side="right") - 1, 0, m - 2)  # (K, 2)
+    piece[pick] = np.stack([i, j - 1], axis=1)[pick]
+    span = cumulative[piece + 1] - cumulative[piece]
+    share = np.where(span > 0, (u - cumulative[piece]) / np.where(span > 0, span, 1.0), 0.0)
+    points = w[piece] + share[..., None] * (w[piece + 1] - w[piece])  # (K, 2, n)
+    points[pick] = w[np.stack([i, j], axis=1)[pick]]  # the waypoints themselves, not rounded
+    a, b = points[:, 0], points[:, 1]
+    first, last = piece[:, 0], piece[:, 1]
+    inner = np.minimum(first[:, None] + 1 + np.arange(PARTIAL_PIECES), last[:, None])  # (K, P): w[first+1..last]
+    partial = kind >= 2.0 / 3.0
+    paths = np.concatenate([a[:, None], np.repeat(b[:, None], PARTIAL_PIECES + 1, axis=1)], axis=1)
+    along = np.concatenate([u[:, :1], cumulative[inner], u[:, 1:]], axis=1)  # path travel of each point
+    bent = np.concatenate([a[:, None], w[inner], b[:, None]], axis=1)
+    rows = np.arange(count)
+    stretch = np.maximum(u[:, 1] - u[:, 0], 1e-300)
+    bent[rows, :, joint] = (
+        a[rows, joint][:, None] + (along - u[:, :1]) / stretch[:, None] * (b - a)[rows, joint][:, None]
+    )
+    paths[partial] = bent[partial]
+    gain = (u[:, 1] - u[:, 0]) - np.abs(np.diff(paths, axis=1)).sum(axis=(1, 2))
+    replaces = (last > first) & ~(partial & (last - first > PARTIAL_PIECES))
+    return _Shortcuts(first, last, paths, np.where(replaces, gain, -np.inf), pick & replaces)
 
 
 def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
@@ -735,61 +792,65 @@ class _Improver:
                 i += 1
 
     def random_shortcuts(self) -> None:
-        """Pairs of waypoints, pairs of points along a segment's path, and one joint between two such points
-        (:meth:`try_partial`), drawn at random, until the work is spent."""
+        """Batches of :data:`SHORTCUT_BATCH` shortcuts of one segment (:func:`_draw_shortcuts`; the segment
+        drawn by its joint travel), until the work is spent or :data:`IDLE_BATCHES` batches in a row changed
+        nothing. Those of a batch that would make the path better are checked in one call; the clear ones are
+        taken, the largest gain first, as long as they do not overlap one taken."""
         rng = self.ctx.rng
-        failures = 0
-        accepted = True
-        travels = np.zeros(0)
-        while self.budget.left() and failures < 200:
-            if accepted:  # the pieces changed: how much each could still gain
-                travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
+        idle = 0
+        while self.budget.left() and idle < IDLE_BATCHES:
+            travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
             if travels.sum() <= 0:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
-            w = self.pieces[index].waypoints
-            kind = rng.random()
-            self.budget.spend(ATTEMPT_WORK)  # drawing and scoring it, before any check
-            if kind < 1.0 / 3.0:  # two waypoints at least two apart
-                i, j = sorted(rng.choice(len(w), size=2, replace=False).tolist())
-                accepted = j - i >= 2 and self.try_shortcut(index, i + 1, j - 1, w[i], w[j])
-            else:  # two points along the path, by joint travel: a straight move, or one joint evened out
-                cumulative = _cumulative(w)
-                u = np.sort(rng.uniform(0.0, cumulative[-1], size=2))
-                (i, a), (j, b) = (_point_at(w, cumulative, x) for x in u)
-                if kind < 2.0 / 3.0:
-                    accepted = j > i and self.try_shortcut(index, i + 1, j, a, b)
-                else:
-                    accepted = j > i and self.try_partial(
-                        index, int(rng.integers(w.shape[1])), (i, a, u[0]), (j, b, u[1])
-                    )
-            failures = 0 if accepted else failures + 1
+            self.budget.spend(BATCH_WORK)  # drawing, scoring and splicing them, besides the checks
+            idle = (
+                0
+                if self.take_shortcuts(index, _draw_shortcuts(self.pieces[index].waypoints, rng, SHORTCUT_BATCH))
+                else idle + 1
+            )
 
-    def try_partial(
-        self, index: int, joint: int, start: tuple[int, np.ndarray, float], end: tuple[int, np.ndarray, float]
-    ) -> bool:
-        """A partial shortcut: between two points of piece ``index``'s path (each ``(piece number, point, path
-        travel)``), ``joint`` moves evenly along the path while the other joints move as before, so a joint
-        that went back and forth there goes straight. Every new straight piece is checked."""
+    def take_shortcuts(self, index: int, drawn: _Shortcuts) -> bool:
+        """Check the shortcuts of ``drawn`` that would make piece ``index``'s path better (every move of all of
+        them in one call of the continuous check) and take the clear ones that do not overlap, the largest gain
+        first. Returns whether the path changed."""
+        rows = drawn.improving()
+        if not len(rows):
+            return False
+        paths = drawn.paths[rows]
+        starts, ends = paths[:, :-1].reshape(-1, paths.shape[2]), paths[:, 1:].reshape(-1, paths.shape[2])
+        owner = np.repeat(np.arange(len(rows)), paths.shape[1] - 1)
+        moving = np.max(np.abs(ends - starts), axis=1) > 1e-12
         piece = self.pieces[index]
-        w = piece.waypoints
-        (i, a, x0), (j, b, x1) = start, end
-        if x1 - x0 <= 0:
+        clear = np.ones(len(starts), dtype=bool)
+        clear[moving] = straight_moves_clear(
+            self.world,
+            starts[moving],
+            ends[moving],
+            object_pose=piece.start_pose,
+            grasp_rel=piece.grasp_rel,
+            min_margin=self.min_margin,
+            budget=self.budget,
+        )
+        if self.budget.stopped:
             return False
-        if j - i > PARTIAL_PIECES:
-            return False  # a long stretch: many pieces to check for one joint's gain
-        cumulative = _cumulative(w)
-        path = np.array([a, *w[i + 1 : j + 1], b])
-        travel = np.array([x0, *cumulative[i + 1 : j + 1], x1])
-        path[:, joint] = a[joint] + (travel - x0) / (x1 - x0) * (b[joint] - a[joint])
-        joined = [*w[: i + 1], *path, *w[j + 1 :]]
-        new = _without_repeats(joined)
-        if not _better((0, joint_travel([w]), len(w)), (0, joint_travel([new]), len(new))):
+        blocked = np.bincount(owner[~clear], minlength=len(rows)) > 0
+        taken: list[int] = []
+        for k in np.flatnonzero(~blocked).tolist():  # the largest gain first
+            first, last = drawn.first[rows[k]], drawn.last[rows[k]]
+            if all(last < drawn.first[rows[t]] or first > drawn.last[rows[t]] for t in taken):
+                taken.append(k)
+        if not taken:
             return False
-        if not (self.budget.left() and self.path_clear(piece, path)):
+        w = list(piece.waypoints)
+        for k in sorted(taken, key=lambda t: -drawn.first[rows[t]]):  # from the path's end: indices stay true
+            first, last = int(drawn.first[rows[k]]), int(drawn.last[rows[k]])
+            w[first + 1 : last + 1] = list(paths[k])
+        new = pruned_path(_without_repeats(w))
+        if not _better((0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([new]), len(new))):
             return False
-        piece.waypoints = pruned_path(new)
-        self.shortcuts += 1
+        piece.waypoints = new
+        self.shortcuts += len(taken)
         self.reserve()
         return True
 

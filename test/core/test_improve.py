@@ -487,3 +487,103 @@ def test_blocked_proposals_are_routed_fewer_transfers_first(monkeypatch) -> None
     for proposals in lists:
         keys = [(len(p.grasps), p.rank) for p in proposals]
         assert keys == sorted(keys)
+
+
+def _on_piece(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float | None:
+    """Where ``point`` lies on the straight piece ``a -> b`` (0..1), or ``None`` if it does not."""
+    span = b - a
+    t = float(span @ (point - a) / (span @ span)) if span @ span > 0 else 0.0
+    close = np.allclose(a + t * span, point, atol=1e-9)
+    return t if close and -1e-9 <= t <= 1 + 1e-9 else None
+
+
+@pytest.mark.parametrize("joints", [2, 3, 7])
+def test_drawn_shortcuts_join_two_points_of_the_path_and_save_what_they_say(joints: int) -> None:
+    from clew_ros.core.improve import PARTIAL_PIECES, _draw_shortcuts
+
+    rng = np.random.default_rng(joints)
+    kinds = {"waypoints": 0, "straight": 0, "partial": 0}
+    for _ in range(30):
+        w = pruned_path(_random_path(rng, joints))
+        if len(w) < 3:
+            continue
+        cumulative = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(w, axis=0)).sum(axis=1))])
+        drawn = _draw_shortcuts(w, rng, 16)
+        for k in range(16):
+            first, last, path = int(drawn.first[k]), int(drawn.last[k]), drawn.paths[k]
+            if not np.isfinite(drawn.gain[k]):
+                assert last <= first or last - first > PARTIAL_PIECES
+                continue
+            assert first < last
+            start, end = path[0], path[-1]
+            assert _on_piece(start, w[first], w[first + 1]) is not None
+            assert _on_piece(end, w[last], w[last + 1]) is not None
+            along = (cumulative[last] + np.abs(end - w[last]).sum()) - (
+                cumulative[first] + np.abs(start - w[first]).sum()
+            )
+            assert drawn.gain[k] == pytest.approx(along - np.abs(np.diff(path, axis=0)).sum(), abs=1e-9)
+            straight = np.allclose(path[1:], end, atol=0.0)
+            if not straight:  # partial: the path's own waypoints in between, one joint evened out
+                kinds["partial"] += 1
+                inner = path[1 : 1 + last - first]
+                assert np.allclose(path[last - first : -1], path[last - first])  # padded: zero moves
+                differs = np.any(~np.isclose(inner, w[first + 1 : last + 1], atol=1e-12), axis=0)
+                assert differs.sum() <= 1
+            elif drawn.fewer[k]:
+                kinds["waypoints"] += 1
+                assert np.array_equal(start, w[first])
+                assert np.array_equal(end, w[last + 1])
+            else:
+                kinds["straight"] += 1
+    assert min(kinds.values()) >= 20, kinds  # every kind is drawn
+
+
+def test_a_batch_of_shortcuts_takes_the_clear_ones_that_do_not_overlap_largest_gain_first(monkeypatch) -> None:
+    from clew_ros.core import improve as improve_module
+    from clew_ros.core.improve import _draw_shortcuts
+
+    _, improver, _ = _improver_on_first_plan("figure1")
+    index = int(np.argmax([len(p.waypoints) for p in improver.pieces]))
+    before = improver.pieces[index].waypoints.copy()
+    drawn = _draw_shortcuts(before, np.random.default_rng(5), 16)
+    rows = drawn.improving()
+    assert len(rows) >= 3  # a first plan's Manhattan path: most shortcuts would shorten it
+    gains = drawn.gain[rows]
+    assert np.all(np.diff(gains) <= 0)  # the largest gain first
+    blocked = drawn.paths[rows[0]]  # the best one is blocked: every move of it comes back not clear
+    calls = []
+
+    def check(world, starts, ends, **kwargs):
+        calls.append(len(starts))
+        hit = [
+            any(np.allclose(s, u) and np.allclose(e, v) for u, v in itertools.pairwise(blocked))
+            for s, e in zip(starts, ends, strict=True)
+        ]
+        return ~np.array(hit, dtype=bool)
+
+    monkeypatch.setattr(improve_module, "straight_moves_clear", check)
+    assert improver.take_shortcuts(index, drawn)
+    assert len(calls) == 1  # the whole batch in one call
+    taken = []
+    for k in rows[1:]:  # what should be taken: the others, largest gain first, none overlapping one taken
+        if all(drawn.last[k] < drawn.first[t] or drawn.first[k] > drawn.last[t] for t in taken):
+            taken.append(k)
+    after = improver.pieces[index].waypoints
+    assert np.array_equal(after[0], before[0])
+    assert np.array_equal(after[-1], before[-1])
+    assert joint_travel([after]) <= joint_travel([before]) - drawn.gain[taken].sum() + 1e-9
+    assert improver.shortcuts == len(taken)
+    for k in taken:  # every shortcut taken is in the new path: its ends are waypoints of it
+        for point in (drawn.paths[k][0], drawn.paths[k][-1]):
+            assert np.min(np.max(np.abs(after - point), axis=1)) <= 1e-12 or _on_any_piece(after, point)
+
+    monkeypatch.setattr(
+        improve_module, "straight_moves_clear", lambda world, starts, ends, **kw: np.zeros(len(starts), bool)
+    )
+    again = improver.pieces[index].waypoints.copy()
+    assert not improver.take_shortcuts(index, _draw_shortcuts(again, np.random.default_rng(6), 16))
+    assert np.array_equal(improver.pieces[index].waypoints, again)  # nothing clear: nothing changes
+
+
+def _on_any_piece(path: np.ndarray, point: np.ndarray) -> bool:
+    return any(_on_piece(point, a, b) is not None for a, b in itertools.pairwise(path))

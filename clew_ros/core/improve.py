@@ -51,7 +51,10 @@ or put down far from where a regrasp was needed. Once a plan is found,
    there, a quarter, ...), then between pairs of waypoints and pairs of points
    along the path drawn by the run's generator; or, between two such points, one joint is made to move
    evenly while the others move as before (a partial shortcut: a joint that
-   went back and forth there goes straight). A segment's end points never
+   went back and forth there goes straight). These are drawn in batches of
+   :data:`SHORTCUT_BATCH` on one segment, scored in numpy, and those that would
+   shorten it are checked in one compiled call; the clear ones that do not
+   overlap are taken, the largest gain first. A segment's end points never
    change, so every grasp and ungrasp stays where it was (the tip still
    holds its grasp) and the object rests or is carried exactly as before.
 
@@ -105,7 +108,7 @@ from clew_ros.core.continuous import (
     straight_move_clear,
     straight_moves_clear,
 )
-from clew_ros.core.kernel import pruned_path
+from clew_ros.core.kernel import pruned_path, shortcuts
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
@@ -148,7 +151,7 @@ EVALUATION_WORK = 110
 SHORTCUT_BATCH = 16
 #: Work of one batch of random shortcuts besides its checks (drawing, scoring and splicing them, in numpy), in
 #: units.
-BATCH_WORK = 300
+BATCH_WORK = 150
 #: Batches of random shortcuts in a row that change nothing end them.
 IDLE_BATCHES = 12
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
@@ -380,41 +383,9 @@ def _draw_shortcuts(waypoints: np.ndarray, rng: np.random.Generator, count: int)
     points along the path (by joint travel) joined straight; and between two such points at most
     :data:`PARTIAL_PIECES` pieces apart, one joint (drawn) moving evenly along the path while the others move
     as before (a *partial* shortcut: a joint that went back and forth there goes straight). Draws that replace
-    nothing (both points on one piece, or a partial one spanning more pieces) come back with ``gain`` -inf."""
-    w = np.asarray(waypoints, dtype=float)
-    m, n = w.shape
-    cumulative = _cumulative(w)
-    kind = rng.random(count)
-    u = np.sort(rng.uniform(0.0, cumulative[-1], size=(count, 2)), axis=1)
-    one = rng.integers(m, size=count)  # two distinct waypoints
-    other = rng.integers(m - 1, size=count)
-    other += other >= one
-    joint = rng.integers(n, size=count)
-    pick = kind < 1.0 / 3.0
-    i, j = np.minimum(one, other), np.maximum(one, other)
-    u[pick] = cumulative[np.stack([i, j], axis=1)[pick]]
-    piece = np.clip(np.searchsorted(cumulative, u, side="right") - 1, 0, m - 2)  # (K, 2)
-    piece[pick] = np.stack([i, j - 1], axis=1)[pick]
-    span = cumulative[piece + 1] - cumulative[piece]
-    share = np.where(span > 0, (u - cumulative[piece]) / np.where(span > 0, span, 1.0), 0.0)
-    points = w[piece] + share[..., None] * (w[piece + 1] - w[piece])  # (K, 2, n)
-    points[pick] = w[np.stack([i, j], axis=1)[pick]]  # the waypoints themselves, not rounded
-    a, b = points[:, 0], points[:, 1]
-    first, last = piece[:, 0], piece[:, 1]
-    inner = np.minimum(first[:, None] + 1 + np.arange(PARTIAL_PIECES), last[:, None])  # (K, P): w[first+1..last]
-    partial = kind >= 2.0 / 3.0
-    paths = np.concatenate([a[:, None], np.repeat(b[:, None], PARTIAL_PIECES + 1, axis=1)], axis=1)
-    along = np.concatenate([u[:, :1], cumulative[inner], u[:, 1:]], axis=1)  # path travel of each point
-    bent = np.concatenate([a[:, None], w[inner], b[:, None]], axis=1)
-    rows = np.arange(count)
-    stretch = np.maximum(u[:, 1] - u[:, 0], 1e-300)
-    bent[rows, :, joint] = (
-        a[rows, joint][:, None] + (along - u[:, :1]) / stretch[:, None] * (b - a)[rows, joint][:, None]
-    )
-    paths[partial] = bent[partial]
-    gain = (u[:, 1] - u[:, 0]) - np.abs(np.diff(paths, axis=1)).sum(axis=(1, 2))
-    replaces = (last > first) & ~(partial & (last - first > PARTIAL_PIECES))
-    return _Shortcuts(first, last, paths, np.where(replaces, gain, -np.inf), pick & replaces)
+    nothing (both points on one piece, or a partial one spanning more pieces) come back with ``gain`` -inf.
+    The draws come from ``rng``; the paths and gains from one compiled call (:func:`clew_ros.core.kernel.shortcuts`)."""
+    return _Shortcuts(*shortcuts(waypoints, rng.random((count, 6)), PARTIAL_PIECES))
 
 
 def _better(old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:

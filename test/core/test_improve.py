@@ -489,6 +489,69 @@ def test_blocked_proposals_are_routed_fewer_transfers_first(monkeypatch) -> None
         assert keys == sorted(keys)
 
 
+def _shortcuts_in_numpy(w: np.ndarray, draws: np.ndarray, pieces: int):
+    """The shortcuts as first written in numpy (session 17), from the same draws: the compiled kernel's
+    reference (kernel.shortcuts)."""
+    m, n = w.shape
+    count = len(draws)
+    cumulative = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(w, axis=0)).sum(axis=1))])
+    kind = draws[:, 0]
+    u = cumulative[-1] * np.sort(draws[:, 1:3], axis=1)
+    one = np.minimum((draws[:, 3] * m).astype(int), m - 1)
+    other = np.minimum((draws[:, 4] * (m - 1)).astype(int), m - 2)
+    other += other >= one
+    joint = np.minimum((draws[:, 5] * n).astype(int), n - 1)
+    pick = kind < 1.0 / 3.0
+    i, j = np.minimum(one, other), np.maximum(one, other)
+    u[pick] = cumulative[np.stack([i, j], axis=1)[pick]]
+    piece = np.clip(np.searchsorted(cumulative, u, side="right") - 1, 0, m - 2)
+    piece[pick] = np.stack([i, j - 1], axis=1)[pick]
+    span = cumulative[piece + 1] - cumulative[piece]
+    share = np.where(span > 0, (u - cumulative[piece]) / np.where(span > 0, span, 1.0), 0.0)
+    points = np.where((share == 0.0)[..., None], w[piece], w[piece] + share[..., None] * (w[piece + 1] - w[piece]))
+    points[pick] = w[np.stack([i, j], axis=1)[pick]]
+    a, b = points[:, 0], points[:, 1]
+    first, last = piece[:, 0], piece[:, 1]
+    inner = np.minimum(first[:, None] + 1 + np.arange(pieces), last[:, None])
+    partial = kind >= 2.0 / 3.0
+    paths = np.concatenate([a[:, None], np.repeat(b[:, None], pieces + 1, axis=1)], axis=1)
+    along = np.concatenate([u[:, :1], cumulative[inner], u[:, 1:]], axis=1)
+    bent = np.concatenate([a[:, None], w[inner], b[:, None]], axis=1)
+    rows = np.arange(count)
+    stretch = np.maximum(u[:, 1] - u[:, 0], 1e-300)
+    bent[rows, :, joint] = (
+        a[rows, joint][:, None] + (along - u[:, :1]) / stretch[:, None] * (b - a)[rows, joint][:, None]
+    )
+    paths[partial] = bent[partial]
+    gain = (u[:, 1] - u[:, 0]) - np.abs(np.diff(paths, axis=1)).sum(axis=(1, 2))
+    replaces = (last > first) & ~(partial & (last - first > pieces))
+    return first, last, paths, np.where(replaces, gain, -np.inf), pick & replaces
+
+
+@pytest.mark.parametrize("joints", [2, 3, 7])
+def test_the_compiled_shortcuts_are_the_numpy_ones(joints: int) -> None:
+    from clew_ros.core.kernel import shortcuts
+
+    rng = np.random.default_rng(10 + joints)
+    compared = 0
+    for _ in range(40):
+        w = pruned_path(_random_path(rng, joints))
+        if len(w) < 2:
+            continue
+        draws = rng.random((32, 6))
+        draws[:4, 1:3] = [[0.0, 1.0], [0.0, 0.0], [1.0, 1.0], [0.5, 0.5]]  # the path's ends, one point twice
+        got, want = shortcuts(w, draws, 8), _shortcuts_in_numpy(w, draws, 8)
+        for name, g, e in zip(("first", "last", "paths", "gain", "fewer"), got, want, strict=True):
+            if name in ("paths", "gain"):
+                finite = np.isfinite(want[3])
+                assert np.allclose(g[finite], e[finite], rtol=0.0, atol=1e-12), name
+                assert np.array_equal(np.isfinite(got[3]), finite)
+            else:
+                assert np.array_equal(g, e), name
+        compared += int(np.isfinite(want[3]).sum())
+    assert compared > 300
+
+
 def _on_piece(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float | None:
     """Where ``point`` lies on the straight piece ``a -> b`` (0..1), or ``None`` if it does not."""
     span = b - a
@@ -545,9 +608,9 @@ def test_a_batch_of_shortcuts_takes_the_clear_ones_that_do_not_overlap_largest_g
     _, improver, _ = _improver_on_first_plan("figure1")
     index = int(np.argmax([len(p.waypoints) for p in improver.pieces]))
     before = improver.pieces[index].waypoints.copy()
-    drawn = _draw_shortcuts(before, np.random.default_rng(5), 16)
+    drawn = _draw_shortcuts(before, np.random.default_rng(5), 64)
     rows = drawn.improving()
-    assert len(rows) >= 3  # a first plan's Manhattan path: most shortcuts would shorten it
+    assert len(rows) >= 3  # a first plan's Manhattan path: many shortcuts would shorten it
     gains = drawn.gain[rows]
     assert np.all(np.diff(gains) <= 0)  # the largest gain first
     blocked = drawn.paths[rows[0]]  # the best one is blocked: every move of it comes back not clear

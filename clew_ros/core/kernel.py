@@ -1841,14 +1841,15 @@ def _path_travel(paths: np.ndarray, k: int) -> float:
 @_leaf
 def _piece_at(cumulative: np.ndarray, travel: float) -> int:
     """The piece of a path (by its cumulative joint travel) that the point ``travel`` along it lies on."""
-    low, high = 0, cumulative.shape[0]  # the first index whose cumulative travel is above ``travel``
+    last: int = cumulative.shape[0] - 2
+    low, high = 0, last + 2  # the first index whose cumulative travel is above ``travel``
     while low < high:
         middle = (low + high) // 2
         if cumulative[middle] <= travel:
             low = middle + 1
         else:
             high = middle
-    return min(max(low - 1, 0), cumulative.shape[0] - 2)
+    return min(max(low - 1, 0), last)
 
 
 def shortcuts(

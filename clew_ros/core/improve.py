@@ -105,7 +105,6 @@ from clew_ros.core.continuous import (
     CHECK_STEP_RAD,
     MIN_MARGIN_FACTOR,
     path_valid,
-    straight_move_clear,
     straight_moves_clear,
 )
 from clew_ros.core.kernel import pruned_path, shortcuts
@@ -430,15 +429,8 @@ class _Improver:
         self.restarts = np.random.default_rng([ctx.settings.seed, RESTART_STREAM])
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
-        return straight_move_clear(
-            self.world,
-            a,
-            b,
-            object_pose=piece.start_pose,
-            grasp_rel=piece.grasp_rel,
-            min_margin=self.min_margin,
-            budget=self.budget,
-        )
+        """Whether the straight move ``a -> b`` is clear in ``piece``'s mode."""
+        return self.path_clear(piece, np.array([a, b], dtype=float))
 
     def path_clear(self, piece: _Piece, path: np.ndarray) -> bool:
         """Whether every move of ``path`` is clear in ``piece``'s mode (one call of the check; it stops at the

@@ -138,7 +138,8 @@ WORK_PER_SECOND = 3.5e5
 #: the ways and compute poses), in units of one configuration of figure1.
 CALL_WORK = 200
 #: Work of one call of the compiled straight-move check (:func:`clew_ros.core.continuous.straight_moves_clear`:
-#: the Python around it, one or several moves), in the same units.
+#: the Python around it, one or several moves), or of the proposals' compiled screen
+#: (:func:`clew_ros.core.kernel.screen_routes`), in the same units.
 MOVE_CALL_WORK = 20
 #: Work of one round of RRT-Connect besides its checks (drawing its configuration, finding the nearest node), in
 #: the same units.
@@ -533,6 +534,7 @@ class _Improver:
                     restarts=self.restarts,
                 )
                 self.budget.spend_checks(effort.checks, effort.calls)
+                self.budget.spend(MOVE_CALL_WORK * effort.screens)  # the Python around each compiled screen
                 self.budget.spend(math.ceil(IK_WORK * effort.steps))
                 found = self.try_proposals(proposals, kept, placement, routed=False)
                 blocked &= bool(proposals) and all(p.blocked for p in proposals)

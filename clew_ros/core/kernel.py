@@ -61,6 +61,7 @@ __all__ = [
     "intervals",
     "moves_clear",
     "pruned_path",
+    "screen_routes",
     "shortcuts",
     "solve_point",
     "warm_up",
@@ -1744,6 +1745,148 @@ def _pruned(waypoints: np.ndarray, points: np.ndarray) -> int:
     return size
 
 
+@_jit
+def _screen(
+    a: np.ndarray,
+    b: np.ndarray,
+    samples: np.ndarray,
+    transfer: bool,
+    held: np.ndarray,
+    at_rest: np.ndarray,
+    route: np.ndarray,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    obstacle_starts: np.ndarray,
+    boxes: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    shrunk_starts: np.ndarray,
+    eps: float,
+) -> int:
+    """:func:`screen_routes` into ``route``; returns how many configurations were checked."""
+    m, n = a.shape
+    links = np.empty((n, 2, 2))
+    shape = np.empty((object_edges.shape[0], 2, 2))
+    shrunk = np.empty((shrunk_edges.shape[0], 2, 2))
+    q, moved, start = np.empty(n), np.empty(n), np.empty(n)
+    checked = 0
+    for k in range(m):
+        route[k] = -1
+        total = 0.0
+        for j in range(n):
+            moved[j] = abs(b[k, j] - a[k, j])
+            total += moved[j]
+        for way in range(3):
+            sofar = 0.0
+            for step in range(n):  # where each joint starts moving along the way (one joint after the other)
+                j = step if way == 1 else n - 1 - step
+                sofar += moved[j]
+                start[j] = sofar - moved[j]
+            clear = True
+            for sample in range(2 * samples[k]):  # every fourth sample first: most blocked moves stop there
+                coarse = sample < samples[k]
+                index = sample if coarse else sample - samples[k]
+                if (index % 4 == 0) != coarse:
+                    continue
+                share = _end_share(index, samples[k])
+                _way_point(a, b, k, way, share * total, share, moved, start, q)
+                px, py, pt = at_rest[k, 0], at_rest[k, 1], at_rest[k, 2]
+                if transfer:
+                    px, py, pt = _holding(q, held, k, base, lengths, links)
+                checked += 1
+                if not _valid_beyond(
+                    q, px, py, pt, eps, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
+                    obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
+                ):  # fmt: skip
+                    clear = False
+                    break
+            if clear:
+                route[k] = way
+                break
+    return checked
+
+
+@_leaf
+def _end_share(sample: int, count: int) -> float:
+    """Sample ``sample`` of ``count`` along a move, as a share of it, closer together near both ends (cosine
+    spacing, as ``0.5 - 0.5 cos(linspace(0, pi, count))``)."""
+    angle = math.pi if sample == count - 1 else sample * (math.pi / (count - 1))
+    return 0.5 - 0.5 * math.cos(angle)
+
+
+@_leaf
+def _way_point(
+    a: np.ndarray,
+    b: np.ndarray,
+    k: int,
+    way: int,
+    travel: float,
+    share: float,
+    moved: np.ndarray,
+    start: np.ndarray,
+    q: np.ndarray,
+) -> None:
+    """``q`` = the point of way ``way`` (straight, or one joint after the other from ``start``) from ``a[k]``
+    to ``b[k]`` at ``share`` of it, ``travel`` rad of joint travel along it."""
+    for j in range(q.shape[0]):
+        if way == 0:
+            q[j] = a[k, j] + share * (b[k, j] - a[k, j])
+        else:
+            done = min(max((travel - start[j]) / max(moved[j], 1e-300), 0.0), 1.0)
+            q[j] = a[k, j] + done * (b[k, j] - a[k, j])
+
+
+@_leaf
+def _holding(
+    q: np.ndarray, held: np.ndarray, k: int, base: np.ndarray, lengths: np.ndarray, links: np.ndarray
+) -> tuple[float, float, float]:
+    """The pose of the object held as ``held[k]`` by the tip at configuration ``q``."""
+    x, y, phi = _forward(q, base, lengths, links)
+    c, s = math.cos(phi), math.sin(phi)
+    return x + c * held[k, 0] - s * held[k, 1], y + s * held[k, 0] + c * held[k, 1], phi + held[k, 2]
+
+
+def screen_routes(
+    world: PackedWorld,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    samples: np.ndarray,
+    *,
+    resting: np.ndarray | None,
+    grasp_rel: np.ndarray | None,
+) -> tuple[np.ndarray, int]:
+    """The proposals' screen (:meth:`clew_ros.core.regrasp._Kinematics.routes`), compiled: per move
+    ``starts[k] -> ends[k]`` ``(M, n)``, the first way (0 straight, 1 one joint after the other from the
+    first, 2 from the last) whose ``samples[k]`` configurations (cosine-spaced along the way's joint travel,
+    every fourth first) pass :func:`clearly_valid` with the world's rounding as the margin, the object resting
+    at ``resting[k]`` or held as ``grasp_rel[k]`` (``(M, 3)``; give one); -1 when none does. Returns the ways
+    and how many configurations were checked (a way stops at its first sample that does not pass)."""
+    starts, ends = _arg(starts), _arg(ends)
+    count = np.ascontiguousarray(samples, dtype=np.int64)
+    if starts.ndim != 2 or starts.shape != ends.shape or count.shape != (len(starts),) or np.any(count < 2):
+        raise ValueError(
+            f"starts, ends, samples: expected (M, n), (M, n) and (M,) of at least 2, got {starts.shape}, "
+            f"{ends.shape}, {count.shape}"
+        )
+    transfer = grasp_rel is not None
+    if transfer == (resting is not None):
+        raise ValueError("give the object's poses at rest (transits) or the grasp_rel it is held by (transfers)")
+    poses = _arg(grasp_rel if transfer else resting).reshape(-1, 3)  # type: ignore[arg-type]  # one is given
+    if len(poses) != len(starts):
+        raise ValueError(f"resting, grasp_rel: expected ({len(starts)}, 3), got {poses.shape}")
+    route = np.empty(len(starts), dtype=np.int64)
+    held, at_rest = (poses, _NO_POSES) if transfer else (_NO_POSES, poses)
+    checked = _screen(starts, ends, count, transfer, held, at_rest, route, *world.validity_arguments())
+    return route, int(checked)
+
+
+_NO_POSES = np.zeros((1, 3))  # the poses a mode does not use
+
+
 @_leaf
 def _shortcuts(
     w: np.ndarray,
@@ -1938,6 +2081,15 @@ def warm_up() -> float:
     for held in (None, np.zeros(3)):
         at_rest = np.zeros(3) if held is None else None
         moves_clear(world, waypoints[:, 0], waypoints[:, 1] + 0.1, resting=at_rest, grasp_rel=held, **moving)  # type: ignore[arg-type]
+        poses = np.zeros((1, 3))
+        screen_routes(
+            world,
+            waypoints[:, 0],
+            waypoints[:, 1] + 0.1,
+            np.full(1, 8),
+            resting=poses if held is None else None,
+            grasp_rel=None if held is None else poses,
+        )
         nodes, parents = np.zeros((2, 8, 2)), np.full((2, 8), -1, dtype=np.int64)
         connect_rounds(
             world,

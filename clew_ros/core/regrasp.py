@@ -46,7 +46,7 @@ import numpy as np
 
 from clew_ros.core.collision import packed_world
 from clew_ros.core.inverse import mirrored, solve_point
-from clew_ros.core.kernel import clearly_valid
+from clew_ros.core.kernel import clearly_valid, screen_routes
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.world import World
 
@@ -96,11 +96,12 @@ RESTARTS, RESTART_SPREADS_RAD = 8, (0.5, 1.0)
 @dataclass
 class Effort:
     """The work :func:`propose` did: configurations checked, calls of the check, inverse-kinematics steps (one
-    configuration, one iteration)."""
+    configuration, one iteration), calls of the compiled screen."""
 
     checks: int = 0
     calls: int = 0
     steps: int = 0
+    screens: int = 0  # compiled calls of the screen (:meth:`_Kinematics.routes`), each many moves
 
 
 @dataclass(frozen=True)
@@ -137,29 +138,6 @@ def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
     if len(points) == 1:
         points.append(points[0].copy())
     return np.array(points)
-
-
-def _end_dense(count: int) -> np.ndarray:
-    """``count`` shares of a move from 0 to 1, closer together near both ends (where a move leaves or
-    reaches a grasp, touching the object): cosine spacing."""
-    spacing: np.ndarray = 0.5 - 0.5 * np.cos(np.linspace(0.0, np.pi, count))
-    return spacing
-
-
-def _route_samples(a: np.ndarray, b: np.ndarray, samples: int) -> list[np.ndarray]:
-    """Configurations along each way of :data:`ROUTES` from ``a[k]`` to ``b[k]`` ``(M, n)``: ``(M, S, n)`` each,
-    spread evenly over the way's joint travel (densest near its ends)."""
-    share = _end_dense(samples)[None, :, None]
-    ways = [a[:, None, :] + share * (b - a)[:, None, :]]
-    moved = np.abs(b - a)  # (M, n) each joint's travel
-    travel = share * moved.sum(axis=1)[:, None, None]  # (M, S, 1) how far along the way each sample is
-    for order in (np.arange(a.shape[1]), np.arange(a.shape[1])[::-1]):
-        before = np.cumsum(moved[:, order], axis=1) - moved[:, order]  # travel before each joint starts
-        start = np.empty_like(before)
-        start[:, order] = before
-        done = np.clip((travel - start[:, None, :]) / np.maximum(moved, 1e-300)[:, None, :], 0.0, 1.0)
-        ways.append(a[:, None, :] + done * (b - a)[:, None, :])
-    return ways
 
 
 class _Kinematics:
@@ -202,32 +180,14 @@ class _Kinematics:
     ) -> np.ndarray:
         """Per move ``a[k] -> b[k]``, the first way of :data:`ROUTES` whose sampled configurations are all
         valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is. A move
-        is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 32 samples)."""
-        route = np.full(len(a), -1)
-        if self.exhausted:
-            return route
+        is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 32 samples),
+        every fourth sample first; one compiled call (:func:`clew_ros.core.kernel.screen_routes`)."""
+        if self.exhausted or not len(a):
+            return np.full(len(a), -1)
         samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 2)
-        for count in np.unique(samples).astype(int):
-            group = np.flatnonzero(samples == count)
-            for index, way in enumerate(_route_samples(a[group], b[group], count)):
-                rows = np.flatnonzero(route[group] < 0)
-                if not len(rows):
-                    break
-                coarse = np.arange(way.shape[1]) % 4 == 0  # every fourth sample first: most blocked moves stop there
-                for part in (coarse, ~coarse):
-                    if not len(rows):
-                        break
-                    q = way[rows][:, part].reshape(-1, a.shape[1])
-                    moves = group[rows]
-                    if grasp_rel is None:
-                        assert resting is not None
-                        poses = np.repeat(resting[moves], int(part.sum()), axis=0)
-                    else:
-                        poses = compose(
-                            tip_poses(self.world.robot, q), np.repeat(grasp_rel[moves], int(part.sum()), axis=0)
-                        )
-                    rows = rows[self.valid(q, poses).reshape(len(rows), -1).all(axis=1)]
-                route[group[rows]] = index
+        route, checked = screen_routes(self.packed, a, b, samples, resting=resting, grasp_rel=grasp_rel)
+        self.effort.checks += checked
+        self.effort.screens += 1
         return route
 
     def holding(

@@ -300,3 +300,88 @@ def test_restarts_around_a_configuration_add_ones_nearer_an_origin() -> None:
     assert is_valid(world, solved[1][None], placement[0])[0]
     point = transform_points(placement[0], world.object.grasps[grasp][None][0])[0]
     assert np.linalg.norm(tip_poses(world.robot, solved[1][None])[0, :2] - point) <= 1e-9
+
+
+def _routes_in_python(world, packed, a, b, resting=None, grasp_rel=None) -> np.ndarray:
+    from clew_ros.core.kernel import clearly_valid
+
+    """The proposals' screen as it was written in numpy until session 17: the compiled screen's reference."""
+
+    def ways(a, b, samples):
+        share = (0.5 - 0.5 * np.cos(np.linspace(0.0, np.pi, samples)))[None, :, None]
+        out = [a[:, None, :] + share * (b - a)[:, None, :]]
+        moved = np.abs(b - a)
+        travel = share * moved.sum(axis=1)[:, None, None]
+        for order in (np.arange(a.shape[1]), np.arange(a.shape[1])[::-1]):
+            before = np.cumsum(moved[:, order], axis=1) - moved[:, order]
+            start = np.empty_like(before)
+            start[:, order] = before
+            done = np.clip((travel - start[:, None, :]) / np.maximum(moved, 1e-300)[:, None, :], 0.0, 1.0)
+            out.append(a[:, None, :] + done * (b - a)[:, None, :])
+        return out
+
+    route = np.full(len(a), -1)
+    samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(np.abs(b - a).sum(axis=1) / 0.1, 1.0) / 8.0)), 0, 2)
+    for count in np.unique(samples).astype(int):
+        group = np.flatnonzero(samples == count)
+        for index, way in enumerate(ways(a[group], b[group], count)):
+            rows = np.flatnonzero(route[group] < 0)
+            if not len(rows):
+                break
+            q = way[rows].reshape(-1, a.shape[1])
+            moves = np.repeat(group[rows], count)
+            poses = resting[moves] if grasp_rel is None else compose(tip_poses(world.robot, q), grasp_rel[moves])
+            ok = clearly_valid(packed, q, poses).reshape(len(rows), -1).all(axis=1)
+            route[group[rows[ok]]] = index
+    return route
+
+
+@pytest.mark.parametrize("name", ["figure1", "arm3_regrasp", "arm5_regrasp"])
+def test_the_compiled_screen_finds_the_ways_the_numpy_one_found(name: str) -> None:
+    import dataclasses
+
+    from clew_ros.core.collision import packed_world
+    from clew_ros.core.kernel import screen_routes
+
+    world = load_world(ROOT / "config" / f"{name}.yaml")
+    packed = dataclasses.replace(packed_world(world), rounding=max(5e-4, packed_world(world).rounding))
+    rng = np.random.default_rng(7)
+    robot = world.robot
+    found = np.zeros(4, dtype=int)  # how often each answer (-1, 0, 1, 2) came
+    for transfer in (False, True):
+        for spread in (0.1, 0.5, 1.5, 4.0):  # short moves (8 samples) to long ones (32)
+            a = rng.uniform(robot.joint_lower, robot.joint_upper, (150, robot.dof))
+            b = np.clip(a + rng.normal(0.0, spread, a.shape), robot.joint_lower, robot.joint_upper)
+            resting = np.repeat(np.asarray(world.object.initial, float)[None], len(a), axis=0)
+            grasp_rel = None
+            if transfer:  # held where the tip is at the move's start, as a grasp would hold it
+                grasp_rel = relative(tip_poses(robot, a), resting)
+                resting = None
+            samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(np.abs(b - a).sum(axis=1) / 0.1, 1.0) / 8.0)), 0, 2)
+            got, checked = screen_routes(packed, a, b, samples, resting=resting, grasp_rel=grasp_rel)
+            want = _routes_in_python(world, packed, a, b, resting=resting, grasp_rel=grasp_rel)
+            assert np.array_equal(got, want)
+            assert 0 < checked <= samples.sum() * 3
+            found += np.bincount(want + 1, minlength=4)
+    # blocked moves and straight ones common, and moves clear only one joint after the other found too
+    assert found[0] >= 50, found
+    assert found[1] >= 50, found
+    assert found[2] + found[3] >= 5, found
+
+
+def test_the_compiled_screen_refuses_bad_shapes_and_a_missing_mode() -> None:
+    from clew_ros.core.collision import packed_world
+    from clew_ros.core.kernel import screen_routes
+
+    world = load_world(ROOT / "config" / "figure1.yaml")
+    packed = packed_world(world)
+    a = np.zeros((3, 2))
+    rest = np.zeros((3, 3))
+    with pytest.raises(ValueError, match="starts, ends, samples"):
+        screen_routes(packed, a, np.zeros((2, 2)), np.full(3, 8), resting=rest, grasp_rel=None)
+    with pytest.raises(ValueError, match="starts, ends, samples"):
+        screen_routes(packed, a, a, np.full(3, 1), resting=rest, grasp_rel=None)
+    with pytest.raises(ValueError, match="at rest"):
+        screen_routes(packed, a, a, np.full(3, 8), resting=None, grasp_rel=None)
+    with pytest.raises(ValueError, match="resting, grasp_rel"):
+        screen_routes(packed, a, a, np.full(3, 8), resting=np.zeros((2, 3)), grasp_rel=None)

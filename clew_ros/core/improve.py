@@ -52,7 +52,7 @@ or put down far from where a regrasp was needed. Once a plan is found,
    along the path drawn by the run's generator; or, between two such points, one joint is made to move
    evenly while the others move as before (a partial shortcut: a joint that
    went back and forth there goes straight). These are drawn in batches of
-   :data:`SHORTCUT_BATCH` on one segment, scored in numpy, and those that would
+   :data:`SHORTCUT_BATCH` on one segment, scored in one compiled call, and those that would
    shorten it are checked in one compiled call; the clear ones that do not
    overlap are taken, the largest gain first. A segment's end points never
    change, so every grasp and ungrasp stays where it was (the tip still
@@ -149,11 +149,13 @@ EVALUATION_WORK = 110
 #: Random shortcuts drawn, scored and checked together (:meth:`_Improver.random_shortcuts`: one compiled call
 #: checks every move of those that would make the path shorter).
 SHORTCUT_BATCH = 16
-#: Work of one batch of random shortcuts besides its checks (drawing, scoring and splicing them, in numpy), in
+#: Work of one batch of random shortcuts besides its checks (drawing and scoring them, compiled; splicing them), in
 #: units.
 BATCH_WORK = 150
 #: Batches of random shortcuts in a row that change nothing end them.
 IDLE_BATCHES = 12
+#: Batches of random shortcuts in a row that change nothing end those on a path RRT-Connect found.
+POLISH_IDLE_BATCHES = 4
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
 #: The cost of one configuration check, in joints (the links are what the compiled check places and tests,
@@ -351,13 +353,6 @@ def _without_repeats(waypoints: list[np.ndarray]) -> np.ndarray:
     moved = np.max(np.abs(np.diff(points, axis=0)), axis=1) > 1e-12
     kept: np.ndarray = points[np.concatenate([[True], moved])]
     return kept
-
-
-def _cumulative(waypoints: np.ndarray) -> np.ndarray:
-    """Joint travel (rad) along ``waypoints`` up to each of them."""
-    steps = np.abs(np.diff(waypoints, axis=0)).sum(axis=1)
-    cumulative: np.ndarray = np.concatenate([[0.0], np.cumsum(steps)])
-    return cumulative
 
 
 @dataclass
@@ -647,8 +642,9 @@ class _Improver:
     def connect(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
         """A path from ``a`` to ``b`` in ``piece``'s mode around what blocks the straight move: RRT-Connect
         (:func:`clew_ros.core.connect.rrt_connect`, each extension checked continuously), then shortened
-        greedily. At most :data:`CONNECT_STEPS` rounds and :data:`CONNECT_SHARE` of the budget; ``None`` when
-        the trees did not meet."""
+        greedily and by batches of random shortcuts (:meth:`take_shortcuts`) until :data:`POLISH_IDLE_BATCHES`
+        in a row find nothing. At most :data:`CONNECT_STEPS` rounds and :data:`CONNECT_SHARE` of the budget;
+        ``None`` when the trees did not meet."""
         limit = self.budget.spent + CONNECT_SHARE * self.budget.total
 
         def clear(p: np.ndarray, q: np.ndarray) -> bool:
@@ -665,7 +661,21 @@ class _Improver:
             rounds=CONNECT_STEPS,
             budget=_RoutingShare(self.budget, limit),
         )
-        return None if path is None else shortened(clear, path, lambda: self.budget.spent > limit)
+        if path is None:
+            return None
+        routed = _Piece(
+            piece.kind,
+            piece.grasp,
+            shortened(clear, path, lambda: self.budget.spent > limit),
+            piece.start_pose,
+            piece.grasp_rel,
+        )
+        idle = 0  # then shortcuts anywhere along it (a tree's path turns at its nodes, not where it must)
+        while idle < POLISH_IDLE_BATCHES and self.budget.spent <= limit and not self.budget.stop():
+            self.budget.spend(BATCH_WORK)
+            better = self.take_shortcuts(routed, _draw_shortcuts(routed.waypoints, self.ctx.rng, SHORTCUT_BATCH))
+            idle = 0 if better else idle + 1
+        return routed.waypoints
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:
         """Waypoints from ``a`` to ``b`` in ``piece``'s mode, each move checked continuously: the ways of
@@ -769,15 +779,12 @@ class _Improver:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
             self.budget.spend(BATCH_WORK)  # drawing, scoring and splicing them, besides the checks
-            idle = (
-                0
-                if self.take_shortcuts(index, _draw_shortcuts(self.pieces[index].waypoints, rng, SHORTCUT_BATCH))
-                else idle + 1
-            )
+            piece = self.pieces[index]
+            idle = 0 if self.take_shortcuts(piece, _draw_shortcuts(piece.waypoints, rng, SHORTCUT_BATCH)) else idle + 1
 
-    def take_shortcuts(self, index: int, drawn: _Shortcuts) -> bool:
-        """Check the shortcuts of ``drawn`` that would make piece ``index``'s path better (every move of all of
-        them in one call of the continuous check) and take the clear ones that do not overlap, the largest gain
+    def take_shortcuts(self, piece: _Piece, drawn: _Shortcuts) -> bool:
+        """Check the shortcuts of ``drawn`` that would make ``piece``'s path better (every move of all of them
+        in one call of the continuous check) and take the clear ones that do not overlap, the largest gain
         first. Returns whether the path changed."""
         rows = drawn.improving()
         if not len(rows):
@@ -786,17 +793,17 @@ class _Improver:
         starts, ends = paths[:, :-1].reshape(-1, paths.shape[2]), paths[:, 1:].reshape(-1, paths.shape[2])
         owner = np.repeat(np.arange(len(rows)), paths.shape[1] - 1)
         moving = np.max(np.abs(ends - starts), axis=1) > 1e-12
-        piece = self.pieces[index]
         clear = np.ones(len(starts), dtype=bool)
-        clear[moving] = straight_moves_clear(
-            self.world,
-            starts[moving],
-            ends[moving],
-            object_pose=piece.start_pose,
-            grasp_rel=piece.grasp_rel,
-            min_margin=self.min_margin,
-            budget=self.budget,
-        )
+        if moving.any():
+            clear[moving] = straight_moves_clear(
+                self.world,
+                starts[moving],
+                ends[moving],
+                object_pose=piece.start_pose,
+                grasp_rel=piece.grasp_rel,
+                min_margin=self.min_margin,
+                budget=self.budget,
+            )
         if self.budget.stopped:
             return False
         blocked = np.bincount(owner[~clear], minlength=len(rows)) > 0

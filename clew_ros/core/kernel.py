@@ -1059,9 +1059,18 @@ def _at(
         q[j] = a[j] + t * (b[j] - a[j])
     if not transfer:
         return resting[0], resting[1], resting[2]
+    return _held(q, grasp_rel[0], grasp_rel[1], grasp_rel[2], base, lengths, links)
+
+
+@_leaf
+def _held(
+    q: np.ndarray, gx: float, gy: float, gt: float, base: np.ndarray, lengths: np.ndarray, links: np.ndarray
+) -> tuple[float, float, float]:
+    """The pose of the object held as ``(gx, gy, gt)`` (``grasp_rel``) by the tip at configuration ``q`` (the
+    tip's frame composed with it, as :func:`clew_ros.core.kinematics.compose` does); ``links`` filled."""
     x, y, phi = _forward(q, base, lengths, links)
     c, s = math.cos(phi), math.sin(phi)
-    return x + c * grasp_rel[0] - s * grasp_rel[1], y + s * grasp_rel[0] + c * grasp_rel[1], phi + grasp_rel[2]
+    return x + c * gx - s * gy, y + s * gx + c * gy, phi + gt
 
 
 @_jit
@@ -1796,7 +1805,7 @@ def _screen(
                 _way_point(a, b, k, way, share * total, share, moved, start, q)
                 px, py, pt = at_rest[k, 0], at_rest[k, 1], at_rest[k, 2]
                 if transfer:
-                    px, py, pt = _holding(q, held, k, base, lengths, links)
+                    px, py, pt = _held(q, held[k, 0], held[k, 1], held[k, 2], base, lengths, links)
                 checked += 1
                 if not _valid_beyond(
                     q, px, py, pt, eps, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
@@ -1840,16 +1849,6 @@ def _way_point(
             q[j] = a[k, j] + done * (b[k, j] - a[k, j])
 
 
-@_leaf
-def _holding(
-    q: np.ndarray, held: np.ndarray, k: int, base: np.ndarray, lengths: np.ndarray, links: np.ndarray
-) -> tuple[float, float, float]:
-    """The pose of the object held as ``held[k]`` by the tip at configuration ``q``."""
-    x, y, phi = _forward(q, base, lengths, links)
-    c, s = math.cos(phi), math.sin(phi)
-    return x + c * held[k, 0] - s * held[k, 1], y + s * held[k, 0] + c * held[k, 1], phi + held[k, 2]
-
-
 def screen_routes(
     world: PackedWorld,
     starts: np.ndarray,
@@ -1867,24 +1866,23 @@ def screen_routes(
     and how many configurations were checked (a way stops at its first sample that does not pass)."""
     starts, ends = _arg(starts), _arg(ends)
     count = np.ascontiguousarray(samples, dtype=np.int64)
-    if starts.ndim != 2 or starts.shape != ends.shape or count.shape != (len(starts),) or np.any(count < 2):
+    n = len(world.lengths)
+    if starts.shape != (len(starts), n) or ends.shape != starts.shape or count.shape != (len(starts),):
         raise ValueError(
-            f"starts, ends, samples: expected (M, n), (M, n) and (M,) of at least 2, got {starts.shape}, "
-            f"{ends.shape}, {count.shape}"
+            f"starts, ends, samples: expected (M, {n}), (M, {n}) and (M,), got {starts.shape}, {ends.shape}, "
+            f"{count.shape}"
         )
-    transfer = grasp_rel is not None
-    if transfer == (resting is not None):
-        raise ValueError("give the object's poses at rest (transits) or the grasp_rel it is held by (transfers)")
-    poses = _arg(grasp_rel if transfer else resting).reshape(-1, 3)  # type: ignore[arg-type]  # one is given
-    if len(poses) != len(starts):
-        raise ValueError(f"resting, grasp_rel: expected ({len(starts)}, 3), got {poses.shape}")
+    if np.any(count < 2):
+        raise ValueError(f"samples: expected at least 2 per move, got {count.min()}")
+    transfer, held, at_rest = _mode(resting, grasp_rel)
+    held, at_rest = held.reshape(-1, 3), at_rest.reshape(-1, 3)
+    if len(held if transfer else at_rest) != len(starts):
+        raise ValueError(
+            f"resting, grasp_rel: expected ({len(starts)}, 3), got {(held if transfer else at_rest).shape}"
+        )
     route = np.empty(len(starts), dtype=np.int64)
-    held, at_rest = (poses, _NO_POSES) if transfer else (_NO_POSES, poses)
     checked = _screen(starts, ends, count, transfer, held, at_rest, route, *world.validity_arguments())
     return route, int(checked)
-
-
-_NO_POSES = np.zeros((1, 3))  # the poses a mode does not use
 
 
 @_leaf
@@ -1930,7 +1928,7 @@ def _shortcuts(
         _between(paths, k, w, cumulative, start, end, u0, u1, moved)
         replaces = end > start and not (partial and end - start > pieces)
         gain[k] = (u1 - u0) - _path_travel(paths, k) if replaces else -np.inf
-        fewer[k] = joined and replaces
+        fewer[k] = replaces and (joined or (not partial and end - start > 2))  # as long, fewer waypoints
 
 
 @_leaf
@@ -2005,7 +2003,7 @@ def shortcuts(
     others move as before. Returns ``first``, ``last`` (the pieces the two points lie on), ``paths`` ``(K,
     pieces + 2, n)`` (the first point, the path's waypoints in between padded with the last of them, and the
     last point), ``gain`` (joint travel saved; -inf when nothing is replaced, or when a partial one spans more
-    than ``pieces`` pieces) and ``fewer`` (two waypoints joined: as long, it still drops waypoints).
+    than ``pieces`` pieces) and ``fewer`` (a straight one that drops waypoints: as long, it is still better).
     Compiled: :mod:`clew_ros.core.improve` scores batches of them."""
     w, draws = _arg(waypoints), _arg(draws)
     m, n = w.shape

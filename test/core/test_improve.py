@@ -262,9 +262,22 @@ def test_a_cleared_straight_move_is_valid_at_a_fine_step(seed, joints, width) ->
 
 
 @pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])
-def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, joints, width) -> None:
-    """``_Improver.connect`` (RRT-Connect, moves checked continuously): a path it returns joins the move's ends,
-    is valid at a fine step (resting object or carried one), and is the same from the same generator."""
+def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, joints, width, monkeypatch) -> None:
+    """``_Improver.connect`` (RRT-Connect, moves checked continuously, then shortened): a path it returns joins
+    the move's ends, is valid at a fine step (resting object or carried one), is the same from the same
+    generator, and is no longer than the greedy shortening made it (the random shortcuts after it)."""
+    from clew_ros.core import improve as improve_module
+
+    greedy: list[float] = []
+    shortened = improve_module.shortened
+
+    def recorded(*args, **kwargs):
+        path = shortened(*args, **kwargs)
+        greedy.append(joint_travel([path]))
+        return path
+
+    monkeypatch.setattr(improve_module, "shortened", recorded)
+    polished = 0
     world, rng = _random_world(seed, joints, width)
     grasp_rel = np.array([0.02, 0.0, 0.3])
     rest = np.asarray(world.object.initial, dtype=float)
@@ -292,6 +305,8 @@ def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, 
         assert paths[1] is not None
         assert np.array_equal(paths[0], paths[1])  # deterministic
         path = paths[0]
+        assert joint_travel([path]) <= greedy[-1] + 1e-9
+        polished += joint_travel([path]) < greedy[-1] - 1e-9
         assert np.array_equal(path[0], a)
         assert np.array_equal(path[-1], b)
         routed += 1
@@ -301,6 +316,7 @@ def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, 
             poses = compose(tip_poses(world.robot, fine), grasp_rel) if transfer else rest
             assert is_valid(world, fine, poses).all()
     assert routed >= 2
+    assert polished >= 1  # the shortcuts after the greedy shortening shortened some path
 
 
 @pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])
@@ -525,7 +541,8 @@ def _shortcuts_in_numpy(w: np.ndarray, draws: np.ndarray, pieces: int):
     paths[partial] = bent[partial]
     gain = (u[:, 1] - u[:, 0]) - np.abs(np.diff(paths, axis=1)).sum(axis=(1, 2))
     replaces = (last > first) & ~(partial & (last - first > pieces))
-    return first, last, paths, np.where(replaces, gain, -np.inf), pick & replaces
+    fewer = replaces & (pick | (~partial & (last - first > 2)))
+    return first, last, paths, np.where(replaces, gain, -np.inf), fewer
 
 
 @pytest.mark.parametrize("joints", [2, 3, 7])
@@ -592,12 +609,13 @@ def test_drawn_shortcuts_join_two_points_of_the_path_and_save_what_they_say(join
                 assert np.allclose(path[last - first : -1], path[last - first])  # padded: zero moves
                 differs = np.any(~np.isclose(inner, w[first + 1 : last + 1], atol=1e-12), axis=0)
                 assert differs.sum() <= 1
-            elif drawn.fewer[k]:
-                kinds["waypoints"] += 1
-                assert np.array_equal(start, w[first])
-                assert np.array_equal(end, w[last + 1])
+                assert not drawn.fewer[k]  # as many waypoints as it replaces
+            elif np.array_equal(start, w[first]) and np.array_equal(end, w[last + 1]):
+                kinds["waypoints"] += 1  # two waypoints joined: the ones between are dropped
+                assert drawn.fewer[k]
             else:
-                kinds["straight"] += 1
+                kinds["straight"] += 1  # two points for the waypoints between: fewer only if three or more
+                assert drawn.fewer[k] == (last - first > 2)
     assert min(kinds.values()) >= 20, kinds  # every kind is drawn
 
 
@@ -625,7 +643,7 @@ def test_a_batch_of_shortcuts_takes_the_clear_ones_that_do_not_overlap_largest_g
         return ~np.array(hit, dtype=bool)
 
     monkeypatch.setattr(improve_module, "straight_moves_clear", check)
-    assert improver.take_shortcuts(index, drawn)
+    assert improver.take_shortcuts(improver.pieces[index], drawn)
     assert len(calls) == 1  # the whole batch in one call
     taken = []
     for k in rows[1:]:  # what should be taken: the others, largest gain first, none overlapping one taken
@@ -644,7 +662,7 @@ def test_a_batch_of_shortcuts_takes_the_clear_ones_that_do_not_overlap_largest_g
         improve_module, "straight_moves_clear", lambda world, starts, ends, **kw: np.zeros(len(starts), bool)
     )
     again = improver.pieces[index].waypoints.copy()
-    assert not improver.take_shortcuts(index, _draw_shortcuts(again, np.random.default_rng(6), 16))
+    assert not improver.take_shortcuts(improver.pieces[index], _draw_shortcuts(again, np.random.default_rng(6), 16))
     assert np.array_equal(improver.pieces[index].waypoints, again)  # nothing clear: nothing changes
 
 

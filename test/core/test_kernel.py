@@ -459,7 +459,7 @@ def test_warm_up_compiles_every_kernel_the_python_entry_points_call() -> None:
         from clew_ros.core.world import load_world
         k.warm_up()
         entry = ["_decode", "_intervals", "_clearly_valid", "_moves_clear", "_connect_rounds", "_solve_point",
-                 "_chain", "_pruned", "_bounce_all"]
+                 "_chain", "_pruned", "_bounce_all", "_screen", "_shortcuts"]
         counts = {name: len(getattr(k, name).signatures) for name in entry}
         print(" ".join(name for name in entry if not counts[name]))
         plan(load_world("config/single_transfer.yaml"), PlannerSettings(seed=0, improve_time=0.4))

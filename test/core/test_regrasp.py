@@ -380,6 +380,8 @@ def test_the_compiled_screen_refuses_bad_shapes_and_a_missing_mode() -> None:
     with pytest.raises(ValueError, match="starts, ends, samples"):
         screen_routes(packed, a, np.zeros((2, 2)), np.full(3, 8), resting=rest, grasp_rel=None)
     with pytest.raises(ValueError, match="starts, ends, samples"):
+        screen_routes(packed, np.zeros((3, 5)), np.zeros((3, 5)), np.full(3, 8), resting=rest, grasp_rel=None)
+    with pytest.raises(ValueError, match="samples: expected at least 2"):
         screen_routes(packed, a, a, np.full(3, 1), resting=rest, grasp_rel=None)
     with pytest.raises(ValueError, match="at rest"):
         screen_routes(packed, a, a, np.full(3, 8), resting=None, grasp_rel=None)

@@ -154,8 +154,6 @@ SHORTCUT_BATCH = 16
 BATCH_WORK = 150
 #: Batches of random shortcuts in a row that change nothing end them.
 IDLE_BATCHES = 12
-#: Batches of random shortcuts in a row that change nothing end those on a path RRT-Connect found.
-POLISH_IDLE_BATCHES = 4
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
 IK_WORK = 0.125
 #: The cost of one configuration check, in joints (the links are what the compiled check places and tests,
@@ -642,9 +640,8 @@ class _Improver:
     def connect(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
         """A path from ``a`` to ``b`` in ``piece``'s mode around what blocks the straight move: RRT-Connect
         (:func:`clew_ros.core.connect.rrt_connect`, each extension checked continuously), then shortened
-        greedily and by batches of random shortcuts (:meth:`take_shortcuts`) until :data:`POLISH_IDLE_BATCHES`
-        in a row find nothing. At most :data:`CONNECT_STEPS` rounds and :data:`CONNECT_SHARE` of the budget;
-        ``None`` when the trees did not meet."""
+        greedily. At most :data:`CONNECT_STEPS` rounds and :data:`CONNECT_SHARE` of the budget; ``None`` when
+        the trees did not meet."""
         limit = self.budget.spent + CONNECT_SHARE * self.budget.total
 
         def clear(p: np.ndarray, q: np.ndarray) -> bool:
@@ -661,21 +658,7 @@ class _Improver:
             rounds=CONNECT_STEPS,
             budget=_RoutingShare(self.budget, limit),
         )
-        if path is None:
-            return None
-        routed = _Piece(
-            piece.kind,
-            piece.grasp,
-            shortened(clear, path, lambda: self.budget.spent > limit),
-            piece.start_pose,
-            piece.grasp_rel,
-        )
-        idle = 0  # then shortcuts anywhere along it (a tree's path turns at its nodes, not where it must)
-        while idle < POLISH_IDLE_BATCHES and self.budget.spent <= limit and not self.budget.stop():
-            self.budget.spend(BATCH_WORK)
-            better = self.take_shortcuts(routed, _draw_shortcuts(routed.waypoints, self.ctx.rng, SHORTCUT_BATCH))
-            idle = 0 if better else idle + 1
-        return routed.waypoints
+        return None if path is None else shortened(clear, path, lambda: self.budget.spent > limit)
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:
         """Waypoints from ``a`` to ``b`` in ``piece``'s mode, each move checked continuously: the ways of

@@ -262,22 +262,9 @@ def test_a_cleared_straight_move_is_valid_at_a_fine_step(seed, joints, width) ->
 
 
 @pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])
-def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, joints, width, monkeypatch) -> None:
-    """``_Improver.connect`` (RRT-Connect, moves checked continuously, then shortened): a path it returns joins
-    the move's ends, is valid at a fine step (resting object or carried one), is the same from the same
-    generator, and is no longer than the greedy shortening made it (the random shortcuts after it)."""
-    from clew_ros.core import improve as improve_module
-
-    greedy: list[float] = []
-    shortened = improve_module.shortened
-
-    def recorded(*args, **kwargs):
-        path = shortened(*args, **kwargs)
-        greedy.append(joint_travel([path]))
-        return path
-
-    monkeypatch.setattr(improve_module, "shortened", recorded)
-    polished = 0
+def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, joints, width) -> None:
+    """``_Improver.connect`` (RRT-Connect, moves checked continuously): a path it returns joins the move's ends,
+    is valid at a fine step (resting object or carried one), and is the same from the same generator."""
     world, rng = _random_world(seed, joints, width)
     grasp_rel = np.array([0.02, 0.0, 0.3])
     rest = np.asarray(world.object.initial, dtype=float)
@@ -305,8 +292,6 @@ def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, 
         assert paths[1] is not None
         assert np.array_equal(paths[0], paths[1])  # deterministic
         path = paths[0]
-        assert joint_travel([path]) <= greedy[-1] + 1e-9
-        polished += joint_travel([path]) < greedy[-1] - 1e-9
         assert np.array_equal(path[0], a)
         assert np.array_equal(path[-1], b)
         routed += 1
@@ -316,7 +301,6 @@ def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, 
             poses = compose(tip_poses(world.robot, fine), grasp_rel) if transfer else rest
             assert is_valid(world, fine, poses).all()
     assert routed >= 2
-    assert polished >= 1  # the shortcuts after the greedy shortening shortened some path
 
 
 @pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])

@@ -1,4 +1,4 @@
-"""``python -m benchmarks.improvement [--worlds NAME|PATH ...] [--seeds N] [--improve-time S]``: what the
+"""``python -m benchmarks.improvement [--worlds NAME|PATH ...] [--seeds N] [--improve-time S] [--shortest]``: what the
 anytime improvement gains.
 
 For each world (default figure1, arm3_regrasp and arm5_regrasp; any benchmark
@@ -10,7 +10,8 @@ prints a Markdown table row per world: plans found, median joint travel of
 the first and the improved plan (rad), the gain, median transfers, the
 wall time the improvement added (median / max, s), and that time over the
 seconds its work stands for (``improve_work / WORK_PER_SECOND``, median / max:
-under 1, the work counted keeps the improvement within its budget).
+under 1, the work counted keeps the improvement within its budget); with
+``--shortest``, also the shortest improved plan over the seeds (rad).
 docs/algorithm.md quotes it.
 """
 
@@ -52,21 +53,27 @@ def _timing_improvement() -> list[float]:
     return times
 
 
-def arguments(argv: list[str] | None, doc: str, seeds: int) -> tuple[argparse.Namespace, list[str]]:
+def arguments(
+    argv: list[str] | None, doc: str, seeds: int, *, shortest: bool = False
+) -> tuple[argparse.Namespace, list[str]]:
     """The options the improvement's benchmarks share (``--worlds``, ``--seeds``, ``--improve-time``; ``doc``'s
-    first paragraph as the description), and the world files or names to run."""
+    first paragraph as the description; ``--shortest`` if ``shortest``), and the world files or names to run."""
     parser = argparse.ArgumentParser(description=doc.split("\n\n", maxsplit=1)[0])
     parser.add_argument(
         "--worlds", nargs="+", default=None, help=f"benchmark world names or YAML files (default {' '.join(WORLDS)})"
     )
     parser.add_argument("--seeds", type=int, default=seeds)
     parser.add_argument("--improve-time", type=float, default=None, help="default: planner.improve_time's default")
+    if shortest:
+        parser.add_argument(
+            "--shortest", action="store_true", help="one more column: the shortest improved plan over the seeds (rad)"
+        )
     args = parser.parse_args(argv)
     return args, args.worlds or [str(ROOT / "config" / f"{name}.yaml") for name in WORLDS]
 
 
 def main(argv: list[str] | None = None) -> int:
-    args, names = arguments(argv, __doc__, seeds=10)
+    args, names = arguments(argv, __doc__, seeds=10, shortest=True)
     warm_up()
     times = _timing_improvement()
     for world, parameters in load_worlds(names):
@@ -103,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"| {name} | {len(rows)}/{args.seeds} | {median(0):.1f} | {median(1):.1f} | {median(0) / median(1):.2f}x "
             f"| {median(2):g} / {median(3):g} | {median(4):.2f} / {max(r[4] for r in rows):.2f} "
-            f"| {median(5):.2f} / {max(r[5] for r in rows):.2f} |",
+            f"| {median(5):.2f} / {max(r[5] for r in rows):.2f} |"
+            + (f" {min(r[1] for r in rows):.2f} |" if args.shortest else ""),
             flush=True,
         )
     return 0

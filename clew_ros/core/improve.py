@@ -134,8 +134,8 @@ __all__ = [
 #: docs/benchmarks.md when quiet, up to twice that with its 2 cores shared with other jobs: improvement
 #: takes at most about its budget there, and the same work everywhere).
 WORK_PER_SECOND = 3.5e5
-#: Work of one call of the compiled configuration check (the Python around it: the proposals' screens sample
-#: the ways and compute poses), in units of one configuration of figure1.
+#: Work of one call of the compiled configuration check from Python (the Python around it: the proposals'
+#: inverse kinematics computes poses and checks its solutions), in units of one configuration of figure1.
 CALL_WORK = 200
 #: Work of one call of the compiled straight-move check (:func:`clew_ros.core.continuous.straight_moves_clear`:
 #: the Python around it, one or several moves), or of the proposals' compiled screen
@@ -363,7 +363,7 @@ class _Shortcuts:
     last: np.ndarray
     paths: np.ndarray
     gain: np.ndarray
-    fewer: np.ndarray  # as long, but drops waypoints (two waypoints joined straight)
+    fewer: np.ndarray  # a straight one that drops waypoints: as long, it is still better
 
     def improving(self) -> np.ndarray:
         """The shortcuts that would make the path better, the largest gain first."""
@@ -756,14 +756,18 @@ class _Improver:
         taken, the largest gain first, as long as they do not overlap one taken."""
         rng = self.ctx.rng
         idle = 0
+        changed = True
+        travels = np.zeros(0)
         while self.budget.left() and idle < IDLE_BATCHES:
-            travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
+            if changed:  # how much each piece could still gain
+                travels = np.array([joint_travel([p.waypoints]) if len(p.waypoints) > 2 else 0.0 for p in self.pieces])
             if travels.sum() <= 0:
                 return
             index = int(rng.choice(len(self.pieces), p=travels / travels.sum()))
             self.budget.spend(BATCH_WORK)  # drawing, scoring and splicing them, besides the checks
             piece = self.pieces[index]
-            idle = 0 if self.take_shortcuts(piece, _draw_shortcuts(piece.waypoints, rng, SHORTCUT_BATCH)) else idle + 1
+            changed = self.take_shortcuts(piece, _draw_shortcuts(piece.waypoints, rng, SHORTCUT_BATCH))
+            idle = 0 if changed else idle + 1
 
     def take_shortcuts(self, piece: _Piece, drawn: _Shortcuts) -> bool:
         """Check the shortcuts of ``drawn`` that would make ``piece``'s path better (every move of all of them

@@ -322,11 +322,14 @@ class _Start:
     grasp_rel: np.ndarray  # (A, 3)
     route: np.ndarray  # (A,)
     goal_seeds: np.ndarray  # (A, n) a configuration holding the goal with the same approach (NaN: none known)
-    drawn: np.ndarray  # (A,) found by restarts (:meth:`_Kinematics.restarted`)
+    drawn: np.ndarray  # (A,) found by restarts (:meth:`_Kinematics.restarted`) besides their seed's own
 
     def seeded(self) -> _Start:
-        """Without the configurations found by restarts: the two-transfer proposals draw releases for every
-        grasp configuration, so the restarts' would double their work for little (they shorten transits)."""
+        """Without the configurations found by restarts besides a valid one from their seed: the two-transfer
+        proposals draw releases for every grasp configuration, so those would double their work for little
+        (they shorten transits). A restart standing in for a seed whose own solution is not valid stays: on
+        arm3_regrasp grasp 1's solutions from the start and its mirror image collide, and without the
+        restart's no two-transfer proposal started with that grasp."""
         keep = ~self.drawn
         return _Start(
             self.start,
@@ -458,7 +461,8 @@ def _grasp_configurations(
     """Valid configurations holding each grasp from the start and its mirror image, with the restarts'
     (:meth:`_Kinematics.restarted`) and, around the plan's own grasp configurations, ones nearer the start
     (three joints or more; the plan's own are proposed as they are by the caller):
-    the configurations, their grasps, and which came from restarts."""
+    the configurations, their grasps, and which came from restarts besides a valid solution from their seed
+    (a restart in place of a seed whose own solution is not valid counts as that seed's)."""
     world = kinematics.world
     n = len(start)
     grasps = np.repeat(np.arange(len(world.object.grasps)), 2)
@@ -467,7 +471,9 @@ def _grasp_configurations(
     seeds[0::2] = start
     placements = np.broadcast_to(placement, (len(grasps), 3))
     rows, first, ok = kinematics.restarted(lambda k, q: kinematics.holding(placements[k], grasps[k], q), seeds, rng)
-    drawn = np.arange(len(rows)) >= len(seeds)
+    # a restart's solution is extra only beside a valid one from its seed; one standing in for a seed whose own
+    # solution is not valid takes its place (so the two-transfer proposals start from it too)
+    drawn = (np.arange(len(rows)) >= len(seeds)) & ok[rows]  # the first rows are the seeds' own, in order
     first, grasps, drawn = first[ok], grasps[rows[ok]], drawn[ok]
     if own and world.robot.dof >= 3:  # the plan's own are kept as they are (by the caller); ones around them
         # nearer the start are added (restarts: three or more joints only)

@@ -176,6 +176,28 @@ def test_a_two_joint_arms_own_grasp_configurations_cost_no_inverse_kinematics() 
     assert efforts[1] == efforts[0]
 
 
+def test_a_restart_in_place_of_a_seeds_colliding_solution_starts_two_transfer_proposals() -> None:
+    # the two-transfer proposals start only from each seed's (the start's and its mirror image's) grasp
+    # configuration, not from the restarts' besides it; on arm3_regrasp grasp 1's solutions from both seeds
+    # collide at the start placement and only a restart's is valid: it takes the seed's place, so every
+    # grasp with a valid configuration keeps one (at most one per seed) for the two-transfer proposals
+    from clew_ros.core.continuous import MIN_MARGIN_FACTOR
+    from clew_ros.core.regrasp import _grasp_configurations, _Kinematics
+    from clew_ros.core.settings import PlannerSettings
+
+    world = load_world(ROOT / "config" / "arm3_regrasp.yaml")
+    start = np.asarray(world.robot.initial, dtype=float)
+    placement = np.asarray(world.object.initial, dtype=float)
+    kinematics = _Kinematics(world, MIN_MARGIN_FACTOR * PlannerSettings().clearance)
+    for seed in range(3):
+        first, grasps, drawn = _grasp_configurations(kinematics, start, placement, [], np.random.default_rng(seed))
+        assert drawn.any()  # restarts besides a valid solution of their seed stay out of them
+        assert set(grasps[~drawn].tolist()) == set(grasps.tolist())
+        assert np.bincount(grasps[~drawn]).max() <= 2
+        assert 1 in grasps.tolist()
+        assert is_valid(world, first, placement).all()
+
+
 def _aligned_setup(family: str, seed: int):
     from clew_ros.core.regrasp import _aligned_at, _goal_holds, _Kinematics
     from clew_ros.worlds import generate

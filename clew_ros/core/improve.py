@@ -198,6 +198,9 @@ TRAVEL_EPS = 1e-9
 #: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
 #: unit of :func:`check_work`. The final check of the segments changed so far is kept out of the budget.
 DENSE_WORK = 0.5
+#: Configurations this close (rad, largest joint difference) count as the same where a transfer is put down
+#: and taken again (:func:`_joined_regrasps`).
+SAME_RAD = 1e-12
 
 
 def joint_travel(segments: list[Segment] | list[np.ndarray]) -> float:
@@ -345,6 +348,31 @@ def _dense_clear(world: World, piece: _Piece) -> bool:
     return path_valid(world, piece.waypoints, grasp_rel=piece.grasp_rel)
 
 
+def _joined_regrasps(pieces: list[_Piece]) -> list[_Piece]:
+    """``pieces`` with each transfer that is put down and taken again by the same grasp without the arm moving
+    (a transit of no joint travel between two transfers of one grasp) made one transfer: the arm and the
+    object move exactly as before, the object held the same way (the tip and the object did not move in
+    between), so nothing needs checking, and the plan has one transfer fewer."""
+    joined: list[_Piece] = []
+    for piece in pieces:
+        if len(joined) >= 2 and piece.kind == "transfer" and joined[-2].kind == "transfer":
+            carried, still = joined[-2], joined[-1]
+            junction = np.vstack([carried.waypoints[-1:], still.waypoints, piece.waypoints[:1]])
+            if piece.grasp == carried.grasp and float(np.abs(junction - junction[0]).max()) <= SAME_RAD:
+                joined[-2:] = [
+                    _Piece(
+                        "transfer",
+                        carried.grasp,
+                        np.vstack([carried.waypoints, piece.waypoints[1:]]),
+                        carried.start_pose,
+                        carried.grasp_rel,
+                    )
+                ]
+                continue
+        joined.append(piece)
+    return joined
+
+
 def _without_repeats(waypoints: list[np.ndarray]) -> np.ndarray:
     """``waypoints`` without those within 1e-12 rad (each joint) of the one before."""
     points = np.array(waypoints, dtype=float)
@@ -453,6 +481,7 @@ class _Improver:
         self.budget.reserve = math.ceil(DENSE_WORK * self.budget.check_work * count)
 
     def prune(self) -> None:
+        self.pieces = _joined_regrasps(self.pieces)
         for piece in self.pieces:
             pruned = pruned_path(piece.waypoints)
             if _better(

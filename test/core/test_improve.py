@@ -17,7 +17,7 @@ from helpers.random_boxes import random_boxes
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
 from clew_ros.core.continuous import straight_move_clear
-from clew_ros.core.improve import _Improver, _Piece, improve, joint_travel
+from clew_ros.core.improve import _Improver, _joined_regrasps, _Piece, _pieces, improve, joint_travel
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import pruned_path
 from clew_ros.core.kinematics import compose, relative, tip_poses
@@ -366,9 +366,9 @@ def _plan_of(world, segments, final=None) -> Plan:
     return plan
 
 
-def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter() -> None:
-    """A valid plan that puts the object down halfway, takes it again, and wanders: one transfer does."""
-    world = world_from_parameters(OPEN_WORLD)
+def _regrasped_in_place(world) -> tuple[list[Segment], np.ndarray, np.ndarray, np.ndarray]:
+    """A valid plan in the open world that puts the object down halfway and takes it again where it is, with
+    the same grasp and without moving, and wanders: its segments, and the start, grasp and goal configurations."""
     start = world.robot.initial
     point = world.object.initial[:2] + world.object.grasps[0]
     hold, _, _ = solve_point(world.robot, np.array([[-0.12, 1.43]]), point[None])  # the tip on the grasp
@@ -384,6 +384,13 @@ def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter() -> None:
         Segment("transit", None, [halfway]),
         Segment("transfer", 0, [halfway, np.array([halfway[0], end[1]]), end]),
     ]
+    return segments, start, hold, end
+
+
+def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter() -> None:
+    """A valid plan that puts the object down halfway, takes it again, and wanders: one transfer does."""
+    world = world_from_parameters(OPEN_WORLD)
+    segments, start, hold, end = _regrasped_in_place(world)
     first = _plan_of(world, segments)
     assert validate_plan(world, first) == []  # the premise: a valid plan, with a needless regrasp
     goal = np.asarray(first.final_object_pose)
@@ -397,6 +404,26 @@ def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter() -> None:
     assert validate_plan(world, improved) == []
     for motion in replay(world, improved, FINE_RAD):
         assert is_valid(world, motion.configurations, motion.object_poses).all()
+
+
+def test_a_transfer_put_down_and_taken_again_in_place_becomes_one_transfer() -> None:
+    # the same grasp taken again where the arm stopped: the arm and the object move exactly as before
+    world = world_from_parameters(OPEN_WORLD)
+    segments, _, _, _ = _regrasped_in_place(world)
+    pieces = _pieces(world, segments)
+    joined = _joined_regrasps(pieces)
+    assert [p.kind for p in joined] == ["transit", "transfer"]
+    assert np.array_equal(joined[1].waypoints, np.vstack([pieces[1].waypoints, pieces[3].waypoints[1:]]))
+    assert np.array_equal(joined[1].grasp_rel, pieces[1].grasp_rel)
+    assert np.abs(joined[1].end_pose(world) - pieces[3].end_pose(world)).max() <= 1e-9
+    assert joint_travel([p.waypoints for p in joined]) == pytest.approx(joint_travel([p.waypoints for p in pieces]))
+    assert validate_plan(world, _plan_of(world, [p.segment() for p in joined])) == []
+    # not when the arm moves between them, another grasp is taken, or the second starts elsewhere
+    moved = dataclasses.replace(pieces[2], waypoints=np.vstack([pieces[2].waypoints, pieces[2].waypoints + 0.01]))
+    other = dataclasses.replace(pieces[3], grasp=1)
+    elsewhere = dataclasses.replace(pieces[3], waypoints=pieces[3].waypoints + 0.01)
+    for changed in ([*pieces[:2], moved, pieces[3]], [*pieces[:3], other], [*pieces[:3], elsewhere]):
+        assert len(_joined_regrasps(changed)) == 4
 
 
 def _improver_on_first_plan(name: str):

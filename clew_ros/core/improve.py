@@ -6,7 +6,9 @@ wherever its search happened to: often with the elbow the wrong way round,
 or put down far from where a regrasp was needed. Once a plan is found,
 :func:`improve` spends a bounded budget (``planner.improve_time``) on it:
 
-1. **Back-and-forth pruning** (free): a waypoint between two collinear
+1. **Back-and-forth pruning** (free): a transfer put down and taken again by
+   the same grasp where the arm stopped becomes one transfer
+   (:func:`_joined_regrasps`); a waypoint between two collinear
    pieces (a joint moving one way, then back) is dropped, and so is a loop
    that comes back to an earlier waypoint. The configurations left were
    already on the plan, so nothing needs checking.

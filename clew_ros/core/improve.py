@@ -111,7 +111,7 @@ from clew_ros.core.continuous import (
 )
 from clew_ros.core.kernel import pruned_path, shortcuts
 from clew_ros.core.kinematics import compose, relative, tip_poses
-from clew_ros.core.regrasp import ROUTES, Proposal, propose, route_waypoints
+from clew_ros.core.regrasp import ROUTES, Proposal, goal_holds_near, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
@@ -195,6 +195,8 @@ MOVE_ALIKE_RAD = 0.1
 PARTIAL_PIECES = 8
 #: Stream of the generator the proposals' inverse-kinematics restarts draw from (with ``planner.seed``).
 RESTART_STREAM = 19
+#: Goal shortcuts taken at most per call of :meth:`_Improver.goal_shortcuts` (each the best clear one).
+GOAL_SHORTCUTS = 3
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
 #: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
@@ -844,6 +846,49 @@ class _Improver:
         self.reserve()
         return True
 
+    def goal_shortcuts(self) -> bool:
+        """The object may end anywhere on the goal (within its tolerances), and a redundant arm, or one whose
+        goal leaves the object's angle free, holds it there in many ways. From each waypoint of the last
+        transfer but its end, the configuration inverse kinematics finds from there putting the object on
+        the goal, held as that transfer holds it (:func:`clew_ros.core.regrasp.goal_holds_near`, valid with
+        the margin), joined straight, ends the transfer when that makes it shorter: the shortest clear one,
+        up to :data:`GOAL_SHORTCUTS` times (one batch of inverse kinematics and one call of the continuous
+        check each). Returns whether the plan changed."""
+        piece = self.pieces[-1]
+        changed = False
+        for _ in range(GOAL_SHORTCUTS):
+            if piece.kind != "transfer" or piece.grasp_rel is None or len(piece.waypoints) < 2:
+                return changed
+            if not self.budget.left():
+                return changed
+            w = piece.waypoints
+            seeds = w[:-1]
+            holding = np.broadcast_to(piece.grasp_rel, (len(seeds), 3))
+            held, ok, effort = goal_holds_near(self.world, holding, seeds, self.goal, margin_m=self.min_margin)
+            self.budget.spend_checks(effort.checks, effort.calls)
+            self.budget.spend(math.ceil(IK_WORK * effort.steps))
+            steps = np.abs(np.diff(w, axis=0)).sum(axis=1)
+            travel = np.cumsum(steps) - steps + np.abs(held - seeds).sum(axis=1)  # to each seed, then to the goal
+            rows = np.flatnonzero(ok & (travel < steps.sum() - TRAVEL_EPS))
+            if not len(rows):
+                return changed
+            clear = straight_moves_clear(
+                self.world,
+                seeds[rows],
+                held[rows],
+                object_pose=piece.start_pose,
+                grasp_rel=piece.grasp_rel,
+                min_margin=self.min_margin,
+                budget=self.budget,
+            )
+            if self.budget.stopped or not clear.any():
+                return changed
+            best = rows[clear][np.argmin(travel[rows[clear]])]
+            piece.waypoints = np.vstack([w[: best + 1], held[best][None]])
+            self.reserve()
+            changed = True
+        return changed
+
     def run(self) -> list[_Piece]:
         """Rounds of rebuilding, fewer transfers and shortcuts while work is left and the last round made the
         plan better (after the first, the rebuilding may use all that is left: the shortcuts had too little to
@@ -854,8 +899,11 @@ class _Improver:
             self.rebuild()
             self.fewer_transfers()
             self.prune()
+            self.goal_shortcuts()
             self.greedy_shortcuts()
             self.random_shortcuts()
+            if self.goal_shortcuts():
+                self.random_shortcuts()
             if not self.budget.left() or not _better(score, _score(self.pieces)):
                 return self.pieces
             self.rebuild_share = 1.0

@@ -20,9 +20,10 @@ goal are also solved from seeds drawn around each seed (:data:`RESTARTS`), the v
 seed added (around the plan's own grasp configuration, the one nearest the arm's configuration):
 a redundant arm's first solution often folds into an obstacle, the object or itself, or lies far
 from where the arm is. Two-transfer proposals start from the seeds' own grasp configurations only,
-or from the restarts' where a seed's own is not valid. A rigid grasp keeps its approach (the object's angle in the tip's frame)
-while carried, so an arm of three or more joints also takes each grasp with an approach that can
-hold the object on the goal (:func:`_goal_holds`), at the placement and at releases.
+or from the restarts' where a seed's own is not valid. A rigid grasp keeps its approach (the
+object's angle in the tip's frame) while carried, so an arm of three or more joints also takes
+each grasp with an approach that can hold the object on the goal (:func:`_goal_holds`), at the
+placement and at releases.
 Release configurations are drawn from the run's generator: along the way from the grasp to where
 the object comes closest to the goal, putting the object down at points drawn around the goal, at
 and around where the plan put it down, and anywhere within the joint limits; then refined around
@@ -276,6 +277,17 @@ class _Kinematics:
         q, _, steps = solve_point(self.world.robot, seeds, points, offsets=grasp_rel[:, :2], tolerance_m=1e-6)
         self.effort.steps += steps + len(q)
         return q
+
+
+def goal_holds_near(
+    world: World, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray, *, margin_m: float
+) -> tuple[np.ndarray, np.ndarray, Effort]:
+    """Configurations near ``seeds`` ``(B, n)`` (inverse kinematics from each) putting the object, held as
+    ``grasp_rel`` ``(B, 3)``, on ``goal`` within its tolerances, which ones do, valid with ``margin_m`` to
+    spare, and the work done; the goal configurations of :func:`propose`'s one-transfer proposals."""
+    kinematics = _Kinematics(world, margin_m)
+    q, ok = kinematics.at_goal(np.asarray(grasp_rel, dtype=float), np.asarray(seeds, dtype=float), goal)
+    return q, ok, kinematics.effort
 
 
 def _within_reach(lengths: np.ndarray, distance: np.ndarray, slack: float) -> np.ndarray:

@@ -442,6 +442,50 @@ def _improver_on_first_plan(name: str):
     return world, fresh(), fresh
 
 
+def test_goal_shortcuts_end_the_last_transfer_on_the_goal_sooner_by_a_clear_straight_move() -> None:
+    # the goal leaves the object's angle free (arm3_regrasp, arm5_regrasp) or the arm is redundant (arm7): the
+    # last transfer may end in another configuration holding the object on the goal, reached from one of its
+    # waypoints by a clear straight move
+    from clew_ros.core.search import goal_reached
+    from clew_ros.worlds import generate
+
+    changed = 0
+    for world in (_world("arm3_regrasp"), _world("arm5_regrasp"), generate("arm7", 1).world()):
+        goal = np.asarray(world.object.goal, dtype=float)
+        for seed in range(2):
+            first = _plan(world, seed, 0.0)
+            ctx = PlanningContext(
+                world, PlannerSettings(seed=seed, improve_time=0.4), np.random.default_rng(seed), Termination(30)
+            )
+            improver = _Improver(ctx, _pieces(world, first.segments), goal)
+            before = [p.waypoints.copy() for p in improver.pieces]
+            spent = improver.budget.spent
+            moved = improver.goal_shortcuts()
+            assert improver.budget.spent > spent  # its inverse kinematics and checks are charged
+            after = improver.pieces
+            assert len(after) == len(before)
+            assert all(np.array_equal(p.waypoints, w) for p, w in zip(after[:-1], before[:-1], strict=True))
+            last, old = after[-1], before[-1]
+            assert moved == (not np.array_equal(last.waypoints, old))
+            if not moved:
+                continue
+            changed += 1
+            kept = len(last.waypoints) - 1  # the waypoints kept, then a new end on the goal
+            assert np.array_equal(last.waypoints[:kept], old[:kept])
+            assert joint_travel([last.waypoints]) < joint_travel([old]) - 1e-9
+            assert goal_reached(world, last.end_pose(world), goal)
+            assert straight_move_clear(
+                world,
+                last.waypoints[-2],
+                last.waypoints[-1],
+                grasp_rel=last.grasp_rel,
+                min_margin=improver.min_margin,
+            )
+            segments = [p.segment() for p in after]
+            assert validate_plan(world, _plan_of(world, segments)) == []
+    assert changed >= 3
+
+
 def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_ones_apart(monkeypatch) -> None:
     # routing (RRT-Connect) is dear: a call for the proposals that looked clear never routes, and a call for
     # the blocked ones checks nothing else

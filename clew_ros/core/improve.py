@@ -58,7 +58,11 @@ or put down far from where a regrasp was needed. Once a plan is found,
    shorten it are checked in one compiled call; the clear ones that do not
    overlap are taken, the largest gain first. A segment's end points never
    change, so every grasp and ungrasp stays where it was (the tip still
-   holds its grasp) and the object rests or is carried exactly as before.
+   holds its grasp) and the object rests or is carried exactly as before;
+   but the last transfer may end anywhere on the goal: before and after
+   them, *goal shortcuts* (:meth:`_Improver.goal_shortcuts`) join one of its
+   waypoints straight to a configuration holding the object on the goal
+   that inverse kinematics finds from there, when that is shorter.
 
 Steps 2 to 4 are one round. Rounds repeat while the last one made the plan
 better and work is left; after the first, the rebuilding may use the whole

@@ -199,8 +199,6 @@ MOVE_ALIKE_RAD = 0.1
 PARTIAL_PIECES = 8
 #: Stream of the generator the proposals' inverse-kinematics restarts draw from (with ``planner.seed``).
 RESTART_STREAM = 19
-#: Goal shortcuts taken at most per call of :meth:`_Improver.goal_shortcuts` (each the best clear one).
-GOAL_SHORTCUTS = 3
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
 #: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
@@ -363,7 +361,7 @@ def _joined_regrasps(pieces: list[_Piece]) -> list[_Piece]:
     between), so nothing needs checking, and the plan has one transfer fewer."""
     joined: list[_Piece] = []
     for piece in pieces:
-        if len(joined) >= 2 and piece.kind == "transfer" and joined[-2].kind == "transfer":
+        if len(joined) >= 2 and piece.kind == "transfer" and [p.kind for p in joined[-2:]] == ["transfer", "transit"]:
             carried, still = joined[-2], joined[-1]
             junction = np.vstack([carried.waypoints[-1:], still.waypoints, piece.waypoints[:1]])
             if piece.grasp == carried.grasp and float(np.abs(junction - junction[0]).max()) <= SAME_RAD:
@@ -855,43 +853,39 @@ class _Improver:
         goal leaves the object's angle free, holds it there in many ways. From each waypoint of the last
         transfer but its end, the configuration inverse kinematics finds from there putting the object on
         the goal, held as that transfer holds it (:func:`clew_ros.core.regrasp.goal_holds_near`, valid with
-        the margin), joined straight, ends the transfer when that makes it shorter: the shortest clear one,
-        up to :data:`GOAL_SHORTCUTS` times (one batch of inverse kinematics and one call of the continuous
-        check each). Returns whether the plan changed."""
+        the margin), joined straight, ends the transfer when that makes it shorter: the shortest clear one
+        (one batch of inverse kinematics and one call of the continuous check; once is enough, since a
+        second batch from the waypoints kept would find the same). Returns whether the plan changed."""
         piece = self.pieces[-1]
-        changed = False
-        for _ in range(GOAL_SHORTCUTS):
-            if piece.kind != "transfer" or piece.grasp_rel is None or len(piece.waypoints) < 2:
-                return changed
-            if not self.budget.left():
-                return changed
-            w = piece.waypoints
-            seeds = w[:-1]
-            holding = np.broadcast_to(piece.grasp_rel, (len(seeds), 3))
-            held, ok, effort = goal_holds_near(self.world, holding, seeds, self.goal, margin_m=self.min_margin)
-            self.budget.spend_checks(effort.checks, effort.calls)
-            self.budget.spend(math.ceil(IK_WORK * effort.steps))
-            steps = np.abs(np.diff(w, axis=0)).sum(axis=1)
-            travel = np.cumsum(steps) - steps + np.abs(held - seeds).sum(axis=1)  # to each seed, then to the goal
-            rows = np.flatnonzero(ok & (travel < steps.sum() - TRAVEL_EPS))
-            if not len(rows):
-                return changed
-            clear = straight_moves_clear(
-                self.world,
-                seeds[rows],
-                held[rows],
-                object_pose=piece.start_pose,
-                grasp_rel=piece.grasp_rel,
-                min_margin=self.min_margin,
-                budget=self.budget,
-            )
-            if self.budget.stopped or not clear.any():
-                return changed
-            best = rows[clear][np.argmin(travel[rows[clear]])]
-            piece.waypoints = np.vstack([w[: best + 1], held[best][None]])
-            self.reserve()
-            changed = True
-        return changed
+        if piece.kind != "transfer" or piece.grasp_rel is None or len(piece.waypoints) < 2 or not self.budget.left():
+            return False
+        w = piece.waypoints
+        seeds = w[:-1]
+        holding = np.broadcast_to(piece.grasp_rel, (len(seeds), 3))
+        held, ok, effort = goal_holds_near(self.world, holding, seeds, self.goal, margin_m=self.min_margin)
+        self.budget.spend_checks(effort.checks, effort.calls)
+        self.budget.spend(math.ceil(IK_WORK * effort.steps))
+        steps = np.abs(np.diff(w, axis=0)).sum(axis=1)
+        travel = np.cumsum(steps) - steps + np.abs(held - seeds).sum(axis=1)  # to each seed, then to the goal
+        rows = np.flatnonzero(ok & (travel < steps.sum() - TRAVEL_EPS))
+        if not len(rows):
+            return False
+        clear = straight_moves_clear(
+            self.world,
+            seeds[rows],
+            held[rows],
+            object_pose=piece.start_pose,
+            grasp_rel=piece.grasp_rel,
+            min_margin=self.min_margin,
+            budget=self.budget,
+        )
+        if self.budget.stopped or not clear.any():
+            return False
+        best = rows[clear][np.argmin(travel[rows[clear]])]
+        piece.waypoints = _without_repeats([*w[: best + 1], held[best]])  # a waypoint on the goal already: itself
+        self.shortcuts += 1
+        self.reserve()
+        return True
 
     def run(self) -> list[_Piece]:
         """Rounds of rebuilding, fewer transfers and shortcuts while work is left and the last round made the

@@ -49,7 +49,7 @@ import numpy as np
 from clew_ros.core.collision import packed_world
 from clew_ros.core.inverse import mirrored, solve_point
 from clew_ros.core.kernel import clearly_valid, screen_routes
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.world import World
 
 __all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
@@ -284,9 +284,16 @@ def goal_holds_near(
 ) -> tuple[np.ndarray, np.ndarray, Effort]:
     """Configurations near ``seeds`` ``(B, n)`` (inverse kinematics from each) putting the object, held as
     ``grasp_rel`` ``(B, 3)``, on ``goal`` within its tolerances, which ones do, valid with ``margin_m`` to
-    spare, and the work done; the goal configurations of :func:`propose`'s one-transfer proposals."""
+    spare, and the work done: the goal configurations of :func:`propose`'s one-transfer proposals, each also
+    checked against the goal's tolerances themselves (that inverse kinematics bounds a sum of the position's
+    error and the radius times the angle's excess, which a narrow angle tolerance may not keep within it)."""
     kinematics = _Kinematics(world, margin_m)
-    q, ok = kinematics.at_goal(np.asarray(grasp_rel, dtype=float), np.asarray(seeds, dtype=float), goal)
+    grasp_rel = np.asarray(grasp_rel, dtype=float)
+    q, ok = kinematics.at_goal(grasp_rel, np.asarray(seeds, dtype=float), goal)
+    poses = compose(tip_poses(world.robot, q[ok]), grasp_rel[ok])
+    ok[ok] = (np.hypot(*(poses[:, :2] - goal[:2]).T) <= world.goal_tolerance) & (
+        np.abs(wrap_angle(poses[:, 2] - goal[2])) <= world.goal_angle_tolerance
+    )
     return q, ok, kinematics.effort
 
 

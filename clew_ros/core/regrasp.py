@@ -19,8 +19,8 @@ an arm of three or more joints, the grasp configurations at the placement and, f
 goal are also solved from seeds drawn around each seed (:data:`RESTARTS`), the valid one nearest the
 seed added (around the plan's own grasp configuration, the one nearest the arm's configuration):
 a redundant arm's first solution often folds into an obstacle, the object or itself, or lies far
-from where the arm is. Two-transfer proposals start from the seeds' own grasp configurations only,
-or from the restarts' where a seed's own is not valid. A rigid grasp keeps its approach (the
+from where the arm is. Of the restarts' grasp configurations, two-transfer proposals start only
+from those standing in for a seed whose own solution is not valid. A rigid grasp keeps its approach (the
 object's angle in the tip's frame) while carried, so an arm of three or more joints also takes
 each grasp with an approach that can hold the object on the goal (:func:`_goal_holds`), at the
 placement and at releases.

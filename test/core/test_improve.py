@@ -16,13 +16,14 @@ from helpers.random_boxes import random_boxes
 
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
-from clew_ros.core.continuous import straight_move_clear
+from clew_ros.core.continuous import straight_move_clear, straight_moves_clear
 from clew_ros.core.improve import _Improver, _joined_regrasps, _Piece, _pieces, improve, joint_travel
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import pruned_path
 from clew_ros.core.kinematics import compose, relative, tip_poses
 from clew_ros.core.manhattan import run_manhattan
 from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
+from clew_ros.core.regrasp import goal_holds_near
 from clew_ros.core.search import PlanningContext
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Segment
@@ -477,6 +478,15 @@ def test_goal_shortcuts_end_the_last_transfer_on_the_goal_sooner_by_a_clear_stra
             kept = len(last.waypoints) - 1  # the waypoints kept, then a new end on the goal
             assert np.array_equal(last.waypoints[:kept], old[:kept])
             assert joint_travel([last.waypoints]) < joint_travel([old]) - 1e-9
+            # the shortest of the ends found from every waypoint whose move is clear (all of them checked here)
+            held, ok, _ = goal_holds_near(
+                world, np.broadcast_to(last.grasp_rel, (len(old) - 1, 3)), old[:-1], goal, margin_m=improver.min_margin
+            )
+            clear = ok & straight_moves_clear(
+                world, old[:-1], held, grasp_rel=last.grasp_rel, min_margin=improver.min_margin
+            )
+            shortest = min(joint_travel([np.vstack([old[: i + 1], held[i]])]) for i in np.flatnonzero(clear))
+            assert joint_travel([last.waypoints]) == pytest.approx(shortest, abs=1e-9)
             assert goal_reached(world, last.end_pose(world), goal)
             assert straight_move_clear(
                 world,
@@ -488,6 +498,20 @@ def test_goal_shortcuts_end_the_last_transfer_on_the_goal_sooner_by_a_clear_stra
             segments = [p.segment() for p in after]
             assert validate_plan(world, _plan_of(world, segments)) == []
     assert changed >= 3
+
+
+def test_goal_shortcuts_change_nothing_after_a_transit_or_once_stopped() -> None:
+    world = _world("arm3_regrasp")
+    goal = np.asarray(world.object.goal, dtype=float)
+    first = _plan(world, 0, 0.0)
+    for pieces, limit in ((_pieces(world, first.segments)[:-1], 30.0), (_pieces(world, first.segments), 0.0)):
+        settings = PlannerSettings(seed=0, improve_time=0.4)
+        ctx = PlanningContext(world, settings, np.random.default_rng(0), Termination(limit))
+        improver = _Improver(ctx, pieces, goal)  # ends with a transit; or its time limit is past
+        before = [p.waypoints.copy() for p in improver.pieces]
+        assert not improver.goal_shortcuts()
+        assert improver.budget.spent == 0
+        assert all(np.array_equal(p.waypoints, w) for p, w in zip(improver.pieces, before, strict=True))
 
 
 def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_ones_apart(monkeypatch) -> None:

@@ -464,17 +464,20 @@ class _Improver:
         """Whether every move of ``path`` is clear in ``piece``'s mode (one call of the check; it stops at the
         first move that is not)."""
         path = np.asarray(path, dtype=float)
-        return bool(
-            straight_moves_clear(
-                self.world,
-                path[:-1],
-                path[1:],
-                object_pose=piece.start_pose,
-                grasp_rel=piece.grasp_rel,
-                min_margin=self.min_margin,
-                budget=self.budget,
-                every=True,
-            ).all()
+        return bool(self.moves_clear(piece, path[:-1], path[1:], every=True).all())
+
+    def moves_clear(self, piece: _Piece, starts: np.ndarray, ends: np.ndarray, *, every: bool = False) -> np.ndarray:
+        """Which straight moves ``starts[k] -> ends[k]`` are clear in ``piece``'s mode, with the improver's
+        margin, charged to the budget (:func:`clew_ros.core.continuous.straight_moves_clear`, one call)."""
+        return straight_moves_clear(
+            self.world,
+            starts,
+            ends,
+            object_pose=piece.start_pose,
+            grasp_rel=piece.grasp_rel,
+            min_margin=self.min_margin,
+            budget=self.budget,
+            every=every,
         )
 
     def reserve(self) -> None:
@@ -817,15 +820,7 @@ class _Improver:
         moving = np.max(np.abs(ends - starts), axis=1) > 1e-12
         clear = np.ones(len(starts), dtype=bool)
         if moving.any():
-            clear[moving] = straight_moves_clear(
-                self.world,
-                starts[moving],
-                ends[moving],
-                object_pose=piece.start_pose,
-                grasp_rel=piece.grasp_rel,
-                min_margin=self.min_margin,
-                budget=self.budget,
-            )
+            clear[moving] = self.moves_clear(piece, starts[moving], ends[moving])
         if self.budget.stopped:
             return False
         blocked = np.bincount(owner[~clear], minlength=len(rows)) > 0
@@ -870,15 +865,7 @@ class _Improver:
         rows = np.flatnonzero(ok & (travel < steps.sum() - TRAVEL_EPS))
         if not len(rows):
             return False
-        clear = straight_moves_clear(
-            self.world,
-            seeds[rows],
-            held[rows],
-            object_pose=piece.start_pose,
-            grasp_rel=piece.grasp_rel,
-            min_margin=self.min_margin,
-            budget=self.budget,
-        )
+        clear = self.moves_clear(piece, seeds[rows], held[rows])
         if self.budget.stopped or not clear.any():
             return False
         best = rows[clear][np.argmin(travel[rows[clear]])]

@@ -38,6 +38,7 @@ places between the nearest ones found so far is skipped before its ``atan2``
 from __future__ import annotations
 
 import functools
+import heapq
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -59,6 +60,7 @@ __all__ = [
     "connect_rounds",
     "decode",
     "intervals",
+    "lattice_search",
     "moves_clear",
     "pruned_path",
     "screen_routes",
@@ -2037,6 +2039,132 @@ def bounce_array(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray
 _WARMED_IN_S: list[float] = []  # how long the first warm-up took, once it is done
 
 
+#: :func:`lattice_search`'s edge states: not checked yet (taken as clear), checked clear, checked blocked.
+EDGE_UNKNOWN, EDGE_CLEAR, EDGE_BLOCKED = 0, 1, 2
+
+
+@_jit
+def _lattice_node(
+    u: int | np.int64, strides: np.ndarray, lower: np.ndarray, step: float, goal: np.ndarray, k: np.ndarray
+) -> float:
+    """Node ``u``'s indices into ``k``; returns its joint travel to ``goal``."""
+    estimate = 0.0
+    rest = u
+    for j in range(len(strides)):
+        k[j] = rest // strides[j]
+        rest %= strides[j]
+        estimate += abs(lower[j] + k[j] * step - goal[j])
+    return estimate
+
+
+@_jit
+def _lattice_path(previous: np.ndarray, last: int) -> np.ndarray:
+    """The nodes that led to ``last`` (excluded), first to last."""
+    count = 0
+    v = previous[last]
+    while v >= 0:
+        count += 1
+        v = previous[v]
+    path = np.empty(count, dtype=np.int64)
+    v = previous[last]
+    for i in range(count - 1, -1, -1):
+        path[i] = v
+        v = previous[v]
+    return path
+
+
+@_jit
+def _lattice_expand(
+    u: int | np.int64,
+    estimate: float,
+    k: np.ndarray,
+    counts: np.ndarray,
+    strides: np.ndarray,
+    lower: np.ndarray,
+    step: float,
+    goal: np.ndarray,
+    edges: np.ndarray,
+    cost: np.ndarray,
+    previous: np.ndarray,
+    heap: list[tuple[float, np.int64]],
+) -> None:
+    """Relax the edges of node ``u`` (indices ``k``, joint travel ``estimate`` to ``goal``) that are not blocked."""
+    g = cost[u] + step
+    for j in range(len(counts)):
+        for sign in (1, -1):
+            if (sign > 0 and (k[j] + 1 >= counts[j] or edges[u, j] == EDGE_BLOCKED)) or (
+                sign < 0 and (k[j] == 0 or edges[u - strides[j], j] == EDGE_BLOCKED)
+            ):
+                continue
+            v = u + sign * strides[j]
+            if g < cost[v]:
+                cost[v] = g
+                previous[v] = u
+                here = lower[j] + k[j] * step
+                f = g + estimate - abs(here - goal[j]) + abs(here + sign * step - goal[j])
+                heapq.heappush(heap, (f, np.int64(v)))
+
+
+@_jit
+def lattice_search(
+    counts: np.ndarray,
+    lower: np.ndarray,
+    step: float,
+    edges: np.ndarray,
+    sources: np.ndarray,
+    source_costs: np.ndarray,
+    targets: np.ndarray,
+    target_costs: np.ndarray,
+    goal: np.ndarray,
+    bound: float,
+) -> tuple[np.ndarray, float, int]:
+    """Compiled A* over a joint-space lattice, in joint travel (L1).
+
+    Node ``u`` has index ``k_j`` along joint ``j`` (``u = sum_j k_j stride_j``, the last joint fastest) and
+    the configuration ``lower + k step``; an edge moves one joint by one step. ``edges[u, j]`` is the state
+    of the edge from ``u`` to its neighbour one step up joint ``j``: :data:`EDGE_BLOCKED` is never taken, the
+    others are. Paths start at one of ``sources`` (at ``source_costs``: the joint travel from the true
+    start) and end at one of ``targets`` (``target_costs`` more to the true end ``goal``), shorter than
+    ``bound``. The heuristic, the joint travel left to ``goal``, is admissible and consistent. Returns the
+    shortest path's nodes (none when no path is shorter than ``bound``), its cost and the nodes expanded.
+    """
+    n = len(counts)
+    strides = np.empty(n, dtype=np.int64)
+    total = 1
+    for j in range(n - 1, -1, -1):
+        strides[j] = total
+        total *= counts[j]
+    cost = np.full(total + 1, np.inf)  # the last entry: the true end, reached from a target
+    previous = np.full(total + 1, -1, dtype=np.int64)
+    extra = np.full(total, np.inf)
+    for i in range(len(targets)):
+        extra[targets[i]] = min(extra[targets[i]], target_costs[i])
+    k = np.empty(n, dtype=np.int64)
+    heap = [(0.0, np.int64(0)) for _ in range(0)]
+    for i in range(len(sources)):
+        if source_costs[i] < cost[sources[i]]:
+            cost[sources[i]] = source_costs[i]
+            f = source_costs[i] + _lattice_node(sources[i], strides, lower, step, goal, k)
+            heapq.heappush(heap, (f, np.int64(sources[i])))
+    expanded = 0
+    while heap:
+        f, u = heapq.heappop(heap)
+        if f >= bound:
+            break
+        if u == total:
+            return _lattice_path(previous, total), cost[total], expanded
+        estimate = _lattice_node(u, strides, lower, step, goal, k)
+        if f > cost[u] + estimate + 1e-9:
+            continue  # a stale entry
+        expanded += 1
+        if cost[u] + extra[u] < cost[total]:
+            cost[total] = cost[u] + extra[u]
+            previous[total] = u
+            heapq.heappush(heap, (cost[total], np.int64(total)))
+        _lattice_expand(u, estimate, k, counts, strides, lower, step, goal, edges, cost, previous, heap)
+    return np.empty(0, dtype=np.int64), np.inf, expanded
+
+
 def warm_up() -> float:
     """Compile every kernel (or load them from numba's on-disk cache) before the first plan.
 
@@ -2121,5 +2249,17 @@ def warm_up() -> float:
             max_step=0.4,
         )
     chain(world.base, world.lengths, waypoints[:, 0])
+    lattice_search(
+        np.full(2, 3, dtype=np.int64),
+        np.zeros(2),
+        1.0,
+        np.zeros((9, 2), dtype=np.uint8),
+        np.zeros(1, dtype=np.int64),
+        np.zeros(1),
+        np.full(1, 8, dtype=np.int64),
+        np.zeros(1),
+        np.full(2, 2.0),
+        np.inf,
+    )
     _WARMED_IN_S.append(time.perf_counter() - start)
     return _WARMED_IN_S[0]

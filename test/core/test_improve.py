@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers.open_reach import open_reach
-from helpers.random_boxes import random_boxes
+from helpers.random_boxes import random_box_world
 
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
@@ -214,36 +214,12 @@ def test_pruning_drops_back_and_forth_and_loops_only() -> None:
 # -- random worlds: the straight-move check and improvement of random Manhattan paths ----------------------
 
 
-def _random_world(seed: int, joints: int, width: float):
-    rng = np.random.default_rng(seed)
-    boxes = random_boxes(rng, 6, clear_radius=0.6)
-    polygon = [0.0, 0.0, 0.2, 0.0, 0.2, 0.08, 0.0, 0.08]
-    parameters = {
-        "world": {
-            "name": f"random_{seed}",
-            "bounds": [-2.5, -2.5, 2.5, 2.5],
-            "robot": {
-                "base": [0.0, 0.0],
-                "link_lengths": (rng.uniform(0.3, 1.0, joints) * 1.8 / joints + 0.1).tolist(),
-                "link_width": width,
-                "joint_lower": [-3.0] * joints,
-                "joint_upper": [3.0] * joints,
-                "initial": [0.0] * joints,
-            },
-            "obstacle_names": list(boxes),
-            "obstacles": boxes,
-            "object": {"polygon": polygon, "initial": [0.0, 0.35, 0.0], "goal": [0.0, 0.35, 0.0], "grasps": [0, 0]},
-        }
-    }
-    return world_from_parameters(parameters), rng
-
-
 RANDOM = [(1, 2, 0.0), (2, 3, 0.04), (3, 4, 0.02), (4, 5, 0.03)]
 
 
 @pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])
 def test_a_cleared_straight_move_is_valid_at_a_fine_step(seed, joints, width) -> None:
-    world, rng = _random_world(seed, joints, width)
+    world, rng = random_box_world(seed, joints, width)
     grasp_rel = np.array([0.02, 0.0, 0.3])
     cleared = 0
     for trial in range(60):
@@ -266,7 +242,7 @@ def test_a_cleared_straight_move_is_valid_at_a_fine_step(seed, joints, width) ->
 def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, joints, width) -> None:
     """``_Improver.connect`` (RRT-Connect, moves checked continuously): a path it returns joins the move's ends,
     is valid at a fine step (resting object or carried one), and is the same from the same generator."""
-    world, rng = _random_world(seed, joints, width)
+    world, rng = random_box_world(seed, joints, width)
     grasp_rel = np.array([0.02, 0.0, 0.3])
     rest = np.asarray(world.object.initial, dtype=float)
     settings = PlannerSettings(seed=seed, improve_time=5.0)
@@ -306,7 +282,7 @@ def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, 
 
 @pytest.mark.parametrize(("seed", "joints", "width"), RANDOM, ids=[f"seed{c[0]}_{c[1]}joints" for c in RANDOM])
 def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(seed, joints, width) -> None:
-    world, rng = _random_world(seed, joints, width)
+    world, rng = random_box_world(seed, joints, width)
     candidates = rng.uniform(-1.5, 1.5, (200, joints))
     q0 = candidates[is_valid(world, candidates, world.object.initial)][0]
     genes = rng.normal(0.0, 1.5, (1, 4, joints))
@@ -532,9 +508,9 @@ def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_one
     def recording(improver: _Improver, checked: list) -> None:
         original = improver.checked_tail
 
-        def checked_tail(proposal, placement):
+        def checked_tail(proposal, placement, slack):
             checked.append(proposal)
-            return original(proposal, placement)
+            return original(proposal, placement, slack)
 
         monkeypatch.setattr(improver, "checked_tail", checked_tail)
 

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["random_boxes"]
+from clew_ros.core.world import World, world_from_parameters
+
+__all__ = ["random_box_world", "random_boxes"]
 
 
 def random_boxes(rng: np.random.Generator, count: int, clear_radius: float) -> dict[str, list[float]]:
@@ -19,3 +21,30 @@ def random_boxes(rng: np.random.Generator, count: int, clear_radius: float) -> d
         corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
         boxes[f"box_{len(boxes)}"] = [float(v) for sx, sy in corners for v in centre + half * (sx, sy)]
     return boxes
+
+
+def random_box_world(seed: int, joints: int, width: float) -> tuple[World, np.random.Generator]:
+    """A world of six :func:`random_boxes` around an arm of ``joints`` joints (limits +-3 rad, links of
+    ``width``, 1.9 m of reach at most) and a small bar resting near its base; also the generator, to go on
+    drawing from."""
+    rng = np.random.default_rng(seed)
+    boxes = random_boxes(rng, 6, clear_radius=0.6)
+    polygon = [0.0, 0.0, 0.2, 0.0, 0.2, 0.08, 0.0, 0.08]
+    parameters = {
+        "world": {
+            "name": f"random_{seed}",
+            "bounds": [-2.5, -2.5, 2.5, 2.5],
+            "robot": {
+                "base": [0.0, 0.0],
+                "link_lengths": (rng.uniform(0.3, 1.0, joints) * 1.8 / joints + 0.1).tolist(),
+                "link_width": width,
+                "joint_lower": [-3.0] * joints,
+                "joint_upper": [3.0] * joints,
+                "initial": [0.0] * joints,
+            },
+            "obstacle_names": list(boxes),
+            "obstacles": boxes,
+            "object": {"polygon": polygon, "initial": [0.0, 0.35, 0.0], "goal": [0.0, 0.35, 0.0], "grasps": [0, 0]},
+        }
+    }
+    return world_from_parameters(parameters), rng

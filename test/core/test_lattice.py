@@ -1,0 +1,243 @@
+"""The joint-space lattice (issue 14, plan quality): its compiled A* is a shortest-path search, its routes
+join their ends, are valid at any step and are the shortest on the lattice, and the improvement's routing
+around blocked moves uses them only to shorten RRT-Connect's paths."""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+
+import numpy as np
+import pytest
+from helpers.random_boxes import random_box_world
+
+from clew_ros.core.collision import is_valid
+from clew_ros.core.improve import _Improver, _Piece, joint_travel
+from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_UNKNOWN, lattice_search
+from clew_ros.core.kinematics import compose, tip_poses
+from clew_ros.core.lattice import MAX_JOINTS, KnownNodes, lattice_route, lattice_step
+from clew_ros.core.search import PlanningContext
+from clew_ros.core.settings import PlannerSettings, Termination
+
+FINE_RAD = 2e-4  # ten times finer than the validator
+GRASP_REL = np.array([0.02, 0.0, 0.3])
+
+
+def _dijkstra(counts, step, edges, sources, source_costs, targets, target_costs) -> float:
+    """The reference: Dijkstra over the same lattice, without a heuristic."""
+    strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
+    best = {int(s): float(c) for s, c in zip(sources, source_costs, strict=True)}
+    heap = [(c, s) for s, c in best.items()]
+    heapq.heapify(heap)
+    done: dict[int, float] = {}
+    while heap:
+        cost, u = heapq.heappop(heap)
+        if u in done:
+            continue
+        done[u] = cost
+        k = [(u // int(s)) % int(c) for s, c in zip(strides, counts, strict=True)]
+        for j, stride in enumerate(strides.tolist()):
+            for v, ok in ((u + stride, k[j] + 1 < counts[j]), (u - stride, k[j] > 0)):
+                if not ok or edges[min(u, v), j] == EDGE_BLOCKED:
+                    continue
+                if cost + step < best.get(v, math.inf):
+                    best[v] = cost + step
+                    heapq.heappush(heap, (cost + step, v))
+    return min((done.get(int(t), math.inf) + c for t, c in zip(targets, target_costs, strict=True)), default=math.inf)
+
+
+@pytest.mark.parametrize("dims", [2, 3])
+def test_the_compiled_lattice_search_finds_the_shortest_path_through_edges_that_are_not_blocked(dims) -> None:
+    rng = np.random.default_rng(dims)
+    step = 0.25
+    for trial in range(30):
+        counts = rng.integers(3, 9, dims).astype(np.int64)
+        size = int(np.prod(counts))
+        edges = np.where(rng.random((size, dims)) < 0.35, EDGE_BLOCKED, EDGE_UNKNOWN).astype(np.uint8)
+        sources, targets = rng.choice(size, 2, replace=False), rng.choice(size, 3, replace=False)
+        # as lattice_route calls it: the true end ``goal`` near the targets, each target's cost at least its
+        # joint travel to it (the heuristic, the joint travel left to ``goal``, stays admissible)
+        goal = rng.uniform(0.0, 1.0, dims) * (counts - 1) * step
+        at = np.stack(np.unravel_index(targets, tuple(counts)), axis=1) * step
+        source_costs, target_costs = rng.uniform(0, 0.2, 2), np.abs(at - goal).sum(axis=1) + rng.uniform(0, 0.1, 3)
+        bound = math.inf if trial % 3 else 2.0
+        path, cost, _ = lattice_search(
+            counts, np.zeros(dims), step, edges, sources, source_costs, targets, target_costs, goal, bound
+        )
+        expected = _dijkstra(counts, step, edges, sources, source_costs, targets, target_costs)
+        if expected >= bound:
+            assert len(path) == 0 and cost == math.inf
+            continue
+        assert cost == pytest.approx(expected, abs=1e-9)
+        start, end = int(np.flatnonzero(sources == path[0])[0]), int(np.flatnonzero(targets == path[-1])[0])
+        assert cost == pytest.approx(source_costs[start] + step * (len(path) - 1) + target_costs[end], abs=1e-9)
+        strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
+        for u, v in itertools.pairwise(path.tolist()):
+            j = int(np.flatnonzero(strides == abs(v - u))[0])
+            assert edges[min(u, v), j] != EDGE_BLOCKED
+
+
+class _Counter:
+    """A budget that only counts (``lattice_route``'s protocol)."""
+
+    check_work = 1.0
+
+    def __init__(self) -> None:
+        self.spent = 0
+
+    def spend(self, units: int) -> None:
+        self.spent += units
+
+    def spend_move_checks(self, configurations: int) -> None:
+        self.spent += configurations
+
+    def stop(self) -> bool:
+        return False
+
+
+def _route(world, a, b, transfer, shorter_than, budget=None, known=None):
+    return lattice_route(
+        world,
+        a,
+        b,
+        object_pose=np.asarray(world.object.initial, dtype=float),
+        grasp_rel=GRASP_REL if transfer else None,
+        min_margin=5e-4,
+        shorter_than=shorter_than,
+        budget=budget or _Counter(),
+        allowance=1e9,
+        expansion_work=0.2,
+        nodes_known=known,
+    )
+
+
+def _valid_at_a_fine_step(world, path, transfer) -> bool:
+    rest = np.asarray(world.object.initial, dtype=float)
+    for u, v in itertools.pairwise(path):
+        steps = max(1, int(np.ceil(np.max(np.abs(v - u)) / FINE_RAD)))
+        fine = u + np.linspace(0.0, 1.0, steps + 1)[:, None] * (v - u)
+        poses = compose(tip_poses(world.robot, fine), GRASP_REL) if transfer else rest
+        if not is_valid(world, fine, poses).all():
+            return False
+    return True
+
+
+def _blocked_pairs(world, rng, transfer, count):
+    """Pairs of valid configurations whose straight move is blocked."""
+    joints = world.robot.dof
+    rest = np.asarray(world.object.initial, dtype=float)
+    q = rng.uniform(-2.8, 2.8, (400, joints))
+    poses = compose(tip_poses(world.robot, q), GRASP_REL) if transfer else rest
+    q = q[is_valid(world, q, poses)]
+    pairs = []
+    for a, b in zip(q[0::2], q[1::2], strict=False):
+        if not _valid_at_a_fine_step(world, [a, b], transfer):
+            pairs.append((a, b))
+        if len(pairs) == count:
+            break
+    return pairs
+
+
+@pytest.mark.parametrize(("seed", "joints", "width"), [(1, 2, 0.0), (2, 3, 0.04), (3, 3, 0.02)])
+def test_lattice_routes_join_their_ends_are_valid_at_a_fine_step_and_are_the_lattice_s_shortest(
+    seed, joints, width
+) -> None:
+    world, rng = random_box_world(seed, joints, width)
+    routed = 0
+    for a, b in _blocked_pairs(world, rng, transfer=False, count=6):
+        first, second = _Counter(), _Counter()
+        known = KnownNodes()
+        path = _route(world, a, b, False, 40.0, first, known)
+        if path is None:
+            continue
+        routed += 1
+        assert np.array_equal(path[0], a) and np.array_equal(path[-1], b)
+        assert joint_travel([path]) < 40.0
+        assert _valid_at_a_fine_step(world, path, False)
+        # the nodes checked before are not checked again: the same route for less work
+        again = _route(world, a, b, False, 40.0, second, known)
+        assert again is not None and np.array_equal(again, path)
+        assert second.spent < first.spent
+        # the shortest on the lattice: none shorter than it
+        assert _route(world, a, b, False, joint_travel([path]) - 1e-9) is None
+    assert routed >= 2
+
+
+@pytest.mark.parametrize(("seed", "joints"), [(2, 2), (3, 3)])
+def test_lattice_routes_carrying_the_object_are_valid_with_it(seed, joints) -> None:
+    world, rng = random_box_world(seed, joints, 0.03)
+    routed = 0
+    for a, b in _blocked_pairs(world, rng, transfer=True, count=5):
+        path = _route(world, a, b, True, 40.0)
+        if path is None:
+            continue
+        routed += 1
+        assert np.array_equal(path[0], a) and np.array_equal(path[-1], b)
+        assert _valid_at_a_fine_step(world, path, True)
+    assert routed >= 1
+
+
+def test_no_lattice_for_many_joints_or_a_bound_below_the_straight_move() -> None:
+    world, _ = random_box_world(4, MAX_JOINTS + 1, 0.02)
+    assert lattice_step(world) is None
+    a, b = np.zeros(MAX_JOINTS + 1), np.full(MAX_JOINTS + 1, 0.5)
+    assert _route(world, a, b, False, 40.0) is None
+    small, _ = random_box_world(4, 2, 0.02)
+    step = lattice_step(small)
+    assert step is not None and step > 0
+    assert _route(small, np.zeros(2), np.full(2, 0.5), False, 1.0) is None  # 1.0 rad is the straight move's travel
+
+
+def test_a_routing_stops_within_its_allowance() -> None:
+    world, rng = random_box_world(2, 3, 0.04)
+    a, b = _blocked_pairs(world, rng, transfer=False, count=1)[0]
+    counter = _Counter()
+    path = lattice_route(
+        world,
+        a,
+        b,
+        object_pose=np.asarray(world.object.initial, dtype=float),
+        grasp_rel=None,
+        min_margin=5e-4,
+        shorter_than=40.0,
+        budget=counter,
+        allowance=50.0,
+        expansion_work=0.2,
+    )
+    assert path is None
+    assert counter.spent == 0  # checking the nodes would not fit: nothing checked
+
+
+def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_within_the_bound(monkeypatch) -> None:
+    """``_Improver.connect`` on an arm with a lattice: the path joins the move's ends, is valid at a fine step,
+    is never longer than RRT-Connect's path alone (the same generator), is shorter on some moves, and is
+    RRT-Connect's when no lattice path is shorter than ``longest``."""
+    from clew_ros.core import improve as improve_module
+
+    world, rng = random_box_world(2, 3, 0.04)
+    rest = np.asarray(world.object.initial, dtype=float)
+    shorter = 0
+    for trial, (a, b) in enumerate(_blocked_pairs(world, rng, transfer=False, count=8)):
+        piece = _Piece("transit", None, np.array([a, b]), rest, None)
+
+        def routed(longest: float = math.inf, lattice: bool = True, seed: int = trial) -> np.ndarray | None:
+            with monkeypatch.context() as patch:
+                if not lattice:
+                    patch.setattr(improve_module, "lattice_step", lambda world: None)
+                settings = PlannerSettings(seed=seed, improve_time=5.0)
+                ctx = PlanningContext(world, settings, np.random.default_rng([seed, 1]), Termination(30))
+                return _Improver(ctx, [piece], world.object.goal).connect(piece, a, b, longest)
+
+        alone, path = routed(lattice=False), routed()
+        if alone is None:
+            assert path is None  # the lattice only shortens what RRT-Connect found
+            continue
+        assert path is not None
+        assert np.array_equal(path[0], a) and np.array_equal(path[-1], b)
+        assert _valid_at_a_fine_step(world, path, False)
+        assert joint_travel([path]) <= joint_travel([alone]) + 1e-12
+        shorter += joint_travel([path]) < joint_travel([alone]) - 1e-9
+        straight = float(np.abs(b - a).sum())
+        assert np.array_equal(routed(longest=straight), alone)  # no lattice path is shorter than the straight move
+    assert shorter >= 2

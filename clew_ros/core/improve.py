@@ -31,7 +31,9 @@ or put down far from where a regrasp was needed. Once a plan is found,
    all of the placement's that looked clear (one transfer, then two), fewer
    transfers first, when they would still make the plan better: such a move
    is routed by RRT-Connect (:meth:`_Improver.connect`, moves checked
-   continuously, then shortened), given up, when no routed proposal made the
+   continuously, then shortened; on an arm of at most three joints the
+   shortest path on a joint-space lattice, :mod:`clew_ros.core.lattice`,
+   replaces it when shorter), given up, when no routed proposal made the
    plan better, after :data:`CONNECT_PROBES` routings that found no path or
    :data:`ROUTED_PROBES` routed proposals that did not make it better. A move found blocked makes alike proposals
    (both ends within :data:`MOVE_ALIKE_RAD`) skipped. Each proposal that makes

@@ -1,8 +1,9 @@
 """The shortest way round the obstacles on a joint-space lattice, for arms of few joints.
 
 Shortcuts only straighten a path within its own way round the obstacles, and
-the first plan's way round (where EXPLORE and SEARCH happened to carry the
-object) is often a long one. On an arm of at most :data:`MAX_JOINTS` joints
+the way round RRT-Connect finds for a blocked move of the improvement is often
+a long one (:meth:`clew_ros.core.improve._Improver.connect` takes this one
+instead when it is shorter). On an arm of at most :data:`MAX_JOINTS` joints
 the joint space is small enough for a lattice: joint ``j`` takes the values
 ``lower_j + k step`` and an edge moves one joint by one step. In joint travel
 (the L1 metric) a staircase is as long as the diagonal it follows, so the

@@ -67,7 +67,8 @@ def test_the_compiled_lattice_search_finds_the_shortest_path_through_edges_that_
         )
         expected = _dijkstra(counts, step, edges, sources, source_costs, targets, target_costs)
         if expected >= bound:
-            assert len(path) == 0 and cost == math.inf
+            assert len(path) == 0
+            assert cost == math.inf
             continue
         assert cost == pytest.approx(expected, abs=1e-9)
         start, end = int(np.flatnonzero(sources == path[0])[0]), int(np.flatnonzero(targets == path[-1])[0])
@@ -152,12 +153,14 @@ def test_lattice_routes_join_their_ends_are_valid_at_a_fine_step_and_are_the_lat
         if path is None:
             continue
         routed += 1
-        assert np.array_equal(path[0], a) and np.array_equal(path[-1], b)
+        assert np.array_equal(path[0], a)
+        assert np.array_equal(path[-1], b)
         assert joint_travel([path]) < 40.0
         assert _valid_at_a_fine_step(world, path, False)
         # the nodes checked before are not checked again: the same route for less work
         again = _route(world, a, b, False, 40.0, second, known)
-        assert again is not None and np.array_equal(again, path)
+        assert again is not None
+        assert np.array_equal(again, path)
         assert second.spent < first.spent
         # the shortest on the lattice: none shorter than it
         assert _route(world, a, b, False, joint_travel([path]) - 1e-9) is None
@@ -173,7 +176,8 @@ def test_lattice_routes_carrying_the_object_are_valid_with_it(seed, joints) -> N
         if path is None:
             continue
         routed += 1
-        assert np.array_equal(path[0], a) and np.array_equal(path[-1], b)
+        assert np.array_equal(path[0], a)
+        assert np.array_equal(path[-1], b)
         assert _valid_at_a_fine_step(world, path, True)
     assert routed >= 1
 
@@ -185,7 +189,8 @@ def test_no_lattice_for_many_joints_or_a_bound_below_the_straight_move() -> None
     assert _route(world, a, b, False, 40.0) is None
     small, _ = random_box_world(4, 2, 0.02)
     step = lattice_step(small)
-    assert step is not None and step > 0
+    assert step is not None
+    assert step > 0
     assert _route(small, np.zeros(2), np.full(2, 0.5), False, 1.0) is None  # 1.0 rad is the straight move's travel
 
 
@@ -221,7 +226,9 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
     for trial, (a, b) in enumerate(_blocked_pairs(world, rng, transfer=False, count=8)):
         piece = _Piece("transit", None, np.array([a, b]), rest, None)
 
-        def routed(longest: float = math.inf, lattice: bool = True, seed: int = trial) -> np.ndarray | None:
+        def routed(
+            longest: float = math.inf, lattice: bool = True, seed: int = trial, piece=piece, a=a, b=b
+        ) -> np.ndarray | None:
             with monkeypatch.context() as patch:
                 if not lattice:
                     patch.setattr(improve_module, "lattice_step", lambda world: None)
@@ -234,7 +241,8 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
             assert path is None  # the lattice only shortens what RRT-Connect found
             continue
         assert path is not None
-        assert np.array_equal(path[0], a) and np.array_equal(path[-1], b)
+        assert np.array_equal(path[0], a)
+        assert np.array_equal(path[-1], b)
         assert _valid_at_a_fine_step(world, path, False)
         assert joint_travel([path]) <= joint_travel([alone]) + 1e-12
         shorter += joint_travel([path]) < joint_travel([alone]) - 1e-9

@@ -298,6 +298,10 @@ class _Budget:
         """Charge one call of the compiled straight-move check that checked ``configurations``."""
         self.spent += math.ceil(configurations * self.check_work) + MOVE_CALL_WORK
 
+    def units_left(self) -> float:
+        """Work units left of the budget, the final check's reserve kept out."""
+        return self.total - self.reserve - self.spent
+
     def left(self, share: float = 1.0) -> bool:
         """Whether work is left (within ``share`` of the budget) and the clock allows more."""
         if self.stop():
@@ -323,8 +327,7 @@ class _RoutingShare:
         self.check_work = budget.check_work
 
     def allowance(self) -> float:
-        left = self.budget.total - self.budget.reserve - self.budget.spent
-        return min(self.limit - self.budget.spent, left)
+        return min(self.limit - self.budget.spent, self.budget.units_left())
 
     def spend(self, units: float) -> None:
         self.budget.spend(math.ceil(units) + MOVE_CALL_WORK)
@@ -660,9 +663,10 @@ class _Improver:
     def checked_tail(self, proposal: Proposal, placement: np.ndarray, slack: float = math.inf) -> list[_Piece] | None:
         """``proposal``'s moves as pieces, the object starting at ``placement``, each move checked
         continuously (:meth:`route`), the shortest first (they are the cheapest to check, and the ones
-        near the object, leaving or taking a grasp, are short); ``None`` if a move stays blocked. A move
-        routed around what blocks it (:meth:`connect`) may be at most ``slack`` rad longer than straight
-        (beyond that the proposal could no longer make the plan better)."""
+        near the object, leaving or taking a grasp, are short); ``None`` if a move stays blocked. ``slack``:
+        the joint travel (rad) the moves may add to the proposal's straight moves for it to still make the plan
+        better; each move taken longer than straight uses some, and what is left bounds the lattice's path of
+        a move routed around what blocks it (:meth:`connect`)."""
         pieces: list[_Piece] = []
         keys = proposal.keys
         pose = np.asarray(placement, dtype=float)
@@ -684,6 +688,7 @@ class _Improver:
                 self.blocked_moves.append((piece.kind, a, b))
                 return None
             piece.waypoints = path
+            slack -= joint_travel([path]) - float(np.abs(b - a).sum())
         return pieces
 
     def connect(self, piece: _Piece, a: np.ndarray, b: np.ndarray, longest: float = math.inf) -> np.ndarray | None:
@@ -714,9 +719,8 @@ class _Improver:
         path = shortened(clear, path, lambda: self.budget.spent > limit)
         if lattice_step(self.world) is None or self.budget.stop():
             return path
-        left = self.budget.total - self.budget.reserve - self.budget.spent
         bound = min(longest, joint_travel([path])) - TRAVEL_EPS
-        shortest = self.lattice(piece, a, b, bound, min(CONNECT_SHARE * self.budget.total, left))
+        shortest = self.lattice(piece, a, b, bound, min(CONNECT_SHARE * self.budget.total, self.budget.units_left()))
         return path if shortest is None else shortest
 
     def route(self, piece: _Piece, a: np.ndarray, b: np.ndarray, hint: int) -> np.ndarray | None:

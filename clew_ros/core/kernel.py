@@ -2124,8 +2124,9 @@ def lattice_search(
     the configuration ``lower + k step``; an edge moves one joint by one step. ``edges[u, j]`` is the state
     of the edge from ``u`` to its neighbour one step up joint ``j``: :data:`EDGE_BLOCKED` is never taken, the
     others are. Paths start at one of ``sources`` (at ``source_costs``: the joint travel from the true
-    start) and end at one of ``targets`` (``target_costs`` more to the true end ``goal``), shorter than
-    ``bound``. The heuristic, the joint travel left to ``goal``, is admissible and consistent. Returns the
+    start) and end at one of ``targets`` (``target_costs`` more to the true end ``goal``, at least the joint
+    travel from the target to it), shorter than ``bound``. The heuristic, the joint travel left to ``goal``,
+    is then admissible and consistent. Returns the
     shortest path's nodes (none when no path is shorter than ``bound``), its cost and the nodes expanded.
     """
     n = len(counts)

@@ -47,7 +47,8 @@ __all__ = [
 
 #: Arms of more joints than this get no lattice (one of :data:`MAX_NODES` nodes would be too coarse).
 MAX_JOINTS = 3
-#: Nodes of a lattice at most: its step is the one that fills the joint limits with this many.
+#: Cells of a lattice: its step is the one that fills the joint limits with this many (a joint's values include
+#: both ends, so a 3-joint arm with limits of +-pi gets 21^3 = 9,261 nodes 0.31 rad apart, a 2-joint one 90^2).
 MAX_NODES = 8_000
 #: A routing starts only when checking its nodes takes at most this share of its allowance (the rest is for the
 #: edges and the searches: a routing that found its path took 1.5 to 3 times its nodes' checks).
@@ -87,7 +88,7 @@ class KnownNodes:
 
 
 def lattice_step(world: World) -> float | None:
-    """The lattice's step (rad) for ``world``'s arm: :data:`MAX_NODES` nodes within the joint limits, at
+    """The lattice's step (rad) for ``world``'s arm: :data:`MAX_NODES` cells within the joint limits, at
     least :data:`MIN_STEP_RAD`; ``None`` for an arm of more than :data:`MAX_JOINTS` joints."""
     robot = world.robot
     if robot.dof > MAX_JOINTS:
@@ -115,7 +116,7 @@ class _Lattice:
         return self.lower + np.asarray(indices, dtype=float) * self.step
 
     def corners(self, q: np.ndarray) -> np.ndarray:
-        """The nodes at the corners of the cell holding ``q`` (fewer when ``q`` lies on a side)."""
+        """The nodes at the corners of the cell holding ``q`` (fewer at the lattice's upper ends)."""
         low = np.clip(np.floor((q - self.lower) / self.step).astype(np.int64), 0, self.counts - 1)
         high = np.clip(low + 1, 0, self.counts - 1)
         picks = np.array(sorted(set(itertools.product(*zip(low, high, strict=True)))), dtype=np.int64)
@@ -193,7 +194,7 @@ def lattice_route(
     if len(todo):
         q = lattice.configurations(lattice.indices(todo))
         ok = clear(q, q)  # a move that does not move: the configuration, with the margin
-        checked[todo], valid[todo] = not budget.stop(), ok  # a check stopped part way: nothing learnt
+        checked[todo], valid[todo] = not budget.stop(), ok  # a check the clock stopped: nothing learnt
     edges = np.full((lattice.size, len(lattice.counts)), EDGE_BLOCKED, dtype=np.uint8)
     usable = nodes[valid[nodes]]
     edges[usable] = EDGE_UNKNOWN  # an edge out of a node outside the ellipse or not valid stays blocked
@@ -202,9 +203,9 @@ def lattice_route(
     while joins is not None and not spent():
         path, _, expanded = lattice_search(lattice.counts, lattice.lower, step, edges, *joins, b, shorter_than)
         budget.spend(math.ceil(expansion_work * expanded))
-        if not len(path):
+        if not len(path) or spent():
             return None
-        if _path_clear(lattice, path, edges, known, clear) and not spent():
+        if _edges_clear(lattice, path, edges, clear):  # checked: the path stands, however much that took
             return np.concatenate([a[None], lattice.configurations(lattice.indices(path)), b[None]])
     return None
 
@@ -230,19 +231,11 @@ def _joins(
     return joins[0], joins[1], joins[2], joins[3]
 
 
-def _path_clear(lattice: _Lattice, path: np.ndarray, edges: np.ndarray, known: KnownNodes, clear: _Clear) -> bool:
-    """Check what the search took as clear on ``path`` without a check: a node just outside the ellipse (reached
-    by an edge out of it), then the edges, each in one call; record what was found (blocked nodes and edges are
-    not taken again). Whether the whole path is clear."""
-    checked, valid = known.states(lattice.size)
-    unknown = path[~checked[path]]
-    if len(unknown):
-        q = lattice.configurations(lattice.indices(unknown))
-        ok = clear(q, q)
-        checked[unknown], valid[unknown] = True, ok
-        if not ok.all():
-            lattice.block_nodes(edges, unknown[~ok])
-            return False
+def _edges_clear(lattice: _Lattice, path: np.ndarray, edges: np.ndarray, clear: _Clear) -> bool:
+    """Check the edges of ``path`` the search took as clear without a check, in one call, and record what was
+    found (a blocked edge is not taken again). Whether the whole path is clear. Its nodes were checked: a
+    path shorter than the bound stays inside the ellipse (the joint travel to a node and on to the end is at
+    least the node's two L1 distances to the ends)."""
     base = np.minimum(path[:-1], path[1:])
     axis = np.argmax(np.abs(path[1:] - path[:-1])[:, None] == lattice.strides[None], axis=1)
     unchecked = np.flatnonzero(edges[base, axis] == EDGE_UNKNOWN)

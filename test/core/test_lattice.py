@@ -13,10 +13,20 @@ import pytest
 from helpers.random_boxes import random_box_world
 
 from clew_ros.core.collision import is_valid
+from clew_ros.core.continuous import straight_moves_clear
 from clew_ros.core.improve import _Improver, _Piece, joint_travel
-from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_UNKNOWN, lattice_search
+from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_CLEAR, EDGE_UNKNOWN, lattice_search
 from clew_ros.core.kinematics import compose, tip_poses
-from clew_ros.core.lattice import MAX_JOINTS, KnownNodes, lattice_route, lattice_step
+from clew_ros.core.lattice import (
+    MAX_JOINTS,
+    NODE_SHARE,
+    KnownNodes,
+    _edges_clear,
+    _joins,
+    _Lattice,
+    lattice_route,
+    lattice_step,
+)
 from clew_ros.core.search import PlanningContext
 from clew_ros.core.settings import PlannerSettings, Termination
 
@@ -97,7 +107,7 @@ class _Counter:
         return False
 
 
-def _route(world, a, b, transfer, shorter_than, budget=None, known=None):
+def _route(world, a, b, transfer, shorter_than, budget=None, known=None, allowance=1e9, expansion_work=0.2):
     return lattice_route(
         world,
         a,
@@ -107,8 +117,8 @@ def _route(world, a, b, transfer, shorter_than, budget=None, known=None):
         min_margin=5e-4,
         shorter_than=shorter_than,
         budget=budget or _Counter(),
-        allowance=1e9,
-        expansion_work=0.2,
+        allowance=allowance,
+        expansion_work=expansion_work,
         nodes_known=known,
     )
 
@@ -194,24 +204,75 @@ def test_no_lattice_for_many_joints_or_a_bound_below_the_straight_move() -> None
     assert _route(small, np.zeros(2), np.full(2, 0.5), False, 1.0) is None  # 1.0 rad is the straight move's travel
 
 
-def test_a_routing_stops_within_its_allowance() -> None:
+def test_a_routing_stops_within_its_allowance(monkeypatch) -> None:
+    """Nothing is checked when the nodes alone would not fit; a routing whose nodes fit but whose first search
+    spends the rest stops right after it (no edge checked, no second search) and finds nothing."""
+    calls = {"searches": 0, "edge checks": 0}
+
+    def counted(name, function):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return function(*args, **kwargs)
+
+        return call
+
+    monkeypatch.setattr("clew_ros.core.lattice.lattice_search", counted("searches", lattice_search))
+    monkeypatch.setattr("clew_ros.core.lattice._edges_clear", counted("edge checks", _edges_clear))
     world, rng = random_box_world(2, 3, 0.04)
-    a, b = _blocked_pairs(world, rng, transfer=False, count=1)[0]
-    counter = _Counter()
-    path = lattice_route(
-        world,
-        a,
-        b,
-        object_pose=np.asarray(world.object.initial, dtype=float),
-        grasp_rel=None,
-        min_margin=5e-4,
-        shorter_than=40.0,
-        budget=counter,
-        allowance=50.0,
-        expansion_work=0.2,
-    )
-    assert path is None
-    assert counter.spent == 0  # checking the nodes would not fit: nothing checked
+    tried = 0
+    for a, b in _blocked_pairs(world, rng, transfer=False, count=4):
+        counter = _Counter()
+        assert _route(world, a, b, False, 40.0, counter, allowance=50.0) is None
+        assert counter.spent == 0  # checking the nodes would not fit: nothing checked
+        calls.update({"searches": 0, "edge checks": 0})
+        if _route(world, a, b, False, 40.0) is None:
+            continue
+        assert calls["searches"] >= 1  # the premise: the whole routing searches, then checks edges
+        assert calls["edge checks"] >= 1
+        nodes = len(_Lattice(world, lattice_step(world)).inside(a, b, 40.0))
+        calls.update({"searches": 0, "edge checks": 0})
+        part = _Counter()
+        allowance = 1.01 * nodes / NODE_SHARE  # the nodes fit; any search (1e6 units a node) spends the rest
+        assert _route(world, a, b, False, 40.0, part, allowance=allowance, expansion_work=1e6) is None
+        assert calls == {"searches": 1, "edge checks": 0}
+        assert part.spent >= 1e6
+        tried += 1
+    assert tried >= 1
+
+
+def test_a_lattice_route_is_as_short_as_dijkstra_over_every_node_and_edge_checked() -> None:
+    """The lazy checks lose nothing: the route is as short as the shortest path over the ellipse with every
+    node and edge checked first (the same joins of the ends)."""
+    world, rng = random_box_world(1, 2, 0.0)
+    rest = np.asarray(world.object.initial, dtype=float)
+    lattice = _Lattice(world, lattice_step(world))
+    compared = 0
+
+    def clear(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        return straight_moves_clear(world, starts, ends, object_pose=rest, grasp_rel=None, min_margin=5e-4)
+
+    for a, b in _blocked_pairs(world, rng, transfer=False, count=4):
+        path = _route(world, a, b, False, 12.0)
+        if path is None:
+            continue
+        nodes = lattice.inside(a, b, 12.0)
+        q = lattice.configurations(lattice.indices(nodes))
+        valid = np.zeros(lattice.size, dtype=bool)
+        valid[nodes[clear(q, q)]] = True
+        edges = np.full((lattice.size, 2), EDGE_BLOCKED, dtype=np.uint8)
+        index = lattice.indices(nodes)
+        for j, stride in enumerate(lattice.strides.tolist()):
+            up = nodes[(index[:, j] + 1 < lattice.counts[j]) & valid[nodes]]
+            up = up[valid[up + stride]]
+            low = lattice.configurations(lattice.indices(up))
+            ok = clear(low, lattice.configurations(lattice.indices(up + stride)))
+            edges[up[ok], j] = EDGE_CLEAR
+        joins = _joins(lattice, nodes[valid[nodes]], a, b, clear)
+        assert joins is not None
+        expected = _dijkstra(lattice.counts, lattice.step, edges, *joins)
+        assert joint_travel([path]) == pytest.approx(expected, abs=1e-9)
+        compared += 1
+    assert compared >= 2
 
 
 def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_within_the_bound(monkeypatch) -> None:
@@ -238,14 +299,14 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
 
         alone, path = routed(lattice=False), routed()
         if alone is None:
-            assert path is None  # the lattice only shortens what RRT-Connect found
             continue
         assert path is not None
         assert np.array_equal(path[0], a)
         assert np.array_equal(path[-1], b)
         assert _valid_at_a_fine_step(world, path, False)
         assert joint_travel([path]) <= joint_travel([alone]) + 1e-12
-        shorter += joint_travel([path]) < joint_travel([alone]) - 1e-9
-        straight = float(np.abs(b - a).sum())
-        assert np.array_equal(routed(longest=straight), alone)  # no lattice path is shorter than the straight move
+        if joint_travel([path]) < joint_travel([alone]) - 1e-9:
+            shorter += 1
+            # the proposal's bound: none shorter than the lattice's own path, so RRT-Connect's comes back
+            assert np.array_equal(routed(longest=joint_travel([path])), alone)
     assert shorter >= 2

@@ -626,6 +626,8 @@ class _Improver:
             fewer = transfers + len(proposal.grasps) < score[0]  # then any travel makes the plan better
             slack = math.inf if fewer else score[1] - travel_before - proposal.travel
             tail = self.checked_tail(proposal, placement, slack)
+            if tail is not None:
+                self.goal_shortcut(tail[-1])  # compared where it could end on the goal, as the plan's last transfer
             accepted = tail is not None and _better(score, _score(before + tail))
             if self.routings:
                 self.connected[accepted] += 1
@@ -876,7 +878,14 @@ class _Improver:
         the margin), joined straight, ends the transfer when that makes it shorter: the shortest clear one
         (one batch of inverse kinematics and one call of the continuous check; once is enough, since a
         second batch from the waypoints kept would find the same). Returns whether the plan changed."""
-        piece = self.pieces[-1]
+        if not self.goal_shortcut(self.pieces[-1]):
+            return False
+        self.reserve()
+        return True
+
+    def goal_shortcut(self, piece: _Piece) -> bool:
+        """:meth:`goal_shortcuts` of ``piece``, a transfer ending on the goal (the plan's last, or a proposal's):
+        whether its waypoints changed."""
         if piece.kind != "transfer" or piece.grasp_rel is None or len(piece.waypoints) < 2 or not self.budget.left():
             return False
         w = piece.waypoints
@@ -896,7 +905,6 @@ class _Improver:
         best = rows[clear][np.argmin(travel[rows[clear]])]
         piece.waypoints = _without_repeats([*w[: best + 1], held[best]])  # a waypoint on the goal already: itself
         self.shortcuts += 1
-        self.reserve()
         return True
 
     def lattice(

@@ -476,6 +476,42 @@ def test_goal_shortcuts_end_the_last_transfer_on_the_goal_sooner_by_a_clear_stra
     assert changed >= 3
 
 
+def test_proposals_are_compared_with_their_last_transfer_ended_on_the_goal_sooner(monkeypatch) -> None:
+    """A checked proposal's last transfer gets the goal shortcut before the proposal is compared with the plan
+    (a routed move that is shorter but leaves no goal shortcut must not win over one that, shortcut, is
+    shorter still): the piece compared, and the plan's end when it is taken, is the shortcut one."""
+    from clew_ros.core.search import goal_reached
+
+    calls = []
+    changed = 0
+    for name in ("arm3_regrasp", "arm5_regrasp"):
+        world, improver, _ = _improver_on_first_plan(name)
+        goal = np.asarray(world.object.goal, dtype=float)
+        original = improver.goal_shortcut
+
+        def recording(piece, original=original, world=world, goal=goal):
+            before = piece.waypoints.copy()
+            assert goal_reached(world, piece.end_pose(world), goal)  # a proposal's last transfer, on the goal
+            moved = original(piece)
+            calls.append((piece, before, moved))
+            return moved
+
+        monkeypatch.setattr(improver, "goal_shortcut", recording)
+        improver.rebuild_pass()
+        for piece, before, moved in calls:
+            assert moved == (not np.array_equal(piece.waypoints, before))
+            if moved:
+                changed += 1
+                assert joint_travel([piece.waypoints]) < joint_travel([before]) - 1e-9
+                assert goal_reached(world, piece.end_pose(world), goal)
+        last = improver.pieces[-1]
+        shortcut = [piece for piece, _, moved in calls if moved and piece is last]
+        if shortcut:  # a proposal taken: the plan ends as it was compared
+            assert validate_plan(world, _plan_of(world, [p.segment() for p in improver.pieces])) == []
+        calls.clear()
+    assert changed >= 1
+
+
 def test_goal_shortcuts_change_nothing_after_a_transit_or_once_stopped() -> None:
     world = _world("arm3_regrasp")
     goal = np.asarray(world.object.goal, dtype=float)

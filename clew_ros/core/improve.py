@@ -36,9 +36,10 @@ or put down far from where a regrasp was needed. Once a plan is found,
    replaces it when shorter), given up, when no routed proposal made the
    plan better, after :data:`CONNECT_PROBES` routings that found no path or
    :data:`ROUTED_PROBES` routed proposals that did not make it better. A move found blocked makes alike proposals
-   (both ends within :data:`MOVE_ALIKE_RAD`) skipped. Each proposal that makes
-   the plan better replaces the plan's end from that placement on, and the
-   later ones must beat it. Passes repeat while they find something
+   (both ends within :data:`MOVE_ALIKE_RAD`) skipped. A proposal is compared
+   with its last transfer ended on the goal sooner where it can be (the goal
+   shortcut of step 4); each that makes the plan better replaces the plan's
+   end from that placement on, and the later ones must beat it. Passes repeat while they find something
    (:data:`REBUILD_IDLE_PASSES`); a placement from which every proposal looked
    blocked and none worked (a cluttered world) ends the rebuilding, leaving
    the budget to shortcuts.

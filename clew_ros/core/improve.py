@@ -627,12 +627,13 @@ class _Improver:
             fewer = transfers + len(proposal.grasps) < score[0]  # then any travel makes the plan better
             slack = math.inf if fewer else score[1] - travel_before - proposal.travel
             tail = self.checked_tail(proposal, placement, slack)
-            if tail is not None:
-                self.goal_shortcut(tail[-1])  # compared where it could end on the goal, as the plan's last transfer
+            # compared where it could end on the goal, as the plan's last transfer
+            ended_sooner = tail is not None and self.goal_shortcut(tail[-1])
             accepted = tail is not None and _better(score, _score(before + tail))
             if self.routings:
                 self.connected[accepted] += 1
             if tail is not None and accepted:
+                self.shortcuts += ended_sooner  # a straight move accepted only with the proposal
                 self.pieces = before + tail
                 self.reserve()
                 self.rebuilt += 1
@@ -881,12 +882,13 @@ class _Improver:
         second batch from the waypoints kept would find the same). Returns whether the plan changed."""
         if not self.goal_shortcut(self.pieces[-1]):
             return False
+        self.shortcuts += 1
         self.reserve()
         return True
 
     def goal_shortcut(self, piece: _Piece) -> bool:
         """:meth:`goal_shortcuts` of ``piece``, a transfer ending on the goal (the plan's last, or a proposal's):
-        whether its waypoints changed."""
+        whether its waypoints changed (the caller counts the shortcut when it keeps it)."""
         if piece.kind != "transfer" or piece.grasp_rel is None or len(piece.waypoints) < 2 or not self.budget.left():
             return False
         w = piece.waypoints
@@ -905,7 +907,6 @@ class _Improver:
             return False
         best = rows[clear][np.argmin(travel[rows[clear]])]
         piece.waypoints = _without_repeats([*w[: best + 1], held[best]])  # a waypoint on the goal already: itself
-        self.shortcuts += 1
         return True
 
     def lattice(

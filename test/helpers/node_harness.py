@@ -90,6 +90,16 @@ class NodeProcess:
             self._log_file.flush()
         return self.log.read_text(errors="replace")
 
+    def stacks(self) -> str:
+        """The node's log, after it printed where each of its threads is (if it is still running)."""
+        if self.proc.poll() is None:
+            before = len(self.output())
+            self.proc.send_signal(signal.SIGUSR1)
+            deadline = time.monotonic() + 2.0
+            while "most recent call first" not in self.output()[before:] and time.monotonic() < deadline:
+                time.sleep(0.05)
+        return self.output()
+
     def stop(self, sig: int = signal.SIGINT, timeout_s: float = EXIT_TIMEOUT_S) -> int | None:
         """Send ``sig`` and wait; SIGKILL if it hangs. Returns the exit code (``None``: had to be killed)."""
         code: int | None
@@ -217,7 +227,31 @@ class Client:
     ) -> Any:
         client = self._client(service, srv_type)
         assert client.wait_for_service(timeout_sec=wait_service_s), f"{service} not found in {wait_service_s} s"
+        self._wait_server_matched(service, wait_service_s)
         return client.call_async(srv_type.Request() if request is None else request)
+
+    def _wait_server_matched(self, service: str, timeout_s: float) -> None:
+        """Wait until the node serving ``service`` has matched this client's response reader.
+
+        ``wait_for_service`` only says that this side has matched the server; the server may not have matched
+        the client's response reader yet, and a response it sends then is lost (rmw_fastrtps waits 100 ms for
+        the match, then rclpy warns "failed to send response (timeout)"): on a loaded machine a quick ~/plan
+        was never answered. A participant announces its endpoints in order over reliable discovery, so once
+        the node's latched ``~/status`` reaches a reader created after the service client, the node has
+        matched that client's response reader too.
+        """
+        matched = self.__dict__.setdefault("_matched", set())
+        if service in matched:
+            return
+        box = Inbox()
+        probe = self.node.create_subscription(GoalStatusArray, f"{service.rsplit('/', 1)[0]}/status", box.put, LATCHED)
+        try:
+            box.wait_for(timeout_s=timeout_s)
+        except AssertionError as error:
+            raise AssertionError(f"{service}: the node's latched ~/status did not arrive: {error}") from None
+        finally:
+            self.node.destroy_subscription(probe)
+        matched.add(service)
 
     def _client(self, service: str, srv_type: Any) -> Any:
         clients = self.__dict__.setdefault("_clients", {})
@@ -276,7 +310,11 @@ class Session:
         return f"{self.node.name}/{name}"
 
     def plan(self, timeout_s: float = PLAN_TIMEOUT_S) -> Trigger.Response:
-        return self.client.call(self.srv("plan"), Trigger, timeout_s=timeout_s)
+        """Call ``~/plan``; a call it does not answer fails with the node's log, its threads' stacks last."""
+        try:
+            return self.client.call(self.srv("plan"), Trigger, timeout_s=timeout_s)
+        except AssertionError as error:
+            raise AssertionError(f"{error}\n--- the node's log ---\n{self.node.stacks()}") from None
 
     def events_of(self, run_id: str) -> list[dict]:
         return [e for e in (json.loads(m.data) for m in self.events.messages) if e["run_id"] == run_id]

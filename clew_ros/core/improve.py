@@ -86,8 +86,9 @@ returned.
 **Determinism.** All choices come from a generator seeded with
 ``planner.seed`` (apart from the planner's own), and the budget is counted
 in work, not seconds: :data:`WORK_PER_SECOND` units per second of
-``planner.improve_time``; a configuration checked costs one unit, or more
-in a world whose check compares more pieces (:func:`check_work`), plus
+``planner.improve_time``; a configuration checked costs
+:data:`BATCH_CHECK_SHARE` units, or more in a world whose check compares
+more pieces (:func:`check_work`), plus
 :data:`MOVE_CALL_WORK` per call of the compiled straight-move check,
 :data:`CALL_WORK` per call of the configuration check, :data:`BATCH_WORK` per batch of
 random shortcuts, :data:`IK_WORK` per step of inverse kinematics and
@@ -125,6 +126,7 @@ from clew_ros.core.tree import Segment
 from clew_ros.core.world import World
 
 __all__ = [
+    "BATCH_CHECK_SHARE",
     "BATCH_WORK",
     "CALL_WORK",
     "EVALUATION_WORK",
@@ -140,12 +142,18 @@ __all__ = [
     "joint_travel",
 ]
 
-#: Work units per second of ``planner.improve_time`` (1.0-1.9 microseconds each on the machine of
-#: docs/benchmarks.md when quiet, up to twice that with its 2 cores shared with other jobs: improvement
-#: takes at most about its budget there, and the same work everywhere).
-WORK_PER_SECOND = 3.5e5
+#: Work units per second of ``planner.improve_time``: on the machine of docs/benchmarks.md, when quiet, the
+#: improvement's wall time is 0.4-0.9 of the work it spent over the 28 worlds there (medians per world;
+#: ``benchmarks.improvement``'s last column), up to twice that with its 2 cores shared with other jobs; the
+#: same work everywhere.
+WORK_PER_SECOND = 5.25e5
+#: Work of one configuration checked in a batched call of the compiled checks, per unit of :func:`check_work`:
+#: such a check takes 0.09-0.21 of the time a unit stood for at 3.5e5 units a second (``python -m
+#: benchmarks.check_cost``: 8,000 configurations a call, each checked still or along a move, six worlds), the
+#: Python around each call being charged by the call (:data:`CALL_WORK`, :data:`MOVE_CALL_WORK`).
+BATCH_CHECK_SHARE = 0.3
 #: Work of one call of the compiled configuration check from Python (the Python around it: the proposals'
-#: inverse kinematics computes poses and checks its solutions), in units of one configuration of figure1.
+#: inverse kinematics computes poses and checks its solutions), in work units.
 CALL_WORK = 200
 #: Work of one call of the compiled straight-move check (:func:`clew_ros.core.continuous.straight_moves_clear`:
 #: the Python around it, one or several moves), or of the proposals' compiled screen
@@ -285,7 +293,7 @@ class _Budget:
         self.spent = 0
         self.evaluations_at_start = ctx.counters.evaluations
         self.stopped = False
-        self.check_work = check_work(ctx.world)
+        self.check_work = BATCH_CHECK_SHARE * check_work(ctx.world)
         self.reserve = 0  # work the final check of the segments changed so far will take
 
     def spend(self, units: int) -> None:
@@ -338,7 +346,8 @@ class _RoutingShare:
 
 
 def check_work(world: World) -> float:
-    """Work units one configuration check costs in ``world``, at least 1: its cost in joints
+    """How much one configuration check costs in ``world`` relative to figure1's, at least 1 (the budget charges
+    :data:`BATCH_CHECK_SHARE` units for each): its cost in joints
     (:data:`SELF_PAIR_JOINTS`, :data:`OBSTACLES_PER_JOINT`) over figure1's (:data:`REFERENCE_COST`). Measured
     with the compiled check's broad phase (valid configurations, docs/benchmarks.md): within a factor of
     two of the time a check takes on every benchmark world, where counting the pairs of pieces compared

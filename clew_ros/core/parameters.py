@@ -286,7 +286,7 @@ PLANNER_PARAMETERS = ParameterTable(
         ParameterSpec(
             "planner.improve_time",
             _D,
-            0.4,
+            0.5,
             "Budget (s) for improving a found plan (other grasps, elbows and regrasp placements, fewer "
             "transfers, shortcuts); counted in work, not wall time, so the plan does not depend on the machine; "
             "stops early at time_limit or cancel; 0: off.",

@@ -135,6 +135,8 @@ __all__ = [
     "MOVE_CALL_WORK",
     "REFERENCE_COST",
     "ROUND_WORK",
+    "SHORTCUT_TRY_WORK",
+    "WAYPOINT_WORK",
     "WORK_PER_SECOND",
     "Improvement",
     "check_work",
@@ -143,9 +145,9 @@ __all__ = [
 ]
 
 #: Work units per second of ``planner.improve_time``: on the machine of docs/benchmarks.md, when quiet, the
-#: improvement's wall time is 0.4-0.9 of the work it spent over the 28 worlds there (medians per world;
-#: ``benchmarks.improvement``'s last column), up to twice that with its 2 cores shared with other jobs; the
-#: same work everywhere.
+#: improvement's wall time is 0.5-1.1 of the seconds its work stands for on the 28 worlds there (medians per
+#: world; ``benchmarks.improvement``'s last column) and at most 0.54 s of the default 0.5 s; up to twice that
+#: with its 2 cores shared with other jobs. The same work everywhere.
 WORK_PER_SECOND = 5.25e5
 #: Work of one configuration checked in a batched call of the compiled checks, per unit of :func:`check_work`:
 #: such a check takes 0.09-0.21 of the time a unit stood for at 3.5e5 units a second (``python -m
@@ -170,6 +172,11 @@ SHORTCUT_BATCH = 16
 #: Work of one batch of random shortcuts besides its checks (drawing and scoring them, compiled; splicing them), in
 #: units.
 BATCH_WORK = 150
+#: Work of one shortcut tried by :meth:`_Improver.try_shortcut` besides its check (the Python that splices and
+#: prunes the path and scores it), and more for each waypoint of the segment: on a 7-joint plan of 150 waypoints a
+#: try took 0.27 ms where its check was charged 0.18 ms (``benchmarks.improvement_stages``: the greedy shortcuts'
+#: wall time 1.4 times their work).
+SHORTCUT_TRY_WORK, WAYPOINT_WORK = 40, 1.0
 #: Batches of random shortcuts in a row that change nothing end them.
 IDLE_BATCHES = 12
 #: Work of one step of inverse kinematics (one configuration, one iteration), in units.
@@ -792,6 +799,7 @@ class _Improver:
         ``b`` (points on the pieces before ``first`` and after ``last``) joined straight."""
         piece = self.pieces[index]
         w = piece.waypoints
+        self.budget.spend(math.ceil(SHORTCUT_TRY_WORK + WAYPOINT_WORK * len(w)))
         joined = [*w[:first], a, b, *w[last + 1 :]]
         new = pruned_path(_without_repeats(joined))
         old_score = (0, joint_travel([w]), len(w))

@@ -91,11 +91,12 @@ in work, not seconds: :data:`WORK_PER_SECOND` units per second of
 more pieces (:func:`check_work`), plus
 :data:`MOVE_CALL_WORK` per call of the compiled straight-move check,
 :data:`CALL_WORK` per call of the configuration check, :data:`BATCH_WORK` per batch of
-random shortcuts, :data:`IK_WORK` per step of inverse kinematics and
+random shortcuts, :data:`SHORTCUT_TRY_WORK` and :data:`WAYPOINT_WORK` per
+greedy shortcut tried, :data:`IK_WORK` per step of inverse kinematics and
 :data:`EVALUATION_WORK` per genetic-algorithm individual.
 The final check of the segments changed so far at the validator's step is
-reserved from the budget as they change (:data:`DENSE_WORK` per configuration
-and unit of :func:`check_work`), so it fits in the budget too. Attempts run
+reserved from the budget as they change (:data:`DENSE_WORK` of what a
+configuration checked costs, per configuration), so it fits in the budget too. Attempts run
 until the work is spent, so the same seed gives the same plan on any machine.
 Only the planner's time limit and cancel stop it by the clock (between
 calls of the checks and between rounds of routing calls, well within 100 ms),
@@ -150,9 +151,9 @@ __all__ = [
 #: with its 2 cores shared with other jobs. The same work everywhere.
 WORK_PER_SECOND = 5.25e5
 #: Work of one configuration checked in a batched call of the compiled checks, per unit of :func:`check_work`:
-#: such a check takes 0.09-0.21 of the time a unit stood for at 3.5e5 units a second (``python -m
-#: benchmarks.check_cost``: 8,000 configurations a call, each checked still or along a move, six worlds), the
-#: Python around each call being charged by the call (:data:`CALL_WORK`, :data:`MOVE_CALL_WORK`).
+#: such a check takes 0.4-1.3 of what this charges at :data:`WORK_PER_SECOND` and 0.13-0.40 of a whole unit
+#: (``python -m benchmarks.check_cost``: 8,000 configurations a call, each checked still or along a move, eight
+#: worlds), the Python around each call being charged by the call (:data:`CALL_WORK`, :data:`MOVE_CALL_WORK`).
 BATCH_CHECK_SHARE = 0.3
 #: Work of one call of the compiled configuration check from Python (the Python around it: the proposals'
 #: inverse kinematics computes poses and checks its solutions), in work units.
@@ -220,8 +221,9 @@ PARTIAL_PIECES = 8
 RESTART_STREAM = 19
 #: Joint travel below this (rad) counts as equal.
 TRAVEL_EPS = 1e-9
-#: Work of one configuration of the final check at the validator's step (batched: cheaper than a unit), per
-#: unit of :func:`check_work`. The final check of the segments changed so far is kept out of the budget.
+#: Work of one configuration of the final check at the validator's step, as a share of what a configuration
+#: checked costs (:data:`BATCH_CHECK_SHARE` x :func:`check_work`). The final check of the segments changed so
+#: far is kept out of the budget.
 DENSE_WORK = 0.5
 #: Work of one node expanded by the lattice's compiled A* (:func:`clew_ros.core.kernel.lattice_search`), in units
 #: (0.26 microseconds a node, measured on a 34^3 lattice with a wall).

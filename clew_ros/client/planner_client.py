@@ -104,6 +104,11 @@ class PlannerClient:
         name = self.planner
         group = self._group
         self._goal_pub = node.create_publisher(PoseStamped, f"{name}/goal_pose", GOAL_QOS, callback_group=group)
+        # the service clients before the latched ~/status's subscription: a participant announces its endpoints
+        # in order, so once ~/status arrives (planner_ready) the planner has matched their response readers too,
+        # and its first answer is not lost (Fast DDS drops a response to a reader it has not matched yet)
+        self._cancel = node.create_client(Trigger, f"{name}/cancel", callback_group=group)
+        self._parameters = node.create_client(GetParameters, f"{name}/get_parameters", callback_group=group)
         self._subscriptions = [
             node.create_subscription(String, f"{name}/events", self._on_event, EVENTS_QOS, callback_group=group),
             node.create_subscription(
@@ -119,8 +124,6 @@ class PlannerClient:
                 String, f"{name}/world_yaml", self._on_world_yaml, LATCHED_QOS, callback_group=group
             ),
         ]
-        self._cancel = node.create_client(Trigger, f"{name}/cancel", callback_group=group)
-        self._parameters = node.create_client(GetParameters, f"{name}/get_parameters", callback_group=group)
 
     # -- the planner ---------------------------------------------------------------------------------
 

@@ -146,12 +146,13 @@ __all__ = [
 ]
 
 #: Work units per second of ``planner.improve_time``: on the machine of docs/benchmarks.md, when quiet, the
-#: improvement's wall time is 0.5-1.1 of the seconds its work stands for on the 28 worlds there (medians per
-#: world; ``benchmarks.improvement``'s last column) and at most 0.54 s of the default 0.5 s; up to twice that
+#: improvement's wall time is 0.5-1.1 of the seconds its work stands for on 27 of the 28 worlds there (medians
+#: per world, ``benchmarks.improvement``'s last column; shapes2_1, 0.02 s in all, 1.6) and at most 0.54 s of
+#: the default 0.5 s; up to twice that
 #: with its 2 cores shared with other jobs. The same work everywhere.
 WORK_PER_SECOND = 5.25e5
 #: Work of one configuration checked in a batched call of the compiled checks, per unit of :func:`check_work`:
-#: such a check takes 0.4-1.3 of what this charges at :data:`WORK_PER_SECOND` and 0.13-0.40 of a whole unit
+#: such a check takes 0.4-1.3 of what this charges at :data:`WORK_PER_SECOND`, 0.13-0.40 of a whole unit
 #: (``python -m benchmarks.check_cost``: 8,000 configurations a call, each checked still or along a move, eight
 #: worlds), the Python around each call being charged by the call (:data:`CALL_WORK`, :data:`MOVE_CALL_WORK`).
 BATCH_CHECK_SHARE = 0.3
@@ -165,8 +166,10 @@ MOVE_CALL_WORK = 20
 #: Work of one round of RRT-Connect besides its checks (drawing its configuration, finding the nearest node), in
 #: the same units.
 ROUND_WORK = 2.0
-#: Work of one genetic-algorithm individual (a decoded Manhattan path), in units.
-EVALUATION_WORK = 110
+#: Work of one genetic-algorithm individual (a decoded Manhattan path), in units (110 at 3.5e5 units a second,
+#: scaled with :data:`WORK_PER_SECOND` in session 20: a whole search, 24 x 12 x 3 individuals, still does not fit
+#: :data:`TRANSFER_SHARE` of the default budget; no plan of the 28 benchmark worlds changed).
+EVALUATION_WORK = 165
 #: Random shortcuts drawn, scored and checked together (:meth:`_Improver.random_shortcuts`: one compiled call
 #: checks every move of those that would make the path shorter).
 SHORTCUT_BATCH = 16
@@ -187,7 +190,7 @@ IK_WORK = 0.125
 #: self-collision costs this many joints, and so does each of :data:`OBSTACLES_PER_JOINT` obstacles.
 SELF_PAIR_JOINTS = 0.2
 OBSTACLES_PER_JOINT = 16
-#: figure1's check cost in those terms (2 joints, 2 obstacles): one unit of work.
+#: figure1's check cost in those terms (2 joints, 2 obstacles): a :func:`check_work` of 1.
 REFERENCE_COST = 2.125
 #: Share of the budget that attempts to drop transfers may start in.
 TRANSFER_SHARE = 0.5

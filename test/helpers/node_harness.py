@@ -31,6 +31,7 @@ import yaml
 from action_msgs.msg import GoalStatus, GoalStatusArray
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
+from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
@@ -46,6 +47,14 @@ from clew_ros.node.qos import EVENTS_QOS, LATCHED_QOS
 LATCHED = LATCHED_QOS
 STREAM = EVENTS_QOS
 
+#: The services of a planner node that tests call, by name under the node, and their types.
+NODE_SERVICES: dict[str, Any] = {
+    "plan": Trigger,
+    "cancel": Trigger,
+    "set_parameters": SetParameters,
+    "set_parameters_atomically": SetParametersAtomically,
+    "get_parameters": GetParameters,
+}
 DISCOVERY_TIMEOUT_S = 20.0
 PLAN_TIMEOUT_S = 30.0
 RUN_ID = re.compile(r"run ([0-9a-f]{32})")
@@ -231,27 +240,32 @@ class Client:
         return client.call_async(srv_type.Request() if request is None else request)
 
     def _wait_server_matched(self, service: str, timeout_s: float) -> None:
-        """Wait until the node serving ``service`` has matched this client's response reader.
+        """Wait until the node serving ``service`` has matched this client's response readers.
 
         ``wait_for_service`` only says that this side has matched the server; the server may not have matched
         the client's response reader yet, and a response it sends then is lost (rmw_fastrtps waits 100 ms for
         the match, then rclpy warns "failed to send response (timeout)"): on a loaded machine a quick ~/plan
         was never answered. A participant announces its endpoints in order over reliable discovery, so once
-        the node's latched ``~/status`` reaches a reader created after the service client, the node has
-        matched that client's response reader too.
+        the node's latched ``~/status`` reaches a reader created after the service clients, the node has
+        matched their response readers too. Done once a node, for the clients of all its services that tests
+        call (:data:`NODE_SERVICES`, created first), so that a timed call later pays nothing for it.
         """
-        matched = self.__dict__.setdefault("_matched", set())
+        matched: set[str] = self.__dict__.setdefault("_matched", set())
         if service in matched:
             return
+        node = service.rsplit("/", 1)[0]
+        for name, srv_type in NODE_SERVICES.items():
+            self._client(f"{node}/{name}", srv_type)
+        covered = {f"{node}/{name}" for name in NODE_SERVICES} | {service}
         box = Inbox()
-        probe = self.node.create_subscription(GoalStatusArray, f"{service.rsplit('/', 1)[0]}/status", box.put, LATCHED)
+        # kept until the client closes (destroying it while the spin thread waits on it would gain nothing)
+        probes = self.__dict__.setdefault("_probes", [])
+        probes.append(self.node.create_subscription(GoalStatusArray, f"{node}/status", box.put, LATCHED))
         try:
             box.wait_for(timeout_s=timeout_s)
         except AssertionError as error:
             raise AssertionError(f"{service}: the node's latched ~/status did not arrive: {error}") from None
-        finally:
-            self.node.destroy_subscription(probe)
-        matched.add(service)
+        matched |= covered
 
     def _client(self, service: str, srv_type: Any) -> Any:
         clients = self.__dict__.setdefault("_clients", {})

@@ -117,8 +117,7 @@ class NodeProcess:
             try:
                 code = self.proc.wait(timeout=timeout_s)
             except subprocess.TimeoutExpired:
-                self.proc.send_signal(signal.SIGUSR1)  # the node prints its threads' stacks to the log
-                time.sleep(0.5)
+                self.stacks()  # into the log: where it hangs
                 self.proc.kill()
                 self.proc.wait()
                 code = None

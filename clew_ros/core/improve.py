@@ -146,9 +146,10 @@ __all__ = [
 ]
 
 #: Work units per second of ``planner.improve_time``: on the machine of docs/benchmarks.md, when quiet, the
-#: improvement's wall time is 0.5-1.1 of the seconds its work stands for on 27 of the 28 worlds there (medians
-#: per world, ``benchmarks.improvement``'s last column; shapes2_1, 0.02 s in all, 1.6) and at most 0.54 s of
-#: the default 0.5 s; up to twice that with its 2 cores shared with other jobs. The same work everywhere.
+#: improvement's wall time is 0.5-1.3 of the seconds its work stands for on 27 of the 28 worlds there (medians
+#: per world over two runs, ``benchmarks.improvement``'s last column; shapes2_1, 0.02 s in all, up to 1.8) and
+#: at most 0.54 s of the default 0.5 s; up to twice that with its 2 cores shared with other jobs. The same work
+#: everywhere.
 WORK_PER_SECOND = 5.25e5
 #: Work of one configuration checked in a batched call of the compiled checks, per unit of :func:`check_work`:
 #: such a check takes 0.4-1.3 of what this charges at :data:`WORK_PER_SECOND`, 0.13-0.40 of a whole unit

@@ -120,7 +120,7 @@ from clew_ros.core.continuous import (
 )
 from clew_ros.core.kernel import pruned_path, shortcuts
 from clew_ros.core.kinematics import compose, relative, tip_poses
-from clew_ros.core.lattice import KnownNodes, lattice_route, lattice_step
+from clew_ros.core.lattice import KnownNodes, lattice_regrasp, lattice_route, lattice_step
 from clew_ros.core.regrasp import ROUTES, Proposal, goal_holds_near, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
@@ -215,6 +215,9 @@ BLOCKED_TRIES = 3
 CONNECT_PROBES, ROUTED_PROBES = 1, 2
 #: Share of the budget one :meth:`_Improver.connect` may spend at most, and its rounds at most.
 CONNECT_SHARE, CONNECT_STEPS = 0.2, 1000
+#: :meth:`_Improver.lattice_regrasps`: the share of the budget one search may take, and the share spent after
+#: which none starts (the rest is the rebuilding's and the shortcuts').
+REGRASP_SHARE, REGRASP_TOTAL_SHARE = 0.25, 0.5
 #: A move whose ends both lie this close (rad, largest joint difference) to those of a move found blocked
 #: in the same mode is taken as blocked too.
 MOVE_ALIKE_RAD = 0.1
@@ -487,6 +490,7 @@ class _Improver:
         # the inverse kinematics' restarts draw from a generator of their own: the run's stream stays the releases'
         self.restarts = np.random.default_rng([ctx.settings.seed, RESTART_STREAM])
         self.known_nodes: dict[bytes, KnownNodes] = {}  # per mode: the lattice nodes checked so far
+        self.regrasps_tried: set[bytes] = set()  # the spans lattice_regrasps searched (their ends, their length)
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         """Whether the straight move ``a -> b`` is clear in ``piece``'s mode."""
@@ -937,8 +941,7 @@ class _Improver:
         """The lattice's shortest path from ``a`` to ``b`` in ``piece``'s mode, shorter than ``shorter_than``
         rad, within ``allowance`` work units (:func:`clew_ros.core.lattice.lattice_route`, the nodes checked in
         this mode before not checked again), without its collinear waypoints; ``None`` if none was found."""
-        mode = piece.start_pose if piece.grasp_rel is None else piece.grasp_rel
-        known = self.known_nodes.setdefault(piece.kind.encode() + np.asarray(mode, dtype=float).tobytes(), KnownNodes())
+        known = self.known(piece.kind, piece.start_pose if piece.grasp_rel is None else piece.grasp_rel)
         path = lattice_route(
             self.world,
             a,
@@ -954,6 +957,62 @@ class _Improver:
         )
         return None if path is None else pruned_path(path)
 
+    def known(self, kind: str, mode: np.ndarray) -> KnownNodes:
+        """The lattice nodes checked so far in one mode: a transit's object pose or a transfer's grasp."""
+        return self.known_nodes.setdefault(kind.encode() + np.asarray(mode, dtype=float).tobytes(), KnownNodes())
+
+    def lattice_regrasps(self) -> bool:
+        """On a 3-joint arm: from the start of a transfer to the end of a later one, one regrasp placed where
+        the lattice finds it shortest (:func:`clew_ros.core.lattice.lattice_regrasp`), replacing every
+        transfer and transit between, when that makes the plan better. The longest spans (most transfers)
+        first; each search within :data:`REGRASP_SHARE` of the budget, and new ones only while less than
+        :data:`REGRASP_TOTAL_SHARE` of it is spent. Returns whether the plan changed."""
+        if self.world.robot.dof != 3 or lattice_step(self.world) is None:
+            return False
+        changed = False
+        while True:
+            transfers = [i for i, p in enumerate(self.pieces) if p.kind == "transfer"]
+            spans = sorted(
+                ((i, j) for k, i in enumerate(transfers) for j in transfers[k + 1 :]), key=lambda s: (s[0] - s[1], s[0])
+            )
+            for i, j in spans:
+                if not self.budget.left(REGRASP_TOTAL_SHARE):
+                    return changed
+                one, two = self.pieces[i], self.pieces[j]
+                key = one.waypoints[0].tobytes() + two.waypoints[-1].tobytes() + bytes([j - i])
+                if key in self.regrasps_tried or one.grasp_rel is None or two.grasp_rel is None:
+                    continue
+                self.regrasps_tried.add(key)
+                fewer = sum(p.kind == "transfer" for p in self.pieces[i : j + 1]) > 2
+                found = lattice_regrasp(
+                    self.world,
+                    one.waypoints[0],
+                    one.grasp_rel,
+                    two.waypoints[-1],
+                    two.grasp_rel,
+                    min_margin=self.min_margin,
+                    shorter_than=math.inf if fewer else joint_travel([p.waypoints for p in self.pieces[i : j + 1]]),
+                    budget=self.budget,
+                    allowance=min(REGRASP_SHARE * self.budget.total, self.budget.units_left()),
+                    expansion_work=EXPANSION_WORK,
+                    nodes_known=(self.known("transfer", one.grasp_rel), self.known("transfer", two.grasp_rel)),
+                )
+                if found is None:
+                    continue
+                carried = _Piece("transfer", one.grasp, pruned_path(found[0]), one.start_pose, one.grasp_rel)
+                pose = carried.end_pose(self.world)
+                put_down = _Piece("transit", None, found[1], pose, None)
+                held = _Piece("transfer", two.grasp, pruned_path(found[2]), pose, two.grasp_rel)
+                candidate = [*self.pieces[:i], carried, put_down, held, *self.pieces[j + 1 :]]
+                if _better(_score(self.pieces), _score(candidate)):
+                    self.pieces = candidate
+                    self.reserve()
+                    self.rebuilt += 1
+                    changed = True
+                    break  # the spans of the new plan
+            else:
+                return changed
+
     def run(self) -> list[_Piece]:
         """Rounds of rebuilding, fewer transfers and shortcuts while work is left and the last round made the
         plan better (after the first, the rebuilding may use all that is left: the shortcuts had too little to
@@ -962,6 +1021,7 @@ class _Improver:
         while True:
             score = _score(self.pieces)
             self.rebuild()
+            self.lattice_regrasps()
             self.fewer_transfers()
             self.prune()
             self.goal_shortcuts()

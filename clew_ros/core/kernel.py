@@ -60,6 +60,7 @@ __all__ = [
     "connect_rounds",
     "decode",
     "intervals",
+    "lattice_costs",
     "lattice_search",
     "moves_clear",
     "pruned_path",
@@ -2166,6 +2167,55 @@ def lattice_search(
     return np.empty(0, dtype=np.int64), np.inf, expanded
 
 
+@_jit
+def lattice_costs(
+    counts: np.ndarray, step: float, edges: np.ndarray, sources: np.ndarray, source_costs: np.ndarray, bound: float
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Compiled Dijkstra over a joint-space lattice (the nodes and edges of :func:`lattice_search`), in joint
+    travel: from ``sources`` (at ``source_costs``), the least cost of every node below ``bound`` (``inf``
+    for the others) and the node it is reached from (-1 for a source or a node not reached), and the nodes
+    expanded."""
+    n = len(counts)
+    strides = np.empty(n, dtype=np.int64)
+    total = 1
+    for j in range(n - 1, -1, -1):
+        strides[j] = total
+        total *= counts[j]
+    cost = np.full(total, np.inf)
+    previous = np.full(total, -1, dtype=np.int64)
+    heap = [(0.0, np.int64(0)) for _ in range(0)]
+    for i in range(len(sources)):
+        if source_costs[i] < cost[sources[i]]:
+            cost[sources[i]] = source_costs[i]
+            heapq.heappush(heap, (source_costs[i], np.int64(sources[i])))
+    k = np.empty(n, dtype=np.int64)
+    expanded = 0
+    while heap:
+        f, u = heapq.heappop(heap)
+        if f > cost[u]:
+            continue  # a stale entry
+        expanded += 1
+        rest = u
+        for j in range(n):
+            k[j] = rest // strides[j]
+            rest %= strides[j]
+        g = f + step
+        if g >= bound:
+            continue
+        for j in range(n):
+            for sign in (1, -1):
+                if (sign > 0 and (k[j] + 1 >= counts[j] or edges[u, j] == EDGE_BLOCKED)) or (
+                    sign < 0 and (k[j] == 0 or edges[u - strides[j], j] == EDGE_BLOCKED)
+                ):
+                    continue
+                v = u + sign * strides[j]
+                if g < cost[v]:
+                    cost[v] = g
+                    previous[v] = u
+                    heapq.heappush(heap, (g, np.int64(v)))
+    return cost, previous, expanded
+
+
 def warm_up() -> float:
     """Compile every kernel (or load them from numba's on-disk cache) before the first plan.
 
@@ -2260,6 +2310,14 @@ def warm_up() -> float:
         np.full(1, 8, dtype=np.int64),
         np.zeros(1),
         np.full(2, 2.0),
+        np.inf,
+    )
+    lattice_costs(
+        np.full(2, 3, dtype=np.int64),
+        1.0,
+        np.zeros((9, 2), dtype=np.uint8),
+        np.zeros(1, dtype=np.int64),
+        np.zeros(1),
         np.inf,
     )
     _WARMED_IN_S.append(time.perf_counter() - start)

@@ -1,4 +1,5 @@
-"""The shortest way round the obstacles on a joint-space lattice, for arms of few joints.
+"""The shortest way round the obstacles on a joint-space lattice, for arms of few joints; and where to put the
+object down between two grasps.
 
 Shortcuts only straighten a path within its own way round the obstacles, and
 the way round RRT-Connect finds for a blocked move of the improvement is often
@@ -19,10 +20,23 @@ them is blocked. Every check is a straight move checked continuously with a
 margin (:func:`clew_ros.core.continuous.straight_moves_clear`), so the path
 returned is valid at any checking resolution. The true ends join the lattice
 through the corners of their cells, by straight moves checked the same way.
+
+**Where to put the object down** (:func:`lattice_regrasp`, a 3-joint arm). A plan that regrasps twice or
+more, or once where the object was put down far from where it had to be, keeps its releases: shortcuts
+never move one, and in clutter a straight-move proposal (:mod:`clew_ros.core.regrasp`) for another one
+finds its moves blocked. With the first grasp (its configuration and how it holds the object) and the last
+one (the configuration it ends at) fixed, one regrasp between them is a search over two lattices, one per
+grasp: a transfer to any lattice node ``r`` of the first (the release: where the object is then put down
+follows), the transit to the configuration holding the object there as the last grasp does (on a 3-joint
+arm a tip frame fixes it up to the elbow, :func:`pose_configurations`), and a transfer on the second. A
+Dijkstra search from each end (:func:`clew_ros.core.kernel.lattice_costs`) gives every node's joint travel
+to it, so every release's total is one numpy expression; the best are screened, and the best that passes
+has its lattice edges checked (lazily, as above), then its regrasp's moves continuously.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from collections.abc import Callable
@@ -30,19 +44,26 @@ from typing import Protocol
 
 import numpy as np
 
+from clew_ros.core.collision import packed_world
 from clew_ros.core.continuous import straight_moves_clear
-from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_CLEAR, EDGE_UNKNOWN, lattice_search
-from clew_ros.core.world import World
+from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_CLEAR, EDGE_UNKNOWN, lattice_costs, lattice_search, screen_routes
+from clew_ros.core.kinematics import compose, relative, tip_poses, wrap_angle
+from clew_ros.core.regrasp import route_waypoints, screen_samples
+from clew_ros.core.world import Robot, World
 
 __all__ = [
     "MAX_JOINTS",
     "MAX_NODES",
     "MIN_STEP_RAD",
     "NODE_SHARE",
+    "REGRASP_ROUNDS",
+    "REGRASP_SCREENED",
     "KnownNodes",
     "LatticeBudget",
+    "lattice_regrasp",
     "lattice_route",
     "lattice_step",
+    "pose_configurations",
 ]
 
 #: Arms of more joints than this get no lattice (one of :data:`MAX_NODES` nodes would be too coarse).
@@ -55,6 +76,14 @@ MAX_NODES = 8_000
 NODE_SHARE = 0.35
 #: The finest step (rad) of a lattice (a 2-joint arm's lattice is finer than :data:`MAX_NODES` needs).
 MIN_STEP_RAD = 0.05
+#: :func:`lattice_regrasp`: the best regrasps screened in a round (one compiled call for the moves putting the
+#: object down, one for the joins to the second lattice), those not screened before.
+REGRASP_SCREENED = 32
+#: :func:`lattice_regrasp`: rounds of searching and checking at most (a round that finds an edge of its paths
+#: blocked searches again); its allowance of work ends it sooner in a cluttered world.
+REGRASP_ROUNDS = 64
+# a regrasp's state in lattice_regrasp: not screened, passed the screen, clear (checked continuously), blocked
+_UNKNOWN, _SCREENED, _CLEAR, _BLOCKED = 0, 1, 2, 3
 
 
 class LatticeBudget(Protocol):
@@ -68,6 +97,8 @@ class LatticeBudget(Protocol):
     def spend(self, units: int) -> None: ...
 
     def spend_move_checks(self, configurations: int) -> None: ...
+
+    def spend_checks(self, configurations: int, calls: int = 1) -> None: ...
 
     def stop(self) -> bool: ...
 
@@ -188,18 +219,11 @@ def lattice_route(
 
     known = nodes_known if nodes_known is not None else KnownNodes()
     checked, valid = known.states(lattice.size)
-    todo = nodes[~checked[nodes]]
-    if not len(nodes) or len(todo) * budget.check_work > NODE_SHARE * allowance:
+    if not len(nodes) or np.count_nonzero(~checked[nodes]) * budget.check_work > NODE_SHARE * allowance:
         return None
-    if len(todo):
-        q = lattice.configurations(lattice.indices(todo))
-        ok = clear(q, q)  # a move that does not move: the configuration, with the margin
-        checked[todo], valid[todo] = not budget.stop(), ok  # a check the clock stopped: nothing learnt
-    edges = np.full((lattice.size, len(lattice.counts)), EDGE_BLOCKED, dtype=np.uint8)
-    usable = nodes[valid[nodes]]
-    edges[usable] = EDGE_UNKNOWN  # an edge out of a node outside the ellipse or not valid stays blocked
-    lattice.block_nodes(edges, nodes[~valid[nodes]])
-    joins = _joins(lattice, usable, a, b, clear)
+    layer = _layer(lattice, nodes, clear, checked=checked, valid=valid, budget=budget)
+    edges = layer.edges
+    joins = _joins(lattice, layer.usable, a, b, clear)
     while joins is not None and not spent():
         path, _, expanded = lattice_search(lattice.counts, lattice.lower, step, edges, *joins, b, shorter_than)
         budget.spend(math.ceil(expansion_work * expanded))
@@ -247,3 +271,295 @@ def _edges_clear(lattice: _Lattice, path: np.ndarray, edges: np.ndarray, clear: 
     ok = clear(lattice.configurations(low), lattice.configurations(high))
     edges[base[unchecked], axis[unchecked]] = np.where(ok, EDGE_CLEAR, EDGE_BLOCKED)
     return bool(ok.all())
+
+
+def pose_configurations(robot: Robot, tips: np.ndarray, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Both configurations ``(2, B, 3)`` of a 3-joint arm putting its tip at the frames ``tips`` ``(B, 3)``
+    (elbow one way, then the other), each joint's angle the one nearest ``near`` ``(B, 3)`` of those ``2 pi``
+    apart (else one within the joint limits); and which ``(2, B)`` exist within the joint limits."""
+    lengths = np.asarray(robot.link_lengths, dtype=float)
+    lower, upper = np.asarray(robot.joint_lower, dtype=float), np.asarray(robot.joint_upper, dtype=float)
+    wrist = tips[:, :2] - lengths[2] * np.stack([np.cos(tips[:, 2]), np.sin(tips[:, 2])], axis=1) - robot.base
+    cosine = (np.sum(wrist**2, axis=1) - lengths[0] ** 2 - lengths[1] ** 2) / (2.0 * lengths[0] * lengths[1])
+    reached = np.abs(cosine) <= 1.0
+    elbow = np.arccos(np.clip(cosine, -1.0, 1.0))
+    out = np.empty((2, len(tips), 3))
+    ok = np.empty((2, len(tips)), dtype=bool)
+    for side, q2 in enumerate((elbow, -elbow)):
+        q1 = np.arctan2(wrist[:, 1], wrist[:, 0]) - np.arctan2(
+            lengths[1] * np.sin(q2), lengths[0] + lengths[1] * np.cos(q2)
+        )
+        q = np.stack([q1, q2, tips[:, 2] - q1 - q2], axis=1)
+        q = near + wrap_angle(q - near)
+        for turn in (-2.0 * np.pi, 2.0 * np.pi):  # outside the limits: a turn may bring it back
+            outside = (q < lower) | (q > upper)
+            q = np.where(outside & (q + turn >= lower) & (q + turn <= upper), q + turn, q)
+        out[side] = q
+        ok[side] = reached & np.all((q >= lower) & (q <= upper), axis=1)
+    return out, ok
+
+
+@dataclasses.dataclass
+class _Layer:
+    """One grasp's lattice in :func:`lattice_regrasp`: its clear test, edge states and valid nodes, and the
+    joint travel from its end to each node with the node it is reached from (up to date unless ``stale``)."""
+
+    clear: _Clear
+    edges: np.ndarray
+    usable: np.ndarray
+    ends: tuple[np.ndarray, np.ndarray] = (np.zeros(0, dtype=np.int64), np.zeros(0))
+    cost: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    previous: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    stale: bool = True
+
+
+@dataclasses.dataclass
+class _Candidates:
+    """A round's best regrasps: elbow, row into the round's releases, release node, each in order."""
+
+    sides: np.ndarray
+    rows: np.ndarray
+    nodes: np.ndarray
+
+
+def lattice_regrasp(
+    world: World,
+    first: np.ndarray,
+    first_rel: np.ndarray,
+    last: np.ndarray,
+    last_rel: np.ndarray,
+    *,
+    min_margin: float,
+    shorter_than: float,
+    budget: LatticeBudget,
+    allowance: float,
+    expansion_work: float,
+    nodes_known: tuple[KnownNodes, KnownNodes] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The shortest way on the lattice (module docstring) to carry the object from ``first`` (holding it as
+    ``first_rel``) to ``last`` (holding it as ``last_rel``), putting it down once: a transfer to a lattice
+    node (the release), a transit to the configuration holding the object where it then rests as
+    ``last_rel`` does (straight or one joint after the other, :data:`clew_ros.core.regrasp.ROUTES`), and a
+    transfer to ``last``. Returns the three moves' waypoints, shorter than ``shorter_than`` rad of joint
+    travel in all, every move clear with ``min_margin`` (m) to spare; ``None`` when there is none, the arm
+    has not three joints and a lattice, checking the nodes inside the L1 ellipse of ``first`` and ``last``
+    in both modes would take more than :data:`NODE_SHARE` of ``allowance`` (those of ``nodes_known``, one
+    per grasp, not counted), the search has spent ``allowance`` work units or :data:`REGRASP_ROUNDS`
+    rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands."""
+    step = lattice_step(world)
+    first, last = np.asarray(first, dtype=float), np.asarray(last, dtype=float)
+    if step is None or world.robot.dof != 3 or float(np.abs(last - first).sum()) >= shorter_than:
+        return None
+    search = _RegraspSearch(
+        world, _Lattice(world, step), (first_rel, last_rel), min_margin=min_margin, budget=budget, allowance=allowance
+    )
+    if not search.layers(first, last, shorter_than, nodes_known or (KnownNodes(), KnownNodes())):
+        return None
+    for _ in range(REGRASP_ROUNDS):
+        if search.spent():
+            return None
+        found = search.round(shorter_than, expansion_work)
+        if found is not None or search.exhausted:
+            return found
+    return None
+
+
+class _RegraspSearch:
+    """The state of one :func:`lattice_regrasp`."""
+
+    def __init__(
+        self,
+        world: World,
+        lattice: _Lattice,
+        grasps: tuple[np.ndarray, np.ndarray],
+        *,
+        min_margin: float,
+        budget: LatticeBudget,
+        allowance: float,
+    ) -> None:
+        self.world, self.lattice, self.budget = world, lattice, budget
+        (self.first_rel, self.last_rel), self.min_margin = grasps, min_margin
+        self.exhausted = False  # no regrasp left below the bound
+        self.first, self.last = np.zeros(3), np.zeros(3)
+        self.limit = budget.spent + allowance
+        self.allowance = allowance
+        packed = packed_world(world)
+        self.packed = dataclasses.replace(packed, rounding=max(min_margin, packed.rounding))
+        self.state = np.zeros((2, lattice.size), dtype=np.int8)  # per elbow and release node: _UNKNOWN ...
+        self.checked_to = np.full((2, lattice.size), -1, dtype=np.int64)  # the corner its join was checked to
+        self.put_downs: dict[tuple[int, int], np.ndarray] = {}
+        self.first_layer = self.last_layer = _Layer(self.clear_in(None, None), np.zeros((0, 3)), np.zeros(0))
+
+    def spent(self) -> bool:
+        return self.budget.stop() or self.budget.spent >= self.limit
+
+    def clear_in(self, grasp_rel: np.ndarray | None, pose: np.ndarray | None) -> _Clear:
+        """Which straight moves are clear, the object held as ``grasp_rel`` or resting at ``pose``."""
+
+        def clear(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+            return straight_moves_clear(
+                self.world,
+                np.ascontiguousarray(starts, dtype=float),
+                np.ascontiguousarray(ends, dtype=float),
+                object_pose=pose,
+                grasp_rel=grasp_rel,
+                min_margin=self.min_margin,
+                budget=self.budget,
+            )
+
+        return clear
+
+    def layers(self, first: np.ndarray, last: np.ndarray, bound: float, known: tuple[KnownNodes, KnownNodes]) -> bool:
+        """Check both grasps' nodes inside the ellipse and join ``first`` and ``last`` to theirs: whether both
+        joined within the allowance."""
+        lattice = self.lattice
+        nodes = lattice.inside(first, last, bound)  # a node on a shorter way lies inside
+        states = [k.states(lattice.size) for k in known]
+        todo = sum(int(np.count_nonzero(~checked[nodes])) for checked, _ in states)
+        if not len(nodes) or todo * self.budget.check_work > NODE_SHARE * self.allowance:
+            return False
+        self.first_layer, self.last_layer = (
+            _layer(lattice, nodes, self.clear_in(rel, None), checked=checked, valid=valid, budget=self.budget)
+            for rel, (checked, valid) in zip((self.first_rel, self.last_rel), states, strict=True)
+        )
+        if self.spent():
+            return False
+        sources = _joins(lattice, self.first_layer.usable, first, first, self.first_layer.clear)
+        targets = _joins(lattice, self.last_layer.usable, last, last, self.last_layer.clear)
+        if sources is None or targets is None:
+            return False
+        self.first_layer.ends, self.last_layer.ends = sources[:2], targets[2:]
+        self.first, self.last = first, last
+        return True
+
+    def round(self, bound: float, expansion_work: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Search both lattices again where an edge was found blocked, screen the best regrasps not screened
+        yet, and check the best that passed: its three moves if it stands, else ``None`` (``exhausted`` when
+        no regrasp is left below ``bound``)."""
+        lattice, robot = self.lattice, self.world.robot
+        for layer in (self.first_layer, self.last_layer):
+            if layer.stale:
+                layer.cost, layer.previous, expanded = lattice_costs(
+                    lattice.counts, lattice.step, layer.edges, layer.ends[0], layer.ends[1], bound
+                )
+                self.budget.spend(math.ceil(expansion_work * expanded))
+                layer.stale = False
+        releases = np.flatnonzero(np.isfinite(self.first_layer.cost))
+        at = lattice.configurations(lattice.indices(releases))
+        poses = compose(tip_poses(robot, at), self.first_rel)  # where the object is put down
+        regrasps, exists = pose_configurations(robot, compose(poses, relative(self.last_rel, np.zeros(3))), at)
+        total, joined = _regrasp_totals(lattice, self.first_layer.cost[releases], self.last_layer.cost, at, regrasps)
+        total[~exists | (self.state[:, releases] == _BLOCKED)] = np.inf
+        order = np.argsort(total, axis=None, kind="stable")[:REGRASP_SCREENED]
+        order = order[total.reshape(-1)[order] < bound]
+        if not len(order):
+            self.exhausted = True
+            return None
+        sides, rows = np.divmod(order, len(releases))
+        best = _Candidates(sides, rows, releases[rows])
+        moved = self.checked_to[best.sides, best.nodes] != joined[best.sides, best.rows]  # another corner now
+        self.state[best.sides[moved], best.nodes[moved]] = np.minimum(
+            self.state[best.sides[moved], best.nodes[moved]], _SCREENED
+        )
+        self.screen(best, at, regrasps, poses, joined)
+        standing = np.flatnonzero(self.state[best.sides, best.nodes] != _BLOCKED)
+        if not len(standing):
+            return None
+        k = int(standing[0])  # the best that passed the screen: its lattice paths, then its own moves
+        side, row, release = int(best.sides[k]), int(best.rows[k]), int(best.nodes[k])
+        path_first = _lattice_path(self.first_layer.previous, release)
+        path_last = _lattice_path(self.last_layer.previous, int(joined[side, row]))[::-1]
+        for layer, path in ((self.first_layer, path_first), (self.last_layer, path_last)):
+            layer.stale = not _edges_clear(lattice, path, layer.edges, layer.clear)
+        if self.first_layer.stale or self.last_layer.stale or self.spent():
+            return None
+        regrasp, put_down = regrasps[side, row], self.put_downs[side, release]
+        if self.state[side, release] != _CLEAR:  # the dearest check (near contact), once its paths stand
+            corner = lattice.configurations(lattice.indices(joined[side, row : row + 1]))[0]
+            clear = bool(self.clear_in(None, poses[row])(put_down[:-1], put_down[1:]).all()) and bool(
+                self.last_layer.clear(regrasp[None], corner[None])[0]
+            )
+            self.state[side, release] = _CLEAR if clear else _BLOCKED
+            self.checked_to[side, release] = joined[side, row]
+            if not clear:
+                return None
+        return (
+            np.concatenate([self.first[None], lattice.configurations(lattice.indices(path_first))]),
+            put_down,
+            np.concatenate([regrasp[None], lattice.configurations(lattice.indices(path_last)), self.last[None]]),
+        )
+
+    def screen(
+        self, best: _Candidates, at: np.ndarray, regrasps: np.ndarray, poses: np.ndarray, joined: np.ndarray
+    ) -> None:
+        """The compiled screen (sampled, as regrasp's proposals) of the moves of those of ``best`` not screened
+        yet: putting the object down and taking it again where it then rests, and the join of the regrasp
+        configuration to the second lattice."""
+        fresh = np.flatnonzero(self.state[best.sides, best.nodes] == _UNKNOWN)
+        if not len(fresh):
+            return
+        sides, rows, nodes = best.sides[fresh], best.rows[fresh], best.nodes[fresh]
+        a, b = at[rows], regrasps[sides, rows]
+        c = self.lattice.configurations(self.lattice.indices(joined[sides, rows]))
+        down, checked = screen_routes(self.packed, a, b, screen_samples(a, b), resting=poses[rows], grasp_rel=None)
+        held = np.ascontiguousarray(np.broadcast_to(self.last_rel, (len(fresh), 3)))
+        join, more = screen_routes(self.packed, b, c, screen_samples(b, c), resting=None, grasp_rel=held)
+        self.budget.spend_checks(int(checked) + int(more), 2)
+        passed = (down >= 0) & (join >= 0)
+        self.state[sides, nodes] = np.where(passed, _SCREENED, _BLOCKED)
+        for k in np.flatnonzero(passed).tolist():
+            self.put_downs[int(sides[k]), int(nodes[k])] = route_waypoints(a[k], b[k], int(down[k]))
+
+
+def _layer(
+    lattice: _Lattice,
+    nodes: np.ndarray,
+    clear: _Clear,
+    *,
+    checked: np.ndarray,
+    valid: np.ndarray,
+    budget: LatticeBudget,
+) -> _Layer:
+    """Check the ``nodes`` not ``checked`` yet (in one call), and the edge states that follow: an edge out of a
+    node outside ``nodes`` or not valid is blocked, the others are unknown."""
+    todo = nodes[~checked[nodes]]
+    if len(todo):
+        q = lattice.configurations(lattice.indices(todo))
+        ok = clear(q, q)  # a move that does not move: the configuration, with the margin
+        checked[todo], valid[todo] = not budget.stop(), ok  # a check the clock stopped: nothing learnt
+    edges = np.full((lattice.size, len(lattice.counts)), EDGE_BLOCKED, dtype=np.uint8)
+    usable = nodes[valid[nodes]]
+    edges[usable] = EDGE_UNKNOWN
+    lattice.block_nodes(edges, nodes[~valid[nodes]])
+    return _Layer(clear, edges, usable)
+
+
+def _regrasp_totals(
+    lattice: _Lattice, to_release: np.ndarray, cost_last: np.ndarray, at: np.ndarray, regrasps: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per elbow and release (``at``, reached at joint travel ``to_release``): the joint travel of the whole way
+    through its regrasp configuration (``regrasps`` ``(2, R, 3)``), joined to the corner of its cell on the
+    second lattice from which the way to the end is shortest (``cost_last``); and that corner's node."""
+    total = np.full(regrasps.shape[:2], np.inf)
+    joined = np.zeros(regrasps.shape[:2], dtype=np.int64)
+    for side in range(2):
+        q = regrasps[side]
+        low = np.floor((q - lattice.lower) / lattice.step).astype(np.int64)
+        best = np.full(len(q), np.inf)
+        for offset in itertools.product((0, 1), repeat=len(lattice.counts)):
+            index = low + np.array(offset)
+            inside = np.all((index >= 0) & (index < lattice.counts), axis=1)
+            node = np.clip(index, 0, lattice.counts - 1) @ lattice.strides
+            travel = np.where(inside, cost_last[node] + np.abs(lattice.configurations(index) - q).sum(axis=1), np.inf)
+            better = travel < best
+            best[better], joined[side, better] = travel[better], node[better]
+        total[side] = to_release + np.abs(q - at).sum(axis=1) + best
+    return total, joined
+
+
+def _lattice_path(previous: np.ndarray, node: int) -> np.ndarray:
+    """The nodes from a search's source to ``node``, in that order (``previous`` from lattice_costs)."""
+    path = [node]
+    while previous[path[-1]] >= 0:
+        path.append(int(previous[path[-1]]))
+    return np.array(path[::-1], dtype=np.int64)

@@ -52,7 +52,7 @@ from clew_ros.core.kernel import clearly_valid, screen_routes
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.world import World
 
-__all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints"]
+__all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints", "screen_samples"]
 
 #: A grasp configuration puts the tip this close to the grasp point (m).
 HOLD_ERROR_M = 1e-9
@@ -142,6 +142,14 @@ def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
     return np.array(points)
 
 
+def screen_samples(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """How many configurations the screen samples along each move ``a[k] -> b[k]``: about one every
+    :data:`SCREEN_STEP_RAD` of joint travel, at least 8, at most 32."""
+    return (8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 2)).astype(
+        np.int64
+    )
+
+
 class _Kinematics:
     """Batched inverse kinematics and validity with a margin, counting the work."""
 
@@ -186,8 +194,7 @@ class _Kinematics:
         every fourth sample first; one compiled call (:func:`clew_ros.core.kernel.screen_routes`)."""
         if self.exhausted or not len(a):
             return np.full(len(a), -1)
-        samples = 8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 2)
-        route, checked = screen_routes(self.packed, a, b, samples, resting=resting, grasp_rel=grasp_rel)
+        route, checked = screen_routes(self.packed, a, b, screen_samples(a, b), resting=resting, grasp_rel=grasp_rel)
         self.effort.checks += checked
         self.effort.screens += 1
         return route

@@ -766,3 +766,23 @@ def test_a_batch_of_shortcuts_takes_the_clear_ones_that_do_not_overlap_largest_g
 
 def _on_any_piece(path: np.ndarray, point: np.ndarray) -> bool:
     return any(_on_piece(point, a, b) is not None for a, b in itertools.pairwise(path))
+
+
+def test_on_a_three_joint_arm_one_regrasp_placed_on_the_lattice_takes_out_transfers_in_clutter(monkeypatch) -> None:
+    # obstacles_32 (benchmarks), seed 0: the first plan puts the object down twice (3 transfers); every straight
+    # -move proposal from its placements looks blocked, and one regrasp between its first and last grasps, put
+    # where the lattice finds the way shortest, carries it in 2
+    from benchmarks.families import obstacles_world
+
+    parameters = obstacles_world(32).parameters
+    world = world_from_parameters(parameters)
+    settings = PlannerSettings.from_parameters(parameters, seed=0, time_limit=120)
+    result = plan(world, settings)
+    assert result.stats["first_transfers"] == 3
+    assert result.stats["transfers"] == 2
+    assert validate_plan(world, Plan.from_result(world, result)) == []
+    monkeypatch.setattr(_Improver, "lattice_regrasps", lambda self: False)
+    without = plan(world, settings)
+    assert without.stats["first_joint_travel_rad"] == result.stats["first_joint_travel_rad"]
+    assert without.stats["transfers"] == 3
+    assert result.stats["joint_travel_rad"] < without.stats["joint_travel_rad"]

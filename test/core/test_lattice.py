@@ -15,8 +15,8 @@ from helpers.random_boxes import random_box_world
 from clew_ros.core.collision import is_valid
 from clew_ros.core.continuous import straight_moves_clear
 from clew_ros.core.improve import _Improver, _Piece, joint_travel
-from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_CLEAR, EDGE_UNKNOWN, lattice_search
-from clew_ros.core.kinematics import compose, tip_poses
+from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_CLEAR, EDGE_UNKNOWN, lattice_costs, lattice_search
+from clew_ros.core.kinematics import compose, relative, tip_poses, wrap_angle
 from clew_ros.core.lattice import (
     MAX_JOINTS,
     NODE_SHARE,
@@ -24,8 +24,10 @@ from clew_ros.core.lattice import (
     _edges_clear,
     _joins,
     _Lattice,
+    lattice_regrasp,
     lattice_route,
     lattice_step,
+    pose_configurations,
 )
 from clew_ros.core.search import PlanningContext
 from clew_ros.core.settings import PlannerSettings, Termination
@@ -36,6 +38,12 @@ GRASP_REL = np.array([0.02, 0.0, 0.3])
 
 def _dijkstra(counts, step, edges, sources, source_costs, targets, target_costs) -> float:
     """The reference: Dijkstra over the same lattice, without a heuristic."""
+    done = _distances(counts, step, edges, sources, source_costs)
+    return min((done.get(int(t), math.inf) + c for t, c in zip(targets, target_costs, strict=True)), default=math.inf)
+
+
+def _distances(counts, step, edges, sources, source_costs) -> dict[int, float]:
+    """Each node's least cost from the sources, over edges not blocked (those reached)."""
     strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
     best = {int(s): float(c) for s, c in zip(sources, source_costs, strict=True)}
     heap = [(c, s) for s, c in best.items()]
@@ -54,7 +62,56 @@ def _dijkstra(counts, step, edges, sources, source_costs, targets, target_costs)
                 if cost + step < best.get(v, math.inf):
                     best[v] = cost + step
                     heapq.heappush(heap, (cost + step, v))
-    return min((done.get(int(t), math.inf) + c for t, c in zip(targets, target_costs, strict=True)), default=math.inf)
+    return done
+
+
+@pytest.mark.parametrize("dims", [2, 3])
+def test_the_compiled_lattice_costs_are_each_node_s_least_cost_and_lead_back_to_a_source(dims) -> None:
+    rng = np.random.default_rng(10 + dims)
+    step = 0.25
+    for trial in range(20):
+        counts = rng.integers(3, 8, dims).astype(np.int64)
+        size = int(np.prod(counts))
+        edges = np.where(rng.random((size, dims)) < 0.35, EDGE_BLOCKED, EDGE_UNKNOWN).astype(np.uint8)
+        sources = rng.choice(size, 2, replace=False)
+        source_costs = rng.uniform(0, 0.2, 2)
+        bound = math.inf if trial % 2 else 1.0
+        cost, previous, expanded = lattice_costs(counts, step, edges, sources, source_costs, bound)
+        expected = np.full(size, np.inf)
+        for node, c in _distances(counts, step, edges, sources, source_costs).items():
+            expected[node] = c if c < bound else np.inf
+        assert np.allclose(cost, expected, rtol=0, atol=1e-9, equal_nan=False)
+        assert expanded == np.count_nonzero(np.isfinite(cost))
+        strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
+        for reached in np.flatnonzero(np.isfinite(cost)).tolist():  # back to a source, one edge a step
+            node = reached
+            while previous[node] >= 0:
+                u, node = node, int(previous[node])
+                j = int(np.flatnonzero(strides == abs(u - node))[0])
+                assert edges[min(u, node), j] != EDGE_BLOCKED
+            assert node in sources.tolist()
+        for node in np.flatnonzero(np.isfinite(cost)).tolist():
+            assert previous[node] < 0 or cost[node] == pytest.approx(cost[previous[node]] + step, abs=1e-9)
+
+
+def test_pose_configurations_put_the_tip_at_the_frame_and_one_is_the_configuration_it_came_from() -> None:
+    world, rng = random_box_world(5, 3, 0.02)
+    robot = world.robot
+    q = rng.uniform(robot.joint_lower, robot.joint_upper, (500, 3))
+    tips = tip_poses(robot, q)
+    near = q + rng.normal(0.0, 0.2, q.shape)
+    solved, ok = pose_configurations(robot, tips, near)
+    assert ok.any(axis=0).all()  # a frame the arm reaches: one elbow at least
+    for side in range(2):
+        got = tip_poses(robot, solved[side][ok[side]])
+        assert np.abs(got[:, :2] - tips[ok[side], :2]).max() < 1e-9
+        assert np.abs(wrap_angle(got[:, 2] - tips[ok[side], 2])).max() < 1e-9
+        inside = (solved[side] >= robot.joint_lower) & (solved[side] <= robot.joint_upper)
+        assert np.array_equal(ok[side], inside.all(axis=1) & ok[side])
+    nearest = np.minimum(np.abs(solved[0] - q).sum(axis=1), np.abs(solved[1] - q).sum(axis=1))
+    assert nearest.max() < 1e-9
+    far = np.array([[5.0, 0.0, 0.0]])  # out of reach: no configuration
+    assert not pose_configurations(robot, far, np.zeros((1, 3)))[1].any()
 
 
 @pytest.mark.parametrize("dims", [2, 3])
@@ -102,6 +159,9 @@ class _Counter:
 
     def spend_move_checks(self, configurations: int) -> None:
         self.spent += configurations
+
+    def spend_checks(self, configurations: int, calls: int = 1) -> None:
+        self.spent += configurations + calls
 
     def stop(self) -> bool:
         return False
@@ -310,3 +370,112 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
             # the proposal's bound: none shorter than the lattice's own path, so RRT-Connect's comes back
             assert np.array_equal(routed(longest=joint_travel([path])), alone)
     assert shorter >= 2
+
+
+OTHER_REL = np.array([0.02, 0.0, -1.4])  # a second grasp: another angle between the tip and the object
+
+
+def _valid_held_at_a_fine_step(world, path, grasp_rel=None, resting=None) -> bool:
+    for u, v in itertools.pairwise(path):
+        steps = max(1, int(np.ceil(np.max(np.abs(v - u)) / FINE_RAD)))
+        fine = u + np.linspace(0.0, 1.0, steps + 1)[:, None] * (v - u)
+        poses = compose(tip_poses(world.robot, fine), grasp_rel) if grasp_rel is not None else resting
+        if not is_valid(world, fine, poses).all():
+            return False
+    return True
+
+
+@pytest.mark.parametrize("seed", [6, 7, 8])
+def test_a_lattice_regrasp_puts_the_object_down_once_holds_it_as_asked_and_is_valid_at_a_fine_step(seed) -> None:
+    world, rng = random_box_world(seed, 3, 0.02)
+    q = rng.uniform(-2.8, 2.8, (600, 3))
+    firsts = q[is_valid(world, q, compose(tip_poses(world.robot, q), GRASP_REL))]
+    lasts = q[is_valid(world, q, compose(tip_poses(world.robot, q), OTHER_REL))]
+    found = 0
+    for a, b in zip(firsts[:6], lasts[:6], strict=False):
+        budget = _Counter()
+        ways = lattice_regrasp(
+            world,
+            a,
+            GRASP_REL,
+            b,
+            OTHER_REL,
+            min_margin=5e-4,
+            shorter_than=40.0,
+            budget=budget,
+            allowance=1e9,
+            expansion_work=0.2,
+        )
+        if ways is None:
+            continue
+        found += 1
+        carried, put_down, held = ways
+        assert np.array_equal(carried[0], a)
+        assert np.array_equal(held[-1], b)
+        assert np.array_equal(carried[-1], put_down[0])
+        assert np.array_equal(put_down[-1], held[0])
+        assert joint_travel([carried, put_down, held]) < 40.0
+        # the object stays where the first grasp put it down, and the second holds it there as asked
+        resting = compose(tip_poses(world.robot, carried[-1:]), GRASP_REL)[0]
+        assert np.allclose(relative(tip_poses(world.robot, held[:1])[0], resting), OTHER_REL, atol=1e-9)
+        assert _valid_held_at_a_fine_step(world, carried, grasp_rel=GRASP_REL)
+        assert _valid_held_at_a_fine_step(world, put_down, resting=resting)
+        assert _valid_held_at_a_fine_step(world, held, grasp_rel=OTHER_REL)
+        # the shortest on its graph: nothing below its travel
+        travel = joint_travel([carried, put_down, held])
+        assert (
+            lattice_regrasp(
+                world,
+                a,
+                GRASP_REL,
+                b,
+                OTHER_REL,
+                min_margin=5e-4,
+                shorter_than=travel - 1e-9,
+                budget=_Counter(),
+                allowance=1e9,
+                expansion_work=0.2,
+            )
+            is None
+        )
+    assert found >= 2
+
+
+def test_no_lattice_regrasp_but_on_three_joints_or_beyond_its_allowance() -> None:
+    for joints in (2, 4):
+        world, _ = random_box_world(4, joints, 0.02)
+        a = np.zeros(joints)
+        assert (
+            lattice_regrasp(
+                world,
+                a,
+                GRASP_REL,
+                a + 0.5,
+                OTHER_REL,
+                min_margin=5e-4,
+                shorter_than=40.0,
+                budget=_Counter(),
+                allowance=1e9,
+                expansion_work=0.2,
+            )
+            is None
+        )
+    world, _ = random_box_world(6, 3, 0.02)
+    budget = _Counter()
+    a, b = np.array([0.5, 0.5, 0.5]), np.array([-0.5, 1.0, -0.5])
+    assert (
+        lattice_regrasp(
+            world,
+            a,
+            GRASP_REL,
+            b,
+            OTHER_REL,
+            min_margin=5e-4,
+            shorter_than=40.0,
+            budget=budget,
+            allowance=1000.0,
+            expansion_work=0.2,
+        )
+        is None
+    )
+    assert budget.spent == 0  # checking the nodes alone would take more than its share: nothing done

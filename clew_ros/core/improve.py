@@ -38,19 +38,27 @@ or put down far from where a regrasp was needed. Once a plan is found,
    :data:`ROUTED_PROBES` routed proposals that did not make it better. A move found blocked makes alike proposals
    (both ends within :data:`MOVE_ALIKE_RAD`) skipped. A proposal is compared
    with its last transfer ended on the goal sooner where it can be (the goal
-   shortcut of step 4); each that makes the plan better replaces the plan's
+   shortcut of step 5); each that makes the plan better replaces the plan's
    end from that placement on, and the later ones must beat it. Passes repeat while they find something
    (:data:`REBUILD_IDLE_PASSES`); a placement from which every proposal looked
    blocked and none worked (a cluttered world) ends the rebuilding, leaving
    the budget to shortcuts.
-3. **Fewer transfers**: from the start of each transfer but the last
+3. **One regrasp on the lattice** (an arm of three joints; each search within :data:`REGRASP_SHARE` of the
+   budget, none started once :data:`REGRASP_TOTAL_SHARE` of it is spent): from the start of a transfer to the
+   end of a later one, the longest spans first, :func:`clew_ros.core.lattice.lattice_regrasp` carries the
+   object with the first one's grasp to the release where the way is shortest, puts it down, takes it
+   as the last one holds it and carries it on to that one's end, every move checked continuously; it
+   replaces every piece between when that makes the plan better (:meth:`_Improver.lattice_regrasps`).
+   In clutter the rebuilding's straight-move proposals all look blocked, and this is what takes a
+   transfer out.
+4. **Fewer transfers**: from the start of each transfer but the last
    (earliest first), SEARCH_TRANSFER tries to carry the object, with that
    transfer's grasp, straight to the goal; the first success replaces every
    later segment. A search may take a whole population's decoding for
    every generation and round, more than the default budget, so it starts
    only when that much work fits in :data:`TRANSFER_SHARE` of the budget
    (a larger ``planner.improve_time``).
-4. **Shortcuts**: a sub-path of one segment is replaced by one straight
+5. **Shortcuts**: a sub-path of one segment is replaced by one straight
    joint-space move (all joints together): first greedily, from each waypoint
    to the farthest later one that is clear (the segment's last, else halfway
    there, a quarter, ...), then between pairs of waypoints and pairs of points
@@ -67,7 +75,7 @@ or put down far from where a regrasp was needed. Once a plan is found,
    waypoints straight to a configuration holding the object on the goal
    that inverse kinematics finds from there, when that is shorter.
 
-Steps 2 to 4 are one round. Rounds repeat while the last one made the plan
+Steps 2 to 5 are one round. Rounds repeat while the last one made the plan
 better and work is left; after the first, the rebuilding may use the whole
 budget (what the shortcuts left: a plan of straight moves leaves them nothing
 to do).

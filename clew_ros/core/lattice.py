@@ -389,6 +389,9 @@ class _RegraspSearch:
         self.checked_to = np.full((2, lattice.size), -1, dtype=np.int64)  # the corner its join was checked to
         self.put_downs: dict[tuple[int, int], np.ndarray] = {}
         self.first_layer = self.last_layer = _Layer(self.clear_in(None, None), np.zeros((0, 3)), np.zeros(0))
+        self.releases = np.zeros(0, dtype=np.int64)
+        self.at = self.poses = self.put_travel = self.join_travel = np.zeros(0)
+        self.regrasps = self.corners = np.zeros(0)
 
     def spent(self) -> bool:
         return self.budget.stop() or self.budget.spent >= self.limit
@@ -430,13 +433,35 @@ class _RegraspSearch:
             return False
         self.first_layer.ends, self.last_layer.ends = sources[:2], targets[2:]
         self.first, self.last = first, last
+        self.regrasp_configurations()
         return True
+
+    def regrasp_configurations(self) -> None:
+        """For every release (a valid node of the first lattice) where the object is put down, both elbows'
+        regrasp configurations, the joint travel to them, the corners of their cells on the second lattice
+        and the joint travel to each (infinite for a regrasp the arm cannot reach or a corner off the lattice):
+        the same every round, so computed once."""
+        lattice, robot = self.lattice, self.world.robot
+        self.releases = self.first_layer.usable
+        self.at = lattice.configurations(lattice.indices(self.releases))
+        self.poses = compose(tip_poses(robot, self.at), self.first_rel)
+        self.regrasps, exists = pose_configurations(
+            robot, compose(self.poses, relative(self.last_rel, np.zeros(3))), self.at
+        )
+        self.put_travel = np.where(exists, np.abs(self.regrasps - self.at[None]).sum(axis=2), np.inf)
+        low = np.floor((self.regrasps - lattice.lower) / lattice.step).astype(np.int64)
+        offsets = np.array(list(itertools.product((0, 1), repeat=len(lattice.counts))), dtype=np.int64)
+        index = low[:, :, None, :] + offsets[None, None]  # (2, R, corners, joints)
+        inside = np.all((index >= 0) & (index < lattice.counts), axis=3)
+        self.corners = np.clip(index, 0, lattice.counts - 1) @ lattice.strides
+        travel = np.abs(lattice.configurations(index) - self.regrasps[:, :, None, :]).sum(axis=3)
+        self.join_travel = np.where(inside, travel, np.inf)
 
     def round(self, bound: float, expansion_work: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Search both lattices again where an edge was found blocked, screen the best regrasps not screened
         yet, and check the best that passed: its three moves if it stands, else ``None`` (``exhausted`` when
         no regrasp is left below ``bound``)."""
-        lattice, robot = self.lattice, self.world.robot
+        lattice = self.lattice
         for layer in (self.first_layer, self.last_layer):
             if layer.stale:
                 layer.cost, layer.previous, expanded = lattice_costs(
@@ -444,12 +469,14 @@ class _RegraspSearch:
                 )
                 self.budget.spend(math.ceil(expansion_work * expanded))
                 layer.stale = False
-        releases = np.flatnonzero(np.isfinite(self.first_layer.cost))
-        at = lattice.configurations(lattice.indices(releases))
-        poses = compose(tip_poses(robot, at), self.first_rel)  # where the object is put down
-        regrasps, exists = pose_configurations(robot, compose(poses, relative(self.last_rel, np.zeros(3))), at)
-        total, joined = _regrasp_totals(lattice, self.first_layer.cost[releases], self.last_layer.cost, at, regrasps)
-        total[~exists | (self.state[:, releases] == _BLOCKED)] = np.inf
+        releases, at, poses, regrasps = self.releases, self.at, self.poses, self.regrasps
+        via = self.last_layer.cost[self.corners] + self.join_travel  # (2, R, corners): on from each corner
+        pick = np.argmin(via, axis=2)
+        joined = np.take_along_axis(self.corners, pick[..., None], axis=2)[..., 0]
+        total = (
+            self.first_layer.cost[releases] + self.put_travel + np.take_along_axis(via, pick[..., None], axis=2)[..., 0]
+        )
+        total[self.state[:, releases] == _BLOCKED] = np.inf
         order = np.argsort(total, axis=None, kind="stable")[:REGRASP_SCREENED]
         order = order[total.reshape(-1)[order] < bound]
         if not len(order):
@@ -532,29 +559,6 @@ def _layer(
     edges[usable] = EDGE_UNKNOWN
     lattice.block_nodes(edges, nodes[~valid[nodes]])
     return _Layer(clear, edges, usable)
-
-
-def _regrasp_totals(
-    lattice: _Lattice, to_release: np.ndarray, cost_last: np.ndarray, at: np.ndarray, regrasps: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per elbow and release (``at``, reached at joint travel ``to_release``): the joint travel of the whole way
-    through its regrasp configuration (``regrasps`` ``(2, R, 3)``), joined to the corner of its cell on the
-    second lattice from which the way to the end is shortest (``cost_last``); and that corner's node."""
-    total = np.full(regrasps.shape[:2], np.inf)
-    joined = np.zeros(regrasps.shape[:2], dtype=np.int64)
-    for side in range(2):
-        q = regrasps[side]
-        low = np.floor((q - lattice.lower) / lattice.step).astype(np.int64)
-        best = np.full(len(q), np.inf)
-        for offset in itertools.product((0, 1), repeat=len(lattice.counts)):
-            index = low + np.array(offset)
-            inside = np.all((index >= 0) & (index < lattice.counts), axis=1)
-            node = np.clip(index, 0, lattice.counts - 1) @ lattice.strides
-            travel = np.where(inside, cost_last[node] + np.abs(lattice.configurations(index) - q).sum(axis=1), np.inf)
-            better = travel < best
-            best[better], joined[side, better] = travel[better], node[better]
-        total[side] = to_release + np.abs(q - at).sum(axis=1) + best
-    return total, joined
 
 
 def _lattice_path(previous: np.ndarray, node: int) -> np.ndarray:

@@ -2075,6 +2075,27 @@ def _lattice_path(previous: np.ndarray, last: int) -> np.ndarray:
 
 
 @_jit
+def _lattice_neighbour(
+    u: int | np.int64,
+    j: int,
+    sign: int,
+    k: np.ndarray,
+    counts: np.ndarray,
+    strides: np.ndarray,
+    edges: np.ndarray,
+) -> int:
+    """Node ``u``'s neighbour one step along joint ``j`` (up if ``sign`` > 0; ``u``'s indices ``k``), or -1 when
+    that is off the lattice or the edge is blocked."""
+    if sign > 0:
+        if k[j] + 1 >= counts[j] or edges[u, j] == EDGE_BLOCKED:
+            return -1
+        return int(u + strides[j])
+    if k[j] == 0 or edges[u - strides[j], j] == EDGE_BLOCKED:
+        return -1
+    return int(u - strides[j])
+
+
+@_jit
 def _lattice_expand(
     u: int | np.int64,
     estimate: float,
@@ -2093,11 +2114,9 @@ def _lattice_expand(
     g = cost[u] + step
     for j in range(len(counts)):
         for sign in (1, -1):
-            if (sign > 0 and (k[j] + 1 >= counts[j] or edges[u, j] == EDGE_BLOCKED)) or (
-                sign < 0 and (k[j] == 0 or edges[u - strides[j], j] == EDGE_BLOCKED)
-            ):
+            v = _lattice_neighbour(u, j, sign, k, counts, strides, edges)
+            if v < 0:
                 continue
-            v = u + sign * strides[j]
             if g < cost[v]:
                 cost[v] = g
                 previous[v] = u
@@ -2204,11 +2223,9 @@ def lattice_costs(
             continue
         for j in range(n):
             for sign in (1, -1):
-                if (sign > 0 and (k[j] + 1 >= counts[j] or edges[u, j] == EDGE_BLOCKED)) or (
-                    sign < 0 and (k[j] == 0 or edges[u - strides[j], j] == EDGE_BLOCKED)
-                ):
+                v = _lattice_neighbour(u, j, sign, k, counts, strides, edges)
+                if v < 0:
                     continue
-                v = u + sign * strides[j]
                 if g < cost[v]:
                     cost[v] = g
                     previous[v] = u

@@ -375,6 +375,22 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
 OTHER_REL = np.array([0.02, 0.0, -1.4])  # a second grasp: another angle between the tip and the object
 
 
+def _regrasp(world, a, b, *, budget=None, shorter_than=40.0, allowance=1e9):
+    """lattice_regrasp from ``a`` holding the object as GRASP_REL to ``b`` holding it as OTHER_REL."""
+    return lattice_regrasp(
+        world,
+        a,
+        GRASP_REL,
+        b,
+        OTHER_REL,
+        min_margin=5e-4,
+        shorter_than=shorter_than,
+        budget=budget or _Counter(),
+        allowance=allowance,
+        expansion_work=0.2,
+    )
+
+
 def _valid_held_at_a_fine_step(world, path, grasp_rel=None, resting=None) -> bool:
     for u, v in itertools.pairwise(path):
         steps = max(1, int(np.ceil(np.max(np.abs(v - u)) / FINE_RAD)))
@@ -393,19 +409,7 @@ def test_a_lattice_regrasp_puts_the_object_down_once_holds_it_as_asked_and_is_va
     lasts = q[is_valid(world, q, compose(tip_poses(world.robot, q), OTHER_REL))]
     found = 0
     for a, b in zip(firsts[:6], lasts[:6], strict=False):
-        budget = _Counter()
-        ways = lattice_regrasp(
-            world,
-            a,
-            GRASP_REL,
-            b,
-            OTHER_REL,
-            min_margin=5e-4,
-            shorter_than=40.0,
-            budget=budget,
-            allowance=1e9,
-            expansion_work=0.2,
-        )
+        ways = _regrasp(world, a, b)
         if ways is None:
             continue
         found += 1
@@ -423,21 +427,7 @@ def test_a_lattice_regrasp_puts_the_object_down_once_holds_it_as_asked_and_is_va
         assert _valid_held_at_a_fine_step(world, held, grasp_rel=OTHER_REL)
         # the shortest on its graph: nothing below its travel
         travel = joint_travel([carried, put_down, held])
-        assert (
-            lattice_regrasp(
-                world,
-                a,
-                GRASP_REL,
-                b,
-                OTHER_REL,
-                min_margin=5e-4,
-                shorter_than=travel - 1e-9,
-                budget=_Counter(),
-                allowance=1e9,
-                expansion_work=0.2,
-            )
-            is None
-        )
+        assert _regrasp(world, a, b, shorter_than=travel - 1e-9) is None
     assert found >= 2
 
 
@@ -445,37 +435,9 @@ def test_no_lattice_regrasp_but_on_three_joints_or_beyond_its_allowance() -> Non
     for joints in (2, 4):
         world, _ = random_box_world(4, joints, 0.02)
         a = np.zeros(joints)
-        assert (
-            lattice_regrasp(
-                world,
-                a,
-                GRASP_REL,
-                a + 0.5,
-                OTHER_REL,
-                min_margin=5e-4,
-                shorter_than=40.0,
-                budget=_Counter(),
-                allowance=1e9,
-                expansion_work=0.2,
-            )
-            is None
-        )
+        assert _regrasp(world, a, a + 0.5) is None
     world, _ = random_box_world(6, 3, 0.02)
     budget = _Counter()
     a, b = np.array([0.5, 0.5, 0.5]), np.array([-0.5, 1.0, -0.5])
-    assert (
-        lattice_regrasp(
-            world,
-            a,
-            GRASP_REL,
-            b,
-            OTHER_REL,
-            min_margin=5e-4,
-            shorter_than=40.0,
-            budget=budget,
-            allowance=1000.0,
-            expansion_work=0.2,
-        )
-        is None
-    )
+    assert _regrasp(world, a, b, budget=budget, allowance=1000.0) is None
     assert budget.spent == 0  # checking the nodes alone would take more than its share: nothing done

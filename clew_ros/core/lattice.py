@@ -82,8 +82,8 @@ REGRASP_SCREENED = 32
 #: :func:`lattice_regrasp`: rounds of searching and checking at most (a round that finds an edge of its paths
 #: blocked searches again); its allowance of work ends it sooner in a cluttered world.
 REGRASP_ROUNDS = 64
-# a regrasp's state in lattice_regrasp: not screened, passed the screen, clear (checked continuously), blocked
-_UNKNOWN, _SCREENED, _CLEAR, _BLOCKED = 0, 1, 2, 3
+# a regrasp's state in lattice_regrasp: not screened, passed the screen, blocked (by the screen or the check)
+_UNKNOWN, _SCREENED, _BLOCKED = 0, 1, 2
 
 
 class LatticeBudget(Protocol):
@@ -240,19 +240,26 @@ def _joins(
     """How ``a`` and ``b`` join the lattice: the corners of their cells among ``usable`` nodes reached by a clear
     straight move, and each one's joint travel to its end (sources, their costs, targets, theirs); ``None``
     when an end joins none."""
-    inside = np.zeros(lattice.size, dtype=bool)
-    inside[usable] = True
-    joins = []
-    for point, leaving in ((a, True), (b, False)):
-        corners = lattice.corners(point)
-        corners = corners[inside[corners]]
-        at = lattice.configurations(lattice.indices(corners))
-        away = np.broadcast_to(point, at.shape)
-        ok = clear(away, at) if leaving else clear(at, away)
-        if not ok.any():
-            return None
-        joins += [corners[ok], np.abs(at[ok] - point).sum(axis=1)]
-    return joins[0], joins[1], joins[2], joins[3]
+    sources = _join(lattice, usable, a, clear, leaving=True)
+    targets = _join(lattice, usable, b, clear, leaving=False)
+    if sources is None or targets is None:
+        return None
+    return sources[0], sources[1], targets[0], targets[1]
+
+
+def _join(
+    lattice: _Lattice, usable: np.ndarray, point: np.ndarray, clear: _Clear, *, leaving: bool
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The corners of ``point``'s cell among ``usable`` nodes reached by a clear straight move (from ``point`` if
+    ``leaving``, else to it), and each one's joint travel to it; ``None`` when it joins none."""
+    corners = lattice.corners(point)
+    corners = corners[np.isin(corners, usable)]
+    at = lattice.configurations(lattice.indices(corners))
+    away = np.broadcast_to(point, at.shape)
+    ok = clear(away, at) if leaving else clear(at, away)
+    if not ok.any():
+        return None
+    return corners[ok], np.abs(at[ok] - point).sum(axis=1)
 
 
 def _edges_clear(lattice: _Lattice, path: np.ndarray, edges: np.ndarray, clear: _Clear) -> bool:
@@ -334,6 +341,7 @@ def lattice_regrasp(
     budget: LatticeBudget,
     allowance: float,
     expansion_work: float,
+    release_work: float,
     nodes_known: tuple[KnownNodes, KnownNodes] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The shortest way on the lattice (module docstring) to carry the object from ``first`` (holding it as
@@ -345,7 +353,8 @@ def lattice_regrasp(
     has not three joints and a lattice, checking the nodes inside the L1 ellipse of ``first`` and ``last``
     in both modes would take more than :data:`NODE_SHARE` of ``allowance`` (those of ``nodes_known``, one
     per grasp, not counted), the search has spent ``allowance`` work units or :data:`REGRASP_ROUNDS`
-    rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands."""
+    rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands, and each
+    round whose searches ran again ``release_work`` units a release (the numpy that totals the releases)."""
     step = lattice_step(world)
     first, last = np.asarray(first, dtype=float), np.asarray(last, dtype=float)
     if step is None or world.robot.dof != 3 or float(np.abs(last - first).sum()) >= shorter_than:
@@ -353,6 +362,7 @@ def lattice_regrasp(
     search = _RegraspSearch(
         world, _Lattice(world, step), (first_rel, last_rel), min_margin=min_margin, budget=budget, allowance=allowance
     )
+    search.release_work = release_work
     if not search.layers(first, last, shorter_than, nodes_known or (KnownNodes(), KnownNodes())):
         return None
     for _ in range(REGRASP_ROUNDS):
@@ -380,13 +390,14 @@ class _RegraspSearch:
         self.world, self.lattice, self.budget = world, lattice, budget
         (self.first_rel, self.last_rel), self.min_margin = grasps, min_margin
         self.exhausted = False  # no regrasp left below the bound
+        self.release_work = 0.0  # work units a release, each time the totals are computed
+        self.totals = self.joined = np.zeros((2, 0))
         self.first, self.last = np.zeros(3), np.zeros(3)
         self.limit = budget.spent + allowance
         self.allowance = allowance
         packed = packed_world(world)
         self.packed = dataclasses.replace(packed, rounding=max(min_margin, packed.rounding))
         self.state = np.zeros((2, lattice.size), dtype=np.int8)  # per elbow and release node: _UNKNOWN ...
-        self.checked_to = np.full((2, lattice.size), -1, dtype=np.int64)  # the corner its join was checked to
         self.put_downs: dict[tuple[int, int], np.ndarray] = {}
         self.first_layer = self.last_layer = _Layer(self.clear_in(None, None), np.zeros((0, 3)), np.zeros(0))
         self.releases = np.zeros(0, dtype=np.int64)
@@ -427,11 +438,11 @@ class _RegraspSearch:
         )
         if self.spent():
             return False
-        sources = _joins(lattice, self.first_layer.usable, first, first, self.first_layer.clear)
-        targets = _joins(lattice, self.last_layer.usable, last, last, self.last_layer.clear)
+        sources = _join(lattice, self.first_layer.usable, first, self.first_layer.clear, leaving=True)
+        targets = _join(lattice, self.last_layer.usable, last, self.last_layer.clear, leaving=False)
         if sources is None or targets is None:
             return False
-        self.first_layer.ends, self.last_layer.ends = sources[:2], targets[2:]
+        self.first_layer.ends, self.last_layer.ends = sources, targets
         self.first, self.last = first, last
         self.regrasp_configurations()
         return True
@@ -462,6 +473,7 @@ class _RegraspSearch:
         yet, and check the best that passed: its three moves if it stands, else ``None`` (``exhausted`` when
         no regrasp is left below ``bound``)."""
         lattice = self.lattice
+        totals_stale = self.first_layer.stale or self.last_layer.stale
         for layer in (self.first_layer, self.last_layer):
             if layer.stale:
                 layer.cost, layer.previous, expanded = lattice_costs(
@@ -470,24 +482,25 @@ class _RegraspSearch:
                 self.budget.spend(math.ceil(expansion_work * expanded))
                 layer.stale = False
         releases, at, poses, regrasps = self.releases, self.at, self.poses, self.regrasps
-        via = self.last_layer.cost[self.corners] + self.join_travel  # (2, R, corners): on from each corner
-        pick = np.argmin(via, axis=2)
-        joined = np.take_along_axis(self.corners, pick[..., None], axis=2)[..., 0]
-        total = (
-            self.first_layer.cost[releases] + self.put_travel + np.take_along_axis(via, pick[..., None], axis=2)[..., 0]
-        )
-        total[self.state[:, releases] == _BLOCKED] = np.inf
-        order = np.argsort(total, axis=None, kind="stable")[:REGRASP_SCREENED]
-        order = order[total.reshape(-1)[order] < bound]
+        if totals_stale:  # the totals only change with the searches' costs
+            self.budget.spend(math.ceil(self.release_work * len(releases)))  # the numpy that totals them
+            via = self.last_layer.cost[self.corners] + self.join_travel  # (2, R, corners): on from each corner
+            pick = np.argmin(via, axis=2)[..., None]
+            self.joined = np.take_along_axis(self.corners, pick, axis=2)[..., 0]
+            self.totals = (
+                self.first_layer.cost[releases] + self.put_travel + np.take_along_axis(via, pick, axis=2)[..., 0]
+            )
+        joined = self.joined
+        total = np.where(self.state[:, releases] == _BLOCKED, np.inf, self.totals).reshape(-1)
+        count = min(REGRASP_SCREENED, len(total))
+        order = np.argpartition(total, count - 1)[:count]
+        order = order[np.lexsort((order, total[order]))]  # the best, in order (ties: the lower index first)
+        order = order[total[order] < bound]
         if not len(order):
             self.exhausted = True
             return None
         sides, rows = np.divmod(order, len(releases))
         best = _Candidates(sides, rows, releases[rows])
-        moved = self.checked_to[best.sides, best.nodes] != joined[best.sides, best.rows]  # another corner now
-        self.state[best.sides[moved], best.nodes[moved]] = np.minimum(
-            self.state[best.sides[moved], best.nodes[moved]], _SCREENED
-        )
         self.screen(best, at, regrasps, poses, joined)
         standing = np.flatnonzero(self.state[best.sides, best.nodes] != _BLOCKED)
         if not len(standing):
@@ -501,15 +514,15 @@ class _RegraspSearch:
         if self.first_layer.stale or self.last_layer.stale or self.spent():
             return None
         regrasp, put_down = regrasps[side, row], self.put_downs[side, release]
-        if self.state[side, release] != _CLEAR:  # the dearest check (near contact), once its paths stand
-            corner = lattice.configurations(lattice.indices(joined[side, row : row + 1]))[0]
-            clear = bool(self.clear_in(None, poses[row])(put_down[:-1], put_down[1:]).all()) and bool(
-                self.last_layer.clear(regrasp[None], corner[None])[0]
-            )
-            self.state[side, release] = _CLEAR if clear else _BLOCKED
-            self.checked_to[side, release] = joined[side, row]
-            if not clear:
-                return None
+        # the dearest check (near contact), once its paths stand; the join to the corner the costs now pick (the
+        # screen may have passed another)
+        corner = lattice.configurations(lattice.indices(joined[side, row : row + 1]))[0]
+        clear = bool(self.clear_in(None, poses[row])(put_down[:-1], put_down[1:]).all()) and bool(
+            self.last_layer.clear(regrasp[None], corner[None])[0]
+        )
+        if not clear:
+            self.state[side, release] = _BLOCKED
+            return None
         return (
             np.concatenate([self.first[None], lattice.configurations(lattice.indices(path_first))]),
             put_down,

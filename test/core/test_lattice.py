@@ -388,6 +388,7 @@ def _regrasp(world, a, b, *, budget=None, shorter_than=40.0, allowance=1e9):
         budget=budget or _Counter(),
         allowance=allowance,
         expansion_work=0.2,
+        release_work=0.1,
     )
 
 

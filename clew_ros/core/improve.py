@@ -981,9 +981,10 @@ class _Improver:
     def lattice_regrasps(self) -> bool:
         """On a 3-joint arm: from the start of a transfer to the end of a later one, one regrasp placed where
         the lattice finds it shortest (:func:`clew_ros.core.lattice.lattice_regrasp`), replacing every
-        transfer and transit between, when that makes the plan better. The longest spans (most transfers)
-        first; each search within :data:`REGRASP_SHARE` of the budget, and new ones only while less than
-        :data:`REGRASP_TOTAL_SHARE` of it is spent. Returns whether the plan changed."""
+        transfer and transit between, when that makes the plan better. The longest spans (most pieces)
+        first; each search within :data:`REGRASP_SHARE` of the budget (its last round may run past it), and new
+        ones only while less than :data:`REGRASP_TOTAL_SHARE` of it is spent, the final check's reserve
+        counted. Returns whether the plan changed."""
         if self.world.robot.dof != 3 or lattice_step(self.world) is None:
             return False
         changed = False

@@ -2191,9 +2191,10 @@ def lattice_costs(
     counts: np.ndarray, step: float, edges: np.ndarray, sources: np.ndarray, source_costs: np.ndarray, bound: float
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Compiled Dijkstra over a joint-space lattice (the nodes and edges of :func:`lattice_search`), in joint
-    travel: from ``sources`` (at ``source_costs``), the least cost of every node below ``bound`` (``inf``
-    for the others) and the node it is reached from (-1 for a source or a node not reached), and the nodes
-    expanded."""
+    travel: from ``sources`` (at ``source_costs``), the least cost of every node reached below ``bound``
+    (``inf`` for a node not reached; a source keeps its own cost even when that is not below ``bound``) and
+    the node it is reached from (-1 for a node not reached or reached at its own source cost), and the
+    nodes expanded."""
     n = len(counts)
     strides = np.empty(n, dtype=np.int64)
     total = 1

@@ -76,8 +76,8 @@ MAX_NODES = 8_000
 NODE_SHARE = 0.35
 #: The finest step (rad) of a lattice (a 2-joint arm's lattice is finer than :data:`MAX_NODES` needs).
 MIN_STEP_RAD = 0.05
-#: :func:`lattice_regrasp`: the best regrasps screened in a round (one compiled call for the moves putting the
-#: object down, one for the joins to the second lattice), those not screened before.
+#: :func:`lattice_regrasp`: of a round's best regrasps not found blocked, this many are taken; those of them not
+#: screened before are screened (one compiled call for the moves putting the object down, one for the joins).
 REGRASP_SCREENED = 32
 #: :func:`lattice_regrasp`: rounds of searching and checking at most (a round that finds an edge of its paths
 #: blocked searches again); its allowance of work ends it sooner in a cluttered world.
@@ -560,8 +560,9 @@ def _layer(
     valid: np.ndarray,
     budget: LatticeBudget,
 ) -> _Layer:
-    """Check the ``nodes`` not ``checked`` yet (in one call), and the edge states that follow: an edge out of a
-    node outside ``nodes`` or not valid is blocked, the others are unknown."""
+    """Check the ``nodes`` not ``checked`` yet (in one call), and the edge states that follow: every edge of a
+    node of ``nodes`` that is not valid is blocked, the edges out of the valid ones unknown (one leading out of
+    ``nodes`` too: a path through it is longer than the bound the ellipse was drawn for), the rest blocked."""
     todo = nodes[~checked[nodes]]
     if len(todo):
         q = lattice.configurations(lattice.indices(todo))

@@ -524,12 +524,24 @@ def load_worlds(names: list[str]) -> list[tuple[World, dict[str, Any]]]:
             parameters = read_parameter_file(name)
         else:
             known = known if known is not None else all_worlds()
-            matches = select(known, name)
+            matches = select(known, name) or _generated(name)
             if not matches:
                 raise ValueError(f"--worlds: no benchmark world named {name!r} (give a name or a YAML file)")
             parameters = matches[0].parameters
         worlds.append((check_start_and_goal(world_from_parameters(parameters)), parameters))
     return worlds
+
+
+def _generated(name: str) -> list[Any]:
+    """``joints_N`` or ``obstacles_M`` for any ``N`` >= 2 or ``M`` >= 2 (:mod:`benchmarks.families` lists a few):
+    figure1's task with ``N`` joints, or joints_3 with ``M`` obstacles in all."""
+    from benchmarks.families import joints_world, obstacles_world
+
+    family, _, count = name.rpartition("_")
+    if not count.isdigit() or int(count) < 2:
+        return []
+    make = {"joints": joints_world, "obstacles": obstacles_world}.get(family)
+    return [] if make is None else [make(int(count))]
 
 
 @dataclass

@@ -61,6 +61,7 @@ __all__ = [
     "decode",
     "intervals",
     "lattice_costs",
+    "lattice_path",
     "lattice_search",
     "moves_clear",
     "pruned_path",
@@ -2059,7 +2060,7 @@ def _lattice_node(
 
 
 @_jit
-def _lattice_path(previous: np.ndarray, last: int) -> np.ndarray:
+def lattice_path(previous: np.ndarray, last: int) -> np.ndarray:
     """The nodes that led to ``last`` (excluded), first to last."""
     count = 0
     v = previous[last]
@@ -2173,7 +2174,7 @@ def lattice_search(
         if f >= bound:
             break
         if u == total:
-            return _lattice_path(previous, total), cost[total], expanded
+            return lattice_path(previous, total), cost[total], expanded
         estimate = _lattice_node(u, strides, lower, step, goal, k)
         if f > cost[u] + estimate + 1e-9:
             continue  # a stale entry

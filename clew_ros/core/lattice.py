@@ -46,7 +46,15 @@ import numpy as np
 
 from clew_ros.core.collision import packed_world
 from clew_ros.core.continuous import straight_moves_clear
-from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_CLEAR, EDGE_UNKNOWN, lattice_costs, lattice_search, screen_routes
+from clew_ros.core.kernel import (
+    EDGE_BLOCKED,
+    EDGE_CLEAR,
+    EDGE_UNKNOWN,
+    lattice_costs,
+    lattice_path,
+    lattice_search,
+    screen_routes,
+)
 from clew_ros.core.kinematics import compose, relative, tip_poses, wrap_angle
 from clew_ros.core.regrasp import route_waypoints, screen_samples
 from clew_ros.core.world import Robot, World
@@ -360,9 +368,14 @@ def lattice_regrasp(
     if step is None or world.robot.dof != 3 or float(np.abs(last - first).sum()) >= shorter_than:
         return None
     search = _RegraspSearch(
-        world, _Lattice(world, step), (first_rel, last_rel), min_margin=min_margin, budget=budget, allowance=allowance
+        world,
+        _Lattice(world, step),
+        (first_rel, last_rel),
+        min_margin=min_margin,
+        budget=budget,
+        allowance=allowance,
+        release_work=release_work,
     )
-    search.release_work = release_work
     if not search.layers(first, last, shorter_than, nodes_known or (KnownNodes(), KnownNodes())):
         return None
     for _ in range(REGRASP_ROUNDS):
@@ -386,11 +399,12 @@ class _RegraspSearch:
         min_margin: float,
         budget: LatticeBudget,
         allowance: float,
+        release_work: float,
     ) -> None:
         self.world, self.lattice, self.budget = world, lattice, budget
         (self.first_rel, self.last_rel), self.min_margin = grasps, min_margin
         self.exhausted = False  # no regrasp left below the bound
-        self.release_work = 0.0  # work units a release, each time the totals are computed
+        self.release_work = release_work  # work units a release, each time the totals are computed
         self.totals = self.joined = np.zeros((2, 0))
         self.first, self.last = np.zeros(3), np.zeros(3)
         self.limit = budget.spent + allowance
@@ -507,8 +521,9 @@ class _RegraspSearch:
             return None
         k = int(standing[0])  # the best that passed the screen: its lattice paths, then its own moves
         side, row, release = int(best.sides[k]), int(best.rows[k]), int(best.nodes[k])
-        path_first = _lattice_path(self.first_layer.previous, release)
-        path_last = _lattice_path(self.last_layer.previous, int(joined[side, row]))[::-1]
+        corner = int(joined[side, row])
+        path_first = np.append(lattice_path(self.first_layer.previous, release), release)
+        path_last = np.append(lattice_path(self.last_layer.previous, corner), corner)[::-1]
         for layer, path in ((self.first_layer, path_first), (self.last_layer, path_last)):
             layer.stale = not _edges_clear(lattice, path, layer.edges, layer.clear)
         if self.first_layer.stale or self.last_layer.stale or self.spent():
@@ -516,9 +531,9 @@ class _RegraspSearch:
         regrasp, put_down = regrasps[side, row], self.put_downs[side, release]
         # the dearest check (near contact), once its paths stand; the join to the corner the costs now pick (the
         # screen may have passed another)
-        corner = lattice.configurations(lattice.indices(joined[side, row : row + 1]))[0]
+        corner_q = lattice.configurations(lattice.indices(np.array([corner])))[0]
         clear = bool(self.clear_in(None, poses[row])(put_down[:-1], put_down[1:]).all()) and bool(
-            self.last_layer.clear(regrasp[None], corner[None])[0]
+            self.last_layer.clear(regrasp[None], corner_q[None])[0]
         )
         if not clear:
             self.state[side, release] = _BLOCKED
@@ -573,11 +588,3 @@ def _layer(
     edges[usable] = EDGE_UNKNOWN
     lattice.block_nodes(edges, nodes[~valid[nodes]])
     return _Layer(clear, edges, usable)
-
-
-def _lattice_path(previous: np.ndarray, node: int) -> np.ndarray:
-    """The nodes from a search's source to ``node``, in that order (``previous`` from lattice_costs)."""
-    path = [node]
-    while previous[path[-1]] >= 0:
-        path.append(int(previous[path[-1]]))
-    return np.array(path[::-1], dtype=np.int64)

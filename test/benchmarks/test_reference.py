@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from helpers.open_reach import open_reach
 
-from benchmarks.reference import ReferenceSettings, main, planner_runs, reference_plan
+from benchmarks.reference import ReferenceSettings, load_worlds, main, planner_runs, reference_plan
 from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.plan import validate_plan
 from clew_ros.core.world import World, world_from_parameters
@@ -117,3 +117,14 @@ def test_the_command_line_names_a_bad_world(capsys: pytest.CaptureFixture[str]) 
     assert main(["--worlds", "no_such_world", "--seeds", "0"]) == 2
     assert "no_such_world" in capsys.readouterr().err
     assert main(["--step", "-1", "--seeds", "0"]) == 2
+
+
+def test_worlds_by_name_include_any_count_of_joints_or_obstacles() -> None:
+    (listed, _), (more, _), (joints, _) = load_worlds(["obstacles_8", "obstacles_12", "joints_4"])
+    assert len(listed.obstacles) == 8
+    assert len(more.obstacles) == 12
+    assert more.robot.dof == 3
+    assert joints.robot.dof == 4
+    for name in ("obstacles_1", "elbows_3", "obstacles_x"):
+        with pytest.raises(ValueError, match="--worlds"):
+            load_worlds([name])

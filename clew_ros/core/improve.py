@@ -231,10 +231,11 @@ REGRASP_SHARE, REGRASP_TOTAL_SHARE = 0.35, 0.6
 #: Work units per node a Dijkstra search of :func:`clew_ros.core.lattice.lattice_regrasp` expands (measured: 1.2 ms
 #: for 5,300 nodes of obstacles_32's lattice, 0.12 units a node at :data:`WORK_PER_SECOND`).
 FLOOD_WORK = 0.12
-#: Work units per release per round of :func:`clew_ros.core.lattice.lattice_regrasp` (the numpy that totals the
-#: releases, charged on the rounds whose searches ran again: 0.08 a release a round measured over all 175 rounds of
-#: obstacles_32 seeds 0-3, timed without their checks and searches).
-RELEASE_WORK = 0.1
+#: Work units per release per round of :func:`clew_ros.core.lattice.lattice_regrasp`: totalling the releases
+#: (compiled, :func:`clew_ros.core.kernel.release_totals`, when a search changed) and picking the best not found
+#: blocked, with the round's Python (measured: 0.26 ms a round of about 5,000 releases on obstacles_16, 24 and 32,
+#: 0.027 units a release at :data:`WORK_PER_SECOND`).
+RELEASE_WORK = 0.03
 #: A move whose ends both lie this close (rad, largest joint difference) to those of a move found blocked
 #: in the same mode is taken as blocked too.
 MOVE_ALIKE_RAD = 0.1

@@ -62,9 +62,11 @@ __all__ = [
     "intervals",
     "lattice_costs",
     "lattice_path",
+    "lattice_repair",
     "lattice_search",
     "moves_clear",
     "pruned_path",
+    "release_totals",
     "screen_routes",
     "shortcuts",
     "solve_point",
@@ -2188,27 +2190,31 @@ def lattice_search(
 
 
 @_jit
-def lattice_costs(
-    counts: np.ndarray, step: float, edges: np.ndarray, sources: np.ndarray, source_costs: np.ndarray, bound: float
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Compiled Dijkstra over a joint-space lattice (the nodes and edges of :func:`lattice_search`), in joint
-    travel: from ``sources`` (at ``source_costs``), the least cost of every node reached below ``bound``
-    (``inf`` for a node not reached; a source keeps its own cost even when that is not below ``bound``) and
-    the node it is reached from (-1 for a node not reached or reached at its own source cost), and the
-    nodes expanded."""
+def _strides(counts: np.ndarray) -> tuple[np.ndarray, int]:
+    """A lattice's node-number strides (the last joint fastest) and its node count."""
     n = len(counts)
     strides = np.empty(n, dtype=np.int64)
     total = 1
     for j in range(n - 1, -1, -1):
         strides[j] = total
         total *= counts[j]
-    cost = np.full(total, np.inf)
-    previous = np.full(total, -1, dtype=np.int64)
-    heap = [(0.0, np.int64(0)) for _ in range(0)]
-    for i in range(len(sources)):
-        if source_costs[i] < cost[sources[i]]:
-            cost[sources[i]] = source_costs[i]
-            heapq.heappush(heap, (source_costs[i], np.int64(sources[i])))
+    return strides, total
+
+
+@_jit
+def _flood(
+    heap: list[tuple[float, np.int64]],
+    counts: np.ndarray,
+    strides: np.ndarray,
+    step: float,
+    edges: np.ndarray,
+    cost: np.ndarray,
+    previous: np.ndarray,
+    bound: float,
+) -> int:
+    """Dijkstra's loop of :func:`lattice_costs` and :func:`lattice_repair` from the entries of ``heap``, updating
+    ``cost`` and ``previous`` in place; the nodes expanded."""
+    n = len(counts)
     k = np.empty(n, dtype=np.int64)
     expanded = 0
     while heap:
@@ -2232,7 +2238,129 @@ def lattice_costs(
                     cost[v] = g
                     previous[v] = u
                     heapq.heappush(heap, (g, np.int64(v)))
-    return cost, previous, expanded
+    return expanded
+
+
+@_jit
+def lattice_costs(
+    counts: np.ndarray, step: float, edges: np.ndarray, sources: np.ndarray, source_costs: np.ndarray, bound: float
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Compiled Dijkstra over a joint-space lattice (the nodes and edges of :func:`lattice_search`), in joint
+    travel: from ``sources`` (at ``source_costs``), the least cost of every node reached below ``bound``
+    (``inf`` for a node not reached; a source keeps its own cost even when that is not below ``bound``) and
+    the node it is reached from (-1 for a node not reached or reached at its own source cost), and the
+    nodes expanded."""
+    strides, total = _strides(counts)
+    cost = np.full(total, np.inf)
+    previous = np.full(total, -1, dtype=np.int64)
+    heap = [(0.0, np.int64(0)) for _ in range(0)]
+    for i in range(len(sources)):
+        if source_costs[i] < cost[sources[i]]:
+            cost[sources[i]] = source_costs[i]
+            heapq.heappush(heap, (source_costs[i], np.int64(sources[i])))
+    return cost, previous, _flood(heap, counts, strides, step, edges, cost, previous, bound)
+
+
+@_jit
+def _losing(strides: np.ndarray, edges: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """Which nodes' way back to a source (by ``previous``) takes a blocked edge: one pass, each chain followed
+    until a node already known."""
+    total = len(previous)
+    state = np.zeros(total, dtype=np.int8)  # 0 not known yet, 1 keeps its cost, 2 loses it
+    chain = np.empty(total, dtype=np.int64)
+    for v in range(total):
+        length = 0
+        u = np.int64(v)
+        while state[u] == 0:
+            p = previous[u]
+            if p < 0:  # a source at its own cost, or a node not reached: either stands
+                state[u] = 1
+                break
+            j = 0
+            while strides[j] != abs(u - p):
+                j += 1
+            if edges[min(u, p), j] == EDGE_BLOCKED:
+                state[u] = 2
+                break
+            chain[length] = u
+            length += 1
+            u = p
+        for i in range(length):
+            state[chain[i]] = state[u]
+    lose: np.ndarray = state == 2
+    return lose
+
+
+@_jit
+def lattice_repair(
+    counts: np.ndarray,
+    step: float,
+    edges: np.ndarray,
+    sources: np.ndarray,
+    source_costs: np.ndarray,
+    bound: float,
+    cost: np.ndarray,
+    previous: np.ndarray,
+) -> int:
+    """:func:`lattice_costs`' ``cost`` and ``previous`` brought up to date in place after edges were blocked (and
+    none unblocked), as a search from scratch would give them (ties apart): the nodes whose way back to a source
+    takes a blocked edge lose their cost, and Dijkstra's loop runs again from their neighbours that kept theirs
+    (blocking only makes costs higher, so those are still least). Returns the nodes expanded again."""
+    n = len(counts)
+    strides, _ = _strides(counts)
+    lose = _losing(strides, edges, previous)
+    lost = np.flatnonzero(lose)
+    cost[lost] = np.inf
+    previous[lost] = -1
+    for i in range(len(sources)):
+        if lose[sources[i]]:
+            cost[sources[i]] = min(cost[sources[i]], source_costs[i])
+    heap = [(0.0, np.int64(0)) for _ in range(0)]
+    k = np.empty(n, dtype=np.int64)
+    for v in lost:
+        rest = v
+        for j in range(n):
+            k[j] = rest // strides[j]
+            rest %= strides[j]
+        for j in range(n):
+            for sign in (1, -1):
+                u = _lattice_neighbour(v, j, sign, k, counts, strides, edges)  # the edge is the same both ways
+                if u >= 0 and not lose[u] and cost[u] + step < min(bound, cost[v]):
+                    cost[v] = cost[u] + step
+                    previous[v] = u
+        if cost[v] < np.inf:
+            heapq.heappush(heap, (cost[v], np.int64(v)))
+    return _flood(heap, counts, strides, step, edges, cost, previous, bound)
+
+
+@_jit
+def release_totals(
+    first_cost: np.ndarray,
+    last_cost: np.ndarray,
+    releases: np.ndarray,
+    put_travel: np.ndarray,
+    corners: np.ndarray,
+    join_travel: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The regrasp search's totals (:func:`clew_ros.core.lattice.lattice_regrasp`): for each elbow ``e`` and
+    release ``r``, the joint travel ``first_cost[releases[r]] + put_travel[e, r]`` plus the least over the
+    corners ``c`` of ``last_cost[corners[e, r, c]] + join_travel[e, r, c]``, and the corner that gives it (the
+    first of equals)."""
+    sides, count, nearby = corners.shape
+    totals = np.empty((sides, count))
+    joined = np.empty((sides, count), dtype=np.int64)
+    for e in range(sides):
+        for r in range(count):
+            best = np.inf
+            pick = corners[e, r, 0]
+            for c in range(nearby):
+                via = last_cost[corners[e, r, c]] + join_travel[e, r, c]
+                if via < best:
+                    best = via
+                    pick = corners[e, r, c]
+            joined[e, r] = pick
+            totals[e, r] = first_cost[releases[r]] + put_travel[e, r] + best
+    return totals, joined
 
 
 def warm_up() -> float:
@@ -2331,13 +2459,15 @@ def warm_up() -> float:
         np.full(2, 2.0),
         np.inf,
     )
-    lattice_costs(
+    counts, edges, sources, source_costs = (
         np.full(2, 3, dtype=np.int64),
-        1.0,
         np.zeros((9, 2), dtype=np.uint8),
         np.zeros(1, dtype=np.int64),
         np.zeros(1),
-        np.inf,
     )
+    cost, previous, _ = lattice_costs(counts, 1.0, edges, sources, source_costs, np.inf)
+    lattice_repair(counts, 1.0, edges, sources, source_costs, np.inf, cost, previous)
+    corners = np.zeros((2, 1, 4), dtype=np.int64)
+    release_totals(cost, cost, sources, np.zeros((2, 1)), corners, np.zeros((2, 1, 4)))
     _WARMED_IN_S.append(time.perf_counter() - start)
     return _WARMED_IN_S[0]

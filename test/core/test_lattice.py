@@ -15,7 +15,15 @@ from helpers.random_boxes import random_box_world
 from clew_ros.core.collision import is_valid
 from clew_ros.core.continuous import straight_moves_clear
 from clew_ros.core.improve import _Improver, _Piece, joint_travel
-from clew_ros.core.kernel import EDGE_BLOCKED, EDGE_CLEAR, EDGE_UNKNOWN, lattice_costs, lattice_search
+from clew_ros.core.kernel import (
+    EDGE_BLOCKED,
+    EDGE_CLEAR,
+    EDGE_UNKNOWN,
+    lattice_costs,
+    lattice_repair,
+    lattice_search,
+    release_totals,
+)
 from clew_ros.core.kinematics import compose, relative, tip_poses, wrap_angle
 from clew_ros.core.lattice import (
     MAX_JOINTS,
@@ -92,6 +100,58 @@ def test_the_compiled_lattice_costs_are_each_node_s_least_cost_and_lead_back_to_
             assert node in sources.tolist()
         for node in np.flatnonzero(np.isfinite(cost)).tolist():
             assert previous[node] < 0 or cost[node] == pytest.approx(cost[previous[node]] + step, abs=1e-9)
+
+
+def _tree_edge(counts: np.ndarray, u: int, v: int) -> tuple[int, int]:
+    """The edge (lower node, joint) between neighbours ``u`` and ``v``."""
+    strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
+    return min(u, v), int(np.flatnonzero(strides == abs(u - v))[0])
+
+
+@pytest.mark.parametrize("dims", [2, 3])
+def test_the_repaired_lattice_costs_are_those_of_a_search_from_scratch_after_edges_are_blocked(dims) -> None:
+    rng = np.random.default_rng(30 + dims)
+    step = 0.25
+    for trial in range(20):
+        counts = rng.integers(3, 9, dims).astype(np.int64)
+        size = int(np.prod(counts))
+        edges = np.where(rng.random((size, dims)) < 0.15, EDGE_BLOCKED, EDGE_UNKNOWN).astype(np.uint8)
+        sources = rng.choice(size, 3, replace=False)
+        source_costs = rng.uniform(0, 0.6, 3)  # a source may be reached cheaper through another
+        bound = math.inf if trial % 2 else 1.5
+        cost, previous, _ = lattice_costs(counts, step, edges, sources, source_costs, bound)
+        for _ in range(4):  # block edges of the search's tree (those that change costs) and one at random
+            taken = np.flatnonzero(previous >= 0).tolist()
+            for v in rng.choice(taken, min(3, len(taken)), replace=False).tolist() if taken else []:
+                edges[_tree_edge(counts, v, int(previous[v]))] = EDGE_BLOCKED
+            edges[int(rng.integers(size)), int(rng.integers(dims))] = EDGE_BLOCKED
+            lattice_repair(counts, step, edges, sources, source_costs, bound, cost, previous)
+            fresh, _, _ = lattice_costs(counts, step, edges, sources, source_costs, bound)
+            assert np.array_equal(np.isfinite(cost), np.isfinite(fresh))
+            assert np.allclose(cost[np.isfinite(cost)], fresh[np.isfinite(fresh)], rtol=0, atol=1e-9)
+            for node in np.flatnonzero(previous >= 0).tolist():  # each step back: a clear edge, one step less
+                assert edges[_tree_edge(counts, node, int(previous[node]))] != EDGE_BLOCKED
+                assert cost[node] == pytest.approx(cost[previous[node]] + step, abs=1e-9)
+            for node in np.flatnonzero(np.isfinite(cost) & (previous < 0)).tolist():  # the rest: at a source's cost
+                assert node in sources.tolist()
+                assert cost[node] == pytest.approx(float(source_costs[sources.tolist().index(node)]), abs=1e-12)
+
+
+def test_release_totals_add_the_first_cost_the_put_down_and_the_cheapest_corner_on() -> None:
+    rng = np.random.default_rng(4)
+    size, count, corners_per = 50, 12, 8
+    first_cost, last_cost = rng.uniform(0, 3, size), rng.uniform(0, 3, size)
+    last_cost[rng.random(size) < 0.3] = np.inf
+    releases = rng.choice(size, count, replace=False)
+    put = rng.uniform(0, 1, (2, count))
+    corners = rng.integers(0, size, (2, count, corners_per))
+    join = rng.uniform(0, 0.5, (2, count, corners_per))
+    totals, joined = release_totals(first_cost, last_cost, releases, put, corners, join)
+    for e, r in itertools.product(range(2), range(count)):
+        via = [last_cost[corners[e, r, c]] + join[e, r, c] for c in range(corners_per)]
+        assert totals[e, r] == pytest.approx(first_cost[releases[r]] + put[e, r] + min(via))
+        if np.isfinite(min(via)):
+            assert joined[e, r] == corners[e, r, int(np.argmin(via))]
 
 
 def test_pose_configurations_put_the_tip_at_the_frame_and_one_is_the_configuration_it_came_from() -> None:

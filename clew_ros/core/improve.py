@@ -128,7 +128,7 @@ from clew_ros.core.continuous import (
 )
 from clew_ros.core.kernel import pruned_path, shortcuts
 from clew_ros.core.kinematics import compose, relative, tip_poses
-from clew_ros.core.lattice import KnownNodes, lattice_regrasp, lattice_route, lattice_step
+from clew_ros.core.lattice import KnownNodes, grasp_configurations, lattice_regrasp, lattice_route, lattice_step
 from clew_ros.core.regrasp import ROUTES, Proposal, goal_holds_near, propose, route_waypoints
 from clew_ros.core.search import PlanningContext, goal_reached, search_transfer
 from clew_ros.core.tree import Segment
@@ -228,6 +228,8 @@ CONNECT_SHARE, CONNECT_STEPS = 0.2, 1000
 #: :meth:`_Improver.lattice_regrasps`: the share of the budget one search may take, and the share spent after
 #: which none starts (the rest is the shortcuts').
 REGRASP_SHARE, REGRASP_TOTAL_SHARE = 0.35, 0.6
+#: :meth:`_Improver.lattice_first_grasps`: tip angles tried around each grasp point.
+FIRST_GRASP_APPROACHES = 24
 #: Work units per node a Dijkstra search of :func:`clew_ros.core.lattice.lattice_regrasp` expands (measured: 1.2 ms
 #: for 5,300 nodes of obstacles_32's lattice, 0.12 units a node at :data:`WORK_PER_SECOND`).
 FLOOD_WORK = 0.12
@@ -1033,6 +1035,82 @@ class _Improver:
             else:
                 return changed
 
+    def lattice_first_grasps(self) -> bool:
+        """On a 3-joint arm: the plan from its start to the end of its last transfer again with another first
+        grasp (:func:`clew_ros.core.lattice.grasp_configurations` at the start): the transit to it routed on the
+        lattice, then one regrasp on the lattice as :meth:`lattice_regrasps` places it. The grasps whose joint
+        travel to the start and on to the last transfer's end is least first; each within
+        :data:`REGRASP_SHARE` of the budget, none started once :data:`REGRASP_TOTAL_SHARE` is spent."""
+        pieces = self.pieces
+        if self.world.robot.dof != 3 or lattice_step(self.world) is None or len(pieces) < 2:
+            return False
+        if pieces[0].kind != "transit" or pieces[1].kind != "transfer":
+            return False
+        j = max(i for i, p in enumerate(pieces) if p.kind == "transfer")
+        start, last, two = pieces[0].waypoints[0], pieces[j].waypoints[-1], pieces[j]
+        if two.grasp_rel is None:
+            return False
+        span = joint_travel([p.waypoints for p in pieces[: j + 1]])
+        fewer = sum(p.kind == "transfer" for p in pieces[: j + 1]) > 2
+        q, which, rels = grasp_configurations(self.world, pieces[0].start_pose, start, FIRST_GRASP_APPROACHES)
+        bound = np.abs(q - start).sum(axis=1) + np.abs(last - q).sum(axis=1)
+        hopeful = bound < (math.inf if fewer else span)
+        q, which, rels, bound = q[hopeful], which[hopeful], rels[hopeful], bound[hopeful]
+        valid = self.moves_clear(pieces[0], q, q)  # where the arm takes the object: clear with the margin
+        q, which, rels, bound = q[valid], which[valid], rels[valid], bound[valid]
+        for k in np.argsort(bound, kind="stable").tolist():
+            if not fewer and bound[k] >= span:
+                break
+            if not self.budget.left(REGRASP_TOTAL_SHARE):
+                return False
+            key = b"first" + q[k].tobytes() + last.tobytes()
+            if key in self.regrasps_tried:
+                continue
+            self.regrasps_tried.add(key)
+            allowance = min(REGRASP_SHARE * self.budget.total, self.budget.units_left())
+            limit = self.budget.spent + allowance
+            transit = self.lattice(pieces[0], start, q[k], span - float(np.abs(last - q[k]).sum()), allowance)
+            if transit is None:
+                continue
+            rest = span - joint_travel([transit])
+            found = lattice_regrasp(
+                self.world,
+                q[k],
+                rels[k],
+                last,
+                two.grasp_rel,
+                min_margin=self.min_margin,
+                shorter_than=math.inf if fewer else rest,
+                budget=self.budget,
+                allowance=limit - self.budget.spent,
+                expansion_work=FLOOD_WORK,
+                release_work=RELEASE_WORK,
+                nodes_known=(self.known("transfer", rels[k]), self.known("transfer", two.grasp_rel)),
+            )
+            if found is None:
+                continue
+            taken = _Piece("transit", None, transit, pieces[0].start_pose, None)
+            carried = _Piece("transfer", int(which[k]), pruned_path(found[0]), pieces[0].start_pose, rels[k])
+            pose = carried.end_pose(self.world)
+            put_down = _Piece("transit", None, found[1], pose, None)
+            held = _Piece("transfer", two.grasp, pruned_path(found[2]), pose, two.grasp_rel)
+            candidate = [taken, carried, put_down, held, *pieces[j + 1 :]]
+            if _better(_score(self.pieces), _score(candidate)):
+                self.pieces = candidate
+                self.reserve()
+                self.rebuilt += 1
+                return True
+        return False
+
+    def shorten(self) -> None:
+        """Pruning, then shortcuts: to the goal, greedy, random (and random again after goal shortcuts)."""
+        self.prune()
+        self.goal_shortcuts()
+        self.greedy_shortcuts()
+        self.random_shortcuts()
+        if self.goal_shortcuts():
+            self.random_shortcuts()
+
     def run(self) -> list[_Piece]:
         """Rounds of rebuilding, fewer transfers and shortcuts while work is left and the last round made the
         plan better (after the first, the rebuilding may use all that is left: the shortcuts had too little to
@@ -1043,12 +1121,9 @@ class _Improver:
             self.rebuild()
             self.lattice_regrasps()
             self.fewer_transfers()
-            self.prune()
-            self.goal_shortcuts()
-            self.greedy_shortcuts()
-            self.random_shortcuts()
-            if self.goal_shortcuts():
-                self.random_shortcuts()
+            self.shorten()
+            if self.lattice_first_grasps():
+                self.shorten()
             if not self.budget.left() or not _better(score, _score(self.pieces)):
                 return self.pieces
             self.rebuild_share = 1.0

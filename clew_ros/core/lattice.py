@@ -71,6 +71,7 @@ __all__ = [
     "REPAIR_PASS_SHARE",
     "KnownNodes",
     "LatticeBudget",
+    "grasp_configurations",
     "lattice_regrasp",
     "lattice_route",
     "lattice_step",
@@ -319,6 +320,25 @@ def pose_configurations(robot: Robot, tips: np.ndarray, near: np.ndarray) -> tup
         out[side] = q
         ok[side] = reached & np.all((q >= lower) & (q <= upper), axis=1)
     return out, ok
+
+
+def grasp_configurations(
+    world: World, pose: np.ndarray, near: np.ndarray, approaches: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A 3-joint arm's configurations ``(K, 3)`` holding the object resting at ``pose``: each grasp point with
+    ``approaches`` tip angles evenly around it and both elbows (:func:`pose_configurations`, each joint nearest
+    ``near``), those within the joint limits; with each one's grasp (an index of ``world.object.grasps``) and
+    the object's pose in the tip's frame. Not checked for collisions."""
+    grasps = np.asarray(world.object.grasps, dtype=float)
+    pose = np.asarray(pose, dtype=float)
+    points = compose(pose, np.c_[grasps, np.zeros(len(grasps))])[:, :2]
+    angles = pose[2] + np.arange(approaches) * (2.0 * np.pi / approaches)
+    which = np.repeat(np.arange(len(grasps)), approaches)
+    tips = np.c_[points[which], np.tile(angles, len(grasps))]
+    solved, ok = pose_configurations(world.robot, tips, np.broadcast_to(near, (len(tips), 3)))
+    side, row = np.nonzero(ok)
+    q = solved[side, row]
+    return q, which[row], relative(tips[row], pose)
 
 
 @dataclasses.dataclass

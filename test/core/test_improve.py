@@ -782,7 +782,32 @@ def test_on_a_three_joint_arm_one_regrasp_placed_on_the_lattice_takes_out_transf
     assert result.stats["transfers"] == 2
     assert validate_plan(world, Plan.from_result(world, result)) == []
     monkeypatch.setattr(_Improver, "lattice_regrasps", lambda self: False)
+    monkeypatch.setattr(_Improver, "lattice_first_grasps", lambda self: False)
     without = plan(world, settings)
     assert without.stats["first_joint_travel_rad"] == result.stats["first_joint_travel_rad"]
     assert without.stats["transfers"] == 3
     assert result.stats["joint_travel_rad"] < without.stats["joint_travel_rad"]
+
+
+def test_on_a_three_joint_arm_another_first_grasp_found_on_the_lattice_shortens_the_plan(monkeypatch) -> None:
+    # obstacles_32, seed 6: once the lattice's regrasp has taken the plan down to 2 transfers, it keeps its first
+    # grasp configuration; taking the object another way (another approach, the transit routed on the lattice)
+    # and placing the regrasp again shortens the plan
+    from benchmarks.families import obstacles_world
+
+    parameters = obstacles_world(32).parameters
+    world = world_from_parameters(parameters)
+    settings = PlannerSettings.from_parameters(parameters, seed=6, time_limit=120)
+    result = plan(world, settings)
+    assert validate_plan(world, Plan.from_result(world, result), step_rad=FINE_RAD) == []
+    monkeypatch.setattr(_Improver, "lattice_first_grasps", lambda self: False)
+    without = plan(world, settings)
+    assert result.stats["transfers"] == without.stats["transfers"] == 2
+    assert result.stats["joint_travel_rad"] < without.stats["joint_travel_rad"] - 1.0
+    start = np.asarray(result.segments[0].waypoints[0])
+    assert np.array_equal(start, without.segments[0].waypoints[0])  # from the same start
+    taken, before = np.asarray(result.segments[1].waypoints[0]), np.asarray(without.segments[1].waypoints[0])
+    assert np.abs(taken - before).max() > 0.1  # the object taken with another configuration
+    grasp = result.segments[1].grasp
+    point = compose(np.asarray(world.object.initial), np.r_[world.object.grasps[grasp], 0.0])[:2]
+    assert np.linalg.norm(tip_poses(world.robot, taken[None])[0, :2] - point) < 1e-9  # at the grasp it names

@@ -32,6 +32,7 @@ from clew_ros.core.lattice import (
     _edges_clear,
     _joins,
     _Lattice,
+    grasp_configurations,
     lattice_regrasp,
     lattice_route,
     lattice_step,
@@ -172,6 +173,25 @@ def test_pose_configurations_put_the_tip_at_the_frame_and_one_is_the_configurati
     assert nearest.max() < 1e-9
     far = np.array([[5.0, 0.0, 0.0]])  # out of reach: no configuration
     assert not pose_configurations(robot, far, np.zeros((1, 3)))[1].any()
+
+
+def test_grasp_configurations_hold_each_grasp_point_at_every_approach_within_the_limits() -> None:
+    world, rng = random_box_world(5, 3, 0.02)
+    robot = world.robot
+    pose = np.asarray(world.object.initial, dtype=float)
+    near = rng.uniform(robot.joint_lower, robot.joint_upper)
+    q, which, rels = grasp_configurations(world, pose, near, 12)
+    assert len(q)
+    assert set(which.tolist()) <= set(range(len(world.object.grasps)))
+    assert np.all((q >= robot.joint_lower) & (q <= robot.joint_upper))
+    tips = tip_poses(robot, q)
+    points = compose(pose, np.c_[world.object.grasps[which], np.zeros(len(which))])[:, :2]
+    assert np.abs(tips[:, :2] - points).max() < 1e-9  # the tip on the grasp point it names
+    held = compose(tips, rels)  # the object where it rests, held as each one's relative pose says
+    assert np.abs(held[:, :2] - pose[:2]).max() < 1e-9
+    assert np.abs(wrap_angle(held[:, 2] - pose[2])).max() < 1e-9
+    approach = np.round(wrap_angle(tips[:, 2] - pose[2]) / (2 * np.pi / 12)) % 12
+    assert len({(int(g), int(a)) for g, a in zip(which, approach, strict=True)}) > len(world.object.grasps)
 
 
 @pytest.mark.parametrize("dims", [2, 3])

@@ -74,8 +74,16 @@ or put down far from where a regrasp was needed. Once a plan is found,
    them, *goal shortcuts* (:meth:`_Improver.goal_shortcuts`) join one of its
    waypoints straight to a configuration holding the object on the goal
    that inverse kinematics finds from there, when that is shorter.
+6. **Another first grasp on the lattice** (an arm of three joints; after the shortcuts, then the shortcuts again
+   if it changed the plan; each search within :data:`REGRASP_SHARE`, none started once
+   :data:`REGRASP_TOTAL_SHARE` is spent): the ways to take the object at the start
+   (:func:`clew_ros.core.lattice.grasp_configurations`), least joint travel from the start and on to the last
+   transfer's end first, each with the transit to it routed on the lattice and one regrasp placed as step 3
+   places it, replacing the plan up to its last transfer when that makes it better
+   (:meth:`_Improver.lattice_first_grasps`). After the shortcuts, because the lattice's paths are about as short
+   as shortcuts make them and the first plan's are not.
 
-Steps 2 to 5 are one round. Rounds repeat while the last one made the plan
+Steps 2 to 6 are one round. Rounds repeat while the last one made the plan
 better and work is left; after the first, the rebuilding may use the whole
 budget (what the shortcuts left: a plan of straight moves leaves them nothing
 to do).

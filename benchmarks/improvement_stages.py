@@ -3,10 +3,10 @@ anytime improvement's time goes, and whether its work counting keeps it within i
 
 For each world (names and files as :mod:`benchmarks.improvement` takes them) and seed, the plan is made with
 the improvement on, and each stage of :class:`clew_ros.core.improve._Improver` (rebuilding, routing, the
-lattice's regrasps, fewer transfers, greedy and random shortcuts, the lattice's first grasps) records its wall time and the work it was charged. Prints a Markdown
-row per world and stage, summed over the seeds: wall time (s), the seconds its work stands for
-(``work / WORK_PER_SECOND``) and their ratio. Routing runs inside rebuilding and is counted in both (the
-lattice's first grasps route their transits themselves). A stage
+lattice's regrasps, fewer transfers, greedy and random shortcuts, the lattice's first grasps) records its wall
+time and the work it was charged. Prints a Markdown row per world and stage, summed over the seeds: wall time
+(s), the seconds its work stands for (``work / WORK_PER_SECOND``) and their ratio. Routing runs inside
+rebuilding and is counted in both (the lattice's first grasps route their transits themselves). A stage
 whose ratio is far above the others' is charged too little for its Python.
 """
 

@@ -491,6 +491,13 @@ def _alike(a: Proposal, b: Proposal) -> bool:
     return a.grasps == b.grasps and float(np.max(np.abs(a.keys - b.keys))) <= ALIKE_RAD
 
 
+def _span_key(one: _Piece, two: _Piece, length: int) -> bytes:
+    """What :meth:`_Improver.lattice_regrasps` knows a span by: where its first transfer starts, where its last
+    ends, and how many pieces from one to the other."""
+    key: bytes = one.waypoints[0].tobytes() + two.waypoints[-1].tobytes() + length.to_bytes(8, "little")
+    return key
+
+
 def _score(pieces: list[_Piece]) -> tuple[int, float, int]:
     return (
         sum(p.kind == "transfer" for p in pieces),
@@ -518,7 +525,8 @@ class _Improver:
         # the inverse kinematics' restarts draw from a generator of their own: the run's stream stays the releases'
         self.restarts = np.random.default_rng([ctx.settings.seed, RESTART_STREAM])
         self.known_nodes: dict[bytes, KnownNodes] = {}  # per mode: the lattice nodes checked so far
-        self.regrasps_tried: set[bytes] = set()  # the spans lattice_regrasps searched (their ends, their length)
+        # the spans lattice_regrasps searched (their ends, their length), the first grasps lattice_first_grasps tried
+        self.regrasps_tried: set[bytes] = set()
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         """Whether the straight move ``a -> b`` is clear in ``piece``'s mode."""
@@ -1008,7 +1016,7 @@ class _Improver:
                 if not self.budget.left(REGRASP_TOTAL_SHARE):
                     return changed
                 one, two = self.pieces[i], self.pieces[j]
-                key = one.waypoints[0].tobytes() + two.waypoints[-1].tobytes() + (j - i).to_bytes(8, "little")
+                key = _span_key(one, two, j - i)
                 if key in self.regrasps_tried or one.grasp_rel is None or two.grasp_rel is None:
                     continue
                 self.regrasps_tried.add(key)
@@ -1036,6 +1044,7 @@ class _Improver:
                 candidate = [*self.pieces[:i], carried, put_down, held, *self.pieces[j + 1 :]]
                 if _better(_score(self.pieces), _score(candidate)):
                     self.pieces = candidate
+                    self.regrasps_tried.add(_span_key(carried, held, 2))  # its own result: not searched again
                     self.reserve()
                     self.rebuilt += 1
                     changed = True
@@ -1046,29 +1055,36 @@ class _Improver:
     def lattice_first_grasps(self) -> bool:
         """On a 3-joint arm: the plan from its start to the end of its last transfer again with another first
         grasp (:func:`clew_ros.core.lattice.grasp_configurations` at the start): the transit to it routed on the
-        lattice, then one regrasp on the lattice as :meth:`lattice_regrasps` places it. The grasps whose joint
-        travel to the start and on to the last transfer's end is least first; each within
-        :data:`REGRASP_SHARE` of the budget, none started once :data:`REGRASP_TOTAL_SHARE` is spent."""
+        lattice, then one regrasp on the lattice as :meth:`lattice_regrasps` places it (a plan of one transfer is
+        left alone: two are never better). The grasps whose joint travel from the start and on to the last
+        transfer's end is least first, those only that come below the plan's travel there (any, when it has more
+        than two transfers); each within :data:`REGRASP_SHARE` of the budget, none started once
+        :data:`REGRASP_TOTAL_SHARE` is spent. Returns whether the plan changed."""
         pieces = self.pieces
-        if self.world.robot.dof != 3 or lattice_step(self.world) is None or len(pieces) < 2:
+        transfers = [i for i, p in enumerate(pieces) if p.kind == "transfer"]
+        if (
+            self.world.robot.dof != 3
+            or lattice_step(self.world) is None
+            or len(transfers) < 2  # one transfer: two, with a regrasp, are never better
+            or pieces[0].kind != "transit"
+            or transfers[0] != 1
+            or pieces[transfers[-1]].grasp_rel is None
+            or not self.budget.left(REGRASP_TOTAL_SHARE)
+        ):
             return False
-        if pieces[0].kind != "transit" or pieces[1].kind != "transfer":
-            return False
-        j = max(i for i, p in enumerate(pieces) if p.kind == "transfer")
+        j = transfers[-1]
         start, last, two = pieces[0].waypoints[0], pieces[j].waypoints[-1], pieces[j]
-        if two.grasp_rel is None:
-            return False
+        assert two.grasp_rel is not None  # checked above
         span = joint_travel([p.waypoints for p in pieces[: j + 1]])
-        fewer = sum(p.kind == "transfer" for p in pieces[: j + 1]) > 2
+        fewer = len(transfers) > 2  # then any way with 2 is better, however long
         q, which, rels = grasp_configurations(self.world, pieces[0].start_pose, start, FIRST_GRASP_APPROACHES)
-        bound = np.abs(q - start).sum(axis=1) + np.abs(last - q).sum(axis=1)
-        hopeful = bound < (math.inf if fewer else span)
-        q, which, rels, bound = q[hopeful], which[hopeful], rels[hopeful], bound[hopeful]
-        valid = self.moves_clear(pieces[0], q, q)  # where the arm takes the object: clear with the margin
-        q, which, rels, bound = q[valid], which[valid], rels[valid], bound[valid]
-        for k in np.argsort(bound, kind="stable").tolist():
-            if not fewer and bound[k] >= span:
-                break
+        on = np.abs(last - q).sum(axis=1)
+        bound = np.abs(q - start).sum(axis=1) + on
+        hopeful = np.flatnonzero(bound < (math.inf if fewer else span))
+        if not len(hopeful):
+            return False
+        hopeful = hopeful[self.moves_clear(pieces[0], q[hopeful], q[hopeful])]  # taking the object: clear
+        for k in hopeful[np.argsort(bound[hopeful], kind="stable")].tolist():
             if not self.budget.left(REGRASP_TOTAL_SHARE):
                 return False
             key = b"first" + q[k].tobytes() + last.tobytes()
@@ -1077,7 +1093,7 @@ class _Improver:
             self.regrasps_tried.add(key)
             allowance = min(REGRASP_SHARE * self.budget.total, self.budget.units_left())
             limit = self.budget.spent + allowance
-            transit = self.lattice(pieces[0], start, q[k], span - float(np.abs(last - q[k]).sum()), allowance)
+            transit = self.lattice(pieces[0], start, q[k], math.inf if fewer else span - on[k], allowance)
             if transit is None:
                 continue
             rest = span - joint_travel([transit])
@@ -1105,6 +1121,7 @@ class _Improver:
             candidate = [taken, carried, put_down, held, *pieces[j + 1 :]]
             if _better(_score(self.pieces), _score(candidate)):
                 self.pieces = candidate
+                self.regrasps_tried.add(_span_key(carried, held, 2))  # its regrasp: step 3 would find it again
                 self.reserve()
                 self.rebuilt += 1
                 return True

@@ -2277,7 +2277,7 @@ def _losing(strides: np.ndarray, edges: np.ndarray, previous: np.ndarray) -> np.
                 state[u] = 1
                 break
             j = 0
-            while strides[j] != abs(u - p):
+            while j < len(strides) - 1 and strides[j] != abs(u - p):  # the joint of the edge (p is a neighbour)
                 j += 1
             if edges[min(u, p), j] == EDGE_BLOCKED:
                 state[u] = 2

@@ -92,7 +92,8 @@ MIN_STEP_RAD = 0.05
 #: screened before are screened (one compiled call for the moves putting the object down, one for the joins).
 REGRASP_SCREENED = 32
 #: :func:`lattice_regrasp`: rounds of searching and checking at most (a round that finds an edge of its paths
-#: blocked searches again); its allowance of work ends it sooner in a cluttered world.
+#: blocked repairs its searches, :func:`clew_ros.core.kernel.lattice_repair`); its allowance of work ends it sooner
+#: in a cluttered world.
 REGRASP_ROUNDS = 256
 #: :func:`lattice_regrasp`: a search brought up to date after edges were found blocked
 #: (:func:`clew_ros.core.kernel.lattice_repair`) passes over every node once, at about this share of an expansion's
@@ -388,8 +389,9 @@ def lattice_regrasp(
     has not three joints and a lattice, checking the nodes inside the L1 ellipse of ``first`` and ``last``
     in both modes would take more than :data:`NODE_SHARE` of ``allowance`` (those of ``nodes_known``, one
     per grasp, not counted), the search has spent ``allowance`` work units or :data:`REGRASP_ROUNDS`
-    rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands, and each
-    round whose searches ran again ``release_work`` units a release (the numpy that totals the releases)."""
+    rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands (a repair the
+    nodes it expands again and :data:`REPAIR_PASS_SHARE` of that a node of the lattice for its pass over them), and
+    each round ``release_work`` units a release (totalling them when a search changed, and picking the best)."""
     step = lattice_step(world)
     first, last = np.asarray(first, dtype=float), np.asarray(last, dtype=float)
     if step is None or world.robot.dof != 3 or float(np.abs(last - first).sum()) >= shorter_than:
@@ -431,7 +433,7 @@ class _RegraspSearch:
         self.world, self.lattice, self.budget = world, lattice, budget
         (self.first_rel, self.last_rel), self.min_margin = grasps, min_margin
         self.exhausted = False  # no regrasp left below the bound
-        self.release_work = release_work  # work units a release, each time the totals are computed
+        self.release_work = release_work  # work units a release, each round
         self.totals = self.joined = np.zeros((2, 0))
         self.first, self.last = np.zeros(3), np.zeros(3)
         self.limit = budget.spent + allowance

@@ -123,7 +123,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -1072,6 +1072,8 @@ class _Improver:
             or not self.budget.left(REGRASP_TOTAL_SHARE)
         ):
             return False
+        changed = self.first_transit()
+        pieces = self.pieces
         j = transfers[-1]
         start, last, two = pieces[0].waypoints[0], pieces[j].waypoints[-1], pieces[j]
         assert two.grasp_rel is not None  # checked above
@@ -1082,11 +1084,11 @@ class _Improver:
         bound = np.abs(q - start).sum(axis=1) + on
         hopeful = np.flatnonzero(bound < (math.inf if fewer else span))
         if not len(hopeful):
-            return False
+            return changed
         hopeful = hopeful[self.moves_clear(pieces[0], q[hopeful], q[hopeful])]  # taking the object: clear
         for k in hopeful[np.argsort(bound[hopeful], kind="stable")].tolist():
             if not self.budget.left(REGRASP_TOTAL_SHARE):
-                return False
+                return changed
             key = b"first" + q[k].tobytes() + last.tobytes()
             if key in self.regrasps_tried:
                 continue
@@ -1125,7 +1127,22 @@ class _Improver:
                 self.reserve()
                 self.rebuilt += 1
                 return True
-        return False
+        return changed
+
+    def first_transit(self) -> bool:
+        """The plan's first transit (to its first grasp) routed again on the lattice, kept when shorter."""
+        first = self.pieces[0]
+        key = b"transit" + first.waypoints[0].tobytes() + first.waypoints[-1].tobytes()
+        if key in self.regrasps_tried:
+            return False
+        self.regrasps_tried.add(key)
+        travel = joint_travel([first.waypoints])
+        path = self.lattice(first, first.waypoints[0], first.waypoints[-1], travel, REGRASP_SHARE * self.budget.total)
+        if path is None or joint_travel([path]) >= travel:
+            return False
+        self.pieces = [replace(first, waypoints=path), *self.pieces[1:]]
+        self.reserve()
+        return True
 
     def shorten(self) -> None:
         """Pruning, then shortcuts: to the goal, greedy, random (and random again after goal shortcuts)."""

@@ -789,6 +789,25 @@ def test_on_a_three_joint_arm_one_regrasp_placed_on_the_lattice_takes_out_transf
     assert result.stats["joint_travel_rad"] < without.stats["joint_travel_rad"]
 
 
+def test_on_a_three_joint_arm_the_transit_to_the_first_grasp_is_routed_again_on_the_lattice(monkeypatch) -> None:
+    # obstacles_32, seed 4: the first plan's transit from the start to its first grasp goes a long way round among
+    # the boxes (10 rad, twice its ends' joint travel); the lattice's shortest way there is shorter, to the same grasp
+    from benchmarks.families import obstacles_world
+
+    parameters = obstacles_world(32).parameters
+    world = world_from_parameters(parameters)
+    settings = PlannerSettings.from_parameters(parameters, seed=4, time_limit=120)
+    result = plan(world, settings)
+    assert validate_plan(world, Plan.from_result(world, result), step_rad=FINE_RAD) == []
+    monkeypatch.setattr(_Improver, "first_transit", lambda self: False)
+    without = plan(world, settings)
+    transit, before = np.asarray(result.segments[0].waypoints), np.asarray(without.segments[0].waypoints)
+    assert np.array_equal(transit[0], before[0])
+    assert np.array_equal(transit[-1], before[-1])  # the same first grasp
+    assert joint_travel([transit]) < joint_travel([before]) - 1.0
+    assert result.stats["joint_travel_rad"] < without.stats["joint_travel_rad"]
+
+
 def test_on_a_three_joint_arm_another_first_grasp_found_on_the_lattice_shortens_the_plan(monkeypatch) -> None:
     # obstacles_32, seed 6: once the lattice's regrasp has taken the plan down to 2 transfers, it keeps its first
     # grasp configuration; taking the object another way (another approach, the transit routed on the lattice)

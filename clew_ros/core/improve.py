@@ -76,7 +76,8 @@ or put down far from where a regrasp was needed. Once a plan is found,
    that inverse kinematics finds from there, when that is shorter.
 6. **Another first grasp on the lattice** (an arm of three joints; after the shortcuts, then the shortcuts again
    if it changed the plan; each search within :data:`REGRASP_SHARE`, none started once
-   :data:`REGRASP_TOTAL_SHARE` is spent): the ways to take the object at the start
+   :data:`REGRASP_TOTAL_SHARE` is spent): the plan's transit to its first grasp routed again on the lattice
+   (:meth:`_Improver.first_transit`, kept when shorter), then the ways to take the object at the start
    (:func:`clew_ros.core.lattice.grasp_configurations`), least joint travel from the start and on to the last
    transfer's end first, each with the transit to it routed on the lattice and one regrasp placed as step 3
    places it, replacing the plan up to its last transfer when that makes it better
@@ -1053,7 +1054,8 @@ class _Improver:
                 return changed
 
     def lattice_first_grasps(self) -> bool:
-        """On a 3-joint arm: the plan from its start to the end of its last transfer again with another first
+        """On a 3-joint arm: the plan's transit to its first grasp routed again on the lattice
+        (:meth:`first_transit`), then the plan from its start to the end of its last transfer again with another first
         grasp (:func:`clew_ros.core.lattice.grasp_configurations` at the start): the transit to it routed on the
         lattice, then one regrasp on the lattice as :meth:`lattice_regrasps` places it (a plan of one transfer is
         left alone: two are never better). The grasps whose joint travel from the start and on to the last

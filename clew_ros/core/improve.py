@@ -1139,7 +1139,8 @@ class _Improver:
             return False
         self.regrasps_tried.add(key)
         travel = joint_travel([first.waypoints])
-        path = self.lattice(first, first.waypoints[0], first.waypoints[-1], travel, REGRASP_SHARE * self.budget.total)
+        allowance = min(REGRASP_SHARE * self.budget.total, self.budget.units_left())
+        path = self.lattice(first, first.waypoints[0], first.waypoints[-1], travel, allowance)
         if path is None or joint_travel([path]) >= travel:
             return False
         self.pieces = [replace(first, waypoints=path), *self.pieces[1:]]

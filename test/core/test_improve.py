@@ -768,23 +768,30 @@ def _on_any_piece(path: np.ndarray, point: np.ndarray) -> bool:
     return any(_on_piece(point, a, b) is not None for a, b in itertools.pairwise(path))
 
 
-def test_on_a_three_joint_arm_one_regrasp_placed_on_the_lattice_takes_out_transfers_in_clutter(monkeypatch) -> None:
-    # obstacles_32 (benchmarks), seed 0: the first plan puts the object down twice (3 transfers); every straight
-    # -move proposal from its placements looks blocked, and one regrasp between its first and last grasps, put
-    # where the lattice finds the way shortest, carries it in 2
+def _with_and_without(seed: int, monkeypatch, *steps: str):
+    """obstacles_32 (benchmarks) planned with ``seed``: the world, the plan, and the plan with the improver's
+    ``steps`` turned off (the same first plan)."""
     from benchmarks.families import obstacles_world
 
     parameters = obstacles_world(32).parameters
     world = world_from_parameters(parameters)
-    settings = PlannerSettings.from_parameters(parameters, seed=0, time_limit=120)
+    settings = PlannerSettings.from_parameters(parameters, seed=seed, time_limit=120)
     result = plan(world, settings)
-    assert result.stats["first_transfers"] == 3
-    assert result.stats["transfers"] == 2
-    assert validate_plan(world, Plan.from_result(world, result)) == []
-    monkeypatch.setattr(_Improver, "lattice_regrasps", lambda self: False)
-    monkeypatch.setattr(_Improver, "lattice_first_grasps", lambda self: False)
+    for step in steps:
+        monkeypatch.setattr(_Improver, step, lambda self: False)
     without = plan(world, settings)
     assert without.stats["first_joint_travel_rad"] == result.stats["first_joint_travel_rad"]
+    return world, result, without
+
+
+def test_on_a_three_joint_arm_one_regrasp_placed_on_the_lattice_takes_out_transfers_in_clutter(monkeypatch) -> None:
+    # obstacles_32, seed 0: the first plan puts the object down twice (3 transfers); every straight-move proposal
+    # from its placements looks blocked, and one regrasp between its first and last grasps, put where the lattice
+    # finds the way shortest, carries it in 2
+    world, result, without = _with_and_without(0, monkeypatch, "lattice_regrasps", "lattice_first_grasps")
+    assert result.stats["first_transfers"] == 3
+    assert result.stats["transfers"] == 2
+    assert validate_plan(world, Plan.from_result(world, result), step_rad=FINE_RAD) == []
     assert without.stats["transfers"] == 3
     assert result.stats["joint_travel_rad"] < without.stats["joint_travel_rad"]
 
@@ -792,15 +799,8 @@ def test_on_a_three_joint_arm_one_regrasp_placed_on_the_lattice_takes_out_transf
 def test_on_a_three_joint_arm_the_transit_to_the_first_grasp_is_routed_again_on_the_lattice(monkeypatch) -> None:
     # obstacles_32, seed 4: the first plan's transit from the start to its first grasp goes a long way round among
     # the boxes (10 rad, twice its ends' joint travel); the lattice's shortest way there is shorter, to the same grasp
-    from benchmarks.families import obstacles_world
-
-    parameters = obstacles_world(32).parameters
-    world = world_from_parameters(parameters)
-    settings = PlannerSettings.from_parameters(parameters, seed=4, time_limit=120)
-    result = plan(world, settings)
+    world, result, without = _with_and_without(4, monkeypatch, "first_transit")
     assert validate_plan(world, Plan.from_result(world, result), step_rad=FINE_RAD) == []
-    monkeypatch.setattr(_Improver, "first_transit", lambda self: False)
-    without = plan(world, settings)
     transit, before = np.asarray(result.segments[0].waypoints), np.asarray(without.segments[0].waypoints)
     assert np.array_equal(transit[0], before[0])
     assert np.array_equal(transit[-1], before[-1])  # the same first grasp
@@ -812,15 +812,8 @@ def test_on_a_three_joint_arm_another_first_grasp_found_on_the_lattice_shortens_
     # obstacles_32, seed 6: once the lattice's regrasp has taken the plan down to 2 transfers, it keeps its first
     # grasp configuration; taking the object another way (another approach, the transit routed on the lattice)
     # and placing the regrasp again shortens the plan
-    from benchmarks.families import obstacles_world
-
-    parameters = obstacles_world(32).parameters
-    world = world_from_parameters(parameters)
-    settings = PlannerSettings.from_parameters(parameters, seed=6, time_limit=120)
-    result = plan(world, settings)
+    world, result, without = _with_and_without(6, monkeypatch, "lattice_first_grasps")
     assert validate_plan(world, Plan.from_result(world, result), step_rad=FINE_RAD) == []
-    monkeypatch.setattr(_Improver, "lattice_first_grasps", lambda self: False)
-    without = plan(world, settings)
     assert result.stats["transfers"] == without.stats["transfers"] == 2
     assert result.stats["joint_travel_rad"] < without.stats["joint_travel_rad"] - 1.0
     start = np.asarray(result.segments[0].waypoints[0])

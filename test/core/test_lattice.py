@@ -74,16 +74,28 @@ def _distances(counts, step, edges, sources, source_costs) -> dict[int, float]:
     return done
 
 
+def _tree_edge(counts: np.ndarray, u: int, v: int) -> tuple[int, int]:
+    """The edge (lower node, joint) between neighbours ``u`` and ``v``."""
+    strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
+    return min(u, v), int(np.flatnonzero(strides == abs(u - v))[0])
+
+
+def _random_lattice(rng: np.random.Generator, dims: int, high: int, blocked: float, count: int, dearest: float):
+    """A lattice of ``dims`` joints of 3 to ``high - 1`` values each, each edge blocked with probability ``blocked``,
+    and ``count`` sources at costs up to ``dearest``: counts, edges, sources, their costs."""
+    counts = rng.integers(3, high, dims).astype(np.int64)
+    size = int(np.prod(counts))
+    edges = np.where(rng.random((size, dims)) < blocked, EDGE_BLOCKED, EDGE_UNKNOWN).astype(np.uint8)
+    return counts, edges, rng.choice(size, count, replace=False), rng.uniform(0, dearest, count)
+
+
 @pytest.mark.parametrize("dims", [2, 3])
 def test_the_compiled_lattice_costs_are_each_node_s_least_cost_and_lead_back_to_a_source(dims) -> None:
     rng = np.random.default_rng(10 + dims)
     step = 0.25
     for trial in range(20):
-        counts = rng.integers(3, 8, dims).astype(np.int64)
+        counts, edges, sources, source_costs = _random_lattice(rng, dims, 8, 0.35, 2, 0.2)
         size = int(np.prod(counts))
-        edges = np.where(rng.random((size, dims)) < 0.35, EDGE_BLOCKED, EDGE_UNKNOWN).astype(np.uint8)
-        sources = rng.choice(size, 2, replace=False)
-        source_costs = rng.uniform(0, 0.2, 2)
         bound = math.inf if trial % 2 else 1.0
         cost, previous, expanded = lattice_costs(counts, step, edges, sources, source_costs, bound)
         expected = np.full(size, np.inf)
@@ -91,22 +103,14 @@ def test_the_compiled_lattice_costs_are_each_node_s_least_cost_and_lead_back_to_
             expected[node] = c if c < bound else np.inf
         assert np.allclose(cost, expected, rtol=0, atol=1e-9, equal_nan=False)
         assert expanded == np.count_nonzero(np.isfinite(cost))
-        strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
         for reached in np.flatnonzero(np.isfinite(cost)).tolist():  # back to a source, one edge a step
             node = reached
             while previous[node] >= 0:
                 u, node = node, int(previous[node])
-                j = int(np.flatnonzero(strides == abs(u - node))[0])
-                assert edges[min(u, node), j] != EDGE_BLOCKED
+                assert edges[_tree_edge(counts, u, node)] != EDGE_BLOCKED
             assert node in sources.tolist()
         for node in np.flatnonzero(np.isfinite(cost)).tolist():
             assert previous[node] < 0 or cost[node] == pytest.approx(cost[previous[node]] + step, abs=1e-9)
-
-
-def _tree_edge(counts: np.ndarray, u: int, v: int) -> tuple[int, int]:
-    """The edge (lower node, joint) between neighbours ``u`` and ``v``."""
-    strides = np.cumprod(np.r_[counts[1:], 1][::-1])[::-1]
-    return min(u, v), int(np.flatnonzero(strides == abs(u - v))[0])
 
 
 @pytest.mark.parametrize("dims", [2, 3])
@@ -114,11 +118,9 @@ def test_the_repaired_lattice_costs_are_those_of_a_search_from_scratch_after_edg
     rng = np.random.default_rng(30 + dims)
     step = 0.25
     for trial in range(20):
-        counts = rng.integers(3, 9, dims).astype(np.int64)
+        # a source may be reached cheaper through another
+        counts, edges, sources, source_costs = _random_lattice(rng, dims, 9, 0.15, 3, 0.6)
         size = int(np.prod(counts))
-        edges = np.where(rng.random((size, dims)) < 0.15, EDGE_BLOCKED, EDGE_UNKNOWN).astype(np.uint8)
-        sources = rng.choice(size, 3, replace=False)
-        source_costs = rng.uniform(0, 0.6, 3)  # a source may be reached cheaper through another
         bound = math.inf if trial % 2 else 1.5
         cost, previous, _ = lattice_costs(counts, step, edges, sources, source_costs, bound)
         for _ in range(4):  # block edges of the search's tree (those that change costs) and one at random

@@ -1022,32 +1022,12 @@ class _Improver:
                     continue
                 self.regrasps_tried.add(key)
                 fewer = sum(p.kind == "transfer" for p in self.pieces[i : j + 1]) > 2
-                found = lattice_regrasp(
-                    self.world,
-                    one.waypoints[0],
-                    one.grasp_rel,
-                    two.waypoints[-1],
-                    two.grasp_rel,
-                    min_margin=self.min_margin,
-                    shorter_than=math.inf if fewer else joint_travel([p.waypoints for p in self.pieces[i : j + 1]]),
-                    budget=self.budget,
-                    allowance=min(REGRASP_SHARE * self.budget.total, self.budget.units_left()),
-                    expansion_work=FLOOD_WORK,
-                    release_work=RELEASE_WORK,
-                    nodes_known=(self.known("transfer", one.grasp_rel), self.known("transfer", two.grasp_rel)),
-                )
-                if found is None:
+                bound = math.inf if fewer else joint_travel([p.waypoints for p in self.pieces[i : j + 1]])
+                allowance = min(REGRASP_SHARE * self.budget.total, self.budget.units_left())
+                regrasped = self.regrasped(one, two, bound, allowance)
+                if regrasped is None:
                     continue
-                carried = _Piece("transfer", one.grasp, pruned_path(found[0]), one.start_pose, one.grasp_rel)
-                pose = carried.end_pose(self.world)
-                put_down = _Piece("transit", None, found[1], pose, None)
-                held = _Piece("transfer", two.grasp, pruned_path(found[2]), pose, two.grasp_rel)
-                candidate = [*self.pieces[:i], carried, put_down, held, *self.pieces[j + 1 :]]
-                if _better(_score(self.pieces), _score(candidate)):
-                    self.pieces = candidate
-                    self.regrasps_tried.add(_span_key(carried, held, 2))  # its own result: not searched again
-                    self.reserve()
-                    self.rebuilt += 1
+                if self.take([*self.pieces[:i], *regrasped, *self.pieces[j + 1 :]], regrasped):
                     changed = True
                     break  # the spans of the new plan
             else:
@@ -1100,36 +1080,53 @@ class _Improver:
             transit = self.lattice(pieces[0], start, q[k], math.inf if fewer else span - on[k], allowance)
             if transit is None:
                 continue
-            rest = span - joint_travel([transit])
-            found = lattice_regrasp(
-                self.world,
-                q[k],
-                rels[k],
-                last,
-                two.grasp_rel,
-                min_margin=self.min_margin,
-                shorter_than=math.inf if fewer else rest,
-                budget=self.budget,
-                allowance=limit - self.budget.spent,
-                expansion_work=FLOOD_WORK,
-                release_work=RELEASE_WORK,
-                nodes_known=(self.known("transfer", rels[k]), self.known("transfer", two.grasp_rel)),
-            )
-            if found is None:
-                continue
+            one = _Piece("transfer", int(which[k]), q[k][None], pieces[0].start_pose, rels[k])
+            shorter = math.inf if fewer else span - joint_travel([transit])
+            regrasped = self.regrasped(one, two, shorter, limit - self.budget.spent)
             taken = _Piece("transit", None, transit, pieces[0].start_pose, None)
-            carried = _Piece("transfer", int(which[k]), pruned_path(found[0]), pieces[0].start_pose, rels[k])
-            pose = carried.end_pose(self.world)
-            put_down = _Piece("transit", None, found[1], pose, None)
-            held = _Piece("transfer", two.grasp, pruned_path(found[2]), pose, two.grasp_rel)
-            candidate = [taken, carried, put_down, held, *pieces[j + 1 :]]
-            if _better(_score(self.pieces), _score(candidate)):
-                self.pieces = candidate
-                self.regrasps_tried.add(_span_key(carried, held, 2))  # its regrasp: step 3 would find it again
-                self.reserve()
-                self.rebuilt += 1
+            if regrasped is not None and self.take([taken, *regrasped, *pieces[j + 1 :]], regrasped):
                 return True
         return changed
+
+    def regrasped(
+        self, one: _Piece, two: _Piece, shorter_than: float, allowance: float
+    ) -> tuple[_Piece, _Piece, _Piece] | None:
+        """From where transfer ``one`` starts (its grasp) to where transfer ``two`` ends, one regrasp placed on the
+        lattice (:func:`clew_ros.core.lattice.lattice_regrasp`) within ``allowance`` work units, shorter than
+        ``shorter_than`` rad: the transfer, the put-down transit and the transfer, or ``None``."""
+        assert one.grasp_rel is not None  # transfers
+        assert two.grasp_rel is not None
+        found = lattice_regrasp(
+            self.world,
+            one.waypoints[0],
+            one.grasp_rel,
+            two.waypoints[-1],
+            two.grasp_rel,
+            min_margin=self.min_margin,
+            shorter_than=shorter_than,
+            budget=self.budget,
+            allowance=allowance,
+            expansion_work=FLOOD_WORK,
+            release_work=RELEASE_WORK,
+            nodes_known=(self.known("transfer", one.grasp_rel), self.known("transfer", two.grasp_rel)),
+        )
+        if found is None:
+            return None
+        carried = _Piece("transfer", one.grasp, pruned_path(found[0]), one.start_pose, one.grasp_rel)
+        pose = carried.end_pose(self.world)
+        put_down = _Piece("transit", None, found[1], pose, None)
+        return carried, put_down, _Piece("transfer", two.grasp, pruned_path(found[2]), pose, two.grasp_rel)
+
+    def take(self, candidate: list[_Piece], regrasped: tuple[_Piece, _Piece, _Piece]) -> bool:
+        """Make ``candidate``, a plan holding the pieces ``regrasped`` placed on the lattice, the plan if it is
+        better; their span is then marked searched (a search from the same ends would find them again)."""
+        if not _better(_score(self.pieces), _score(candidate)):
+            return False
+        self.pieces = candidate
+        self.regrasps_tried.add(_span_key(regrasped[0], regrasped[2], 2))
+        self.reserve()
+        self.rebuilt += 1
+        return True
 
     def first_transit(self) -> bool:
         """The plan's first transit (to its first grasp) routed again on the lattice, kept when shorter."""

@@ -202,6 +202,7 @@ def lattice_route(
     allowance: float,
     expansion_work: float,
     nodes_known: KnownNodes | None = None,
+    step: float | None = None,
 ) -> np.ndarray | None:
     """Waypoints from ``a`` to ``b`` in one mode (the object resting at ``object_pose``, or held as
     ``grasp_rel``), every move clear with ``min_margin`` (m) to spare: the shortest lattice path between
@@ -211,8 +212,9 @@ def lattice_route(
     checked in the same mode before are not counted), the routing has spent
     ``allowance`` units (it stops between calls), or ``budget`` says stop. Each search costs
     ``expansion_work`` units a node it expands. ``nodes_known``: the nodes checked by earlier routings in the
-    same mode with the same margin (not checked again); those this routing checks are added to it."""
-    step = lattice_step(world)
+    same mode with the same margin (not checked again); those this routing checks are added to it. ``step``:
+    the lattice's step (rad), :func:`lattice_step` unless given (a benchmark's finer lattice)."""
+    step = lattice_step(world) if step is None else step
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     if step is None or float(np.abs(b - a).sum()) >= shorter_than:
         return None

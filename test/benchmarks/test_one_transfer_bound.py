@@ -19,7 +19,8 @@ def test_the_bound_is_a_valid_one_transfer_plan_to_the_goal() -> None:
     assert bound.problems == []
     assert [s.kind for s in bound.plan.segments] == ["transit", "transfer"]
     transit, transfer = (np.asarray(s.waypoints) for s in bound.plan.segments)
-    assert np.array_equal(transit[0], world.robot.initial) and np.array_equal(transit[-1], transfer[0])
+    assert np.array_equal(transit[0], world.robot.initial)
+    assert np.array_equal(transit[-1], transfer[0])
     final = list(replay(world, bound.plan, None))[-1].object_poses[-1]
     assert goal_reached(world, final, world.object.goal)
     ends = np.abs(transit[-1] - transit[0]).sum() + np.abs(transfer[-1] - transfer[0]).sum()

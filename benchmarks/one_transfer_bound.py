@@ -28,12 +28,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from benchmarks.reference import _segment, load_worlds, planner_runs
+from benchmarks.reference import _segment, load_worlds, planner_runs, succeeded_plan
 from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_moves_clear
 from clew_ros.core.improve import EXPANSION_WORK, check_work
 from clew_ros.core.kinematics import compose, relative
 from clew_ros.core.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
-from clew_ros.core.plan import Plan, replay, validate_plan
+from clew_ros.core.plan import Plan, validate_plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import World
 
@@ -128,17 +128,7 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
     if best is None:
         return Bound(None, math.inf, [], elapsed)
     segments = (_segment("transit", None, best[1]), _segment("transfer", best[3], best[2]))
-    probe = Plan(world.name, tuple(world.robot.joint_names), True, "", segments=segments)
-    final = list(replay(world, probe, None))[-1].object_poses[-1]
-    plan = Plan(
-        world.name,
-        tuple(world.robot.joint_names),
-        True,
-        f"one-transfer bound: joint travel {best[0]:.3f} rad, step {step} rad",
-        "SUCCEEDED",
-        segments,
-        np.array(final),
-    )
+    plan = succeeded_plan(world, segments, f"one-transfer bound: joint travel {best[0]:.3f} rad, step {step} rad")
     return Bound(plan, best[0], validate_plan(world, plan), elapsed)
 
 

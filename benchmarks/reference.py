@@ -465,6 +465,24 @@ class _Search:
         return np.concatenate([path if on_lattice else np.concatenate([start[None], path]), target[None]])
 
 
+def succeeded_plan(
+    world: World, segments: tuple[PlanSegment, ...], message: str, stats: dict[str, Any] | None = None
+) -> Plan:
+    """A succeeded plan of ``segments`` in ``world``, its final object pose where replaying them puts it."""
+    probe = Plan(world.name, tuple(world.robot.joint_names), True, "", segments=segments)
+    final = list(replay(world, probe, None))[-1].object_poses[-1]
+    return Plan(
+        world.name,
+        tuple(world.robot.joint_names),
+        True,
+        message,
+        "SUCCEEDED",
+        segments,
+        np.array(final),
+        stats=stats or {},
+    )
+
+
 def reference_plan(world: World, settings: ReferenceSettings | None = None) -> ReferenceResult:
     """The grid reference plan of a 2-joint ``world`` (module docstring), validated.
 
@@ -480,19 +498,13 @@ def reference_plan(world: World, settings: ReferenceSettings | None = None) -> R
             world.name, None, math.inf, 0, [], search.expansions, search.releases, search.capped, elapsed, settings
         )
     segments = tuple(search.best[1])
-    probe = Plan(world.name, tuple(world.robot.joint_names), True, "", segments=segments)
-    final = list(replay(world, probe, None))[-1].object_poses[-1]
     travel = float(sum(np.abs(np.diff(s.waypoints, axis=0)).sum() for s in segments))
     transfers = sum(s.kind == "transfer" for s in segments)
-    plan = Plan(
-        world.name,
-        tuple(world.robot.joint_names),
-        True,
-        f"grid reference: joint travel {travel:.3f} rad, {transfers} transfer(s), step {settings.step_rad} rad",
-        "SUCCEEDED",
+    plan = succeeded_plan(
+        world,
         segments,
-        np.array(final),
-        stats={"joint_travel_rad": round(travel, 6), "transfers": transfers, "time_s": round(elapsed, 3)},
+        f"grid reference: joint travel {travel:.3f} rad, {transfers} transfer(s), step {settings.step_rad} rad",
+        {"joint_travel_rad": round(travel, 6), "transfers": transfers, "time_s": round(elapsed, 3)},
     )
     problems = validate_plan(world, plan)
     return ReferenceResult(

@@ -12,7 +12,8 @@ order of their straight joint distance, any that cannot beat the best found skip
 0.002 rad (:func:`clew_ros.core.plan.validate_plan`). It is a plan, so an upper bound on the shortest
 one-transfer plan: the goal position's tolerance, other approaches and paths off the lattice could shorten it.
 
-**The report**: per world, the bound's travel and the time it took, the planner's first and improved plans
+**The report**: per world, the bound's travel, the time it took and the work units its routings spent (the
+improver's budget is ``improve_time * WORK_PER_SECOND`` of them), the planner's first and improved plans
 (median over seeds ``0..N-1``, as ``clew_plan WORLD --seed S`` plans them, transfers in brackets), and the
 first plan's median over the bound: the gain a plan of one transfer could give at most about that.
 """
@@ -28,9 +29,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from benchmarks.reference import _segment, load_worlds, planner_runs, succeeded_plan
+from benchmarks.reference import load_worlds, plan_segment, planner_runs, succeeded_plan
 from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_moves_clear
-from clew_ros.core.improve import EXPANSION_WORK, check_work
+from clew_ros.core.improve import CALL_WORK, EXPANSION_WORK, MOVE_CALL_WORK, check_work, joint_travel
 from clew_ros.core.kinematics import compose, relative
 from clew_ros.core.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
 from clew_ros.core.plan import Plan, validate_plan
@@ -39,7 +40,7 @@ from clew_ros.core.world import World
 
 
 class _Unlimited:
-    """A :class:`clew_ros.core.lattice.LatticeBudget` that counts and never stops."""
+    """A :class:`clew_ros.core.lattice.LatticeBudget` that never stops and counts as the improver's does."""
 
     def __init__(self, world: World) -> None:
         self.check_work = check_work(world)
@@ -49,10 +50,10 @@ class _Unlimited:
         self.spent += units
 
     def spend_move_checks(self, configurations: int) -> None:
-        self.spent += math.ceil(configurations * self.check_work)
+        self.spent += math.ceil(configurations * self.check_work) + MOVE_CALL_WORK
 
     def spend_checks(self, configurations: int, calls: int = 1) -> None:
-        self.spent += math.ceil(configurations * self.check_work)
+        self.spent += math.ceil(configurations * self.check_work) + calls * CALL_WORK
 
     def stop(self) -> bool:
         return False
@@ -66,10 +67,7 @@ class Bound:
     travel: float  # rad; inf without a plan
     problems: list[str]
     time_s: float
-
-
-def _travel(path: np.ndarray) -> float:
-    return float(np.abs(np.diff(path, axis=0)).sum())
+    work: int  # the work units its routings spent, as the improver's budget counts them
 
 
 def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angles: int, margin: float) -> Bound:
@@ -115,7 +113,7 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
             continue
         known = held_known.setdefault(rels[k].tobytes(), KnownNodes())
         for end in ends:
-            limit = (math.inf if best is None else best[0]) - _travel(transit)
+            limit = (math.inf if best is None else best[0]) - joint_travel([transit])
             if np.abs(end - q[k]).sum() >= limit:
                 break
             carried = lattice_route(
@@ -123,18 +121,18 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
                 min_margin=margin, budget=budget, allowance=math.inf, expansion_work=EXPANSION_WORK, step=step,
             )  # fmt: skip
             if carried is not None:
-                best = (_travel(transit) + _travel(carried), transit, carried, int(which[k]))
+                best = (joint_travel([transit]) + joint_travel([carried]), transit, carried, int(which[k]))
     elapsed = time.perf_counter() - started
     if best is None:
-        return Bound(None, math.inf, [], elapsed)
-    segments = (_segment("transit", None, best[1]), _segment("transfer", best[3], best[2]))
+        return Bound(None, math.inf, [], elapsed, budget.spent)
+    segments = (plan_segment("transit", None, best[1]), plan_segment("transfer", best[3], best[2]))
     plan = succeeded_plan(world, segments, f"one-transfer bound: joint travel {best[0]:.3f} rad, step {step} rad")
-    return Bound(plan, best[0], validate_plan(world, plan), elapsed)
+    return Bound(plan, best[0], validate_plan(world, plan), elapsed, budget.spent)
 
 
 HEADER = (
-    "| world | one-transfer bound rad | bound s | found | first plan rad (transfers) | improved rad (transfers) "
-    "| improved / bound | first / bound |\n|---|---|---|---|---|---|---|---|"
+    "| world | one-transfer bound rad | bound s | bound work units | found | first plan rad (transfers) "
+    "| improved rad (transfers) | improved / bound | first / bound |\n|---|---|---|---|---|---|---|---|---|"
 )
 
 
@@ -157,7 +155,7 @@ def main(argv: list[str] | None = None) -> int:
     print(HEADER, flush=True)
     for world, parameters in load_worlds(args.worlds):
         if world.robot.dof != 3:
-            print(f"| {world.name} | not a 3-joint world | | | | | | |", flush=True)
+            print(f"| {world.name} | not a 3-joint world | | | | | | | |", flush=True)
             continue
         margin = MIN_MARGIN_FACTOR * PlannerSettings.from_parameters(parameters).clearance
         bound = one_transfer_bound(
@@ -166,12 +164,12 @@ def main(argv: list[str] | None = None) -> int:
         runs = planner_runs(world, parameters, args.seeds)
         text = "none" if bound.plan is None else f"{bound.travel:.2f}" + (" INVALID" if bound.problems else "")
         if not runs.travel:
-            print(f"| {world.name} | {text} | {bound.time_s:.1f} | 0/{args.seeds} | | | | |", flush=True)
+            print(f"| {world.name} | {text} | {bound.time_s:.1f} | {bound.work} | 0/{args.seeds} | | | | |", flush=True)
             continue
         first, improved = statistics.median(runs.first_travel), statistics.median(runs.travel)
         ratios = f"{improved / bound.travel:.2f}x | {first / bound.travel:.2f}x" if bound.plan is not None else " | "
         print(
-            f"| {world.name} | {text} | {bound.time_s:.1f} | {len(runs.travel)}/{args.seeds} "
+            f"| {world.name} | {text} | {bound.time_s:.1f} | {bound.work} | {len(runs.travel)}/{args.seeds} "
             f"| {first:.2f} ({statistics.median(runs.first_transfers):g}) "
             f"| {improved:.2f} ({statistics.median(runs.transfers):g}) | {ratios} |",
             flush=True,

@@ -209,7 +209,7 @@ def _l1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return distance
 
 
-def _segment(kind: str, grasp: int | None, waypoints: np.ndarray) -> PlanSegment:
+def plan_segment(kind: str, grasp: int | None, waypoints: np.ndarray) -> PlanSegment:
     keep = np.ones(len(waypoints), dtype=bool)
     keep[1:] = np.any(waypoints[1:] != waypoints[:-1], axis=1)  # repeated configurations
     return PlanSegment(kind, grasp, np.array(waypoints[keep]))
@@ -263,7 +263,7 @@ class _Search:
         routes = self.windowed(Mode(placement), start=start, on_lattice=False, cost=0.0, targets=targets, left=left)
         for grasp, target, route in zip(grasps, targets, routes, strict=True):
             if route is not None:
-                segments = [_segment("transit", None, route.waypoints)]
+                segments = [plan_segment("transit", None, route.waypoints)]
                 self.enter(1, placement, int(grasp), target, cost=route.cost, segments=segments)
 
     def enter(
@@ -345,10 +345,10 @@ class _Search:
         grasps, targets = grasps[keep], targets[keep]
         left = self.estimates(entry.depth + 1, placement, targets)
         routes = self.windowed(Mode(placement), start=q_release, on_lattice=True, cost=cost, targets=targets, left=left)
-        done = [*entry.segments, _segment("transfer", entry.mode.grasp, carried)]
+        done = [*entry.segments, plan_segment("transfer", entry.mode.grasp, carried)]
         for grasp, target, route in zip(grasps, targets, routes, strict=True):
             if route is not None:
-                segments = [*done, _segment("transit", None, route.waypoints)]
+                segments = [*done, plan_segment("transit", None, route.waypoints)]
                 self.enter(entry.depth + 1, placement, int(grasp), target, cost=route.cost, segments=segments)
 
     def finish(self, entry: _Entry) -> None:
@@ -362,7 +362,7 @@ class _Search:
 
     def found(self, entry: _Entry, route: _Route) -> None:
         if route.cost < self.best_cost:
-            self.best = (route.cost, [*entry.segments, _segment("transfer", entry.mode.grasp, route.waypoints)])
+            self.best = (route.cost, [*entry.segments, plan_segment("transfer", entry.mode.grasp, route.waypoints)])
 
     # -- searches on the lattice ------------------------------------------------------------------
 

@@ -49,7 +49,8 @@ import numpy as np
 from clew_ros.core.collision import packed_world
 from clew_ros.core.inverse import mirrored, solve_point
 from clew_ros.core.kernel import clearly_valid, screen_routes
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.search import goals_reached
 from clew_ros.core.world import World
 
 __all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints", "screen_samples"]
@@ -252,7 +253,8 @@ class _Kinematics:
         )
 
     def at_goal(self, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Configurations near ``seeds`` putting the object, held as ``grasp_rel``, on the goal, and which do."""
+        """Configurations near ``seeds`` putting the object, held as ``grasp_rel``, on the goal within its
+        tolerances, and which do, validly."""
         world = self.world
         lengths = np.broadcast_to(world.robot.link_lengths, (len(grasp_rel), world.robot.dof)).copy()
         lengths[:, -1] = np.hypot(lengths[:, -1] + grasp_rel[:, 0], grasp_rel[:, 1])  # joint n to the object
@@ -275,7 +277,12 @@ class _Kinematics:
         self.effort.steps += steps + len(solved)
         q[ok] = solved
         ok[ok] = error <= GOAL_SHARE * world.goal_tolerance
-        ok[ok] = self.valid(q[ok], compose(tip_poses(world.robot, q[ok]), grasp_rel[ok]))
+        # That error bounds a sum of the position's error and the radius times the angle's excess over 0.8 of
+        # the tolerance, which a narrow angle tolerance may not keep within it: the goal's own test decides.
+        held = compose(tip_poses(world.robot, q[ok]), grasp_rel[ok])
+        reached = goals_reached(world, held, goal)
+        ok[ok] = reached
+        ok[ok] = self.valid(q[ok], held[reached])
         return q, ok
 
     def toward(self, grasp_rel: np.ndarray, seeds: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -291,16 +298,9 @@ def goal_holds_near(
 ) -> tuple[np.ndarray, np.ndarray, Effort]:
     """Configurations near ``seeds`` ``(B, n)`` (inverse kinematics from each) putting the object, held as
     ``grasp_rel`` ``(B, 3)``, on ``goal`` within its tolerances, which ones do, valid with ``margin_m`` to
-    spare, and the work done: the goal configurations of :func:`propose`'s one-transfer proposals, each also
-    checked against the goal's tolerances themselves (that inverse kinematics bounds a sum of the position's
-    error and the radius times the angle's excess, which a narrow angle tolerance may not keep within it)."""
+    spare, and the work done: the goal configurations of :func:`propose`'s one-transfer proposals."""
     kinematics = _Kinematics(world, margin_m)
-    grasp_rel = np.asarray(grasp_rel, dtype=float)
-    q, ok = kinematics.at_goal(grasp_rel, np.asarray(seeds, dtype=float), goal)
-    poses = compose(tip_poses(world.robot, q[ok]), grasp_rel[ok])
-    ok[ok] = (np.hypot(*(poses[:, :2] - goal[:2]).T) <= world.goal_tolerance) & (
-        np.abs(wrap_angle(poses[:, 2] - goal[2])) <= world.goal_angle_tolerance
-    )
+    q, ok = kinematics.at_goal(np.asarray(grasp_rel, dtype=float), np.asarray(seeds, dtype=float), goal)
     return q, ok, kinematics.effort
 
 

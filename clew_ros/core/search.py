@@ -484,9 +484,15 @@ def goal_error(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.n
 
 def goal_reached(world: World, object_pose: np.ndarray, goal: np.ndarray) -> bool:
     """Whether ``object_pose`` is within the goal tolerances of ``goal`` (section 2)."""
-    position = float(np.hypot(*(object_pose[:2] - goal[:2])))
-    angle = float(abs(wrap_angle(object_pose[2] - goal[2])))
-    return position <= world.goal_tolerance and angle <= world.goal_angle_tolerance + 1e-9
+    return bool(goals_reached(world, np.asarray(object_pose, dtype=float)[None], goal)[0])
+
+
+def goals_reached(world: World, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """Which of ``object_poses`` ``(B, 3)`` are within the goal tolerances of ``goal``, as :func:`goal_reached`."""
+    position = np.hypot(object_poses[:, 0] - goal[0], object_poses[:, 1] - goal[1])
+    angle = np.abs(wrap_angle(object_poses[:, 2] - goal[2]))
+    reached: np.ndarray = (position <= world.goal_tolerance) & (angle <= world.goal_angle_tolerance + 1e-9)
+    return reached
 
 
 def goal_configurations(
@@ -526,7 +532,7 @@ def goal_configurations(
     )
     poses = compose(tip_poses(robot, q), grasp_rel)
     close = np.linalg.norm(goal_error(world, poses, goal), axis=1) <= 0.5 * world.goal_tolerance
-    held = np.array([bool(c) and goal_reached(world, pose, goal) for c, pose in zip(close, poses, strict=True)])
+    held = close & goals_reached(world, poses, goal)
     if held.any():  # the margin a join's first move from it asks for (clew_ros.core.continuous)
         rounded = dataclasses.replace(packed_world(world), rounding=min_margin)
         held[held] = clearly_valid(rounded, np.ascontiguousarray(q[held]), poses[held])

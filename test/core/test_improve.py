@@ -85,6 +85,18 @@ def test_improvement_gains_on_figure1_and_is_deterministic() -> None:
     assert plan_a == plan_b
 
 
+def test_improvement_ends_on_the_goal_within_a_narrow_angle_tolerance() -> None:
+    """regrasp2 seed 40 (goal angle tolerance 0.1 rad): every improved plan once ended 0.103 rad off the goal's
+    angle and was dropped for the first plan (11.8 rad); the grid reference's plan travels 9.1 rad."""
+    from clew_ros.worlds import generate
+
+    world = generate("regrasp2", 40).world()
+    result = _plan(world, 0, 0.5)
+    assert result.success
+    assert result.stats["joint_travel_rad"] < 0.8 * result.stats["first_joint_travel_rad"]
+    assert validate_plan(world, Plan.from_result(world, result)) == []
+
+
 def test_improve_time_zero_gives_exactly_the_first_plan() -> None:
     world = _world("figure1")
     result = _plan(world, 1, 0.0)

@@ -66,6 +66,27 @@ def test_proposals_hold_their_grasps_end_at_the_goal_and_are_valid(name: str) ->
             assert earlier.grasps != later.grasps or np.max(np.abs(earlier.keys - later.keys)) > DISTINCT_RAD
 
 
+def test_proposals_end_within_a_narrow_goal_angle_tolerance_itself() -> None:
+    """regrasp2 seed 40's goal allows 0.1 rad: the inverse kinematics' error (position plus the radius times the
+    angle's excess over 0.8 of it) let through goal configurations 0.103 rad off, so every improved plan ended
+    off the goal and the first plan was returned unchanged."""
+    from clew_ros.worlds import generate
+
+    world = generate("regrasp2", 40).world()
+    goal = np.asarray(world.object.goal, dtype=float)
+    proposals, _ = propose(
+        world, world.robot.initial, world.object.initial, goal, np.random.default_rng(0), margin_m=5e-4
+    )
+    assert proposals
+    for proposal in proposals:
+        pose = np.asarray(world.object.initial, dtype=float)
+        for step, _grasp in enumerate(proposal.grasps):
+            hold, end = proposal.keys[2 * step + 1], proposal.keys[2 * step + 2]
+            grasp_rel = relative(tip_poses(world.robot, hold[None])[0], pose)
+            pose = compose(tip_poses(world.robot, end[None]), grasp_rel)[0]
+        assert goal_reached(world, pose, goal)
+
+
 @pytest.mark.parametrize(("name", "one", "two"), [("single_transfer", True, False), ("arm3_regrasp", False, True)])
 def test_proposals_come_with_the_transfers_asked_for(name: str, one: bool, two: bool) -> None:
     world = load_world(ROOT / "config" / f"{name}.yaml")

@@ -1,5 +1,5 @@
 """Before and after on the generated families, in one run: ``python -m benchmarks.families_ab --baseline REV
-[--families A,B] [--worlds 3] [--seeds 2] [--time-limit 10] [--jobs 2] [--out DIR]``.
+[--families A,B] [--worlds 3] [--first-world 0] [--seeds 2] [--time-limit 10] [--jobs 2] [--out DIR]``.
 
 The worlds are generated once by this checkout (:mod:`benchmarks.generated`, as ``clew_world`` writes
 them), then every (world, seed) is planned twice, by ``clew_plan`` of git revision ``REV`` (exported with
@@ -85,7 +85,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.families_ab", description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", required=True, help="git revision to compare with")
     parser.add_argument("--families", default=",".join(FAMILIES), help="comma-separated (default: all)")
-    parser.add_argument("--worlds", type=int, default=3, help="worlds per family, seeds 0..W-1")
+    parser.add_argument("--worlds", type=int, default=3, help="worlds per family, seeds K..K+W-1")
+    parser.add_argument(
+        "--first-world", type=int, default=0, metavar="K", help="the first world seed (default 0; held-out worlds: 40)"
+    )
     parser.add_argument("--seeds", type=int, default=2, help="planner seeds per world, 0..S-1")
     parser.add_argument("--time-limit", type=float, default=10.0, help="per run, s")
     parser.add_argument("--jobs", type=int, default=2, help="(world, seed) pairs planned at once")
@@ -99,7 +102,11 @@ def main(argv: list[str] | None = None) -> int:
     started, load = time.monotonic(), os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="clew_families_ab_") as scratch:
         directory = Path(scratch)
-        worlds = [reference_world()] + [build_world(f, s, directory) for s in range(args.worlds) for f in families]
+        worlds = [reference_world()] + [
+            build_world(f, s, directory)
+            for s in range(args.first_world, args.first_world + args.worlds)
+            for f in families
+        ]
         tasks = [(w, seed) for seed in range(args.seeds) for w in worlds]
 
         def pair(index: int) -> tuple[dict, dict]:

@@ -1,9 +1,10 @@
 """The planner on the generated families: ``python -m benchmarks.families_run [--quick] [--families A,B]
-[--worlds 10] [--seeds 5] [--time-limit 10] [--jobs 2] [--out DIR]``.
+[--worlds 10] [--first-world 0] [--seeds 5] [--time-limit 10] [--jobs 2] [--out DIR]``.
 
 Run from the repository root. For each family of :mod:`clew_ros.worlds` (default: every one, the
-``unsolvable`` family included) it generates worlds 0..W-1 (:mod:`benchmarks.generated`, into a
-temporary directory, or ``--keep-worlds DIR``), plans each with planner seeds 0..S-1 as ``clew_plan
+``unsolvable`` family included) it generates worlds K..K+W-1 (``--first-world K``, default 0; worlds from
+40 on are held out, no tuning has looked at them; :mod:`benchmarks.generated`), into a
+temporary directory or ``--keep-worlds DIR``, plans each with planner seeds 0..S-1 as ``clew_plan
 WORLD --seed S --time-limit T`` would (the world's own ``planner.*`` defaults, ``planner.threads``
 1 so that the ``--jobs`` worker processes do not compete for the cores), and does the same on
 figure1 (``config/figure1.yaml``, W = 1) as the reference. Then it prints a table per family and
@@ -190,7 +191,10 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.families_run", description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="1 world per family, 2 seeds, 3 s limit")
     parser.add_argument("--families", default=None, help=f"comma-separated (default all: {','.join(FAMILIES)})")
-    parser.add_argument("--worlds", type=int, default=None, help="worlds per family, seeds 0..W-1 (default 10)")
+    parser.add_argument("--worlds", type=int, default=None, help="worlds per family, seeds K..K+W-1 (default 10)")
+    parser.add_argument(
+        "--first-world", type=int, default=0, metavar="K", help="the first world seed (default 0; held-out worlds: 40)"
+    )
     parser.add_argument("--seeds", type=int, default=None, help="planner seeds per world, 0..S-1 (default 5)")
     parser.add_argument("--time-limit", type=float, default=None, help="per run, s (default 10)")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
@@ -225,7 +229,7 @@ def run(args: argparse.Namespace, directory: Path) -> dict:
     with concurrent.futures.ProcessPoolExecutor(
         max_workers=args.jobs, mp_context=context, initializer=_warm_up
     ) as pool:
-        jobs = [(f, s) for s in range(world_count) for f in families]
+        jobs = [(f, s) for s in range(args.first_world, args.first_world + world_count) for f in families]
         built = list(pool.map(build_world, *zip(*jobs, strict=True), [str(directory)] * len(jobs)))
         generation_s = time.monotonic() - started
         print(f"generated {len(built)} worlds in {generation_s:.0f} s", file=sys.stderr)
@@ -249,6 +253,7 @@ def run(args: argparse.Namespace, directory: Path) -> dict:
         "loadavg_start": loadavg_start,
         "loadavg_end": os.getloadavg(),
         "worlds_per_family": world_count,
+        "first_world": args.first_world,
         "seeds": seed_count,
         "time_limit_s": limit,
         "jobs": args.jobs,

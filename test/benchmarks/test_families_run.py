@@ -36,3 +36,13 @@ def test_a_tiny_family_run_writes_every_row(tmp_path: Path) -> None:
     table = (out / "families.md").read_text()
     assert "| " + " | ".join(HEADER) + " |" in table
     assert "unsolvable:" in table
+
+
+def test_held_out_worlds_start_at_the_first_world_seed(tmp_path: Path) -> None:
+    out, worlds = tmp_path / "out", tmp_path / "worlds"
+    args = ["--families", "shapes2", "--worlds", "2", "--first-world", "40", "--seeds", "1", "--time-limit", "2"]
+    assert main([*args, "--no-figure1", "--out", str(out), "--keep-worlds", str(worlds)]) == 0
+    assert sorted(p.name for p in worlds.glob("*.yaml")) == ["shapes2_40.yaml", "shapes2_41.yaml"]
+    report = json.loads((out / "families.json").read_text())
+    assert report["first_world"] == 40
+    assert sorted(w["seed"] for w in report["worlds"]) == [40, 41]

@@ -50,13 +50,17 @@ def solve_point(
     angle_scale: float = 1.0,
     iterations: int = ITERATIONS,
     tolerance_m: float = TOLERANCE_M,
+    full_turns: bool = False,
 ) -> Solution:
     """Configurations ``(B, n)`` from ``seeds`` ``(B, n)`` that put the point at ``offsets`` ``(B, 2)`` (default
     the tip) in the end-effector frame on ``targets`` ``(B, 2)``; with ``angles`` ``(B,)``, also the frame's
     angle within ``angle_tolerance`` of them (the angle error counts ``angle_scale`` m per rad). A
     configuration stops moving once its error is at most ``tolerance_m``, or after ``iterations`` steps.
 
-    Joint limits always hold. Compiled (:func:`clew_ros.core.kernel.solve_point`).
+    Joint limits always hold. With ``full_turns``, a joint whose limits are a whole turn apart (to 1e-3 rad, as
+    worlds write +-3.14159) goes on past one as the same angle inside the other: a target behind the base is
+    reached whichever way round the seed lies (without it, a seed on the wrong side stops at the limit).
+    Compiled (:func:`clew_ros.core.kernel.solve_point`).
     """
     seeds = np.array(seeds, dtype=float, ndmin=2)
     count = len(seeds)
@@ -75,6 +79,7 @@ def solve_point(
         damping=DAMPING,
         max_step=MAX_STEP_RAD,
         tolerance=tolerance_m,
+        full_turns=full_turns,
     )
     return Solution(q, error, int(steps.sum()))
 

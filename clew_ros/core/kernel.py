@@ -78,6 +78,9 @@ MAX_MOVE_RAD = 2.0 * math.pi
 #: Free intervals stop this far (rad) short of the first contact.
 BACKOFF_RAD = 1e-6
 _TWO_PI = 2.0 * math.pi
+#: Limits at least this far apart (rad) let a joint turn all the way round (worlds write +-3.14159, just inside
+#: pi): inverse kinematics takes such a joint past one limit to the same angle a turn short of the other.
+_FULL_TURN = _TWO_PI - 1e-3
 #: A contact closer than this to the current angle (rad) is where the start touches, not a crossing.
 _AT_START = 1e-12
 #: :func:`_cannot_improve` skips a contact only if it is this much (rad) past both nearest contacts:
@@ -1382,6 +1385,18 @@ def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndar
             points[b, i + 1, 0], points[b, i + 1, 1] = links[i, 1, 0], links[i, 1, 1]
 
 
+@_leaf
+def _within_limits(angle: float, lower: float, upper: float, full_turns: bool) -> float:
+    """``angle`` stopped at the limits; but with ``full_turns``, on a joint that turns all the way round
+    (:data:`_FULL_TURN`), past one limit it goes on as the same angle inside the other (less than a turn past)."""
+    if full_turns and upper - lower >= _FULL_TURN:
+        if angle > upper:
+            angle -= _TWO_PI
+        elif angle < lower:
+            angle += _TWO_PI
+    return min(max(angle, lower), upper)
+
+
 @_jit
 def _solve_point(  # noqa: PLR0915 - one compiled loop per row: kinematics, Jacobian, a 2x2 or 3x3 solve, the step
     q: np.ndarray,
@@ -1398,13 +1413,15 @@ def _solve_point(  # noqa: PLR0915 - one compiled loop per row: kinematics, Jaco
     lower: np.ndarray,
     upper: np.ndarray,
     tolerance: float,
+    full_turns: bool,
     error: np.ndarray,
     steps: np.ndarray,
 ) -> None:
     """Damped least squares, in place on ``q (B, n)``: the point ``offsets[b]`` of the end-effector frame
     to ``targets[b]``, and (``angles[b]`` not NaN) the frame's angle within ``angle_tolerance`` of it;
-    a row stops once its error is at most ``tolerance``. ``error[b]``: what is left (m; the angle's
-    excess counts ``angle_scale`` m per rad); ``steps[b]``: the steps taken."""
+    a row stops once its error is at most ``tolerance``; a step past a limit is :func:`_within_limits`.
+    ``error[b]``: what is left (m; the angle's excess counts ``angle_scale`` m per rad); ``steps[b]``: the
+    steps taken."""
     n = lengths.shape[0]
     px = np.empty(n)
     py = np.empty(n)
@@ -1463,7 +1480,7 @@ def _solve_point(  # noqa: PLR0915 - one compiled loop per row: kinematics, Jaco
                 largest = max(largest, abs(jx[i]))
             scale = min(1.0, max_step / largest) if largest > 0.0 else 0.0
             for i in range(n):
-                q[b, i] = min(max(q[b, i] + scale * jx[i], lower[i]), upper[i])
+                q[b, i] = _within_limits(q[b, i] + scale * jx[i], lower[i], upper[i], full_turns)
 
 
 # --------------------------------------------------------------------------- Python entry points
@@ -1690,6 +1707,7 @@ def solve_point(
     damping: float,
     max_step: float,
     tolerance: float = 0.0,
+    full_turns: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Compiled damped least squares from ``seeds (B, n)`` (see :func:`clew_ros.core.inverse.solve_point`):
     the configurations, the error left and the steps taken ``(B,)``."""
@@ -1711,6 +1729,7 @@ def solve_point(
         _arg(lower),
         _arg(upper),
         float(tolerance),
+        bool(full_turns),
         error,
         steps,
     )

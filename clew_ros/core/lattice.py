@@ -150,7 +150,7 @@ _Clear = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 class _Lattice:
     def __init__(self, world: World, step: float) -> None:
-        self.lower = np.asarray(world.robot.joint_lower, dtype=float)
+        self.lower = np.array(world.robot.joint_lower, dtype=float)  # writable, as kernel.warm_up compiles it
         upper = np.asarray(world.robot.joint_upper, dtype=float)
         self.step = step
         self.counts = np.floor((upper - self.lower) / step + 1e-9).astype(np.int64) + 1

@@ -152,7 +152,10 @@ def screen_samples(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 class _Kinematics:
-    """Batched inverse kinematics and validity with a margin, counting the work."""
+    """Batched inverse kinematics and validity with a margin, counting the work. The inverse kinematics takes a
+    joint that turns all the way round past its limits (``full_turns``): a key configuration is any way of
+    holding, wherever the seed lies (shapes2 seed 50's grasps lie behind the base, where from the start and
+    its mirror image the solver stopped at joint 1's limit and no grasp configuration was found)."""
 
     def __init__(
         self,
@@ -210,10 +213,16 @@ class _Kinematics:
         q = np.array(seeds, dtype=float)
         ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
         if tip_angles is None:
-            solved, error, steps = solve_point(robot, seeds[ok], targets[ok])
+            solved, error, steps = solve_point(robot, seeds[ok], targets[ok], full_turns=True)
         else:
             solved, error, steps = solve_point(
-                robot, seeds[ok], targets[ok], angles=tip_angles[ok], angle_tolerance=0.0, angle_scale=1.0
+                robot,
+                seeds[ok],
+                targets[ok],
+                angles=tip_angles[ok],
+                angle_tolerance=0.0,
+                angle_scale=1.0,
+                full_turns=True,
             )
         self.effort.steps += steps + len(solved)
         q[ok] = solved
@@ -273,6 +282,7 @@ class _Kinematics:
             angle_tolerance=0.8 * world.goal_angle_tolerance,
             angle_scale=world.object.radius,
             tolerance_m=1e-9,
+            full_turns=True,
         )
         self.effort.steps += steps + len(solved)
         q[ok] = solved
@@ -288,7 +298,9 @@ class _Kinematics:
     def toward(self, grasp_rel: np.ndarray, seeds: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Where the object's origin, held as ``grasp_rel``, gets closest to ``points`` from ``seeds`` (reached
         or not)."""
-        q, _, steps = solve_point(self.world.robot, seeds, points, offsets=grasp_rel[:, :2], tolerance_m=1e-6)
+        q, _, steps = solve_point(
+            self.world.robot, seeds, points, offsets=grasp_rel[:, :2], tolerance_m=1e-6, full_turns=True
+        )
         self.effort.steps += steps + len(q)
         return q
 

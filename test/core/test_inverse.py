@@ -71,3 +71,38 @@ def test_mirroring_keeps_the_tip_on_the_mirror_line_and_flips_the_elbow() -> Non
     other = mirrored(robot, q, np.arctan2(tips[:, 1], tips[:, 0]))
     assert np.max(np.linalg.norm(tip_poses(robot, other)[:, :2] - tips, axis=1)) <= 1e-12
     assert np.array_equal(other[:, 1], -q[:, 1])
+
+
+def test_full_turns_reach_targets_behind_the_base_from_either_elbow() -> None:
+    """shapes2 seed 50: the bar's grasp points lie behind the base (near pi), joint 1 turns all the way round
+    (+-3.14159). From the start and from its mirror image the solver stopped at joint 1's limit on every grasp
+    point; with ``full_turns`` each seed reaches its point, its own elbow kept, joint 1 inside its limits."""
+    robot = Robot(
+        np.zeros(2),
+        np.array([1.088, 0.715]),
+        np.array([-3.14159, -2.17]),
+        np.array([3.14159, 2.17]),
+        np.array([1.638439, -1.009121]),
+    )
+    angles = np.linspace(2.93, 2.97, 4)
+    targets = np.tile(
+        np.column_stack([np.cos(angles), np.sin(angles)]) * np.array([1.2, 1.3, 1.4, 1.25])[:, None], (2, 1)
+    )
+    start = np.repeat(robot.initial[None], 4, axis=0)
+    seeds = np.concatenate([start, mirrored(robot, start, angles)])
+    stopped = solve_point(robot, seeds, targets)
+    assert np.all(stopped.error > 1e-2)
+    wrapped = solve_point(robot, seeds, targets, full_turns=True)
+    assert np.all(wrapped.error <= 1e-9)
+    assert np.all((wrapped.q >= robot.joint_lower) & (wrapped.q <= robot.joint_upper))
+    np.testing.assert_allclose(tip_poses(robot, wrapped.q)[:, :2], targets, atol=1e-9)
+    assert np.all(np.sign(wrapped.q[:, 1]) == np.sign(seeds[:, 1]))  # each seed's elbow
+
+
+def test_full_turns_leave_a_joint_with_narrower_limits_stopped_at_them() -> None:
+    robot = _robot(2)  # joint 1 within +-3.1: not a whole turn
+    target = 1.2 * np.array([[np.cos(-3.0), np.sin(-3.0)]])
+    seeds = np.array([[2.6, 0.9]])
+    a = solve_point(robot, seeds, target, full_turns=True)
+    b = solve_point(robot, seeds, target)
+    np.testing.assert_array_equal(a.q, b.q)

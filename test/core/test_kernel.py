@@ -454,7 +454,9 @@ def test_one_pose_shared_by_a_batch_gives_the_intervals_of_the_pose_repeated(mod
 def test_warm_up_compiles_every_kernel_the_python_entry_points_call() -> None:
     """In a fresh process (the kernels compiled or loaded from the cache), after :func:`kernel.warm_up` every
     compiled function an entry point calls has a compiled version, and planning with the improvement (moves
-    checked, RRT-Connect's rounds, both modes) compiles no other: no plan waits for the compiler."""
+    checked, RRT-Connect's rounds, both modes; on 3 joints the lattice's searches) compiles no other: no plan
+    waits for the compiler (a read-only array is another type to numba: the lattice's lower limits once were,
+    and a 3-joint world's first improvement waited about 2 s for them)."""
     code = textwrap.dedent("""
         import clew_ros.core.kernel as k
         from clew_ros.core.clew import plan
@@ -462,10 +464,12 @@ def test_warm_up_compiles_every_kernel_the_python_entry_points_call() -> None:
         from clew_ros.core.world import load_world
         k.warm_up()
         entry = ["_decode", "_intervals", "_clearly_valid", "_moves_clear", "_connect_rounds", "_solve_point",
-                 "_chain", "_pruned", "_bounce_all", "_screen", "_shortcuts"]
+                 "_chain", "_pruned", "_bounce_all", "_screen", "_shortcuts", "lattice_search", "lattice_costs",
+                 "lattice_repair", "release_totals"]
         counts = {name: len(getattr(k, name).signatures) for name in entry}
         print(" ".join(name for name in entry if not counts[name]))
         plan(load_world("config/single_transfer.yaml"), PlannerSettings(seed=0, improve_time=0.4))
+        plan(load_world("config/arm3_regrasp.yaml"), PlannerSettings(seed=0, improve_time=0.5))
         print(" ".join(name for name in entry if len(getattr(k, name).signatures) != counts[name]))
     """)
     done = subprocess.run(

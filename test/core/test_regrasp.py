@@ -87,6 +87,24 @@ def test_proposals_end_within_a_narrow_goal_angle_tolerance_itself() -> None:
         assert goal_reached(world, pose, goal)
 
 
+def test_grasps_behind_the_base_are_proposed_whichever_way_round_the_arm_starts() -> None:
+    """shapes2 seed 50: every grasp point lies behind the base, beyond joint 1's limit from the start; once no
+    grasp configuration was found there, so a plan that took the object down once on the way kept its regrasp
+    (11.4-13.8 rad, where one transfer of 5.27 rad does)."""
+    from clew_ros.worlds import generate
+
+    world = generate("shapes2", 50).world()
+    goal = np.asarray(world.object.goal, dtype=float)
+    proposals, _ = propose(
+        world, world.robot.initial, world.object.initial, goal, np.random.default_rng(0), margin_m=5e-4
+    )
+    one = [p for p in proposals if len(p.grasps) == 1]
+    assert one
+    assert min(p.travel for p in one) < 6.0
+    for proposal in one:
+        assert np.all((proposal.keys >= world.robot.joint_lower) & (proposal.keys <= world.robot.joint_upper))
+
+
 @pytest.mark.parametrize(("name", "one", "two"), [("single_transfer", True, False), ("arm3_regrasp", False, True)])
 def test_proposals_come_with_the_transfers_asked_for(name: str, one: bool, two: bool) -> None:
     world = load_world(ROOT / "config" / f"{name}.yaml")

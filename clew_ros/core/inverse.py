@@ -18,8 +18,10 @@ import numpy as np
 from clew_ros.core import kernel
 from clew_ros.core.world import Robot
 
-__all__ = ["ITERATIONS", "Solution", "mirrored", "solve_point"]
+__all__ = ["FULL_TURN_RAD", "ITERATIONS", "TOLERANCE_M", "Solution", "mirrored", "solve_point"]
 
+#: Joint limits at least this far apart (rad) let the joint turn all the way round (``full_turns``).
+FULL_TURN_RAD = kernel.FULL_TURN_RAD
 #: Iterations of :func:`solve_point`.
 ITERATIONS = 40
 #: Damping (m^2) of the least-squares step.

@@ -80,7 +80,7 @@ BACKOFF_RAD = 1e-6
 _TWO_PI = 2.0 * math.pi
 #: Limits at least this far apart (rad) let a joint turn all the way round (worlds write +-3.14159, just inside
 #: pi): inverse kinematics takes such a joint past one limit to the same angle a turn short of the other.
-_FULL_TURN = _TWO_PI - 1e-3
+FULL_TURN_RAD = _TWO_PI - 1e-3
 #: A contact closer than this to the current angle (rad) is where the start touches, not a crossing.
 _AT_START = 1e-12
 #: :func:`_cannot_improve` skips a contact only if it is this much (rad) past both nearest contacts:
@@ -1388,8 +1388,8 @@ def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndar
 @_leaf
 def _within_limits(angle: float, lower: float, upper: float, full_turns: bool) -> float:
     """``angle`` stopped at the limits; but with ``full_turns``, on a joint that turns all the way round
-    (:data:`_FULL_TURN`), past one limit it goes on as the same angle inside the other (less than a turn past)."""
-    if full_turns and upper - lower >= _FULL_TURN:
+    (:data:`FULL_TURN_RAD`), past one limit it goes on as the same angle inside the other (less than a turn past)."""
+    if full_turns and upper - lower >= FULL_TURN_RAD:
         if angle > upper:
             angle -= _TWO_PI
         elif angle < lower:

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.collision import packed_world
-from clew_ros.core.inverse import mirrored, solve_point
+from clew_ros.core.inverse import FULL_TURN_RAD, TOLERANCE_M, mirrored, solve_point
 from clew_ros.core.kernel import clearly_valid, screen_routes
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.search import goals_reached
@@ -152,10 +152,7 @@ def screen_samples(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 class _Kinematics:
-    """Batched inverse kinematics and validity with a margin, counting the work. The inverse kinematics takes a
-    joint that turns all the way round past its limits (``full_turns``): a key configuration is any way of
-    holding, wherever the seed lies (shapes2 seed 50's grasps lie behind the base, where from the start and
-    its mirror image the solver stopped at joint 1's limit and no grasp configuration was found)."""
+    """Batched inverse kinematics (:meth:`solve`) and validity with a margin, counting the work."""
 
     def __init__(
         self,
@@ -178,6 +175,51 @@ class _Kinematics:
         ``step_checks`` checks each."""
         done = self.effort.checks + self.step_checks * self.effort.steps
         return self.max_checks is not None and done >= self.max_checks
+
+    def solve(
+        self,
+        seeds: np.ndarray,
+        targets: np.ndarray,
+        reached_m: float,
+        *,
+        offsets: np.ndarray | None = None,
+        angles: np.ndarray | None = None,
+        angle_tolerance: float = np.pi,
+        angle_scale: float = 1.0,
+        tolerance_m: float = TOLERANCE_M,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`solve_point` from ``seeds`` ``(B, n)`` onto ``targets`` (``(B, 2)`` or one point; ``offsets``
+        and ``angles`` per row), counting its steps; the rows it leaves more than ``reached_m`` from their
+        target are solved again taking a joint that turns all the way round past its limits (``full_turns``),
+        and the nearer answer kept. A target behind the base lies past joint 1's limit from seeds on one side
+        (shapes2 seed 50: every grasp point, from the start and from its mirror image, so no grasp
+        configuration was found there); a redundant arm mostly reaches it without a turn, nearer its seed, as
+        before. The configurations and their errors (m)."""
+        robot = self.world.robot
+        points = np.broadcast_to(np.asarray(targets, float), (len(seeds), 2))
+
+        def solved(rows: np.ndarray | slice, full_turns: bool) -> tuple[np.ndarray, np.ndarray, int]:
+            return solve_point(
+                robot,
+                seeds[rows],
+                points[rows],
+                offsets=None if offsets is None else offsets[rows],
+                angles=None if angles is None else angles[rows],
+                angle_tolerance=angle_tolerance,
+                angle_scale=angle_scale,
+                tolerance_m=tolerance_m,
+                full_turns=full_turns,
+            )
+
+        q, error, steps = solved(slice(None), False)
+        self.effort.steps += steps + len(q)
+        short = np.flatnonzero(error > reached_m)
+        if len(short) and np.any(robot.joint_upper - robot.joint_lower >= FULL_TURN_RAD):
+            again, left, more = solved(short, True)
+            self.effort.steps += more + len(short)
+            nearer = left < error[short]
+            q[short[nearer]], error[short[nearer]] = again[nearer], left[nearer]
+        return q, error
 
     def stop(self) -> bool:
         return self.exhausted or (self.should_stop is not None and self.should_stop())
@@ -213,18 +255,11 @@ class _Kinematics:
         q = np.array(seeds, dtype=float)
         ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
         if tip_angles is None:
-            solved, error, steps = solve_point(robot, seeds[ok], targets[ok], full_turns=True)
+            solved, error = self.solve(seeds[ok], targets[ok], HOLD_ERROR_M)
         else:
-            solved, error, steps = solve_point(
-                robot,
-                seeds[ok],
-                targets[ok],
-                angles=tip_angles[ok],
-                angle_tolerance=0.0,
-                angle_scale=1.0,
-                full_turns=True,
+            solved, error = self.solve(
+                seeds[ok], targets[ok], HOLD_ERROR_M, angles=tip_angles[ok], angle_tolerance=0.0, angle_scale=1.0
             )
-        self.effort.steps += steps + len(solved)
         q[ok] = solved
         ok[ok] = error <= HOLD_ERROR_M
         ok[ok] = self.valid(q[ok], placements[ok])
@@ -273,18 +308,16 @@ class _Kinematics:
         if world.goal_angle_tolerance < np.pi - 1e-6:
             angles = goal[2] - grasp_rel[ok, 2]
         q = np.array(seeds, dtype=float)
-        solved, error, steps = solve_point(
-            world.robot,
+        solved, error = self.solve(
             seeds[ok],
             goal[:2],
+            GOAL_SHARE * world.goal_tolerance,
             offsets=grasp_rel[ok, :2],
             angles=angles,
             angle_tolerance=0.8 * world.goal_angle_tolerance,
             angle_scale=world.object.radius,
             tolerance_m=1e-9,
-            full_turns=True,
         )
-        self.effort.steps += steps + len(solved)
         q[ok] = solved
         ok[ok] = error <= GOAL_SHARE * world.goal_tolerance
         # That error bounds a sum of the position's error and the radius times the angle's excess over 0.8 of
@@ -298,10 +331,7 @@ class _Kinematics:
     def toward(self, grasp_rel: np.ndarray, seeds: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Where the object's origin, held as ``grasp_rel``, gets closest to ``points`` from ``seeds`` (reached
         or not)."""
-        q, _, steps = solve_point(
-            self.world.robot, seeds, points, offsets=grasp_rel[:, :2], tolerance_m=1e-6, full_turns=True
-        )
-        self.effort.steps += steps + len(q)
+        q, _ = self.solve(seeds, points, 1e-6, offsets=grasp_rel[:, :2], tolerance_m=1e-6)
         return q
 
 

@@ -328,19 +328,25 @@ def _found_message(landmarks: int, better: Improvement, improve_time: float) -> 
     )
     if better.travel < better.first_travel or better.transfers < better.first_transfers:
         message += f" (first plan: {better.first_transfers} grasp(s), {better.first_travel:.2f} rad)"
+    if better.refused:
+        message += f"; the improved plan was refused ({better.refused}), the first plan is returned"
     return message
 
 
 def _quality(better: Improvement) -> dict[str, Any]:
     """The plan's quality for its stats: joint travel (rad, sum over joints of the absolute motion) and
-    transfers, of the returned plan and of the first one, and the improvement's work (deterministic)."""
-    return {
+    transfers, of the returned plan and of the first one, and the improvement's work (deterministic); when the
+    final checks refused a better plan (a fault: :func:`clew_ros.core.improve.improve`), what they found."""
+    quality: dict[str, Any] = {
         "joint_travel_rad": round(better.travel, 6),
         "transfers": better.transfers,
         "first_joint_travel_rad": round(better.first_travel, 6),
         "first_transfers": better.first_transfers,
         "improve_work": better.work,
     }
+    if better.refused:
+        quality["improve_refused"] = better.refused
+    return quality
 
 
 def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int) -> str:

@@ -97,8 +97,8 @@ absolute motion (rad). The first plan is kept when nothing better is found.
 (:func:`clew_ros.core.continuous.straight_move_clear`): valid at any
 checking resolution, keeping at least :data:`MIN_MARGIN_FACTOR` x
 ``planner.clearance`` from everything, like the planner's own paths. The whole improved plan is checked once more
-at the validator's 0.002 rad; if that ever failed, the first plan would be
-returned.
+at the validator's 0.002 rad, and the object's end against the goal's tolerances; if that ever failed,
+the first plan would be returned, and ``improve_refused`` in its stats would say why.
 
 **Determinism.** All choices come from a generator seeded with
 ``planner.seed`` (apart from the planner's own), and the budget is counted
@@ -291,6 +291,7 @@ class Improvement:
     shortcuts: int  # straight moves accepted
     work: int  # work units spent (deterministic)
     stopped: bool  # the time limit or cancel cut it short
+    refused: str = ""  # why a better plan was not returned: "" (it was, or none was found), or what failed of it
 
 
 @dataclass
@@ -1195,11 +1196,10 @@ def improve(
         if q is None or p is None or not np.array_equal(p.waypoints, q.waypoints)
     ]
     final = pieces[-1].end_pose(world) if pieces else final_object_pose
-    if (
-        not _better(first_score, _score(pieces))
-        or any(p is not None and not _dense_clear(world, p) for p in changed)
-        or not goal_reached(world, final, goal)
-    ):
+    refused = ""
+    if _better(first_score, _score(pieces)):
+        refused = _refusal(world, changed, final, goal)
+    if refused or not _better(first_score, _score(pieces)):
         pieces, final = first, final_object_pose
     score = _score(pieces)
     return Improvement(
@@ -1212,4 +1212,16 @@ def improve(
         improver.shortcuts if pieces is not first else 0,
         improver.budget.spent,
         improver.budget.stopped,
+        refused,
     )
+
+
+def _refusal(world: World, changed: list[_Piece | None], final: np.ndarray, goal: np.ndarray) -> str:
+    """What the final checks find wrong with an improved plan, "" when nothing: a changed segment not clear at
+    the validator's step, or the object off the goal. Every step checks what it builds, so either is a fault;
+    the first plan is returned then, and the plan's stats name the fault (``improve_refused``)."""
+    if any(p is not None and not _dense_clear(world, p) for p in changed):
+        return "a changed segment collides at the validator's step"
+    if not goal_reached(world, final, goal):
+        return "the object ends off the goal"
+    return ""

@@ -97,6 +97,30 @@ def test_improvement_ends_on_the_goal_within_a_narrow_angle_tolerance() -> None:
     assert validate_plan(world, Plan.from_result(world, result)) == []
 
 
+@pytest.mark.parametrize(
+    ("check", "said"), [("goal_reached", "off the goal"), ("_dense_clear", "collides at the validator's step")]
+)
+def test_a_better_plan_the_final_checks_refuse_gives_the_first_plan_and_says_why(monkeypatch, check, said) -> None:
+    """Every step checks what it builds, so the final checks never refuse a plan unless something is wrong; if
+    they do, the first plan comes back and its stats and message say what they found (it once happened
+    unseen on a narrow goal angle: test_improvement_ends_on_the_goal_within_a_narrow_angle_tolerance)."""
+    from clew_ros.core import improve as improvement
+
+    world = _world("figure1")
+    first = _plan(world, 0, 0.0)
+    kept = _plan(world, 0, 0.3)
+    assert kept.stats["joint_travel_rad"] < first.stats["joint_travel_rad"]
+    assert "improve_refused" not in kept.stats
+    monkeypatch.setattr(improvement, check, lambda *args, **kwargs: False)
+    refused = _plan(world, 0, 0.3)
+    assert said in refused.stats["improve_refused"]
+    assert "refused" in refused.message
+    assert refused.stats["joint_travel_rad"] == first.stats["joint_travel_rad"]
+    assert [np.asarray(s.waypoints).tolist() for s in refused.segments] == [
+        np.asarray(s.waypoints).tolist() for s in first.segments
+    ]
+
+
 def test_improve_time_zero_gives_exactly_the_first_plan() -> None:
     world = _world("figure1")
     result = _plan(world, 1, 0.0)

@@ -1388,7 +1388,8 @@ def _chain(q: np.ndarray, base: np.ndarray, lengths: np.ndarray, points: np.ndar
 @_leaf
 def _within_limits(angle: float, lower: float, upper: float, full_turns: bool) -> float:
     """``angle`` stopped at the limits; but with ``full_turns``, on a joint that turns all the way round
-    (:data:`FULL_TURN_RAD`), past one limit it goes on as the same angle inside the other (less than a turn past)."""
+    (:data:`FULL_TURN_RAD`), past one limit it goes on a turn back from the other (the same angle, to within the
+    gap between the limits, where it stops; ``angle`` is less than a turn past)."""
     if full_turns and upper - lower >= FULL_TURN_RAD:
         if angle > upper:
             angle -= _TWO_PI

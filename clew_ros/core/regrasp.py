@@ -217,7 +217,7 @@ class _Kinematics:
         if len(short) and np.any(robot.joint_upper - robot.joint_lower >= FULL_TURN_RAD):
             again, left, more = solved(short, True)
             self.effort.steps += more + len(short)
-            nearer = left < error[short]
+            nearer = left < error[short]  # by error alone: the answers differ only where the first met a limit
             q[short[nearer]], error[short[nearer]] = again[nearer], left[nearer]
         return q, error
 

@@ -100,9 +100,19 @@ def test_full_turns_reach_targets_behind_the_base_from_either_elbow() -> None:
 
 
 def test_full_turns_leave_a_joint_with_narrower_limits_stopped_at_them() -> None:
-    robot = _robot(2)  # joint 1 within +-3.1: not a whole turn
+    """Joint 1 within +-3.1 (not a whole turn): from the seed below the solver meets the limit and stops there,
+    ``full_turns`` or not; with +-3.14159 and ``full_turns`` the same seed goes on and reaches the target."""
     target = 1.2 * np.array([[np.cos(-3.0), np.sin(-3.0)]])
-    seeds = np.array([[2.6, 0.9]])
-    a = solve_point(robot, seeds, target, full_turns=True)
-    b = solve_point(robot, seeds, target)
+    seeds = np.array([[2.6, -0.9]])
+    narrow = _robot(2)
+    a = solve_point(narrow, seeds, target, full_turns=True)
+    b = solve_point(narrow, seeds, target)
     np.testing.assert_array_equal(a.q, b.q)
+    assert a.q[0, 0] == pytest.approx(3.1)
+    assert a.error[0] > 0.1
+    whole = Robot(
+        narrow.base, narrow.link_lengths, np.array([-3.14159, -2.8]), np.array([3.14159, 2.8]), narrow.initial
+    )
+    c = solve_point(whole, seeds, target, full_turns=True)
+    assert c.error[0] <= 1e-9
+    assert whole.joint_lower[0] <= c.q[0, 0] < 0.0

@@ -1196,10 +1196,9 @@ def improve(
         if q is None or p is None or not np.array_equal(p.waypoints, q.waypoints)
     ]
     final = pieces[-1].end_pose(world) if pieces else final_object_pose
-    refused = ""
-    if _better(first_score, _score(pieces)):
-        refused = _refusal(world, changed, final, goal)
-    if refused or not _better(first_score, _score(pieces)):
+    better = _better(first_score, _score(pieces))
+    refused = _refusal(world, changed, final, goal) if better else ""
+    if refused or not better:
         pieces, final = first, final_object_pose
     score = _score(pieces)
     return Improvement(

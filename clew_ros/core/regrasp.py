@@ -311,8 +311,7 @@ class _Kinematics:
         world = self.world
         lengths = np.broadcast_to(world.robot.link_lengths, (len(grasp_rel), world.robot.dof)).copy()
         lengths[:, -1] = np.hypot(lengths[:, -1] + grasp_rel[:, 0], grasp_rel[:, 1])  # joint n to the object
-        distance = float(np.hypot(*(goal[:2] - world.robot.base)))
-        reach = _within_reach(lengths, np.full(len(grasp_rel), distance), GOAL_SHARE * world.goal_tolerance)
+        distance = np.full(len(grasp_rel), float(np.hypot(*(goal[:2] - world.robot.base))))
         narrow = world.goal_angle_tolerance < np.pi - 1e-6
         q = np.array(seeds, dtype=float)
         ok = np.zeros(len(q), dtype=bool)
@@ -320,6 +319,7 @@ class _Kinematics:
         # goal angle its rows the first pass left off the goal try the next
         passes = GOAL_PASSES if narrow and world.robot.dof < 3 else GOAL_PASSES[:1]
         for slack, share, weight in passes:
+            reach = _within_reach(lengths, distance, share * world.goal_tolerance)
             rows = np.flatnonzero(reach & ~ok)  # the rows the tighter pass left off the goal try the wider one
             if not len(rows):
                 break
@@ -335,8 +335,8 @@ class _Kinematics:
             )
             q[rows] = solved
             ok[rows] = error <= share * world.goal_tolerance
-        # That error bounds a sum of the position's error and the radius times the angle's excess over the slack
-        # share of the tolerance, which a narrow angle tolerance may not keep within it: the goal's own test decides.
+        # That error bounds both the position's error and the angle's weight times its excess over the slack share
+        # of the tolerance, which need not keep the angle within the tolerance itself: the goal's own test decides.
         held = compose(tip_poses(world.robot, q[ok]), grasp_rel[ok])
         reached = goals_reached(world, held, goal)
         ok[ok] = reached

@@ -115,6 +115,7 @@ def test_a_better_plan_the_final_checks_refuse_gives_the_first_plan_and_says_why
     refused = _plan(world, 0, 0.3)
     assert said in refused.stats["improve_refused"]
     assert "refused" in refused.message
+    assert said in refused.message
     assert refused.stats["joint_travel_rad"] == first.stats["joint_travel_rad"]
     assert [np.asarray(s.waypoints).tolist() for s in refused.segments] == [
         np.asarray(s.waypoints).tolist() for s in first.segments

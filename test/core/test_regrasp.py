@@ -107,8 +107,8 @@ def test_grasps_behind_the_base_are_proposed_whichever_way_round_the_arm_starts(
 
 def test_a_two_joint_arm_carries_a_grasp_onto_the_edge_of_a_narrow_goal() -> None:
     """shapes2 seed 60 (goal angle tolerance 0.5 rad): the one grasp a single transfer can use reaches the goal
-    only 0.49 rad and about a centimetre off it; the goal's inverse kinematics kept a quarter of the position's
-    tolerance and a fifth of the angle's to spare, so no one-transfer proposal was made and every plan kept a
+    only 0.49 rad and about a centimetre off it; the goal's inverse kinematics used a quarter of the position's
+    tolerance and kept a fifth of the angle's to spare, so no one-transfer proposal was made and every plan kept a
     regrasp (7.43 rad; the grid reference carries the object once in 5.84). Its second pass uses nearly all of
     both, and every proposal still ends within the goal's tolerances."""
     from clew_ros.worlds import generate

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 from benchmarks.families_run import _fmt, summarise
-from benchmarks.generated import build_world, reference_world
+from benchmarks.generated import add_first_world, build_world, reference_world, world_seeds
 from benchmarks.report import command_line, header, write_report
 from benchmarks.run import ROOT, _export
 from clew_ros.worlds import FAMILIES
@@ -86,13 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--baseline", required=True, help="git revision to compare with")
     parser.add_argument("--families", default=",".join(FAMILIES), help="comma-separated (default: all)")
     parser.add_argument("--worlds", type=int, default=3, help="worlds per family, seeds K..K+W-1")
-    parser.add_argument(
-        "--first-world",
-        type=int,
-        default=0,
-        metavar="K",
-        help="the first world seed (default 0; 70 and on: held out, docs/benchmarks.md)",
-    )
+    add_first_world(parser)
     parser.add_argument("--seeds", type=int, default=2, help="planner seeds per world, 0..S-1")
     parser.add_argument("--time-limit", type=float, default=10.0, help="per run, s")
     parser.add_argument("--jobs", type=int, default=2, help="(world, seed) pairs planned at once")
@@ -107,9 +101,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="clew_families_ab_") as scratch:
         directory = Path(scratch)
         worlds = [reference_world()] + [
-            build_world(f, s, directory)
-            for s in range(args.first_world, args.first_world + args.worlds)
-            for f in families
+            build_world(f, s, directory) for s in world_seeds(args, args.worlds) for f in families
         ]
         tasks = [(w, seed) for seed in range(args.seeds) for w in worlds]
 

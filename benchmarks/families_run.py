@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.generated import GeneratedBenchWorld, build_world, reference_world
+from benchmarks.generated import GeneratedBenchWorld, add_first_world, build_world, reference_world, world_seeds
 from clew_ros.worlds import FAMILIES
 
 #: Default sizes (the issue's: at least 6 solvable families x 10 worlds x 5 seeds) and their --quick values.
@@ -193,13 +193,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--quick", action="store_true", help="1 world per family, 2 seeds, 3 s limit")
     parser.add_argument("--families", default=None, help=f"comma-separated (default all: {','.join(FAMILIES)})")
     parser.add_argument("--worlds", type=int, default=None, help="worlds per family, seeds K..K+W-1 (default 10)")
-    parser.add_argument(
-        "--first-world",
-        type=int,
-        default=0,
-        metavar="K",
-        help="the first world seed (default 0; 70 and on: held out, docs/benchmarks.md)",
-    )
+    add_first_world(parser)
     parser.add_argument("--seeds", type=int, default=None, help="planner seeds per world, 0..S-1 (default 5)")
     parser.add_argument("--time-limit", type=float, default=None, help="per run, s (default 10)")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
@@ -234,7 +228,7 @@ def run(args: argparse.Namespace, directory: Path) -> dict:
     with concurrent.futures.ProcessPoolExecutor(
         max_workers=args.jobs, mp_context=context, initializer=_warm_up
     ) as pool:
-        jobs = [(f, s) for s in range(args.first_world, args.first_world + world_count) for f in families]
+        jobs = [(f, s) for s in world_seeds(args, world_count) for f in families]
         built = list(pool.map(build_world, *zip(*jobs, strict=True), [str(directory)] * len(jobs)))
         generation_s = time.monotonic() - started
         print(f"generated {len(built)} worlds in {generation_s:.0f} s", file=sys.stderr)

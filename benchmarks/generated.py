@@ -11,6 +11,7 @@ written into ``config/``.
 
 from __future__ import annotations
 
+import argparse
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,6 +33,26 @@ class GeneratedBenchWorld:
     obstacles: int
     witness_transfers: int | None
     witness_travel_rad: float | None
+
+
+#: The first world seed no session has measured or tuned on (docs/benchmarks.md, "Held-out worlds").
+HELD_OUT_FROM = 70
+
+
+def add_first_world(parser: argparse.ArgumentParser) -> None:
+    """``--first-world K``: the family benchmarks generate worlds K..K+W-1 (default 0)."""
+    parser.add_argument(
+        "--first-world",
+        type=int,
+        default=0,
+        metavar="K",
+        help=f"the first world seed (default 0; {HELD_OUT_FROM} and on: held out, docs/benchmarks.md)",
+    )
+
+
+def world_seeds(args: argparse.Namespace, count: int) -> range:
+    """The world seeds ``--first-world`` and a count of worlds give."""
+    return range(args.first_world, args.first_world + count)
 
 
 def solvable_families() -> list[str]:

@@ -61,8 +61,8 @@ def solve_point(
 
     Joint limits always hold. With ``full_turns``, a joint whose limits are a whole turn apart (to 1e-3 rad, as
     worlds write +-3.14159) goes on past one a turn back from the other (the same angle, to within the gap between
-    the limits): a target behind the base is
-    reached whichever way round the seed lies (without it, a seed on the wrong side stops at the limit).
+    the limits): a target behind the base is reached whichever way round the seed lies (without it, a seed on the
+    wrong side stops at the limit).
     Compiled (:func:`clew_ros.core.kernel.solve_point`).
     """
     seeds = np.array(seeds, dtype=float, ndmin=2)

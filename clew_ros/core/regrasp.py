@@ -263,12 +263,8 @@ class _Kinematics:
         targets = transform_points(placements, self.world.object.grasps)[np.arange(len(grasps)), grasps]
         q = np.array(seeds, dtype=float)
         ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
-        if tip_angles is None:
-            solved, error = self.solve(seeds[ok], targets[ok], HOLD_ERROR_M)
-        else:
-            solved, error = self.solve(
-                seeds[ok], targets[ok], HOLD_ERROR_M, angles=tip_angles[ok], angle_tolerance=0.0, angle_scale=1.0
-            )
+        angles = None if tip_angles is None else tip_angles[ok]
+        solved, error = self.solve(seeds[ok], targets[ok], HOLD_ERROR_M, angles=angles, angle_tolerance=0.0)
         q[ok] = solved
         ok[ok] = error <= HOLD_ERROR_M
         ok[ok] = self.valid(q[ok], placements[ok])

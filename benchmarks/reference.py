@@ -546,11 +546,17 @@ def load_worlds(names: list[str]) -> list[tuple[World, dict[str, Any]]]:
 
 def _generated(name: str) -> list[Any]:
     """``joints_N`` or ``obstacles_M`` for any ``N`` >= 2 or ``M`` >= 2 (:mod:`benchmarks.families` lists a few):
-    figure1's task with ``N`` joints, or joints_3 with ``M`` obstacles in all."""
+    figure1's task with ``N`` joints, or joints_3 with ``M`` obstacles in all; or ``FAMILY_S``, world ``S`` of a
+    :mod:`clew_ros.worlds` family, as ``clew_world FAMILY --seed S`` writes it (shapes2_60, arm7_62, ...)."""
     from benchmarks.families import joints_world, obstacles_world
+    from clew_ros.worlds import FAMILIES, generate
 
     family, _, count = name.rpartition("_")
-    if not count.isdigit() or int(count) < 2:
+    if not count.isdigit():
+        return []
+    if family in FAMILIES:
+        return [generate(family, int(count))]
+    if int(count) < 2:
         return []
     make = {"joints": joints_world, "obstacles": obstacles_world}.get(family)
     return [] if make is None else [make(int(count))]

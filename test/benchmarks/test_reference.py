@@ -128,3 +128,19 @@ def test_worlds_by_name_include_any_count_of_joints_or_obstacles() -> None:
     for name in ("obstacles_1", "elbows_3", "obstacles_x"):
         with pytest.raises(ValueError, match="--worlds"):
             load_worlds([name])
+
+
+def test_worlds_by_name_include_a_generated_familys_world_as_clew_world_writes_it(tmp_path) -> None:
+    from clew_ros.core.world import load_world
+    from clew_ros.worlds import generate, write_world
+
+    ((named, parameters),) = load_worlds(["shapes2_60"])
+    write_world(generate("shapes2", 60), tmp_path / "shapes2_60.yaml")
+    written = load_world(tmp_path / "shapes2_60.yaml")
+    assert named.name == written.name == "shapes2_60"
+    np.testing.assert_array_equal(named.robot.initial, written.robot.initial)
+    np.testing.assert_array_equal(named.object.goal, written.object.goal)
+    assert len(named.obstacles) == len(written.obstacles)
+    assert "world" in parameters
+    with pytest.raises(ValueError, match="--worlds"):
+        load_worlds(["shapes3_60"])

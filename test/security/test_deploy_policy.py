@@ -15,7 +15,9 @@ native install; not the PyPI wheels), so they count as published there.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
+from copy import deepcopy
 from pathlib import Path
 
 import pytest
@@ -23,7 +25,8 @@ import pytest
 etree = pytest.importorskip("lxml.etree")
 rclpy = pytest.importorskip("rclpy")
 
-from helpers.node_harness import LATCHED, Client, NodeProcess, wait_until  # noqa: E402
+from helpers.node_harness import LATCHED, Client, NodeProcess, PlannersProcess, wait_until  # noqa: E402
+from rclpy.node import NodeNameNonExistentError  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
 from clew_ros.node.publishing import have_tf2_msgs  # noqa: E402
@@ -39,6 +42,8 @@ TF_TOPICS = {"/tf", "/tf_static"}
 #: What ``create_permission`` adds for rmw_fastrtps_cpp (sros2's _RMW_WITH_ROS_GRAPH_INFO_TOPIC).
 DISCOVERY_TOPIC = "ros_discovery_info"
 START_TIMEOUT_S = 60.0
+#: Time between two reads of the graph that must agree (s): endpoint announcements come within ms of each other.
+SETTLE_S = 1.0
 
 Interface = dict[str, set[str]]  # role (publish, subscribe, reply, request) -> fully qualified names
 
@@ -63,13 +68,18 @@ def resolve(name: str, namespace: str, node: str) -> str:
     return prefix + name
 
 
-def policy_interface(policy: etree._ElementTree) -> Interface:
-    """What the ``/clew_planner`` enclave allows, by role, as fully qualified names."""
-    allowed: Interface = {"publish": set(), "subscribe": set(), "reply": set(), "request": set()}
+def the_profile(policy: etree._ElementTree) -> etree._Element:
+    """The one profile of the one enclave, ``/clew_planner``, of the policy."""
     (enclave,) = policy.getroot().findall("enclaves/enclave")
     assert enclave.get("path") == ENCLAVE
     (profile,) = enclave.findall("profiles/profile")
     assert (profile.get("ns"), profile.get("node")) == (NODE_NAMESPACE, NODE_NAME)
+    return profile
+
+
+def policy_interface(profile: etree._Element) -> Interface:
+    """What a profile allows, by role, as fully qualified names."""
+    allowed: Interface = {"publish": set(), "subscribe": set(), "reply": set(), "request": set()}
     for rules in profile:
         if not isinstance(rules.tag, str):  # a comment
             continue
@@ -82,8 +92,19 @@ def policy_interface(policy: etree._ElementTree) -> Interface:
             name = (entry.text or "").strip()
             assert not set(name) & set("*?[]"), f"{name}: a wildcard allows more than the node has"
             for role in roles:
-                allowed[role].add(resolve(name, NODE_NAMESPACE, NODE_NAME))
+                allowed[role].add(resolve(name, profile.get("ns"), profile.get("node")))
     return allowed
+
+
+def namespaced_profile(profile: etree._Element, namespace: str) -> etree._Element:
+    """The profile of a planner in ``namespace``, as docs/security.md says to write it: ``ns`` set, and
+    ``tf`` / ``tf_static`` relative (clew_planners and its launch file remap them into the namespace)."""
+    copy = deepcopy(profile)
+    copy.set("ns", namespace)
+    for topic in copy.iter("topic"):
+        if topic.text in TF_TOPICS:
+            topic.text = topic.text.lstrip("/")
+    return copy
 
 
 def dds_permissions(policy: etree._ElementTree) -> etree._ElementTree:
@@ -97,19 +118,17 @@ def dds_permissions(policy: etree._ElementTree) -> etree._ElementTree:
     return permissions
 
 
-@pytest.fixture(scope="module")
-def node_interface(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Interface]:
-    """The publishers, subscriptions, services and clients of a running ``/clew_planner``, by role."""
-    log = tmp_path_factory.mktemp("policy") / "node.log"
-    node = NodeProcess(log, QUICK, {"record.enabled": False}, namespace=NODE_NAMESPACE)
-    client = Client("clew_policy_probe")
-    try:
-        client.inbox(f"/{NODE_NAME}/world_yaml", String, LATCHED).wait_for(timeout_s=START_TIMEOUT_S)
-        graph = client.node
+def graph_interface(client: Client, namespace: str, node: str) -> Interface:
+    """The publishers, subscriptions, services and clients of ``namespace/node`` in the ROS graph, by role,
+    once two reads :data:`SETTLE_S` apart agree. The node creates every endpoint before it publishes its world,
+    but discovery announces them one by one, so a list read just after the world arrived may lack the last
+    ones; the node creates nothing later, so a list that stays the same is the whole."""
+    graph = client.node
 
-        def listed() -> Interface:
+    def listed() -> Interface:
+        try:
             return {
-                role: {name for name, _types in list_by_node(NODE_NAME, NODE_NAMESPACE)}
+                role: {name for name, _types in list_by_node(node, namespace)}
                 for role, list_by_node in (
                     ("publish", graph.get_publisher_names_and_types_by_node),
                     ("subscribe", graph.get_subscriber_names_and_types_by_node),
@@ -117,19 +136,47 @@ def node_interface(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Interfa
                     ("request", graph.get_client_names_and_types_by_node),
                 )
             }
+        except NodeNameNonExistentError:  # its topics may arrive before its name (ros_discovery_info)
+            return {}
 
-        # the latched world arrived, so the node is up; its endpoints are announced together, but wait
-        # until two reads agree, so that a list read mid-discovery does not pass for the whole
-        previous: list[Interface] = [listed()]
+    previous: list[Interface] = [listed()]
 
-        def settled() -> bool:
-            current = listed()
-            same = current == previous[0]
-            previous[0] = current
-            return same and bool(current["reply"])
+    def settled() -> bool:
+        time.sleep(SETTLE_S)
+        current = listed()
+        same = current == previous[0]
+        previous[0] = current
+        return same and bool(current.get("reply"))
 
-        wait_until(settled, 20.0, "the node's interface in the graph")
-        yield previous[0]
+    wait_until(settled, 20.0, f"the interface of {namespace}/{node} in the graph")
+    return previous[0]
+
+
+def with_tf(interface: Interface, tf_topics: set[str]) -> Interface:
+    """``interface`` with ``tf_topics`` published where tf2_msgs is missing (a native install publishes them)."""
+    expected = {role: set(names) for role, names in interface.items()}
+    if not have_tf2_msgs():
+        assert not (expected["publish"] & tf_topics)
+        expected["publish"] |= tf_topics
+    return expected
+
+
+def assert_same(allowed: Interface, expected: Interface) -> None:
+    for role in ("publish", "subscribe", "reply", "request"):
+        assert allowed[role] - expected[role] == set(), f"{role}: allowed but the node does not use it"
+        assert expected[role] - allowed[role] == set(), f"{role}: the node uses it but the policy denies it"
+
+
+@pytest.fixture(scope="module")
+def node_interface(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Interface]:
+    """The interface of a running ``/clew_planner``, by role."""
+    log = tmp_path_factory.mktemp("policy") / "node.log"
+    node = NodeProcess(log, QUICK, {"record.enabled": False}, namespace=NODE_NAMESPACE)
+    client = Client("clew_policy_probe")
+    try:
+        # the latched world arrived: the node is up
+        client.inbox(f"/{NODE_NAME}/world_yaml", String, LATCHED).wait_for(timeout_s=START_TIMEOUT_S)
+        yield graph_interface(client, NODE_NAMESPACE, NODE_NAME)
     finally:
         client.close()
         assert node.stop() == 0, node.output()
@@ -137,21 +184,37 @@ def node_interface(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Interfa
 
 def test_policy_is_valid_for_sros2() -> None:
     policy = load_policy()
-    allowed = policy_interface(policy)
+    allowed = policy_interface(the_profile(policy))
     assert allowed["request"] == set()  # the node calls no service
     dds_permissions(policy)
 
 
 @pytest.mark.ros
 def test_policy_allows_exactly_the_node_interface(node_interface: Interface) -> None:
-    expected = {role: set(names) for role, names in node_interface.items()}
-    if not have_tf2_msgs():
-        assert not (expected["publish"] & TF_TOPICS)
-        expected["publish"] |= TF_TOPICS
-    allowed = policy_interface(load_policy())
-    for role in ("publish", "subscribe", "reply", "request"):
-        assert allowed[role] - expected[role] == set(), f"{role}: allowed but the node does not use it"
-        assert expected[role] - allowed[role] == set(), f"{role}: the node uses it but the policy denies it"
+    assert_same(policy_interface(the_profile(load_policy())), with_tf(node_interface, TF_TOPICS))
+
+
+@pytest.mark.ros
+def test_namespaced_profiles_allow_exactly_each_planner_interface(tmp_path: Path) -> None:
+    """docs/security.md's variant for several planners: the profile with ``ns`` set and ``tf`` relative
+    allows exactly what each planner of ``clew_planners`` uses."""
+    namespaces = ("/arm_a", "/robots/arm_b")
+    process = PlannersProcess(
+        tmp_path / "planners.log",
+        dict.fromkeys(namespaces, QUICK),
+        ["-p", "record.enabled:=false"],
+    )
+    client = Client("clew_policy_probe")
+    try:
+        profile = the_profile(load_policy())
+        for namespace in namespaces:
+            client.inbox(f"{namespace}/{NODE_NAME}/world_yaml", String, LATCHED).wait_for(timeout_s=START_TIMEOUT_S)
+            interface = graph_interface(client, namespace, NODE_NAME)
+            allowed = policy_interface(namespaced_profile(profile, namespace))
+            assert_same(allowed, with_tf(interface, {f"{namespace}/tf", f"{namespace}/tf_static"}))
+    finally:
+        client.close()
+        assert process.stop() == 0, process.output()
 
 
 @pytest.mark.ros

@@ -22,6 +22,8 @@ setup(
             sorted(glob("config/*.yaml") + glob("config/*.json")),
         ),
         ("share/" + package_name + "/launch", sorted(glob("launch/*.py"))),
+        # the SROS2 policy of the node (docs/security.md)
+        ("share/" + package_name + "/config/sros2", sorted(glob("config/sros2/*.xml"))),
     ],
     python_requires=">=3.11",
     install_requires=[
@@ -40,7 +42,8 @@ setup(
             "ros-jazzy-common-interfaces>=5.3",
             "ros-jazzy-std-srvs>=5.3",
         ],
-        "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10", "urdf-parser-py>=0.0.4"],
+        # lxml: test/security/test_deploy_policy.py validates the SROS2 policy as sros2 does (XSD, XSLT)
+        "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10", "urdf-parser-py>=0.0.4", "lxml>=5.0"],
         # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
         "bench": ["ompl>=2.0", "matplotlib>=3.8"],
         # clew_plan --foxglove (clew_ros/live): the run served live to Foxglove over a WebSocket on 127.0.0.1.

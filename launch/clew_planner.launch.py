@@ -1,11 +1,15 @@
 """Launch the clew_planner node, optionally with a parameter file.
 
 ros2 launch clew_ros clew_planner.launch.py params_file:=/path/to/world.yaml
+
+params_file is only compared with '' (EqualsSubstitution / NotEqualsSubstitution,
+plain string comparisons) and handed to the node as a path: it is never
+evaluated, so a path with quotes or any other text in it is taken as it is.
 """
 
 from launch.actions import DeclareLaunchArgument
-from launch.conditions import IfCondition, UnlessCondition
-from launch.substitutions import LaunchConfiguration, PythonExpression
+from launch.conditions import IfCondition
+from launch.substitutions import EqualsSubstitution, LaunchConfiguration, NotEqualsSubstitution
 from launch_ros.actions import Node
 
 from launch import LaunchDescription
@@ -13,7 +17,6 @@ from launch import LaunchDescription
 
 def generate_launch_description() -> LaunchDescription:
     params_file = LaunchConfiguration("params_file")
-    has_params = PythonExpression(["'", params_file, "' != ''"])
     return LaunchDescription(
         [
             DeclareLaunchArgument(
@@ -27,14 +30,14 @@ def generate_launch_description() -> LaunchDescription:
                 name="clew_planner",
                 output="screen",
                 parameters=[params_file],
-                condition=IfCondition(has_params),
+                condition=IfCondition(NotEqualsSubstitution(params_file, "")),
             ),
             Node(
                 package="clew_ros",
                 executable="clew_planner",
                 name="clew_planner",
                 output="screen",
-                condition=UnlessCondition(has_params),
+                condition=IfCondition(EqualsSubstitution(params_file, "")),
             ),
         ]
     )

@@ -1,24 +1,21 @@
 """The launch files describe the nodes they mean to start.
 
 ROS 2 launch cannot be installed here (pip has no ``launch`` / ``launch_ros``),
-so each file is run against stand-ins of the few launch classes it uses,
-which keep their arguments: what the test reads is exactly what the file
-hands to launch (package, executable, name, namespace, parameters,
-remappings, launch arguments). The launch API itself was checked against
-its documentation, not here.
+so each file is run against stand-ins of the few launch classes it uses
+(``helpers.launch_api``), which keep their arguments: what the test reads is
+exactly what the file hands to launch (package, executable, name, namespace,
+parameters, remappings, launch arguments), and the conditions evaluate as
+launch's do. The launch API itself was checked against its source, not here.
 """
 
 from __future__ import annotations
 
 import py_compile
-import runpy
-import sys
-import types
 from pathlib import Path
-from typing import Any
 
 import pytest
 import yaml
+from helpers.launch_api import Recorded, describe, install, of_type, started_nodes
 
 from clew_ros.core.parameters import NODE_PARAMETERS
 from clew_ros.core.world import read_parameter_file
@@ -29,56 +26,10 @@ LAUNCH = ROOT / "launch"
 CONFIG = ROOT / "config"
 
 
-class Recorded:
-    """A launch class stand-in: keeps its arguments."""
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        self.args = args
-        self.kwargs = kwargs
-
-
-class LaunchConfiguration(Recorded):
-    def perform(self, context: dict[str, str]) -> str:
-        return context[self.args[0]]
-
-
 @pytest.fixture
 def launch_api(monkeypatch: pytest.MonkeyPatch) -> None:
     """Stand-ins for launch and launch_ros; the package's share directory is the source tree."""
-    modules = {
-        "launch": {"LaunchDescription": type("LaunchDescription", (Recorded,), {})},
-        "launch.actions": {
-            "DeclareLaunchArgument": type("DeclareLaunchArgument", (Recorded,), {}),
-            "OpaqueFunction": type("OpaqueFunction", (Recorded,), {}),
-        },
-        "launch.conditions": {
-            "IfCondition": type("IfCondition", (Recorded,), {}),
-            "UnlessCondition": type("UnlessCondition", (Recorded,), {}),
-        },
-        "launch.substitutions": {
-            "LaunchConfiguration": LaunchConfiguration,
-            "PythonExpression": type("PythonExpression", (Recorded,), {}),
-        },
-        "launch_ros": {},
-        "launch_ros.actions": {"Node": type("Node", (Recorded,), {})},
-    }
-    for name, members in modules.items():
-        module = types.ModuleType(name)
-        module.__dict__.update(members)
-        monkeypatch.setitem(sys.modules, name, module)
-    import ament_index_python.packages
-
-    monkeypatch.setattr(ament_index_python.packages, "get_package_share_directory", lambda _package: str(ROOT))
-
-
-def describe(path: Path) -> list[Recorded]:
-    """The entities of the launch file's description."""
-    description = runpy.run_path(str(path))["generate_launch_description"]()
-    return list(description.args[0])
-
-
-def of_type(entities: list[Recorded], name: str) -> list[Recorded]:
-    return [e for e in entities if type(e).__name__ == name]
+    install(monkeypatch, ROOT)
 
 
 @pytest.mark.parametrize("path", sorted(LAUNCH.glob("*.launch.py")), ids=lambda p: p.name)
@@ -88,18 +39,17 @@ def test_launch_files_compile(path: Path, tmp_path: Path) -> None:
 
 @pytest.mark.usefixtures("launch_api")
 def test_clew_planner_launch_starts_one_node_with_or_without_a_parameter_file() -> None:
-    entities = describe(LAUNCH / "clew_planner.launch.py")
-    (argument,) = of_type(entities, "DeclareLaunchArgument")
+    path = LAUNCH / "clew_planner.launch.py"
+    (argument,) = of_type(describe(path), "DeclareLaunchArgument")
     assert argument.args == ("params_file",)
-    nodes = of_type(entities, "Node")
-    assert len(nodes) == 2  # one of them, by condition
-    for node in nodes:
+    for params_file, parameters in [("", []), ("/worlds/figure1.yaml", ["/worlds/figure1.yaml"])]:
+        ((node, performed),) = started_nodes(path, {"params_file": params_file})
         assert (node.kwargs["package"], node.kwargs["executable"], node.kwargs["name"]) == (
             "clew_ros",
             "clew_planner",
             "clew_planner",
         )
-    assert {type(node.kwargs["condition"]).__name__ for node in nodes} == {"IfCondition", "UnlessCondition"}
+        assert performed == parameters
 
 
 def planners_nodes(context: dict[str, str]) -> list[Recorded]:

@@ -139,11 +139,12 @@ def test_setup_py_installs_ament_files(setup_kwargs: dict[str, Any]) -> None:
 def test_setup_py_installs_config_worlds(tmp_path: Path) -> None:
     # In a scratch tree, so that the check does not depend on which worlds
     # config/ holds today.
-    for name in ["config/a.yaml", "config/b.json", "config/notes.txt", "launch/x.launch.py"]:
-        (tmp_path / name).parent.mkdir(exist_ok=True)
+    for name in ["config/a.yaml", "config/b.json", "config/notes.txt", "launch/x.launch.py", "config/sros2/p.xml"]:
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / name).touch()
     data_files = dict(run_setup_py(tmp_path)["data_files"])
     assert data_files["share/clew_ros/config"] == ["config/a.yaml", "config/b.json"]
+    assert data_files["share/clew_ros/config/sros2"] == ["config/sros2/p.xml"]
     assert data_files["share/clew_ros/launch"] == ["launch/x.launch.py"]
 
 

@@ -55,13 +55,12 @@ def _array(values: Any, what: str, shape: tuple[int | None, ...]) -> np.ndarray:
     """A read-only array of finite floats of ``shape`` (``None``: any length), or :class:`PlanFileError`
     naming ``what``."""
     wanted = " x ".join("N" if s is None else str(s) for s in shape)
-    refusal = f"{what}: expected an array of numbers of shape {wanted}, got {short_repr(values)}"
     if not _numbers(values, len(shape)):
-        raise PlanFileError(refusal)
+        raise PlanFileError(f"{what}: expected an array of numbers of shape {wanted}, got {short_repr(values)}")
     try:
         array = np.array(values, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise PlanFileError(refusal) from None
+    except (ValueError, OverflowError):  # ragged lists, integers too large for a float
+        raise PlanFileError(f"{what}: expected an array of shape {wanted} of floats") from None
     if array.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, array.shape, strict=True)):
         raise PlanFileError(f"{what}: expected an array of shape {wanted}, got shape {array.shape}")
     if not np.all(np.isfinite(array)):

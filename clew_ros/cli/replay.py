@@ -199,17 +199,19 @@ def _load(args: argparse.Namespace) -> tuple[Any, list[Any], dict[str, Any]]:
             )
         messages = [m for m in recording.messages(args.topics) if args.include_goal or not _is_goal(m.topic)]
         classes = {}
+        skipped = []
         for name in sorted({m.topic for m in messages}):
             try:
                 classes[name] = message_class(topics[name].type_name)
             except RecordingError as error:
                 if args.topics:  # asked for by name: say why it cannot be played
                     raise
-                # e.g. /tf without tf2_msgs (PyPI wheels): play the rest
-                print(f"clew_replay: not playing {name}: {error}", file=sys.stderr)
+                skipped.append(f"not playing {name}: {error}")  # e.g. /tf without tf2_msgs (PyPI wheels)
         messages = [m for m in messages if m.topic in classes]
         if not messages:
-            raise RecordingError(f"{args.recording} holds no messages to play")
+            raise RecordingError(f"{args.recording} holds no messages to play{''.join(f'; {s}' for s in skipped)}")
+        for line in skipped:  # play the rest
+            print(one_line(f"clew_replay: {line}"), file=sys.stderr)
         for name in classes:
             recording.decoded(name)  # every message played decodes with its recorded schema
     except RecordingError as error:

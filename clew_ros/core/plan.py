@@ -260,15 +260,20 @@ class Plan:
         if not isinstance(message, str):
             raise PlanFileError(f"{source}: message: expected text, got {short_repr(message)}")
         final = data.get("final_object_pose")
+        read_segments = tuple(PlanSegment.from_dict(s, f"{source}: segments[{i}]") for i, s in enumerate(segments))
+        read_landmarks = tuple(
+            PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]") for i, lm in enumerate(landmarks)
+        )
+        _check_widths(source, len(names), read_segments, read_landmarks)
         return cls(
             world=world,
             joint_names=tuple(names),
             success=success,
             message=message,
             code=code,
-            segments=tuple(PlanSegment.from_dict(s, f"{source}: segments[{i}]") for i, s in enumerate(segments)),
+            segments=read_segments,
             final_object_pose=None if final is None else _array(final, f"{source}: final_object_pose", (3,)),
-            landmarks=tuple(PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]") for i, lm in enumerate(landmarks)),
+            landmarks=read_landmarks,
             stats=dict(stats),
         )
 
@@ -331,6 +336,16 @@ def _finite_float(text: str) -> float:
     if not np.isfinite(value):
         raise PlanFileError(f"not a plan file: {text[:40]} is too large for a float")
     return value
+
+
+def _check_widths(source: str, joints: int, segments: Sequence[PlanSegment], landmarks: Sequence[PlanLandmark]) -> None:
+    """:class:`PlanFileError` unless every waypoint and landmark has one value per joint name."""
+    for i, segment in enumerate(segments):
+        if segment.waypoints.shape[1] != joints or not len(segment.waypoints):
+            raise PlanFileError(f"{source}: segments[{i}].waypoints: expected rows of {joints} joint values")
+    for i, landmark in enumerate(landmarks):
+        if landmark.joints.shape != (joints,):
+            raise PlanFileError(f"{source}: landmarks[{i}].joints: expected {joints} joint values")
 
 
 def _frozen(values: Any) -> np.ndarray:

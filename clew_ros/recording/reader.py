@@ -10,6 +10,7 @@ accept it.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import struct
 from collections.abc import Callable, Iterable
@@ -208,7 +209,7 @@ class Recording:
             if not started:
                 raise RecordingError(f"{self.mcap_path} is not an MCAP file (its header is corrupt)") from None
             # a record longer than the file: the file was cut inside it (writer killed)
-        except (McapError, struct.error, EOFError, ValueError, _ChunkError) as error:
+        except (McapError, struct.error, EOFError, ValueError, OverflowError, _ChunkError) as error:
             if not started:
                 raise RecordingError(f"{self.mcap_path} is empty or cut before its header") from None
             if not isinstance(error, McapError | struct.error | EOFError):
@@ -317,7 +318,8 @@ class Recording:
         decoder = self._decoders.get(channel.id)
         if decoder is None:
             try:
-                decoder = DecoderFactory().decoder_for(channel.message_encoding, schema)
+                with contextlib.redirect_stderr(io.StringIO()):  # mcap_ros2's parser prints what it refuses
+                    decoder = DecoderFactory().decoder_for(channel.message_encoding, schema)
             except Exception as error:  # noqa: BLE001 - mcap_ros2 raises many types for a schema it cannot parse
                 raise RecordingError(
                     f"{self.mcap_path}: cannot decode {topic}: its schema {_schema_name(schema)} does not parse "

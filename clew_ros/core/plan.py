@@ -22,6 +22,7 @@ from clew_ros.core.clew import PlanResult
 from clew_ros.core.collision import explain_invalid, is_valid
 from clew_ros.core.continuous import CHECK_STEP_RAD, interpolate
 from clew_ros.core.errors import PlanFileError, short_repr
+from clew_ros.core.files import read_at_most
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.settings import Outcome
 from clew_ros.core.world import World
@@ -311,7 +312,7 @@ class Plan:
         path = Path(path)
         try:
             with path.open("rb") as stream:
-                data = stream.read(limits.max_bytes + 1)
+                data = read_at_most(stream, limits.max_bytes)
         except OSError as error:
             raise PlanFileError(f"{path}: cannot read the plan ({error.strerror or error})") from None
         if len(data) > limits.max_bytes:

@@ -20,6 +20,7 @@ from typing import Any
 
 import yaml
 
+from clew_ros.core.files import read_at_most
 from clew_ros.recording.errors import RecordingError
 from clew_ros.recording.recorder import bag_metadata, default_offered_qos, write_bag_metadata
 
@@ -171,7 +172,7 @@ class Recording:
         self._decompressed = 0
         try:
             with self.mcap_path.open("rb") as stream:
-                data = stream.read(self.limits.max_file_bytes + 1)
+                data = read_at_most(stream, self.limits.max_file_bytes)
         except OSError as error:
             raise RecordingError(f"cannot read {self.mcap_path}: {error.strerror}") from None
         if len(data) > self.limits.max_file_bytes:

@@ -41,11 +41,9 @@ CASES = {
     "huge integer": (b"7" * 5000, "digits"),
     "string number": (_changed(("segments", 0, "waypoints", 0, 0), "0.5").encode(), "segments[0].waypoints"),
     "boolean number": (_changed(("segments", 0, "waypoints", 0, 0), True).encode(), "segments[0].waypoints"),
-    "ragged": (_changed(("segments", 0, "waypoints"), [[0.0, 0.0], [0.0]]).encode(), "segments[0].waypoints"),
     "width": (_changed(("segments", 0, "waypoints"), [[0.0, 0.0, 0.0]]).encode(), "rows of 2 joint values"),
     "landmark width": (_changed(("landmarks", 0, "joints"), [0.0]).encode(), "landmarks[0].joints"),
     "message": (_changed(("message",), {"a": 1}).encode(), "message: expected text"),
-    "schema": (_changed(("format",), "clew-plan/9").encode(), "format 'clew-plan/1'"),
     "truncated": (plan_bytes("figure1_seed0")[:200], "invalid JSON"),
 }
 
@@ -64,15 +62,9 @@ def test_plan_read_refuses_naming_the_file(name: str, tmp_path: Path) -> None:
 def test_plan_read_refuses_a_file_over_its_limit(tmp_path: Path) -> None:
     path = tmp_path / "plan.json"
     path.write_bytes(plan_bytes("figure1_seed0"))
-    Plan.read(path)
+    assert Plan.read(path).to_dict()["segments"] == GOOD["segments"]  # the real plan reads, whole
     with pytest.raises(PlanFileError, match="larger than 100 bytes"):
         Plan.read(path, limits=PlanFileLimits(max_bytes=100))
-
-
-def test_a_real_plan_still_reads() -> None:
-    plan = Plan.from_json(plan_bytes("figure1_seed0"), source="figure1")
-    assert plan.success
-    assert plan.to_dict()["segments"] == GOOD["segments"]
 
 
 @pytest.mark.parametrize("name", ["binary", "nested", "NaN", "width", "huge integer"])

@@ -52,8 +52,28 @@ class RecordedMessage:
     data: bytes
 
 
-def find_mcap(path: str | Path) -> Path:
-    """The MCAP file of a recording: ``path`` itself, or the one in a run directory."""
+@dataclass(frozen=True)
+class RecordingLimits:
+    """What :class:`Recording` reads at most: beyond these a file is refused as corrupt or crafted.
+
+    A run's recording is a few megabytes (the recorder writes 64 KiB chunks), so these leave a
+    thousandfold margin while keeping a crafted file from taking the reader's memory.
+    """
+
+    #: Bytes of the ``.mcap`` file (it is read into memory whole).
+    max_file_bytes: int = 1024 * 2**20
+    #: Declared uncompressed bytes of one chunk, checked before it is decompressed (decompression bomb).
+    max_chunk_bytes: int = 64 * 2**20
+    #: Uncompressed bytes of all chunks together.
+    max_total_bytes: int = 1024 * 2**20
+    #: Bytes of the run directory's ``metadata.yaml`` (rosbag2 writes a few kilobytes).
+    max_metadata_bytes: int = 16 * 2**20
+
+
+def find_mcap(path: str | Path, *, limits: RecordingLimits | None = None) -> Path:
+    """The MCAP file of a recording: ``path`` itself, or the one in a run directory (the one its
+    ``metadata.yaml`` names, when that is a file of the directory)."""
+    limit = (limits or RecordingLimits()).max_metadata_bytes
     path = Path(path)
     if path.is_file():
         if path.suffix != ".mcap":
@@ -64,11 +84,18 @@ def find_mcap(path: str | Path) -> Path:
     metadata = path / "metadata.yaml"
     if metadata.is_file():
         try:
-            info = yaml.safe_load(metadata.read_text())["rosbag2_bagfile_information"]
+            with metadata.open("rb") as stream:
+                text = read_at_most(stream, limit)
+            if len(text) > limit:
+                raise ValueError(f"larger than {limit} bytes")
+            info = yaml.safe_load(text.decode("utf-8"))["rosbag2_bagfile_information"]
             names: list[str] = [n for n in info.get("relative_file_paths", []) if str(n).endswith(".mcap")]
-        except (OSError, yaml.YAMLError, KeyError, TypeError) as error:
-            raise RecordingError(f"{metadata} is not rosbag2 metadata ({error})") from None
-        if len(names) == 1 and (path / names[0]).is_file():
+        except (OSError, yaml.YAMLError, KeyError, TypeError, AttributeError, ValueError, RecursionError) as error:
+            reason = type(error).__name__ if isinstance(error, RecursionError) else str(error)[:200]
+            raise RecordingError(f"{metadata} is not rosbag2 metadata ({reason})") from None
+        # only a file of this folder: a name with a folder in it (``../``, absolute) is not followed
+        plain = len(names) == 1 and isinstance(names[0], str) and Path(names[0]).name == names[0]
+        if plain and (path / names[0]).is_file():
             return path / names[0]
     files = sorted(path.glob("*.mcap"))
     if len(files) != 1:
@@ -132,22 +159,6 @@ def _qos_list(text: str | None, topic: str) -> list[dict[str, Any]]:
     return [default_offered_qos(topic)]
 
 
-@dataclass(frozen=True)
-class RecordingLimits:
-    """What :class:`Recording` reads at most: beyond these a file is refused as corrupt or crafted.
-
-    A run's recording is a few megabytes (the recorder writes 64 KiB chunks), so these leave a
-    thousandfold margin while keeping a crafted file from taking the reader's memory.
-    """
-
-    #: Bytes of the ``.mcap`` file (it is read into memory whole).
-    max_file_bytes: int = 1024 * 2**20
-    #: Declared uncompressed bytes of one chunk, checked before it is decompressed (decompression bomb).
-    max_chunk_bytes: int = 64 * 2**20
-    #: Uncompressed bytes of all chunks together.
-    max_total_bytes: int = 1024 * 2**20
-
-
 class Recording:
     """A recording read into memory (recordings of one run are small).
 
@@ -161,7 +172,7 @@ class Recording:
     def __init__(self, path: str | Path, *, limits: RecordingLimits | None = None) -> None:
         self.path = Path(path)
         self.limits = limits or RecordingLimits()
-        self.mcap_path = find_mcap(self.path)
+        self.mcap_path = find_mcap(self.path, limits=self.limits)
         self.complete = False
         #: Why reading stopped before the footer (``None``: it did not, or the file just ends early).
         self.problem: str | None = None

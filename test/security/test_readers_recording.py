@@ -185,3 +185,18 @@ def test_trajectory_to_plan_refuses_grasps_the_object_does_not_have() -> None:
     trajectory = _trajectory(["joint_1", "joint_2", "gripper"], rows)
     with pytest.raises(TrajectoryError, match="grasps: expected indices in"):
         trajectory_to_plan(world, trajectory, grasps=[99])
+
+
+def test_metadata_yaml_cannot_point_outside_the_run_folder_or_crash_it(mcap_file: Path, tmp_path: Path) -> None:
+    outside = tmp_path / "outside.mcap"
+    outside.write_bytes(mcap_file.read_bytes())
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "own.mcap").write_bytes(mcap_file.read_bytes())
+    for name in (str(outside), "../outside.mcap"):
+        (run / "metadata.yaml").write_text(f"rosbag2_bagfile_information:\n  relative_file_paths: ['{name}']\n")
+        assert Recording(run).mcap_path == run / "own.mcap"
+    for text in ("[" * 10_000 + "]" * 10_000, "rosbag2_bagfile_information: [1, 2]", "\udcff"):
+        (run / "metadata.yaml").write_bytes(text.encode("utf-8", "surrogateescape"))
+        with pytest.raises(RecordingError, match=r"metadata.yaml is not rosbag2 metadata"):
+            Recording(run)

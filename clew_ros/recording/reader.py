@@ -6,9 +6,10 @@ complete chunk; messages decode with ``mcap_ros2`` from the schemas stored in
 the file. A file is untrusted input: it is read within
 :class:`RecordingLimits` (each chunk's declared size is checked before it is
 decompressed, and it is decompressed no further), with mcap's CRC checks on;
-whatever is wrong with it is a :class:`RecordingError` naming the file. :func:`recover_recording` rewrites such a file whole (summary,
-index, ``metadata.yaml``) so that ``ros2 bag info/play`` and seeking readers
-accept it.
+whatever is wrong with it is a :class:`RecordingError` naming the file.
+:func:`recover_recording` rewrites a file cut short whole (summary, index,
+``metadata.yaml``) so that ``ros2 bag info/play`` and seeking readers accept
+it.
 """
 
 from __future__ import annotations

@@ -33,6 +33,9 @@ setup(
         "pyyaml>=6.0",
         "mcap>=1.2",
         "mcap-ros2-support>=0.5",
+        # what mcap decompresses chunks with; the reader decompresses them itself, bounded (recording/reader.py)
+        "zstandard>=0.22",
+        "lz4>=4.0",
         "pillow>=10.0",
     ],
     extras_require={

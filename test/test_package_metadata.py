@@ -41,8 +41,8 @@ ROSDEP_KEYS = {
     "PIL": "python3-pil",
 }
 #: Imported, but with no rosdep key (setup.py's install_requires), or optional (imported under try).
-# foxglove: the live extra (clew_ros.live); ray: the batch extra (clew_batch --ray)
-NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "rosbags", "foxglove", "ray"}
+# foxglove: the live extra (clew_ros.live); ray: the batch extra (clew_batch --ray); zstandard, lz4: mcap's own
+NO_ROSDEP_KEY = {"mcap", "mcap_ros2", "zstandard", "lz4", "rosbags", "foxglove", "ray"}
 
 CONSOLE_SCRIPTS = {
     "clew_planner": "clew_ros.node.main:main",

@@ -23,6 +23,7 @@ import contextlib
 import multiprocessing
 import os
 import signal
+import socket
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -35,11 +36,48 @@ import clew_ros
 from clew_ros.batch.errors import ExecutorError, ExecutorUnavailableError
 from clew_ros.batch.worker import JobFunction, JobOutcome, JobSpec, run_job, run_prepared, serve
 
-__all__ = ["RAY_INSTALL_HINT", "Executor", "Finished", "LocalPool", "RayExecutor", "default_workers"]
+__all__ = [
+    "RAY_INSTALL_HINT",
+    "Executor",
+    "Finished",
+    "LocalPool",
+    "RayExecutor",
+    "default_workers",
+    "network_interfaces_up",
+]
 
 RAY_INSTALL_HINT = "pip install 'clew_ros[batch]' (or pip install 'ray>=2.9')"
 #: Workers in a row that die before they are ready: the pool gives up (ExecutorError).
 MAX_START_FAILURES = 3
+
+
+_IFF_UP = 0x1
+_IFF_LOOPBACK = 0x8
+_SIOCGIFFLAGS = 0x8913  # Linux: read an interface's flags (struct ifreq: 16-byte name, then the flags)
+
+
+def network_interfaces_up() -> list[str]:
+    """The network interfaces of this process's network namespace, other than loopback, that are up;
+    inside a private network namespace with only loopback up (``unshare --net``), none.
+
+    Asked of the kernel (``if_nameindex``, ``SIOCGIFFLAGS``), not of ``/sys/class/net``, which shows the
+    namespace it was mounted in. An interface whose flags cannot be read counts as up: when in doubt,
+    there is a network.
+    """
+    import fcntl
+    import struct
+
+    up = []
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        for _, name in socket.if_nameindex():
+            try:
+                request = struct.pack("16s16x", name.encode()[:15])
+                flags = struct.unpack_from("H", fcntl.ioctl(probe.fileno(), _SIOCGIFFLAGS, request), 16)[0]
+            except OSError:
+                flags = _IFF_UP
+            if flags & _IFF_UP and not flags & _IFF_LOOPBACK:
+                up.append(name)
+    return up
 
 
 @dataclass(frozen=True)

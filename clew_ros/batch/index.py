@@ -29,6 +29,9 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
+from clew_ros.batch.errors import BatchInputError
+from clew_ros.batch.files import FILE_MODE, private_folder
+
 __all__ = ["COLUMNS", "INDEX_NAME", "Index"]
 
 INDEX_NAME = "index.jsonl"
@@ -65,15 +68,18 @@ class Index:
         self.repaired_bytes = repaired_bytes
         #: Complete lines that were not JSON objects with a ``job`` (ignored).
         self.skipped_lines = skipped_lines
-        self._fd: int | None = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        self._fd: int | None = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, FILE_MODE)
+        os.fchmod(self._fd, FILE_MODE)  # an index an older version wrote world-readable becomes private
 
     @classmethod
     def open(cls, folder: str | Path) -> Index:
         """The index in ``folder`` (created with the folder if missing), its torn last line cut off."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        folder = private_folder(Path(folder))
         path = folder / INDEX_NAME
-        data = path.read_bytes() if path.exists() else b""
+        try:
+            data = path.read_bytes() if path.exists() else b""
+        except OSError as error:
+            raise BatchInputError("--out", f"cannot read the index {path} ({error.strerror})") from None
         complete = data[: data.rfind(b"\n") + 1]
         if len(complete) < len(data):
             with path.open("r+b") as stream:
@@ -120,8 +126,12 @@ def _parsed_lines(data: bytes) -> Iterator[dict[str, Any] | None]:
         if not line.strip():
             continue
         try:
-            record = json.loads(line)
-        except (json.JSONDecodeError, UnicodeDecodeError):
+            record = json.loads(line, parse_constant=_no_constant)
+        except (ValueError, RecursionError):  # not JSON, not UTF-8, NaN, nested deeper than the parser goes
             yield None
             continue
         yield record if isinstance(record, dict) and isinstance(record.get("job"), str) else None
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a value an index line holds")

@@ -17,7 +17,6 @@ here. Without ``--record`` nothing here imports ROS.
 
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
 import uuid
@@ -26,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clew_ros.batch.errors import BatchInputError
+from clew_ros.batch.files import FOLDER_MODE, check_file_names, private_folder, write_private
 from clew_ros.core.errors import ParameterError
 
 if TYPE_CHECKING:
@@ -105,16 +105,16 @@ def recording_files(
 
 def write_recording(folder: Path, files: Mapping[str, bytes]) -> None:
     """``files`` as the recording ``folder``, whole or not at all: written and synced into a temporary
-    sibling folder, which is then renamed to ``folder`` (an older recording there is replaced)."""
-    folder.parent.mkdir(parents=True, exist_ok=True)
+    sibling folder, which is then renamed to ``folder`` (an older recording there is replaced). Folders
+    0700, files 0600; :class:`~clew_ros.batch.files.UnsafeNameError`, before anything is written, for a
+    name that is not a plain file name (the names come from the worker)."""
+    check_file_names(files)
+    private_folder(folder.parent)
     partial = folder.with_name(f".{folder.name}.partial")
     shutil.rmtree(partial, ignore_errors=True)
-    partial.mkdir()
+    partial.mkdir(mode=FOLDER_MODE)
     for name, data in files.items():
-        with (partial / name).open("wb") as stream:
-            stream.write(data)
-            stream.flush()
-            os.fsync(stream.fileno())
+        write_private(partial / name, data)
     replaced = folder.with_name(f".{folder.name}.replaced")
     if folder.exists():
         shutil.rmtree(replaced, ignore_errors=True)

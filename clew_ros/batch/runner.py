@@ -20,7 +20,6 @@ from __future__ import annotations
 import contextlib
 import datetime
 import math
-import os
 import threading
 import time
 from collections import deque
@@ -30,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from clew_ros.batch.executors import Executor, Finished
+from clew_ros.batch.files import UnsafeNameError, check_file_names, private_folder, write_private
 from clew_ros.batch.index import COLUMNS, Index
 from clew_ros.batch.jobs import Job
 from clew_ros.batch.progress import ProgressBar
@@ -87,13 +87,11 @@ def has_valid_output(job: Job, record: dict[str, Any] | None, out_dir: Path, *, 
 
 
 def _write_atomically(path: Path, text: str) -> None:
-    """``text`` into ``path`` whole or not at all (a temporary file, synced, renamed over it)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """``text`` into ``path`` whole or not at all (a temporary file of mode 0600, synced, renamed over it;
+    missing folders made 0700)."""
+    private_folder(path.parent)
     partial = path.with_name(f".{path.name}.partial")
-    with partial.open("w", encoding="utf-8") as stream:
-        stream.write(text)
-        stream.flush()
-        os.fsync(stream.fileno())
+    write_private(partial, text.encode("utf-8"))
     partial.replace(path)
 
 
@@ -189,10 +187,15 @@ class _Driver:
         """Record a finished job, or queue it again when it failed and has retries left."""
         running = self.running.pop(finished.spec.key)
         job = running.job
-        outcome = finished.outcome
+        outcome, failure = finished.outcome, finished.failure
+        if outcome is not None and outcome.recording is not None:
+            try:  # the names come from the worker (a cluster node): checked before anything is written
+                check_file_names(outcome.recording)
+            except UnsafeNameError as error:
+                outcome, failure = None, f"the worker sent back a recording file that was not written: {error}"
         if outcome is None:
             elapsed = time.monotonic() - running.submitted
-            plan = failed_plan(job.world.problem.world, job.settings, f"internal error: {finished.failure}", elapsed)
+            plan = failed_plan(job.world.problem.world, job.settings, f"internal error: {failure}", elapsed)
             outcome = JobOutcome.from_plan(job.key, plan, elapsed)
         if outcome.code == "INTERNAL_ERROR" and running.attempts <= self.retries:
             self.report.retried += 1

@@ -38,7 +38,7 @@ from pathlib import Path
 from types import FrameType
 
 from clew_ros.batch.errors import BatchInputError, ExecutorError, ExecutorUnavailableError
-from clew_ros.batch.executors import Executor, LocalPool, RayExecutor, default_workers
+from clew_ros.batch.executors import Executor, LocalPool, RayExecutor, default_workers, network_interfaces_up
 from clew_ros.batch.index import INDEX_NAME
 from clew_ros.batch.jobs import collect_world_paths, derived_seeds, generated_world_paths, load_worlds, make_jobs
 from clew_ros.batch.progress import ProgressBar
@@ -101,6 +101,12 @@ def _parser() -> argparse.ArgumentParser:
         help="run on Ray: a local Ray on 127.0.0.1, or the cluster at ADDRESS (HOST:PORT, ray://HOST:PORT, auto)",
     )
     parser.add_argument(
+        "--ray-allow-network",
+        action="store_true",
+        help="let --ray without ADDRESS start a local Ray on a machine with network interfaces up (by default "
+        "it is refused outside a private network namespace: Ray probes outside addresses as it starts)",
+    )
+    parser.add_argument(
         "--retries", type=int, default=0, metavar="N", help="further attempts of a job whose worker failed (default 0)"
     )
     parser.add_argument(
@@ -139,6 +145,13 @@ def _check_arguments(args: argparse.Namespace) -> None:
         raise BatchInputError("--grace", f"expected seconds > 0, got {args.grace}")
     if args.out.exists() and not args.out.is_dir():
         raise BatchInputError("--out", f"expected a folder (created if missing), but {args.out} is a file")
+    if args.ray == _LOCAL_RAY and not args.ray_allow_network and (interfaces := network_interfaces_up()):
+        raise BatchInputError(
+            "--ray",
+            f"a local Ray probes outside addresses as it starts, and this machine has network interfaces up "
+            f"({', '.join(interfaces[:5])}): run it in a private network namespace (unshare --net, only loopback "
+            "up), or pass --ray-allow-network if this network is trusted",
+        )
     if args.ray not in (None, _LOCAL_RAY) and not _RAY_ADDRESS.match(args.ray):
         hint = (
             "; --ray took it as its ADDRESS: put --ray after the world files for a local Ray"
@@ -234,7 +247,7 @@ def main(argv: Sequence[str] | None = None, *, job_function: JobFunction = run_j
             progress=progress,
             record=args.record,
         )
-    except ExecutorUnavailableError as error:
+    except (BatchInputError, ExecutorUnavailableError) as error:
         print(f"clew_batch: invalid input: {error}", file=sys.stderr)
         return 2
     except ExecutorError as error:

@@ -16,6 +16,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from clew_ros.cli.oneline import one_line
+
 EXIT_OK = 0
 EXIT_INVALID = 2
 FORMATS = (".png", ".gif", ".svg")
@@ -81,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
         render = {".png": render_png, ".gif": render_gif, ".svg": render_svg}[suffix]
         render(scene, output, size)
     except RenderError as error:
-        print(f"clew_render: {error}", file=sys.stderr)
+        print(one_line(f"clew_render: {error}"), file=sys.stderr)
         return EXIT_INVALID
     except OSError as error:
         print(f"clew_render: cannot write {output}: {error.strerror}", file=sys.stderr)

@@ -1,15 +1,22 @@
-"""``clew_replay``: publish a recorded run again, on its topics and with its timing.
+"""``clew_replay``: publish a recorded run again, with its timing, under ``/replay``.
 
-    clew_replay RECORDING [--rate R] [--loop] [--prefix P] [--delay S] [--wait-for-subscribers S]
+    clew_replay RECORDING [--rate R] [--loop] [--prefix P | --live-topics] [--include-goal]
+                [--delay S] [--wait-for-subscribers S] [--topics T...] [--dry-run]
 
 RECORDING is a run directory (``<record dir>/<run id>/``) or its ``.mcap``
 file; a recording cut short (writer killed) plays up to its last complete
-chunk. Every recorded topic is published on its original name (or under
-``--prefix``) with the QoS it was offered with: the latched topics
-(trajectory, landmarks, world markers, world YAML) transient-local. Messages
-go out as recorded (the CDR bytes, with their original header stamps), spaced
-as recorded divided by ``--rate``. Exit 0 at the end (never with ``--loop``)
-and on Ctrl-C or SIGTERM; 2 for an unreadable recording or bad options.
+chunk. Every recorded topic ``/T`` is published as ``/replay/T`` (another
+prefix with ``--prefix``), so a replay never reaches a running planner or the
+controllers that follow it; ``--live-topics`` publishes on the recorded names
+themselves. The ``goal_pose`` topic (a recorded goal would start a real plan)
+is left out unless ``--include-goal``. Each topic has the QoS it was offered
+with: the latched topics (trajectory, landmarks, world markers, world YAML)
+transient-local. Messages go out as recorded (the CDR bytes, with their
+original header stamps, each checked first to decode with its recorded
+schema), spaced as recorded divided by ``--rate``. ``--dry-run`` reads and
+checks the recording and says what would be played, publishing nothing.
+Exit 0 at the end (never with ``--loop``) and on Ctrl-C or SIGTERM; 2 for an
+unreadable recording or bad options (one line on stderr).
 """
 
 from __future__ import annotations
@@ -20,14 +27,24 @@ import time
 from pathlib import Path
 from typing import Any
 
+from clew_ros.cli.oneline import one_line
+
 EXIT_OK = 0
 EXIT_INVALID = 2
 _TICK_S = 0.05  # longest sleep: how fast Ctrl-C and SIGTERM are noticed
 _MAX_LATCHED_DEPTH = 1000
+#: Where topics are published unless --prefix or --live-topics says otherwise.
+DEFAULT_PREFIX = "/replay"
+#: The recorded topic that starts a plan when published (``~/goal_pose``): never replayed unless asked.
+GOAL_TOPIC = "goal_pose"
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="clew_replay", description="Publish a recorded clew_planner run again.")
+    parser = argparse.ArgumentParser(
+        prog="clew_replay",
+        description=f"Publish a recorded clew_planner run again, under {DEFAULT_PREFIX} unless --live-topics.",
+        epilog="Exit 0: played (or stopped); 2: unreadable recording or bad options.",
+    )
     parser.add_argument("recording", metavar="RECORDING", help="run directory or .mcap file")
     parser.add_argument(
         "--rate", type=float, default=1.0, metavar="R", help="playback speed factor (2: twice as fast; default 1)"
@@ -35,9 +52,19 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--loop", action="store_true", help="start again at the end, until stopped")
     parser.add_argument(
         "--prefix",
-        default="",
+        default=None,
         metavar="P",
-        help="publish /T as P/T (e.g. --prefix /replay: /replay/clew_planner/status)",
+        help=f"publish /T as P/T (default {DEFAULT_PREFIX}: {DEFAULT_PREFIX}/clew_planner/status)",
+    )
+    parser.add_argument(
+        "--live-topics",
+        action="store_true",
+        help="publish on the recorded names themselves (what a running planner and its controllers listen to)",
+    )
+    parser.add_argument(
+        "--include-goal",
+        action="store_true",
+        help=f"also play the recorded {GOAL_TOPIC} (left out by default: it starts a plan)",
     )
     parser.add_argument(
         "--delay",
@@ -54,6 +81,9 @@ def _parser() -> argparse.ArgumentParser:
         help="before playing, wait up to S seconds until every topic has a subscriber",
     )
     parser.add_argument("--topics", nargs="+", metavar="T", help="play only these (recorded) topics")
+    parser.add_argument(
+        "--dry-run", action="store_true", help="read and check the recording, say what would be played, publish nothing"
+    )
     return parser
 
 
@@ -73,7 +103,9 @@ def _qos(info, count: int):
         if str(offered.get("reliability")).lower() == "best_effort"
         else ReliabilityPolicy.RELIABLE
     )
-    depth = int(offered.get("depth") or 10)
+    depth = offered.get("depth")
+    if isinstance(depth, bool) or not isinstance(depth, int) or not 0 < depth <= _MAX_LATCHED_DEPTH:
+        depth = 10  # what the file says is not a depth a publisher can take
     if info.transient_local:
         # every latched message of the run reaches a late subscriber, as it did from the node
         return QoSProfile(
@@ -99,14 +131,20 @@ def main(argv: list[str] | None = None) -> int:
     try:
         _check_arguments(args)
         recording, messages, classes = _load(args)
+        targets = _targets(args.prefix, classes)
     except _InvalidInputError as error:
-        print(f"clew_replay: {error}", file=sys.stderr)
+        print(one_line(f"clew_replay: {error}"), file=sys.stderr)
         return EXIT_INVALID
     if not recording.complete:
+        why = f" ({recording.problem})" if recording.problem else ""
         print(
-            f"clew_replay: {recording.mcap_path} was cut short; playing its {len(messages)} readable messages",
+            f"clew_replay: {recording.mcap_path} was cut short{why}; playing its {len(messages)} readable messages",
             file=sys.stderr,
         )
+    if args.dry_run:
+        topics = ", ".join(f"{name} -> {targets[name]}" for name in sorted(targets))
+        print(f"clew_replay: would play {len(messages)} messages: {topics}")
+        return EXIT_OK
 
     import rclpy
     from rclpy.executors import ExternalShutdownException
@@ -115,10 +153,10 @@ def main(argv: list[str] | None = None) -> int:
     node = None
     try:
         node = rclpy.create_node("clew_replay")
-        publishers = _publishers(node, args.prefix, recording.topics, classes, messages)
+        publishers = _publishers(node, targets, recording.topics, classes, messages)
         _play_all(args, messages, publishers)
     except _InvalidInputError as error:
-        print(f"clew_replay: {error}", file=sys.stderr)
+        print(one_line(f"clew_replay: {error}"), file=sys.stderr)
         return EXIT_INVALID
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -130,6 +168,16 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
+    if args.live_topics and args.prefix is not None:
+        raise _InvalidInputError("--live-topics and --prefix: give one of them (--live-topics means no prefix)")
+    args.prefix = "" if args.live_topics else (DEFAULT_PREFIX if args.prefix is None else args.prefix)
+    if not args.live_topics and not args.prefix.strip("/"):
+        raise _InvalidInputError(
+            f"--prefix: expected a namespace such as {DEFAULT_PREFIX}, got {args.prefix!r} "
+            "(--live-topics plays on the recorded names)"
+        )
+    if not args.include_goal and any(_is_goal(topic) for topic in args.topics or ()):
+        raise _InvalidInputError(f"--topics: playing {GOAL_TOPIC} starts a plan; add --include-goal to play it")
     if not args.rate > 0:
         raise _InvalidInputError(f"--rate: expected a number > 0, got {args.rate}")
     if args.delay < 0 or args.wait_for_subscribers < 0:
@@ -149,40 +197,59 @@ def _load(args: argparse.Namespace) -> tuple[Any, list[Any], dict[str, Any]]:
             raise RecordingError(
                 f"{args.recording} has no topic {', '.join(unknown)}; it has {', '.join(sorted(topics))}"
             )
-        messages = recording.messages(args.topics)
+        messages = [m for m in recording.messages(args.topics) if args.include_goal or not _is_goal(m.topic)]
         classes = {}
+        skipped = []
         for name in sorted({m.topic for m in messages}):
             try:
                 classes[name] = message_class(topics[name].type_name)
             except RecordingError as error:
                 if args.topics:  # asked for by name: say why it cannot be played
                     raise
-                # e.g. /tf without tf2_msgs (PyPI wheels): play the rest
-                print(f"clew_replay: not playing {name}: {error}", file=sys.stderr)
+                skipped.append(f"not playing {name}: {error}")  # e.g. /tf without tf2_msgs (PyPI wheels)
         messages = [m for m in messages if m.topic in classes]
         if not messages:
-            raise RecordingError(f"{args.recording} holds no messages to play")
+            raise RecordingError(f"{args.recording} holds no messages to play{''.join(f'; {s}' for s in skipped)}")
+        for line in skipped:  # play the rest
+            print(one_line(f"clew_replay: {line}"), file=sys.stderr)
+        for name in classes:
+            recording.decoded(name)  # every message played decodes with its recorded schema
     except RecordingError as error:
         raise _InvalidInputError(str(error)) from None
     return recording, messages, classes
 
 
-def _publishers(
-    node: Any, prefix: str, topics: dict[str, Any], classes: dict[str, Any], messages: list[Any]
-) -> dict[str, Any]:
-    """One publisher per played topic, under ``prefix``, with the QoS the topic was recorded with."""
+def _is_goal(topic: str) -> bool:
+    return topic.rstrip("/").rsplit("/", 1)[-1] == GOAL_TOPIC
+
+
+def _targets(prefix: str, classes: dict[str, Any]) -> dict[str, str]:
+    """Where each played topic is published: its recorded name under ``prefix``, checked to be a topic name."""
     from rclpy.validate_full_topic_name import validate_full_topic_name
 
-    counts = {name: sum(m.topic == name for m in messages) for name in classes}
-    publishers = {}
-    for name, cls in classes.items():
+    targets = {}
+    for name in classes:
         target = _remap(prefix, name)
         try:
             validate_full_topic_name(target)
         except Exception as error:  # noqa: BLE001 - rclpy raises its own InvalidTopicNameException
-            raise _InvalidInputError(f"--prefix: {target!r} is not a valid topic name ({error})") from None
-        publishers[name] = node.create_publisher(cls, target, _qos(topics[name], counts[name]))
-    return publishers
+            raise _InvalidInputError(
+                f"the recorded topic {name!r:.80} under prefix {prefix!r:.80} is not a valid topic name "
+                f"({str(error).splitlines()[0]})"
+            ) from None
+        targets[name] = target
+    return targets
+
+
+def _publishers(
+    node: Any, targets: dict[str, str], topics: dict[str, Any], classes: dict[str, Any], messages: list[Any]
+) -> dict[str, Any]:
+    """One publisher per played topic, on its target name, with the QoS the topic was recorded with."""
+    counts = {name: sum(m.topic == name for m in messages) for name in classes}
+    return {
+        name: node.create_publisher(cls, targets[name], _qos(topics[name], counts[name]))
+        for name, cls in classes.items()
+    }
 
 
 def _play_all(args: argparse.Namespace, messages: list[Any], publishers: dict[str, Any]) -> None:

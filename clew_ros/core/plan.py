@@ -21,7 +21,8 @@ import numpy as np
 from clew_ros.core.clew import PlanResult
 from clew_ros.core.collision import explain_invalid, is_valid
 from clew_ros.core.continuous import CHECK_STEP_RAD, interpolate
-from clew_ros.core.errors import PlanFileError
+from clew_ros.core.errors import PlanFileError, short_repr
+from clew_ros.core.files import read_at_most
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.settings import Outcome
 from clew_ros.core.world import World
@@ -30,6 +31,7 @@ __all__ = [
     "CHECK_STEP_RAD",
     "FORMAT",
     "Plan",
+    "PlanFileLimits",
     "PlanLandmark",
     "PlanSegment",
     "SegmentMotion",
@@ -43,15 +45,27 @@ FORMAT = "clew-plan/1"
 KINDS = ("transit", "transfer")
 
 
+def _numbers(values: Any, depth: int) -> bool:
+    """Whether ``values`` is a list nested ``depth`` deep whose leaves are JSON numbers (not strings, not booleans)."""
+    if depth == 0:
+        return isinstance(values, int | float) and not isinstance(values, bool)
+    return isinstance(values, list) and all(_numbers(value, depth - 1) for value in values)
+
+
 def _array(values: Any, what: str, shape: tuple[int | None, ...]) -> np.ndarray:
-    """A read-only float array of ``shape`` (``None``: any length), or :class:`PlanFileError` naming ``what``."""
+    """A read-only array of finite floats of ``shape`` (``None``: any length), or :class:`PlanFileError`
+    naming ``what``."""
+    wanted = " x ".join("N" if s is None else str(s) for s in shape)
+    if not _numbers(values, len(shape)):
+        raise PlanFileError(f"{what}: expected an array of numbers of shape {wanted}, got {short_repr(values)}")
     try:
         array = np.array(values, dtype=float)
-    except (TypeError, ValueError):
-        raise PlanFileError(f"{what}: expected numbers, got {values!r:.80}") from None
+    except (ValueError, OverflowError):  # ragged lists, integers too large for a float
+        raise PlanFileError(f"{what}: expected an array of shape {wanted} of floats") from None
     if array.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, array.shape, strict=True)):
-        wanted = " x ".join("N" if s is None else str(s) for s in shape)
         raise PlanFileError(f"{what}: expected an array of shape {wanted}, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise PlanFileError(f"{what}: expected finite numbers, got {short_repr(values)}")
     array.setflags(write=False)
     return array
 
@@ -243,35 +257,96 @@ class Plan:
             raise PlanFileError(f"{source}: landmarks: expected a list")
         if not isinstance(stats, Mapping):
             raise PlanFileError(f"{source}: stats: expected an object")
+        message = data.get("message", "")
+        if not isinstance(message, str):
+            raise PlanFileError(f"{source}: message: expected text, got {short_repr(message)}")
         final = data.get("final_object_pose")
+        read_segments = tuple(PlanSegment.from_dict(s, f"{source}: segments[{i}]") for i, s in enumerate(segments))
+        read_landmarks = tuple(
+            PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]") for i, lm in enumerate(landmarks)
+        )
+        _check_widths(source, len(names), read_segments, read_landmarks)
         return cls(
             world=world,
             joint_names=tuple(names),
             success=success,
-            message=str(data.get("message", "")),
+            message=message,
             code=code,
-            segments=tuple(PlanSegment.from_dict(s, f"{source}: segments[{i}]") for i, s in enumerate(segments)),
+            segments=read_segments,
             final_object_pose=None if final is None else _array(final, f"{source}: final_object_pose", (3,)),
-            landmarks=tuple(PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]") for i, lm in enumerate(landmarks)),
+            landmarks=read_landmarks,
             stats=dict(stats),
         )
 
     @classmethod
-    def from_json(cls, text: str, *, source: str = "plan") -> Plan:
+    def from_json(cls, text: str | bytes, *, source: str = "plan") -> Plan:
+        """A plan from the text of a plan file; :class:`PlanFileError` names ``source`` and what is wrong.
+
+        Strict JSON: ``NaN`` and ``Infinity`` (which Python's ``json`` accepts) and numbers too large for a
+        float are refused, as are bytes that are not UTF-8 and nesting deeper than Python's parser goes.
+        """
+        if isinstance(text, bytes):
+            try:
+                text = text.decode("utf-8")
+            except UnicodeDecodeError as error:
+                raise PlanFileError(f"{source}: not a plan file: not UTF-8 text (byte {error.start})") from None
         try:
-            data = json.loads(text)
+            data = json.loads(text, parse_constant=_refuse_constant, parse_float=_finite_float)
         except json.JSONDecodeError as error:
-            raise PlanFileError(f"{source}: cannot read the plan ({error})") from None
-        return cls.from_dict(data, source=source)
+            raise PlanFileError(f"{source}: not a plan file: invalid JSON ({error})") from None
+        except PlanFileError as error:
+            raise PlanFileError(f"{source}: {error}") from None
+        except RecursionError:
+            raise PlanFileError(f"{source}: not a plan file: JSON nested too deeply") from None
+        except ValueError as error:  # an integer of more digits than Python converts
+            raise PlanFileError(f"{source}: not a plan file: {error}") from None
+        try:
+            return cls.from_dict(data, source=source)
+        except RecursionError:  # a value nested too deeply to turn into an array
+            raise PlanFileError(f"{source}: not a plan file: a value nested too deeply") from None
 
     @classmethod
-    def read(cls, path: str | Path) -> Plan:
-        """Read a plan file; :class:`PlanFileError` says what is wrong with it."""
+    def read(cls, path: str | Path, *, limits: PlanFileLimits | None = None) -> Plan:
+        """Read a plan file; :class:`PlanFileError` names the file and says what is wrong with it."""
+        limits = limits or PlanFileLimits()
+        path = Path(path)
         try:
-            text = Path(path).read_text()
+            with path.open("rb") as stream:
+                data = read_at_most(stream, limits.max_bytes)
         except OSError as error:
-            raise PlanFileError(f"{path}: cannot read the plan ({error})") from None
-        return cls.from_json(text, source=str(path))
+            raise PlanFileError(f"{path}: cannot read the plan ({error.strerror or error})") from None
+        if len(data) > limits.max_bytes:
+            raise PlanFileError(f"{path}: not a plan file: larger than {limits.max_bytes} bytes")
+        return cls.from_json(data, source=str(path))
+
+
+@dataclass(frozen=True)
+class PlanFileLimits:
+    """What :meth:`Plan.read` reads at most."""
+
+    #: Bytes of one plan file. A plan of 10^5 waypoints of 7 joints is about 15 MB; larger is not a plan.
+    max_bytes: int = 256 * 2**20
+
+
+def _refuse_constant(name: str) -> Any:
+    raise PlanFileError(f"not a plan file: {name} is not a number a plan may hold")
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not np.isfinite(value):
+        raise PlanFileError(f"not a plan file: {text[:40]} is too large for a float")
+    return value
+
+
+def _check_widths(source: str, joints: int, segments: Sequence[PlanSegment], landmarks: Sequence[PlanLandmark]) -> None:
+    """:class:`PlanFileError` unless every waypoint and landmark has one value per joint name."""
+    for i, segment in enumerate(segments):
+        if segment.waypoints.shape[1] != joints or not len(segment.waypoints):
+            raise PlanFileError(f"{source}: segments[{i}].waypoints: expected rows of {joints} joint values")
+    for i, landmark in enumerate(landmarks):
+        if landmark.joints.shape != (joints,):
+            raise PlanFileError(f"{source}: landmarks[{i}].joints: expected {joints} joint values")
 
 
 def _frozen(values: Any) -> np.ndarray:

@@ -20,8 +20,15 @@ Importing this package needs no rclpy; :class:`RunRecorder` needs rclpy
 and ``mcap`` (without ``mcap`` the node plans but does not record).
 """
 
-from clew_ros.recording.errors import RecordingError
-from clew_ros.recording.reader import RecordedMessage, Recording, TopicInfo, find_mcap, recover_recording
+from clew_ros.recording.errors import RecordingError, TrajectoryError
+from clew_ros.recording.reader import (
+    RecordedMessage,
+    Recording,
+    RecordingLimits,
+    TopicInfo,
+    find_mcap,
+    recover_recording,
+)
 from clew_ros.recording.recorder import (
     ROSBAG2_VERSION,
     TRANSIENT_LOCAL_TOPICS,
@@ -37,8 +44,10 @@ __all__ = [
     "RecordedMessage",
     "Recording",
     "RecordingError",
+    "RecordingLimits",
     "RunRecorder",
     "TopicInfo",
+    "TrajectoryError",
     "default_offered_qos",
     "find_mcap",
     "recover_recording",

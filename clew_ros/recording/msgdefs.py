@@ -96,24 +96,63 @@ def _split(type_name: str) -> tuple[str, str, str]:
     return package, namespace or "msg", name
 
 
+#: What :func:`message_class` takes: ``<package>/msg|srv|action/<Name>`` as ROS 2 names them.
+_INTERFACE_NAME = re.compile(r"^([a-z][a-z0-9_]{0,99})/(msg|srv|action)/([A-Z][A-Za-z0-9_]{0,99})$")
+
+
+def _prefixes() -> Iterator[Path]:
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        if prefix:
+            yield Path(prefix)
+    yield Path(sys.prefix)
+
+
+@functools.cache
+def _installed_interface(package: str, namespace: str, name: str) -> bool:
+    """Whether the ament index of an install prefix lists ``package``'s interface ``namespace/name``
+    (``Trigger_Request`` is listed as ``srv/Trigger.srv``). Reads files only; imports nothing."""
+    for prefix in _prefixes():
+        index = prefix / "share" / "ament_index" / "resource_index" / "rosidl_interfaces" / package
+        try:
+            listed = index.read_text(encoding="utf-8").split()
+        except (OSError, UnicodeDecodeError):
+            continue
+        for line in listed:
+            folder, _, file_name = line.partition("/")
+            stem = file_name.rsplit(".", 1)[0]
+            if folder == namespace and (stem == name or (namespace != "msg" and name.startswith(stem + "_"))):
+                return True
+    return False
+
+
 def message_class(type_name: str) -> type:
-    """Import the rclpy message class of ``pkg/msg/Type`` (or ``pkg/Type``)."""
-    package, namespace, name = _split(type_name)
+    """Import the rclpy message class of ``pkg/msg|srv|action/Type``.
+
+    The name comes from a file: it must be a ROS 2 interface name whose package's interface is listed
+    in an installed ament index before anything is imported (a name cannot make Python import a module
+    of its choice). :class:`RecordingError` otherwise.
+    """
+    match = _INTERFACE_NAME.match(type_name)
+    if match is None:
+        raise RecordingError(f"{type_name!r:.120} is not a ROS 2 interface name (expected package/msg/Name)")
+    package, namespace, name = match.groups()
+    if not _installed_interface(package, namespace, name):
+        raise RecordingError(f"message type {type_name} is not installed (no installed interface package lists it)")
     try:
         module = importlib.import_module(f"{package}.{namespace}")
         message: type = getattr(module, name)
-        return message
     except (ImportError, AttributeError):
         raise RecordingError(
             f"message type {type_name} is not installed (cannot import {package}.{namespace}.{name})"
         ) from None
+    if not hasattr(message, "_TYPE_SUPPORT") and not hasattr(message, "__import_type_support__"):
+        raise RecordingError(f"{type_name} is not a generated ROS 2 message class")
+    return message
 
 
 def _share_candidates(package: str) -> Iterator[Path]:
-    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        if prefix:
-            yield Path(prefix) / "share" / package
-    yield Path(sys.prefix) / "share" / package
+    for prefix in _prefixes():
+        yield prefix / "share" / package
     try:  # a native install: <prefix>/lib/pythonX.Y/site-packages/<pkg> -> <prefix>/share/<pkg>
         spec = importlib.util.find_spec(package)
     except (ImportError, ValueError):

@@ -16,9 +16,11 @@ from typing import Any
 
 import numpy as np
 
+from clew_ros.core.errors import short_repr
 from clew_ros.core.kinematics import tip_poses, transform_points
 from clew_ros.core.plan import Plan, PlanSegment, replay
 from clew_ros.core.world import World
+from clew_ros.recording.errors import TrajectoryError
 
 __all__ = ["GRIPPER_JOINT", "trajectory_to_plan"]
 
@@ -42,6 +44,24 @@ def _segments_of(points: np.ndarray, gripper: np.ndarray) -> list[tuple[str, lis
     return segments
 
 
+def _positions(rows: list[list[Any]], width: int, source: str) -> np.ndarray:
+    """``rows`` as an array of finite floats, ``width`` of them each, or :class:`TrajectoryError`."""
+    for number, row in enumerate(rows):
+        if len(row) != width:
+            raise TrajectoryError(
+                f"{source}: point {number} has {len(row)} positions, expected {width} "
+                "(one per joint name, at least one per joint of the world)"
+            )
+    try:
+        positions = np.asarray(rows, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise TrajectoryError(f"{source}: the points' positions are not numbers") from None
+    if not np.all(np.isfinite(positions)):
+        number = int(np.flatnonzero(~np.isfinite(positions).all(axis=1))[0])
+        raise TrajectoryError(f"{source}: point {number} has a position that is not a finite number")
+    return positions
+
+
 def trajectory_to_plan(
     world: World,
     trajectory: Any,
@@ -49,6 +69,7 @@ def trajectory_to_plan(
     grasps: Sequence[int] | None = None,
     message: str = "rebuilt from the recorded trajectory",
     strict: bool = False,
+    source: str = "trajectory",
 ) -> Plan:
     """The :class:`~clew_ros.core.plan.Plan` that a ``JointTrajectory`` plays.
 
@@ -67,10 +88,14 @@ def trajectory_to_plan(
         The plan's ``message``.
     strict:
         Hold the trajectory to the contract (interface.md section 3): raise
-        ``ValueError`` unless ``joint_names`` are exactly the world's joints
-        then ``gripper`` and there is at least one point. Without it, joints
-        are found by name (in column order when a name is missing) and an
-        empty trajectory gives a plan with ``success`` false.
+        :class:`~clew_ros.recording.errors.TrajectoryError` unless
+        ``joint_names`` are exactly the world's joints then ``gripper`` and
+        there is at least one point. Without it, joints are found by name (in
+        column order when a name is missing) and an empty trajectory gives a
+        plan with ``success`` false.
+    source:
+        Where the trajectory comes from (a recording's path and topic), for
+        the messages of errors.
 
     Returns
     -------
@@ -78,14 +103,24 @@ def trajectory_to_plan(
         A plan with ``success`` true when the trajectory has points, no
         ``code`` (the trajectory does not say it) and no ``landmarks`` (nor
         does it hold the tree).
+
+    Raises
+    ------
+    TrajectoryError
+        Names that are not text, points whose positions are not one finite
+        number per joint name (or fewer than the world's joints), grasp
+        indices the world's object does not have; the message names
+        ``source``.
     """
     names = list(trajectory.joint_names)
+    if not all(isinstance(name, str) for name in names):
+        raise TrajectoryError(f"{source}: joint_names: expected names, got {short_repr(names)}")
     robot_names = list(world.robot.joint_names)
     if strict:
         if names != [*robot_names, GRIPPER_JOINT]:
-            raise ValueError(f"joint_names: expected {[*robot_names, GRIPPER_JOINT]}, got {names}")
+            raise TrajectoryError(f"{source}: joint_names: expected {[*robot_names, GRIPPER_JOINT]}, got {names}")
         if not len(trajectory.points):
-            raise ValueError("the trajectory has no points")
+            raise TrajectoryError(f"{source}: the trajectory has no points")
     n = world.robot.dof
     columns = [names.index(j) for j in robot_names] if all(j in names for j in robot_names) else list(range(n))
     gripper_column = names.index(GRIPPER_JOINT) if GRIPPER_JOINT in names else None
@@ -97,7 +132,7 @@ def trajectory_to_plan(
             success=False,
             message="the recorded trajectory has no points",
         )
-    positions = np.asarray(rows, dtype=float)
+    positions = _positions(rows, max(len(names), n), source)
     points = positions[:, columns]
     gripper = positions[:, gripper_column] if gripper_column is not None else np.zeros(len(points))
     segments = [PlanSegment(kind, None, np.asarray(waypoints)) for kind, waypoints in _segments_of(points, gripper)]
@@ -108,6 +143,11 @@ def trajectory_to_plan(
     # the object's replay does not depend on the grasp indices: it gives where each transfer takes the object
     transfers = [motion for motion in replay(world, rebuilt, step_rad=None) if motion.kind == "transfer"]
     given = list(grasps) if grasps is not None and len(grasps) == len(transfers) else None
+    count = len(world.object.grasps)
+    if given is not None and not all(isinstance(g, int | np.integer) and 0 <= g < count for g in given):
+        raise TrajectoryError(f"{source}: grasps: expected indices in [0, {count}), got {short_repr(given)}")
+    if transfers and given is None and not count:
+        raise TrajectoryError(f"{source}: the trajectory carries the object, but the world's object has no grasps")
     for number, motion in enumerate(transfers):
         if given is not None:
             grasp = int(given[number])

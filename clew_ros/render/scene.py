@@ -157,6 +157,8 @@ def world_from_yaml_text(text: str, *, source: str = "world YAML") -> World:
         document = yaml.safe_load(text)
     except yaml.YAMLError as error:
         raise RenderError(f"{source}: not valid YAML ({error})") from None
+    except (RecursionError, ValueError) as error:  # absurd nesting, numbers YAML cannot hold
+        raise RenderError(f"{source}: not a parameter file YAML can read ({type(error).__name__})") from None
     if not isinstance(document, dict):
         raise RenderError(f"{source}: expected a parameter file mapping")
     parameters = None
@@ -252,7 +254,7 @@ def _events(recording: Any) -> list[dict[str, Any]]:
     for message in recording.decoded(topic) if topic else []:
         try:
             event = json.loads(message.data)
-        except (ValueError, TypeError):
+        except (ValueError, TypeError, RecursionError):
             continue
         if isinstance(event, dict):
             events.append(event)
@@ -266,23 +268,25 @@ def scene_from_recording(path: str | Path, world: World | None = None) -> Scene:
 
     try:
         recording = Recording(path)
+        notes = [] if recording.complete else ["recording cut short: read up to its last complete chunk"]
+        if recording.problem:
+            notes.append(f"stopped at: {recording.problem}")
+        if world is None:
+            topic = _topic(recording, "world_yaml")
+            message = recording.last(topic) if topic else None
+            if message is None:
+                raise RenderError(f"{path}: the recording holds no ~/world_yaml message; pass --world WORLD.yaml")
+            world = world_from_yaml_text(message.data, source=f"{path} ({topic})")
+        events = _events(recording)
+        grasps = [int(e["grasp"]) for e in events if e.get("event") == "grasp" and isinstance(e.get("grasp"), int)]
+        outcome = next((e for e in reversed(events) if e.get("event") in ("succeeded", "aborted", "canceled")), None)
+        plan = None
+        topic = _topic(recording, "trajectory")
+        trajectory = recording.last(topic) if topic else None
+        if trajectory is not None and len(trajectory.points):
+            plan = trajectory_to_plan(world, trajectory, grasps=grasps or None, source=f"{path} ({topic})")
     except RecordingError as error:
         raise RenderError(str(error)) from None
-    notes = [] if recording.complete else ["recording cut short: read up to its last complete chunk"]
-    if world is None:
-        topic = _topic(recording, "world_yaml")
-        message = recording.last(topic) if topic else None
-        if message is None:
-            raise RenderError(f"{path}: the recording holds no ~/world_yaml message; pass --world WORLD.yaml")
-        world = world_from_yaml_text(message.data, source=f"{path} ({topic})")
-    events = _events(recording)
-    grasps = [int(e["grasp"]) for e in events if e.get("event") == "grasp" and isinstance(e.get("grasp"), int)]
-    outcome = next((e for e in reversed(events) if e.get("event") in ("succeeded", "aborted", "canceled")), None)
-    plan = None
-    topic = _topic(recording, "trajectory")
-    trajectory = recording.last(topic) if topic else None
-    if trajectory is not None and len(trajectory.points):
-        plan = trajectory_to_plan(world, trajectory, grasps=grasps or None)
     landmarks = LandmarkGraph.from_landmarks(landmarks_from_events(events, world))
     run = Path(path).name
     state = outcome["event"] if outcome else ("plan recorded" if plan else "no plan recorded")

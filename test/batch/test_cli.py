@@ -223,7 +223,9 @@ def test_ray_missing_says_to_install_the_batch_extra(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails, as without the extra
-    code = main([str(CONFIG / "single_transfer.yaml"), "--seeds", "1", "--out", str(tmp_path / "out"), "--ray"])
+    out = str(tmp_path / "out")
+    # --ray-allow-network: past the refusal of a local Ray on a machine with a network (test/security)
+    code = main([str(CONFIG / "single_transfer.yaml"), "--seeds", "1", "--out", out, "--ray", "--ray-allow-network"])
     assert code == 2
     assert "pip install 'clew_ros[batch]'" in capsys.readouterr().err
 

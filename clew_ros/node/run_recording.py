@@ -22,6 +22,8 @@ keeps what it could write. The first fault is logged and added to
 
 from __future__ import annotations
 
+import errno
+import os
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -211,14 +213,17 @@ def _make_private_directories(path: Path) -> None:
     """Create ``path`` and its missing parents, each with mode 0700 (set explicitly: the umask may take bits
     off); an existing folder keeps its mode (the operator's)."""
     missing = []
-    while not path.exists():
-        missing.append(path)
-        if path.parent == path:
+    folder = path
+    while not folder.exists():
+        missing.append(folder)
+        if folder.parent == folder:
             break
-        path = path.parent
+        folder = folder.parent
     for folder in reversed(missing):
         try:
             folder.mkdir(mode=0o700)
         except FileExistsError:
             continue  # made meanwhile (another node): its mode is its maker's
         folder.chmod(0o700)
+    if not path.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path))

@@ -66,7 +66,8 @@ NUMBER_PARAMETERS = [
 @pytest.fixture(scope="module")
 def node(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("node_inputs")
-    session = Session(NodeProcess(tmp / "node.log", WORLD, FAST))
+    # the development switch: every world.* change is checked at run time (else fixed at start: test/security)
+    session = Session(NodeProcess(tmp / "node.log", WORLD, {**FAST, "parameters.allow_runtime_changes": True}))
     try:
         yield session
     finally:

@@ -197,7 +197,7 @@ class Limits:
     max_world_vertices: int = 50_000
     #: Grasps of the object (``world.object.grasps``): EXPLORE and the regrasp search try them in turn.
     max_grasps: int = 256
-    #: Parameters one node holds (its own and rclpy's): each obstacle is one, so it exceeds max_obstacles.
+    #: Parameters one node holds (its own and those of ROS 2): each obstacle is one, so it exceeds max_obstacles.
     max_parameters: int = 6000
     #: Characters of a parameter name, an obstacle name or ``world.name`` (they go into logs, markers
     #: and recordings).

@@ -80,6 +80,9 @@ def test_a_peer_cannot_change_what_matters_for_safety(locked: Session) -> None:
         [result] = set_parameters(locked, {name: attempt(value, elsewhere)})
         assert not result.successful, f"{name}: accepted"
         assert name in result.reason, f"{name}: the reason does not name it: {result.reason!r}"
+        # declared: a read-only descriptor (rclpy's refusal); new: the node's own, saying how to allow it
+        expected = "fixed at start" if name == "world.obstacles.extra" else "read-only"
+        assert expected in result.reason, result.reason
         refused += 1
     # atomically, together with a settable parameter: nothing changes
     [result] = set_parameters(locked, {"planner.seed": 7, "world.robot.joint_upper": [6.0, 6.0]}, atomically=True)

@@ -655,7 +655,7 @@ def limits_table() -> str:
 _LIMIT_TEXT = {
     "max_links": "links of the robot (world.robot.link_lengths)",
     "max_obstacles": "obstacles (world.obstacle_names)",
-    "max_polygon_vertices": "vertices of one polygon (world.obstacles.\\<name>, world.object.polygon)",
+    "max_polygon_vertices": "vertices of one polygon (world.obstacles.<name>, world.object.polygon)",
     "max_world_vertices": "vertices of all the world's polygons together",
     "max_grasps": "grasps (world.object.grasps)",
     "max_parameters": "parameters one node holds, at start and after a change",

@@ -6,8 +6,10 @@ description), one :class:`ParameterTable` per namespace:
 - :data:`WORLD_PARAMETERS`: ``world.*`` (interface.md §1), plus the pattern
   :data:`OBSTACLE_PARAMETER` for ``world.obstacles.<name>``;
 - :data:`PLANNER_PARAMETERS`: ``planner.*``;
-- :data:`NODE_PARAMETERS`: the node's own ``record.*``, ``playback.*`` and
-  ``trajectory.*``.
+- :data:`NODE_PARAMETERS`: the node's own ``record.*``, ``playback.*``,
+  ``trajectory.*``, ``live.*`` and ``parameters.*``;
+- :data:`LIMITS`: the caps on the size of what the parameters describe
+  (links, obstacles, vertices, grasps, parameter count and name lengths).
 
 Derived from these tables: the defaults of
 :class:`~clew_ros.core.settings.PlannerSettings`,
@@ -27,6 +29,7 @@ checks: no ROS, no numpy.
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import math
 import re
@@ -37,17 +40,22 @@ from typing import Any
 from clew_ros.core.errors import ParameterError, short_repr
 
 __all__ = [
+    "LIMITS",
+    "LOCKED_PREFIXES",
     "NODE_PARAMETERS",
     "OBSTACLE_PARAMETER",
     "PLANNER_PARAMETERS",
     "REQUIRED",
     "RETIRED_PARAMETERS",
+    "RUNTIME_CHANGES",
     "WORLD_PARAMETERS",
+    "Limits",
     "ParameterSpec",
     "ParameterTable",
     "ParameterType",
     "check_joint_count",
     "check_value",
+    "limits_table",
     "markdown_tables",
     "retired_message",
     "update_markdown",
@@ -103,6 +111,9 @@ class ParameterSpec:
     ``limits`` is the closed range ``(low, high)`` of a number, or ``None``.
     ``unit`` is the unit of a number (``m``, ``rad``, ``s``, ...), ``""`` if it
     has none. ``read_only``: taken when the node starts, never changed while it runs.
+    ``locked``: it matters for safety (what the robot may hit, how fast it may move,
+    where runs are recorded), so it is fixed at start too, unless the node is started
+    with :data:`RUNTIME_CHANGES` true (a development switch).
     """
 
     name: str
@@ -112,10 +123,22 @@ class ParameterSpec:
     unit: str = ""
     limits: tuple[float, float] | None = None
     read_only: bool = False
+    locked: bool = False
 
     @property
     def required(self) -> bool:
         return self.default is REQUIRED
+
+    def fixed(self, *, allow_runtime_changes: bool) -> bool:
+        """Whether the node refuses a change of this parameter while it runs (a ``read_only`` descriptor)."""
+        return self.read_only or (self.locked and not allow_runtime_changes)
+
+    @property
+    def at_run_time(self) -> str:
+        """What README's tables say about a change while the node runs."""
+        if self.read_only:
+            return "fixed"
+        return "fixed (dev switch)" if self.locked else "settable"
 
 
 class ParameterTable(Mapping[str, ParameterSpec]):
@@ -152,71 +175,154 @@ class ParameterTable(Mapping[str, ParameterSpec]):
 _B, _I, _D, _S = ParameterType.BOOL, ParameterType.INTEGER, ParameterType.DOUBLE, ParameterType.STRING
 _DA, _SA, _DJ = ParameterType.DOUBLE_ARRAY, ParameterType.STRING_ARRAY, ParameterType.DOUBLE_PER_JOINT
 
+
+@dataclass(frozen=True)
+class Limits:
+    """Caps on the size of what the parameters describe; a value beyond one is refused, naming the cap.
+
+    They keep one parameter file or one ``ros2 param set`` from taking a node's memory or time: every
+    cost below grows with these counts. The world parser checks the world's (links, obstacles, vertices,
+    grasps, names); the node checks the parameter count and name lengths at start and on every change.
+    """
+
+    #: Links of the robot: self-collision checks and planning grow with the square of the link count; at
+    #: least 64 (the longest generated arms have 40).
+    max_links: int = 100
+    #: Obstacles (``world.obstacle_names``): every collision check visits each (5,000 plan within the time
+    #: limit on a 2-core machine).
+    max_obstacles: int = 5000
+    #: Vertices of one polygon (an obstacle or the object): its edges are tested one by one.
+    max_polygon_vertices: int = 1000
+    #: Vertices of all the world's polygons together: the packed collision arrays hold them all.
+    max_world_vertices: int = 50_000
+    #: Grasps of the object (``world.object.grasps``): EXPLORE and the regrasp search try them in turn.
+    max_grasps: int = 256
+    #: Parameters one node holds (its own and those of ROS 2): each obstacle is one, so it exceeds max_obstacles.
+    max_parameters: int = 6000
+    #: Characters of a parameter name, an obstacle name or ``world.name`` (they go into logs, markers
+    #: and recordings).
+    max_name_chars: int = 256
+    #: Characters of a string parameter's value (``record.directory``: a path, PATH_MAX on Linux).
+    max_string_chars: int = 4096
+    #: Characters of a ``~/goal_pose`` ``header.frame_id`` quoted in a log line or an event (printable
+    #: characters only; the rest is cut).
+    max_quoted_chars: int = 64
+
+
+#: The caps in force (:class:`Limits`' defaults).
+LIMITS = Limits()
+
+
+#: The name of the development switch: ``true`` lets the :attr:`~ParameterSpec.locked` parameters change while
+#: the node runs.
+RUNTIME_CHANGES = "parameters.allow_runtime_changes"
+#: The namespaces whose parameters are :attr:`~ParameterSpec.locked` (fixed at start): the world (the robot,
+#: its limits, the obstacles), the trajectory limits a controller follows, where and whether runs are
+#: recorded, the live view. A parameter under them that was not declared at start cannot be added later.
+LOCKED_PREFIXES = ("world.", "record.", "trajectory.", "live.")
+
+
+def _locked(specs: Iterable[ParameterSpec]) -> list[ParameterSpec]:
+    return [dataclasses.replace(spec, locked=True) for spec in specs]
+
+
 WORLD_PARAMETERS = ParameterTable(
     "world.",
-    [
-        ParameterSpec("world.name", _S, "world", "Name of the world; plans and recordings carry it."),
-        ParameterSpec(
-            "world.bounds",
-            _DA,
-            REQUIRED,
-            "The workspace box [xmin, ymin, xmax, ymax] (m); touching its edge is inside.",
-            "m",
-        ),
-        ParameterSpec("world.robot.base", _DA, REQUIRED, "Position [x, y] of joint 1 (m).", "m"),
-        ParameterSpec("world.robot.link_lengths", _DA, REQUIRED, "Length of each link (m); n >= 2 links.", "m"),
-        ParameterSpec(
-            "world.robot.link_width", _D, 0.0, "Links are capsules of radius link_width / 2 (m); 0: segments.", "m"
-        ),
-        ParameterSpec("world.robot.joint_lower", _DA, REQUIRED, "Lower joint limits (rad), one per link.", "rad"),
-        ParameterSpec("world.robot.joint_upper", _DA, REQUIRED, "Upper joint limits (rad), one per link.", "rad"),
-        ParameterSpec("world.robot.initial", _DA, REQUIRED, "Joint angles at the start (rad), one per link.", "rad"),
-        ParameterSpec("world.robot.self_collision", _B, True, "Check non-adjacent links against each other."),
-        ParameterSpec(
-            "world.obstacle_names",
-            _SA,
-            None,
-            "Names of the obstacles; each needs world.obstacles.<name>. Omit it for a world without obstacles.",
-        ),
-        ParameterSpec(
-            "world.object.polygon",
-            _DA,
-            REQUIRED,
-            "The object as a flat x0, y0, x1, y1, ... list in its own frame (m).",
-            "m",
-        ),
-        ParameterSpec(
-            "world.object.initial", _DA, REQUIRED, "Start placement [x, y, theta] of the object (m, rad).", "m, rad"
-        ),
-        ParameterSpec(
-            "world.object.goal",
-            _DA,
-            REQUIRED,
-            "Goal placement [x, y, theta] of the object (m, rad); ~/plan plans to it.",
-            "m, rad",
-        ),
-        ParameterSpec(
-            "world.object.grasps",
-            _DA,
-            REQUIRED,
-            "Grasp points on the object's boundary, flat x0, y0, ... in its frame (m).",
-            "m",
-        ),
-        ParameterSpec(
-            "world.grasp_tolerance", _D, 0.005, "The tip holds a grasp when it is this close to it (m).", "m"
-        ),
-        ParameterSpec(
-            "world.goal_tolerance", _D, 0.02, "Largest distance of the final object position from the goal (m).", "m"
-        ),
-        ParameterSpec(
-            "world.goal_angle_tolerance", _D, math.pi, "Largest orientation error at the goal (rad); pi: any.", "rad"
-        ),
-    ],
+    _locked(
+        [
+            ParameterSpec(
+                "world.name",
+                _S,
+                "world",
+                f"Name of the world; plans and recordings carry it. At most {LIMITS.max_name_chars} characters.",
+            ),
+            ParameterSpec(
+                "world.bounds",
+                _DA,
+                REQUIRED,
+                "The workspace box [xmin, ymin, xmax, ymax] (m); touching its edge is inside.",
+                "m",
+            ),
+            ParameterSpec("world.robot.base", _DA, REQUIRED, "Position [x, y] of joint 1 (m).", "m"),
+            ParameterSpec(
+                "world.robot.link_lengths",
+                _DA,
+                REQUIRED,
+                f"Length of each link (m); n >= 2 links, at most {LIMITS.max_links}.",
+                "m",
+            ),
+            ParameterSpec(
+                "world.robot.link_width", _D, 0.0, "Links are capsules of radius link_width / 2 (m); 0: segments.", "m"
+            ),
+            ParameterSpec("world.robot.joint_lower", _DA, REQUIRED, "Lower joint limits (rad), one per link.", "rad"),
+            ParameterSpec("world.robot.joint_upper", _DA, REQUIRED, "Upper joint limits (rad), one per link.", "rad"),
+            ParameterSpec(
+                "world.robot.initial", _DA, REQUIRED, "Joint angles at the start (rad), one per link.", "rad"
+            ),
+            ParameterSpec("world.robot.self_collision", _B, True, "Check non-adjacent links against each other."),
+            ParameterSpec(
+                "world.obstacle_names",
+                _SA,
+                None,
+                "Names of the obstacles; each needs world.obstacles.<name>. Omit it for a world without obstacles. "
+                f"At most {LIMITS.max_obstacles} names of at most {LIMITS.max_name_chars} characters.",
+            ),
+            ParameterSpec(
+                "world.object.polygon",
+                _DA,
+                REQUIRED,
+                f"The object as a flat x0, y0, x1, y1, ... list in its own frame (m); at most "
+                f"{LIMITS.max_polygon_vertices} vertices.",
+                "m",
+            ),
+            ParameterSpec(
+                "world.object.initial", _DA, REQUIRED, "Start placement [x, y, theta] of the object (m, rad).", "m, rad"
+            ),
+            ParameterSpec(
+                "world.object.goal",
+                _DA,
+                REQUIRED,
+                "Goal placement [x, y, theta] of the object (m, rad); ~/plan plans to it.",
+                "m, rad",
+            ),
+            ParameterSpec(
+                "world.object.grasps",
+                _DA,
+                REQUIRED,
+                "Grasp points on the object's boundary, flat x0, y0, ... in its frame (m); "
+                f"at most {LIMITS.max_grasps}.",
+                "m",
+            ),
+            ParameterSpec(
+                "world.grasp_tolerance", _D, 0.005, "The tip holds a grasp when it is this close to it (m).", "m"
+            ),
+            ParameterSpec(
+                "world.goal_tolerance",
+                _D,
+                0.02,
+                "Largest distance of the final object position from the goal (m).",
+                "m",
+            ),
+            ParameterSpec(
+                "world.goal_angle_tolerance",
+                _D,
+                math.pi,
+                "Largest orientation error at the goal (rad); pi: any.",
+                "rad",
+            ),
+        ]
+    ),
 )
 
 #: ``world.obstacles.<name>``, one per name in ``world.obstacle_names`` (not a key of :data:`WORLD_PARAMETERS`).
 OBSTACLE_PARAMETER = ParameterSpec(
-    "world.obstacles.<name>", _DA, REQUIRED, "Obstacle polygon as a flat x0, y0, x1, y1, ... list (m).", "m"
+    "world.obstacles.<name>",
+    _DA,
+    REQUIRED,
+    f"Obstacle polygon as a flat x0, y0, x1, y1, ... list (m); at most {LIMITS.max_polygon_vertices} vertices "
+    f"(and {LIMITS.max_world_vertices} in all the world's polygons).",
+    "m",
+    locked=True,
 )
 
 PLANNER_PARAMETERS = ParameterTable(
@@ -231,7 +337,7 @@ PLANNER_PARAMETERS = ParameterTable(
             30.0,
             "Seconds before the planner stops and reports TIME_LIMIT.",
             "s",
-            (0.01, 86400.0),
+            (0.01, 3600.0),
         ),
         ParameterSpec(
             "planner.resolution",
@@ -258,9 +364,9 @@ PLANNER_PARAMETERS = ParameterTable(
             "Order k of the Manhattan paths optimised (k single paths of n moves).",
             limits=(1, 8),
         ),
-        ParameterSpec("planner.population", _I, 24, "Genetic algorithm population size.", limits=(4, 10000)),
+        ParameterSpec("planner.population", _I, 24, "Genetic algorithm population size.", limits=(4, 1000)),
         ParameterSpec(
-            "planner.generations", _I, 12, "Genetic algorithm generations per optimisation.", limits=(1, 10000)
+            "planner.generations", _I, 12, "Genetic algorithm generations per optimisation.", limits=(1, 1000)
         ),
         ParameterSpec(
             "planner.explore_candidates", _I, 4, "Landmark/grasp pairs (m1) tried per EXPLORE step.", limits=(1, 1000)
@@ -280,8 +386,9 @@ PLANNER_PARAMETERS = ParameterTable(
             "planner.threads",
             _I,
             0,
-            "Threads that decode a population's Manhattan paths (0: all cores); the plan does not depend on it.",
-            limits=(0, 1024),
+            "Threads that decode a population's Manhattan paths (0: all cores; never more than the cores); the "
+            "plan does not depend on it.",
+            limits=(0, 256),
         ),
         ParameterSpec(
             "planner.improve_time",
@@ -308,15 +415,52 @@ NODE_PARAMETERS = ParameterTable(
             "",
             (0, 65535),
             read_only=True,
+            locked=True,
         ),
         ParameterSpec(
-            "record.enabled", _B, True, "Record every run as a rosbag2 directory <record.directory>/<run id>/."
+            RUNTIME_CHANGES,
+            _B,
+            False,
+            "Development switch: true lets ros2 param set change the world.*, record.*, trajectory.* and live.* "
+            "parameters while the node runs (when no plan runs); false fixes them at start, and a change is "
+            "refused naming the parameter. Read only: taken when the node starts.",
+            read_only=True,
+        ),
+        ParameterSpec(
+            "record.enabled",
+            _B,
+            True,
+            "Record every run as a rosbag2 directory <record.directory>/<run id>/ (folders mode 0700, files 0600).",
+            locked=True,
         ),
         ParameterSpec(
             "record.directory",
             _S,
             "~/.ros/clew_recordings",
-            "Where runs are recorded; '~' and environment variables are expanded.",
+            "Where runs are recorded, resolved once at start to an absolute path: '~' is expanded, environment "
+            "variables are not (a '$' is refused); symbolic links and '..' are resolved, and every run folder "
+            "is made inside the resolved directory.",
+            locked=True,
+        ),
+        ParameterSpec(
+            "record.max_runs",
+            _I,
+            100,
+            "Most run folders kept in record.directory: as a run starts, the oldest complete runs beyond it are "
+            "deleted (logged), never the run being recorded; only folders named by a run id that hold a "
+            "metadata.yaml are counted or deleted. 0: no limit.",
+            limits=(0, 1_000_000),
+            locked=True,
+        ),
+        ParameterSpec(
+            "record.max_bytes",
+            _I,
+            2**30,
+            "Most bytes kept in the complete run folders of record.directory: as a run starts, the oldest are "
+            "deleted (logged) until the rest fit (the run being recorded is not counted). 0: no limit.",
+            "bytes",
+            (0, 2**62),
+            locked=True,
         ),
         ParameterSpec(
             "playback.rate",
@@ -334,6 +478,7 @@ NODE_PARAMETERS = ParameterTable(
             "or a list with one per joint, joint_1 first (the per-joint limits of a joint_limits.yaml).",
             "rad/s",
             (0.001, 1000.0),
+            locked=True,
         ),
         ParameterSpec(
             "trajectory.max_acceleration",
@@ -343,6 +488,7 @@ NODE_PARAMETERS = ParameterTable(
             "joint, or a list with one per joint.",
             "rad/s^2",
             (0.001, 100000.0),
+            locked=True,
         ),
         ParameterSpec(
             "trajectory.joint_speed",
@@ -352,11 +498,24 @@ NODE_PARAMETERS = ParameterTable(
             "when set, it is the velocity limit and trajectory.max_velocity is ignored.",
             "rad/s",
             (0.001, 1000.0),
+            locked=True,
         ),
         ParameterSpec(
-            "trajectory.grasp_dwell", _D, 0.2, "Time (s) a grasp or ungrasp takes in ~/trajectory.", "s", (0.001, 60.0)
+            "trajectory.grasp_dwell",
+            _D,
+            0.2,
+            "Time (s) a grasp or ungrasp takes in ~/trajectory.",
+            "s",
+            (0.001, 60.0),
+            locked=True,
         ),
     ],
+)
+
+# A parameter is locked exactly when it lies under one of LOCKED_PREFIXES.
+assert all(
+    spec.locked == spec.name.startswith(LOCKED_PREFIXES)
+    for spec in (*WORLD_PARAMETERS.values(), *PLANNER_PARAMETERS.values(), *NODE_PARAMETERS.values())
 )
 
 
@@ -383,6 +542,11 @@ def check_value(spec: ParameterSpec, value: Any) -> Any:
     if kind is ParameterType.STRING:
         if not isinstance(value, str) or not value:
             raise ParameterError(spec.name, f"expected a non-empty string, got {short_repr(value)}")
+        if len(value) > LIMITS.max_string_chars:
+            raise ParameterError(
+                spec.name,
+                f"expected at most {LIMITS.max_string_chars} characters (Limits.max_string_chars), got {len(value)}",
+            )
         return value
     if kind is ParameterType.DOUBLE_PER_JOINT:
         return _check_per_joint(spec, value)
@@ -461,21 +625,59 @@ def _cell(value: Any) -> str:
     return f"`{value}`"
 
 
+def _literal(text: str) -> str:
+    return text.replace("|", "\\|").replace("<", "\\<")  # literal, not HTML
+
+
 def _rows(specs: Iterable[ParameterSpec], *, ranges: bool) -> list[str]:
     rows = []
     for spec in specs:
         cells = [f"`{spec.name}`", spec.type.value, _cell(spec.default), spec.unit]
         if ranges:
             cells.append(f"[{spec.limits[0]}, {spec.limits[1]}]" if spec.limits else "")
-        cells.append(spec.description.replace("|", "\\|").replace("<", "\\<"))  # literal, not HTML
+        cells.append(spec.at_run_time)
+        cells.append(_literal(spec.description))
         rows.append("| " + " | ".join(cells) + " |")
     return rows
 
 
+def limits_table() -> str:
+    """The caps of :data:`LIMITS` as a Markdown table: the field, its value, what it caps."""
+    rows = ["| limit | value | caps |", "|---|---|---|"]
+    rows.extend(
+        f"| `{field.name}` | `{getattr(LIMITS, field.name)}` | {_literal(_LIMIT_TEXT[field.name])} |"
+        for field in dataclasses.fields(Limits)
+    )
+    return "\n".join(rows)
+
+
+#: What README says each cap limits (the comments of :class:`Limits` say why).
+_LIMIT_TEXT = {
+    "max_links": "links of the robot (world.robot.link_lengths)",
+    "max_obstacles": "obstacles (world.obstacle_names)",
+    "max_polygon_vertices": "vertices of one polygon (world.obstacles.<name>, world.object.polygon)",
+    "max_world_vertices": "vertices of all the world's polygons together",
+    "max_grasps": "grasps (world.object.grasps)",
+    "max_parameters": "parameters one node holds, at start and after a change",
+    "max_name_chars": "characters of a parameter name, an obstacle name or world.name",
+    "max_string_chars": "characters of a string parameter (record.directory)",
+    "max_quoted_chars": "characters of a ~/goal_pose frame_id quoted in logs and events (printable only)",
+}
+assert list(_LIMIT_TEXT) == [field.name for field in dataclasses.fields(Limits)]
+
+
 def markdown_tables() -> dict[str, str]:
-    """The README tables, by name (``world``, ``planner``, ``node``): Markdown, one line per parameter."""
-    world_header = ["| name | type | default | unit | meaning |", "|---|---|---|---|---|"]
-    ranged_header = ["| name | type | default | unit | range | meaning |", "|---|---|---|---|---|---|"]
+    """The README tables, by name (``world``, ``planner``, ``node``): Markdown, one line per parameter.
+
+    The column "at run time" says whether ``ros2 param set`` may change the parameter while the node runs:
+    ``settable``; ``fixed`` (taken at start); ``fixed (dev switch)``: fixed unless the node was started
+    with ``parameters.allow_runtime_changes: true``.
+    """
+    world_header = ["| name | type | default | unit | at run time | meaning |", "|---|---|---|---|---|---|"]
+    ranged_header = [
+        "| name | type | default | unit | range | at run time | meaning |",
+        "|---|---|---|---|---|---|---|",
+    ]
     world = list(WORLD_PARAMETERS.values())
     names = [i for i, spec in enumerate(world) if spec.name == "world.obstacle_names"]
     world.insert(names[0] + 1, OBSTACLE_PARAMETER)
@@ -484,6 +686,11 @@ def markdown_tables() -> dict[str, str]:
         "planner": "\n".join(ranged_header + _rows(PLANNER_PARAMETERS.values(), ranges=True)),
         "node": "\n".join(ranged_header + _rows(NODE_PARAMETERS.values(), ranges=True)),
     }
+
+
+def _optional_tables() -> dict[str, str]:
+    """Tables :func:`update_markdown` rewrites only where their markers are (``limits``)."""
+    return {"limits": limits_table()}
 
 
 def update_markdown(text: str) -> str:
@@ -497,11 +704,15 @@ def update_markdown(text: str) -> str:
         if match is None:
             raise ValueError(f"no generated table '{name}': expected a line {begin!r}, the table, then {end!r}")
         text = f"{text[: match.start()]}{begin}\n{table}\n{end}{text[match.end() :]}"
+    for name, table in _optional_tables().items():
+        begin, end = _BEGIN.format(name), _END.format(name)
+        match = re.search(re.escape(begin) + r"\n.*?" + re.escape(end), text, re.DOTALL)
+        if match is not None:
+            text = f"{text[: match.start()]}{begin}\n{table}\n{end}{text[match.end() :]}"
     return text
 
 
 def marked_tables() -> str:
     """Every generated table between its markers, as :func:`update_markdown` finds them."""
-    return "\n".join(
-        f"{_BEGIN.format(name)}\n{table}\n{_END.format(name)}\n" for name, table in markdown_tables().items()
-    )
+    tables = {**markdown_tables(), **_optional_tables()}
+    return "\n".join(f"{_BEGIN.format(name)}\n{table}\n{_END.format(name)}\n" for name, table in tables.items())

@@ -25,7 +25,7 @@ import shapely
 import yaml
 
 from clew_ros.core.errors import WorldError, short_repr
-from clew_ros.core.parameters import REQUIRED, WORLD_PARAMETERS
+from clew_ros.core.parameters import LIMITS, REQUIRED, WORLD_PARAMETERS, Limits
 
 __all__ = [
     "GRASP_ON_BOUNDARY_TOLERANCE_M",
@@ -47,9 +47,8 @@ GRASP_ON_BOUNDARY_TOLERANCE_M = 1e-6
 #: Largest magnitude of any number of the world (m or rad). Beyond it the
 #: geometry loses its precision (and squares overflow); no planar arm needs it.
 MAX_ABS_VALUE = 1e6
-#: Most links a robot may have: validation (self-collision pairs) and planning
-#: grow with the square of the link count.
-MAX_LINKS = 100
+#: Most links a robot may have (:attr:`Limits.max_links <clew_ros.core.parameters.Limits.max_links>`).
+MAX_LINKS = LIMITS.max_links
 #: Largest parameter file read (bytes); ``/dev/zero`` is not a world.
 MAX_PARAMETER_FILE_BYTES = 64 * 2**20
 
@@ -239,9 +238,49 @@ def _numbers(
     return array
 
 
-def _polygon(tree: Mapping[str, Any], key: str, prefix: str) -> np.ndarray:
+def _check_count(name: str, value: Any, *, per_item: int, cap: int, cap_name: str, items: str) -> None:
+    """Refuse a list ``value`` of more than ``cap`` ``items`` (``per_item`` numbers each), before reading it."""
+    if isinstance(value, (list, tuple)) and len(value) > cap * per_item:
+        raise WorldError(
+            name, f"expected at most {cap} {items} (Limits.{cap_name}), got {math.ceil(len(value) / per_item)}"
+        )
+
+
+def _check_name(name: str, text: str, limits: Limits) -> None:
+    if len(text) > limits.max_name_chars:
+        raise WorldError(
+            name,
+            f"expected a name of at most {limits.max_name_chars} characters (Limits.max_name_chars), "
+            f"got {len(text)}: {short_repr(text, 40)}",
+        )
+
+
+def _check_world_vertices(tree: Mapping[str, Any], limits: Limits) -> None:
+    """Refuse a world whose polygons hold more than ``limits.max_world_vertices`` vertices, before parsing them."""
+    polygons = [
+        tree.get("obstacles").values() if isinstance(tree.get("obstacles"), Mapping) else [],  # type: ignore[union-attr]
+        [tree["object"].get("polygon")] if isinstance(tree.get("object"), Mapping) else [],
+    ]
+    vertices = sum(len(flat) // 2 for group in polygons for flat in group if isinstance(flat, (list, tuple)))
+    if vertices > limits.max_world_vertices:
+        raise WorldError(
+            "world.obstacles",
+            f"expected at most {limits.max_world_vertices} vertices in all the world's polygons "
+            f"(Limits.max_world_vertices), got {vertices}",
+        )
+
+
+def _polygon(tree: Mapping[str, Any], key: str, prefix: str, limits: Limits = LIMITS) -> np.ndarray:
     """A flat x0, y0, x1, y1, ... list as a valid, counter-clockwise polygon."""
     name = f"{prefix}.{key}"
+    _check_count(
+        name,
+        tree.get(key),
+        per_item=2,
+        cap=limits.max_polygon_vertices,
+        cap_name="max_polygon_vertices",
+        items="vertices",
+    )
     flat = _numbers(tree, key, prefix, min_length=6, even=True)
     vertices = flat.reshape(-1, 2)
     if len(vertices) > 1 and np.allclose(vertices[0], vertices[-1]):
@@ -275,11 +314,13 @@ def _bool(tree: Mapping[str, Any], key: str, prefix: str) -> bool:
     return value
 
 
-def world_from_parameters(parameters: Mapping[str, Any]) -> World:
+def world_from_parameters(parameters: Mapping[str, Any], limits: Limits = LIMITS) -> World:
     """Parse a :class:`World` from a ``ros__parameters`` tree, checking every value.
 
     ``parameters`` holds a ``world`` key (other keys are ignored). Raises
-    :class:`~clew_ros.core.errors.WorldError` naming the parameter at fault.
+    :class:`~clew_ros.core.errors.WorldError` naming the parameter at fault;
+    a world beyond one of ``limits`` (links, obstacles, vertices, grasps,
+    name lengths) is refused naming the parameter and the limit.
     The start and goal placements are not checked for collisions here: see
     :func:`clew_ros.core.collision.check_start_and_goal`.
     """
@@ -291,12 +332,14 @@ def world_from_parameters(parameters: Mapping[str, Any]) -> World:
     name = tree.get("name", _default("world.name"))
     if not isinstance(name, str) or not name:
         raise WorldError("world.name", f"expected a non-empty string, got {short_repr(name)}")
+    _check_name("world.name", name, limits)
     bounds = _numbers(tree, "bounds", "world", length=4)
     if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
         raise WorldError("world.bounds", f"expected xmin < xmax and ymin < ymax, got {bounds.tolist()}")
-    robot = _robot(_mapping(tree, "robot", "world"))
-    obstacles = _obstacles(tree)
-    movable = _movable_object(_mapping(tree, "object", "world"))
+    robot = _robot(_mapping(tree, "robot", "world"), limits)
+    _check_world_vertices(tree, limits)
+    obstacles = _obstacles(tree, limits)
+    movable = _movable_object(_mapping(tree, "object", "world"), limits)
     return World(
         name=name,
         bounds=_frozen(bounds),
@@ -310,13 +353,19 @@ def world_from_parameters(parameters: Mapping[str, Any]) -> World:
     )
 
 
-def _robot(tree: Mapping[str, Any]) -> Robot:
+def _robot(tree: Mapping[str, Any], limits: Limits) -> Robot:
     """``world.robot``: the chain, its joint limits and its start within them."""
     rp = "world.robot"
+    _check_count(
+        f"{rp}.link_lengths",
+        tree.get("link_lengths"),
+        per_item=1,
+        cap=limits.max_links,
+        cap_name="max_links",
+        items="links",
+    )
     lengths = _numbers(tree, "link_lengths", rp, min_length=2)
     n = len(lengths)
-    if n > MAX_LINKS:
-        raise WorldError(f"{rp}.link_lengths", f"expected at most {MAX_LINKS} links, got {n}")
     if np.any(lengths <= 0):
         raise WorldError(f"{rp}.link_lengths", f"expected lengths > 0, got {lengths.tolist()}")
     lower = _numbers(tree, "joint_lower", rp)
@@ -346,7 +395,7 @@ def _robot(tree: Mapping[str, Any]) -> Robot:
     )
 
 
-def _obstacles(tree: Mapping[str, Any]) -> tuple[Obstacle, ...]:
+def _obstacles(tree: Mapping[str, Any], limits: Limits) -> tuple[Obstacle, ...]:
     """``world.obstacles.<name>`` for each name of ``world.obstacle_names``, in that order."""
     names = tree.get("obstacle_names", _default("world.obstacle_names"))
     obstacle_tree = tree.get("obstacles") or {}
@@ -356,8 +405,18 @@ def _obstacles(tree: Mapping[str, Any]) -> tuple[Obstacle, ...]:
         )
     if names is None:
         names = []
+    _check_count(
+        "world.obstacle_names", names, per_item=1, cap=limits.max_obstacles, cap_name="max_obstacles", items="obstacles"
+    )
+    if isinstance(obstacle_tree, Mapping) and len(obstacle_tree) > limits.max_obstacles:
+        raise WorldError(
+            "world.obstacles",
+            f"expected at most {limits.max_obstacles} obstacles (Limits.max_obstacles), got {len(obstacle_tree)}",
+        )
     if not isinstance(names, (list, tuple)) or not all(isinstance(s, str) and s for s in names):
         raise WorldError("world.obstacle_names", f"expected a list of non-empty strings, got {short_repr(names)}")
+    for obstacle_name in names:
+        _check_name("world.obstacle_names", obstacle_name, limits)
     if len(set(names)) != len(names):
         raise WorldError("world.obstacle_names", "expected unique names")
     for key in obstacle_tree:
@@ -370,14 +429,18 @@ def _obstacles(tree: Mapping[str, Any]) -> tuple[Obstacle, ...]:
     for obstacle_name in names:
         if obstacle_name not in obstacle_tree:
             raise WorldError(f"world.obstacles.{obstacle_name}", "is required: it is listed in world.obstacle_names")
-        obstacles.append(Obstacle(obstacle_name, _frozen(_polygon(obstacle_tree, obstacle_name, "world.obstacles"))))
+        polygon = _polygon(obstacle_tree, obstacle_name, "world.obstacles", limits)
+        obstacles.append(Obstacle(obstacle_name, _frozen(polygon)))
     return tuple(obstacles)
 
 
-def _movable_object(tree: Mapping[str, Any]) -> MovableObject:
+def _movable_object(tree: Mapping[str, Any], limits: Limits) -> MovableObject:
     """``world.object``: its polygon, its grasps on the polygon's boundary, its start and goal poses."""
     op = "world.object"
-    polygon = _polygon(tree, "polygon", op)
+    polygon = _polygon(tree, "polygon", op, limits)
+    _check_count(
+        f"{op}.grasps", tree.get("grasps"), per_item=2, cap=limits.max_grasps, cap_name="max_grasps", items="grasps"
+    )
     grasps = _numbers(tree, "grasps", op, min_length=2, even=True).reshape(-1, 2)
     boundary = shapely.Polygon(polygon).exterior
     distances = np.atleast_1d(shapely.distance(boundary, shapely.points(grasps)))

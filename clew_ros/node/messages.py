@@ -40,6 +40,7 @@ from unique_identifier_msgs.msg import UUID
 from visualization_msgs.msg import Marker, MarkerArray
 
 from clew_ros.core.kinematics import joint_positions, transform_points
+from clew_ros.core.parameters import LIMITS
 from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import Landmark, LandmarkTree
@@ -63,6 +64,7 @@ __all__ = [
     "playback_messages",
     "pose_msg",
     "quaternion_to_yaw",
+    "quoted_text",
     "robot_description_message",
     "scene_markers",
     "tf_message",
@@ -127,6 +129,13 @@ def _color(r: float, g: float, b: float, a: float = 1.0) -> ColorRGBA:
 # --------------------------------------------------------------------------- goals
 
 
+def quoted_text(text: str, limit: int = LIMITS.max_quoted_chars) -> str:
+    """``text`` from a peer as a log line or an event may quote it: printable characters only (each other one
+    is shown as ``?``), at most ``limit`` of them, then ``...(N characters)`` when it was longer."""
+    shown = "".join(c if c.isprintable() else "?" for c in text[:limit])
+    return shown if len(text) <= limit else f"{shown}...({len(text)} characters)"
+
+
 def goal_from_pose_stamped(msg: PoseStamped, world: World) -> np.ndarray:
     """The object goal ``(x, y, yaw)`` of a ``~/goal_pose`` message, checked.
 
@@ -137,7 +146,7 @@ def goal_from_pose_stamped(msg: PoseStamped, world: World) -> np.ndarray:
     """
     frame = msg.header.frame_id
     if frame not in ("", FRAME_ID):
-        raise GoalPoseError(f"goal_pose: header.frame_id must be '{FRAME_ID}' (or empty), got '{frame}'")
+        raise GoalPoseError(f"goal_pose: header.frame_id must be '{FRAME_ID}' (or empty), got '{quoted_text(frame)}'")
     p, q = msg.pose.position, msg.pose.orientation
     values = [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
     if not all(math.isfinite(v) for v in values):

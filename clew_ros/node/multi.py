@@ -19,8 +19,8 @@ each were started with ``clew_planner --ros-args --params-file WORLD.yaml
 name (``/arm_a/clew_planner:``) reaches that node only.
 
 Recordings: each node records into ``<record.directory>/<NAMESPACE>/<run
-id>/`` (its ``record.directory`` parameter is set so at start; ``ros2 param
-get`` shows it). ``/tf`` and ``/tf_static`` are remapped into the namespace
+id>/`` (its ``record.directory`` parameter is declared so at start, fixed
+like the node's; ``ros2 param get`` shows it). ``/tf`` and ``/tf_static`` are remapped into the namespace
 (``/<NAMESPACE>/tf``), since every planner names its frames alike.
 
 Exit codes: 0 after a clean shutdown; 2 when an argument or a world is
@@ -38,7 +38,6 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from rclpy.parameter import Parameter
 from rclpy.utilities import remove_ros_args
 
 from clew_ros.node.main import serve
@@ -48,12 +47,11 @@ from clew_ros.node.namespaces import (
     PlannerArgumentError,
     PlannerSpec,
     demo_pairs,
-    namespaced_directory,
     parse_planner_pairs,
     world_parameters,
 )
 from clew_ros.node.parameters import default_world_file
-from clew_ros.node.planner_node import PlannerNode, StartupError
+from clew_ros.node.planner_node import PlannerNode
 
 __all__ = ["main", "node_arguments", "ros_parameter_arguments"]
 
@@ -148,25 +146,21 @@ def _build_planners(
                 # keyed /** in the node's own arguments: it reaches this node, whatever its namespace
                 world_file = Path(scratch) / f"planner_{index}.yaml"
                 world_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": world}}), encoding="utf-8")
-                node = PlannerNode(namespace=spec.namespace, cli_args=node_arguments(world_file, parameter_args))
+                node = PlannerNode(
+                    namespace=spec.namespace,
+                    cli_args=node_arguments(world_file, parameter_args),
+                    record_subdirectory=spec.namespace.strip("/"),
+                )
                 nodes.append(node)
-                _record_in_namespace(node, spec)
+                node.get_logger().info(
+                    f"world file {spec.world_file}; recording directory {node.get_parameter('record.directory').value}"
+                )
     except BaseException:  # StartupError (already logged) or anything else: no node is left behind
         for node in nodes:
             node.shutdown_runs()
             node.destroy_node()
         raise
     return nodes
-
-
-def _record_in_namespace(node: PlannerNode, spec: PlannerSpec) -> None:
-    """Set the node's ``record.directory`` to ``<record.directory>/<namespace>``."""
-    directory = namespaced_directory(str(node.get_parameter("record.directory").value), spec.namespace)
-    result = node.set_parameters([Parameter("record.directory", value=directory)])[0]
-    if not result.successful:  # a string is always a valid record.directory: a bug if it happens
-        node.get_logger().error(f"record.directory {directory!r} refused: {result.reason}; not starting")
-        raise StartupError(result.reason)
-    node.get_logger().info(f"world file {spec.world_file}; recording directory {directory}")
 
 
 if __name__ == "__main__":

@@ -123,7 +123,7 @@ def world_parameters(spec: PlannerSpec) -> dict[str, Any]:
 def namespaced_directory(directory: str, namespace: str) -> str:
     """``directory`` with the namespace's path appended: ``("~/runs", "/robots/arm_a")`` -> ``~/runs/robots/arm_a``.
 
-    ``~`` and environment variables are left for the node to expand (as in ``record.directory``).
+    ``~`` is left for the node to expand (as in ``record.directory``).
     """
     return f"{directory.rstrip('/')}/{namespace.strip('/')}"
 

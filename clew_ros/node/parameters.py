@@ -14,8 +14,16 @@ values. Three families:
 - ``planner.*``: :data:`~clew_ros.core.parameters.PLANNER_PARAMETERS`,
   checked by :class:`~clew_ros.core.settings.PlannerSettings`.
 - the node's own: :data:`~clew_ros.core.parameters.NODE_PARAMETERS`
-  (``record.*``, ``playback.*``, ``trajectory.*``), checked here into
-  :class:`NodeSettings`.
+  (``record.*``, ``playback.*``, ``trajectory.*``, ``live.*``,
+  ``parameters.*``), checked here into :class:`NodeSettings`.
+
+The parameters that matter for safety (``world.*``, ``record.*``,
+``trajectory.*``, ``live.*``: :data:`~clew_ros.core.parameters.LOCKED_PREFIXES`)
+are declared read-only, so that rclpy refuses a change from any peer with a
+reason naming the parameter, unless the node is started with
+``parameters.allow_runtime_changes: true`` (itself read-only).
+:func:`check_parameter_names` holds a node to the parameter count and name
+length of :data:`~clew_ros.core.parameters.LIMITS`.
 
 Every parameter is declared with ``dynamic_typing`` so that a YAML ``30``
 is as good as ``30.0``; the value is checked here instead, with a message of
@@ -31,8 +39,8 @@ interface.md §1 take their documented defaults).
 from __future__ import annotations
 
 import array
-import os
-from collections.abc import Mapping
+import dataclasses
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -42,11 +50,14 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.parameters import (
+    LIMITS,
     NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
     PLANNER_PARAMETERS,
     RETIRED_PARAMETERS,
+    RUNTIME_CHANGES,
     WORLD_PARAMETERS,
+    Limits,
     ParameterSpec,
     ParameterType,
     check_joint_count,
@@ -62,6 +73,7 @@ __all__ = [
     "WORLD_PARAMETERS",
     "Configuration",
     "NodeSettings",
+    "check_parameter_names",
     "configuration_from_values",
     "default_world_file",
     "descriptor_for",
@@ -70,12 +82,14 @@ __all__ = [
     "nest",
     "node_settings",
     "plain_value",
+    "resolve_record_directory",
+    "runtime_changes_allowed",
 ]
 
 DEFAULT_WORLD_FILE = "figure1.yaml"
 
 #: The parameter prefixes the node owns and checks (others, e.g. use_sim_time, are rclpy's).
-OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.", "live.")
+OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.", "live.", "parameters.")
 
 
 @dataclass(frozen=True)
@@ -84,6 +98,9 @@ class NodeSettings:
 
     record_enabled: bool = NODE_PARAMETERS.default("record.enabled")
     record_directory: str = NODE_PARAMETERS.default("record.directory")
+    #: Most run folders kept (0: no limit) and most bytes of complete runs kept (0: no limit).
+    record_max_runs: int = NODE_PARAMETERS.default("record.max_runs")
+    record_max_bytes: int = NODE_PARAMETERS.default("record.max_bytes")
     playback_rate_hz: float = NODE_PARAMETERS.default("playback.rate")
     #: The joint limits: one number for every joint, or one per joint (checked against the world's joints).
     max_velocity_rad_s: float | tuple[float, ...] = NODE_PARAMETERS.default("trajectory.max_velocity")
@@ -91,6 +108,13 @@ class NodeSettings:
     joint_speed_rad_s: float | tuple[float, ...] | None = NODE_PARAMETERS.default("trajectory.joint_speed")
     grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell")
     foxglove_port: int = NODE_PARAMETERS.default("live.foxglove_port")
+    allow_runtime_changes: bool = NODE_PARAMETERS.default(RUNTIME_CHANGES)
+    #: ``record_directory`` resolved when these settings are made (at start): absolute, ``~`` expanded,
+    #: symbolic links and ``..`` resolved; every run folder is made inside it.
+    record_path: Path = dataclasses.field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "record_path", resolve_record_directory(self.record_directory))
 
     @property
     def velocity_limit_rad_s(self) -> float | tuple[float, ...]:
@@ -98,23 +122,50 @@ class NodeSettings:
         alias) when set, else ``max_velocity``."""
         return self.max_velocity_rad_s if self.joint_speed_rad_s is None else self.joint_speed_rad_s
 
-    @property
-    def record_path(self) -> Path:
-        return Path(os.path.expandvars(self.record_directory)).expanduser()
+
+def resolve_record_directory(text: str) -> Path:
+    """``record.directory`` as the absolute path runs are recorded in; :class:`ParameterError` says why not.
+
+    ``~`` (and ``~user``) is expanded; environment variables are not: a ``$``
+    is refused, so that no value names another variable's content. The path
+    is made absolute (relative to the working directory) and resolved
+    (symbolic links and ``..``), once: a link changed later cannot move the
+    recordings (:class:`~clew_ros.node.run_recording.Recordings` checks it).
+    """
+    name = "record.directory"
+    if "$" in text:
+        raise ParameterError(
+            name,
+            f"expected a path without '$': environment variables are not expanded (write the path out, or let "
+            f"the launch file or shell substitute it), got {text!r}",
+        )
+    if "\0" in text:
+        raise ParameterError(name, "expected a path without NUL characters")
+    try:
+        expanded = Path(text).expanduser()
+    except RuntimeError:  # no home directory for '~' or '~user'
+        raise ParameterError(name, f"expected '~' to name a home directory, got {text!r}") from None
+    try:
+        return expanded.resolve()
+    except (OSError, RuntimeError) as error:  # a symbolic link loop, an unreadable parent
+        raise ParameterError(name, f"expected a path that resolves, got {text!r} ({error})") from None
 
 
 #: The parameter behind each field of :class:`NodeSettings` (every node parameter, once).
 SETTINGS_FIELDS = {
     "record_enabled": "record.enabled",
     "record_directory": "record.directory",
+    "record_max_runs": "record.max_runs",
+    "record_max_bytes": "record.max_bytes",
     "playback_rate_hz": "playback.rate",
     "max_velocity_rad_s": "trajectory.max_velocity",
     "max_acceleration_rad_s2": "trajectory.max_acceleration",
     "joint_speed_rad_s": "trajectory.joint_speed",
     "grasp_dwell_s": "trajectory.grasp_dwell",
     "foxglove_port": "live.foxglove_port",
+    "allow_runtime_changes": RUNTIME_CHANGES,
 }
-assert [f.name for f in fields(NodeSettings)] == list(SETTINGS_FIELDS)
+assert [f.name for f in fields(NodeSettings) if f.init] == list(SETTINGS_FIELDS)
 assert sorted(SETTINGS_FIELDS.values()) == sorted(NODE_PARAMETERS)
 
 
@@ -288,11 +339,13 @@ def _node_value(spec: ParameterSpec, value: Any) -> Any:
 # --------------------------------------------------------------------------- descriptors
 
 
-def descriptor_for(name: str) -> ParameterDescriptor:
+def descriptor_for(name: str, *, allow_runtime_changes: bool = False) -> ParameterDescriptor:
     """The descriptor a parameter is declared with: its spec's description, type and default, and range.
 
     Every parameter is declared with ``dynamic_typing`` (a ``30`` is as good
-    as ``30.0``: the value is checked by this module, not by rclpy).
+    as ``30.0``: the value is checked by this module, not by rclpy). It is
+    ``read_only`` when its spec is, and when it is locked (``world.*``,
+    ``record.*``, ``trajectory.*``, ``live.*``) unless ``allow_runtime_changes``.
     """
     spec = _spec_of(name)
     descriptor = ParameterDescriptor(
@@ -300,7 +353,7 @@ def descriptor_for(name: str) -> ParameterDescriptor:
         dynamic_typing=True,
         description=spec.description,
         additional_constraints=_constraints(spec),
-        read_only=spec.read_only,
+        read_only=spec.fixed(allow_runtime_changes=allow_runtime_changes),
     )
     if spec.limits is not None:
         low, high = spec.limits
@@ -326,10 +379,13 @@ def _spec_of(name: str) -> ParameterSpec:
 def _constraints(spec: ParameterSpec) -> str:
     """The descriptor's ``additional_constraints``: type, default and range in words (one wording per family)."""
     if spec is OBSTACLE_PARAMETER:
-        return "list of numbers (an even count, at least 3 points)"
+        return (
+            f"list of numbers (an even count, at least 3 points, at most {LIMITS.max_polygon_vertices}); "
+            f"fixed at start (unless {RUNTIME_CHANGES})"
+        )
     if spec.name.startswith("world."):
         given = "required" if spec.required else "optional" if spec.default is None else f"default {spec.default!r}"
-        return f"{spec.type.value}; {given}; a change is refused while a plan runs"
+        return f"{spec.type.value}; {given}; fixed at start (unless {RUNTIME_CHANGES}: then not while a plan runs)"
     if spec.name.startswith("planner."):
         assert spec.limits is not None
         return f"{spec.type.python_type.__name__} in [{spec.limits[0]}, {spec.limits[1]}]; default {spec.default}"
@@ -341,3 +397,35 @@ def _constraints(spec: ParameterSpec) -> str:
         return text
     each = "each " if spec.type is ParameterType.DOUBLE_PER_JOINT else ""
     return f"{text}; {each}in [{spec.limits[0]}, {spec.limits[1]}]"
+
+
+# --------------------------------------------------------------------------- the switch and the caps
+
+
+def runtime_changes_allowed(overrides: Mapping[str, Any]) -> bool:
+    """The development switch ``parameters.allow_runtime_changes`` among a node's start values (default off).
+
+    Read before any descriptor is given, since it decides which are read-only.
+    Raises :class:`ParameterError` when it is not a bool.
+    """
+    value = overrides.get(RUNTIME_CHANGES)
+    return False if value is None else bool(check_value(NODE_PARAMETERS[RUNTIME_CHANGES], plain_value(value)))
+
+
+def check_parameter_names(names: Collection[str], limits: Limits = LIMITS) -> None:
+    """Hold the names of one node's parameters to ``limits``: how many, and how long each.
+
+    Raises :class:`ParameterError` naming the first name at fault and the limit (``Limits.<field>``).
+    """
+    if len(names) > limits.max_parameters:
+        raise ParameterError(
+            "parameters",
+            f"expected at most {limits.max_parameters} parameters (Limits.max_parameters), got {len(names)}",
+        )
+    for name in names:
+        if len(name) > limits.max_name_chars:
+            raise ParameterError(
+                name[:40] + "...",
+                f"expected a parameter name of at most {limits.max_name_chars} characters (Limits.max_name_chars), "
+                f"got {len(name)}",
+            )

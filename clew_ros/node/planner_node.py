@@ -36,17 +36,20 @@ from std_srvs.srv import Trigger
 
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.kernel import warm_up
-from clew_ros.core.parameters import RETIRED_PARAMETERS, retired_message
+from clew_ros.core.parameters import LOCKED_PREFIXES, RETIRED_PARAMETERS, RUNTIME_CHANGES, retired_message
 from clew_ros.core.settings import Outcome
 from clew_ros.node import messages
+from clew_ros.node.namespaces import namespaced_directory
 from clew_ros.node.parameters import (
     OWN_PREFIXES,
     Configuration,
     NodeSettings,
+    check_parameter_names,
     configuration_from_values,
     descriptor_for,
     initial_values,
     plain_value,
+    runtime_changes_allowed,
 )
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.qos import GOAL_QOS
@@ -73,12 +76,18 @@ class StartupError(RuntimeError):
 
 
 class PlannerNode(Node):
-    """Serves :func:`clew_ros.core.clew.plan` as ``~/plan``, ``~/goal_pose`` and ``~/cancel``."""
+    """Serves :func:`clew_ros.core.clew.plan` as ``~/plan``, ``~/goal_pose`` and ``~/cancel``.
 
-    def __init__(self, node_name: str = NODE_NAME, **kwargs: Any) -> None:
+    ``record_subdirectory`` (``clew_planners``: the node's namespace) makes the
+    node record into ``<record.directory>/<record_subdirectory>``; its
+    ``record.directory`` parameter is declared so.
+    """
+
+    def __init__(self, node_name: str = NODE_NAME, *, record_subdirectory: str | None = None, **kwargs: Any) -> None:
         # Every --params-file / -p value is declared as the node is created (world.obstacles.<name>
         # with any name); _declare_parameters checks them and gives each its descriptor.
-        # Undeclared parameters stay allowed: ros2 param set may add an obstacle.
+        # Undeclared parameters stay allowed, but only parameters.allow_runtime_changes lets
+        # ros2 param set add one under LOCKED_PREFIXES (an obstacle).
         super().__init__(
             node_name, allow_undeclared_parameters=True, automatically_declare_parameters_from_overrides=True, **kwargs
         )
@@ -86,7 +95,7 @@ class PlannerNode(Node):
         self._closing = threading.Event()  # shutting down: no new run
         self._run: Run | None = None  # the current run: the last accepted
         self._pending_world_change = False  # set by on_set, republished by post_set
-        self._config = self._declare_parameters()
+        self._config = self._declare_parameters(record_subdirectory)
         warm_up_s = warm_up()  # the planning kernel, before any plan (main() did it; another program may not)
         if warm_up_s > 1.0:
             self.get_logger().info(f"planning kernel compiled in {warm_up_s:.1f} s (cached for the next start)")
@@ -123,6 +132,12 @@ class PlannerNode(Node):
             f"serving world '{world.name}' ({world.robot.dof} joints, {len(world.obstacles)} obstacles); "
             f"recording {'to ' + str(self._config.node.record_path) if self._config.node.record_enabled else 'off'}"
         )
+        if self._config.node.allow_runtime_changes:
+            self.get_logger().warning(
+                f"{RUNTIME_CHANGES} is true: any peer on the ROS domain may change the "
+                f"{', '.join(p + '*' for p in LOCKED_PREFIXES)} parameters (the world, the trajectory limits, "
+                "the recordings); for development only"
+            )
 
     # ----------------------------------------------------------------- runs: the public entry points
 
@@ -293,17 +308,24 @@ class PlannerNode(Node):
 
     # ----------------------------------------------------------------- parameters
 
-    def _declare_parameters(self) -> Configuration:
+    def _declare_parameters(self, record_subdirectory: str | None) -> Configuration:
         """Declare every parameter with its descriptor; raise :class:`StartupError` if any is invalid.
 
         The overrides (``--params-file`` / ``-p``) are declared already, typed by
         their value; they get their descriptor here (``dynamic_typing``: a later
         ``30`` for ``30.0`` is checked by :mod:`~clew_ros.node.parameters`, not
         refused by rclpy). The others are declared with their start values.
+        ``parameters.allow_runtime_changes`` is read first: it decides which
+        descriptors are read-only (rclpy then refuses any change of those,
+        naming the parameter).
         """
         overrides = self._own_values()
         try:
+            allow = runtime_changes_allowed(overrides)
             values = initial_values(overrides)
+            check_parameter_names(set(values) | set(self.get_parameters_by_prefix("")))
+            if record_subdirectory is not None:
+                values["record.directory"] = namespaced_directory(str(values["record.directory"]), record_subdirectory)
             config = configuration_from_values(values)
         except ParameterError as error:
             self.get_logger().error(f"invalid parameter {error}; not starting")
@@ -311,10 +333,14 @@ class PlannerNode(Node):
         for name, value in values.items():
             if name in RETIRED_PARAMETERS:
                 self.get_logger().warning(retired_message(name))
-            elif name in overrides:
-                self.set_descriptor(name, descriptor_for(name))
-            else:  # an empty list has no parameter type
-                self.declare_parameter(name, None if value == [] else value, descriptor_for(name), ignore_override=True)
+                continue
+            descriptor = descriptor_for(name, allow_runtime_changes=allow)
+            if name in overrides and plain_value(self.get_parameter(name).value) == value:
+                self.set_descriptor(name, descriptor)
+            else:  # not given, or given and changed here (record.directory); an empty list has no parameter type
+                if self.has_parameter(name):
+                    self.undeclare_parameter(name)
+                self.declare_parameter(name, None if value == [] else value, descriptor, ignore_override=True)
         return config
 
     def _own_values(self) -> dict[str, Any]:
@@ -339,7 +365,32 @@ class PlannerNode(Node):
                 f"change ({type(error).__name__}: {error}); nothing was changed",
             )
 
+    def _locked_or_over_caps(self, parameters: list[Parameter]) -> str | None:
+        """Why a change is refused before it is checked: a parameter fixed at start, or too many or too long
+        names; ``None`` if neither.
+
+        A declared locked parameter is read-only, so rclpy refused it already; this refuses the others: a
+        new name under a locked prefix (an obstacle, while the switch is off), and names beyond the caps.
+        """
+        if not self._config.node.allow_runtime_changes:
+            for p in parameters:
+                if p.name.startswith(LOCKED_PREFIXES):
+                    return (
+                        f"{p.name}: fixed at start, like every {', '.join(x + '*' for x in LOCKED_PREFIXES)} "
+                        f"parameter (start the node with {RUNTIME_CHANGES}: true to change them at run time)"
+                    )
+        names = set(self.get_parameters_by_prefix(""))
+        names |= {p.name for p in parameters if p.type_ != Parameter.Type.NOT_SET}
+        try:
+            check_parameter_names(names)
+        except ParameterError as error:
+            return f"{error}; nothing was changed"
+        return None
+
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        refusal = self._locked_or_over_caps(parameters)
+        if refusal is not None:
+            return SetParametersResult(successful=False, reason=refusal)
         for p in parameters:
             if not p.name.startswith(OWN_PREFIXES) and not self.has_parameter(p.name):
                 return SetParametersResult(

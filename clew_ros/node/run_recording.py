@@ -6,6 +6,14 @@ or the recording cannot be opened; :attr:`~RunRecording.text` says why).
 :class:`BagRecording` writes through :class:`clew_ros.recording.RunRecorder`
 (interface.md §4). :class:`Recordings` opens one per run.
 
+Runs are recorded inside ``record.directory`` as resolved at start
+(:attr:`~clew_ros.node.parameters.NodeSettings.record_path`): the folders
+:class:`Recordings` creates for it get mode 0700, and a run is not recorded
+when that path has come to resolve elsewhere since (a symbolic link
+changed). As each recorded run starts, the oldest complete runs beyond
+``record.max_runs`` / ``record.max_bytes`` are deleted and logged
+(:mod:`clew_ros.recording.retention`).
+
 No method raises: a recording fault never stops a run, and the recorder
 keeps what it could write. The first fault is logged and added to
 :attr:`~RunRecording.text` (``... (recording failed: <why>)``), which the
@@ -14,8 +22,11 @@ keeps what it could write. The first fault is logged and added to
 
 from __future__ import annotations
 
+import errno
+import os
 import threading
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from clew_ros.node.parameters import NodeSettings
@@ -143,9 +154,20 @@ class Recordings:
             return RunRecording(f"not recorded: {self._unavailable}")
         directory = settings.record_path
         try:
-            directory.mkdir(parents=True, exist_ok=True)  # the recorder wants it to exist
+            _make_private_directories(directory)  # the recorder wants it to exist
         except OSError as error:
             text = f"not recorded: record.directory {directory} cannot be created ({error.strerror})"
+            self._logger.error(f"run {run_hex}: {text}")
+            return RunRecording(text)
+        try:
+            now = directory.resolve()
+        except OSError as error:
+            now = Path(f"? ({error.strerror})")
+        if now != directory:
+            text = (
+                f"not recorded: record.directory {directory} now resolves to {now} (a symbolic link changed "
+                "since the node started); recordings stay where the node was told at start"
+            )
             self._logger.error(f"run {run_hex}: {text}")
             return RunRecording(text)
         try:
@@ -153,11 +175,27 @@ class Recordings:
         except Exception as error:  # noqa: BLE001 - RecordingError and anything else: the run goes on unrecorded
             self._logger.error(f"run {run_hex}: cannot record to {directory / run_hex}: {error}")
             return RunRecording(f"not recorded: {error}")
+        self._prune(settings, run_hex)
 
         def on_failure(reason: str) -> None:
             self._logger.error(f"run {run_hex}: recording failed: {reason}")
 
         return BagRecording(recorder, on_failure)
+
+    def _prune(self, settings: NodeSettings, run_hex: str) -> None:
+        """Delete the oldest complete runs beyond ``record.max_runs`` / ``record.max_bytes``; log each."""
+        from clew_ros.recording.retention import RetentionPolicy, prune_runs
+
+        policy = RetentionPolicy(settings.record_max_runs, settings.record_max_bytes)
+        if policy.max_runs == 0 and policy.max_bytes == 0:
+            return
+        try:
+            deleted = prune_runs(settings.record_path, policy, current=run_hex)
+        except Exception as error:  # noqa: BLE001 - retention never stops a run
+            self._logger.error(f"run {run_hex}: cannot apply the recording retention: {error!r}")
+            return
+        for run in deleted:
+            self._logger.info(f"deleted the recording {run.path} ({run.size_bytes} bytes): {run.reason}")
 
     def _recorder(self) -> type[RunRecorder] | None:
         if self._recorder_class is None and self._unavailable is None:
@@ -169,3 +207,23 @@ class Recordings:
             else:
                 self._recorder_class = RunRecorder
         return self._recorder_class
+
+
+def _make_private_directories(path: Path) -> None:
+    """Create ``path`` and its missing parents, each with mode 0700 (set explicitly: the umask may take bits
+    off); an existing folder keeps its mode (the operator's)."""
+    missing = []
+    folder = path
+    while not folder.exists():
+        missing.append(folder)
+        if folder.parent == folder:
+            break
+        folder = folder.parent
+    for folder in reversed(missing):
+        try:
+            folder.mkdir(mode=0o700)
+        except FileExistsError:
+            continue  # made meanwhile (another node): its mode is its maker's
+        folder.chmod(0o700)
+    if not path.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path))

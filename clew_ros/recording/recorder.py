@@ -10,6 +10,12 @@ leaves a file that the MCAP stream reader reads up to its last chunk
 (:func:`clew_ros.recording.reader.recover_recording` rewrites it whole).
 :meth:`RunRecorder.close` writes the MCAP summary and ``metadata.yaml``
 (rosbag2 version 9, as ROS 2 Jazzy writes it).
+
+A run's folder is made with mode 0700 and its files with mode 0600 (set
+explicitly, whatever the umask), only directly inside the recording
+directory: the run id must be a plain name, and the folder must resolve to
+``<resolved directory>/<run id>`` (no symbolic link on the way); files are
+opened without following a symbolic link.
 """
 
 from __future__ import annotations
@@ -48,6 +54,10 @@ TRANSIENT_LOCAL_TOPICS = frozenset(
 )
 #: Volatile topics (last name component) that the node offers with depth 100 (the others: 10).
 _DEEP_TOPICS = frozenset({"events", "goal_pose", "tf"})
+
+#: Modes of what a recorder makes: only the node's user reads a recording (it holds the world and the goals).
+FOLDER_MODE = 0o700
+FILE_MODE = 0o600
 
 _STOP = object()
 _FLUSH = object()
@@ -179,12 +189,27 @@ def bag_metadata(
 
 
 def write_bag_metadata(directory: Path, information: dict[str, Any]) -> Path:
-    """Write ``metadata.yaml`` atomically (temporary file, then rename); return its path."""
+    """Write ``metadata.yaml`` atomically (temporary file of mode 0600, then rename); return its path."""
     path = Path(directory) / "metadata.yaml"
     temporary = path.with_name("metadata.yaml.tmp")
-    temporary.write_text(_dump({"rosbag2_bagfile_information": information}))
+    with contextlib.suppress(FileNotFoundError):
+        temporary.unlink()  # left by a writer killed between write and rename: never written through
+    with _create_private(temporary, "w") as stream:
+        stream.write(_dump({"rosbag2_bagfile_information": information}))
     temporary.replace(path)
     return path
+
+
+def _create_private(path: Path, mode: str) -> Any:
+    """A new file of mode 0600 opened for writing (``mode`` ``"w"`` or ``"wb"``); never through a symbolic link,
+    never over an existing file (:class:`FileExistsError`)."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), FILE_MODE)
+    try:
+        os.fchmod(fd, FILE_MODE)  # the umask may have taken bits off; never adds any
+        return os.fdopen(fd, mode)
+    except BaseException:
+        os.close(fd)
+        raise
 
 
 class RunRecorder:
@@ -240,7 +265,7 @@ class RunRecorder:
         self.path = self._make_directory(Path(directory), run_id)
         self.mcap_path = self.path / f"{run_id}_0.mcap"
         try:
-            self._file = self.mcap_path.open("xb")
+            self._file = _create_private(self.mcap_path, "wb")
         except OSError as error:
             with contextlib.suppress(OSError):
                 self.path.rmdir()  # created just above: leave nothing behind
@@ -280,8 +305,9 @@ class RunRecorder:
 
     @staticmethod
     def _make_directory(directory: Path, run_id: str) -> Path:
-        """Create ``directory/run_id`` (never over an existing one); :class:`RecordingError` says why not."""
-        if not run_id or "/" in run_id or run_id in (".", ".."):
+        """Create ``directory/run_id`` with mode 0700 (never over an existing one, never outside ``directory``);
+        :class:`RecordingError` says why not."""
+        if not run_id or "/" in run_id or "\\" in run_id or "\0" in run_id or run_id in (".", ".."):
             raise RecordingError(f"run id {run_id!r} cannot name a directory")
         if not directory.is_dir():
             raise RecordingError(f"recording directory {directory} does not exist or is not a directory")
@@ -289,11 +315,26 @@ class RunRecorder:
             raise RecordingError(f"recording directory {directory} is not writable")
         path = directory / run_id
         try:
-            path.mkdir()
+            path.mkdir(mode=FOLDER_MODE)
         except FileExistsError:
             raise RecordingError(f"{path} exists already, not overwriting.") from None
         except OSError as error:
             raise RecordingError(f"cannot create the recording directory {path}: {error.strerror}") from None
+        try:
+            fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY | getattr(os, "O_NOFOLLOW", 0))
+            try:
+                os.fchmod(fd, FOLDER_MODE)  # the umask may have taken bits off
+            finally:
+                os.close(fd)
+            inside = path.resolve() == directory.resolve() / run_id
+        except OSError as error:
+            inside, reason = False, error.strerror
+        else:
+            reason = f"it resolves to {path.resolve()}, not inside {directory.resolve()}"
+        if not inside:
+            with contextlib.suppress(OSError):
+                path.rmdir()
+            raise RecordingError(f"cannot record into {path}: {reason}")
         return path
 
     def _abandon(self) -> None:

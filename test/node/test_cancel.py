@@ -48,7 +48,12 @@ CANCEL_BUDGET_S = 2.0
 @pytest.fixture(scope="module")
 def walled(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("walled")
-    node = NodeProcess(tmp / "node.log", BEHIND_WALL, {"record.directory": str(tmp / "recordings")})
+    node = NodeProcess(
+        tmp / "node.log",
+        BEHIND_WALL,
+        # the development switch: a world change is refused for the run, not for the lock (test/security)
+        {"record.directory": str(tmp / "recordings"), "parameters.allow_runtime_changes": True},
+    )
     session = Session(node)
     session.recordings = tmp / "recordings"
     try:

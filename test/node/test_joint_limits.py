@@ -46,6 +46,7 @@ def node(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
         "trajectory.max_acceleration": ACCELERATION,
         "trajectory.grasp_dwell": DWELL_S,
         "playback.rate": 100.0,
+        "parameters.allow_runtime_changes": True,  # the limits' checks at run time (else fixed at start)
     }
     process = NodeProcess(tmp / "node.log", QUICK, parameters)
     session = Session(process)

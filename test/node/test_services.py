@@ -63,7 +63,9 @@ FAST = {"trajectory.max_velocity": 20.0, "trajectory.max_acceleration": 400.0, "
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("quick")
-    node = NodeProcess(tmp / "node.log", QUICK, {"record.directory": str(tmp / "recordings"), **FAST})
+    # the development switch: the tests change world.* at run time (else fixed at start: test/security)
+    parameters = {"record.directory": str(tmp / "recordings"), "parameters.allow_runtime_changes": True, **FAST}
+    node = NodeProcess(tmp / "node.log", QUICK, parameters)
     session = Session(node)
     session.recordings = tmp / "recordings"
     try:

@@ -177,6 +177,8 @@ def test_given_parameters_get_their_descriptors() -> None:
             "world.obstacles.pillar_7": NAMED_OBSTACLES["pillar_7"],
             "record.enabled": False,
             "planner.seed": 3,
+            # the development switch: world.* may change at run time (else read-only: test/security)
+            "parameters.allow_runtime_changes": True,
         }
     )
     context = rclpy.Context()

@@ -122,7 +122,14 @@ def quick(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("faults")
     session = Session(
         NodeProcess(
-            tmp / "node.log", FAST_WORLD, {"record.directory": str(tmp / "missing" / "deeper" / "runs"), **FAST}
+            tmp / "node.log",
+            FAST_WORLD,
+            # the development switch: the tests move record.directory at run time (else fixed: test/security)
+            {
+                "record.directory": str(tmp / "missing" / "deeper" / "runs"),
+                "parameters.allow_runtime_changes": True,
+                **FAST,
+            },
         )
     )
     session.tmp = tmp

@@ -66,7 +66,8 @@ NUMBER_PARAMETERS = [
 @pytest.fixture(scope="module")
 def node(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Session]:
     tmp = tmp_path_factory.mktemp("node_inputs")
-    session = Session(NodeProcess(tmp / "node.log", WORLD, FAST))
+    # the development switch: every world.* change is checked at run time (else fixed at start: test/security)
+    session = Session(NodeProcess(tmp / "node.log", WORLD, {**FAST, "parameters.allow_runtime_changes": True}))
     try:
         yield session
     finally:
@@ -125,8 +126,9 @@ def bad_parameter(draw) -> tuple[str, object]:
         return f"planner.{key}", draw(st.sampled_from(bad))
     if family == "node":
         name = draw(st.sampled_from(sorted(NODE_PARAMETERS)))
-        kind = NODE_PARAMETERS[name].type.value
-        bad = {"bool": ["yes", 1, [True]], "string": ["", 5, ["a"]]}.get(kind, [0.0, -1.0, math.nan, 1e9, "x"])
+        spec = NODE_PARAMETERS[name]
+        numbers = [math.nan, "x"] + ([spec.limits[0] - 1, 1e300] if spec.limits else [])  # outside its range
+        bad = {"bool": ["yes", 1, [True]], "string": ["", 5, ["a"]]}.get(spec.type.value, numbers)
         return name, draw(st.sampled_from(bad))
     return draw(
         st.sampled_from(

@@ -41,7 +41,7 @@ NODE_NAMESPACE, NODE_NAME = "/", "clew_planner"
 TF_TOPICS = {"/tf", "/tf_static"}
 #: What ``create_permission`` adds for rmw_fastrtps_cpp (sros2's _RMW_WITH_ROS_GRAPH_INFO_TOPIC).
 DISCOVERY_TOPIC = "ros_discovery_info"
-#: How long the node may take to start (s): a cold numba cache compiles the kernels first, which passes 60 s on a loaded machine.
+#: How long the node may take to start (s): a cold numba cache compiles first (over 60 s on a loaded machine).
 START_TIMEOUT_S = 180.0
 #: Time between two reads of the graph that must agree (s): endpoint announcements come within ms of each other.
 SETTLE_S = 1.0

@@ -95,13 +95,13 @@ def learn_types(type_name: str, definition: str) -> bool:
     type otherwise (another distribution's message files). Cached: a type is parsed once per process."""
     if not definition.strip():
         return False
-    from rosbags.typesys import get_types_from_msg
-
     try:
+        from rosbags.typesys import get_types_from_msg
+
         found = get_types_from_msg(definition, type_name)
-    except Exception:  # noqa: BLE001 - rosbags' parser refuses it
+        store = typestore()
+    except Exception:  # noqa: BLE001 - rosbags' parser refuses it (or rosbags is not installed)
         return False
-    store = typestore()
     with _TYPESTORE_LOCK:
         new = {name: fields for name, fields in found.items() if name not in store.fielddefs}
         if new:

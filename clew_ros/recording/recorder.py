@@ -465,7 +465,7 @@ class RunRecorder:
             self._file.close()
 
     def _run(self) -> None:
-        with contextlib.suppress(Exception):  # made here, not on the caller's thread (an error shows in _channel)
+        with contextlib.suppress(Exception):  # made on this thread, not the caller's; a fault shows at the first type
             typestore()
         last_flush = time.monotonic()
         while True:

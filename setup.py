@@ -33,6 +33,8 @@ setup(
         "pyyaml>=6.0",
         "mcap>=1.2",
         "mcap-ros2-support>=0.5",
+        # recordings: the CDR and the definitions of the recorded messages, tf2_msgs among them (recording/cdr.py)
+        "rosbags>=0.10",
         # what mcap decompresses chunks with; the reader decompresses them itself, bounded (recording/reader.py)
         "zstandard>=0.22",
         "lz4>=4.0",
@@ -46,7 +48,7 @@ setup(
             "ros-jazzy-std-srvs>=5.3",
         ],
         # lxml: test/security/test_deploy_policy.py validates the SROS2 policy as sros2 does (XSD, XSLT)
-        "test": ["pytest>=8.0", "hypothesis>=6.100", "rosbags>=0.10", "urdf-parser-py>=0.0.4", "lxml>=5.0"],
+        "test": ["pytest>=8.0", "hypothesis>=6.100", "urdf-parser-py>=0.0.4", "lxml>=5.0"],
         # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
         "bench": ["ompl>=2.0", "matplotlib>=3.8"],
         # clew_plan --foxglove (clew_ros/live): the run served live to Foxglove over a WebSocket on 127.0.0.1.

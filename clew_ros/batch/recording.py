@@ -53,11 +53,12 @@ def recording_unavailable() -> str | None:
     """Why runs cannot be recorded here (a package missing, and the install command), or ``None``."""
     try:
         import mcap.writer  # noqa: F401 - what the recorder writes with
+        import rosbags.typesys  # noqa: F401 - what the recorder encodes with
 
         import clew_ros.node.plan_recording  # noqa: F401 - rclpy and every message package it records
     except ImportError as error:
         return (
-            f"recording needs ROS 2 (rclpy and its message packages) and mcap, which cannot be imported here "
+            f"recording needs ROS 2 (rclpy and its message packages), mcap and rosbags, which cannot be imported here "
             f"({error}); install them: {RECORD_INSTALL_HINT}"
         )
     return None

@@ -17,7 +17,7 @@ the transform of the URDF joint between the two links
 
 Composed from ``world``, ``link_i`` has origin ``p_(i-1)`` and x axis along
 ``phi_i``, and ``tool`` is the end-effector frame of interface.md §1.
-``clew_ros.recording.cdr.tf_message`` serialises them as ``tf2_msgs/msg/TFMessage``.
+``clew_ros.recording.cdr.tf_message`` makes them a ``tf2_msgs/msg/TFMessage``, recorded and published.
 """
 
 from __future__ import annotations

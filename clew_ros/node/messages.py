@@ -1,12 +1,12 @@
 """The one place where core values become ROS 2 messages, and back.
 
 Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
-plans, :class:`~clew_ros.node.playback.Track`, TF edges of
-:mod:`~clew_ros.node.frames`) and a stamp, and returns
+plans, :class:`~clew_ros.node.playback.Track`) and a stamp, and returns
 a standard message, or the reverse (a ``~/goal_pose``; a ``~/trajectory``
 becomes a plan again with :func:`clew_ros.recording.trajectory_to_plan`).
 The node calls these and nothing else to build what it publishes
-(interface.md §3).
+(interface.md §3), but for ``/tf``: the TF edges of :mod:`~clew_ros.node.frames`
+become a ``tf2_msgs/msg/TFMessage`` in :func:`clew_ros.recording.cdr.tf_message`.
 
 Conventions:
 
@@ -45,7 +45,6 @@ from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
-from clew_ros.node.frames import FrameTransform
 from clew_ros.node.playback import Track, TrackState
 from clew_ros.node.urdf import robot_urdf, visual_width_m
 
@@ -67,7 +66,6 @@ __all__ = [
     "quoted_text",
     "robot_description_message",
     "scene_markers",
-    "tf_message",
     "time_msg",
     "uuid_msg",
     "world_markers",
@@ -482,28 +480,6 @@ def scene_markers(
         points=_outline(transform_points(np.asarray(object_pose, dtype=float), world.object.polygon)),
     )
     return MarkerArray(markers=[arm, joints_marker, grip, outline])
-
-
-def tf_message(transforms: Iterable[FrameTransform], time_ns: int) -> Any:
-    """A ``tf2_msgs/msg/TFMessage`` of ``transforms`` stamped ``time_ns``; ImportError without tf2_msgs.
-
-    Recordings do not need it: :func:`clew_ros.recording.cdr.tf_message` encodes the same message.
-    """
-    from geometry_msgs.msg import Transform, TransformStamped, Vector3
-    from tf2_msgs.msg import TFMessage
-
-    out = []
-    for edge in transforms:
-        x, y, z = edge.translation
-        qx, qy, qz, qw = edge.rotation
-        out.append(
-            TransformStamped(
-                header=_header(time_ns, edge.parent),
-                child_frame_id=edge.child,
-                transform=Transform(translation=Vector3(x=x, y=y, z=z), rotation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
-            )
-        )
-    return TFMessage(transforms=out)
 
 
 # --------------------------------------------------------------------------- trajectory

@@ -12,7 +12,8 @@ URDF, with the world), ``/tf`` and ``/tf_static`` (:mod:`~clew_ros.node.frames`)
 and ``~/scene`` markers, at rest (:meth:`Publishing.world`) and at every
 playback sample (:meth:`Publishing.arm`). ``/tf`` and ``/tf_static`` are
 published where ``tf2_msgs`` is importable (a native install; the PyPI wheels
-lack it) and always recorded, encoded by :func:`clew_ros.recording.cdr.tf_message`.
+lack it) and always recorded: :func:`clew_ros.recording.cdr.tf_message` encodes the message once, and
+the same bytes are recorded and published.
 
 ``~/status`` and ``~/feedback`` are built and published under one lock, so
 that the latched ``~/status`` never ends on an older snapshot and no
@@ -168,13 +169,20 @@ class Publishing:
         """``transforms`` stamped ``time_ns`` on ``/tf`` (or ``/tf_static``): recorded, and published where
         ``tf2_msgs`` is installed; never raises."""
         topic = "/tf_static" if static else "/tf"
-        if recording.is_open:
-            recording.write(topic, tf_message(transforms, time_ns), self.now_ns(), TF_TOPICS[topic])
         publisher = self._tf_publishers.get(topic)
+        if not recording.is_open and publisher is None:
+            return
+        try:
+            message = tf_message(transforms, time_ns)
+        except Exception as error:  # noqa: BLE001 - rosbags not installed: the run goes on without TF
+            self._logger.error(f"cannot encode {topic}: {error!r}")
+            return
+        if recording.is_open:
+            recording.write(topic, message, self.now_ns(), TF_TOPICS[topic])
         if publisher is None:
             return
         try:
-            publisher.publish(messages.tf_message(transforms, time_ns))
+            publisher.publish(message.data)  # serialized bytes, published as they are
         except Exception as error:  # noqa: BLE001 - the context is gone while shutting down
             if not self._closing.is_set():
                 self._logger.error(f"cannot publish on {topic}: {error}")

@@ -4,10 +4,12 @@ Each run is a rosbag2 directory ``<record dir>/<run id>/`` holding
 ``metadata.yaml`` (rosbag2 version 9, as ROS 2 Jazzy writes it) and one MCAP
 file ``<run id>_0.mcap``: schema encoding ``ros2msg`` with the full dependency
 text, message encoding ``cdr``, each topic with the QoS it was offered with.
-Foxglove, ``ros2 bag``, ``rosbags`` and the ``mcap`` readers open it. ``/tf``
-and ``/tf_static`` (``tf2_msgs/msg/TFMessage``) are recorded without
-``tf2_msgs`` installed: :func:`~clew_ros.recording.cdr.tf_message` encodes
-them and :mod:`~clew_ros.recording.msgdefs` holds their definition.
+Foxglove, ``ros2 bag``, ``rosbags`` and the ``mcap`` readers open it. The
+messages are encoded by rclpy's serializer and ``rosbags``
+(:mod:`~clew_ros.recording.cdr`); the schema texts are rosbag2's
+(:mod:`~clew_ros.recording.msgdefs`). ``/tf`` and ``/tf_static``
+(``tf2_msgs/msg/TFMessage``) are recorded without ``tf2_msgs`` installed:
+rosbags knows the type (:func:`~clew_ros.recording.cdr.tf_message`).
 
 - :class:`RunRecorder` writes a run from the node without ever blocking it
   (the node holds it through :mod:`clew_ros.node.run_recording`, which
@@ -16,8 +18,8 @@ them and :mod:`~clew_ros.recording.msgdefs` holds their definition.
   :func:`recover_recording` rewrites such a file whole.
 - :func:`trajectory_to_plan` rebuilds the plan from a recorded trajectory.
 
-Importing this package needs no rclpy; :class:`RunRecorder` needs rclpy
-and ``mcap`` (without ``mcap`` the node plans but does not record).
+Importing this package needs no rclpy; :class:`RunRecorder` needs rclpy,
+``mcap`` and ``rosbags`` (without them the node plans but does not record).
 """
 
 from clew_ros.recording.errors import RecordingError, TrajectoryError

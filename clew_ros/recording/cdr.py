@@ -1,131 +1,38 @@
-"""CDR for recordings: rclpy's buffers tidied, and ``tf2_msgs/msg/TFMessage`` encoded by hand.
+"""CDR of the recorded messages, by the libraries: rclpy's serializer and rosbags' type store.
 
-**Tidy.**
-With rmw_fastrtps (Jazzy), ``serialize_message`` returns a buffer as long as
-the *estimated* serialized size, which can exceed the message by a few bytes
-per string, and its alignment padding is not zeroed. Strict readers
-(``rosbags``) refuse such trailing bytes. :func:`tidy_cdr` walks the message
-(its ``SLOT_TYPES``, XCDR1 plain CDR rules), cuts the buffer to the message's
-real length and zeroes the padding, so equal messages record as equal bytes.
+**rclpy messages.** :meth:`~clew_ros.recording.RunRecorder.write` serialises
+a message with ``rclpy.serialization.serialize_message`` (the rmw's C
+serializer, on the caller's thread). With rmw_fastrtps (Jazzy) the alignment
+padding of that buffer is not initialised: it carries stray bytes of memory,
+so equal messages would record as different bytes, and its length is the
+serializer's estimate, which can exceed the message (strict readers refuse the
+extra bytes). :func:`canonical_cdr` (on the recorder's writer thread) decodes
+and re-encodes the buffer with ``rosbags``
+(:func:`~clew_ros.recording.msgdefs.typestore`): same values, zero padding,
+exact length.
 
 **TF without tf2_msgs.** The PyPI ROS wheels have no ``tf2_msgs``, yet a
-recording must carry ``/tf`` and ``/tf_static`` (interface.md §4).
-:func:`tf_message` encodes a list of transforms (anything with ``parent``,
-``child``, ``translation`` and ``rotation``, as
-:class:`clew_ros.node.frames.FrameTransform`) as the CDR of a
-``TFMessage`` and returns a :class:`SerializedMessage` that
-:meth:`clew_ros.recording.RunRecorder.write` records as it is; its schema
-text comes from :mod:`clew_ros.recording.msgdefs`.
+recording must carry ``/tf`` and ``/tf_static`` (interface.md §4), and rosbags
+knows Jazzy's ``tf2_msgs/msg/TFMessage``. :func:`tf_message` builds it with
+rosbags from a list of transforms (anything with ``parent``, ``child``,
+``translation`` and ``rotation``, as :class:`clew_ros.node.frames.FrameTransform`)
+and returns its CDR as a :class:`SerializedMessage`, which the recorder
+records as it is and which the node publishes as it is where ``tf2_msgs`` is
+installed (rclpy publishes serialized bytes): one message for both.
 """
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
-__all__ = ["TF_MESSAGE_TYPE", "SerializedMessage", "TransformLike", "tf_message", "tidy_cdr"]
+from clew_ros.recording.msgdefs import typestore
+
+__all__ = ["TF_MESSAGE_TYPE", "SerializedMessage", "TransformLike", "canonical_cdr", "tf_message"]
 
 #: The type of ``/tf`` and ``/tf_static``.
 TF_MESSAGE_TYPE = "tf2_msgs/msg/TFMessage"
-#: CDR little-endian (XCDR1 plain CDR), the encapsulation rmw_fastrtps writes.
-_ENCAPSULATION = b"\x00\x01\x00\x00"
-
-_SIZES = {
-    "boolean": 1,
-    "octet": 1,
-    "char": 1,
-    "uint8": 1,
-    "int8": 1,
-    "int16": 2,
-    "uint16": 2,
-    "wchar": 2,
-    "int32": 4,
-    "uint32": 4,
-    "float": 4,
-    "int64": 8,
-    "uint64": 8,
-    "double": 8,
-    "long double": 16,
-}
-
-
-class _Walker:
-    """Follows the CDR layout of a message; offsets count from the end of the 4-byte encapsulation."""
-
-    def __init__(self) -> None:
-        from rosidl_parser import definition
-
-        self.d = definition
-        self.offset = 0
-        self.padding: list[tuple[int, int]] = []
-
-    def align(self, size: int) -> None:
-        size = min(size, 8)
-        gap = (-self.offset) % size
-        if gap:
-            self.padding.append((self.offset, gap))
-            self.offset += gap
-
-    def message(self, msg: Any) -> None:
-        fields = list(msg.get_fields_and_field_types())
-        types = type(msg).SLOT_TYPES
-        if not fields:  # empty messages hold one uint8
-            self.offset += 1
-            return
-        for name, slot_type in zip(fields, types, strict=True):  # both generated from the same .msg
-            self.value(getattr(msg, name), slot_type)
-
-    def value(self, value: Any, slot_type: Any) -> None:
-        d = self.d
-        if isinstance(slot_type, d.BasicType):
-            size = _SIZES[slot_type.typename]
-            self.align(size)
-            self.offset += size
-        elif isinstance(slot_type, d.AbstractString):
-            self.align(4)
-            self.offset += 4 + len(value.encode("utf-8")) + 1
-        elif isinstance(slot_type, d.NamespacedType):
-            self.message(value)
-        elif isinstance(slot_type, d.AbstractNestedType):
-            if isinstance(slot_type, d.AbstractSequence):
-                self.align(4)
-                self.offset += 4
-            element = slot_type.value_type
-            count = len(value)
-            if isinstance(element, d.BasicType):
-                if count:
-                    size = _SIZES[element.typename]
-                    self.align(size)
-                    self.offset += size * count
-            else:
-                for item in value:
-                    self.value(item, element)
-        else:  # wide strings and anything unforeseen: give up, keep the buffer as it is
-            raise NotImplementedError(type(slot_type).__name__)
-
-
-def tidy_cdr(msg: Any, data: bytes) -> bytes:
-    """``data`` (``serialize_message(msg)``) cut to the message's length, padding zeroed.
-
-    Returns ``data`` unchanged when the layout cannot be followed or does not fit.
-    """
-    walker = _Walker()
-    try:
-        walker.message(msg)
-    except (NotImplementedError, AttributeError, KeyError, TypeError, ValueError, ImportError):
-        return data
-    end = 4 + walker.offset
-    if end > len(data):
-        return data
-    out = bytearray(data[:end]) + bytes((-end) % 4)  # DDS payloads end on a 4-byte boundary
-    for start, gap in walker.padding:
-        out[4 + start : 4 + start + gap] = bytes(gap)
-    return bytes(out)
-
-
-# --------------------------------------------------------------------------- messages encoded here
 
 
 @dataclass(frozen=True)
@@ -149,54 +56,51 @@ class TransformLike(Protocol):
     def rotation(self) -> tuple[float, float, float, float]: ...
 
 
-class _Encoder:
-    """Plain CDR, little endian; alignment counts from the end of the encapsulation header."""
+def canonical_cdr(type_name: str, data: bytes) -> bytes:
+    """``data`` (CDR of a ``type_name`` message, e.g. ``serialize_message``'s) decoded and re-encoded by rosbags.
 
-    def __init__(self) -> None:
-        self.buffer = bytearray(_ENCAPSULATION)
-
-    def _align(self, size: int) -> None:
-        self.buffer += bytes((-(len(self.buffer) - 4)) % size)
-
-    def uint32(self, value: int) -> None:
-        self._align(4)
-        self.buffer += struct.pack("<I", value)
-
-    def int32(self, value: int) -> None:
-        self._align(4)
-        self.buffer += struct.pack("<i", value)
-
-    def string(self, value: str) -> None:
-        data = value.encode("utf-8") + b"\x00"
-        self.uint32(len(data))
-        self.buffer += data
-
-    def doubles(self, values: Iterable[float]) -> None:
-        self._align(8)
-        for value in values:
-            self.buffer += struct.pack("<d", float(value))
-
-    def finish(self) -> bytes:
-        self.buffer += bytes((-len(self.buffer)) % 4)  # DDS payloads end on a 4-byte boundary
-        return bytes(self.buffer)
+    The decoding stops at the message's end: rmw_fastrtps may size the buffer
+    by its estimate, a few bytes past the message (rosbags'
+    ``Typestore.deserialize_cdr`` refuses those). Raises what rosbags raises for
+    a type it does not know (``TypesysError``; see
+    :func:`~clew_ros.recording.msgdefs.learn_types`) or bytes it cannot decode
+    (``struct.error``, ``ValueError``).
+    """
+    store = typestore()
+    definition = store.get_msgdef(type_name)
+    little_endian = data[1:2] == b"\x01"
+    deserialize = definition.deserialize_cdr_le if little_endian else definition.deserialize_cdr_be
+    message, _end = deserialize(memoryview(data)[4:], 0, definition.cls, store)
+    return bytes(store.serialize_cdr(message, type_name, little_endian=little_endian))
 
 
 def tf_message(transforms: Iterable[TransformLike], stamp_ns: int) -> SerializedMessage:
-    """``tf2_msgs/msg/TFMessage`` holding ``transforms``, each stamped ``stamp_ns`` (ns since the epoch).
+    """``tf2_msgs/msg/TFMessage`` holding ``transforms``, each stamped ``stamp_ns`` (ns since the epoch), in CDR.
 
-    The bytes are those rmw_fastrtps would send: a ``geometry_msgs/TransformStamped``
-    sequence (header stamp and ``frame_id`` = ``parent``, ``child_frame_id``,
-    translation, rotation ``x, y, z, w``).
+    Each edge is a ``geometry_msgs/TransformStamped``: header stamp and
+    ``frame_id`` = ``parent``, ``child_frame_id`` = ``child``, translation,
+    rotation ``x, y, z, w``.
     """
-    edges = list(transforms)
+    store = typestore()
+    types = store.types
+    time = types["builtin_interfaces/msg/Time"]
+    header = types["std_msgs/msg/Header"]
+    stamped = types["geometry_msgs/msg/TransformStamped"]
+    transform = types["geometry_msgs/msg/Transform"]
+    vector = types["geometry_msgs/msg/Vector3"]
+    quaternion = types["geometry_msgs/msg/Quaternion"]
     sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
-    encoder = _Encoder()
-    encoder.uint32(len(edges))
-    for edge in edges:
-        encoder.int32(sec)
-        encoder.uint32(nanosec)
-        encoder.string(edge.parent)
-        encoder.string(edge.child)
-        encoder.doubles(edge.translation)
-        encoder.doubles(edge.rotation)
-    return SerializedMessage(TF_MESSAGE_TYPE, encoder.finish())
+    message = types[TF_MESSAGE_TYPE](
+        transforms=[
+            stamped(
+                header=header(stamp=time(sec=sec, nanosec=nanosec), frame_id=edge.parent),
+                child_frame_id=edge.child,
+                transform=transform(
+                    translation=vector(*map(float, edge.translation)),
+                    rotation=quaternion(*map(float, edge.rotation)),
+                ),
+            )
+            for edge in transforms
+        ]
+    )
+    return SerializedMessage(TF_MESSAGE_TYPE, bytes(store.serialize_cdr(message, TF_MESSAGE_TYPE, little_endian=True)))

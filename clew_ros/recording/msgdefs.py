@@ -8,10 +8,11 @@ does the same from the ``.msg`` files installed with the message packages
 (``share/<pkg>/msg/<Type>.msg``), so that a recording written here carries the
 same schema text as one written by ``ros2 bag record``.
 
-Types whose package is not installed but that the node records
-(``tf2_msgs/msg/TFMessage``: the PyPI ROS wheels lack ``tf2_msgs``) have
-their ``.msg`` text and type hash here (:data:`BUILTIN_DEFINITIONS`); their
-dependencies still come from the installed files.
+A type whose package is not installed but that the node records
+(``tf2_msgs/msg/TFMessage``: the PyPI ROS wheels lack ``tf2_msgs``) takes its
+own text and its type hash from ``rosbags``' type store of ROS 2 Jazzy
+(:func:`typestore`; comment-free text, as rosbags writes it); its dependencies
+still come from the installed files.
 """
 
 from __future__ import annotations
@@ -23,19 +24,24 @@ import json
 import os
 import re
 import sys
+import threading
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from clew_ros.recording.errors import RecordingError
 
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
+
 __all__ = [
-    "BUILTIN_DEFINITIONS",
     "DELIMITER",
+    "learn_types",
     "message_class",
     "message_definition",
     "message_type_name",
     "type_description_hash",
+    "typestore",
 ]
 
 #: The line that separates definitions in a ``ros2msg`` full text.
@@ -64,14 +70,43 @@ _PRIMITIVES = frozenset(
 _TYPE_NAME = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)/(?:([A-Za-z][A-Za-z0-9_]*)/)?([A-Za-z][A-Za-z0-9_]*)$")
 _MAX_DEPTH = 50
 
-#: ``pkg/msg/Type`` -> (its ``.msg`` text, its ``RIHS01`` type hash) for types recorded without their
-#: package installed; used only when the package's own files are not found. (Jazzy's tf2_msgs.)
-BUILTIN_DEFINITIONS: dict[str, tuple[str, str]] = {
-    "tf2_msgs/msg/TFMessage": (
-        "geometry_msgs/TransformStamped[] transforms\n",
-        "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087",
-    ),
-}
+_TYPESTORE_LOCK = threading.Lock()
+_typestores: list[Typestore] = []
+
+
+def typestore() -> Typestore:
+    """The process's ``rosbags`` type store: ROS 2 Jazzy's types, and those :func:`learn_types` added.
+
+    Made once (about 0.4 s the first time), thread safe.
+    """
+    with _TYPESTORE_LOCK:
+        if not _typestores:
+            from rosbags.typesys import Stores, get_typestore
+
+            _typestores.append(get_typestore(Stores.ROS2_JAZZY))
+        return _typestores[0]
+
+
+@functools.cache
+def learn_types(type_name: str, definition: str) -> bool:
+    """Add to :func:`typestore` the types of a ``ros2msg`` full text (``definition`` of ``type_name``) that it does
+    not know yet. True when the store now defines every type of the text as the text does (so rosbags encodes
+    ``type_name`` as a reader of that text decodes it); False when the text cannot be parsed or the store knew a
+    type otherwise (another distribution's message files). Cached: a type is parsed once per process."""
+    if not definition.strip():
+        return False
+    try:
+        from rosbags.typesys import get_types_from_msg
+
+        found = get_types_from_msg(definition, type_name)
+        store = typestore()
+    except Exception:  # noqa: BLE001 - rosbags' parser refuses it (or rosbags is not installed)
+        return False
+    with _TYPESTORE_LOCK:
+        new = {name: fields for name, fields in found.items() if name not in store.fielddefs}
+        if new:
+            store.register(new)
+    return type_name in found and all(store.fielddefs.get(name) == fields for name, fields in found.items())
 
 
 def message_type_name(message: Any) -> str:
@@ -175,14 +210,16 @@ def _interface_file(package: str, namespace: str, name: str, suffix: str) -> Pat
 def _msg_text(type_name: str) -> str:
     package, namespace, name = _split(type_name)
     path = _interface_file(package, namespace, name, ".msg")
-    if path is None and f"{package}/{namespace}/{name}" in BUILTIN_DEFINITIONS:
-        return BUILTIN_DEFINITIONS[f"{package}/{namespace}/{name}"][0]
-    if path is None:
+    if path is not None:
+        return path.read_text()
+    try:  # not installed: rosbags' definition of the type (comment-free)
+        text, _md5 = typestore().gendefhash(f"{package}/{namespace}/{name}", {}, ros_version=2)
+    except Exception:  # noqa: BLE001 - rosbags does not know it either (TypesysError)
         raise RecordingError(
             f"no .msg file for {type_name} (looked for share/{package}/{namespace}/{name}.msg "
-            "under AMENT_PREFIX_PATH and the Python prefix)"
-        )
-    return path.read_text()
+            "under AMENT_PREFIX_PATH and the Python prefix) and rosbags does not know it"
+        ) from None
+    return text
 
 
 def _dependencies(text: str, package: str) -> list[str]:
@@ -199,9 +236,8 @@ def _dependencies(text: str, package: str) -> list[str]:
 def message_definition(type_name: str) -> str:
     """The ``ros2msg`` full text of ``type_name`` (``pkg/msg/Type``), as rosbag2 writes it.
 
-    Falls back to ``rosbags.typesys`` (comment-free text, same structure) when
-    the ``.msg`` files are not installed; raises :class:`RecordingError` when
-    neither knows the type.
+    A type whose ``.msg`` file is not installed has rosbags' text (comment-free);
+    :class:`RecordingError` when neither knows one of the types.
     """
     seen: set[str] = set()
 
@@ -216,23 +252,13 @@ def message_definition(type_name: str) -> str:
                 result += "\n" + DELIMITER + f"MSG: {dependency}\n" + walk(dependency, depth - 1)
         return result
 
-    try:
-        return walk(type_name, _MAX_DEPTH)
-    except RecordingError as error:
-        try:
-            from rosbags.typesys import Stores, get_typestore
-        except ImportError:
-            raise error from None
-        try:
-            text, _digest = get_typestore(Stores.ROS2_JAZZY).generate_msgdef(type_name, ros_version=2)
-        except Exception:  # noqa: BLE001 - rosbags does not know it either
-            raise error from None
-        return text
+    return walk(type_name, _MAX_DEPTH)
 
 
 @functools.cache
 def type_description_hash(type_name: str) -> str:
-    """The ``RIHS01_...`` type hash from the installed ``<Type>.json``, or ``''`` when unknown."""
+    """The ``RIHS01_...`` type hash from the installed ``<Type>.json``, else rosbags' (computed from its
+    definitions), or ``''`` when neither knows the type."""
     try:
         package, namespace, name = _split(type_name)
     except RecordingError:
@@ -240,7 +266,10 @@ def type_description_hash(type_name: str) -> str:
     path = _interface_file(package, namespace, name, ".json")
     full = f"{package}/{namespace}/{name}"
     if path is None:
-        return BUILTIN_DEFINITIONS[full][1] if full in BUILTIN_DEFINITIONS else ""
+        try:
+            return typestore().hash_rihs01(full)
+        except Exception:  # noqa: BLE001 - rosbags does not know it (TypesysError)
+            return ""
     try:
         hashes = json.loads(path.read_text()).get("type_hashes", [])
     except (OSError, ValueError):

@@ -1,9 +1,11 @@
 """``RunRecorder``: one planning run written as a rosbag2 directory with one MCAP file.
 
 The node calls :meth:`RunRecorder.write` from its planning and publishing
-paths; the call serialises the message (CDR, ``rclpy.serialization``, cut to
-its exact length by :func:`~clew_ros.recording.cdr.tidy_cdr`) and hands it to
-a writer thread, so it never waits for the disk. The writer
+paths; the call serialises the message (CDR, ``rclpy.serialization``) and
+hands it to a writer thread, so it never waits for the disk. The writer
+thread puts the bytes in canonical form with rosbags
+(:func:`~clew_ros.recording.cdr.canonical_cdr`: zero padding, exact length),
+so the caller pays for the C serializer only. The writer
 thread writes a chunked MCAP incrementally and flushes the file after every
 chunk and at least every ``flush_period_s``, so a process that is killed
 leaves a file that the MCAP stream reader reads up to its last chunk
@@ -33,9 +35,15 @@ from typing import Any
 import yaml
 
 import clew_ros
-from clew_ros.recording.cdr import SerializedMessage, tidy_cdr
+from clew_ros.recording.cdr import SerializedMessage, canonical_cdr
 from clew_ros.recording.errors import RecordingError
-from clew_ros.recording.msgdefs import message_definition, message_type_name, type_description_hash
+from clew_ros.recording.msgdefs import (
+    learn_types,
+    message_definition,
+    message_type_name,
+    type_description_hash,
+    typestore,
+)
 
 __all__ = [
     "ROSBAG2_VERSION",
@@ -134,6 +142,7 @@ class _Topic:
         self.qos = qos
         self.type_hash = type_description_hash(type_name)
         self.channel_id: int | None = None
+        self.canonical = False  # rosbags encodes the type as its schema says: rclpy's bytes go through canonical_cdr
         self.written = 0  # on disk (in a flushed chunk)
         self.pending = 0  # in the chunk being built
 
@@ -235,7 +244,8 @@ class RunRecorder:
     ------
     RecordingError
         ``directory`` is missing or not writable, the run directory exists
-        already (a recorder never overwrites), or ``mcap`` is not installed.
+        already (a recorder never overwrites), or ``mcap`` or ``rosbags`` is
+        not installed.
 
     :meth:`write` never raises and never waits for the disk; the first error
     met while writing is kept in :attr:`error` and later messages are dropped.
@@ -257,8 +267,10 @@ class RunRecorder:
 
         try:
             from mcap.writer import CompressionType, Writer
+            from rosbags.typesys import Stores  # noqa: F401 - what canonical_cdr and tf_message encode with
         except ImportError as error:  # before anything is created on disk
-            raise RecordingError(f"the mcap package is not installed ({error})") from None
+            package = (error.name or "mcap").partition(".")[0]
+            raise RecordingError(f"the {package} package is not installed ({error})") from None
         self._serialize = serialize_message
         self.run_id = run_id
         self.node_name = node_name
@@ -280,7 +292,7 @@ class RunRecorder:
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=compressions[compression])
         self._flush_period_s = float(flush_period_s)
         self._topics: dict[str, _Topic] = {}
-        self._schemas: dict[str, int] = {}
+        self._schemas: dict[str, tuple[int, bool]] = {}  # type -> schema id, whether canonical_cdr applies
         self._start_ns: int | None = None
         self._end_ns: int | None = None
         self._error: str | None = None
@@ -383,9 +395,9 @@ class RunRecorder:
             return
         try:
             if isinstance(msg, SerializedMessage):
-                data, type_name = msg.data, msg.type_name
+                data, type_name, canonical = msg.data, msg.type_name, True
             else:
-                data, type_name = tidy_cdr(msg, self._serialize(msg)), message_type_name(msg)
+                data, type_name, canonical = self._serialize(msg), message_type_name(msg), False
             offered = _qos_from_profile(qos) if qos is not None else None
             time_ns = int(time_ns)
             if not 0 <= time_ns < 2**64:
@@ -403,7 +415,7 @@ class RunRecorder:
                 self._drop()
                 return
             self._queued_bytes += len(data)
-            self._queue.put((topic, type_name, data, time_ns, offered))
+            self._queue.put((topic, type_name, data, canonical, time_ns, offered))
 
     def close(self) -> Path:
         """Finish the recording: flush, write the MCAP summary and ``metadata.yaml``.
@@ -453,6 +465,8 @@ class RunRecorder:
             self._file.close()
 
     def _run(self) -> None:
+        with contextlib.suppress(Exception):  # made on this thread, not the caller's; a fault shows at the first type
+            typestore()
         last_flush = time.monotonic()
         while True:
             pending = any(t.pending for t in self._topics.values())
@@ -468,13 +482,13 @@ class RunRecorder:
                     self._flush_chunk()
                 last_flush = time.monotonic()
                 continue
-            topic, type_name, data, time_ns, offered = item
+            topic, type_name, data, canonical, time_ns, offered = item
             with self._lock:
                 self._queued_bytes -= len(data)
             if self._failed:
                 self._drop()
                 continue
-            if self._add(topic, type_name, data, time_ns, offered):
+            if self._add(topic, type_name, data, canonical=canonical, time_ns=time_ns, offered=offered):
                 last_flush = time.monotonic()
             elif time.monotonic() - last_flush >= self._flush_period_s:
                 self._flush_chunk()
@@ -488,15 +502,16 @@ class RunRecorder:
                 raise TypeError(f"topic {topic} was recorded as {entry.type_name}, got {type_name}")
             return entry
         entry = _Topic(topic, type_name, offered or default_offered_qos(topic))
-        schema_id = self._schemas.get(type_name)
-        if schema_id is None:
+        schema = self._schemas.get(type_name)
+        if schema is None:
             try:
                 definition, encoding = message_definition(type_name), "ros2msg"
             except RecordingError as error:
                 self._set_error(f"{self.mcap_path}: {error}; {topic} recorded without a schema")
                 definition, encoding = "", ""
             schema_id = self._writer.register_schema(type_name, encoding, definition.encode())
-            self._schemas[type_name] = schema_id
+            schema = self._schemas[type_name] = (schema_id, learn_types(type_name, definition))
+        schema_id, entry.canonical = schema
         entry.channel_id = self._writer.register_channel(
             topic,
             "cdr",
@@ -506,8 +521,10 @@ class RunRecorder:
         self._topics[topic] = entry
         return entry
 
-    def _add(self, topic: str, type_name: str, data: bytes, time_ns: int, offered: dict | None) -> bool:
-        """Write one message; return True when a chunk went to disk."""
+    def _add(
+        self, topic: str, type_name: str, data: bytes, *, canonical: bool, time_ns: int, offered: dict | None
+    ) -> bool:
+        """Write one message (``data`` in canonical form already or not); return True when a chunk went to disk."""
         try:
             before = self._file.tell()
             try:
@@ -517,6 +534,9 @@ class RunRecorder:
                 self._drop()
                 return False
             assert entry.channel_id is not None  # registered by _channel
+            if not canonical and entry.canonical:
+                with contextlib.suppress(Exception):  # rosbags refuses it: rclpy's bytes are valid CDR all the same
+                    data = canonical_cdr(type_name, data)
             self._writer.add_message(
                 entry.channel_id,
                 log_time=time_ns,

@@ -1,5 +1,6 @@
-"""``tf2_msgs/msg/TFMessage`` recorded without tf2_msgs: the hand-made CDR equals rosbags' serialiser,
-its schema text and type hash are rosbag2's, and a recording of it reads back with rosbags and with
+"""``tf2_msgs/msg/TFMessage`` recorded without tf2_msgs: :func:`tf_message` (rosbags) gives bytes that
+an independent decoder (``mcap_ros2``, from the recorded schema text) reads as the transforms given, its
+schema text and type hash are rosbag2's, and a recording of it reads back with rosbags and with
 ``mcap`` + ``mcap_ros2``.
 """
 
@@ -16,6 +17,7 @@ pytest.importorskip("rclpy")
 pytest.importorskip("rosbags.rosbag2")
 
 from mcap.reader import make_reader
+from mcap_ros2._dynamic import generate_dynamic
 from mcap_ros2.decoder import DecoderFactory
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
@@ -55,13 +57,22 @@ def _rosbags_tf(edges: list[FrameTransform], stamp_ns: int):
 
 
 @pytest.mark.parametrize("count", [0, 1, 2, 3])
-def test_tf_message_bytes_are_rosbags(count: int) -> None:
+def test_tf_message_reads_back_with_an_independent_decoder(count: int) -> None:
     stamp_ns = 1_700_000_000_123_456_789
     message = tf_message(EDGES[:count], stamp_ns)
     assert message.type_name == "tf2_msgs/msg/TFMessage"
     assert message.data == bytes(TYPESTORE.serialize_cdr(_rosbags_tf(EDGES[:count], stamp_ns), TF_MESSAGE_TYPE))
-    decoded = TYPESTORE.deserialize_cdr(message.data, TF_MESSAGE_TYPE)  # strict: no byte left over
-    assert [t.child_frame_id for t in decoded.transforms] == [e.child for e in EDGES[:count]]
+    assert message.data == tf_message(EDGES[:count], stamp_ns).data  # same transforms, same bytes
+    decoded = generate_dynamic(TF_MESSAGE_TYPE, message_definition(TF_MESSAGE_TYPE))[TF_MESSAGE_TYPE](message.data)
+    assert len(decoded.transforms) == count
+    for transform, edge in zip(decoded.transforms, EDGES[:count], strict=True):
+        assert (transform.header.frame_id, transform.child_frame_id) == (edge.parent, edge.child)
+        assert (transform.header.stamp.sec, transform.header.stamp.nanosec) == (1_700_000_000, 123_456_789)
+        t, q = transform.transform.translation, transform.transform.rotation
+        assert (t.x, t.y, t.z) == edge.translation
+        assert (q.x, q.y, q.z, q.w) == edge.rotation
+    strict = TYPESTORE.deserialize_cdr(message.data, TF_MESSAGE_TYPE)  # strict: no byte left over
+    assert [t.child_frame_id for t in strict.transforms] == [e.child for e in EDGES[:count]]
 
 
 def test_tf_schema_and_hash_are_rosbag2s() -> None:

@@ -34,8 +34,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E
 from std_msgs.msg import String  # noqa: E402
 
 from clew_ros.recording import Recording, RecordingError, RunRecorder, recover_recording  # noqa: E402
-from clew_ros.recording.cdr import tidy_cdr  # noqa: E402
-from clew_ros.recording.msgdefs import DELIMITER, message_class, message_definition  # noqa: E402
+from clew_ros.recording.cdr import canonical_cdr  # noqa: E402
+from clew_ros.recording.msgdefs import DELIMITER, learn_types, message_class, message_definition  # noqa: E402
 
 WRITER = Path(__file__).parents[1] / "helpers" / "rec_writer.py"
 
@@ -186,15 +186,71 @@ def test_schema_text_is_rosbag2s() -> None:
     assert message_definition("std_msgs/msg/String") == (share / "std_msgs" / "msg" / "String.msg").read_text()
 
 
-def test_tidy_cdr_keeps_rclpy_bytes_readable_by_strict_readers(run_triples) -> None:
+def test_recorded_bytes_are_rclpys_in_canonical_form(recording: Path, run_triples) -> None:
+    """Each recorded message is rclpy's serialisation re-encoded by rosbags: rclpy reads back the original,
+    and the bytes are rosbags' own encoding of it (exact length, zero padding), so equal messages are equal bytes."""
     typestore = get_typestore(Stores.ROS2_JAZZY)
-    for topic, msg, _t in run_triples:
-        raw = serialize_message(msg)
-        tidy = tidy_cdr(msg, raw)
-        assert len(tidy) <= len(raw) + 3
-        assert len(tidy) % 4 == 0
-        assert deserialize_message(tidy, type(msg)) == msg
-        typestore.deserialize_cdr(tidy, rec_messages.TOPIC_TYPES[topic])  # raises on trailing bytes
+    with (recording / f"{recording.name}_0.mcap").open("rb") as stream:
+        records = [(c.topic, m.data) for _s, c, m in make_reader(stream).iter_messages(log_time_order=True)]
+    assert len(records) == len(run_triples)
+    for (topic, data), (topic_sent, original, _t) in zip(records, run_triples, strict=True):
+        assert topic == topic_sent
+        type_name = rec_messages.TOPIC_TYPES[topic]
+        assert deserialize_message(data, type(original)) == original
+        assert data == bytes(typestore.serialize_cdr(typestore.deserialize_cdr(data, type_name), type_name))
+        assert data == canonical_cdr(type_name, serialize_message(original))
+
+
+def test_canonical_cdr_zeroes_padding_and_keeps_values(run_triples) -> None:
+    """Whatever rclpy leaves in the alignment padding, the canonical bytes are the same; any other byte stays."""
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    for topic, msg, _t in run_triples[:12]:
+        type_name = rec_messages.TOPIC_TYPES[topic]
+        canonical = canonical_cdr(type_name, serialize_message(msg))
+        padding = 0
+        for k in range(4, len(canonical)):
+            stray = bytearray(canonical)
+            stray[k] ^= 0xA5
+            try:
+                decoded = deserialize_message(bytes(stray), type(msg))
+                again = canonical_cdr(type_name, bytes(stray))
+            except Exception:  # noqa: BLE001 - the byte is a length or a string's: a library refuses the buffer
+                continue
+            if decoded == msg:  # padding: both libraries read the same message, and the canonical form drops it
+                padding += 1
+                assert again == canonical
+            else:  # a value: it stays
+                assert again != canonical
+        typestore.deserialize_cdr(canonical, type_name)  # strict: no byte left over
+        if topic.endswith("/world_markers"):
+            assert padding > 0  # a Marker has padding (after its int32 and uint8 fields)
+
+
+def test_learn_types_adds_unknown_types_and_refuses_a_different_definition() -> None:
+    text = (
+        "std_msgs/Header header\nfloat64[] values\nstring name\n"
+        + DELIMITER
+        + "MSG: std_msgs/Header\n"
+        + message_definition("std_msgs/msg/Header")
+    )
+    assert learn_types("clew_test_msgs/msg/Reading", text)
+    reading = get_typestore(Stores.ROS2_JAZZY)  # a fresh store does not know it
+    assert "clew_test_msgs/msg/Reading" not in reading.fielddefs
+    from clew_ros.recording.msgdefs import typestore
+
+    store = typestore()
+    types = store.types
+    message = types["clew_test_msgs/msg/Reading"](
+        header=types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](sec=1, nanosec=2), frame_id="w"),
+        values=__import__("numpy").array([1.5, -2.0]),
+        name="r",
+    )
+    data = bytes(store.serialize_cdr(message, "clew_test_msgs/msg/Reading"))
+    assert canonical_cdr("clew_test_msgs/msg/Reading", data) == data
+    # a known type defined otherwise (another distribution): rosbags must not re-encode rclpy's bytes with it
+    assert not learn_types("std_msgs/msg/String", "int32 data\n")
+    assert not learn_types("std_msgs/msg/String", "")
+    assert learn_types("std_msgs/msg/String", message_definition("std_msgs/msg/String"))
 
 
 @pytest.mark.parametrize("outcome", ["aborted", "canceled"])
@@ -252,9 +308,12 @@ def test_recording_errors_name_the_path(tmp_path: Path) -> None:
         RunRecorder(tmp_path, "run")
 
 
-def test_without_mcap_nothing_is_created(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setitem(sys.modules, "mcap.writer", None)  # any import of it raises ImportError
-    with pytest.raises(RecordingError, match="mcap package is not installed"):
+@pytest.mark.parametrize("module", ["mcap.writer", "rosbags.typesys"])
+def test_without_mcap_or_rosbags_nothing_is_created(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, module: str
+) -> None:
+    monkeypatch.setitem(sys.modules, module, None)  # any import of it raises ImportError
+    with pytest.raises(RecordingError, match=f"the {module.partition('.')[0]} package is not installed"):
         RunRecorder(tmp_path, "run")
     assert list(tmp_path.iterdir()) == []
 

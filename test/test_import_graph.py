@@ -108,7 +108,7 @@ def test_every_kind_of_import_is_an_edge(tmp_path: Path) -> None:
         "from clew_ros.core import geometry\n"
         "from clew_ros.core.world import World\n"
         "from . import tree\n"
-        "from ..node import playback\n"
+        "from ..motion import playback\n"
         "import numpy.linalg\n"
         "def late():\n"
         "    from clew_ros.core.collision import is_valid\n"
@@ -122,7 +122,7 @@ def test_every_kind_of_import_is_an_edge(tmp_path: Path) -> None:
         "clew_ros.core.geometry",
         "clew_ros.core.world",
         "clew_ros.core.tree",
-        "clew_ros.node.playback",
+        "clew_ros.motion.playback",
         "clew_ros.core.collision",
         "clew_ros.core.plan",
     }

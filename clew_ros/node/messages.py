@@ -1,7 +1,7 @@
 """The one place where core values become ROS 2 messages, and back.
 
 Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
-plans, :class:`~clew_ros.node.playback.Track`, TF edges of
+plans, :class:`~clew_ros.motion.playback.Track`, TF edges of
 :mod:`~clew_ros.node.frames`) and a stamp, and returns
 a standard message, or the reverse (a ``~/goal_pose``; a ``~/trajectory``
 becomes a plan again with :func:`clew_ros.recording.trajectory_to_plan`).
@@ -45,8 +45,8 @@ from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
+from clew_ros.motion.playback import Track, TrackState
 from clew_ros.node.frames import FrameTransform
-from clew_ros.node.playback import Track, TrackState
 from clew_ros.node.urdf import robot_urdf, visual_width_m
 
 __all__ = [

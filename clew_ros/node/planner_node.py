@@ -4,7 +4,7 @@ This module holds the node's parameters, callbacks and policy: one run at a
 time; a request while a run plans is refused (``BUSY``), never queued; a
 request during a playback stops the playback. A run's state lives on its
 handle (:mod:`~clew_ros.node.run`), its life in :mod:`~clew_ros.node.worker`
-(playback: :mod:`~clew_ros.node.player`); messages go out, and into the run's
+(playback: :mod:`~clew_ros.motion.player`); messages go out, and into the run's
 recording (:mod:`~clew_ros.node.run_recording`), through
 :mod:`~clew_ros.node.publishing`.
 

@@ -42,8 +42,8 @@ from action_msgs.msg import GoalStatus
 
 from clew_ros.core.settings import Outcome, Termination
 from clew_ros.core.world import World
+from clew_ros.motion.playback import Track
 from clew_ros.node.parameters import Configuration
-from clew_ros.node.playback import Track
 from clew_ros.node.run_recording import NO_RECORDING, RunRecording
 
 __all__ = [

@@ -24,9 +24,9 @@ from clew_ros.core.plan import Plan, validate_plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import load_world, world_from_parameters
+from clew_ros.motion.playback import track_from_plan
+from clew_ros.motion.timing import quintic_spline
 from clew_ros.node import messages
-from clew_ros.node.playback import track_from_plan
-from clew_ros.node.timing import quintic_spline
 from clew_ros.recording import trajectory_to_plan
 
 WORLDS = Path(__file__).parents[1] / "worlds"

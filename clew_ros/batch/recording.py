@@ -66,7 +66,7 @@ def recording_unavailable() -> str | None:
 def check_recording_parameters(worlds: Sequence[BatchWorld]) -> None:
     """``--record``: the node parameters of every world file (``playback.*``, ``trajectory.*``) checked
     before any job runs; :class:`~clew_ros.batch.errors.BatchInputError` names the file and parameter."""
-    from clew_ros.node.parameters import flatten, node_settings
+    from clew_ros.ros.parameters import flatten, node_settings
 
     for world in worlds:
         try:
@@ -85,8 +85,8 @@ def recording_files(
     started. Raises :class:`~clew_ros.recording.RecordingError` or
     :class:`~clew_ros.core.errors.ParameterError` (a node parameter of the world file is invalid).
     """
-    from clew_ros.node.parameters import flatten, node_settings
     from clew_ros.node.plan_recording import record_plan
+    from clew_ros.ros.parameters import flatten, node_settings
 
     node = node_settings(flatten(parameters), world.robot.dof)
     with tempfile.TemporaryDirectory(prefix="clew_batch_record_") as folder:

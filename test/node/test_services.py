@@ -48,8 +48,8 @@ from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
 from clew_ros.core.plan import validate_plan  # noqa: E402
 from clew_ros.core.world import load_world, read_parameter_file, world_from_parameters  # noqa: E402
-from clew_ros.node import messages  # noqa: E402
 from clew_ros.recording import trajectory_to_plan  # noqa: E402
+from clew_ros.ros import messages  # noqa: E402
 
 pytestmark = pytest.mark.ros
 

@@ -2,7 +2,7 @@
 
 Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
 plans, :class:`~clew_ros.motion.playback.Track`, TF edges of
-:mod:`~clew_ros.node.frames`) and a stamp, and returns
+:mod:`~clew_ros.ros.frames`) and a stamp, and returns
 a standard message, or the reverse (a ``~/goal_pose``; a ``~/trajectory``
 becomes a plan again with :func:`clew_ros.recording.trajectory_to_plan`).
 The node calls these and nothing else to build what it publishes
@@ -46,8 +46,8 @@ from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
 from clew_ros.motion.playback import Track, TrackState
-from clew_ros.node.frames import FrameTransform
-from clew_ros.node.urdf import robot_urdf, visual_width_m
+from clew_ros.ros.frames import FrameTransform
+from clew_ros.ros.urdf import robot_urdf, visual_width_m
 
 __all__ = [
     "FRAME_ID",
@@ -253,7 +253,7 @@ def world_messages(
     world: World, settings: PlannerSettings, node_name: str, time_ns: int
 ) -> list[tuple[str, String | MarkerArray]]:
     """What a run puts out of its problem, ``(topic name, message)`` in order: ``~/world_yaml``,
-    ``~/world_markers`` and ``~/robot_description`` (the arm's TF is :mod:`~clew_ros.node.frames`')."""
+    ``~/world_markers`` and ``~/robot_description`` (the arm's TF is :mod:`~clew_ros.ros.frames`')."""
     return [
         ("world_yaml", world_yaml_message(world, settings, node_name)),
         ("world_markers", world_markers(world, time_ns)),
@@ -432,7 +432,7 @@ GRIPPER_HOLDING_COLOR = (0.9, 0.1, 0.1)
 
 
 def robot_description_message(world: World) -> String:
-    """``~/robot_description``: the URDF of the arm (:func:`clew_ros.node.urdf.robot_urdf`)."""
+    """``~/robot_description``: the URDF of the arm (:func:`clew_ros.ros.urdf.robot_urdf`)."""
     return String(data=robot_urdf(world))
 
 

@@ -1,7 +1,7 @@
 """``clew_batch --record``: each job's run recorded as the node would have recorded it (interface.md §4).
 
 The worker records the job's plan with
-:func:`clew_ros.node.plan_recording.record_plan` (the node's own message
+:func:`clew_ros.batch.plan_recording.record_plan` (the node's own message
 builders; synthetic timestamps, no waiting) into a temporary folder of its
 own and hands the files back as bytes in its
 :class:`~clew_ros.batch.worker.JobOutcome` (:func:`recording_files`), so
@@ -54,7 +54,7 @@ def recording_unavailable() -> str | None:
     try:
         import mcap.writer  # noqa: F401 - what the recorder writes with
 
-        import clew_ros.node.plan_recording  # noqa: F401 - rclpy and every message package it records
+        import clew_ros.batch.plan_recording  # noqa: F401 - rclpy and every message package it records
     except ImportError as error:
         return (
             f"recording needs ROS 2 (rclpy and its message packages) and mcap, which cannot be imported here "
@@ -85,7 +85,7 @@ def recording_files(
     started. Raises :class:`~clew_ros.recording.RecordingError` or
     :class:`~clew_ros.core.errors.ParameterError` (a node parameter of the world file is invalid).
     """
-    from clew_ros.node.plan_recording import record_plan
+    from clew_ros.batch.plan_recording import record_plan
     from clew_ros.ros.parameters import flatten, node_settings
 
     node = node_settings(flatten(parameters), world.robot.dof)

@@ -10,7 +10,6 @@
 - ``publishing``: the node's publishers (the arm: URDF, TF, ``~/scene``); every message also goes to the
   run's recording.
 - ``run_recording``: a run's recording as the node uses it (nothing when recording is off).
-- ``call_plan``: a small client that calls ``~/plan`` (for pip installs without ``ros2``).
 
 What needs message types but no node (messages, QoS, topics, parameters, frames, URDF) is in
 :mod:`clew_ros.ros`; the timed plan and its player are in :mod:`clew_ros.motion`. Importing this package

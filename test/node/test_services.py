@@ -371,7 +371,7 @@ def test_plan_fails_on_an_unreachable_goal(unreachable: Session) -> None:
 
 def test_call_plan_client_reports_the_failure(unreachable: Session) -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "clew_ros.node.call_plan", "--node", unreachable.node.name, "--timeout", "20"],
+        [sys.executable, "-m", "clew_ros.client.call_plan", "--node", unreachable.node.name, "--timeout", "20"],
         capture_output=True,
         text=True,
         timeout=40,

@@ -103,11 +103,6 @@ class Publishing:
             if not self._closing.is_set():
                 self._logger.error(f"cannot publish on {publisher.topic_name}: {error}")
 
-    @property
-    def tf_live(self) -> bool:
-        """Whether ``/tf`` and ``/tf_static`` are published (not only recorded)."""
-        return bool(self._tf_publishers)
-
     def world(self, world: World, planner: PlannerSettings, recording: RunRecording) -> None:
         """``~/world_yaml``, ``~/world_markers`` and the arm of a problem: ``~/robot_description``,
         ``/tf_static``, and ``/tf`` and ``~/scene`` at the start (arm at ``robot.initial``, gripper open,

@@ -112,7 +112,7 @@ def node_first_and_second() -> dict:
                 [
                     sys.executable,
                     "-m",
-                    "clew_ros.node.call_plan",
+                    "clew_ros.client.call_plan",
                     "--node",
                     f"{namespace}/clew_planner",
                     "--timeout",

@@ -72,9 +72,9 @@ echo "demo: clew_planner --ros-args -p record.directory:=$RECORDINGS -p trajecto
     >"$OUT/clew_planner.log" 2>&1 &
 node_pid=$!
 
-echo "demo: python -m clew_ros.node.call_plan: a plan to the default goal through clew_ros.client"
+echo "demo: python -m clew_ros.client.call_plan: a plan to the default goal through clew_ros.client"
 set +e
-"$PY" -m clew_ros.node.call_plan --node /clew_planner --timeout 180 --wait-playback | tee "$OUT/plan_call.txt"
+"$PY" -m clew_ros.client.call_plan --node /clew_planner --timeout 180 --wait-playback | tee "$OUT/plan_call.txt"
 rc=${PIPESTATUS[0]}
 set -e
 case $rc in

@@ -10,6 +10,11 @@ of its own whose edges are its own imports; importing ``clew_ros.x.y`` is not
 counted as importing the package ``clew_ros.x`` (Python runs the package's
 ``__init__`` first, but a package importing its own submodules is no cycle of
 the design). A cycle is printed module by module.
+
+The same edges, read package by package (``clew_ros.<package>``), must point
+down :data:`LAYERS`: a package imports only packages of lower rows, never one
+of its own row or above, so the packages form a DAG whatever their modules do.
+An edge that breaks the order is printed with the modules that make it.
 """
 
 from __future__ import annotations
@@ -19,6 +24,21 @@ from pathlib import Path
 
 PACKAGE = "clew_ros"
 ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+
+#: The packages of ``clew_ros``, lowest row first: a package may import the packages of the rows below its
+#: own, nothing else (the packages of one row are independent of each other). Every package is placed here;
+#: the root module ``clew_ros`` (the version) imports no package, and any package may import it.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("core",),  # the Ariadne's Clew Algorithm; never imports rclpy
+    ("planar", "spatial"),  # the kinds of world the algorithm plans in, side by side
+    ("worlds", "motion"),  # clew_world's generated worlds; a plan timed and played back (no ROS)
+    ("ros",),  # ROS messages, QoS, topics, parameters, frames, URDF: message types, no node
+    ("recording",),  # the rosbag2 MCAP writer and reader
+    ("render",),  # PNG / GIF / SVG of a world, a plan or a recording
+    ("batch", "live"),  # clew_batch (and its --record); the Foxglove live view
+    ("node", "client"),  # the ROS 2 node; PlannerClient and call_plan
+    ("cli", "examples"),  # the programs
+)
 
 
 def module_names() -> dict[str, Path]:
@@ -108,7 +128,7 @@ def test_every_kind_of_import_is_an_edge(tmp_path: Path) -> None:
         "from clew_ros.core import geometry\n"
         "from clew_ros.core.world import World\n"
         "from . import tree\n"
-        "from ..node import playback\n"
+        "from ..motion import playback\n"
         "import numpy.linalg\n"
         "def late():\n"
         "    from clew_ros.core.collision import is_valid\n"
@@ -122,7 +142,7 @@ def test_every_kind_of_import_is_an_edge(tmp_path: Path) -> None:
         "clew_ros.core.geometry",
         "clew_ros.core.world",
         "clew_ros.core.tree",
-        "clew_ros.node.playback",
+        "clew_ros.motion.playback",
         "clew_ros.core.collision",
         "clew_ros.core.plan",
     }
@@ -140,3 +160,53 @@ def test_no_import_cycle() -> None:
 
 def test_world_parsing_does_not_import_collision_checks() -> None:
     assert "clew_ros.core.collision" not in import_graph()["clew_ros.core.world"]
+
+
+def package_of(module: str) -> str | None:
+    """``node`` for ``clew_ros.node.worker`` and ``clew_ros.node``; ``None`` for the root module ``clew_ros``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def layer_violations(graph: dict[str, set[str]], layers: tuple[tuple[str, ...], ...]) -> dict[str, list[str]]:
+    """``"a -> b"`` for each package ``a`` importing a package ``b`` not in a lower row of ``layers``, with the
+    module edges that make it; the root module imports no package."""
+    row = {package: level for level, packages in enumerate(layers) for package in packages}
+    found: dict[str, list[str]] = {}
+    for module, imported in sorted(graph.items()):
+        source = package_of(module)
+        for target_module in sorted(imported):
+            target = package_of(target_module)
+            if target is None or target == source:
+                continue  # the root, or the package's own modules
+            if source is None or row[target] >= row[source]:
+                found.setdefault(f"{source or PACKAGE} -> {target}", []).append(f"{module} -> {target_module}")
+    return found
+
+
+def test_every_package_has_its_row() -> None:
+    packages = {package_of(name) for name in module_names()} - {None}
+    placed = [package for row in LAYERS for package in row]
+    assert len(placed) == len(set(placed)), "a package is in two rows of LAYERS"
+    assert packages - set(placed) == set(), "place these packages in LAYERS"
+
+
+def test_the_layering_check_finds_an_upward_and_a_sideways_import() -> None:
+    graph = {
+        "clew_ros.node.worker": {"clew_ros.ros.messages", "clew_ros.node.run", "clew_ros"},
+        "clew_ros.node.call_plan": {"clew_ros.client"},
+        "clew_ros.ros.messages": {"clew_ros.node.run"},
+        "clew_ros": {"clew_ros.core"},
+    }
+    assert layer_violations(graph, LAYERS) == {
+        "clew_ros -> core": ["clew_ros -> clew_ros.core"],
+        "node -> client": ["clew_ros.node.call_plan -> clew_ros.client"],
+        "ros -> node": ["clew_ros.ros.messages -> clew_ros.node.run"],
+    }
+
+
+def test_packages_import_only_lower_rows() -> None:
+    wrong = layer_violations(import_graph(), LAYERS)
+    assert not wrong, "imports against LAYERS:\n" + "\n".join(
+        f"{edge}: {', '.join(modules)}" for edge, modules in wrong.items()
+    )

@@ -5,7 +5,8 @@
 - :mod:`~clew_ros.batch.executors`: where jobs run (a local pool of processes, or Ray);
 - :mod:`~clew_ros.batch.index`: ``index.jsonl``, one complete line per job;
 - :mod:`~clew_ros.batch.runner`: the driver (resume, retries, a clean stop);
-- :mod:`~clew_ros.batch.recording`: ``--record``, each job's run recorded as the node would (needs ROS);
+- :mod:`~clew_ros.batch.recording`: ``--record``, each job's run recorded as the node would (needs ROS),
+  by :mod:`~clew_ros.batch.plan_recording` (a plan recorded as a run, with the node's message builders);
 - :mod:`~clew_ros.batch.progress` and :mod:`~clew_ros.batch.summary`: what the command shows.
 
 Importing this package imports neither Ray (only ``--ray`` does) nor ROS (only ``--record`` does).

@@ -1,7 +1,7 @@
 """``clew_batch --record``: each job's run recorded as the node would have recorded it (interface.md §4).
 
 The worker records the job's plan with
-:func:`clew_ros.node.plan_recording.record_plan` (the node's own message
+:func:`clew_ros.batch.plan_recording.record_plan` (the node's own message
 builders; synthetic timestamps, no waiting) into a temporary folder of its
 own and hands the files back as bytes in its
 :class:`~clew_ros.batch.worker.JobOutcome` (:func:`recording_files`), so
@@ -55,7 +55,7 @@ def recording_unavailable() -> str | None:
         import mcap.writer  # noqa: F401 - what the recorder writes with
         import rosbags.typesys  # noqa: F401 - what the recorder encodes with
 
-        import clew_ros.node.plan_recording  # noqa: F401 - rclpy and every message package it records
+        import clew_ros.batch.plan_recording  # noqa: F401 - rclpy and every message package it records
     except ImportError as error:
         return (
             f"recording needs ROS 2 (rclpy and its message packages), mcap and rosbags, which cannot be imported here "
@@ -67,7 +67,7 @@ def recording_unavailable() -> str | None:
 def check_recording_parameters(worlds: Sequence[BatchWorld]) -> None:
     """``--record``: the node parameters of every world file (``playback.*``, ``trajectory.*``) checked
     before any job runs; :class:`~clew_ros.batch.errors.BatchInputError` names the file and parameter."""
-    from clew_ros.node.parameters import flatten, node_settings
+    from clew_ros.ros.parameters import flatten, node_settings
 
     for world in worlds:
         try:
@@ -86,8 +86,8 @@ def recording_files(
     started. Raises :class:`~clew_ros.recording.RecordingError` or
     :class:`~clew_ros.core.errors.ParameterError` (a node parameter of the world file is invalid).
     """
-    from clew_ros.node.parameters import flatten, node_settings
-    from clew_ros.node.plan_recording import record_plan
+    from clew_ros.batch.plan_recording import record_plan
+    from clew_ros.ros.parameters import flatten, node_settings
 
     node = node_settings(flatten(parameters), world.robot.dof)
     with tempfile.TemporaryDirectory(prefix="clew_batch_record_") as folder:

@@ -11,6 +11,8 @@
   (``BUSY``, ``TIME_LIMIT``, ...), never text to parse.
 
 Which calls may block where: see :mod:`clew_ros.client.planner_client`.
+:mod:`clew_ros.client.call_plan` is a small program on it (``python -m
+clew_ros.client.call_plan``): one plan asked for, its outcome printed.
 """
 
 from clew_ros.client.planner_client import PlannerClient

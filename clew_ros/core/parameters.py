@@ -14,9 +14,9 @@ description), one :class:`ParameterTable` per namespace:
 Derived from these tables: the defaults of
 :class:`~clew_ros.core.settings.PlannerSettings`,
 :class:`~clew_ros.core.world.World`, :class:`~clew_ros.core.world.Robot` and
-``clew_ros.node.parameters.NodeSettings``; the defaults and required keys of
+``clew_ros.ros.parameters.NodeSettings``; the defaults and required keys of
 the world parser; the checks of scalar parameters (:func:`check_value`); the
-ROS 2 parameter descriptors (``clew_ros.node.parameters.descriptor_for``);
+ROS 2 parameter descriptors (``clew_ros.ros.parameters.descriptor_for``);
 and the parameter tables of README.md (:func:`markdown_tables`)::
 
     python -m clew_ros.cli.parameter_tables        # print the tables

@@ -28,8 +28,8 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from clew_ros.node.qos import LATCHED_QOS, STREAM_QOS
-from clew_ros.node.timing import quintic_spline
+from clew_ros.motion.timing import quintic_spline
+from clew_ros.ros.qos import LATCHED_QOS, STREAM_QOS
 
 
 class TrajectoryFollower(Node):

@@ -4,8 +4,8 @@
 127.0.0.1 (never another address) and publishes what it is given: the
 world, the landmark tree each time it grows, the run's progress and outcome,
 and a plan played back in real time (timed as the node times
-``~/trajectory``: :func:`clew_ros.node.playback.track_from_plan`, played by
-:func:`clew_ros.node.player.play`). It only observes: the planner's
+``~/trajectory``: :func:`clew_ros.motion.playback.track_from_plan`, played by
+:func:`clew_ros.motion.player.play`). It only observes: the planner's
 ``progress`` callback (:meth:`LiveView.on_progress`) is its way in, and the
 plan is the same with it or without it. No rclpy.
 
@@ -319,8 +319,8 @@ class LiveView:
         :meth:`stop` or ``stop`` ended it first. A plan without segments plays nothing (``True``).
         """
         from clew_ros.live import messages
-        from clew_ros.node.playback import GripperEvent, TrackState, track_from_plan
-        from clew_ros.node.player import play
+        from clew_ros.motion.playback import GripperEvent, TrackState, track_from_plan
+        from clew_ros.motion.player import play
 
         world = self._current_world()
         if not plan.segments:

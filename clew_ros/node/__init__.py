@@ -7,19 +7,13 @@
 - ``planner_node``: the node: parameters, callbacks, the one-run-at-a-time policy.
 - ``run``: one run's handle (its phase, cancel, outcome, recording) and the ``~/status`` table.
 - ``worker``: one run's life in its thread: plan, check, publish the outcome, play back.
-- ``player``: plays a timed plan back in real time (no rclpy).
-- ``publishing``: the node's topics and QoS (the arm: URDF, TF, ``~/scene``); every message also goes to
-  the run's recording.
+- ``publishing``: the node's publishers (the arm: URDF, TF, ``~/scene``); every message also goes to the
+  run's recording.
 - ``run_recording``: a run's recording as the node uses it (nothing when recording is off).
-- ``plan_recording``: a plan recorded as the node would have recorded its run, offline (``clew_batch --record``).
-- ``parameters``: parameter names, defaults, descriptors and checks.
-- ``messages``: the one module that turns core values into ROS messages and back.
-- ``playback``: the timed plan (trajectory times, grasp events, samples); no rclpy.
-- ``urdf``: the arm's URDF (``~/robot_description``) generated from the world; no rclpy.
-- ``frames``: the arm's and the object's TF frames (``/tf``, ``/tf_static``) at a joint state; no rclpy.
-- ``call_plan``: a small client that calls ``~/plan`` (for pip installs without ``ros2``).
 
-Importing this package imports nothing; the modules import rclpy as they need it.
+What needs message types but no node (messages, QoS, topics, parameters, frames, URDF) is in
+:mod:`clew_ros.ros`; the timed plan and its player are in :mod:`clew_ros.motion`. Importing this package
+imports nothing; the modules import rclpy as they need it.
 """
 
 __all__: list[str] = []

@@ -50,8 +50,8 @@ from clew_ros.node.namespaces import (
     parse_planner_pairs,
     world_parameters,
 )
-from clew_ros.node.parameters import default_world_file
 from clew_ros.node.planner_node import PlannerNode
+from clew_ros.ros.parameters import default_world_file
 
 __all__ = ["main", "node_arguments", "ros_parameter_arguments"]
 

@@ -4,7 +4,7 @@ This module holds the node's parameters, callbacks and policy: one run at a
 time; a request while a run plans is refused (``BUSY``), never queued; a
 request during a playback stops the playback. A run's state lives on its
 handle (:mod:`~clew_ros.node.run`), its life in :mod:`~clew_ros.node.worker`
-(playback: :mod:`~clew_ros.node.player`); messages go out, and into the run's
+(playback: :mod:`~clew_ros.motion.player`); messages go out, and into the run's
 recording (:mod:`~clew_ros.node.run_recording`), through
 :mod:`~clew_ros.node.publishing`.
 
@@ -38,9 +38,10 @@ from clew_ros.core.errors import ParameterError
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.parameters import LOCKED_PREFIXES, RETIRED_PARAMETERS, RUNTIME_CHANGES, retired_message
 from clew_ros.core.settings import Outcome
-from clew_ros.node import messages
 from clew_ros.node.namespaces import namespaced_directory
-from clew_ros.node.parameters import (
+from clew_ros.node.publishing import Publishing
+from clew_ros.ros import messages
+from clew_ros.ros.parameters import (
     OWN_PREFIXES,
     Configuration,
     NodeSettings,
@@ -51,8 +52,7 @@ from clew_ros.node.parameters import (
     plain_value,
     runtime_changes_allowed,
 )
-from clew_ros.node.publishing import Publishing
-from clew_ros.node.qos import GOAL_QOS
+from clew_ros.ros.qos import GOAL_QOS
 
 if TYPE_CHECKING:
     from clew_ros.live import LiveView
@@ -313,7 +313,7 @@ class PlannerNode(Node):
 
         The overrides (``--params-file`` / ``-p``) are declared already, typed by
         their value; they get their descriptor here (``dynamic_typing``: a later
-        ``30`` for ``30.0`` is checked by :mod:`~clew_ros.node.parameters`, not
+        ``30`` for ``30.0`` is checked by :mod:`~clew_ros.ros.parameters`, not
         refused by rclpy). The others are declared with their start values.
         ``parameters.allow_runtime_changes`` is read first: it decides which
         descriptors are read-only (rclpy then refuses any change of those,

@@ -1,14 +1,14 @@
-"""What the node publishes: its topics and their QoS, each message also written to a run's recording.
+"""What the node publishes (the topics of :mod:`clew_ros.ros.topics`), each message also written to a run's recording.
 
 :class:`Publishing` owns the node's publishers and the ``~/status`` table
 (:class:`~clew_ros.node.run.StatusTable`). Every ``publish`` takes the
 :class:`~clew_ros.node.run_recording.RunRecording` the message belongs to (a
 run's, or :data:`~clew_ros.node.run_recording.NO_RECORDING`) and records the
 message there before publishing it. The messages themselves come from
-:mod:`clew_ros.node.messages`.
+:mod:`clew_ros.ros.messages`.
 
 The arm goes out three ways (interface.md §3): ``~/robot_description`` (the
-URDF, with the world), ``/tf`` and ``/tf_static`` (:mod:`~clew_ros.node.frames`)
+URDF, with the world), ``/tf`` and ``/tf_static`` (:mod:`~clew_ros.ros.frames`)
 and ``~/scene`` markers, at rest (:meth:`Publishing.world`) and at every
 playback sample (:meth:`Publishing.arm`). ``/tf`` and ``/tf_static`` are
 published where ``tf2_msgs`` is importable (a native install; the PyPI wheels
@@ -30,45 +30,21 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from action_msgs.msg import GoalStatus, GoalStatusArray
-from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import PoseStamped
+from action_msgs.msg import GoalStatus
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
-from sensor_msgs.msg import JointState
-from std_msgs.msg import String
-from trajectory_msgs.msg import JointTrajectory
-from visualization_msgs.msg import MarkerArray
 
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.core.world import World
-from clew_ros.node import frames, messages
-from clew_ros.node.qos import EVENTS_QOS, LATCHED_QOS, STREAM_QOS, TF_QOS, TF_STATIC_QOS
 from clew_ros.node.run import Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
+from clew_ros.ros import frames, messages
+from clew_ros.ros.topics import TF_TOPICS, TOPICS
 
 if TYPE_CHECKING:
     from clew_ros.live import LiveView
 from clew_ros.recording.cdr import tf_message
 
-__all__ = ["TF_TOPICS", "TOPICS", "Publishing", "have_tf2_msgs"]
-
-#: The node's published topics (``~/<name>``): message type and QoS.
-TOPICS: dict[str, tuple[type, QoSProfile]] = {
-    "status": (GoalStatusArray, LATCHED_QOS),
-    "feedback": (DiagnosticStatus, STREAM_QOS),
-    "trajectory": (JointTrajectory, LATCHED_QOS),
-    "joint_states": (JointState, STREAM_QOS),
-    "object_pose": (PoseStamped, STREAM_QOS),
-    "events": (String, EVENTS_QOS),
-    "landmarks": (MarkerArray, LATCHED_QOS),
-    "world_markers": (MarkerArray, LATCHED_QOS),
-    "world_yaml": (String, LATCHED_QOS),
-    "robot_description": (String, LATCHED_QOS),
-    "scene": (MarkerArray, STREAM_QOS),
-}
-#: The TF topics (absolute names, as tf2 wants them) and their QoS; type ``tf2_msgs/msg/TFMessage``.
-TF_TOPICS: dict[str, QoSProfile] = {"/tf": TF_QOS, "/tf_static": TF_STATIC_QOS}
+__all__ = ["Publishing", "have_tf2_msgs"]
 
 
 def have_tf2_msgs() -> bool:
@@ -127,11 +103,6 @@ class Publishing:
         except Exception as error:  # noqa: BLE001 - the context is gone while shutting down
             if not self._closing.is_set():
                 self._logger.error(f"cannot publish on {publisher.topic_name}: {error}")
-
-    @property
-    def tf_live(self) -> bool:
-        """Whether ``/tf`` and ``/tf_static`` are published (not only recorded)."""
-        return bool(self._tf_publishers)
 
     def world(self, world: World, planner: PlannerSettings, recording: RunRecording) -> None:
         """``~/world_yaml``, ``~/world_markers`` and the arm of a problem: ``~/robot_description``,

@@ -35,16 +35,17 @@ import time
 import uuid
 from collections import OrderedDict
 from functools import cached_property
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from action_msgs.msg import GoalStatus
 
 from clew_ros.core.settings import Outcome, Termination
 from clew_ros.core.world import World
-from clew_ros.node.parameters import Configuration
-from clew_ros.node.playback import Track
+from clew_ros.motion.playback import Track
 from clew_ros.node.run_recording import NO_RECORDING, RunRecording
+from clew_ros.ros.events import outcome_status
+from clew_ros.ros.parameters import Configuration
 
 __all__ = [
     "STATUS_HISTORY",
@@ -53,11 +54,6 @@ __all__ = [
     "Run",
     "Source",
     "StatusTable",
-    "accepted_fields",
-    "landmark_fields",
-    "outcome_event",
-    "outcome_fields",
-    "outcome_status",
 ]
 
 #: How many runs ~/status keeps (the oldest are dropped).
@@ -86,52 +82,6 @@ class CancelKind(enum.Enum):
 
     PLAN = "plan"  # the planner: the run ends CANCELED
     PLAYBACK = "playback"  # the playback (to come): the outcome stays
-
-
-def outcome_status(outcome: Outcome) -> int:
-    """The terminal ``GoalStatus`` of an outcome: succeeded, canceled, else aborted."""
-    status: int = {Outcome.SUCCEEDED: GoalStatus.STATUS_SUCCEEDED, Outcome.CANCELED: GoalStatus.STATUS_CANCELED}.get(
-        outcome, GoalStatus.STATUS_ABORTED
-    )
-    return status
-
-
-def outcome_event(outcome: Outcome) -> str:
-    """The ``~/events`` name of an outcome: ``succeeded``, ``canceled``, else ``aborted``."""
-    return {Outcome.SUCCEEDED: "succeeded", Outcome.CANCELED: "canceled"}.get(outcome, "aborted")
-
-
-def outcome_fields(outcome: Outcome, message: str, *, landmarks: int, time_s: float, recording: str) -> dict[str, Any]:
-    """The fields of a run's outcome event (``~/events``, besides ``run_id``, ``event`` and ``time``): the
-    outcome's ``code`` and ``code_value``, ``message``, ``landmarks``, the planner's ``time_s`` and what
-    the run's ``recording`` is."""
-    return {
-        "code": outcome.name,
-        "code_value": outcome.value,
-        "message": message,
-        "landmarks": landmarks,
-        "time_s": time_s,
-        "recording": recording,
-    }
-
-
-def accepted_fields(*, source: str, world: str, goal: np.ndarray, seed: int, recording: str) -> dict[str, Any]:
-    """The fields of a run's ``accepted`` event (``~/events``, besides ``run_id``, ``event`` and ``time``):
-    what started it (``source``), the ``world``'s name, the object ``goal``, the planner's ``seed`` and
-    what the run's ``recording`` is."""
-    return {"source": source, "world": world, "goal": np.asarray(goal).tolist(), "seed": seed, "recording": recording}
-
-
-def landmark_fields(landmark: Any) -> dict[str, Any]:
-    """The fields of a ``landmark`` event (``~/events``) for ``landmark`` (a landmark of the tree or of a
-    plan file: ``id``, ``parent``, ``grasp``, ``object_pose``, ``joints``)."""
-    return {
-        "id": landmark.id,
-        "parent": landmark.parent,
-        "grasp": landmark.grasp,
-        "object_pose": landmark.object_pose,
-        "joints": landmark.joints,
-    }
 
 
 class Run:

@@ -7,7 +7,7 @@ or the recording cannot be opened; :attr:`~RunRecording.text` says why).
 (interface.md §4). :class:`Recordings` opens one per run.
 
 Runs are recorded inside ``record.directory`` as resolved at start
-(:attr:`~clew_ros.node.parameters.NodeSettings.record_path`): the folders
+(:attr:`~clew_ros.ros.parameters.NodeSettings.record_path`): the folders
 :class:`Recordings` creates for it get mode 0700, and a run is not recorded
 when that path has come to resolve elsewhere since (a symbolic link
 changed). As each recorded run starts, the oldest complete runs beyond
@@ -29,7 +29,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from clew_ros.node.parameters import NodeSettings
+from clew_ros.ros.parameters import NodeSettings
 
 if TYPE_CHECKING:
     from rclpy.impl.rcutils_logger import RcutilsLogger

@@ -22,13 +22,14 @@ from clew_ros.core.clew import PlanResult, Progress, plan
 from clew_ros.core.plan import checked_plan
 from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
-from clew_ros.node import messages
-from clew_ros.node.playback import GripperEvent, Track, TrackState, node_track
-from clew_ros.node.player import play
+from clew_ros.motion.playback import GripperEvent, Track, TrackState, node_track
+from clew_ros.motion.player import play
 from clew_ros.node.publishing import Publishing
-from clew_ros.node.qos import GOAL_QOS
-from clew_ros.node.run import Phase, Run, accepted_fields, landmark_fields, outcome_event, outcome_fields
+from clew_ros.node.run import Phase, Run
 from clew_ros.node.run_recording import Recordings
+from clew_ros.ros import messages
+from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields
+from clew_ros.ros.qos import GOAL_QOS
 
 if TYPE_CHECKING:
     from rclpy.impl.rcutils_logger import RcutilsLogger

@@ -15,7 +15,7 @@ exact length.
 recording must carry ``/tf`` and ``/tf_static`` (interface.md §4), and rosbags
 knows Jazzy's ``tf2_msgs/msg/TFMessage``. :func:`tf_message` builds it with
 rosbags from a list of transforms (anything with ``parent``, ``child``,
-``translation`` and ``rotation``, as :class:`clew_ros.node.frames.FrameTransform`)
+``translation`` and ``rotation``, as :class:`clew_ros.ros.frames.FrameTransform`)
 and returns its CDR as a :class:`SerializedMessage`, which the recorder
 records as it is and which the node publishes as it is where ``tf2_msgs`` is
 installed (rclpy publishes serialized bytes): one message for both.

@@ -79,7 +79,7 @@ def default_offered_qos(topic: str) -> dict[str, Any]:
     recorded without one). Reliable; transient-local with depth 1 for the
     latched topics of :data:`TRANSIENT_LOCAL_TOPICS`, volatile with depth 100
     for ``events``, ``goal_pose`` and ``/tf``, 10 otherwise (as
-    :mod:`clew_ros.node.qos`). Zero durations mean "default" (no deadline,
+    :mod:`clew_ros.ros.qos`). Zero durations mean "default" (no deadline,
     lifespan or lease).
     """
     last = topic.rstrip("/").rsplit("/", 1)[-1]

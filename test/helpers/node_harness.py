@@ -40,9 +40,9 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
-from clew_ros.node.qos import EVENTS_QOS, LATCHED_QOS
+from clew_ros.ros.qos import EVENTS_QOS, LATCHED_QOS
 
-#: The node's own profiles (clew_ros.node.qos): latched topics, and a deep reliable stream so that a test
+#: The node's own profiles (clew_ros.ros.qos): latched topics, and a deep reliable stream so that a test
 #: reads every message.
 LATCHED = LATCHED_QOS
 STREAM = EVENTS_QOS

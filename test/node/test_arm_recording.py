@@ -33,10 +33,10 @@ from clew_ros.core.world import (  # noqa: E402
     read_parameter_file,
     world_from_parameters,
 )
-from clew_ros.node import urdf  # noqa: E402
-from clew_ros.node.frames import OBJECT_FRAME  # noqa: E402
-from clew_ros.node.publishing import TF_TOPICS, TOPICS  # noqa: E402
-from clew_ros.node.qos import GOAL_QOS  # noqa: E402
+from clew_ros.ros import urdf  # noqa: E402
+from clew_ros.ros.frames import OBJECT_FRAME  # noqa: E402
+from clew_ros.ros.qos import GOAL_QOS  # noqa: E402
+from clew_ros.ros.topics import TF_TOPICS, TOPICS  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.skipif(not HAVE_RECORDER, reason="the recorder needs mcap")]
 

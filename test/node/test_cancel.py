@@ -35,7 +35,7 @@ from rcl_interfaces.msg import ParameterType, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import SetParameters  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
-from clew_ros.node import messages  # noqa: E402
+from clew_ros.ros import messages  # noqa: E402
 
 pytestmark = pytest.mark.ros
 

@@ -26,7 +26,7 @@ from trajectory_msgs.msg import JointTrajectory  # noqa: E402
 
 from clew_ros.core.plan import validate_plan  # noqa: E402
 from clew_ros.core.world import load_world  # noqa: E402
-from clew_ros.node.playback import track_from_plan  # noqa: E402
+from clew_ros.motion.playback import track_from_plan  # noqa: E402
 from clew_ros.recording import trajectory_to_plan  # noqa: E402
 
 pytestmark = pytest.mark.ros

@@ -12,9 +12,9 @@ pytest.importorskip("mcap")
 
 from std_msgs.msg import String
 
-from clew_ros.node.parameters import NodeSettings
 from clew_ros.node.run_recording import NO_RECORDING, BagRecording, Recordings, RunRecording
 from clew_ros.recording import Recording
+from clew_ros.ros.parameters import NodeSettings
 
 RUN = "0123456789abcdef0123456789abcdef"
 

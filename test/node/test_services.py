@@ -48,8 +48,8 @@ from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
 from clew_ros.core.plan import validate_plan  # noqa: E402
 from clew_ros.core.world import load_world, read_parameter_file, world_from_parameters  # noqa: E402
-from clew_ros.node import messages  # noqa: E402
 from clew_ros.recording import trajectory_to_plan  # noqa: E402
+from clew_ros.ros import messages  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
@@ -371,7 +371,7 @@ def test_plan_fails_on_an_unreachable_goal(unreachable: Session) -> None:
 
 def test_call_plan_client_reports_the_failure(unreachable: Session) -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "clew_ros.node.call_plan", "--node", unreachable.node.name, "--timeout", "20"],
+        [sys.executable, "-m", "clew_ros.client.call_plan", "--node", unreachable.node.name, "--timeout", "20"],
         capture_output=True,
         text=True,
         timeout=40,

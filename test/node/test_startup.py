@@ -17,7 +17,7 @@ from helpers.node_harness import LATCHED, Client, NodeProcess  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
 from clew_ros.core.world import load_world, world_from_parameters  # noqa: E402
-from clew_ros.node.parameters import default_world_file  # noqa: E402
+from clew_ros.ros.parameters import default_world_file  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
@@ -103,8 +103,8 @@ def test_runs_go_on_without_a_recording(monkeypatch: pytest.MonkeyPatch, tmp_pat
     from rclpy.parameter import Parameter
 
     from clew_ros.core.world import read_parameter_file
-    from clew_ros.node.parameters import flatten
     from clew_ros.node.planner_node import PlannerNode
+    from clew_ros.ros.parameters import flatten
 
     directory = tmp_path / "recordings"
     if fault == "no recorder":
@@ -167,8 +167,8 @@ def test_given_parameters_get_their_descriptors() -> None:
     from rclpy.parameter import Parameter
 
     from clew_ros.core.world import read_parameter_file
-    from clew_ros.node.parameters import descriptor_for, flatten
     from clew_ros.node.planner_node import PlannerNode
+    from clew_ros.ros.parameters import descriptor_for, flatten
 
     given = flatten(read_parameter_file(QUICK))
     given.update(

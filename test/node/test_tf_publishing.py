@@ -25,11 +25,11 @@ from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy  # n
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
-from clew_ros.node.frames import FrameTransform  # noqa: E402
 from clew_ros.node.publishing import Publishing  # noqa: E402
 from clew_ros.node.run_recording import BagRecording  # noqa: E402
 from clew_ros.recording import RunRecorder  # noqa: E402
 from clew_ros.recording.cdr import TF_MESSAGE_TYPE, tf_message  # noqa: E402
+from clew_ros.ros.frames import FrameTransform  # noqa: E402
 
 pytestmark = pytest.mark.ros
 

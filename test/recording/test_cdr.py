@@ -22,10 +22,10 @@ from mcap_ros2.decoder import DecoderFactory
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
-from clew_ros.node.frames import FrameTransform
 from clew_ros.recording import RunRecorder
 from clew_ros.recording.cdr import TF_MESSAGE_TYPE, SerializedMessage, tf_message
 from clew_ros.recording.msgdefs import message_definition, type_description_hash
+from clew_ros.ros.frames import FrameTransform
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 EDGES = [

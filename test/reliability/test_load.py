@@ -34,8 +34,8 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from std_msgs.msg import String  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
-from clew_ros.node import messages  # noqa: E402
 from clew_ros.node.main import EXECUTOR_THREADS  # noqa: E402
+from clew_ros.ros import messages  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 

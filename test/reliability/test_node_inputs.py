@@ -35,8 +35,8 @@ from std_srvs.srv import Trigger  # noqa: E402
 
 from clew_ros.core.settings import PLANNER_PARAMETERS  # noqa: E402
 from clew_ros.core.world import read_parameter_file  # noqa: E402
-from clew_ros.node import messages  # noqa: E402
-from clew_ros.node.parameters import NODE_PARAMETERS, flatten  # noqa: E402
+from clew_ros.ros import messages  # noqa: E402
+from clew_ros.ros.parameters import NODE_PARAMETERS, flatten  # noqa: E402
 
 pytestmark = pytest.mark.ros
 

@@ -176,7 +176,7 @@ def test_planner_ranges_a_small_machine_survives(name: str, too_much: float) -> 
 
 def test_parameter_count_and_name_lengths() -> None:
     pytest.importorskip("rclpy")
-    from clew_ros.node.parameters import check_parameter_names
+    from clew_ros.ros.parameters import check_parameter_names
 
     check_parameter_names([f"p{i}" for i in range(LIMITS.max_parameters)])
     with pytest.raises(ParameterError, match=r"Limits\.max_parameters"):
@@ -192,7 +192,7 @@ def test_a_goal_frame_id_is_quoted_short_and_printable() -> None:
     from geometry_msgs.msg import PoseStamped
 
     from clew_ros.core.world import world_from_parameters as load
-    from clew_ros.node.messages import GoalPoseError, goal_from_pose_stamped
+    from clew_ros.ros.messages import GoalPoseError, goal_from_pose_stamped
 
     msg = PoseStamped()
     msg.header.frame_id = "\x1b]0;owned\x07" + "f" * 100_000

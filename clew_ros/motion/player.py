@@ -1,6 +1,6 @@
 """Playing a timed plan back: samples at a rate, gripper events as they are reached.
 
-:func:`play` walks a :class:`~clew_ros.node.playback.Track` on the
+:func:`play` walks a :class:`~clew_ros.motion.playback.Track` on the
 monotonic clock and hands each sample and each grasp / ungrasp event to
 callbacks (the node publishes ``~/joint_states``, ``~/object_pose`` and
 ``~/events``); it stops early when asked. :func:`scheduled_samples` gives the
@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
-from clew_ros.node.playback import GripperEvent, Track, TrackState
+from clew_ros.motion.playback import GripperEvent, Track, TrackState
 
 __all__ = ["PlaybackEnd", "play", "scheduled_samples"]
 
@@ -52,7 +52,7 @@ def play(
         the playback is to stop (``threading.Event.wait``); asked once with
         ``0`` before the first sample.
     on_sample:
-        Called with the :class:`~clew_ros.node.playback.TrackState` at each sample (joints, their
+        Called with the :class:`~clew_ros.motion.playback.TrackState` at each sample (joints, their
         velocities, gripper, object pose).
     on_event:
         Called with each grasp / ungrasp event once the playback reaches it,
@@ -81,7 +81,7 @@ def scheduled_samples(track: Track, rate_hz: float) -> Iterator[tuple[float, Tra
 
     Yields ``(t_s, state, events)``: the time of the sample (s of the track;
     every ``1 / rate_hz``, the last one the track's end), the
-    :class:`~clew_ros.node.playback.TrackState` there, and the grasp /
+    :class:`~clew_ros.motion.playback.TrackState` there, and the grasp /
     ungrasp events that sample reaches (each once, in order).
     """
     events = _Events(track)

@@ -7,8 +7,8 @@ import time
 
 import numpy as np
 
-from clew_ros.node.playback import GripperEvent, TrackState
-from clew_ros.node.player import play, scheduled_samples
+from clew_ros.motion.playback import GripperEvent, TrackState
+from clew_ros.motion.player import play, scheduled_samples
 
 
 class Line:

@@ -19,7 +19,7 @@ Links are drawn (and collide) as the world says: a cylinder of diameter
 ``link_width`` along x with a sphere at each end (the capsule of §1). A world
 of segments (``link_width`` 0) gets collision-free links drawn
 :data:`SEGMENT_DRAW_WIDTH_M` wide. Joint frames and their transforms at a
-joint state are in :mod:`clew_ros.node.frames`.
+joint state are in :mod:`clew_ros.ros.frames`.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Core values <-> ROS 2 messages (clew_ros.node.messages), without a ROS graph."""
+"""Core values <-> ROS 2 messages (clew_ros.ros.messages), without a ROS graph."""
 
 from __future__ import annotations
 
@@ -24,10 +24,10 @@ from clew_ros.core.plan import Plan, validate_plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import load_world, world_from_parameters
-from clew_ros.node import messages
-from clew_ros.node.playback import track_from_plan
-from clew_ros.node.timing import quintic_spline
+from clew_ros.motion.playback import track_from_plan
+from clew_ros.motion.timing import quintic_spline
 from clew_ros.recording import trajectory_to_plan
+from clew_ros.ros import messages
 
 WORLDS = Path(__file__).parents[1] / "worlds"
 RING = Path(__file__).parents[2] / "config" / "unreachable.yaml"  # four obstacles

@@ -9,7 +9,7 @@ Timing (interface.md §3 leaves it to us, README documents it):
 
 - the points are the plan's waypoints (interface.md §3), the first at ``t = 0``;
 - a move between two points of one segment is the rest-to-rest quintic of
-  :mod:`~clew_ros.node.timing`: it starts and ends at rest (zero velocity
+  :mod:`~clew_ros.motion.timing`: it starts and ends at rest (zero velocity
   and acceleration), all joints move together along the straight segment,
   and it lasts the shortest time in which no joint exceeds its
   ``max_velocity_rad_s`` or ``max_acceleration_rad_s2`` (one limit for every
@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -39,10 +39,7 @@ from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.parameters import NODE_PARAMETERS
 from clew_ros.core.plan import Plan, replay
 from clew_ros.core.world import World
-from clew_ros.node.timing import profile, rest_to_rest_duration_s
-
-if TYPE_CHECKING:
-    from clew_ros.node.parameters import NodeSettings
+from clew_ros.motion.timing import profile, rest_to_rest_duration_s
 
 __all__ = [
     "GRIPPER_JOINT",
@@ -50,6 +47,7 @@ __all__ = [
     "GripperEvent",
     "Track",
     "TrackState",
+    "TrackTiming",
     "node_track",
     "track_from_plan",
 ]
@@ -135,7 +133,7 @@ class Track:
         """``(positions, velocities, accelerations)``, each (N, n), at ``times_s`` (N,) s (clamped to the track).
 
         Between two points the joints follow the rest-to-rest quintic of
-        :mod:`~clew_ros.node.timing` along the straight segment; before the
+        :mod:`~clew_ros.motion.timing` along the straight segment; before the
         first point and after the last the arm rests.
         """
         t_ns = np.clip(np.asarray(times_s, dtype=float).reshape(-1) * 1e9, 0.0, float(self.times_ns[-1]))
@@ -252,7 +250,18 @@ def track_from_plan(
     )
 
 
-def node_track(world: World, plan: Plan, settings: NodeSettings) -> Track:
+class TrackTiming(Protocol):
+    """The ``trajectory.*`` settings a plan is timed with (the node's ``NodeSettings`` has them)."""
+
+    @property
+    def velocity_limit_rad_s(self) -> float | tuple[float, ...]: ...
+    @property
+    def max_acceleration_rad_s2(self) -> float | tuple[float, ...]: ...
+    @property
+    def grasp_dwell_s(self) -> float: ...
+
+
+def node_track(world: World, plan: Plan, settings: TrackTiming) -> Track:
     """A successful plan timed as the node times it: with its ``trajectory.*`` settings."""
     return track_from_plan(
         world,

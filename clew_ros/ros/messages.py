@@ -1,11 +1,11 @@
 """The one place where core values become ROS 2 messages, and back.
 
 Every function here is pure: it takes core values (``World``, ``LandmarkTree``,
-plans, :class:`~clew_ros.node.playback.Track`) and a stamp, and returns
+plans, :class:`~clew_ros.motion.playback.Track`) and a stamp, and returns
 a standard message, or the reverse (a ``~/goal_pose``; a ``~/trajectory``
 becomes a plan again with :func:`clew_ros.recording.trajectory_to_plan`).
 The node calls these and nothing else to build what it publishes
-(interface.md §3), but for ``/tf``: the TF edges of :mod:`~clew_ros.node.frames`
+(interface.md §3), but for ``/tf``: the TF edges of :mod:`~clew_ros.ros.frames`
 become a ``tf2_msgs/msg/TFMessage`` in :func:`clew_ros.recording.cdr.tf_message`.
 
 Conventions:
@@ -45,8 +45,8 @@ from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
-from clew_ros.node.playback import Track, TrackState
-from clew_ros.node.urdf import robot_urdf, visual_width_m
+from clew_ros.motion.playback import Track, TrackState
+from clew_ros.ros.urdf import robot_urdf, visual_width_m
 
 __all__ = [
     "FRAME_ID",
@@ -251,7 +251,7 @@ def world_messages(
     world: World, settings: PlannerSettings, node_name: str, time_ns: int
 ) -> list[tuple[str, String | MarkerArray]]:
     """What a run puts out of its problem, ``(topic name, message)`` in order: ``~/world_yaml``,
-    ``~/world_markers`` and ``~/robot_description`` (the arm's TF is :mod:`~clew_ros.node.frames`')."""
+    ``~/world_markers`` and ``~/robot_description`` (the arm's TF is :mod:`~clew_ros.ros.frames`')."""
     return [
         ("world_yaml", world_yaml_message(world, settings, node_name)),
         ("world_markers", world_markers(world, time_ns)),
@@ -430,7 +430,7 @@ GRIPPER_HOLDING_COLOR = (0.9, 0.1, 0.1)
 
 
 def robot_description_message(world: World) -> String:
-    """``~/robot_description``: the URDF of the arm (:func:`clew_ros.node.urdf.robot_urdf`)."""
+    """``~/robot_description``: the URDF of the arm (:func:`clew_ros.ros.urdf.robot_urdf`)."""
     return String(data=robot_urdf(world))
 
 

@@ -1,6 +1,6 @@
 """Ask a running ``clew_planner`` for a plan and print the outcome: a small program on :mod:`clew_ros.client`.
 
-    python -m clew_ros.node.call_plan [--node /clew_planner] [--goal X,Y,YAW] [--timeout S] [--wait-playback]
+    python -m clew_ros.client.call_plan [--node /clew_planner] [--goal X,Y,YAW] [--timeout S] [--wait-playback]
 
 Plans to the planner's own goal (its ``world.object.goal`` parameter), or to
 ``--goal``, the way ``ros2 service call /clew_planner/plan

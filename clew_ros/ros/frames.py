@@ -3,7 +3,7 @@
 Each :class:`FrameTransform` is one edge of the TF tree, the pose of ``child``
 in ``parent`` (planar: a translation in z = 0 and a rotation about z), exactly
 the transform of the URDF joint between the two links
-(:mod:`clew_ros.node.urdf`):
+(:mod:`clew_ros.ros.urdf`):
 
 - :func:`static_transforms` (``/tf_static``): ``world`` -> ``base_link`` (at
   ``world.robot.base``) and ``link_n`` -> ``tool`` (at ``(l_n, 0)``);
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.world import Robot
-from clew_ros.node.urdf import BASE_LINK, JAW_LINKS, JAW_OPEN_RAD, ROOT_FRAME, TOOL_FRAME, jaw_offset_m, link_name
+from clew_ros.ros.urdf import BASE_LINK, JAW_LINKS, JAW_OPEN_RAD, ROOT_FRAME, TOOL_FRAME, jaw_offset_m, link_name
 
 __all__ = [
     "OBJECT_FRAME",

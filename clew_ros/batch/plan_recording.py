@@ -4,9 +4,9 @@
 :class:`clew_ros.recording.RunRecorder`) from a plan already made: the topics
 of interface.md §3 that a run puts out and that mean something offline, with
 the node's names (``/<node_name>/...``) and QoS, built by the node's own
-builders (:mod:`~clew_ros.node.messages`, :mod:`~clew_ros.node.frames`,
-:func:`~clew_ros.node.playback.node_track`,
-:func:`~clew_ros.node.player.scheduled_samples`). In order:
+builders (:mod:`~clew_ros.ros.messages`, :mod:`~clew_ros.ros.frames`,
+:func:`~clew_ros.motion.playback.node_track`,
+:func:`~clew_ros.motion.player.scheduled_samples`). In order:
 
 - at ``start_ns`` (the run accepted): ``~/status`` (accepted), ``~/world_yaml``,
   ``~/world_markers``, ``~/robot_description``, ``/tf_static``, ``/tf`` and
@@ -36,15 +36,15 @@ from action_msgs.msg import GoalStatus
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.world import World
-from clew_ros.node import frames, messages
-from clew_ros.node.parameters import NodeSettings
-from clew_ros.node.playback import node_track
-from clew_ros.node.player import scheduled_samples
-from clew_ros.node.publishing import TF_TOPICS, TOPICS
-from clew_ros.node.qos import GOAL_QOS
-from clew_ros.node.run import accepted_fields, landmark_fields, outcome_event, outcome_fields, outcome_status
+from clew_ros.motion.playback import node_track
+from clew_ros.motion.player import scheduled_samples
 from clew_ros.recording import RecordingError, RunRecorder
 from clew_ros.recording.cdr import tf_message
+from clew_ros.ros import frames, messages
+from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields, outcome_status
+from clew_ros.ros.parameters import NodeSettings
+from clew_ros.ros.qos import GOAL_QOS
+from clew_ros.ros.topics import TF_TOPICS, TOPICS
 
 __all__ = ["record_plan"]
 

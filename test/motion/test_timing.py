@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from clew_ros.node.timing import PEAK_ACCELERATION, PEAK_VELOCITY, profile, quintic_spline, rest_to_rest_duration_s
+from clew_ros.motion.timing import PEAK_ACCELERATION, PEAK_VELOCITY, profile, quintic_spline, rest_to_rest_duration_s
 
 U = np.linspace(0.0, 1.0, 100_001)
 

@@ -1,6 +1,6 @@
 """The URDF of ``~/robot_description`` read by a URDF library (urdf_parser_py): its forward kinematics at
 random joint states equals the planner's (``clew_ros.core.kinematics``) and the TF frames of
-``clew_ros.node.frames``; its joints, limits, link sizes and gripper are the world's.
+``clew_ros.ros.frames``; its joints, limits, link sizes and gripper are the world's.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from helpers.urdf_fk import matrix, urdf_fk  # noqa: E402
 
 from clew_ros.core.kinematics import joint_positions, tip_poses  # noqa: E402
 from clew_ros.core.world import World, load_world, world_from_parameters, world_to_parameters  # noqa: E402
-from clew_ros.node import frames, urdf  # noqa: E402
+from clew_ros.ros import frames, urdf  # noqa: E402
 
 CONFIG = Path(__file__).parents[2] / "config"
 TOLERANCE = 1e-9

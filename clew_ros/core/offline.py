@@ -3,7 +3,7 @@
 The one path ``clew_plan`` and ``clew_batch`` share, so that a batch job
 gives exactly the plan ``clew_plan WORLD --seed S`` gives:
 
-- :func:`load_problem` / :func:`problem_from_parameters`: the world (start
+- :func:`problem_from_parameters`: the world (start
   and goal checked) and the planner settings with the command line's
   overrides; :class:`~clew_ros.core.errors.ParameterError` names the
   parameter at fault.
@@ -21,7 +21,6 @@ import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from clew_ros.core.clew import PlanResult, Progress, plan
@@ -29,9 +28,9 @@ from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.plan import Plan, checked_plan
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree
-from clew_ros.core.world import World, read_parameter_file, world_from_parameters
+from clew_ros.core.world import World, world_from_parameters
 
-__all__ = ["Problem", "failed_plan", "load_problem", "plan_problem", "problem_from_parameters"]
+__all__ = ["Problem", "failed_plan", "plan_problem", "problem_from_parameters"]
 
 
 @dataclass(frozen=True)
@@ -57,19 +56,6 @@ def problem_from_parameters(
     world = check_start_and_goal(world_from_parameters(parameters))
     settings = PlannerSettings.from_parameters(parameters, seed=seed, time_limit=time_limit, improve_time=improve_time)
     return Problem(world, settings)
-
-
-def load_problem(
-    path: str | Path,
-    *,
-    seed: int | None = None,
-    time_limit: float | None = None,
-    improve_time: float | None = None,
-) -> Problem:
-    """:func:`problem_from_parameters` of the parameter file at ``path``."""
-    return problem_from_parameters(
-        read_parameter_file(path), seed=seed, time_limit=time_limit, improve_time=improve_time
-    )
 
 
 def failed_plan(world: World, settings: PlannerSettings, message: str, elapsed_s: float) -> Plan:

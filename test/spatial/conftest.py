@@ -10,6 +10,7 @@ pytest.importorskip("trimesh")
 pytest.importorskip("urdf_parser_py")
 
 from clew_ros.spatial.robot import RobotModel, robot_from_parameters
+from clew_ros.spatial.spheres import SphereModel, sphere_model
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 
@@ -36,3 +37,13 @@ def panda_capsules() -> RobotModel:
 @pytest.fixture(scope="session")
 def ur5() -> RobotModel:
     return robot_from_parameters(UR5, CONFIG)
+
+
+@pytest.fixture(scope="session")
+def panda_spheres(panda: RobotModel) -> SphereModel:
+    return sphere_model(panda)
+
+
+@pytest.fixture(scope="session")
+def ur5_spheres(ur5: RobotModel) -> SphereModel:
+    return sphere_model(ur5)

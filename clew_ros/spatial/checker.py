@@ -1,0 +1,160 @@
+"""The compiled validity checker of a spatial world, batched over configurations.
+
+:class:`SpatialChecker` packs a robot's sphere model, the obstacles and the bounds once into arrays and
+answers for whole batches (``(N, n)`` arrays of planned-joint values): :meth:`~SpatialChecker.valid`
+(joint limits, spheres vs obstacles and bounds, self-collision over the pairs not exempted) and
+:meth:`~SpatialChecker.free_intervals` (the interval of one joint, the others fixed, that is free for
+the sphere model, found by conservative steps). The sphere model covers the URDF's geometry, so what the
+checker calls free is free for the URDF's geometry. Touching counts as colliding.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from clew_ros.spatial.kernels import collide
+from clew_ros.spatial.robot import RobotModel
+from clew_ros.spatial.scene import Obstacle, obstacle_arrays
+from clew_ros.spatial.spheres import SphereModel
+
+__all__ = ["IntervalSettings", "SpatialChecker"]
+
+
+@dataclass(frozen=True)
+class IntervalSettings:
+    """How :meth:`SpatialChecker.free_intervals` steps."""
+
+    #: Clearance (m) every step keeps from contact: room for the rounding of the distance computations.
+    margin_m: float = 1e-7
+    #: A step shorter than this (rad, or m for a prismatic joint) ends the interval on that side: near a
+    #: contact the certified steps shrink geometrically, and the last few buy almost nothing.
+    min_step: float = 1e-3
+    #: At most this many steps each way (each one costs a forward kinematics and a clearance pass).
+    max_steps: int = 64
+
+
+class SpatialChecker:
+    """Validity and free intervals of one robot (its sphere model) among obstacles, inside bounds."""
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        spheres: SphereModel,
+        obstacles: Sequence[Obstacle] = (),
+        bounds: NDArray[np.float64] | None = None,
+    ) -> None:
+        self.robot = robot
+        self.spheres = spheres
+        self.obstacles = tuple(obstacles)
+        link_c = np.zeros((len(robot.links), 3))
+        link_r = np.zeros(len(robot.links))
+        for i in range(len(robot.links)):
+            centers = spheres.centers[spheres.starts[i] : spheres.starts[i + 1]]
+            radii = spheres.radii[spheres.starts[i] : spheres.starts[i + 1]]
+            link_c[i] = (centers.min(axis=0) + centers.max(axis=0)) / 2
+            link_r[i] = float(np.max(np.linalg.norm(centers - link_c[i], axis=1) + radii))
+        pairs = [
+            (i, j)
+            for i in range(len(robot.links))
+            for j in range(i + 1, len(robot.links))
+            if (i, j) not in robot.exempt
+        ]
+        self.pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+        self._arrays: dict[str, Any] = {
+            "lower": robot.lower.astype(np.float64),
+            "upper": robot.upper.astype(np.float64),
+            "base_r": np.ascontiguousarray(robot.base[:3, :3]),
+            "base_t": np.ascontiguousarray(robot.base[:3, 3]),
+            "org_r": np.ascontiguousarray(robot.origins[:, :3, :3]),
+            "org_t": np.ascontiguousarray(robot.origins[:, :3, 3]),
+            "axes": np.ascontiguousarray(robot.axes),
+            "prismatic": robot.prismatic.astype(np.bool_),
+            "sph_c": np.ascontiguousarray(spheres.centers),
+            "sph_r": np.ascontiguousarray(spheres.radii),
+            "sph_frame": spheres.frames.astype(np.int64),
+            "link_start": spheres.starts.astype(np.int64),
+            "link_c": link_c,
+            "link_r": link_r,
+            "link_frame": np.array([link.frame for link in robot.links], dtype=np.int64),
+            **obstacle_arrays(self.obstacles),
+            "pairs": self.pairs,
+            "bounds": np.zeros(6) if bounds is None else np.asarray(bounds, dtype=np.float64),
+            "has_bounds": bounds is not None,
+        }
+
+        a = self._arrays
+        #: Whether a link that no joint moves (on ``base_link``'s frame) touches an obstacle or leaves the
+        #: bounds: then no configuration is valid. Checked once here, never per configuration.
+        self.static_collision = bool(
+            collide.static_collides(
+                a["base_r"], a["base_t"], a["sph_c"], a["sph_r"], a["sph_frame"], a["obs_kind"], a["obs_r"],
+                a["obs_t"], a["obs_dims"], a["bounds"], a["has_bounds"],
+            )
+        )  # fmt: skip
+
+    def _batch(self, qs: Any) -> NDArray[np.float64]:
+        batch = np.ascontiguousarray(qs, dtype=np.float64)
+        if batch.ndim != 2 or batch.shape[1] != self.robot.dof:
+            raise ValueError(f"qs: expected an (N, {self.robot.dof}) array of joint values, got shape {batch.shape}")
+        return batch
+
+    def valid(self, qs: Any) -> NDArray[np.bool_]:
+        """For each row of ``qs`` (N, n): inside the joint limits and colliding with nothing."""
+        batch = self._batch(qs)
+        out = np.empty(len(batch), dtype=np.bool_)
+        if self.static_collision:
+            out[:] = False
+            return out
+        a = self._arrays
+        collide.valid_batch(
+            batch, a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
+            a["prismatic"], a["sph_c"], a["sph_r"], a["sph_frame"], a["link_start"], a["link_c"], a["link_r"],
+            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["pairs"],
+            a["bounds"], a["has_bounds"], out,
+        )  # fmt: skip
+        return out
+
+    def free_intervals(
+        self, qs: Any, joint: int, settings: IntervalSettings | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+        """For each row of ``qs``: ``(lo, hi, valid)``, the values of ``joint`` (0-based, chain order) around
+        the row's own over which the row, the other joints fixed, stays valid for the sphere model
+        (within the joint's limits); ``valid`` false where the row itself is not (then ``lo = hi``)."""
+        settings = settings or IntervalSettings()
+        batch = self._batch(qs)
+        if not 0 <= joint < self.robot.dof:
+            raise ValueError(f"joint: expected 0..{self.robot.dof - 1}, got {joint}")
+        lo = np.empty(len(batch))
+        hi = np.empty(len(batch))
+        ok = np.empty(len(batch), dtype=np.bool_)
+        if self.static_collision:
+            lo[:] = hi[:] = batch[:, joint]
+            ok[:] = False
+            return lo, hi, ok
+        a = self._arrays
+        collide.free_intervals(
+            batch, joint, a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
+            a["prismatic"], a["sph_c"], a["sph_r"], a["sph_frame"], a["link_start"], a["link_c"], a["link_r"],
+            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["pairs"],
+            a["bounds"], a["has_bounds"], settings.margin_m, settings.min_step, settings.max_steps, lo, hi, ok,
+        )  # fmt: skip
+        return lo, hi, ok
+
+    def sphere_positions(self, q: Sequence[float]) -> NDArray[np.float64]:
+        """Every sphere's centre in ``world`` (S, 3) at ``q`` (compiled forward kinematics)."""
+        a = self._arrays
+        n = self.robot.dof
+        frame_r = np.empty((n + 1, 3, 3))
+        frame_t = np.empty((n + 1, 3))
+        collide.forward(
+            np.asarray(q, dtype=np.float64), a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
+            a["prismatic"], frame_r, frame_t,
+        )  # fmt: skip
+        local = self.spheres.centers
+        out: NDArray[np.float64] = np.einsum("sij,sj->si", frame_r[self.spheres.frames], local)
+        return out + frame_t[self.spheres.frames]

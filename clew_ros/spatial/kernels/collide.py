@@ -1,0 +1,680 @@
+"""Forward kinematics, validity and free intervals of a spatial arm's sphere model, batched (numba).
+
+Conventions: frame 0 is ``base_link`` in ``world`` (``base_r``, ``base_t``); frame ``j + 1`` is frame
+``j`` moved by joint ``j``'s constant origin (``org_r``, ``org_t``) and its motion about / along
+``axes[j]``. A sphere ``k`` rides on frame ``sph_frame[k]`` at ``sph_c[k]`` with radius ``sph_r[k]``;
+link ``i`` owns spheres ``link_start[i]:link_start[i + 1]`` and has the bounding sphere ``link_c[i]``,
+``link_r[i]`` in its frame ``link_frame[i]``. Obstacle ``o`` is of kind ``obs_kind[o]`` (0 box, 1
+cylinder, 2 sphere) at ``obs_t[o]`` with rotation ``obs_r[o]`` (local to world), ``obs_dims[o]`` (box:
+half extents; cylinder: radius, half height; sphere: radius) and bounding radius ``obs_bound[o]``.
+``pairs`` (P, 2) are the link pairs checked for self-collision; ``bounds`` ``[xmin, ymin, zmin, xmax,
+ymax, zmax]`` is used when ``has_bounds``. Touching counts as colliding (a clearance <= 0).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["clearance_of_sphere", "forward", "free_intervals", "static_collides", "valid_batch"]
+
+Array = NDArray[Any]  # the kernels take float, int and bool arrays
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+BOX, CYLINDER, SPHERE = 0, 1, 2
+
+
+@_jit
+def forward(  # noqa: PLR0917
+    q: Array,
+    base_r: Array,
+    base_t: Array,
+    org_r: Array,
+    org_t: Array,
+    axes: Array,
+    prismatic: Array,
+    out_r: Array,
+    out_t: Array,
+) -> None:
+    """Frames 0..n of configuration ``q`` into ``out_r`` (n+1, 3, 3) and ``out_t`` (n+1, 3)."""
+    out_r[0] = base_r
+    out_t[0] = base_t
+    m = np.empty((3, 3))
+    placed = np.empty((3, 3))
+    for j in range(q.shape[0]):
+        pr = out_r[j]
+        o = org_r[j]
+        for a in range(3):  # placed = parent @ origin; translation: parent_t + parent_r @ origin_t
+            out_t[j + 1, a] = out_t[j, a] + pr[a, 0] * org_t[j, 0] + pr[a, 1] * org_t[j, 1] + pr[a, 2] * org_t[j, 2]
+            for c in range(3):
+                placed[a, c] = pr[a, 0] * o[0, c] + pr[a, 1] * o[1, c] + pr[a, 2] * o[2, c]
+        x, y, z = axes[j, 0], axes[j, 1], axes[j, 2]
+        if prismatic[j]:
+            for a in range(3):
+                out_t[j + 1, a] += q[j] * (placed[a, 0] * x + placed[a, 1] * y + placed[a, 2] * z)
+                for c in range(3):
+                    out_r[j + 1, a, c] = placed[a, c]
+            continue
+        cos = math.cos(q[j])
+        sin = math.sin(q[j])
+        v = 1.0 - cos
+        m[0, 0] = cos + x * x * v
+        m[0, 1] = x * y * v - z * sin
+        m[0, 2] = x * z * v + y * sin
+        m[1, 0] = y * x * v + z * sin
+        m[1, 1] = cos + y * y * v
+        m[1, 2] = y * z * v - x * sin
+        m[2, 0] = z * x * v - y * sin
+        m[2, 1] = z * y * v + x * sin
+        m[2, 2] = cos + z * z * v
+        for a in range(3):
+            for c in range(3):
+                out_r[j + 1, a, c] = placed[a, 0] * m[0, c] + placed[a, 1] * m[1, c] + placed[a, 2] * m[2, c]
+
+
+@_jit
+def _place(frame_r: Array, frame_t: Array, frame: int, local: Array, out: Array) -> None:
+    r = frame_r[frame]
+    t = frame_t[frame]
+    for a in range(3):
+        out[a] = r[a, 0] * local[0] + r[a, 1] * local[1] + r[a, 2] * local[2] + t[a]
+
+
+@_jit
+def clearance_of_sphere(p: Array, radius: float, kind: int, rot: Array, pos: Array, dims: Array) -> float:  # noqa: PLR0917
+    """Signed distance (m) between a sphere (centre ``p``, ``radius``) and one obstacle; <= 0: they touch."""
+    dx = p[0] - pos[0]
+    dy = p[1] - pos[1]
+    dz = p[2] - pos[2]
+    if kind == SPHERE:
+        return math.sqrt(dx * dx + dy * dy + dz * dz) - float(dims[0]) - radius
+    # into the obstacle's frame: rot is local -> world, so local = rot^T d
+    lx = rot[0, 0] * dx + rot[1, 0] * dy + rot[2, 0] * dz
+    ly = rot[0, 1] * dx + rot[1, 1] * dy + rot[2, 1] * dz
+    lz = rot[0, 2] * dx + rot[1, 2] * dy + rot[2, 2] * dz
+    if kind == BOX:
+        qx = abs(lx) - dims[0]
+        qy = abs(ly) - dims[1]
+        qz = abs(lz) - dims[2]
+        ox = max(qx, 0.0)
+        oy = max(qy, 0.0)
+        oz = max(qz, 0.0)
+        return math.sqrt(ox * ox + oy * oy + oz * oz) + float(min(max(qx, qy, qz), 0.0)) - radius
+    radial = math.sqrt(lx * lx + ly * ly) - dims[0]
+    axial = abs(lz) - dims[1]
+    o_r = max(radial, 0.0)
+    o_a = max(axial, 0.0)
+    return math.sqrt(o_r * o_r + o_a * o_a) + float(min(max(radial, axial), 0.0)) - radius
+
+
+@_jit
+def _bounds_clearance(p: Array, radius: float, bounds: Array) -> float:
+    out = p[0] - bounds[0]
+    out = min(out, p[1] - bounds[1])
+    out = min(out, p[2] - bounds[2])
+    out = min(out, bounds[3] - p[0])
+    out = min(out, bounds[4] - p[1])
+    out = min(out, bounds[5] - p[2])
+    return float(out) - radius
+
+
+@_jit
+def _place_all(  # noqa: PLR0917
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    sph_frame: Array,
+    link_c: Array,
+    link_frame: Array,
+    sph_w: Array,
+    link_w: Array,
+) -> None:
+    for k in range(sph_c.shape[0]):
+        _place(frame_r, frame_t, sph_frame[k], sph_c[k], sph_w[k])
+    for i in range(link_c.shape[0]):
+        _place(frame_r, frame_t, link_frame[i], link_c[i], link_w[i])
+
+
+@_jit
+def _distance(a: Array, b: Array) -> float:
+    dx = a[0] - b[0]
+    dy = a[1] - b[1]
+    dz = a[2] - b[2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@_jit
+def _place_link(  # noqa: PLR0917
+    i: int,
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    link_start: Array,
+    link_frame: Array,
+    sph_w: Array,
+    placed: Array,
+) -> None:
+    """Place link ``i``'s spheres in ``world`` unless already done for this configuration."""
+    if placed[i]:
+        return
+    placed[i] = True
+    frame = link_frame[i]
+    for k in range(link_start[i], link_start[i + 1]):
+        _place(frame_r, frame_t, frame, sph_c[k], sph_w[k])
+
+
+@_jit
+def _link_collides(  # noqa: PLR0917
+    i: int,
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    sph_w: Array,
+    sph_r: Array,
+    link_start: Array,
+    link_frame: Array,
+    link_w: Array,
+    link_r: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    obs_bound: Array,
+    bounds: Array,
+    has_bounds: bool,
+    placed: Array,
+) -> bool:
+    """Whether link ``i`` touches an obstacle or leaves the bounds (its bounding sphere first)."""
+    if has_bounds and _bounds_clearance(link_w[i], link_r[i], bounds) <= 0.0:
+        _place_link(i, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
+        for k in range(link_start[i], link_start[i + 1]):
+            if _bounds_clearance(sph_w[k], sph_r[k], bounds) <= 0.0:
+                return True
+    for o in range(obs_kind.shape[0]):
+        reach = obs_bound[o]
+        if _distance(link_w[i], obs_t[o]) > link_r[i] + reach:
+            continue
+        _place_link(i, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
+        for k in range(link_start[i], link_start[i + 1]):
+            if _distance(sph_w[k], obs_t[o]) > sph_r[k] + reach:
+                continue
+            if clearance_of_sphere(sph_w[k], sph_r[k], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]) <= 0.0:
+                return True
+    return False
+
+
+@_jit
+def _pair_collides(  # noqa: PLR0917
+    a: int,
+    b: int,
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    sph_w: Array,
+    sph_r: Array,
+    link_start: Array,
+    link_frame: Array,
+    link_w: Array,
+    link_r: Array,
+    placed: Array,
+) -> bool:
+    """Whether links ``a`` and ``b`` touch (their bounding spheres first)."""
+    if _distance(link_w[a], link_w[b]) > link_r[a] + link_r[b]:
+        return False
+    _place_link(a, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
+    _place_link(b, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
+    for k in range(link_start[a], link_start[a + 1]):
+        if _distance(sph_w[k], link_w[b]) > sph_r[k] + link_r[b]:
+            continue
+        for m in range(link_start[b], link_start[b + 1]):
+            if _distance(sph_w[k], sph_w[m]) <= sph_r[k] + sph_r[m]:
+                return True
+    return False
+
+
+@_jit
+def _collides(  # noqa: PLR0917
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    sph_w: Array,
+    sph_r: Array,
+    link_start: Array,
+    link_c: Array,
+    link_frame: Array,
+    link_w: Array,
+    link_r: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    obs_bound: Array,
+    pairs: Array,
+    bounds: Array,
+    has_bounds: bool,
+    placed: Array,
+) -> bool:
+    """Whether the configuration whose frames are given touches an obstacle, leaves the bounds, or touches
+    itself (``pairs``); each link's spheres are placed only when its bounding sphere cannot settle it.
+    Links on frame 0 never move: :func:`static_collides` checks them once, not here."""
+    placed[:] = False
+    for i in range(link_r.shape[0]):
+        _place(frame_r, frame_t, link_frame[i], link_c[i], link_w[i])
+    for i in range(link_r.shape[0]):
+        if link_frame[i] != 0 and _link_collides(
+            i,
+            frame_r,
+            frame_t,
+            sph_c,
+            sph_w,
+            sph_r,
+            link_start,
+            link_frame,
+            link_w,
+            link_r,
+            obs_kind,
+            obs_r,
+            obs_t,
+            obs_dims,
+            obs_bound,
+            bounds,
+            has_bounds,
+            placed,
+        ):
+            return True
+    for p in range(pairs.shape[0]):
+        if _pair_collides(
+            pairs[p, 0],
+            pairs[p, 1],
+            frame_r,
+            frame_t,
+            sph_c,
+            sph_w,
+            sph_r,
+            link_start,
+            link_frame,
+            link_w,
+            link_r,
+            placed,
+        ):
+            return True
+    return False
+
+
+@_jit
+def valid_batch(  # noqa: PLR0917
+    qs: Array,
+    lower: Array,
+    upper: Array,
+    base_r: Array,
+    base_t: Array,
+    org_r: Array,
+    org_t: Array,
+    axes: Array,
+    prismatic: Array,
+    sph_c: Array,
+    sph_r: Array,
+    sph_frame: Array,
+    link_start: Array,
+    link_c: Array,
+    link_r: Array,
+    link_frame: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    obs_bound: Array,
+    pairs: Array,
+    bounds: Array,
+    has_bounds: bool,
+    out: Array,
+) -> None:
+    """``out[b]``: configuration ``qs[b]`` is inside its limits and its spheres touch nothing."""
+    n = qs.shape[1]
+    frame_r = np.empty((n + 1, 3, 3))
+    frame_t = np.empty((n + 1, 3))
+    sph_w = np.empty((sph_c.shape[0], 3))
+    link_w = np.empty((link_c.shape[0], 3))
+    placed = np.zeros(link_c.shape[0], dtype=np.bool_)
+    for b in range(qs.shape[0]):
+        q = qs[b]
+        inside = True
+        for j in range(n):
+            if not lower[j] <= q[j] <= upper[j]:
+                inside = False
+        if not inside:
+            out[b] = False
+            continue
+        forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
+        out[b] = not _collides(
+            frame_r,
+            frame_t,
+            sph_c,
+            sph_w,
+            sph_r,
+            link_start,
+            link_c,
+            link_frame,
+            link_w,
+            link_r,
+            obs_kind,
+            obs_r,
+            obs_t,
+            obs_dims,
+            obs_bound,
+            pairs,
+            bounds,
+            has_bounds,
+            placed,
+        )
+
+
+@_jit
+def static_collides(  # noqa: PLR0917
+    base_r: Array,
+    base_t: Array,
+    sph_c: Array,
+    sph_r: Array,
+    sph_frame: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    bounds: Array,
+    has_bounds: bool,
+) -> bool:
+    """Whether a sphere on frame 0 (which no joint moves) touches an obstacle or leaves the bounds."""
+    p = np.empty(3)
+    for k in range(sph_c.shape[0]):
+        if sph_frame[k] != 0:
+            continue
+        for a in range(3):
+            p[a] = base_r[a, 0] * sph_c[k, 0] + base_r[a, 1] * sph_c[k, 1] + base_r[a, 2] * sph_c[k, 2] + base_t[a]
+        if has_bounds and _bounds_clearance(p, sph_r[k], bounds) <= 0.0:
+            return True
+        for o in range(obs_kind.shape[0]):
+            if clearance_of_sphere(p, sph_r[k], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]) <= 0.0:
+                return True
+    return False
+
+
+@_jit
+def _speed(p: Array, axis_p: Array, axis_d: Array, is_prismatic: bool) -> float:
+    """Largest displacement (m) of point ``p`` per unit of the joint's motion."""
+    if is_prismatic:
+        return 1.0
+    dx = p[0] - axis_p[0]
+    dy = p[1] - axis_p[1]
+    dz = p[2] - axis_p[2]
+    along = dx * axis_d[0] + dy * axis_d[1] + dz * axis_d[2]
+    return math.sqrt(max(dx * dx + dy * dy + dz * dz - along * along, 0.0))
+
+
+@_jit
+def _link_step(  # noqa: PLR0917
+    i: int,
+    best: float,
+    axis_p: Array,
+    axis_d: Array,
+    is_prismatic: bool,
+    sph_w: Array,
+    sph_r: Array,
+    link_start: Array,
+    link_w: Array,
+    link_r: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    obs_bound: Array,
+    bounds: Array,
+    has_bounds: bool,
+    margin: float,
+) -> float:
+    """``best`` lowered to what moving link ``i``'s clearances to the obstacles and bounds allow."""
+    link_speed = _speed(link_w[i], axis_p, axis_d, is_prismatic) + (0.0 if is_prismatic else link_r[i])
+    if link_speed <= 0.0:
+        return best
+    if has_bounds:
+        coarse = _bounds_clearance(link_w[i], link_r[i], bounds)
+        if coarse <= margin or (coarse - margin) / link_speed < best:
+            for k in range(link_start[i], link_start[i + 1]):
+                speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
+                if speed > 0.0:
+                    best = min(best, (_bounds_clearance(sph_w[k], sph_r[k], bounds) - margin) / speed)
+    for o in range(obs_kind.shape[0]):
+        coarse = _distance(link_w[i], obs_t[o]) - link_r[i] - obs_bound[o]
+        if coarse > margin and (coarse - margin) / link_speed >= best:
+            continue
+        for k in range(link_start[i], link_start[i + 1]):
+            speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
+            if speed > 0.0:
+                c = clearance_of_sphere(sph_w[k], sph_r[k], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o])
+                best = min(best, (c - margin) / speed)
+    return best
+
+
+@_jit
+def _pair_step(  # noqa: PLR0917
+    a: int,
+    b: int,
+    best: float,
+    axis_p: Array,
+    axis_d: Array,
+    is_prismatic: bool,
+    sph_w: Array,
+    sph_r: Array,
+    link_start: Array,
+    link_w: Array,
+    link_r: Array,
+    margin: float,
+) -> float:
+    """``best`` lowered to what moving link ``a``'s clearance to static link ``b`` allows."""
+    link_speed = _speed(link_w[a], axis_p, axis_d, is_prismatic) + (0.0 if is_prismatic else link_r[a])
+    coarse = _distance(link_w[a], link_w[b]) - link_r[a] - link_r[b]
+    if link_speed <= 0.0 or (coarse > margin and (coarse - margin) / link_speed >= best):
+        return best
+    for k in range(link_start[a], link_start[a + 1]):
+        speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
+        if speed <= 0.0:
+            continue
+        for m in range(link_start[b], link_start[b + 1]):
+            best = min(best, (_distance(sph_w[k], sph_w[m]) - sph_r[k] - sph_r[m] - margin) / speed)
+    return best
+
+
+@_jit
+def _step_bound(  # noqa: PLR0917
+    joint: int,
+    axis_p: Array,
+    axis_d: Array,
+    is_prismatic: bool,
+    sph_w: Array,
+    sph_r: Array,
+    link_start: Array,
+    link_w: Array,
+    link_r: Array,
+    link_frame: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    obs_bound: Array,
+    pairs: Array,
+    bounds: Array,
+    has_bounds: bool,
+    margin: float,
+) -> float:
+    """The largest move (rad or m) of joint ``joint`` either way within which no moving sphere can touch:
+    the least (clearance - margin) / speed over the moving spheres (a sphere's centre moves at most its
+    distance to the axis per radian; 1 m per m along a prismatic axis), against obstacles, bounds and
+    the spheres of links that do not move (over ``pairs``). 0 when one is already that close."""
+    best = np.inf
+    for i in range(link_r.shape[0]):
+        if link_frame[i] > joint:
+            best = _link_step(
+                i,
+                best,
+                axis_p,
+                axis_d,
+                is_prismatic,
+                sph_w,
+                sph_r,
+                link_start,
+                link_w,
+                link_r,
+                obs_kind,
+                obs_r,
+                obs_t,
+                obs_dims,
+                obs_bound,
+                bounds,
+                has_bounds,
+                margin,
+            )
+            if best <= 0.0:
+                return 0.0
+    for p in range(pairs.shape[0]):
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if (link_frame[a] > joint) == (link_frame[b] > joint):
+            continue  # both move or neither: their relative pose does not change
+        if link_frame[a] <= joint:
+            a, b = b, a
+        best = _pair_step(a, b, best, axis_p, axis_d, is_prismatic, sph_w, sph_r, link_start, link_w, link_r, margin)
+        if best <= 0.0:
+            return 0.0
+    return best
+
+
+@_jit
+def free_intervals(  # noqa: PLR0917
+    qs: Array,
+    joint: int,
+    lower: Array,
+    upper: Array,
+    base_r: Array,
+    base_t: Array,
+    org_r: Array,
+    org_t: Array,
+    axes: Array,
+    prismatic: Array,
+    sph_c: Array,
+    sph_r: Array,
+    sph_frame: Array,
+    link_start: Array,
+    link_c: Array,
+    link_r: Array,
+    link_frame: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    obs_bound: Array,
+    pairs: Array,
+    bounds: Array,
+    has_bounds: bool,
+    margin: float,
+    min_step: float,
+    max_steps: int,
+    out_lo: Array,
+    out_hi: Array,
+    out_valid: Array,
+) -> None:
+    """For each configuration ``qs[b]``: ``[out_lo[b], out_hi[b]]``, an interval of joint ``joint``'s value
+    around ``qs[b, joint]`` (within its limits) over which, the other joints fixed, no sphere touches
+    anything (``out_valid[b]``: the configuration itself is valid; else the interval is the point).
+
+    Conservative: from the current value it steps, each way, by the largest move no moving sphere can
+    collide within (:func:`_step_bound`), and stops at a limit, where a step falls under ``min_step``, or
+    after ``max_steps`` steps.
+    """
+    n = qs.shape[1]
+    frame_r = np.empty((n + 1, 3, 3))
+    frame_t = np.empty((n + 1, 3))
+    sph_w = np.empty((sph_c.shape[0], 3))
+    link_w = np.empty((link_c.shape[0], 3))
+    q = np.empty(n)
+    axis_d = np.empty(3)
+    placed = np.zeros(link_c.shape[0], dtype=np.bool_)
+    for b in range(qs.shape[0]):
+        q[:] = qs[b]
+        start = q[joint]
+        out_lo[b] = start
+        out_hi[b] = start
+        inside = True
+        for j in range(n):
+            if not lower[j] <= q[j] <= upper[j]:
+                inside = False
+        if inside:
+            forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
+            inside = not _collides(
+                frame_r,
+                frame_t,
+                sph_c,
+                sph_w,
+                sph_r,
+                link_start,
+                link_c,
+                link_frame,
+                link_w,
+                link_r,
+                obs_kind,
+                obs_r,
+                obs_t,
+                obs_dims,
+                obs_bound,
+                pairs,
+                bounds,
+                has_bounds,
+                placed,
+            )
+        out_valid[b] = inside
+        if not inside:
+            continue
+        for direction in (1.0, -1.0):
+            limit = upper[joint] if direction > 0.0 else lower[joint]
+            value = start
+            for _ in range(max_steps):
+                q[joint] = value
+                forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
+                _place_all(frame_r, frame_t, sph_c, sph_frame, link_c, link_frame, sph_w, link_w)
+                rot = frame_r[joint + 1]
+                for a in range(3):
+                    axis_d[a] = rot[a, 0] * axes[joint, 0] + rot[a, 1] * axes[joint, 1] + rot[a, 2] * axes[joint, 2]
+                step = _step_bound(
+                    joint,
+                    frame_t[joint + 1],
+                    axis_d,
+                    prismatic[joint],
+                    sph_w,
+                    sph_r,
+                    link_start,
+                    link_w,
+                    link_r,
+                    link_frame,
+                    obs_kind,
+                    obs_r,
+                    obs_t,
+                    obs_dims,
+                    obs_bound,
+                    pairs,
+                    bounds,
+                    has_bounds,
+                    margin,
+                )
+                if abs(limit - value) <= step:
+                    value = limit
+                    break
+                if step < min_step:
+                    break
+                value += direction * step
+            if direction > 0.0:
+                out_hi[b] = value
+            else:
+                out_lo[b] = value

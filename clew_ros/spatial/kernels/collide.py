@@ -14,22 +14,31 @@ ymax, zmax]`` is used when ``has_bounds``. Touching counts as colliding (a clear
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from numba.core.decorators import _JITWrapper  # in numba's type stubs only
 
 __all__ = ["clearance_of_sphere", "forward", "free_intervals", "static_collides", "valid_batch"]
 
 Array = NDArray[Any]  # the kernels take float, int and bool arrays
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+# Functions that allocate nothing are compiled without reference counting (numba's ``_nrt`` option), as in
+# clew_ros.core.kernel: every array they get is borrowed from the caller, and the reference counting numba
+# would otherwise emit around each call of a helper with many array arguments cost more than the geometry.
+_leaf: _JITWrapper = numba.njit(  # type: ignore[call-overload]  # numba's stubs leave out its underscored options
+    cache=True, nogil=True, error_model="numpy", _nrt=False
+)
 
 BOX, CYLINDER, SPHERE = 0, 1, 2
 
 
-@_jit
+@_leaf
 def forward(  # noqa: PLR0917
     q: Array,
     base_r: Array,
@@ -42,42 +51,38 @@ def forward(  # noqa: PLR0917
     out_t: Array,
 ) -> None:
     """Frames 0..n of configuration ``q`` into ``out_r`` (n+1, 3, 3) and ``out_t`` (n+1, 3)."""
-    out_r[0] = base_r
-    out_t[0] = base_t
-    m = np.empty((3, 3))
-    placed = np.empty((3, 3))
+    for a in range(3):
+        out_t[0, a] = base_t[a]
+        for c in range(3):
+            out_r[0, a, c] = base_r[a, c]
     for j in range(q.shape[0]):
         pr = out_r[j]
         o = org_r[j]
-        for a in range(3):  # placed = parent @ origin; translation: parent_t + parent_r @ origin_t
+        nr = out_r[j + 1]
+        # placed = parent @ origin, written into frame j+1 first
+        for a in range(3):
             out_t[j + 1, a] = out_t[j, a] + pr[a, 0] * org_t[j, 0] + pr[a, 1] * org_t[j, 1] + pr[a, 2] * org_t[j, 2]
             for c in range(3):
-                placed[a, c] = pr[a, 0] * o[0, c] + pr[a, 1] * o[1, c] + pr[a, 2] * o[2, c]
+                nr[a, c] = pr[a, 0] * o[0, c] + pr[a, 1] * o[1, c] + pr[a, 2] * o[2, c]
         x, y, z = axes[j, 0], axes[j, 1], axes[j, 2]
         if prismatic[j]:
             for a in range(3):
-                out_t[j + 1, a] += q[j] * (placed[a, 0] * x + placed[a, 1] * y + placed[a, 2] * z)
-                for c in range(3):
-                    out_r[j + 1, a, c] = placed[a, c]
+                out_t[j + 1, a] += q[j] * (nr[a, 0] * x + nr[a, 1] * y + nr[a, 2] * z)
             continue
         cos = math.cos(q[j])
         sin = math.sin(q[j])
         v = 1.0 - cos
-        m[0, 0] = cos + x * x * v
-        m[0, 1] = x * y * v - z * sin
-        m[0, 2] = x * z * v + y * sin
-        m[1, 0] = y * x * v + z * sin
-        m[1, 1] = cos + y * y * v
-        m[1, 2] = y * z * v - x * sin
-        m[2, 0] = z * x * v - y * sin
-        m[2, 1] = z * y * v + x * sin
-        m[2, 2] = cos + z * z * v
-        for a in range(3):
-            for c in range(3):
-                out_r[j + 1, a, c] = placed[a, 0] * m[0, c] + placed[a, 1] * m[1, c] + placed[a, 2] * m[2, c]
+        m00, m01, m02 = cos + x * x * v, x * y * v - z * sin, x * z * v + y * sin
+        m10, m11, m12 = y * x * v + z * sin, cos + y * y * v, y * z * v - x * sin
+        m20, m21, m22 = z * x * v - y * sin, z * y * v + x * sin, cos + z * z * v
+        for a in range(3):  # then times the joint's rotation
+            p0, p1, p2 = nr[a, 0], nr[a, 1], nr[a, 2]
+            nr[a, 0] = p0 * m00 + p1 * m10 + p2 * m20
+            nr[a, 1] = p0 * m01 + p1 * m11 + p2 * m21
+            nr[a, 2] = p0 * m02 + p1 * m12 + p2 * m22
 
 
-@_jit
+@_leaf
 def _place(frame_r: Array, frame_t: Array, frame: int, local: Array, out: Array) -> None:
     r = frame_r[frame]
     t = frame_t[frame]
@@ -85,7 +90,7 @@ def _place(frame_r: Array, frame_t: Array, frame: int, local: Array, out: Array)
         out[a] = r[a, 0] * local[0] + r[a, 1] * local[1] + r[a, 2] * local[2] + t[a]
 
 
-@_jit
+@_leaf
 def clearance_of_sphere(p: Array, radius: float, kind: int, rot: Array, pos: Array, dims: Array) -> float:  # noqa: PLR0917
     """Signed distance (m) between a sphere (centre ``p``, ``radius``) and one obstacle; <= 0: they touch."""
     dx = p[0] - pos[0]
@@ -112,7 +117,7 @@ def clearance_of_sphere(p: Array, radius: float, kind: int, rot: Array, pos: Arr
     return math.sqrt(o_r * o_r + o_a * o_a) + float(min(max(radial, axial), 0.0)) - radius
 
 
-@_jit
+@_leaf
 def _bounds_clearance(p: Array, radius: float, bounds: Array) -> float:
     out = p[0] - bounds[0]
     out = min(out, p[1] - bounds[1])
@@ -123,7 +128,7 @@ def _bounds_clearance(p: Array, radius: float, bounds: Array) -> float:
     return float(out) - radius
 
 
-@_jit
+@_leaf
 def _place_all(  # noqa: PLR0917
     frame_r: Array,
     frame_t: Array,
@@ -140,7 +145,7 @@ def _place_all(  # noqa: PLR0917
         _place(frame_r, frame_t, link_frame[i], link_c[i], link_w[i])
 
 
-@_jit
+@_leaf
 def _distance(a: Array, b: Array) -> float:
     dx = a[0] - b[0]
     dy = a[1] - b[1]
@@ -148,7 +153,7 @@ def _distance(a: Array, b: Array) -> float:
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-@_jit
+@_leaf
 def _place_link(  # noqa: PLR0917
     i: int,
     frame_r: Array,
@@ -168,7 +173,7 @@ def _place_link(  # noqa: PLR0917
         _place(frame_r, frame_t, frame, sph_c[k], sph_w[k])
 
 
-@_jit
+@_leaf
 def _link_collides(  # noqa: PLR0917
     i: int,
     frame_r: Array,
@@ -199,16 +204,16 @@ def _link_collides(  # noqa: PLR0917
         reach = obs_bound[o]
         if _distance(link_w[i], obs_t[o]) > link_r[i] + reach:
             continue
+        if clearance_of_sphere(link_w[i], link_r[i], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]) > 0.0:
+            continue  # the link's bounding sphere misses the obstacle itself (a wide table, a long shelf)
         _place_link(i, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
         for k in range(link_start[i], link_start[i + 1]):
-            if _distance(sph_w[k], obs_t[o]) > sph_r[k] + reach:
-                continue
             if clearance_of_sphere(sph_w[k], sph_r[k], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]) <= 0.0:
                 return True
     return False
 
 
-@_jit
+@_leaf
 def _pair_collides(  # noqa: PLR0917
     a: int,
     b: int,
@@ -237,7 +242,7 @@ def _pair_collides(  # noqa: PLR0917
     return False
 
 
-@_jit
+@_leaf
 def _collides(  # noqa: PLR0917
     frame_r: Array,
     frame_t: Array,
@@ -403,7 +408,7 @@ def static_collides(  # noqa: PLR0917
     return False
 
 
-@_jit
+@_leaf
 def _speed(p: Array, axis_p: Array, axis_d: Array, is_prismatic: bool) -> float:
     """Largest displacement (m) of point ``p`` per unit of the joint's motion."""
     if is_prismatic:
@@ -415,7 +420,7 @@ def _speed(p: Array, axis_p: Array, axis_d: Array, is_prismatic: bool) -> float:
     return math.sqrt(max(dx * dx + dy * dy + dz * dz - along * along, 0.0))
 
 
-@_jit
+@_leaf
 def _link_step(  # noqa: PLR0917
     i: int,
     best: float,
@@ -451,6 +456,10 @@ def _link_step(  # noqa: PLR0917
         coarse = _distance(link_w[i], obs_t[o]) - link_r[i] - obs_bound[o]
         if coarse > margin and (coarse - margin) / link_speed >= best:
             continue
+        # the link's bounding sphere against the obstacle itself: no sphere of the link is nearer
+        coarse = clearance_of_sphere(link_w[i], link_r[i], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o])
+        if coarse > margin and (coarse - margin) / link_speed >= best:
+            continue
         for k in range(link_start[i], link_start[i + 1]):
             speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
             if speed > 0.0:
@@ -459,7 +468,7 @@ def _link_step(  # noqa: PLR0917
     return best
 
 
-@_jit
+@_leaf
 def _pair_step(  # noqa: PLR0917
     a: int,
     b: int,
@@ -488,7 +497,7 @@ def _pair_step(  # noqa: PLR0917
     return best
 
 
-@_jit
+@_leaf
 def _step_bound(  # noqa: PLR0917
     joint: int,
     axis_p: Array,

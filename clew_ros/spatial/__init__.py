@@ -3,7 +3,8 @@
 - :mod:`~clew_ros.spatial.robot`: the URDF's chain from ``base_link`` to ``tip_link`` folded into frames,
   with every link's collision geometry and the self-collision pairs an SRDF exempts.
 - :mod:`~clew_ros.spatial.spheres`: the conservative sphere model of every link's collision geometry.
-- :mod:`~clew_ros.spatial.scene`: obstacles (boxes, cylinders, spheres) and bounds from parameters.
+- :mod:`~clew_ros.spatial.scene`: obstacles (boxes, cylinders, spheres) from parameters and MoveIt planning
+  scene YAML (`world.scene_file`), and bounds.
 - :mod:`~clew_ros.spatial.checker`: the compiled, batched validity checker and free intervals of one joint
   (:mod:`~clew_ros.spatial.kernels`).
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).

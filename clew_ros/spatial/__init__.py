@@ -9,5 +9,5 @@
   (:mod:`~clew_ros.spatial.kernels`).
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 
-This package never imports rclpy; nothing outside it imports it yet (planning on it is issue 44).
+It runs without ROS (a test keeps it so); nothing outside it imports it yet (planning on it is issue 44).
 """

@@ -5,6 +5,8 @@
 - :mod:`~clew_ros.spatial.spheres`: the conservative sphere model of every link's collision geometry.
 - :mod:`~clew_ros.spatial.scene`: obstacles (boxes, cylinders, spheres) from parameters and MoveIt planning
   scene YAML (`world.scene_file`), and bounds.
+- :mod:`~clew_ros.spatial.placements`: supports, the movable object (box or cylinder) and its stable
+  placements: the test, sampling, projection.
 - :mod:`~clew_ros.spatial.checker`: the compiled, batched validity checker and free intervals of one joint
   (:mod:`~clew_ros.spatial.kernels`).
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["axis_motion", "pose_matrix", "quaternion_matrix", "rpy_matrix", "translation_matrix"]
+__all__ = ["axis_motion", "matrix_pose", "pose_matrix", "quaternion_matrix", "rpy_matrix", "translation_matrix"]
 
 Matrix = NDArray[np.float64]
 
@@ -70,3 +70,15 @@ def axis_motion(axis: NDArray[np.float64], value: float, *, prismatic: bool) -> 
     k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
     out[:3, :3] = np.eye(3) + math.sin(value) * k + (1.0 - math.cos(value)) * (k @ k)
     return out
+
+
+def matrix_pose(matrix: NDArray[np.float64]) -> list[float]:
+    """The pose ``[x, y, z, roll, pitch, yaw]`` (m, rad) of a 4x4 transform (inverse of :func:`pose_matrix`;
+    at pitch +-pi/2, roll is 0)."""
+    r = matrix[:3, :3]
+    pitch = math.asin(max(-1.0, min(1.0, -float(r[2, 0]))))
+    if abs(math.cos(pitch)) < 1e-9:
+        roll, yaw = 0.0, math.atan2(-float(r[0, 1]), float(r[1, 1]))
+    else:
+        roll, yaw = math.atan2(float(r[2, 1]), float(r[2, 2])), math.atan2(float(r[1, 0]), float(r[0, 0]))
+    return [float(matrix[0, 3]), float(matrix[1, 3]), float(matrix[2, 3]), roll, pitch, yaw]

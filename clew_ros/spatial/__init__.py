@@ -9,6 +9,7 @@
   placements: the test, sampling, projection.
 - :mod:`~clew_ros.spatial.checker`: the compiled, batched validity checker and free intervals of one joint
   (:mod:`~clew_ros.spatial.kernels`).
+- :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 
 It runs without ROS (a test keeps it so); nothing outside it imports it yet (planning on it is issue 44).

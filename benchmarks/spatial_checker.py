@@ -5,10 +5,11 @@ For each shipped robot (config/robots) in a 30-box scene (a table just under the
 around the arm): the sphere model (spheres, build time, over-approximation mean and max); validity checks
 per CPU second on a batch of ``--batch`` random configurations (``all``: as drawn, most stop at their first
 contact; ``valid``: only valid ones, every test run to the end); free intervals per CPU second (every
-joint of valid configurations); and, when pinocchio and coal are installed (the ``spatial-ref`` extra), the
-exact reference (pinocchio + coal on the URDF's own geometry, meshes as triangle BVHs): its CPU time per
-configuration, and its agreement over as many random configurations as ``--agreement-seconds`` allows. A
-configuration the checker calls valid that the reference finds colliding is a violation: there must be none.
+joint of valid configurations); inverse kinematics of reachable tcp poses (solved, distinct solutions,
+time); and, when pinocchio and coal are installed (the ``spatial-ref`` extra), the exact reference
+(pinocchio + coal on the URDF's own geometry, meshes as triangle BVHs): its CPU time per configuration,
+and its agreement over as many random configurations as ``--agreement-seconds`` allows. A configuration
+the checker calls valid that the reference finds colliding is a violation: there must be none.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.ik import IkSettings, solve_tcp_pose
 from clew_ros.spatial.robot import LinkModel, RobotModel, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle, make_obstacle
 from clew_ros.spatial.spheres import SphereModel, over_approximation, sphere_model
@@ -138,6 +140,20 @@ def _coal_shape(coal: Any, item: Any) -> Any:
     return mesh
 
 
+def inverse_kinematics(robot: RobotModel, rng: np.random.Generator, count: int) -> None:
+    """A table row: the inverse kinematics of ``count`` reachable tcp poses (those of random configurations)."""
+    poses = rng.uniform(robot.lower, robot.upper, size=(count, robot.dof))
+    solve_tcp_pose(robot, robot.tcp_pose(poses[0]), rng)  # compiled or loaded
+    start_cpu = time.process_time()
+    counts = [len(solve_tcp_pose(robot, robot.tcp_pose(q), rng)) for q in poses]
+    ik_ms = (time.process_time() - start_cpu) / len(poses) * 1e3
+    solved = np.mean(np.array(counts) > 0)
+    print(
+        f"| inverse kinematics of reachable tcp poses ({IkSettings().seeds} seeds): solved / distinct solutions / "
+        f"CPU ms a pose | {solved:.2f} / {np.mean(counts):.1f} / {ik_ms:.2f} |"
+    )
+
+
 def run_robot(name: str, args: argparse.Namespace) -> None:
     tree = ROBOTS[name]
     robot = robot_from_parameters(tree, CONFIG)
@@ -193,6 +209,7 @@ def run_robot(name: str, args: argparse.Namespace) -> None:
         f"{interval_rate:,.0f} |"
     )
     print(f"| mean free interval width (rad) | {np.mean(widths):.3f} |")
+    inverse_kinematics(robot, rng, args.ik_poses)
     if importlib.util.find_spec("pinocchio") is None or importlib.util.find_spec("coal") is None:
         print("| exact reference (pinocchio + coal) | not installed (pip install 'clew_ros[spatial-ref]') |")
         return
@@ -234,6 +251,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--batch", type=int, default=1024, help="configurations a validity call (default 1024)")
     parser.add_argument("--seconds", type=float, default=2.0, help="CPU seconds each speed is timed for (default 2)")
     parser.add_argument("--intervals", type=int, default=256, help="valid configurations whose intervals are timed")
+    parser.add_argument("--ik-poses", type=int, default=50, help="reachable tcp poses solved by the inverse kinematics")
     parser.add_argument("--agreement-seconds", type=float, default=60.0, help="time for the agreement count (s)")
     parser.add_argument("--agreement-max", type=int, default=100_000, help="at most this many configurations")
     args = parser.parse_args(argv)

@@ -9,6 +9,8 @@
   placements: the test, sampling, projection.
 - :mod:`~clew_ros.spatial.checker`: the compiled, batched validity checker and free intervals of one joint
   (:mod:`~clew_ros.spatial.kernels`).
+- :mod:`~clew_ros.spatial.ik`: inverse kinematics of the tcp (damped least squares from many seeds, compiled),
+  every distinct solution within the limits.
 - :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 

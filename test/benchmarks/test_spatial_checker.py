@@ -12,7 +12,7 @@ from benchmarks import spatial_checker
 
 
 def test_one_robot_quick(capsys: pytest.CaptureFixture[str]) -> None:
-    args = ["--robots", "panda", "--batch", "128", "--seconds", "0.05", "--intervals", "4"]
+    args = ["--robots", "panda", "--batch", "128", "--seconds", "0.05", "--intervals", "4", "--ik-poses", "3"]
     assert spatial_checker.main([*args, "--agreement-seconds", "2", "--agreement-max", "2000"]) == 0
     out = capsys.readouterr().out
     rows = {

@@ -3,4 +3,5 @@
 
 - :mod:`~clew_ros.spatial.kernels.collide`: forward kinematics, sphere-vs-obstacle distances, batched
   validity, clearances and the conservative free interval of one joint.
+- :mod:`~clew_ros.spatial.kernels.ik`: damped least-squares inverse kinematics of the tcp from many seeds.
 """

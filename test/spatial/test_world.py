@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from clew_ros.core.errors import WorldError
+from clew_ros.spatial.spheres import SphereSettings
 from clew_ros.spatial.world import spatial_world_from_parameters
 
 from .conftest import CONFIG
@@ -42,6 +43,10 @@ PANDA_ON_A_TABLE: dict[str, Any] = {
 }
 
 
+#: A coarse sphere model: these tests are about reading the world, and a coarse model builds in a blink.
+COARSE = SphereSettings(cell_m=0.03, protrusion_m=0.06)
+
+
 def changed(path: str, value: Any) -> dict[str, Any]:
     tree = copy.deepcopy(PANDA_ON_A_TABLE)
     node = tree["world"]
@@ -56,7 +61,7 @@ def changed(path: str, value: Any) -> dict[str, Any]:
 
 
 def test_a_panda_on_a_table(tmp_path: Path) -> None:
-    world = spatial_world_from_parameters(PANDA_ON_A_TABLE, tmp_path)
+    world = spatial_world_from_parameters(PANDA_ON_A_TABLE, tmp_path, COARSE)
     assert world.robot.dof == 7
     assert [o.name for o in world.obstacles] == ["table"]
     assert world.object is not None
@@ -71,7 +76,7 @@ def test_a_panda_on_a_table(tmp_path: Path) -> None:
 def test_a_motion_only_query(tmp_path: Path) -> None:
     tree = changed("object", None)
     tree["world"]["robot"]["goal"] = [0.5, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8]
-    world = spatial_world_from_parameters(tree, tmp_path)
+    world = spatial_world_from_parameters(tree, tmp_path, COARSE)
     assert world.object is None
     assert world.goal is not None
     assert world.goal[0] == 0.5
@@ -96,7 +101,7 @@ def test_a_motion_only_query(tmp_path: Path) -> None:
 )
 def test_bad_worlds_are_refused_by_name(tmp_path: Path, path: str, value: Any, parameter: str, message: str) -> None:
     with pytest.raises(WorldError, match=re.escape(message)) as error:
-        spatial_world_from_parameters(changed(path, value), tmp_path)
+        spatial_world_from_parameters(changed(path, value), tmp_path, COARSE)
     assert error.value.parameter == parameter
 
 
@@ -108,6 +113,6 @@ def test_the_scene_file_is_read_beside_the_parameters(tmp_path: Path) -> None:
     )
     tree = changed("scene_file", "scene.yaml")
     tree["world"]["robot"]["base_pose"] = [0.0, 0.0, 0.05, 0.0, 0.0, 0.0]
-    world = spatial_world_from_parameters(tree, tmp_path)
+    world = spatial_world_from_parameters(tree, tmp_path, COARSE)
     assert [o.name for o in world.obstacles] == ["table", "post"]
     np.testing.assert_allclose(world.obstacles[1].pose[:3, 3], [0.0, 0.6, 0.55])

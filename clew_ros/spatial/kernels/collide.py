@@ -311,6 +311,15 @@ def _collides(  # noqa: PLR0917
     return False
 
 
+@_leaf
+def _within(q: Array, lower: Array, upper: Array) -> bool:
+    """Whether every joint value lies within its limits."""
+    for j in range(q.shape[0]):  # noqa: SIM110  # a loop: numba compiles no generator inside all()
+        if not lower[j] <= q[j] <= upper[j]:
+            return False
+    return True
+
+
 @_jit
 def valid_batch(  # noqa: PLR0917
     qs: Array,
@@ -348,11 +357,7 @@ def valid_batch(  # noqa: PLR0917
     placed = np.zeros(link_c.shape[0], dtype=np.bool_)
     for b in range(qs.shape[0]):
         q = qs[b]
-        inside = True
-        for j in range(n):
-            if not lower[j] <= q[j] <= upper[j]:
-                inside = False
-        if not inside:
+        if not _within(q, lower, upper):
             out[b] = False
             continue
         forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
@@ -440,12 +445,15 @@ def _link_step(  # noqa: PLR0917
     bounds: Array,
     has_bounds: bool,
     margin: float,
+    rel_obs: Array,
+    rel_bounds: Array,
 ) -> float:
-    """``best`` lowered to what moving link ``i``'s clearances to the obstacles and bounds allow."""
+    """``best`` lowered to what moving link ``i``'s clearances to the obstacles and bounds allow (those
+    ``rel_obs[i]`` / ``rel_bounds[i]`` leave in: :func:`_relevance`)."""
     link_speed = _speed(link_w[i], axis_p, axis_d, is_prismatic) + (0.0 if is_prismatic else link_r[i])
     if link_speed <= 0.0:
         return best
-    if has_bounds:
+    if has_bounds and rel_bounds[i]:
         coarse = _bounds_clearance(link_w[i], link_r[i], bounds)
         if coarse <= margin or (coarse - margin) / link_speed < best:
             for k in range(link_start[i], link_start[i + 1]):
@@ -453,6 +461,8 @@ def _link_step(  # noqa: PLR0917
                 if speed > 0.0:
                     best = min(best, (_bounds_clearance(sph_w[k], sph_r[k], bounds) - margin) / speed)
     for o in range(obs_kind.shape[0]):
+        if not rel_obs[i, o]:
+            continue
         coarse = _distance(link_w[i], obs_t[o]) - link_r[i] - obs_bound[o]
         if coarse > margin and (coarse - margin) / link_speed >= best:
             continue
@@ -498,6 +508,72 @@ def _pair_step(  # noqa: PLR0917
 
 
 @_leaf
+def _sweep_gap(p: Array, c: Array, axis_p: Array, axis_d: Array) -> float:
+    """Distance (m) between point ``c`` and the circle that point ``p`` runs on turning about the axis."""
+    px, py, pz = p[0] - axis_p[0], p[1] - axis_p[1], p[2] - axis_p[2]
+    cx, cy, cz = c[0] - axis_p[0], c[1] - axis_p[1], c[2] - axis_p[2]
+    hp = px * axis_d[0] + py * axis_d[1] + pz * axis_d[2]
+    hc = cx * axis_d[0] + cy * axis_d[1] + cz * axis_d[2]
+    rp = math.sqrt(max(px * px + py * py + pz * pz - hp * hp, 0.0))
+    rc = math.sqrt(max(cx * cx + cy * cy + cz * cz - hc * hc, 0.0))
+    return math.sqrt((rp - rc) * (rp - rc) + (hp - hc) * (hp - hc))
+
+
+@_leaf
+def _relevance(  # noqa: PLR0917
+    joint: int,
+    axis_p: Array,
+    axis_d: Array,
+    is_prismatic: bool,
+    link_w: Array,
+    link_r: Array,
+    link_frame: Array,
+    obs_t: Array,
+    obs_bound: Array,
+    pairs: Array,
+    bounds: Array,
+    has_bounds: bool,
+    margin: float,
+    rel_obs: Array,
+    rel_bounds: Array,
+    rel_pair: Array,
+) -> None:
+    """Which obstacles, bounds and self pairs can limit joint ``joint``'s interval at all: a moving link's
+    bounding sphere, turned a whole turn about the axis, sweeps a torus; an obstacle (or a static link)
+    whose bounding sphere stays clear of that torus, or bounds that hold its bounding box, never matter.
+    Computed once per configuration: the axis and each link's distance to it do not change as the joint
+    turns. A prismatic joint keeps everything."""
+    for i in range(link_r.shape[0]):
+        moving = link_frame[i] > joint
+        for o in range(obs_t.shape[0]):
+            rel_obs[i, o] = moving and (
+                is_prismatic or _sweep_gap(link_w[i], obs_t[o], axis_p, axis_d) - link_r[i] - obs_bound[o] <= margin
+            )
+        rel_bounds[i] = moving and has_bounds
+        if moving and has_bounds and not is_prismatic:
+            # the torus's bounding box: its circle's extent along world axis k is radius * sqrt(1 - u_k^2)
+            px, py, pz = link_w[i, 0] - axis_p[0], link_w[i, 1] - axis_p[1], link_w[i, 2] - axis_p[2]
+            along = px * axis_d[0] + py * axis_d[1] + pz * axis_d[2]
+            radius = math.sqrt(max(px * px + py * py + pz * pz - along * along, 0.0))
+            inside = True
+            for k in range(3):
+                middle = axis_p[k] + along * axis_d[k]
+                reach = radius * math.sqrt(max(1.0 - axis_d[k] * axis_d[k], 0.0)) + link_r[i] + margin
+                if middle - reach <= bounds[k] or middle + reach >= bounds[k + 3]:
+                    inside = False
+            rel_bounds[i] = not inside
+    for p in range(pairs.shape[0]):
+        a, b = pairs[p, 0], pairs[p, 1]
+        if link_frame[a] <= joint:
+            a, b = b, a  # a: the one that moves, if either does
+        if link_frame[a] <= joint or link_frame[b] > joint:
+            rel_pair[p] = False  # neither moves, or both: their relative pose does not change
+        else:
+            gap = _sweep_gap(link_w[a], link_w[b], axis_p, axis_d) - link_r[a] - link_r[b]
+            rel_pair[p] = is_prismatic or gap <= margin
+
+
+@_leaf
 def _step_bound(  # noqa: PLR0917
     joint: int,
     axis_p: Array,
@@ -518,6 +594,9 @@ def _step_bound(  # noqa: PLR0917
     bounds: Array,
     has_bounds: bool,
     margin: float,
+    rel_obs: Array,
+    rel_bounds: Array,
+    rel_pair: Array,
 ) -> float:
     """The largest move (rad or m) of joint ``joint`` either way within which no moving sphere can touch:
     the least (clearance - margin) / speed over the moving spheres (a sphere's centre moves at most its
@@ -545,14 +624,16 @@ def _step_bound(  # noqa: PLR0917
                 bounds,
                 has_bounds,
                 margin,
+                rel_obs,
+                rel_bounds,
             )
             if best <= 0.0:
                 return 0.0
     for p in range(pairs.shape[0]):
+        if not rel_pair[p]:
+            continue  # both move, neither moves, or they never meet in a whole turn (:func:`_relevance`)
         a = pairs[p, 0]
         b = pairs[p, 1]
-        if (link_frame[a] > joint) == (link_frame[b] > joint):
-            continue  # both move or neither: their relative pose does not change
         if link_frame[a] <= joint:
             a, b = b, a
         best = _pair_step(a, b, best, axis_p, axis_d, is_prismatic, sph_w, sph_r, link_start, link_w, link_r, margin)
@@ -611,15 +692,15 @@ def free_intervals(  # noqa: PLR0917
     q = np.empty(n)
     axis_d = np.empty(3)
     placed = np.zeros(link_c.shape[0], dtype=np.bool_)
+    rel_obs = np.zeros((link_c.shape[0], obs_t.shape[0]), dtype=np.bool_)
+    rel_bounds = np.zeros(link_c.shape[0], dtype=np.bool_)
+    rel_pair = np.zeros(pairs.shape[0], dtype=np.bool_)
     for b in range(qs.shape[0]):
         q[:] = qs[b]
         start = q[joint]
         out_lo[b] = start
         out_hi[b] = start
-        inside = True
-        for j in range(n):
-            if not lower[j] <= q[j] <= upper[j]:
-                inside = False
+        inside = _within(q, lower, upper)
         if inside:
             forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
             inside = not _collides(
@@ -646,6 +727,13 @@ def free_intervals(  # noqa: PLR0917
         out_valid[b] = inside
         if not inside:
             continue
+        rot = frame_r[joint + 1]
+        for a in range(3):
+            axis_d[a] = rot[a, 0] * axes[joint, 0] + rot[a, 1] * axes[joint, 1] + rot[a, 2] * axes[joint, 2]
+        _relevance(
+            joint, frame_t[joint + 1], axis_d, prismatic[joint], link_w, link_r, link_frame, obs_t, obs_bound, pairs,
+            bounds, has_bounds, margin, rel_obs, rel_bounds, rel_pair,
+        )  # fmt: skip
         for direction in (1.0, -1.0):
             limit = upper[joint] if direction > 0.0 else lower[joint]
             value = start
@@ -676,6 +764,9 @@ def free_intervals(  # noqa: PLR0917
                     bounds,
                     has_bounds,
                     margin,
+                    rel_obs,
+                    rel_bounds,
+                    rel_pair,
                 )
                 if abs(limit - value) <= step:
                     value = limit

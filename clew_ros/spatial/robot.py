@@ -301,8 +301,11 @@ def _narrowed(
 ) -> NDArray[np.float64]:
     if given is None:
         return urdf_limits
-    values = np.asarray([float(v) for v in given])
-    if values.shape != urdf_limits.shape or not np.all(np.isfinite(values)):
+    try:
+        values = np.asarray([float(v) for v in given], dtype=np.float64)
+    except (TypeError, ValueError):
+        values = np.zeros(0)
+    if isinstance(given, str) or values.shape != urdf_limits.shape or not np.all(np.isfinite(values)):
         raise WorldError(parameter, f"expected {len(names)} finite numbers (joints {', '.join(names)})")
     wider = values < urdf_limits - 1e-12 if lower else values > urdf_limits + 1e-12
     if np.any(wider):
@@ -523,6 +526,17 @@ def _strings(tree: Mapping[str, Any], key: str) -> list[str]:
     return list(value)
 
 
+def _floats(tree: Mapping[str, Any], key: str) -> list[float]:
+    value = tree.get(key, [])
+    try:
+        out = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise WorldError(f"world.robot.{key}", f"expected a list of numbers, got {short_repr(value)}") from None
+    if isinstance(value, str) or not all(math.isfinite(v) for v in out):
+        raise WorldError(f"world.robot.{key}", f"expected a list of finite numbers, got {short_repr(value)}")
+    return out
+
+
 def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
     """The robot of a ``world.robot`` parameter tree (interface.md section 1b); relative paths are read from
     ``folder`` (the parameter file's)."""
@@ -555,7 +569,7 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
         joint_lower=robot.get("joint_lower"),
         joint_upper=robot.get("joint_upper"),
         fixed_joint_names=_strings(robot, "fixed_joint_names"),
-        fixed_joint_positions=[float(v) for v in robot.get("fixed_joint_positions", [])],
+        fixed_joint_positions=_floats(robot, "fixed_joint_positions"),
         gripper_links=_strings(robot, "gripper_links"),
         source=source,
     )

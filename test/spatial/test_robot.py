@@ -128,6 +128,9 @@ def write(folder: Path, name: str, text: str) -> Path:
         ),
         ({"fixed_joint_names": ["panda_finger_joint1"], "fixed_joint_positions": [0.5]}, "", "outside its limits"),
         ({"gripper_links": ["claw"]}, "world.robot.gripper_links", "'claw' is not in the URDF"),
+        ({"fixed_joint_positions": ["open"]}, "world.robot.fixed_joint_positions", "a list of numbers"),
+        ({"joint_lower": "low"}, "world.robot.joint_lower", "expected 7 finite numbers"),
+        ({"srdf": "robots/panda/none.srdf"}, "world.robot.srdf", "cannot read"),
     ],
 )
 def test_bad_robot_parameters_are_refused_by_name(change: dict[str, object], parameter: str, message: str) -> None:

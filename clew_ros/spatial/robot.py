@@ -297,7 +297,7 @@ def _axis(joint: Any, parameter: str) -> NDArray[np.float64]:
 
 
 def _narrowed(
-    urdf_limits: NDArray[np.float64], given: Sequence[float] | None, names: Sequence[str], parameter: str, lower: bool
+    urdf_limits: NDArray[np.float64], given: Any, names: Sequence[str], parameter: str, lower: bool
 ) -> NDArray[np.float64]:
     if given is None:
         return urdf_limits

@@ -47,7 +47,11 @@ class SpatialChecker:
         spheres: SphereModel,
         obstacles: Sequence[Obstacle] = (),
         bounds: NDArray[np.float64] | None = None,
+        *,
+        self_collision: bool = True,
     ) -> None:
+        """``bounds``: ``[xmin, ymin, zmin, xmax, ymax, zmax]`` (m) or ``None`` (unbounded);
+        ``self_collision`` false leaves every pair of links unchecked."""
         self.robot = robot
         self.spheres = spheres
         self.obstacles = tuple(obstacles)
@@ -62,7 +66,7 @@ class SpatialChecker:
             (i, j)
             for i in range(len(robot.links))
             for j in range(i + 1, len(robot.links))
-            if (i, j) not in robot.exempt
+            if self_collision and (i, j) not in robot.exempt
         ]
         self.pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
         self._arrays: dict[str, Any] = {

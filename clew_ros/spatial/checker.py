@@ -49,12 +49,17 @@ class SpatialChecker:
         bounds: NDArray[np.float64] | None = None,
         *,
         self_collision: bool = True,
+        resting_object: Obstacle | None = None,
     ) -> None:
         """``bounds``: ``[xmin, ymin, zmin, xmax, ymax, zmax]`` (m) or ``None`` (unbounded);
-        ``self_collision`` false leaves every pair of links unchecked."""
+        ``self_collision`` false leaves every pair of links unchecked. ``resting_object``: the object where it
+        rests (in transit), an obstacle to every link but the robot's ``gripper_links``."""
         self.robot = robot
         self.spheres = spheres
-        self.obstacles = tuple(obstacles)
+        self.obstacles = tuple(obstacles) + ((resting_object,) if resting_object is not None else ())
+        ignore = np.zeros((len(robot.links), len(self.obstacles)), dtype=np.bool_)
+        if resting_object is not None:
+            ignore[:, -1] = [link.name in robot.gripper_links for link in robot.links]
         link_c = np.zeros((len(robot.links), 3))
         link_r = np.zeros(len(robot.links))
         for i in range(len(robot.links)):
@@ -81,11 +86,13 @@ class SpatialChecker:
             "sph_c": np.ascontiguousarray(spheres.centers),
             "sph_r": np.ascontiguousarray(spheres.radii),
             "sph_frame": spheres.frames.astype(np.int64),
+            "sph_link": spheres.links.astype(np.int64),
             "link_start": spheres.starts.astype(np.int64),
             "link_c": link_c,
             "link_r": link_r,
             "link_frame": np.array([link.frame for link in robot.links], dtype=np.int64),
             **obstacle_arrays(self.obstacles),
+            "ignore": ignore,
             "pairs": self.pairs,
             "bounds": np.zeros(6) if bounds is None else np.asarray(bounds, dtype=np.float64),
             "has_bounds": bounds is not None,
@@ -96,8 +103,8 @@ class SpatialChecker:
         #: bounds: then no configuration is valid. Checked once here, never per configuration.
         self.static_collision = bool(
             collide.static_collides(
-                a["base_r"], a["base_t"], a["sph_c"], a["sph_r"], a["sph_frame"], a["obs_kind"], a["obs_r"],
-                a["obs_t"], a["obs_dims"], a["bounds"], a["has_bounds"],
+                a["base_r"], a["base_t"], a["sph_c"], a["sph_r"], a["sph_frame"], a["sph_link"], a["obs_kind"],
+                a["obs_r"], a["obs_t"], a["obs_dims"], a["ignore"], a["bounds"], a["has_bounds"],
             )
         )  # fmt: skip
 
@@ -118,8 +125,8 @@ class SpatialChecker:
         collide.valid_batch(
             batch, a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
             a["prismatic"], a["sph_c"], a["sph_r"], a["sph_frame"], a["link_start"], a["link_c"], a["link_r"],
-            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["pairs"],
-            a["bounds"], a["has_bounds"], out,
+            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"],
+            a["pairs"], a["bounds"], a["has_bounds"], out,
         )  # fmt: skip
         return out
 
@@ -144,8 +151,9 @@ class SpatialChecker:
         collide.free_intervals(
             batch, joint, a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
             a["prismatic"], a["sph_c"], a["sph_r"], a["sph_frame"], a["link_start"], a["link_c"], a["link_r"],
-            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["pairs"],
-            a["bounds"], a["has_bounds"], settings.margin_m, settings.min_step, settings.max_steps, lo, hi, ok,
+            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"],
+            a["pairs"], a["bounds"], a["has_bounds"], settings.margin_m, settings.min_step, settings.max_steps, lo,
+            hi, ok,
         )  # fmt: skip
         return lo, hi, ok
 

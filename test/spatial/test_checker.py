@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -170,3 +171,26 @@ def test_an_interval_stops_before_an_obstacle(panda: RobotModel, panda_spheres: 
     assert ok[0]
     assert 0.05 < hi[0] < 0.6
     assert lo[0] == panda.lower[0]
+
+
+def test_the_resting_object_blocks_every_link_but_the_gripper(panda: RobotModel, panda_spheres: SphereModel) -> None:
+    q = np.array([[0.0, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8]])
+    tcp = panda.tcp_pose(q[0])
+    held = make_obstacle("object", "box", [0.03, 0.03, 0.03], tcp, "world.object")
+    gripper = replace(panda, gripper_links=("panda_hand", "panda_leftfinger", "panda_rightfinger"))
+    assert SpatialChecker(gripper, panda_spheres, resting_object=held).valid(q).tolist() == [True]
+    assert SpatialChecker(panda, panda_spheres, resting_object=held).valid(q).tolist() == [False]
+    elbow = panda.link_poses(q[0])["panda_link4"]
+    at_elbow = make_obstacle("object", "box", [0.03, 0.03, 0.03], elbow, "world.object")
+    assert SpatialChecker(gripper, panda_spheres, resting_object=at_elbow).valid(q).tolist() == [False]
+    # the intervals follow the same rule: free for the gripper around the object, sampled at 2 mrad
+    checker = SpatialChecker(gripper, panda_spheres, clutter(3)[:10], resting_object=held)
+    for joint in range(panda.dof):
+        lo, hi, ok = checker.free_intervals(q, joint)
+        assert ok[0]
+        values = np.append(np.arange(lo[0], hi[0], 0.002), hi[0])
+        moved = np.repeat(q, len(values), axis=0)
+        moved[:, joint] = values
+        assert checker.valid(moved).all()
+        if joint == 6:  # the last joint turns the hand about the object: nothing but the gripper is near
+            assert hi[0] - lo[0] > 1.0

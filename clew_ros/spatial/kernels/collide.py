@@ -6,7 +6,8 @@ Conventions: frame 0 is ``base_link`` in ``world`` (``base_r``, ``base_t``); fra
 link ``i`` owns spheres ``link_start[i]:link_start[i + 1]`` and has the bounding sphere ``link_c[i]``,
 ``link_r[i]`` in its frame ``link_frame[i]``. Obstacle ``o`` is of kind ``obs_kind[o]`` (0 box, 1
 cylinder, 2 sphere) at ``obs_t[o]`` with rotation ``obs_r[o]`` (local to world), ``obs_dims[o]`` (box:
-half extents; cylinder: radius, half height; sphere: radius) and bounding radius ``obs_bound[o]``.
+half extents; cylinder: radius, half height; sphere: radius) and bounding radius ``obs_bound[o]``; link
+``i`` never tests obstacle ``o`` where ``ignore[i, o]`` (a gripper link and the resting object).
 ``pairs`` (P, 2) are the link pairs checked for self-collision; ``bounds`` ``[xmin, ymin, zmin, xmax,
 ymax, zmax]`` is used when ``has_bounds``. Touching counts as colliding (a clearance <= 0).
 """
@@ -190,11 +191,13 @@ def _link_collides(  # noqa: PLR0917
     obs_t: Array,
     obs_dims: Array,
     obs_bound: Array,
+    ignore: Array,
     bounds: Array,
     has_bounds: bool,
     placed: Array,
 ) -> bool:
-    """Whether link ``i`` touches an obstacle or leaves the bounds (its bounding sphere first)."""
+    """Whether link ``i`` touches an obstacle (but those ``ignore[i]`` marks) or leaves the bounds (its
+    bounding sphere first)."""
     if has_bounds and _bounds_clearance(link_w[i], link_r[i], bounds) <= 0.0:
         _place_link(i, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
         for k in range(link_start[i], link_start[i + 1]):
@@ -202,7 +205,7 @@ def _link_collides(  # noqa: PLR0917
                 return True
     for o in range(obs_kind.shape[0]):
         reach = obs_bound[o]
-        if _distance(link_w[i], obs_t[o]) > link_r[i] + reach:
+        if ignore[i, o] or _distance(link_w[i], obs_t[o]) > link_r[i] + reach:
             continue
         if clearance_of_sphere(link_w[i], link_r[i], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]) > 0.0:
             continue  # the link's bounding sphere misses the obstacle itself (a wide table, a long shelf)
@@ -259,6 +262,7 @@ def _collides(  # noqa: PLR0917
     obs_t: Array,
     obs_dims: Array,
     obs_bound: Array,
+    ignore: Array,
     pairs: Array,
     bounds: Array,
     has_bounds: bool,
@@ -287,6 +291,7 @@ def _collides(  # noqa: PLR0917
             obs_t,
             obs_dims,
             obs_bound,
+            ignore,
             bounds,
             has_bounds,
             placed,
@@ -343,6 +348,7 @@ def valid_batch(  # noqa: PLR0917
     obs_t: Array,
     obs_dims: Array,
     obs_bound: Array,
+    ignore: Array,
     pairs: Array,
     bounds: Array,
     has_bounds: bool,
@@ -377,6 +383,7 @@ def valid_batch(  # noqa: PLR0917
             obs_t,
             obs_dims,
             obs_bound,
+            ignore,
             pairs,
             bounds,
             has_bounds,
@@ -391,14 +398,17 @@ def static_collides(  # noqa: PLR0917
     sph_c: Array,
     sph_r: Array,
     sph_frame: Array,
+    sph_link: Array,
     obs_kind: Array,
     obs_r: Array,
     obs_t: Array,
     obs_dims: Array,
+    ignore: Array,
     bounds: Array,
     has_bounds: bool,
 ) -> bool:
-    """Whether a sphere on frame 0 (which no joint moves) touches an obstacle or leaves the bounds."""
+    """Whether a sphere on frame 0 (which no joint moves) touches an obstacle (but those its link's
+    ``ignore`` row marks) or leaves the bounds."""
     p = np.empty(3)
     for k in range(sph_c.shape[0]):
         if sph_frame[k] != 0:
@@ -408,6 +418,8 @@ def static_collides(  # noqa: PLR0917
         if has_bounds and _bounds_clearance(p, sph_r[k], bounds) <= 0.0:
             return True
         for o in range(obs_kind.shape[0]):
+            if ignore[sph_link[k], o]:
+                continue
             if clearance_of_sphere(p, sph_r[k], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]) <= 0.0:
                 return True
     return False
@@ -530,6 +542,7 @@ def _relevance(  # noqa: PLR0917
     link_frame: Array,
     obs_t: Array,
     obs_bound: Array,
+    ignore: Array,
     pairs: Array,
     bounds: Array,
     has_bounds: bool,
@@ -546,8 +559,12 @@ def _relevance(  # noqa: PLR0917
     for i in range(link_r.shape[0]):
         moving = link_frame[i] > joint
         for o in range(obs_t.shape[0]):
-            rel_obs[i, o] = moving and (
-                is_prismatic or _sweep_gap(link_w[i], obs_t[o], axis_p, axis_d) - link_r[i] - obs_bound[o] <= margin
+            rel_obs[i, o] = (
+                moving
+                and not ignore[i, o]
+                and (
+                    is_prismatic or _sweep_gap(link_w[i], obs_t[o], axis_p, axis_d) - link_r[i] - obs_bound[o] <= margin
+                )
             )
         rel_bounds[i] = moving and has_bounds
         if moving and has_bounds and not is_prismatic:
@@ -666,6 +683,7 @@ def free_intervals(  # noqa: PLR0917
     obs_t: Array,
     obs_dims: Array,
     obs_bound: Array,
+    ignore: Array,
     pairs: Array,
     bounds: Array,
     has_bounds: bool,
@@ -719,6 +737,7 @@ def free_intervals(  # noqa: PLR0917
                 obs_t,
                 obs_dims,
                 obs_bound,
+                ignore,
                 pairs,
                 bounds,
                 has_bounds,
@@ -731,7 +750,8 @@ def free_intervals(  # noqa: PLR0917
         for a in range(3):
             axis_d[a] = rot[a, 0] * axes[joint, 0] + rot[a, 1] * axes[joint, 1] + rot[a, 2] * axes[joint, 2]
         _relevance(
-            joint, frame_t[joint + 1], axis_d, prismatic[joint], link_w, link_r, link_frame, obs_t, obs_bound, pairs,
+            joint, frame_t[joint + 1], axis_d, prismatic[joint], link_w, link_r, link_frame, obs_t, obs_bound,
+            ignore, pairs,
             bounds, has_bounds, margin, rel_obs, rel_bounds, rel_pair,
         )  # fmt: skip
         for direction in (1.0, -1.0):

@@ -325,6 +325,140 @@ def _within(q: Array, lower: Array, upper: Array) -> bool:
     return True
 
 
+@_leaf
+def _held_lowest(  # noqa: PLR0917
+    frame_r: Array, frame_t: Array, frame: int, held_points: Array, held_disc: float, held_axis: Array, out: Array
+) -> float:
+    """The held object's lowest height (m): a box's lowest corner, or a cylinder's lowest cap rim (the cap
+    centre less the radius times the cap's tilt). ``out`` receives the points (corners, cap centres) in
+    ``world``."""
+    r = frame_r[frame]
+    t = frame_t[frame]
+    tilt = 0.0
+    if held_disc > 0.0:
+        nz = r[2, 0] * held_axis[0] + r[2, 1] * held_axis[1] + r[2, 2] * held_axis[2]
+        tilt = held_disc * math.sqrt(max(1.0 - nz * nz, 0.0))
+    lowest = np.inf
+    for k in range(held_points.shape[0]):
+        for a in range(3):
+            out[k, a] = r[a, 0] * held_points[k, 0] + r[a, 1] * held_points[k, 1] + r[a, 2] * held_points[k, 2] + t[a]
+        lowest = min(lowest, out[k, 2] - tilt)
+    return lowest
+
+
+@_leaf
+def _held_clear_of(  # noqa: PLR0917
+    o: int,
+    held_link: int,
+    link_start: Array,
+    sph_w: Array,
+    sph_r: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+) -> float:
+    """The least clearance (m) of the held object's spheres to obstacle ``o``."""
+    best = np.inf
+    for k in range(link_start[held_link], link_start[held_link + 1]):
+        best = min(best, clearance_of_sphere(sph_w[k], sph_r[k], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]))
+    return best
+
+
+@_leaf
+def _held_on_supports(  # noqa: PLR0917
+    frame_r: Array,
+    frame_t: Array,
+    link_frame: Array,
+    link_start: Array,
+    sph_c: Array,
+    sph_w: Array,
+    sph_r: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    held_link: int,
+    held_points: Array,
+    held_disc: float,
+    held_axis: Array,
+    sup_index: Array,
+    sup_top: Array,
+    sup_tol: float,
+    scratch: Array,
+) -> bool:
+    """Whether the held object keeps off every support but from above: either all of it lies above the
+    support's top (within ``sup_tol``: it may touch), or its spheres are clear of the support."""
+    if held_link < 0 or sup_index.shape[0] == 0:
+        return True
+    lowest = _held_lowest(frame_r, frame_t, link_frame[held_link], held_points, held_disc, held_axis, scratch)
+    frame = link_frame[held_link]
+    for k in range(link_start[held_link], link_start[held_link + 1]):
+        _place(frame_r, frame_t, frame, sph_c[k], sph_w[k])
+    for m in range(sup_index.shape[0]):
+        if lowest >= sup_top[m] - sup_tol:
+            continue
+        o = sup_index[m]
+        if _held_clear_of(o, held_link, link_start, sph_w, sph_r, obs_kind, obs_r, obs_t, obs_dims) <= 0.0:
+            return False
+    return True
+
+
+@_leaf
+def _held_support_step(  # noqa: PLR0917
+    frame_r: Array,
+    frame_t: Array,
+    link_frame: Array,
+    link_start: Array,
+    sph_w: Array,
+    sph_r: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    held_link: int,
+    held_points: Array,
+    held_disc: float,
+    held_axis: Array,
+    sup_index: Array,
+    sup_top: Array,
+    sup_tol: float,
+    axis_p: Array,
+    axis_d: Array,
+    is_prismatic: bool,
+    margin: float,
+    best: float,
+    scratch: Array,
+) -> float:
+    """``best`` lowered to the move the held object is certain to make keeping off every support but from
+    above: for each support, the longer of the move its lowest point stays above the top (its height over
+    the top less ``sup_tol``, over how fast it can sink) and the move its spheres stay clear (clearance
+    over speed); either condition keeps it valid."""
+    if held_link < 0 or sup_index.shape[0] == 0:
+        return best
+    lowest = _held_lowest(frame_r, frame_t, link_frame[held_link], held_points, held_disc, held_axis, scratch)
+    sink = 0.0  # how fast the lowest point can sink: a point's speed, and the cap's tilt at most 1 per radian
+    for k in range(held_points.shape[0]):
+        sink = max(sink, _speed(scratch[k], axis_p, axis_d, is_prismatic) + (0.0 if is_prismatic else held_disc))
+    for m in range(sup_index.shape[0]):
+        above = lowest - (sup_top[m] - sup_tol) - margin
+        plane = 0.0
+        if above > 0.0:
+            plane = above / sink if sink > 0.0 else np.inf
+        o = sup_index[m]
+        spheres = np.inf
+        for k in range(link_start[held_link], link_start[held_link + 1]):
+            speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
+            c = clearance_of_sphere(sph_w[k], sph_r[k], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o]) - margin
+            if c <= 0.0:
+                spheres = 0.0
+                break
+            if speed > 0.0:
+                spheres = min(spheres, c / speed)
+        best = min(best, max(plane, spheres))
+    return best
+
+
 @_jit
 def valid_batch(  # noqa: PLR0917
     qs: Array,
@@ -352,6 +486,13 @@ def valid_batch(  # noqa: PLR0917
     pairs: Array,
     bounds: Array,
     has_bounds: bool,
+    held_link: int,
+    held_points: Array,
+    held_disc: float,
+    held_axis: Array,
+    sup_index: Array,
+    sup_top: Array,
+    sup_tol: float,
     out: Array,
 ) -> None:
     """``out[b]``: configuration ``qs[b]`` is inside its limits and its spheres touch nothing."""
@@ -360,6 +501,7 @@ def valid_batch(  # noqa: PLR0917
     frame_t = np.empty((n + 1, 3))
     sph_w = np.empty((sph_c.shape[0], 3))
     link_w = np.empty((link_c.shape[0], 3))
+    scratch = np.empty((8, 3))  # the held object's corners or cap centres in world
     placed = np.zeros(link_c.shape[0], dtype=np.bool_)
     for b in range(qs.shape[0]):
         q = qs[b]
@@ -389,6 +531,11 @@ def valid_batch(  # noqa: PLR0917
             has_bounds,
             placed,
         )
+        if out[b]:
+            out[b] = _held_on_supports(
+                frame_r, frame_t, link_frame, link_start, sph_c, sph_w, sph_r, obs_kind, obs_r, obs_t, obs_dims,
+                held_link, held_points, held_disc, held_axis, sup_index, sup_top, sup_tol, scratch,
+            )  # fmt: skip
 
 
 @_jit
@@ -687,6 +834,13 @@ def free_intervals(  # noqa: PLR0917
     pairs: Array,
     bounds: Array,
     has_bounds: bool,
+    held_link: int,
+    held_points: Array,
+    held_disc: float,
+    held_axis: Array,
+    sup_index: Array,
+    sup_top: Array,
+    sup_tol: float,
     margin: float,
     min_step: float,
     max_steps: int,
@@ -709,6 +863,7 @@ def free_intervals(  # noqa: PLR0917
     link_w = np.empty((link_c.shape[0], 3))
     q = np.empty(n)
     axis_d = np.empty(3)
+    scratch = np.empty((8, 3))  # the held object's corners or cap centres in world
     placed = np.zeros(link_c.shape[0], dtype=np.bool_)
     rel_obs = np.zeros((link_c.shape[0], obs_t.shape[0]), dtype=np.bool_)
     rel_bounds = np.zeros(link_c.shape[0], dtype=np.bool_)
@@ -743,6 +898,10 @@ def free_intervals(  # noqa: PLR0917
                 has_bounds,
                 placed,
             )
+            inside = inside and _held_on_supports(
+                frame_r, frame_t, link_frame, link_start, sph_c, sph_w, sph_r, obs_kind, obs_r, obs_t, obs_dims,
+                held_link, held_points, held_disc, held_axis, sup_index, sup_top, sup_tol, scratch,
+            )  # fmt: skip
         out_valid[b] = inside
         if not inside:
             continue
@@ -788,6 +947,11 @@ def free_intervals(  # noqa: PLR0917
                     rel_bounds,
                     rel_pair,
                 )
+                step = _held_support_step(
+                    frame_r, frame_t, link_frame, link_start, sph_w, sph_r, obs_kind, obs_r, obs_t, obs_dims, held_link,
+                    held_points, held_disc, held_axis, sup_index, sup_top, sup_tol, frame_t[joint + 1], axis_d,
+                    prismatic[joint], margin, step, scratch,
+                )  # fmt: skip
                 if abs(limit - value) <= step:
                     value = limit
                     break

@@ -10,6 +10,12 @@ half extents; cylinder: radius, half height; sphere: radius) and bounding radius
 ``i`` never tests obstacle ``o`` where ``ignore[i, o]`` (a gripper link and the resting object).
 ``pairs`` (P, 2) are the link pairs checked for self-collision; ``bounds`` ``[xmin, ymin, zmin, xmax,
 ymax, zmax]`` is used when ``has_bounds``. Touching counts as colliding (a clearance <= 0).
+
+A held object is one more "link" (index ``held_link``, -1: none) riding on the tcp's frame. Against the
+supports ``sup_index`` (tops ``sup_top``; ``ignore`` leaves them out of the sphere tests) it is valid when
+its lowest point — of ``held_points`` (a box's corners, a cylinder's cap centres, in its frame) less
+``held_disc`` (a cylinder's radius) times its cap's tilt (``held_axis``) — lies above the top less
+``sup_tol``, or when its spheres are clear of the support.
 """
 
 from __future__ import annotations

@@ -1,10 +1,19 @@
 """Build script for clew_ros (ament_python: colcon and pip both use it)."""
 
 from glob import glob
+from pathlib import Path
 
 from setuptools import find_packages, setup
 
 package_name = "clew_ros"
+
+
+def robot_files() -> list[tuple[str, list[str]]]:
+    """config/robots/<name>/... (URDF, SRDF, collision meshes, licences), installed folder by folder."""
+    files = sorted(p for p in glob("config/robots/**/*", recursive=True) if Path(p).is_file())
+    folders = sorted({str(Path(p).parent) for p in files})
+    return [("share/" + package_name + "/" + d, [p for p in files if str(Path(p).parent) == d]) for d in folders]
+
 
 setup(
     name=package_name,
@@ -21,6 +30,7 @@ setup(
             "share/" + package_name + "/config",
             sorted(glob("config/*.yaml") + glob("config/*.json")),
         ),
+        *robot_files(),
         ("share/" + package_name + "/launch", sorted(glob("launch/*.py"))),
         # the SROS2 policy of the node (docs/security.md)
         ("share/" + package_name + "/config/sros2", sorted(glob("config/sros2/*.xml"))),
@@ -47,8 +57,16 @@ setup(
             "ros-jazzy-common-interfaces>=5.3",
             "ros-jazzy-std-srvs>=5.3",
         ],
-        # lxml: test/security/test_deploy_policy.py validates the SROS2 policy as sros2 does (XSD, XSLT)
-        "test": ["pytest>=8.0", "hypothesis>=6.100", "urdf-parser-py>=0.0.4", "lxml>=5.0"],
+        # test: lxml (test/security/test_deploy_policy.py validates the SROS2 policy as sros2 does: XSD, XSLT) and
+        # the spatial extra's packages (test/spatial loads the shipped robots' URDFs and meshes)
+        "test": [
+            "pytest>=8.0",
+            "hypothesis>=6.100",
+            "urdf-parser-py>=0.0.4",
+            "lxml>=5.0",
+            "trimesh>=4.0",
+            "pycollada>=0.8",
+        ],
         # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
         "bench": ["ompl>=2.0", "matplotlib>=3.8"],
         # clew_plan --foxglove (clew_ros/live): the run served live to Foxglove over a WebSocket on 127.0.0.1.
@@ -57,6 +75,10 @@ setup(
         "live": ["foxglove-sdk>=0.30.3", "websockets>=15.0", "protobuf>=5.29"],
         # clew_batch --ray (clew_ros/batch/executors.py): jobs as Ray tasks, on a local Ray or a cluster.
         "batch": ["ray>=2.9"],
+        # clew_ros.spatial (spatial worlds): URDF parsing, collision meshes (STL, OBJ; DAE through pycollada).
+        "spatial": ["urdf-parser-py>=0.0.4", "trimesh>=4.0", "pycollada>=0.8"],
+        # benchmarks/spatial_checker.py: pinocchio + coal as the exact reference collision checker (large wheels).
+        "spatial-ref": ["pin>=3.0", "coal>=3.0"],
         # make lint (and .ci/run): the checks configured in pyproject.toml. ruff's minor is capped: a new
         # minor release turns on new rules of the selected families, which would fail CI with no code change.
         # foxglove-sdk too: mypy reads its own type information for clew_ros/live.

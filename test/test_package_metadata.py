@@ -39,6 +39,8 @@ ROSDEP_KEYS = {
     "shapely": "python3-shapely",
     "yaml": "python3-yaml",
     "PIL": "python3-pil",
+    "urdf_parser_py": "urdfdom_py",  # a ROS package (clew_ros.spatial)
+    "trimesh": "python3-trimesh",
 }
 #: Imported, but with no rosdep key (setup.py's install_requires), or optional (imported under try).
 # foxglove: the live extra (clew_ros.live); ray: the batch extra (clew_batch --ray); zstandard, lz4: mcap's own

@@ -1,0 +1,18 @@
+"""Spatial worlds (interface.md section 1b): a URDF arm in 3-D among primitive obstacles.
+
+- :mod:`~clew_ros.spatial.robot`: the URDF's chain from ``base_link`` to ``tip_link`` folded into frames,
+  with every link's collision geometry and the self-collision pairs an SRDF exempts.
+- :mod:`~clew_ros.spatial.spheres`: the conservative sphere model of every link's collision geometry.
+- :mod:`~clew_ros.spatial.scene`: obstacles (boxes, cylinders, spheres) from parameters and MoveIt planning
+  scene YAML (`world.scene_file`), and bounds.
+- :mod:`~clew_ros.spatial.placements`: supports, the movable object (box or cylinder) and its stable
+  placements: the test, sampling, projection.
+- :mod:`~clew_ros.spatial.checker`: the compiled, batched validity checker and free intervals of one joint
+  (:mod:`~clew_ros.spatial.kernels`).
+- :mod:`~clew_ros.spatial.ik`: inverse kinematics of the tcp (damped least squares from many seeds, compiled),
+  every distinct solution within the limits.
+- :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
+- :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
+
+It runs without ROS (a test keeps it so); nothing outside it imports it yet (planning on it is issue 44).
+"""

@@ -1,0 +1,216 @@
+"""Obstacles and bounds of a spatial world, from parameters and MoveIt planning scene YAML (interface.md
+section 1b).
+
+An obstacle is a ``shape_msgs/SolidPrimitive``: ``box`` (``size`` = full extents ``[x, y, z]``),
+``cylinder`` (``[height, radius]`` along its own z) or ``sphere`` (``[radius]``), at a ``pose``
+``[x, y, z, roll, pitch, yaw]`` in ``world`` (m, rad). A planning scene file (``world.scene_file``) is a
+``moveit_msgs/PlanningScene`` written as YAML, as MoveIt and MotionBenchMaker write it: each of
+``world.collision_objects`` has an ``id``, an optional ``pose`` and its ``primitives`` (``type``: box,
+sphere or cylinder, by name or by SolidPrimitive's number; ``dimensions``) with ``primitive_poses``
+(``position`` ``[x, y, z]``, ``orientation`` a quaternion ``[x, y, z, w]``), in the frame its
+``header.frame_id`` names.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from clew_ros.core.errors import WorldError, short_repr
+from clew_ros.spatial.transforms import pose_matrix, quaternion_matrix
+
+__all__ = [
+    "SHAPES",
+    "Obstacle",
+    "bounds_from_parameters",
+    "make_obstacle",
+    "obstacle_arrays",
+    "obstacles_from_parameters",
+    "scene_obstacles",
+    "world_obstacles",
+]
+
+#: Each shape and the number of its ``size`` values.
+SHAPES = {"box": 3, "cylinder": 2, "sphere": 1}
+
+
+@dataclass(frozen=True, eq=False)
+class Obstacle:
+    """A primitive obstacle: ``shape``, ``size`` (SolidPrimitive dimensions, m) and its 4x4 ``pose`` in
+    ``world``."""
+
+    name: str
+    shape: str
+    size: tuple[float, ...]
+    pose: NDArray[np.float64]
+
+
+def _numbers(value: Any, parameter: str, count: int, what: str) -> list[float]:
+    try:
+        out = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise WorldError(parameter, f"expected {what}, got {short_repr(value)}") from None
+    if len(out) != count or not all(math.isfinite(v) for v in out):
+        raise WorldError(parameter, f"expected {what} ({count} finite numbers), got {short_repr(value)}")
+    return out
+
+
+def make_obstacle(name: str, shape: Any, size: Any, pose: NDArray[np.float64], parameter: str) -> Obstacle:
+    """An obstacle, checked; ``parameter`` (``world.obstacles.<name>``) names it in errors."""
+    if shape not in SHAPES:
+        raise WorldError(f"{parameter}.shape", f"expected one of {', '.join(SHAPES)}, got {short_repr(shape)}")
+    dims = {"box": "[x, y, z] full extents", "cylinder": "[height, radius]", "sphere": "[radius]"}[shape]
+    values = _numbers(size, f"{parameter}.size", SHAPES[shape], f"a {shape} size {dims}")
+    if not all(v > 0.0 for v in values):
+        raise WorldError(f"{parameter}.size", f"expected positive sizes {dims}, got {values}")
+    return Obstacle(name, shape, tuple(values), pose)
+
+
+def obstacles_from_parameters(world: Mapping[str, Any]) -> tuple[Obstacle, ...]:
+    """The obstacles ``world.obstacle_names`` lists, each from ``world.obstacles.<name>.shape / .size /
+    .pose``."""
+    names = world.get("obstacle_names", [])
+    if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+        raise WorldError("world.obstacle_names", f"expected a list of names, got {short_repr(names)}")
+    if len(set(names)) != len(names):
+        raise WorldError("world.obstacle_names", "expected distinct names")
+    table = world.get("obstacles", {}) or {}
+    if not isinstance(table, Mapping):
+        raise WorldError("world.obstacles", f"expected a mapping of obstacles, got {short_repr(table)}")
+    out = []
+    for name in names:
+        parameter = f"world.obstacles.{name}"
+        entry = table.get(name)
+        if not isinstance(entry, Mapping):
+            raise WorldError(parameter, "expected shape, size and pose (world.obstacle_names lists it)")
+        for key in ("shape", "size", "pose"):
+            if key not in entry:
+                raise WorldError(f"{parameter}.{key}", "missing")
+        pose = pose_matrix(_numbers(entry["pose"], f"{parameter}.pose", 6, "a pose [x, y, z, roll, pitch, yaw]"))
+        out.append(make_obstacle(name, entry["shape"], entry["size"], pose, parameter))
+    return tuple(out)
+
+
+#: ``shape_msgs/SolidPrimitive`` type numbers that are obstacles here (a cone, 4, is not).
+_PRIMITIVE_TYPES = {1: "box", 2: "sphere", 3: "cylinder"}
+
+
+def _scene_pose(value: Any, parameter: str) -> NDArray[np.float64]:
+    """A ``geometry_msgs/Pose`` as MoveIt's YAML writes it: ``position`` [x, y, z] and ``orientation``
+    [x, y, z, w] (lists, or mappings with those keys)."""
+    if not isinstance(value, Mapping):
+        raise WorldError(parameter, f"expected a pose with position and orientation, got {short_repr(value)}")
+
+    def vector(key: str, names: str, default: list[float]) -> list[float]:
+        item = value.get(key, default)
+        if isinstance(item, Mapping):
+            item = [item.get(name, 0.0) for name in names]
+        return _numbers(item, f"{parameter}.{key}", len(names), f"[{', '.join(names)}]")
+
+    position = vector("position", "xyz", [0.0, 0.0, 0.0])
+    orientation = vector("orientation", "xyzw", [0.0, 0.0, 0.0, 1.0])
+    if math.sqrt(sum(v * v for v in orientation)) < 1e-9:
+        raise WorldError(f"{parameter}.orientation", "expected a non-zero quaternion [x, y, z, w]")
+    return quaternion_matrix(position, orientation)
+
+
+def _collision_object(item: Any, parameter: str, frames: Mapping[str, NDArray[np.float64]]) -> list[Obstacle]:
+    if not isinstance(item, Mapping) or not isinstance(item.get("id"), str) or not item["id"]:
+        raise WorldError(parameter, "expected a collision object with an id")
+    frame_id = str((item.get("header") or {}).get("frame_id", "") or "world").lstrip("/")
+    if frame_id not in frames:
+        raise WorldError(f"{parameter}.header.frame_id", f"unknown frame {frame_id!r}; known: {sorted(frames)}")
+    base = frames[frame_id] @ (_scene_pose(item["pose"], f"{parameter}.pose") if "pose" in item else np.eye(4))
+    primitives = item.get("primitives") or []
+    poses = item.get("primitive_poses") or []
+    if not isinstance(primitives, list) or not isinstance(poses, list) or len(primitives) != len(poses):
+        raise WorldError(parameter, "expected primitives and primitive_poses, one pose per primitive")
+    out = []
+    for k, (primitive, pose) in enumerate(zip(primitives, poses, strict=True)):
+        where = f"{parameter}.primitives[{k}]"
+        kind = primitive.get("type") if isinstance(primitive, Mapping) else None
+        shape = _PRIMITIVE_TYPES.get(kind) if isinstance(kind, int) else str(kind).lower()
+        if shape not in SHAPES:
+            raise WorldError(f"{where}.type", f"expected box, sphere or cylinder, got {short_repr(kind)}")
+        name = item["id"] if len(primitives) == 1 else f"{item['id']}_{k}"
+        placed = base @ _scene_pose(pose, f"{parameter}.primitive_poses[{k}]")
+        out.append(make_obstacle(name, shape, primitive.get("dimensions"), placed, where))
+    return out
+
+
+def scene_obstacles(scene: Any, frames: Mapping[str, NDArray[np.float64]], parameter: str) -> list[Obstacle]:
+    """The obstacles of a planning scene (the parsed YAML): each collision object's primitives, named
+    ``<id>`` (``<id>_<k>`` for the k-th of several). ``frames`` maps the frame names a ``header.frame_id``
+    may give to their 4x4 poses in ``world``; ``parameter`` names the file in errors."""
+    if not isinstance(scene, Mapping):
+        raise WorldError(parameter, "expected a moveit_msgs/PlanningScene as YAML (a mapping with world:)")
+    part = scene.get("world") if scene.get("world") is not None else {}
+    if not isinstance(part, Mapping):
+        raise WorldError(f"{parameter}: world", f"expected a mapping holding collision_objects, got {short_repr(part)}")
+    objects = part.get("collision_objects") or []
+    if not isinstance(objects, list):
+        raise WorldError(f"{parameter}: world.collision_objects", "expected a list of collision objects")
+    out = []
+    for i, item in enumerate(objects):
+        out.extend(_collision_object(item, f"{parameter}: world.collision_objects[{i}]", frames))
+    return out
+
+
+def world_obstacles(
+    world: Mapping[str, Any], folder: Path, frames: Mapping[str, NDArray[np.float64]] | None = None
+) -> tuple[Obstacle, ...]:
+    """Every obstacle of a spatial world: ``world.obstacle_names`` and, when ``world.scene_file`` names one,
+    the planning scene's (read relative to ``folder``, the parameter file's). ``frames`` adds the frames a
+    scene's ``frame_id`` may name besides ``world`` (the robot's ``base_link``)."""
+    out = list(obstacles_from_parameters(world))
+    if "scene_file" in world:
+        import yaml
+
+        path = Path(str(world["scene_file"]))
+        path = path if path.is_absolute() else folder / path
+        try:
+            scene = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+            raise WorldError("world.scene_file", f"cannot read {str(path)!r} as YAML: {error}") from None
+        known = {"world": np.eye(4), **(frames or {})}
+        out.extend(scene_obstacles(scene, known, "world.scene_file"))
+    names = [o.name for o in out]
+    if len(set(names)) != len(names):
+        twice = sorted({n for n in names if names.count(n) > 1})
+        raise WorldError("world.scene_file", f"obstacle names must be distinct; given twice: {twice}")
+    return tuple(out)
+
+
+def bounds_from_parameters(world: Mapping[str, Any]) -> NDArray[np.float64] | None:
+    """``world.bounds`` ``[xmin, ymin, zmin, xmax, ymax, zmax]`` (m), or ``None`` when absent."""
+    if "bounds" not in world:
+        return None
+    values = np.array(_numbers(world["bounds"], "world.bounds", 6, "[xmin, ymin, zmin, xmax, ymax, zmax]"))
+    if np.any(values[:3] >= values[3:]):
+        raise WorldError("world.bounds", f"expected each minimum below its maximum, got {values.tolist()}")
+    return values
+
+
+def obstacle_arrays(obstacles: Sequence[Obstacle]) -> dict[str, NDArray[Any]]:
+    """The obstacles packed for the kernels: kind (0 box, 1 cylinder, 2 sphere), rotation (local to world),
+    position, dims (box half extents; cylinder radius, half height; sphere radius) and bounding radius."""
+    kind = np.array([list(SHAPES).index(o.shape) for o in obstacles], dtype=np.int64)
+    dims = np.zeros((len(obstacles), 3))
+    bound = np.zeros(len(obstacles))
+    for i, o in enumerate(obstacles):
+        if o.shape == "box":
+            dims[i] = np.asarray(o.size) / 2
+        elif o.shape == "cylinder":
+            dims[i, :2] = o.size[1], o.size[0] / 2
+        else:
+            dims[i, 0] = o.size[0]
+        bound[i] = float(np.linalg.norm(dims[i])) if o.shape != "sphere" else o.size[0]
+    rot = np.array([o.pose[:3, :3] for o in obstacles]).reshape(-1, 3, 3)
+    pos = np.array([o.pose[:3, 3] for o in obstacles]).reshape(-1, 3)
+    return {"obs_kind": kind, "obs_r": rot, "obs_t": pos, "obs_dims": dims, "obs_bound": bound}

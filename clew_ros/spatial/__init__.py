@@ -7,6 +7,8 @@
   scene YAML (`world.scene_file`), and bounds.
 - :mod:`~clew_ros.spatial.checker`: the compiled, batched validity checker and free intervals of one joint
   (:mod:`~clew_ros.spatial.kernels`).
+- :mod:`~clew_ros.spatial.inverse`: the tcp's inverse kinematics (damped least squares from many seeds,
+  batched): every distinct solution within the joint limits, optionally only collision-free ones.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 
 It runs without ROS (a test keeps it so); nothing outside it imports it yet (planning on it is issue 44).

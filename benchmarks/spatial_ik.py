@@ -1,0 +1,98 @@
+"""``python -m benchmarks.spatial_ik [--robots panda ur5] [--targets 200] [--seeds 32] [--random-robots 0]``:
+the tcp inverse kinematics' success rate and speed (issue 43).
+
+For each shipped robot (config/robots), and for ``--random-robots`` generated chains
+(:mod:`clew_ros.spatial.random_robot`): ``--targets`` reachable targets (the tcp poses of random
+configurations within the limits) solved in one batch with ``--seeds`` random seeds each. Printed: the
+share of targets with at least one solution, the mean number of distinct solutions, the worst tcp error
+of any solution (m, rad; the numpy reference forward kinematics), and CPU milliseconds per target (the
+compiled kernel warmed up first). Then the same number of unreachable targets (3 m beyond the robot's
+reach): the share wrongly solved (must be 0) and their CPU time per target.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics
+from clew_ros.spatial.robot import RobotModel, load_robot, robot_from_parameters
+from clew_ros.spatial.transforms import pose_matrix
+
+CONFIG = Path(__file__).resolve().parents[1] / "config"
+ROBOTS: dict[str, dict[str, Any]] = {
+    "panda": {
+        "urdf": "robots/panda/panda.urdf",
+        "srdf": "robots/panda/panda.srdf",
+        "base_link": "panda_link0",
+        "tip_link": "panda_hand_tcp",
+    },
+    "ur5": {
+        "urdf": "robots/ur5/ur5.urdf",
+        "srdf": "robots/ur5/ur5.srdf",
+        "base_link": "base_link",
+        "tip_link": "tool0",
+    },
+}
+
+
+def errors(robot: RobotModel, target: np.ndarray, q: np.ndarray) -> tuple[float, float]:
+    pose = robot.tcp_pose(q.tolist())
+    cos = (np.trace(pose[:3, :3] @ target[:3, :3].T) - 1.0) / 2.0
+    return float(np.linalg.norm(pose[:3, 3] - target[:3, 3])), math.acos(min(1.0, max(-1.0, cos)))
+
+
+def measure(label: str, robot: RobotModel, targets: int, settings: IKSettings, seed: int) -> None:
+    solver = InverseKinematics(robot, settings)
+    rng = np.random.default_rng(seed)
+    qs = rng.uniform(robot.lower, robot.upper, (targets, robot.dof))
+    poses = [robot.tcp_pose(q) for q in qs]
+    solver.solve(poses[0], np.random.default_rng(0))  # compiles (or loads) the kernel
+    start = time.process_time()
+    found = solver.solve_many(poses, rng)
+    cpu = time.process_time() - start
+    worst_m = worst_rad = 0.0
+    for pose, solutions in zip(poses, found, strict=True):
+        for q in solutions:
+            m, rad = errors(robot, pose, q)
+            worst_m, worst_rad = max(worst_m, m), max(worst_rad, rad)
+    reach = float(np.max(np.linalg.norm([p[:3, 3] - robot.base[:3, 3] for p in poses], axis=1)))
+    far = [pose_matrix([reach + 3.0, 0.0, 0.0, 0.0, 0.0, 0.0]) @ p for p in poses]
+    start = time.process_time()
+    wrong = solver.solve_many(far, rng)
+    far_cpu = time.process_time() - start
+    print(
+        f"{label:<14} dof {robot.dof}  solved {np.mean([len(s) > 0 for s in found]):6.1%}  "
+        f"solutions/target {np.mean([len(s) for s in found]):5.1f}  worst error {worst_m:.1e} m {worst_rad:.1e} rad  "
+        f"{cpu / targets * 1e3:6.2f} ms/target  |  unreachable solved {np.mean([len(s) > 0 for s in wrong]):.0%} "
+        f"{far_cpu / targets * 1e3:6.2f} ms/target"
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--robots", nargs="*", default=list(ROBOTS), choices=list(ROBOTS))
+    parser.add_argument("--targets", type=int, default=200)
+    parser.add_argument("--seeds", type=int, default=IKSettings().seeds)
+    parser.add_argument("--random-robots", type=int, default=0, help="also this many generated chains")
+    args = parser.parse_args(argv)
+    settings = IKSettings(seeds=args.seeds)
+    print(f"{args.targets} random reachable targets per robot, {args.seeds} seeds each; CPU time, one core")
+    for name in args.robots:
+        measure(name, robot_from_parameters(ROBOTS[name], CONFIG), args.targets, settings, seed=1)
+    if args.random_robots:
+        from clew_ros.spatial.random_robot import RandomRobotSettings, random_robot_urdf
+
+        for k in range(args.random_robots):
+            text = random_robot_urdf(np.random.default_rng(100 + k), RandomRobotSettings())
+            robot = load_robot(text, folder=CONFIG, base_link="base_link", tip_link="tool")
+            measure(f"random {100 + k}", robot, args.targets, settings, seed=1)
+
+
+if __name__ == "__main__":
+    main()

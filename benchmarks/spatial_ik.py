@@ -2,7 +2,7 @@
 the tcp inverse kinematics' success rate and speed (issue 43).
 
 For each shipped robot (config/robots), and for ``--random-robots`` generated chains
-(:mod:`clew_ros.spatial.random_robot`): ``--targets`` reachable targets (the tcp poses of random
+(:mod:`clew_ros.spatial.random_robot`, seeds 100, 101, ...): ``--targets`` reachable targets (the tcp poses of random
 configurations within the limits) solved in one batch with ``--seeds`` random seeds each. Printed: the
 share of targets with at least one solution, the mean number of distinct solutions, the worst tcp error
 of any solution (m, rad; the numpy reference forward kinematics), and CPU milliseconds per target (the
@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
-from clew_ros.spatial.robot import RobotModel, load_robot, robot_from_parameters
+from clew_ros.spatial.random_robot import random_robot
+from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.transforms import pose_matrix
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"
@@ -86,12 +87,8 @@ def main(argv: list[str] | None = None) -> None:
     for name in args.robots:
         measure(name, robot_from_parameters(ROBOTS[name], CONFIG), args.targets, settings, seed=1)
     if args.random_robots:
-        from clew_ros.spatial.random_robot import RandomRobotSettings, random_robot_urdf
-
         for k in range(args.random_robots):
-            text = random_robot_urdf(np.random.default_rng(100 + k), RandomRobotSettings())
-            robot = load_robot(text, folder=CONFIG, base_link="base_link", tip_link="tool")
-            measure(f"random {100 + k}", robot, args.targets, settings, seed=1)
+            measure(f"random {100 + k}", random_robot(np.random.default_rng(100 + k)), args.targets, settings, seed=1)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,8 @@
   (:mod:`~clew_ros.spatial.kernels`).
 - :mod:`~clew_ros.spatial.inverse`: the tcp's inverse kinematics (damped least squares from many seeds,
   batched): every distinct solution within the joint limits, optionally only collision-free ones.
+- :mod:`~clew_ros.spatial.random_robot`: random serial arms (4-8 revolute joints, capsule, box and cylinder
+  links) as URDF text, seeded, so tests and benchmarks are never tuned to one arm.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 
 It runs without ROS (a test keeps it so); nothing outside it imports it yet (planning on it is issue 44).

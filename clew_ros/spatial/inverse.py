@@ -55,6 +55,11 @@ class IKSettings:
     #: No joint moves more than this per step (rad, m for a prismatic joint): a linearisation holds only
     #: near the current configuration.
     max_step_rad: float = 0.5
+    #: A step that lowers the squared error by less than this fraction is a stall...
+    stall_ratio: float = 1e-2
+    #: ... and a seed that stalls this many steps in a row is given up (it is creeping towards a local
+    #: minimum, the nearest the arm gets to an unreachable target from there).
+    stall_steps: int = 5
     #: Solutions closer than this joint distance (rad, m; max over joints) are one solution: well above the
     #: scatter of converged runs, below any gap worth a different plan.
     distinct_rad: float = 1e-2
@@ -62,7 +67,7 @@ class IKSettings:
     def __post_init__(self) -> None:
         for item in fields(self):
             value = getattr(self, item.name)
-            if item.name in ("seeds", "max_iterations"):
+            if item.name in ("seeds", "max_iterations", "stall_steps"):
                 if not isinstance(value, int) or value < 0:
                     raise ValueError(f"IKSettings.{item.name}: expected an integer >= 0, got {value!r}")
             elif not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
@@ -161,7 +166,7 @@ class InverseKinematics:
                 a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
                 a["prismatic"], a["tcp_frame"], a["tcp_r"], a["tcp_t"], s.max_iterations, s.damping,
                 s.damping_min, s.damping_max, s.position_tolerance_m, s.angle_tolerance_rad, s.max_step_rad,
-                out_q, out_ok,
+                s.stall_ratio, s.stall_steps, out_q, out_ok,
             )  # fmt: skip
         out = []
         for t in range(len(matrices)):

@@ -5,7 +5,8 @@ Damped least squares with Levenberg-Marquardt damping, projected onto the joint 
 rotation vector of ``R_target R^T``) and ``J`` (6, n) the geometric Jacobian of the tcp; a step that
 lowers ``|e|^2`` is taken (clamped to the limits) and ``lambda`` shrinks, one that does not is refused
 and ``lambda`` grows; past ``damping_max`` the seed is given up (a local minimum: the target is out of
-reach from there). Frames as in :mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is
+reach from there), as it is after ``stall_steps`` steps in a row that each lower ``|e|^2`` by less than
+the fraction ``stall_ratio`` (creeping towards such a minimum). Frames as in :mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is
 ``tcp_r``, ``tcp_t`` in frame ``tcp_frame``.
 """
 
@@ -175,7 +176,18 @@ def _within(e: Array, position2: float, angle2: float) -> bool:
 
 
 @_jit
-def solve_batch(  # noqa: PLR0917, PLR0912, C901
+def _clamped_step(q: Array, dq: Array, max_step: float, lower: Array, upper: Array, out: Array) -> None:  # noqa: PLR0917
+    """``out = q + dq``, ``dq`` scaled down so no joint moves more than ``max_step``, clamped to the limits."""
+    biggest = 0.0
+    for j in range(q.shape[0]):
+        biggest = max(biggest, abs(dq[j]))
+    scale = max_step / biggest if biggest > max_step else 1.0
+    for j in range(q.shape[0]):
+        out[j] = min(max(q[j] + scale * dq[j], lower[j]), upper[j])
+
+
+@_jit
+def solve_batch(  # noqa: PLR0917, C901
     targets_r: Array,
     targets_t: Array,
     seeds: Array,
@@ -197,6 +209,8 @@ def solve_batch(  # noqa: PLR0917, PLR0912, C901
     position_tolerance: float,
     angle_tolerance: float,
     max_step: float,
+    stall_ratio: float,
+    stall_steps: int,
     out_q: Array,
     out_ok: Array,
 ) -> None:
@@ -228,6 +242,7 @@ def solve_batch(  # noqa: PLR0917, PLR0912, C901
             _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, pr, pt)
             cost = pose_error(tr, tt, pr, pt, m, e)
             lam = damping
+            stalls = 0
             for _ in range(max_iterations):
                 if _within(e, tol_p2, tol_r2):
                     break
@@ -237,17 +252,13 @@ def solve_batch(  # noqa: PLR0917, PLR0912, C901
                     if not _damped_step(jac, e, lam, scratch, dq):
                         lam *= 10.0
                         continue
-                    biggest = 0.0
-                    for j in range(n):
-                        biggest = max(biggest, abs(dq[j]))
-                    scale = max_step / biggest if biggest > max_step else 1.0
-                    for j in range(n):
-                        trial[j] = min(max(q[j] + scale * dq[j], lower[j]), upper[j])
+                    _clamped_step(q, dq, max_step, lower, upper, trial)
                     forward(trial, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
                     _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, pr, pt)
                     trial_cost = pose_error(tr, tt, pr, pt, m, e_trial)
                     if trial_cost < cost:
                         improved = True
+                        stalls = stalls + 1 if trial_cost > cost * (1.0 - stall_ratio) else 0
                         cost = trial_cost
                         for j in range(n):
                             q[j] = trial[j]
@@ -256,7 +267,7 @@ def solve_batch(  # noqa: PLR0917, PLR0912, C901
                         lam = max(lam * 0.1, damping_min)
                         break
                     lam *= 10.0
-                if not improved:
+                if not improved or stalls >= stall_steps:
                     break
             for j in range(n):
                 out_q[t, s, j] = q[j]

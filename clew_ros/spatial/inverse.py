@@ -10,6 +10,10 @@ ones: two solutions are the same when no joint differs by more than
 has a continuum of solutions for one pose, so each seed tends to give its own. Every solution lies
 within the joint limits; given a :class:`~clew_ros.spatial.checker.SpatialChecker`, only those it calls
 valid (collision-free) are kept. Same generator state, same answers.
+
+Grasping and placing: :func:`grasp_targets` turns an object pose and its grasps (tcp poses in the
+object's frame, ``world.object.grasps``) into the tcp targets in ``world``; :meth:`InverseKinematics.solve_grasps`
+solves them all at once.
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ from clew_ros.spatial.kernels import ik
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.transforms import pose_matrix
 
-__all__ = ["IKSettings", "InverseKinematics", "distinct"]
+__all__ = ["IKSettings", "InverseKinematics", "distinct", "grasp_targets"]
 
 
 @dataclass(frozen=True)
@@ -87,6 +91,22 @@ def distinct(solutions: NDArray[np.float64], distance: float) -> NDArray[np.floa
         if all(float(np.max(np.abs(row - other))) > distance for other in kept):
             kept.append(row)
     return np.array(kept).reshape(-1, solutions.shape[1])
+
+
+def grasp_targets(object_pose: Any, grasps: Any) -> NDArray[np.float64]:
+    """The tcp poses (g, 4, 4) in ``world`` that hold each of ``grasps`` (tcp poses in the object's frame:
+    a flat list of 6 numbers each, or (g, 6), as ``world.object.grasps``) when the object is at
+    ``object_pose`` (a 4x4 pose or 6 numbers in ``world``)."""
+    pose = _target_matrix(object_pose, "object_pose")
+    try:
+        flat = np.asarray(grasps, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError("grasps: expected tcp poses of 6 numbers each [x, y, z, roll, pitch, yaw]") from None
+    if len(flat) == 0 or len(flat) % 6 or not np.all(np.isfinite(flat)):
+        raise ValueError(
+            f"grasps: expected tcp poses of 6 finite numbers each [x, y, z, roll, pitch, yaw], got {len(flat)} numbers"
+        )
+    return np.array([pose @ pose_matrix(row.tolist()) for row in flat.reshape(-1, 6)])
 
 
 class InverseKinematics:
@@ -175,6 +195,13 @@ class InverseKinematics:
                 found = found[checker.valid(found)]
             out.append(distinct(found, s.distinct_rad))
         return out
+
+    def solve_grasps(
+        self, object_pose: Any, grasps: Any, rng: np.random.Generator, *, checker: SpatialChecker | None = None
+    ) -> list[NDArray[np.float64]]:
+        """For each grasp (see :func:`grasp_targets`) of the object at ``object_pose``: the distinct
+        configurations that hold it (as :meth:`solve`)."""
+        return self.solve_many(list(grasp_targets(object_pose, grasps)), rng, checker=checker)
 
     def _given_seeds(self, seeds: Sequence[Any] | None, count: int) -> NDArray[np.float64]:
         n = self.robot.dof

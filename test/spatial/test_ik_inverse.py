@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.inverse import IKSettings, InverseKinematics, distinct
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics, distinct, grasp_targets
 from clew_ros.spatial.kernels.ik import pose_error
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import make_obstacle
@@ -160,3 +160,20 @@ def test_bad_input_is_refused_naming_it(panda: RobotModel) -> None:
         IKSettings(seeds=-1)
     with pytest.raises(ValueError, match=r"IKSettings.damping: expected damping_min <= damping"):
         IKSettings(damping=1e9)
+
+
+def test_grasps_of_an_object_are_solved(panda: RobotModel) -> None:
+    box_on_table = [0.5, 0.1, 0.3, 0.0, 0.0, 0.4]
+    grasps = [0.0, 0.0, 0.06, math.pi, 0.0, 0.0, 0.0, 0.0, 0.06, math.pi, 0.0, math.pi / 2]  # from above, 2 yaws
+    targets = grasp_targets(box_on_table, grasps)
+    assert targets.shape == (2, 4, 4)
+    np.testing.assert_allclose(targets[0][:3, 3], [0.5, 0.1, 0.36], atol=1e-12)
+    np.testing.assert_allclose(targets[0][:3, 2], [0.0, 0.0, -1.0], atol=1e-12)  # the tcp's z points down
+    found = InverseKinematics(panda, SETTINGS).solve_grasps(box_on_table, grasps, np.random.default_rng(5))
+    assert [len(s) > 0 for s in found] == [True, True]
+    for target, solutions in zip(targets, found, strict=True):
+        assert_solutions(panda, target, solutions)
+    with pytest.raises(ValueError, match=r"grasps: expected tcp poses of 6 finite numbers each"):
+        grasp_targets(box_on_table, [0.0] * 7)
+    with pytest.raises(ValueError, match=r"object_pose: expected a 4x4 pose"):
+        grasp_targets([0.0] * 5, grasps)

@@ -6,8 +6,9 @@ rotation vector of ``R_target R^T``) and ``J`` (6, n) the geometric Jacobian of 
 lowers ``|e|^2`` is taken (clamped to the limits) and ``lambda`` shrinks, one that does not is refused
 and ``lambda`` grows; past ``damping_max`` the seed is given up (a local minimum: the target is out of
 reach from there), as it is after ``stall_steps`` steps in a row that each lower ``|e|^2`` by less than
-the fraction ``stall_ratio`` (creeping towards such a minimum). Frames as in :mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is
-``tcp_r``, ``tcp_t`` in frame ``tcp_frame``.
+the fraction ``stall_ratio`` (creeping towards such a minimum). Frames as in
+:mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is ``tcp_r``, ``tcp_t`` in frame
+``tcp_frame``.
 """
 
 from __future__ import annotations

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ import pytest
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.random_robot import RandomRobotSettings, random_robot, random_robot_urdf
-from clew_ros.spatial.robot import RobotModel
+from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.spheres import sphere_model, surface_points
 
 SEEDS = range(8)
@@ -40,6 +41,16 @@ def test_every_generated_robot_loads(robots: list[RobotModel]) -> None:
         axes_spread = np.abs(robot.axes @ robot.axes.T)[np.triu_indices(robot.dof, 1)]
         assert axes_spread.min() < 0.99  # axes are not all parallel
     assert kinds == {"box", "cylinder", "sphere"}  # boxes, cylinders and capsules (a cylinder and two spheres)
+
+
+def test_the_text_loads_as_a_robot_description(tmp_path: Path) -> None:
+    text = random_robot_urdf(np.random.default_rng(5))
+    parameters = {"description": text, "base_link": "base_link", "tip_link": "tool"}
+    robot = robot_from_parameters(parameters, tmp_path)
+    expected = random_robot(np.random.default_rng(5))
+    assert robot.joint_names == expected.joint_names
+    q = np.random.default_rng(6).uniform(robot.lower, robot.upper, robot.dof)
+    np.testing.assert_allclose(robot.tcp_pose(q), expected.tcp_pose(q), atol=1e-12)
 
 
 def test_the_joint_count_follows_the_settings() -> None:

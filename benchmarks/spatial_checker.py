@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.ik import IkSettings, solve_tcp_pose
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.robot import LinkModel, RobotModel, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle, make_obstacle
 from clew_ros.spatial.spheres import SphereModel, over_approximation, sphere_model
@@ -143,13 +143,14 @@ def _coal_shape(coal: Any, item: Any) -> Any:
 def inverse_kinematics(robot: RobotModel, rng: np.random.Generator, count: int) -> None:
     """A table row: the inverse kinematics of ``count`` reachable tcp poses (those of random configurations)."""
     poses = rng.uniform(robot.lower, robot.upper, size=(count, robot.dof))
-    solve_tcp_pose(robot, robot.tcp_pose(poses[0]), rng)  # compiled or loaded
+    solver = InverseKinematics(robot)
+    solver.solve(robot.tcp_pose(poses[0]), rng)  # compiled or loaded
     start_cpu = time.process_time()
-    counts = [len(solve_tcp_pose(robot, robot.tcp_pose(q), rng)) for q in poses]
+    counts = [len(solver.solve(robot.tcp_pose(q), rng)) for q in poses]
     ik_ms = (time.process_time() - start_cpu) / len(poses) * 1e3
     solved = np.mean(np.array(counts) > 0)
     print(
-        f"| inverse kinematics of reachable tcp poses ({IkSettings().seeds} seeds): solved / distinct solutions / "
+        f"| inverse kinematics of reachable tcp poses ({IKSettings().seeds} seeds): solved / distinct solutions / "
         f"CPU ms a pose | {solved:.2f} / {np.mean(counts):.1f} / {ik_ms:.2f} |"
     )
 

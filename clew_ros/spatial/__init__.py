@@ -9,8 +9,12 @@
   placements: the test, sampling, projection.
 - :mod:`~clew_ros.spatial.checker`: the compiled, batched validity checker and free intervals of one joint
   (:mod:`~clew_ros.spatial.kernels`).
-- :mod:`~clew_ros.spatial.ik`: inverse kinematics of the tcp (damped least squares from many seeds, compiled),
-  every distinct solution within the limits.
+- :mod:`~clew_ros.spatial.inverse`: the tcp's inverse kinematics (damped least squares from many seeds,
+  batched): every distinct solution within the joint limits, optionally only collision-free ones.
+- :mod:`~clew_ros.spatial.random_robot`: random serial arms (4-8 revolute joints, capsule, box and cylinder
+  links) as URDF text, seeded, so tests and benchmarks are never tuned to one arm.
+- :mod:`~clew_ros.spatial.validate`: transit paths checked at 0.002 rad per joint under the checker,
+  each invalid piece named with its first invalid configuration and why.
 - :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from clew_ros.spatial.checker import Held, SpatialChecker
-from clew_ros.spatial.ik import solve_tcp_pose
+from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.placements import MovableObject, placement_pose, supports_from_parameters
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import make_obstacle
@@ -34,7 +34,7 @@ def arm(panda: RobotModel) -> RobotModel:
 def holding(arm: RobotModel, spheres: SphereModel, object_pose: np.ndarray, held: Held, extra=()) -> tuple:
     """A checker with ``held``, and the valid configurations that hold the object at ``object_pose``."""
     checker = SpatialChecker(arm, spheres, [TABLE, *extra], held=held)
-    solutions = solve_tcp_pose(arm, object_pose @ GRASP, np.random.default_rng(1))
+    solutions = InverseKinematics(arm).solve(object_pose @ GRASP, np.random.default_rng(1))
     return checker, solutions
 
 

@@ -3,5 +3,6 @@
 
 - :mod:`~clew_ros.spatial.kernels.collide`: forward kinematics, sphere-vs-obstacle distances, batched
   validity, clearances and the conservative free interval of one joint.
-- :mod:`~clew_ros.spatial.kernels.ik`: damped least-squares inverse kinematics of the tcp from many seeds.
+- :mod:`~clew_ros.spatial.kernels.ik`: the tcp's pose error, Jacobian and damped least squares
+  (Levenberg-Marquardt) over a batch of targets and seeds.
 """

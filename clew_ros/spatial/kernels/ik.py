@@ -1,16 +1,20 @@
-"""Inverse kinematics of the tool centre point, damped least squares from many seeds (numba).
+"""Inverse kinematics of the tool centre point, batched over targets and seeds (numba).
 
-The conventions of :mod:`clew_ros.spatial.kernels.collide` (frames, joint origins and axes); the tcp rides
-on frame ``tcp_frame`` at ``tcp_r``, ``tcp_t``. Each seed is iterated on its own: the pose error (position,
-and rotation as the axis-angle vector of ``target @ current^T``), the geometric Jacobian, a damped
-least-squares step ``J^T (J J^T + damping^2 I)^-1 e`` cut to ``max_step`` per joint, clamped to the
-limits; it stops when within both tolerances or after ``iterations``.
+Damped least squares with Levenberg-Marquardt damping, projected onto the joint limits: from each seed,
+``dq = J^T (J J^T + lambda I)^-1 e`` where ``e`` (6) is the pose error in ``world`` (position, then the
+rotation vector of ``R_target R^T``) and ``J`` (6, n) the geometric Jacobian of the tcp; a step that
+lowers ``|e|^2`` is taken (clamped to the limits) and ``lambda`` shrinks, one that does not is refused
+and ``lambda`` grows; past ``damping_max`` the seed is given up (a local minimum: the target is out of
+reach from there), as it is after ``stall_steps`` steps in a row that each lower ``|e|^2`` by less than
+the fraction ``stall_ratio`` (creeping towards such a minimum). Frames as in
+:mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is ``tcp_r``, ``tcp_t`` in frame
+``tcp_frame``.
 """
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numba
 import numpy as np
@@ -18,92 +22,176 @@ from numpy.typing import NDArray
 
 from clew_ros.spatial.kernels.collide import forward
 
-if TYPE_CHECKING:
-    from numba.core.decorators import _JITWrapper  # in numba's type stubs only
-
-__all__ = ["solve_tcp"]
+__all__ = ["pose_error", "solve_batch", "tcp_batch"]
 
 Array = NDArray[Any]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_leaf: _JITWrapper = numba.njit(  # type: ignore[call-overload]  # numba's stubs leave out its underscored options
-    cache=True, nogil=True, error_model="numpy", _nrt=False
-)
 
 
-@_leaf
+@_jit
 def _tcp(  # noqa: PLR0917
     frame_r: Array, frame_t: Array, tcp_frame: int, tcp_r: Array, tcp_t: Array, out_r: Array, out_t: Array
 ) -> None:
     fr = frame_r[tcp_frame]
+    ft = frame_t[tcp_frame]
     for a in range(3):
-        out_t[a] = frame_t[tcp_frame, a] + fr[a, 0] * tcp_t[0] + fr[a, 1] * tcp_t[1] + fr[a, 2] * tcp_t[2]
+        out_t[a] = fr[a, 0] * tcp_t[0] + fr[a, 1] * tcp_t[1] + fr[a, 2] * tcp_t[2] + ft[a]
         for c in range(3):
             out_r[a, c] = fr[a, 0] * tcp_r[0, c] + fr[a, 1] * tcp_r[1, c] + fr[a, 2] * tcp_r[2, c]
 
 
-@_leaf
-def _error(target_r: Array, target_t: Array, cur_r: Array, cur_t: Array, e: Array) -> float:
-    """The 6-vector pose error into ``e`` (position m, rotation vector rad); returns the rotation angle."""
+@_jit
+def pose_error(target_r: Array, target_t: Array, r: Array, t: Array, m: Array, out: Array) -> float:  # noqa: PLR0917
+    """``out`` (6): the position error ``target_t - t`` (m) and the rotation vector (rad) of ``target_r
+    r^T`` (the rotation that takes ``r`` onto ``target_r``, in ``world``); returns ``|out|^2``. ``m``
+    (3, 3) is scratch."""
     for a in range(3):
-        e[a] = target_t[a] - cur_t[a]
-    # m = target @ cur^T
-    m00 = target_r[0, 0] * cur_r[0, 0] + target_r[0, 1] * cur_r[0, 1] + target_r[0, 2] * cur_r[0, 2]
-    m11 = target_r[1, 0] * cur_r[1, 0] + target_r[1, 1] * cur_r[1, 1] + target_r[1, 2] * cur_r[1, 2]
-    m22 = target_r[2, 0] * cur_r[2, 0] + target_r[2, 1] * cur_r[2, 1] + target_r[2, 2] * cur_r[2, 2]
-    m21 = target_r[2, 0] * cur_r[1, 0] + target_r[2, 1] * cur_r[1, 1] + target_r[2, 2] * cur_r[1, 2]
-    m12 = target_r[1, 0] * cur_r[2, 0] + target_r[1, 1] * cur_r[2, 1] + target_r[1, 2] * cur_r[2, 2]
-    m02 = target_r[0, 0] * cur_r[2, 0] + target_r[0, 1] * cur_r[2, 1] + target_r[0, 2] * cur_r[2, 2]
-    m20 = target_r[2, 0] * cur_r[0, 0] + target_r[2, 1] * cur_r[0, 1] + target_r[2, 2] * cur_r[0, 2]
-    m10 = target_r[1, 0] * cur_r[0, 0] + target_r[1, 1] * cur_r[0, 1] + target_r[1, 2] * cur_r[0, 2]
-    m01 = target_r[0, 0] * cur_r[1, 0] + target_r[0, 1] * cur_r[1, 1] + target_r[0, 2] * cur_r[1, 2]
-    vx, vy, vz = m21 - m12, m02 - m20, m10 - m01
-    sin2 = math.sqrt(vx * vx + vy * vy + vz * vz)  # 2 sin(angle)
-    angle = math.atan2(sin2, m00 + m11 + m22 - 1.0)
-    if sin2 < 1e-12:
-        if angle < 1.0:  # no rotation left
-            e[3], e[4], e[5] = 0.0, 0.0, 0.0
-            return angle
-        # a half turn: the axis from the diagonal; any sign
-        ax = math.sqrt(max((m00 + 1.0) / 2.0, 0.0))
-        ay = math.sqrt(max((m11 + 1.0) / 2.0, 0.0))
-        az = math.sqrt(max((m22 + 1.0) / 2.0, 0.0))
-        e[3], e[4], e[5] = angle * ax, angle * ay, angle * az
-        return angle
-    scale = angle / sin2
-    e[3], e[4], e[5] = vx * scale, vy * scale, vz * scale
-    return angle
-
-
-@_leaf
-def _solve6(a: Array, b: Array, x: Array) -> None:
-    """``x`` = ``a^-1 b`` for a symmetric positive definite 6x6 ``a`` (Cholesky, in place on ``a``)."""
-    for i in range(6):
-        for j in range(i + 1):
-            total = a[i, j]
-            for k in range(j):
-                total -= a[i, k] * a[j, k]
-            if i == j:
-                a[i, i] = math.sqrt(max(total, 1e-300))
-            else:
-                a[i, j] = total / a[j, j]
-    for i in range(6):  # L y = b
-        total = b[i]
-        for k in range(i):
-            total -= a[i, k] * x[k]
-        x[i] = total / a[i, i]
-    for i in range(5, -1, -1):  # L^T x = y
-        total = x[i]
-        for k in range(i + 1, 6):
-            total -= a[k, i] * x[k]
-        x[i] = total / a[i, i]
+        out[a] = target_t[a] - t[a]
+    # m = target_r @ r^T
+    for a in range(3):
+        for c in range(3):
+            m[a, c] = target_r[a, 0] * r[c, 0] + target_r[a, 1] * r[c, 1] + target_r[a, 2] * r[c, 2]
+    sx = 0.5 * (m[2, 1] - m[1, 2])
+    sy = 0.5 * (m[0, 2] - m[2, 0])
+    sz = 0.5 * (m[1, 0] - m[0, 1])
+    sin = math.sqrt(sx * sx + sy * sy + sz * sz)
+    cos = 0.5 * (m[0, 0] + m[1, 1] + m[2, 2] - 1.0)
+    angle = math.atan2(sin, cos)
+    if sin > 1e-6:
+        scale = angle / sin
+        out[3], out[4], out[5] = sx * scale, sy * scale, sz * scale
+    elif cos > 0.0:  # nearly no rotation: the rotation vector is s to first order
+        out[3], out[4], out[5] = sx, sy, sz
+    else:  # nearly a half turn: the axis from the symmetric part, (m + m^T) / 2 - cos I = (1 - cos) a a^T
+        k = 0
+        for a in range(1, 3):
+            if m[a, a] > m[k, k]:
+                k = a
+        bkk = m[k, k] - cos
+        norm = math.sqrt(max(bkk * (1.0 - cos), 1e-300))
+        ax = (0.5 * (m[0, k] + m[k, 0]) - (cos if k == 0 else 0.0)) / norm
+        ay = (0.5 * (m[1, k] + m[k, 1]) - (cos if k == 1 else 0.0)) / norm
+        az = (0.5 * (m[2, k] + m[k, 2]) - (cos if k == 2 else 0.0)) / norm
+        if ax * sx + ay * sy + az * sz < 0.0:
+            ax, ay, az = -ax, -ay, -az
+        out[3], out[4], out[5] = ax * angle, ay * angle, az * angle
+    total = 0.0
+    for a in range(6):
+        total += out[a] * out[a]
+    return total
 
 
 @_jit
-def solve_tcp(  # noqa: PLR0917
+def _jacobian(  # noqa: PLR0917
+    frame_r: Array, frame_t: Array, axes: Array, prismatic: Array, tcp_frame: int, p: Array, out: Array
+) -> None:
+    """The geometric Jacobian (6, n) of the tcp at ``p``: joint j turns about (or slides along) its axis
+    through frame j + 1's origin; joints past ``tcp_frame`` do not move it."""
+    n = axes.shape[0]
+    for j in range(n):
+        if j >= tcp_frame:
+            for a in range(6):
+                out[a, j] = 0.0
+            continue
+        r = frame_r[j + 1]
+        zx = r[0, 0] * axes[j, 0] + r[0, 1] * axes[j, 1] + r[0, 2] * axes[j, 2]
+        zy = r[1, 0] * axes[j, 0] + r[1, 1] * axes[j, 1] + r[1, 2] * axes[j, 2]
+        zz = r[2, 0] * axes[j, 0] + r[2, 1] * axes[j, 1] + r[2, 2] * axes[j, 2]
+        if prismatic[j]:
+            out[0, j], out[1, j], out[2, j] = zx, zy, zz
+            out[3, j] = out[4, j] = out[5, j] = 0.0
+            continue
+        dx = p[0] - frame_t[j + 1, 0]
+        dy = p[1] - frame_t[j + 1, 1]
+        dz = p[2] - frame_t[j + 1, 2]
+        out[0, j] = zy * dz - zz * dy
+        out[1, j] = zz * dx - zx * dz
+        out[2, j] = zx * dy - zy * dx
+        out[3, j], out[4, j], out[5, j] = zx, zy, zz
+
+
+@_jit
+def _cholesky(a: Array) -> bool:
+    """Factor the symmetric 6x6 ``a`` (its lower triangle) in place into ``L`` with ``L L^T = a``; False
+    when it is not positive definite (the damping too small for the rounding)."""
+    for r in range(6):
+        for c in range(r + 1):
+            s = a[r, c]
+            for k in range(c):
+                s -= a[r, k] * a[c, k]
+            if r == c:
+                if s <= 0.0:
+                    return False
+                a[r, r] = math.sqrt(s)
+            else:
+                a[r, c] = s / a[c, c]
+    return True
+
+
+@_jit
+def _solve_factored(a: Array, e: Array, y: Array) -> None:
+    """``y = (L L^T)^-1 e`` for the factor ``L`` in the lower triangle of ``a``."""
+    for r in range(6):
+        s = e[r]
+        for k in range(r):
+            s -= a[r, k] * y[k]
+        y[r] = s / a[r, r]
+    for r in range(5, -1, -1):
+        s = y[r]
+        for k in range(r + 1, 6):
+            s -= a[k, r] * y[k]
+        y[r] = s / a[r, r]
+
+
+@_jit
+def _damped_step(jac: Array, e: Array, damping: float, scratch: Array, out: Array) -> bool:
+    """``out = J^T (J J^T + damping I)^-1 e``; ``scratch`` (7, 6): the system and its solution. False when
+    the system is not positive definite."""
+    n = jac.shape[1]
+    a = scratch[:6]
+    y = scratch[6]
+    for r in range(6):
+        for c in range(r + 1):
+            s = 0.0
+            for j in range(n):
+                s += jac[r, j] * jac[c, j]
+            a[r, c] = s
+        a[r, r] += damping
+    if not _cholesky(a):
+        return False
+    _solve_factored(a, e, y)
+    for j in range(n):
+        s = 0.0
+        for r in range(6):
+            s += jac[r, j] * y[r]
+        out[j] = s
+    return True
+
+
+@_jit
+def _within(e: Array, position2: float, angle2: float) -> bool:
+    return bool(
+        e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= position2 and e[3] * e[3] + e[4] * e[4] + e[5] * e[5] <= angle2
+    )
+
+
+@_jit
+def _clamped_step(q: Array, dq: Array, max_step: float, lower: Array, upper: Array, out: Array) -> None:  # noqa: PLR0917
+    """``out = q + dq``, ``dq`` scaled down so no joint moves more than ``max_step``, clamped to the limits."""
+    biggest = 0.0
+    for j in range(q.shape[0]):
+        biggest = max(biggest, abs(dq[j]))
+    scale = max_step / biggest if biggest > max_step else 1.0
+    for j in range(q.shape[0]):
+        out[j] = min(max(q[j] + scale * dq[j], lower[j]), upper[j])
+
+
+@_jit
+def solve_batch(  # noqa: PLR0917, C901
+    targets_r: Array,
+    targets_t: Array,
     seeds: Array,
-    target_r: Array,
-    target_t: Array,
     lower: Array,
     upper: Array,
     base_r: Array,
@@ -115,63 +203,97 @@ def solve_tcp(  # noqa: PLR0917
     tcp_frame: int,
     tcp_r: Array,
     tcp_t: Array,
-    iterations: int,
+    max_iterations: int,
     damping: float,
-    max_step: float,
+    damping_min: float,
+    damping_max: float,
     position_tolerance: float,
     angle_tolerance: float,
-    out: Array,
-    converged: Array,
+    max_step: float,
+    stall_ratio: float,
+    stall_steps: int,
+    out_q: Array,
+    out_ok: Array,
 ) -> None:
-    """From each row of ``seeds`` (S, n): ``out[s]`` the joint values reached, ``converged[s]`` whether the
-    tcp is then within ``position_tolerance`` (m) and ``angle_tolerance`` (rad) of the target."""
-    n = seeds.shape[1]
+    """For target ``t`` (``targets_r[t]`` 3x3, ``targets_t[t]`` m) and seed ``s`` (``seeds[t, s]``, n):
+    ``out_q[t, s]`` the configuration reached (within the limits) and ``out_ok[t, s]`` whether its tcp is
+    within ``position_tolerance`` (m) and ``angle_tolerance`` (rad) of the target."""
+    n = seeds.shape[2]
     frame_r = np.empty((n + 1, 3, 3))
     frame_t = np.empty((n + 1, 3))
-    cur_r = np.empty((3, 3))
-    cur_t = np.empty(3)
+    pr = np.empty((3, 3))
+    pt = np.empty(3)
+    m = np.empty((3, 3))
+    jac = np.empty((6, n))
+    scratch = np.empty((7, 6))
     e = np.empty(6)
-    jac = np.zeros((6, n))
-    jjt = np.empty((6, 6))
-    y = np.empty(6)
+    e_trial = np.empty(6)
     q = np.empty(n)
-    for s in range(seeds.shape[0]):
-        q[:] = seeds[s]
-        converged[s] = False
-        for _ in range(iterations + 1):
-            forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
-            _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, cur_r, cur_t)
-            angle = _error(target_r, target_t, cur_r, cur_t, e)
-            if math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) <= position_tolerance and angle <= angle_tolerance:
-                converged[s] = True
-                break
-            for j in range(n):  # the geometric Jacobian; joints past the tcp's frame do not move it
-                fr = frame_r[j + 1]
-                z0 = fr[0, 0] * axes[j, 0] + fr[0, 1] * axes[j, 1] + fr[0, 2] * axes[j, 2]
-                z1 = fr[1, 0] * axes[j, 0] + fr[1, 1] * axes[j, 1] + fr[1, 2] * axes[j, 2]
-                z2 = fr[2, 0] * axes[j, 0] + fr[2, 1] * axes[j, 1] + fr[2, 2] * axes[j, 2]
-                if j >= tcp_frame:
-                    z0, z1, z2 = 0.0, 0.0, 0.0
-                if prismatic[j]:
-                    jac[0, j], jac[1, j], jac[2, j] = z0, z1, z2
-                    jac[3, j], jac[4, j], jac[5, j] = 0.0, 0.0, 0.0
-                else:
-                    rx = cur_t[0] - frame_t[j + 1, 0]
-                    ry = cur_t[1] - frame_t[j + 1, 1]
-                    rz = cur_t[2] - frame_t[j + 1, 2]
-                    jac[0, j], jac[1, j], jac[2, j] = z1 * rz - z2 * ry, z2 * rx - z0 * rz, z0 * ry - z1 * rx
-                    jac[3, j], jac[4, j], jac[5, j] = z0, z1, z2
-            for a in range(6):
-                for c in range(6):
-                    total = damping * damping if a == c else 0.0
-                    for j in range(n):
-                        total += jac[a, j] * jac[c, j]
-                    jjt[a, c] = total
-            _solve6(jjt, e, y)
+    trial = np.empty(n)
+    dq = np.empty(n)
+    tol_p2 = position_tolerance * position_tolerance
+    tol_r2 = angle_tolerance * angle_tolerance
+    for t in range(seeds.shape[0]):
+        tr = targets_r[t]
+        tt = targets_t[t]
+        for s in range(seeds.shape[1]):
             for j in range(n):
-                step = 0.0
-                for a in range(6):
-                    step += jac[a, j] * y[a]
-                step = min(max(step, -max_step), max_step)
-                q[j] = min(max(q[j] + step, lower[j]), upper[j])
-        out[s] = q
+                q[j] = min(max(seeds[t, s, j], lower[j]), upper[j])
+            forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
+            _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, pr, pt)
+            cost = pose_error(tr, tt, pr, pt, m, e)
+            lam = damping
+            stalls = 0
+            for _ in range(max_iterations):
+                if _within(e, tol_p2, tol_r2):
+                    break
+                _jacobian(frame_r, frame_t, axes, prismatic, tcp_frame, pt, jac)
+                improved = False
+                while lam <= damping_max:
+                    if not _damped_step(jac, e, lam, scratch, dq):
+                        lam *= 10.0
+                        continue
+                    _clamped_step(q, dq, max_step, lower, upper, trial)
+                    forward(trial, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
+                    _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, pr, pt)
+                    trial_cost = pose_error(tr, tt, pr, pt, m, e_trial)
+                    if trial_cost < cost:
+                        improved = True
+                        stalls = stalls + 1 if trial_cost > cost * (1.0 - stall_ratio) else 0
+                        cost = trial_cost
+                        for j in range(n):
+                            q[j] = trial[j]
+                        for k in range(6):
+                            e[k] = e_trial[k]
+                        lam = max(lam * 0.1, damping_min)
+                        break
+                    lam *= 10.0
+                if not improved or stalls >= stall_steps:
+                    break
+            for j in range(n):
+                out_q[t, s, j] = q[j]
+            out_ok[t, s] = _within(e, tol_p2, tol_r2)
+
+
+@_jit
+def tcp_batch(  # noqa: PLR0917
+    qs: Array,
+    base_r: Array,
+    base_t: Array,
+    org_r: Array,
+    org_t: Array,
+    axes: Array,
+    prismatic: Array,
+    tcp_frame: int,
+    tcp_r: Array,
+    tcp_t: Array,
+    out_r: Array,
+    out_t: Array,
+) -> None:
+    """The tcp pose (``out_r[b]`` 3x3, ``out_t[b]`` m, in ``world``) of every row of ``qs`` (N, n)."""
+    n = qs.shape[1]
+    frame_r = np.empty((n + 1, 3, 3))
+    frame_t = np.empty((n + 1, 3))
+    for b in range(qs.shape[0]):
+        forward(qs[b], base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
+        _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, out_r[b], out_t[b])

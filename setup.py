@@ -39,7 +39,7 @@ setup(
     install_requires=[
         "numpy>=1.26",
         "numba>=0.59",  # the compiled planning kernel (clew_ros/core/kernel.py)
-        "shapely>=2.0",
+        "shapely>=2.1",
         "pyyaml>=6.0",
         "mcap>=1.2",
         "mcap-ros2-support>=0.5",

@@ -25,64 +25,91 @@ obstacles are grown by slightly less than ``r``; and the start's part of
 ``F`` is taken generously (any part within a micrometre of the start centre).
 Each approximation makes ``F`` larger, so it can only fail to refuse, never
 refuse a world that has a plan. The disc is the largest one shapely's
-``polylabel`` finds (any inscribed disc keeps the proof sound; a larger one
-proves more).
+``maximum_inscribed_circle`` finds, shrunk a little (any inscribed disc keeps
+the proof sound; a larger one proves more).
+
+Two callers: the planner's quick answers (:func:`passage_refusal`: both
+proofs, every disc of :func:`_candidate_discs`, the goal a client asked for)
+and the ``unsolvable`` family of generated worlds (:func:`separation`: the
+second proof with the largest disc, the world's own goal), which keeps a ring
+around the goal only when this proves it closed. The numbers the geometry
+uses are the fields of :class:`ProofSettings`.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from shapely.ops import polylabel
 
 from clew_ros.core.kinematics import transform_points
 from clew_ros.core.reach import nearest_grasp_distance
 from clew_ros.core.world import World
 
-__all__ = ["PROOF_MAX_OBSTACLES", "inscribed_disc", "passage_refusal"]
-
-#: How much less than the inscribed radius the obstacles are grown by (m): touching counts as collision,
-#: so any smaller radius keeps the proof sound, and the margin absorbs rounding in GEOS.
-_GROW_MARGIN_M = 1e-7
-#: Distance (m) within which a part of the free region counts as containing a point.
-_CONTAINS_SLACK_M = 1e-6
-#: Discs smaller than this prove nothing worth the geometry (m).
-_MIN_RADIUS_M = 1e-4
-#: Worlds with more obstacles than this are not tried: the union of the grown obstacles costs about
-#: 0.1 s per 500 obstacles here, and the answer must come at once.
-PROOF_MAX_OBSTACLES = 200
-#: Points of the polyline that stands for the arc of goal orientations.
-_ARC_STEPS = 65
-#: Segments per quarter circle of shapely's round buffers.
-_QUAD_SEGS = 8
+__all__ = ["ProofSettings", "Separation", "inscribed_disc", "passage_refusal", "separating_disc", "separation"]
 
 
-def inscribed_disc(polygon: np.ndarray) -> tuple[np.ndarray, float]:
+@dataclass(frozen=True)
+class ProofSettings:
+    """The numbers of the proof's geometry; the defaults are what the planner and the generated worlds use."""
+
+    #: How much less than the inscribed radius the obstacles are grown by (m): touching counts as collision,
+    #: so any smaller radius keeps the proof sound, and the margin absorbs rounding in GEOS.
+    grow_margin_m: float = 1e-7
+    #: Distance (m) within which a part of the free region counts as containing a point.
+    contains_slack_m: float = 1e-6
+    #: Discs smaller than this (m) prove nothing worth the geometry.
+    min_radius_m: float = 1e-4
+    #: Worlds with more obstacles than this are not tried (count): the union of the grown obstacles costs
+    #: about 0.1 s per 500 obstacles, and the planner's answer must come at once.
+    max_obstacles: int = 200
+    #: Points of the polyline that stands for the arc of goal orientations (count).
+    arc_steps: int = 65
+    #: Segments per quarter circle of shapely's round buffers (count): more hug the true circle closer.
+    quad_segs: int = 8
+    #: Tolerance (m) of shapely's search for the largest inscribed circle.
+    disc_tolerance_m: float = 1e-5
+    #: The inscribed disc's radius is the found one times this (ratio): the search's tolerance works both
+    #: ways, so a slightly smaller disc is surely inside the object.
+    disc_shrink: float = 0.999
+
+
+_DEFAULT = ProofSettings()
+
+
+@dataclass(frozen=True)
+class Separation:
+    """A disc inside the object (centre in the object frame, radius in m) whose free space keeps the goal
+    from the start, and the obstacles that close off the goal's side (names, world order)."""
+
+    centre: np.ndarray
+    radius: float
+    closing: tuple[str, ...]
+
+
+def inscribed_disc(polygon: np.ndarray, settings: ProofSettings = _DEFAULT) -> tuple[np.ndarray, float]:
     """A large disc inside ``polygon`` ``(V, 2)``: its centre ``(2,)`` and radius (m)."""
-    shape = shapely.Polygon(polygon)
-    extent = max(shape.bounds[2] - shape.bounds[0], shape.bounds[3] - shape.bounds[1])
-    centre = polylabel(shape, tolerance=max(extent * 1e-3, 1e-9))
-    radius = float(shape.exterior.distance(centre))
-    return np.array([centre.x, centre.y]), radius
+    circle = shapely.maximum_inscribed_circle(shapely.Polygon(polygon), settings.disc_tolerance_m)
+    return np.asarray(circle.coords[0], dtype=float), float(circle.length) * settings.disc_shrink
 
 
-def _candidate_discs(polygon: np.ndarray) -> list[tuple[np.ndarray, float]]:
+def _candidate_discs(polygon: np.ndarray, settings: ProofSettings) -> list[tuple[np.ndarray, float]]:
     """Discs inside the object to try: the largest found, and the one centred on the object's origin.
 
     The origin's disc is smaller, but its centre does not move when the object turns, so a goal
     orientation tolerance does not blur where it must end.
     """
-    discs = [inscribed_disc(polygon)]
+    discs = [inscribed_disc(polygon, settings)]
     shape = shapely.Polygon(polygon)
     origin = shapely.Point(0.0, 0.0)
     if shape.contains(origin):
         discs.append((np.zeros(2), float(shape.exterior.distance(origin))))
-    return [(centre, radius) for centre, radius in discs if radius >= _MIN_RADIUS_M]
+    return [(centre, radius) for centre, radius in discs if radius >= settings.min_radius_m]
 
 
-def _goal_region(world: World, goal: np.ndarray, centre: np.ndarray) -> shapely.Geometry:
+def _goal_region(world: World, goal: np.ndarray, centre: np.ndarray, settings: ProofSettings) -> shapely.Geometry:
     """Every place the disc's centre may take in a final pose within the goal tolerances.
 
     An arc of radius ``|centre|`` around the goal position (the orientation tolerance), thickened by
@@ -90,7 +117,7 @@ def _goal_region(world: World, goal: np.ndarray, centre: np.ndarray) -> shapely.
     the true region, as the proof needs.
     """
     span = min(world.goal_angle_tolerance, math.pi)
-    steps = _ARC_STEPS if span > 0 and np.any(centre) else 1
+    steps = settings.arc_steps if span > 0 and np.any(centre) else 1
     angles = goal[2] + np.linspace(-span, span, steps) if steps > 1 else np.array([goal[2]])
     poses = np.column_stack([np.full(steps, goal[0]), np.full(steps, goal[1]), angles])
     points = transform_points(poses, centre[None])[:, 0]
@@ -98,11 +125,12 @@ def _goal_region(world: World, goal: np.ndarray, centre: np.ndarray) -> shapely.
     path = shapely.LineString(points) if steps > 1 else shapely.Point(points[0])
     # shapely's round caps are polygons inscribed in the circle: grow by 1/cos of half a segment's angle
     # so that the polygon contains the true thickened arc.
-    thickness = (world.goal_tolerance + sagitta + _CONTAINS_SLACK_M) / math.cos(math.pi / (4 * _QUAD_SEGS))
-    return path.buffer(thickness, quad_segs=_QUAD_SEGS)
+    slack = world.goal_tolerance + sagitta + settings.contains_slack_m
+    thickness = slack / math.cos(math.pi / (4 * settings.quad_segs))
+    return path.buffer(thickness, quad_segs=settings.quad_segs)
 
 
-def passage_refusal(world: World, goal: np.ndarray) -> str | None:
+def passage_refusal(world: World, goal: np.ndarray, settings: ProofSettings = _DEFAULT) -> str | None:
     """Why no plan can take the object from its start to ``goal``, or ``None`` when none is proven.
 
     ``goal`` is the goal placement ``(x, y, theta)`` (the world's or a client's).
@@ -116,7 +144,33 @@ def passage_refusal(world: World, goal: np.ndarray) -> str | None:
     reason = _never_grasped(world)
     if reason is not None:
         return reason
-    return _separated(world, goal)
+    if len(world.obstacles) > settings.max_obstacles:
+        return None  # the union of the grown obstacles would cost more than a quick answer may
+    found = separating_disc(world, goal, _candidate_discs(world.object.polygon, settings), settings)
+    if found is None:
+        return None
+    around = f" (the goal's side is closed off by {', '.join(repr(n) for n in found.closing)})" if found.closing else ""
+    return (
+        f"the object cannot pass from its start to the goal: a disc of radius {found.radius:.3f} m inside it "
+        f"finds no way between the obstacles from where it starts to where it must end{around}"
+    )
+
+
+def separation(world: World, settings: ProofSettings = _DEFAULT) -> str | None:
+    """Why the object cannot pass from ``world.object.initial`` to ``world.object.goal`` (a sentence), or
+    ``None`` when the free space eroded by its largest inscribed disc proves nothing.
+
+    The second proof of the module docstring alone, with one disc: what the ``unsolvable`` family of
+    generated worlds writes into its files.
+    """
+    disc = inscribed_disc(world.object.polygon, settings)
+    found = separating_disc(world, world.object.goal, [disc], settings)
+    if found is None:
+        return None
+    return (
+        f"the object cannot pass from its start to its goal: the free space eroded by its inscribed disc "
+        f"(radius {found.radius:.4f} m) puts them in different components"
+    )
 
 
 def _within_goal(world: World, pose: np.ndarray, goal: np.ndarray) -> bool:
@@ -135,42 +189,45 @@ def _never_grasped(world: World) -> str | None:
     )
 
 
-def _separated(world: World, goal: np.ndarray) -> str | None:
+def separating_disc(
+    world: World, goal: np.ndarray, discs: list[tuple[np.ndarray, float]], settings: ProofSettings = _DEFAULT
+) -> Separation | None:
+    """The first of ``discs`` (centre in the object frame, radius in m, each inside the object) whose eroded
+    free space keeps the start from ``goal`` within the goal tolerances, or ``None``."""
     if not world.obstacles:
         return None  # the shrunk box is convex, so connected
-    if len(world.obstacles) > PROOF_MAX_OBSTACLES:
-        return None  # the union of the grown obstacles would cost more than a quick answer may
-    for centre, radius in _candidate_discs(world.object.polygon):
-        reason = _separated_for_disc(world, goal, centre, radius)
-        if reason is not None:
-            return reason
+    goal = np.asarray(goal, dtype=float)
+    for centre, radius in discs:
+        found = _separated_for_disc(world, goal, centre, radius, settings)
+        if found is not None:
+            return found
     return None
 
 
-def _separated_for_disc(world: World, goal: np.ndarray, centre: np.ndarray, radius: float) -> str | None:
+def _separated_for_disc(
+    world: World, goal: np.ndarray, centre: np.ndarray, radius: float, settings: ProofSettings
+) -> Separation | None:
     xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
     if xmax - xmin <= 2 * radius or ymax - ymin <= 2 * radius:
         return None  # no room: the start would not be valid either; prove nothing
     box = shapely.box(xmin + radius, ymin + radius, xmax - radius, ymax - radius)
     obstacles = shapely.polygons([o.vertices for o in world.obstacles])
-    grown: np.ndarray = np.asarray(shapely.buffer(obstacles, radius - _GROW_MARGIN_M, quad_segs=_QUAD_SEGS))
+    grown: np.ndarray = np.asarray(
+        shapely.buffer(obstacles, radius - settings.grow_margin_m, quad_segs=settings.quad_segs)
+    )
     free = box.difference(shapely.union_all(grown))
     start_centre = shapely.Point(transform_points(world.object.initial, centre[None])[0])
     parts = list(getattr(free, "geoms", [free]))
-    reachable = [part for part in parts if part.distance(start_centre) <= _CONTAINS_SLACK_M]
+    reachable = [part for part in parts if part.distance(start_centre) <= settings.contains_slack_m]
     if not reachable:
         return None  # numerics: the start's own disc is not in F; prove nothing
-    ends = _goal_region(world, goal, centre)
+    ends = _goal_region(world, goal, centre, settings)
     if any(part.intersects(ends) for part in reachable):
         return None
     goal_side = shapely.union_all([part for part in parts if part.intersects(ends)])
-    closing = [
+    closing = tuple(
         obstacle.name
         for obstacle, shape in zip(world.obstacles, grown, strict=True)
-        if not goal_side.is_empty and shape.distance(goal_side) <= _CONTAINS_SLACK_M
-    ]
-    around = f" (the goal's side is closed off by {', '.join(repr(n) for n in closing)})" if closing else ""
-    return (
-        f"the object cannot pass from its start to the goal: a disc of radius {radius:.3f} m inside it "
-        f"finds no way between the obstacles from where it starts to where it must end{around}"
+        if not goal_side.is_empty and shape.distance(goal_side) <= settings.contains_slack_m
     )
+    return Separation(centre, radius, closing)

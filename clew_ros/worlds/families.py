@@ -32,10 +32,10 @@ import shapely
 from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import WorldError
 from clew_ros.core.kinematics import wrap_angle
+from clew_ros.core.passage import separation
 from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
 from clew_ros.core.world import World, world_from_parameters
 from clew_ros.worlds.arms import ArmShape, make_arm
-from clew_ros.worlds.enclosure import separation
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
 from clew_ros.worlds.layouts import Layout, LayoutError, blocks_near, clutter, pocket, ring, shelves, window
 from clew_ros.worlds.regrasp import regrasp_needed

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -57,7 +56,9 @@ def test_hopeless_goals_are_refused_at_once(world, goal, outcome) -> None:
     assert result.outcome is outcome
     assert not result.segments
     assert result.final_object_pose is None
-    assert result.stats["time_s"] < 0.5
+    # at once: refused before any search (how fast is a benchmark's figure, not a test's)
+    assert result.stats["landmarks"] == 1
+    assert result.stats["evaluations"] == 0
 
 
 def test_a_start_in_collision_is_refused(world) -> None:
@@ -76,11 +77,12 @@ def test_time_limit_and_cancel_end_the_run_with_their_outcome() -> None:
     cancel = threading.Event()
     timer = threading.Timer(0.3, cancel.set)
     timer.start()
-    started = time.monotonic()
     canceled = plan(unreachable, PlannerSettings(seed=1, time_limit=30), termination=Termination(30, cancel))
     assert canceled.outcome is Outcome.CANCELED
     assert canceled.message.startswith("canceled")
-    assert time.monotonic() - started < 0.3 + 0.5
+    # Liveness, not speed: the run ends at the cancel, long before its 30 s time limit. 10 s leaves room
+    # for a loaded 2-core machine; the contract's 100 ms is held by the node's cancel tests.
+    assert canceled.stats["time_s"] < 10.0
 
 
 def test_explore_retries_draw_more_holding_configurations_before_refusing():

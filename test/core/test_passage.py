@@ -1,4 +1,5 @@
-"""The proof of infeasibility (clew_ros.core.passage): it refuses what it should, and never a solvable world."""
+"""The proof of infeasibility (clew_ros.core.passage): it refuses what it should, and never a solvable world;
+`separation`, its form for the generated unsolvable worlds, likewise."""
 
 import copy
 from pathlib import Path
@@ -10,7 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from clew_ros.core.clew import plan
-from clew_ros.core.passage import inscribed_disc, passage_refusal
+from clew_ros.core.passage import inscribed_disc, passage_refusal, separation
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.core.world import load_world, read_parameter_file, world_from_parameters
 
@@ -158,3 +159,26 @@ def test_every_generated_solvable_world_passes_and_every_unsolvable_one_is_refus
                 assert reason is None, (family, seed, reason)
             elif family == "unsolvable":
                 assert reason is not None, (family, seed)
+
+
+def test_separation_proves_the_closed_ring_of_unreachable() -> None:
+    reason = separation(load_world(CONFIG / "unreachable.yaml"))
+    assert reason is not None
+    assert "inscribed disc" in reason
+
+
+@pytest.mark.parametrize("name", SOLVABLE)
+def test_separation_never_refuses_a_solvable_world(name) -> None:
+    assert separation(load_world(CONFIG / f"{name}.yaml")) is None
+
+
+def test_separation_an_opening_wider_than_the_object_proves_nothing_and_a_narrower_one_does() -> None:
+    tree = _tree("unreachable")
+    # the object is 0.2 x 0.1 m: its inscribed disc is 0.1 m across; cut a window into the ring's north wall
+    obstacles = tree["world"]["obstacles"]
+    for width, proven in ((0.16, False), (0.06, True)):
+        left, right = 1.1 - width / 2, 1.1 + width / 2
+        obstacles["ring_north"] = [0.7, -0.9, left, -0.9, left, -0.8, 0.7, -0.8]
+        obstacles["ring_north_b"] = [right, -0.9, 1.5, -0.9, 1.5, -0.8, right, -0.8]
+        tree["world"]["obstacle_names"] = [*_tree("unreachable")["world"]["obstacle_names"], "ring_north_b"]
+        assert (separation(world_from_parameters(tree)) is not None) == proven, width

@@ -46,7 +46,7 @@ def test_plays_in_time_to_the_last_point() -> None:
     assert not end.stopped
     assert end.phase == "playback_done"
     assert end.at_s == 0.5
-    assert 0.5 <= took < 1.5
+    assert took >= 0.5  # paced in real time: never ahead of the track (load can only make it later)
     assert samples[-1][1] == 0.5  # the last sample is the last point
     assert 9 <= len(samples) <= 13  # 20 Hz over 0.5 s, the first at 0 and the last at the end
     times = [q for _, q, _ in samples]
@@ -60,15 +60,23 @@ def test_plays_in_time_to_the_last_point() -> None:
 
 def test_a_stop_ends_it_within_a_period() -> None:
     stop = threading.Event()
-    threading.Timer(0.2, stop.set).start()
-    start = time.monotonic()
+    stopped_at: list[float] = []
+
+    def request_stop() -> None:
+        stopped_at.append(time.monotonic())
+        stop.set()
+
+    threading.Timer(0.2, request_stop).start()
     end, samples, events = recorded(10.0, 20.0, stop)
     assert end.stopped
     assert end.phase == "playback_stopped"
-    assert 0.1 < end.at_s < 0.5
-    assert time.monotonic() - start < 1.0
-    assert samples[-1][1] < 0.5
-    assert not events
+    assert end.at_s is not None
+    assert end.at_s == samples[-1][1]  # it ends at the last sample sent
+    # within a period: at most the sample being sent when the stop came follows it (whatever the load)
+    assert sum(1 for sent, _, _ in samples if sent > stopped_at[0]) <= 1
+    # liveness: it ended at the stop, long before the track's 10 s (a loaded machine may start it late)
+    assert end.at_s < 5.0
+    assert all(event.time_s <= end.at_s for _, event in events)  # nothing past where it stopped
 
 
 def test_a_stop_before_the_start_sends_nothing() -> None:
@@ -85,7 +93,7 @@ def test_a_stop_before_the_start_sends_nothing() -> None:
 def test_scheduled_samples_are_plays_ticks_at_once() -> None:
     start = time.monotonic()
     schedule = list(scheduled_samples(Line(5.0), 20.0))  # 5 s of track, no waiting
-    assert time.monotonic() - start < 1.0
+    assert time.monotonic() - start < 5.0  # not paced: in real time it would take the track's 5 s
     times = [t for t, _, _ in schedule]
     assert times[0] == 0.0
     assert times[-1] == 5.0  # the last sample is the last point

@@ -262,9 +262,10 @@ def test_a_stop_signal_while_the_kernel_compiles_exits_0_at_once(tmp_path: Path)
     while not _catches(node.proc.pid, signal.SIGTERM) and time.monotonic() < deadline:  # main() took them
         time.sleep(0.005)
     assert node.proc.poll() is None, node.output()
-    started = time.monotonic()
-    code = node.stop(signal.SIGINT, timeout_s=5.0)
+    # Liveness: the node exits at the signal instead of after the compile (20-60 s on a 2-core machine, cold
+    # cache); stop() kills it after 10 s, which a loaded machine needs for no ordinary exit, and then the exit
+    # code is not 0.
+    code = node.stop(signal.SIGINT, timeout_s=10.0)
     output = node.output()
     assert code == 0, output
     assert "serving world" not in output  # it was still compiling
-    assert time.monotonic() - started < 5.0

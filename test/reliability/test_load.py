@@ -51,8 +51,9 @@ WARM_UP = 50  # runs before the baseline sample: caches (scene per world, rclpy,
 #: Largest RSS growth (KiB) from the warmed-up baseline to the end of the 500 runs.
 RSS_GROWTH_BOUND_KIB = 32 * 1024
 #: ~/status and ~/cancel must answer within this (s) while the load runs (DDS included: its delivery
-#: jitters by hundreds of ms on a busy machine).
-RESPONSIVE_S = 2.0
+#: jitters by hundreds of ms on a busy machine, and a reliable message repaired after a loss takes longer):
+#: the bound catches a node that stops answering, not a slow one (the printed figures say how fast).
+RESPONSIVE_S = 5.0
 BURST = 100
 DEEP = QoSProfile(
     depth=2000,

@@ -48,8 +48,11 @@ FAST = {
     "playback.rate": 50.0,
 }
 #: A quick answer (a refusal the planner knows at once) is out within this (s) of the goal's acceptance,
-#: by the node's own clock (the events' wall-clock ``time``) ...
-QUICK_ANSWER_S = 0.5
+#: by the node's own clock (the events' wall-clock ``time``): half of rel_fast's 10 s time limit, so an
+#: answer by then came from the quick refusal, not from a search that ran out of time. Behaviour, not
+#: speed: no loaded 2-core machine needs seconds for the refusal itself (how fast it is, the figures
+#: printed here and the benchmarks say) ...
+QUICK_ANSWER_S = 5.0
 #: ... and reaches the client within this (s), DDS included (its delivery jitters on a busy machine);
 #: either way far less than rel_fast's 10 s time limit.
 DDS_BOUND_S = 5.0
@@ -274,7 +277,8 @@ def test_a_goal_sent_as_soon_as_an_outcome_is_seen_is_accepted(node: Session) ->
 
 
 def test_plan_refused_at_once_with_its_code_in_the_answer(node: Session) -> None:
-    """~/plan to an out-of-reach world.object.goal: the service answer carries the code within 0.5 s."""
+    """~/plan to an out-of-reach world.object.goal: the service answer carries the code, long before the
+    time limit."""
     goal = list(QUICK_REFUSALS["GOAL_OUT_OF_REACH"])
     assert set_parameters(node, {"world.object.goal": goal})[0].successful
     try:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import copy
 import math
-import time
 from typing import Any
 
 import pytest
@@ -50,8 +49,6 @@ BASE: dict[str, Any] = {
         },
     }
 }
-#: Loading must refuse a capped world at once, before reading its items (s; generous for a loaded CI).
-REFUSAL_BUDGET_S = 0.5
 
 
 def circle(count: int, radius: float = 0.05, x: float = 1.2) -> list[float]:
@@ -135,15 +132,12 @@ CASES: list[tuple[str, Any, str, str]] = [
 @pytest.mark.parametrize(("case", "make", "parameter", "cap"), CASES, ids=[c[0] for c in CASES])
 def test_a_world_beyond_a_cap_is_refused_naming_it(case: str, make: Any, parameter: str, cap: str) -> None:
     tree = make()
-    started = time.monotonic()
     with pytest.raises(WorldError) as caught:
         world_from_parameters(tree)
-    took = time.monotonic() - started
     assert caught.value.parameter == parameter, caught.value
     assert f"Limits.{cap}" in str(caught.value), caught.value
     assert f"at most {getattr(LIMITS, cap)}" in str(caught.value), caught.value
     assert len(str(caught.value)) < 300
-    assert took < REFUSAL_BUDGET_S, f"{case}: refused after {took:.2f} s"
 
 
 def test_the_caps_allow_what_users_need() -> None:

@@ -15,7 +15,7 @@ A solvable world is built in this order (each step from one random stream, see :
 Any step that fails (no valid candidate, a layout not near enough the motion, a witness the validator
 refuses) starts over with the next stream, at most :data:`MAX_ATTEMPTS` times. The unsolvable family
 puts a ring around a goal the witness reached and keeps the world only when
-:func:`~clew_ros.worlds.enclosure.separation` proves that the object cannot get in.
+:func:`~clew_ros.core.passage.separation` proves that the object cannot get in.
 """
 
 from __future__ import annotations

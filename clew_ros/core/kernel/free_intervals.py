@@ -21,7 +21,7 @@ in transfer, the object's vertices stay inside the bounds (inset ``r`` and
 
 Only the nearest contact each way matters: a contact that a cheap pseudo-angle
 places between the nearest ones found so far is skipped before its ``atan2``
-(:func:`_cannot_improve`), which leaves every interval bit for bit the same.
+(:func:`~.contacts._cannot_improve`), which leaves every interval bit for bit the same.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Kinematics of the planar chain, compiled: forward kinematics (one tip, every joint) and the inverse
-kinematics of one tool point per row (damped Newton steps within the joint limits)."""
+kinematics of one tool point per row (damped least squares within the joint limits)."""
 
 from __future__ import annotations
 

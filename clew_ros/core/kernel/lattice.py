@@ -1,4 +1,4 @@
-"""The improvement's lattice in joint space, compiled: A* over its nodes (edges checked lazily), Dijkstra
+"""The improvement's lattice in joint space, compiled: A* over its nodes (blocked edges never taken), Dijkstra
 costs from each end and their repair when an edge is found blocked, and the regrasp search's totals."""
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
-"""Straight moves in joint space, compiled: whether each move stays clear (sampled at a step its clearance
-allows, levels of finer margins), and the proposals' screen of routes (straight, or one joint after the other)."""
+"""Straight moves in joint space, compiled: whether each move stays clear
+(:func:`clew_ros.core.continuous.straight_move_clear`, whose docstring says why it is sound), and the proposals'
+screen of routes (straight, or one joint after the other)."""
 
 from __future__ import annotations
 
@@ -353,8 +354,8 @@ def screen_routes(
     """The proposals' screen (:meth:`clew_ros.core.regrasp._Kinematics.routes`), compiled: per move
     ``starts[k] -> ends[k]`` ``(M, n)``, the first way (0 straight, 1 one joint after the other from the
     first, 2 from the last) whose ``samples[k]`` configurations (cosine-spaced along the way's joint travel,
-    every fourth first) pass :func:`clearly_valid` with the world's rounding as the margin, the object resting
-    at ``resting[k]`` or held as ``grasp_rel[k]`` (``(M, 3)``; give one); -1 when none does. Returns the ways
+    every fourth first) pass :func:`~.validity.clearly_valid` with the world's rounding as the margin, the object
+    resting at ``resting[k]`` or held as ``grasp_rel[k]`` (``(M, 3)``; give one); -1 when none does. Returns the ways
     and how many configurations were checked (a way stops at its first sample that does not pass)."""
     starts, ends = _arg(starts), _arg(ends)
     count = np.ascontiguousarray(samples, dtype=np.int64)

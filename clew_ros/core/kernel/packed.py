@@ -22,7 +22,7 @@ _WorldArguments = tuple[
     np.ndarray,
     np.ndarray,
 ]
-#: :attr:`PackedWorld.move_arguments`: the world in the order :func:`_moves_clear` takes it.
+#: :attr:`PackedWorld.move_arguments`: the world in the order :func:`~.moves._moves_clear` takes it.
 _MoveArguments = tuple[
     np.ndarray,
     np.ndarray,
@@ -41,7 +41,7 @@ _MoveArguments = tuple[
 ]
 
 
-#: :meth:`PackedWorld.validity_arguments`: the world in the order :func:`_clearly_valid` takes it.
+#: :meth:`PackedWorld.validity_arguments`: the world in the order :func:`~.validity._clearly_valid` takes it.
 _ValidityArguments = tuple[
     np.ndarray,
     np.ndarray,
@@ -117,7 +117,7 @@ class PackedWorld:
 
     @functools.cached_property
     def move_arguments(self) -> _MoveArguments:
-        """The world in the order :func:`_moves_clear` takes it (built once: it checks one move at a time)."""
+        """The world in the order :func:`~.moves._moves_clear` takes it (built once: it checks one move at a time)."""
         return (self.base, self.lengths, self.lower, self.upper, *self.validity_arguments()[2:])
 
     def validity_arguments(self) -> _ValidityArguments:

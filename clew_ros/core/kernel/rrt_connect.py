@@ -1,5 +1,5 @@
-"""RRT-Connect, compiled: rounds of extending two trees toward random samples and toward each other,
-every step a checked straight move, until they meet or the allowance of work is spent."""
+"""RRT-Connect, compiled: rounds in which two trees (from the start, from the goals) take turns growing toward a
+target and toward each other, every step a checked straight move, while the work spent is within its allowance."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ prints one line per world and mode, then one JSON object.
 On this machine the same loop runs up to 1.9x faster or slower from one
 process to the next, so throughput measured in separate processes cannot
 tell a 15 % change from noise. Here both kernels run in one process, taking
-turns: ``REV:clew_ros/core/kernel.py`` is loaded as a module of its own
+turns: ``REV:clew_ros/core/kernel/`` is loaded as a package of its own
 (the kernel imports only numpy and numba), the configurations are the same,
 and each figure is the fastest of ``--repeats`` turns in CPU time. For each
 world and mode (transit: object at rest; transfer: held at grasp 0):
@@ -48,23 +48,32 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def baseline_kernel(revision: str, directory: Path) -> ModuleType:
-    """``revision``'s ``clew_ros/core/kernel.py``, loaded as module ``kernel_baseline`` from ``directory``."""
-    source = subprocess.run(
-        ["git", "show", f"{revision}:clew_ros/core/kernel.py"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout
-    path = directory / "kernel_baseline.py"
-    path.write_text(source)
-    spec = importlib.util.spec_from_file_location("kernel_baseline", path)
+    """``revision``'s kernel, loaded as module ``kernel_baseline`` from ``directory``: the package
+    ``clew_ros/core/kernel/`` (its imports of itself renamed), or the single ``kernel.py`` of older revisions."""
+    listed = _git("ls-tree", "--name-only", revision, "clew_ros/core/kernel/").split()
+    files = [name for name in listed if name.endswith(".py")]
+    if files:  # a package: its modules import each other by the package's name
+        package = directory / "kernel_baseline"
+        package.mkdir(exist_ok=True)
+        for name in files:
+            source = _git("show", f"{revision}:{name}").replace("clew_ros.core.kernel", "kernel_baseline")
+            (package / Path(name).name).write_text(source)
+        path, search = package / "__init__.py", [str(package)]
+    else:
+        path, search = directory / "kernel_baseline.py", None
+        path.write_text(_git("show", f"{revision}:clew_ros/core/kernel.py"))
+    spec = importlib.util.spec_from_file_location("kernel_baseline", path, submodule_search_locations=search)
     if spec is None or spec.loader is None:
         raise SystemExit(f"kernel_ab: cannot load {path}")
     module = importlib.util.module_from_spec(spec)
     sys.modules["kernel_baseline"] = module  # numba's cache locates a function by its module
     spec.loader.exec_module(module)
     return module
+
+
+def _git(*arguments: str) -> str:
+    """The output of ``git arguments`` in this repository."""
+    return subprocess.run(["git", *arguments], cwd=ROOT, capture_output=True, text=True, check=True).stdout
 
 
 def _timed(work: Callable[[], object], count: int, rates: list[float]) -> None:

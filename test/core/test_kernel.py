@@ -142,10 +142,10 @@ def test_the_broad_phase_never_changes_an_interval(seed, transfer):
 
 def test_a_contact_is_skipped_only_if_it_would_change_neither_nearest_contact():
     """The free intervals skip the exact angle of a contact that lies between the nearest contacts
-    found each way (:func:`kernel._cannot_improve`): the pseudo-angle it compares grows with the angle,
+    found each way (:func:`kernel.contacts._cannot_improve`): the pseudo-angle it compares grows with the angle,
     and a skipped contact, had it been kept, leaves both nearest contacts as they were; contacts next to
     a bound (within rounding of it) are never skipped."""
-    from clew_ros.core.kernel import _cannot_improve, _contact, _nearest, _pseudo_angle, _reset
+    from clew_ros.core.kernel.contacts import _cannot_improve, _contact, _nearest, _pseudo_angle, _reset
 
     angles = np.linspace(0.0, 2.0 * np.pi, 4001)[:-1]
     pseudo = np.array([_pseudo_angle(np.cos(a), np.sin(a)) for a in angles])
@@ -296,8 +296,8 @@ def test_the_cache_falls_back_to_a_user_directory_when_the_package_is_read_only(
         mount --bind {package} {package} && mount -o remount,bind,ro {package} || exit 77
         touch {package}/probe 2>/dev/null && exit 78
         for i in 1 2; do {sys.executable} -c '
-        import clew_ros.core.kernel as k; k.warm_up()
-        print(k.__file__, sum(k._decode.stats.cache_hits.values()))' || exit 1; done
+        import clew_ros.core.kernel as k; from clew_ros.core.kernel import decoding; k.warm_up()
+        print(k.__file__, sum(decoding._decode.stats.cache_hits.values()))' || exit 1; done
     """)
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
     env.update(HOME=str(home), PYTHONPATH=str(package.parent), XDG_CACHE_HOME=str(home / ".cache"))
@@ -316,7 +316,7 @@ def test_the_cache_falls_back_to_a_user_directory_when_the_package_is_read_only(
     assert all(line.startswith(str(package)) for line in lines if line), done.stdout
     assert not list(package.rglob("*.nbi"))  # nothing was written next to the package
     cached = list(home.rglob("*.nbi"))
-    assert any("kernel" in path.name for path in cached), [str(p) for p in cached]
+    assert any(path.parent.name.startswith("kernel_") for path in cached), [str(p) for p in cached]  # kernel/*.py
     first, second = (int(line.split()[-1]) for line in lines if line)
     assert first == 0
     assert second > 0
@@ -458,19 +458,24 @@ def test_warm_up_compiles_every_kernel_the_python_entry_points_call() -> None:
     waits for the compiler (a read-only array is another type to numba: the lattice's lower limits once were,
     and a 3-joint world's first improvement waited about 2 s for them)."""
     code = textwrap.dedent("""
+        import importlib
         import clew_ros.core.kernel as k
         from clew_ros.core.clew import plan
         from clew_ros.core.settings import PlannerSettings
         from clew_ros.core.world import load_world
         k.warm_up()
-        entry = ["_decode", "_intervals", "_clearly_valid", "_moves_clear", "_connect_rounds", "_solve_point",
-                 "_chain", "_pruned", "_bounce_all", "_screen", "_shortcuts", "lattice_search", "lattice_costs",
-                 "lattice_repair", "release_totals"]
-        counts = {name: len(getattr(k, name).signatures) for name in entry}
+        entry = ["decoding._decode", "free_intervals._intervals", "validity._clearly_valid", "moves._moves_clear",
+                 "rrt_connect._connect_rounds", "kinematics._solve_point", "kinematics._chain",
+                 "path_shortcuts._pruned", "free_intervals._bounce_all", "moves._screen", "path_shortcuts._shortcuts",
+                 "lattice.lattice_search", "lattice.lattice_costs", "lattice.lattice_repair", "lattice.release_totals"]
+        def compiled(name):
+            module, function = name.split(".")
+            return getattr(importlib.import_module("clew_ros.core.kernel." + module), function)
+        counts = {name: len(compiled(name).signatures) for name in entry}
         print(" ".join(name for name in entry if not counts[name]))
         plan(load_world("config/single_transfer.yaml"), PlannerSettings(seed=0, improve_time=0.4))
         plan(load_world("config/arm3_regrasp.yaml"), PlannerSettings(seed=0, improve_time=0.5))
-        print(" ".join(name for name in entry if len(getattr(k, name).signatures) != counts[name]))
+        print(" ".join(name for name in entry if len(compiled(name).signatures) != counts[name]))
     """)
     done = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, check=True, cwd=ROOT

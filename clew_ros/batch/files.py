@@ -14,6 +14,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from clew_ros.batch.errors import BatchError
+from clew_ros.core.files import PRIVATE_FOLDER_MODE
 
 __all__ = [
     "FILE_MODE",
@@ -21,11 +22,10 @@ __all__ = [
     "UnsafeNameError",
     "check_file_name",
     "check_file_names",
-    "private_folder",
     "write_private",
 ]
 
-FOLDER_MODE = 0o700
+FOLDER_MODE = PRIVATE_FOLDER_MODE
 FILE_MODE = 0o600
 
 
@@ -50,24 +50,6 @@ def check_file_names(names: Iterable[object]) -> None:
     """:func:`check_file_name` of each of ``names``."""
     for name in names:
         check_file_name(name)
-
-
-def private_folder(path: Path) -> Path:
-    """``path`` and every missing folder above it created with mode 0700 (existing ones are left as they are)."""
-    missing = []
-    folder = path
-    while not folder.exists():
-        missing.append(folder)
-        if folder.parent == folder:
-            break
-        folder = folder.parent
-    for folder in reversed(missing):
-        try:
-            folder.mkdir(mode=FOLDER_MODE)
-        except FileExistsError:  # made meanwhile (another driver): fine if it is a folder
-            if not folder.is_dir():
-                raise
-    return path
 
 
 def write_private(path: Path, data: bytes, *, sync: bool = True) -> None:

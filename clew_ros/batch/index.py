@@ -30,7 +30,8 @@ from types import TracebackType
 from typing import Any
 
 from clew_ros.batch.errors import BatchInputError
-from clew_ros.batch.files import FILE_MODE, private_folder
+from clew_ros.batch.files import FILE_MODE
+from clew_ros.core.files import private_folders
 
 __all__ = ["COLUMNS", "INDEX_NAME", "Index"]
 
@@ -74,7 +75,7 @@ class Index:
     @classmethod
     def open(cls, folder: str | Path) -> Index:
         """The index in ``folder`` (created with the folder if missing), its torn last line cut off."""
-        folder = private_folder(Path(folder))
+        folder = private_folders(Path(folder))
         path = folder / INDEX_NAME
         try:
             data = path.read_bytes() if path.exists() else b""

@@ -25,8 +25,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clew_ros.batch.errors import BatchInputError
-from clew_ros.batch.files import FOLDER_MODE, check_file_names, private_folder, write_private
+from clew_ros.batch.files import FOLDER_MODE, check_file_names, write_private
 from clew_ros.core.errors import ParameterError
+from clew_ros.core.files import private_folders
 
 if TYPE_CHECKING:
     from clew_ros.batch.jobs import BatchWorld
@@ -110,7 +111,7 @@ def write_recording(folder: Path, files: Mapping[str, bytes]) -> None:
     0700, files 0600; :class:`~clew_ros.batch.files.UnsafeNameError`, before anything is written, for a
     name that is not a plain file name (the names come from the worker)."""
     check_file_names(files)
-    private_folder(folder.parent)
+    private_folders(folder.parent)
     partial = folder.with_name(f".{folder.name}.partial")
     shutil.rmtree(partial, ignore_errors=True)
     partial.mkdir(mode=FOLDER_MODE)

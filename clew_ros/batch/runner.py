@@ -29,13 +29,14 @@ from pathlib import Path
 from typing import Any
 
 from clew_ros.batch.executors import Executor, Finished
-from clew_ros.batch.files import UnsafeNameError, check_file_names, private_folder, write_private
+from clew_ros.batch.files import UnsafeNameError, check_file_names, write_private
 from clew_ros.batch.index import COLUMNS, Index
 from clew_ros.batch.jobs import Job
 from clew_ros.batch.progress import ProgressBar
 from clew_ros.batch.recording import has_recording, recording_files, write_recording
 from clew_ros.batch.worker import JobOutcome, JobSpec
 from clew_ros.core.errors import PlanFileError
+from clew_ros.core.files import private_folders
 from clew_ros.core.offline import failed_plan
 from clew_ros.core.plan import Plan
 
@@ -89,7 +90,7 @@ def has_valid_output(job: Job, record: dict[str, Any] | None, out_dir: Path, *, 
 def _write_atomically(path: Path, text: str) -> None:
     """``text`` into ``path`` whole or not at all (a temporary file of mode 0600, synced, renamed over it;
     missing folders made 0700)."""
-    private_folder(path.parent)
+    private_folders(path.parent)
     partial = path.with_name(f".{path.name}.partial")
     write_private(partial, text.encode("utf-8"))
     partial.replace(path)

@@ -22,13 +22,12 @@ keeps what it could write. The first fault is logged and added to
 
 from __future__ import annotations
 
-import errno
-import os
 import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from clew_ros.core.files import private_folders
 from clew_ros.ros.parameters import NodeSettings
 
 if TYPE_CHECKING:
@@ -154,7 +153,7 @@ class Recordings:
             return RunRecording(f"not recorded: {self._unavailable}")
         directory = settings.record_path
         try:
-            _make_private_directories(directory)  # the recorder wants it to exist
+            private_folders(directory)  # the recorder wants it to exist
         except OSError as error:
             text = f"not recorded: record.directory {directory} cannot be created ({error.strerror})"
             self._logger.error(f"run {run_hex}: {text}")
@@ -207,23 +206,3 @@ class Recordings:
             else:
                 self._recorder_class = RunRecorder
         return self._recorder_class
-
-
-def _make_private_directories(path: Path) -> None:
-    """Create ``path`` and its missing parents, each with mode 0700 (set explicitly: the umask may take bits
-    off); an existing folder keeps its mode (the operator's)."""
-    missing = []
-    folder = path
-    while not folder.exists():
-        missing.append(folder)
-        if folder.parent == folder:
-            break
-        folder = folder.parent
-    for folder in reversed(missing):
-        try:
-            folder.mkdir(mode=0o700)
-        except FileExistsError:
-            continue  # made meanwhile (another node): its mode is its maker's
-        folder.chmod(0o700)
-    if not path.is_dir():
-        raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path))

@@ -105,10 +105,11 @@ def variant_of(seed: int) -> SnakeVariant:
 
 def make_snake_arm(rng: np.random.Generator, joints: int, variant: SnakeVariant) -> ArmShape:
     """An arm of ``joints`` links adding up to :data:`REACH_M`, lengths on a 0.1 mm grid, capsule width 0."""
+    weights: np.ndarray
     if variant.lengths == "equal":
         weights = np.ones(joints)
     elif variant.lengths == "decreasing":
-        weights = DECREASE ** np.arange(joints)
+        weights = DECREASE ** np.arange(joints, dtype=float)
     else:
         weights = rng.uniform(0.4, 1.6, joints)
     lengths = np.round(REACH_M * weights / weights.sum(), 4)
@@ -277,7 +278,7 @@ def _to_shelf(
     """Step 1: the bar in the shelf in direction ``alpha``, held in the middle of the long edge facing
     the base; the arm's start, the transit to the grasp, the grasp's angles and the bar's start pose."""
     world, q_of = chain.world, chain.q
-    grip = _pose(alpha, REACH_M * float(rng.uniform(0.55, 0.75)), alpha)
+    grip = _pose(alpha, REACH_M * float(rng.uniform(0.7, 0.88)), alpha)  # the arm nearly straight
     start_pose = compose(grip, side_rel)
     z_grip = _hold(chain, rng, grip, None, start_pose)
     approach = chain.line(z_grip, grip, float(rng.uniform(0.12, 0.2)), 4)[::-1]
@@ -317,7 +318,10 @@ def _aside(
     put = np.array([*((inner + length / 2) * radial - width / 2 * sideways), across])
     middle_pose = compose(put, side_rel)
     z_put = _hold(chain, rng, put, pulled[-1], middle_pose)
-    held = lambda a, b: transfer_valid(world, a, b, side_rel)  # noqa: E731
+
+    def held(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return transfer_valid(world, a, b, side_rel)
+
     transfer = q_of(np.array([z_grip, *pulled, *_joined(chain, rng, pulled[-1], z_put, held)]))
     if not held(transfer[:-1], transfer[1:]).all():
         raise WitnessError("the first transfer collides")
@@ -326,7 +330,10 @@ def _aside(
     end = int(np.argmin(np.linalg.norm(ends, axis=1)))  # grasps 0 and 1 are the ends
     before = np.array([*(ends[end] - 0.15 * radial), aside])
     beside = np.array([*(before[:2] - (0.12 + width) * sideways), aside])
-    resting = lambda a, b: transit_valid(world, a, b, middle_pose)  # noqa: E731
+
+    def resting(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return transit_valid(world, a, b, middle_pose)
+
     z_beside = _hold(chain, rng, beside, back[-1], middle_pose)
     z_before = _hold(chain, rng, before, z_beside, middle_pose)
     z_end = chain.line(z_before, before, -0.15, 3)

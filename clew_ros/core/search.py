@@ -32,7 +32,7 @@ import numpy as np
 
 from clew_ros.core.collision import packed_world
 from clew_ros.core.connect import join
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid, straight_moves_clear
 from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import clearly_valid
@@ -47,7 +47,7 @@ from clew_ros.core.reach import (
     two_link_grasps,
     within_reach,
 )
-from clew_ros.core.settings import PlannerSettings, Termination
+from clew_ros.core.settings import ManyJoints, PlannerSettings, Termination
 from clew_ros.core.world import World
 
 __all__ = [
@@ -97,6 +97,8 @@ class PlanningContext:
     #: from an EXPLORE round that found no transit at all to the next that finds one (elsewhere joins cost
     #: more than they save).
     transit_joins: bool = False
+    #: how the search adapts to arms of many joints
+    many: ManyJoints = field(default_factory=ManyJoints)
 
     def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
         return run_manhattan(
@@ -147,6 +149,9 @@ class SearchJob:
     #: A configuration ``(n,)`` that meets the target, which the greedy probe heads for (:func:`_greedy_probe`);
     #: ``None``: no probe.
     toward: np.ndarray | None = None
+    #: Configurations ``(m, n)`` meeting the target, nearest first, that a straight joint-space move
+    #: from ``q0`` may reach (:func:`_straight_probe`, arms of many joints); ``None``: no such probe.
+    straight: np.ndarray | None = None
 
     @property
     def pose(self) -> np.ndarray:
@@ -183,6 +188,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
         [float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0]) for i, job in enumerate(jobs)]
     )
     refine_radius = 0.15 * ctx.world.robot.reach
+    _straight_probe(ctx, jobs, q, best, waypoints)
     if GREEDY_PROBE:
         _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=refine_radius * 0.2)
     searching = np.arange(len(jobs))
@@ -274,6 +280,35 @@ def _greedy_probe(
             waypoints[i].append(paths.waypoints[a, 1:])
             q[i] = paths.final[a]
             best[i] = value
+
+
+def _straight_probe(
+    ctx: PlanningContext, jobs: list[SearchJob], q: np.ndarray, best: np.ndarray, waypoints: list[list[np.ndarray]]
+) -> None:
+    """Jobs with ``straight`` configurations (transits of arms of many joints, :class:`ManyJoints`) try a
+    straight joint-space move from their start to each, nearest first, checked continuously with
+    :data:`~clew_ros.core.continuous.MIN_MARGIN_FACTOR` x the clearance as the improvement's moves are
+    (valid at any checking step); the first clear one ends the search there. Draws nothing at random."""
+    world = ctx.world
+    for i, job in enumerate(jobs):
+        if job.straight is None or not len(job.straight) or ctx.termination():
+            continue
+        targets = job.straight
+        clear = straight_moves_clear(
+            world,
+            np.broadcast_to(q[i], targets.shape),
+            targets,
+            object_pose=job.pose if "object_poses" in job.mode else None,
+            grasp_rel=job.pose if "grasp_rel" in job.mode else None,
+            min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
+        )
+        if clear.any():
+            reached = targets[int(np.argmax(clear))]
+            value = float(job.objective(reached[None], _object_at(ctx, reached[None], job.mode))[0])
+            if value < best[i]:
+                waypoints[i].append(reached[None].copy())
+                q[i] = reached
+                best[i] = value
 
 
 def join_stalled(
@@ -382,6 +417,8 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
     world = ctx.world
     results: list[PathResult | None] = []
     jobs, slots = [], []
+    many = world.robot.dof >= ctx.many.straight_probe_joints
+    samples = max(ctx.hold_samples, ctx.many.hold_samples) if many else ctx.hold_samples
     for q0, object_pose, grasp, approach in requests:
         job = _transit_job(
             world,
@@ -389,8 +426,9 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             np.asarray(object_pose, float),
             grasp,
             approach,
-            samples=ctx.hold_samples,
+            samples=samples,
             joins=ctx.transit_joins,
+            straight=ctx.many.straight_probes if many else 0,
         )
         if isinstance(job, PathResult):
             results.append(job)
@@ -417,6 +455,7 @@ def _transit_job(
     *,
     samples: int,
     joins: bool,
+    straight: int = 0,
 ) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
@@ -447,14 +486,15 @@ def _transit_job(
     held = holds[objective(holds, None) <= 0.5 * world.grasp_tolerance]  # the transit's own success test
     # the greedy probe heads for the nearest of them (joint travel)
     toward = held[np.argmin(np.abs(held - q0).sum(axis=1))] if len(held) else None
+    nearest = held[np.argsort(np.abs(held - q0).sum(axis=1), kind="stable")[:straight]] if straight else None
     if not joins:
-        return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, toward=toward)
+        return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, toward=toward, straight=nearest)
 
     def targets(_stalled: np.ndarray, _rng: np.random.Generator) -> np.ndarray:
         return held
 
     within = JOIN_RADIUS * world.robot.reach
-    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, targets, within, toward)
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, targets, within, toward, nearest)
 
 
 def _holding_configurations(

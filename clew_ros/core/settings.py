@@ -15,7 +15,25 @@ from clew_ros.core.errors import ParameterError
 from clew_ros.core.genetic import GeneticSettings
 from clew_ros.core.parameters import PLANNER_PARAMETERS, RETIRED_PARAMETERS, check_value, retired_message
 
-__all__ = ["PLANNER_PARAMETERS", "Outcome", "PlannerSettings", "Termination"]
+__all__ = ["PLANNER_PARAMETERS", "ManyJoints", "Outcome", "PlannerSettings", "Termination"]
+
+
+@dataclass(frozen=True)
+class ManyJoints:
+    """How SEARCH adapts to arms of many joints (issue 46): chosen from the arm's number of joints, so
+    that arms of at most 10 joints (every other family, the config worlds) plan as before."""
+
+    #: joints (count) from which SEARCH_TRANSIT first tries straight joint-space moves, checked
+    #: continuously, to its holding configurations: on 15-40 joint arms a Manhattan path visits
+    #: every joint k times and each move's free interval costs O(n^2) link pairs, so one decoded
+    #: path costs about 100x a 4-joint one, and the greedy Manhattan probe, which swings joint 1 first,
+    #: rarely gets past a shelf's walls where a straight move does
+    straight_probe_joints: int = 11
+    #: holding configurations (count, nearest first in joint travel) a transit's straight probe tries
+    straight_probes: int = 8
+    #: random starts of the holding configurations on such arms (at least; 24 on others): few of them
+    #: converge where the arm must be nearly straight, and the straight probe needs some to head for
+    hold_samples: int = 96
 
 
 class Outcome(enum.Enum):

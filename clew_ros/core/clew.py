@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -15,7 +16,7 @@ from clew_ros.core.improve import Improvement, improve
 from clew_ros.core.passage import passage_refusal
 from clew_ros.core.reach import approach_cell, approach_cells, carry_cells, goal_approach_core, nearest_grasp_distance
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
-from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
 from clew_ros.core.world import World
 
@@ -77,6 +78,9 @@ def plan(
     ``settings`` defaults to :class:`PlannerSettings` ().
     """
     settings = settings or PlannerSettings()
+    many = ManyJoints()
+    if world.robot.dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
+        settings = dataclasses.replace(settings, manhattan_order=many.manhattan_order)  # (ManyJoints)
     goal = np.asarray(world.object.goal if goal is None else goal, dtype=float)
     termination = termination or Termination(settings.time_limit)
     ctx = PlanningContext(world, settings, np.random.default_rng(settings.seed), termination)

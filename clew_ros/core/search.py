@@ -44,6 +44,7 @@ from clew_ros.core.reach import (
     approach_excess,
     goal_within_reach,
     holding_configurations,
+    holding_configurations_aimed,
     two_link_grasps,
     within_reach,
 )
@@ -192,6 +193,8 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     if GREEDY_PROBE:
         _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=refine_radius * 0.2)
     searching = np.arange(len(jobs))
+    if not ctx.many.transit_ga:  # arms of many joints: a transit is the straight probe's, or none
+        searching = np.array([i for i, job in enumerate(jobs) if job.straight is None], dtype=int)
     for _ in range(ctx.settings.search_rounds):
         searching = searching[best[searching] > refine_radius * 0.2]
         if not len(searching) or ctx.termination():
@@ -459,7 +462,7 @@ def _transit_job(
 ) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
-    holds = _holding_configurations(world, object_pose, grasp, approach, samples)
+    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0)
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
     two_joints = world.robot.dof == 2
@@ -498,7 +501,13 @@ def _transit_job(
 
 
 def _holding_configurations(
-    world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None, samples: int
+    world: World,
+    object_pose: np.ndarray,
+    grasp: int,
+    approach: np.ndarray | None,
+    samples: int,
+    *,
+    aimed: bool = False,
 ) -> np.ndarray:
     """The valid configurations holding ``grasp`` (with an allowed approach), which a transit can
     only end near: all of them for two-joint arms (:func:`two_link_grasps`), a sample for others
@@ -507,10 +516,12 @@ def _holding_configurations(
         holds = two_link_grasps(world, object_pose, grasp)
     else:
         holds = holding_configurations(world, object_pose, grasp, samples)
-    if approach is None or not len(holds):
+    if approach is None or (not len(holds) and not aimed):
         return holds
     psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]
     allowed: np.ndarray = holds[approach[approach_cell(psi, len(approach))]]
+    if aimed:  # arms of many joints: few unaimed samples come in at an allowed angle
+        allowed = np.vstack([allowed, holding_configurations_aimed(world, object_pose, grasp, approach, samples)])
     return allowed
 
 
@@ -597,6 +608,45 @@ def transfer_probe_target(
     return held[0] if len(held) else None
 
 
+def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -> PathResult | None:
+    """Arms of many joints (:class:`ManyJoints`): SEARCH_TRANSFER by straight joint-space moves, checked
+    continuously, to a configuration holding the object at the goal (:func:`goal_configurations`, nearest
+    first), directly or by way of the line along which the tip, backed along its own heading, puts the
+    object in place; ``None`` when none is clear. Its own generator (the run's stream is untouched)."""
+    world, many = ctx.world, ctx.many
+    grasp_rel = job.pose
+    rng = _own_generator(ctx, PROBE_STREAM + 1, job.q0, grasp_rel)
+    margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+    held = goal_configurations(world, job.q0, grasp_rel, goal, rng, min_margin=margin)[: many.straight_probes]
+    back = many.approach_radii * world.object.radius
+    for target in held:
+        if ctx.termination():
+            return None
+        tip = tip_poses(world.robot, target[None])[0]
+        line = [target]
+        for step in range(1, many.approach_steps + 1):
+            d = back * step / many.approach_steps
+            point = tip[:2] - d * np.array([np.cos(tip[2]), np.sin(tip[2])])
+            solved = solve_point(
+                world.robot, line[-1][None], point[None], angles=np.array([tip[2]]), angle_tolerance=1e-4
+            )
+            reached = tip_poses(world.robot, solved.q)[0]
+            if np.linalg.norm(reached[:2] - point) > 1e-4 or abs(wrap_angle(reached[2] - tip[2])) > 1e-3:
+                break
+            line.append(solved.q[0])
+        ways = [np.array([job.q0, target])]
+        if len(line) == many.approach_steps + 1:
+            ways.append(np.array([job.q0, *line[::-1]]))
+        for way in ways:
+            clear = straight_moves_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, min_margin=margin, every=True)
+            if clear.all():
+                pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]
+                distance = float(np.linalg.norm(goal_error(world, pose[None], goal)[0]))
+                if goal_reached(world, pose, goal) and distance <= 0.5 * world.goal_tolerance:
+                    return PathResult(True, way, distance, object_pose=pose)
+    return None
+
+
 def search_transfer(
     ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
 ) -> PathResult:
@@ -626,6 +676,10 @@ def search_transfer(
     within = JOIN_RADIUS * world.robot.reach
     toward = transfer_probe_target(ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
     job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within, toward)
+    if world.robot.dof >= ctx.many.straight_probe_joints:
+        straight = _straight_transfer(ctx, job, goal)
+        if straight is not None:
+            return straight
     [(waypoints, distance)] = local_search(ctx, [job])
 
     def succeeded(path: np.ndarray, reached: float) -> tuple[bool, np.ndarray]:

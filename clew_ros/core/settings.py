@@ -34,6 +34,21 @@ class ManyJoints:
     #: random starts of the holding configurations on such arms (at least; 24 on others): few of them
     #: converge where the arm must be nearly straight, and the straight probe needs some to head for
     hold_samples: int = 96
+    #: SEARCH_TRANSFER's straight probe also tries each goal configuration by way of the configuration
+    #: with the tip backed along its own heading by this many object radii (m / m), reached in
+    #: :attr:`approach_steps` straight moves along that line (the object put in place along the last
+    #: link, as a gripper puts an object into a slot)
+    approach_radii: float = 2.0
+    approach_steps: int = 8
+    #: whether SEARCH_TRANSIT runs its GA rounds on such arms after the straight probe failed: measured on
+    #: the snake family, the GA took 90 % of a run (a 40-joint generation decodes 24 paths of 80 moves at
+    #: about 5 ms each) and never reached a grasp the straight probe missed; without it EXPLORE moves on to
+    #: other pairs and landmarks (a failed pair is tried again, with more holding configurations, after a
+    #: round with no transit)
+    transit_ga: bool = False
+    #: largest Manhattan order (``planner.manhattan_order`` is lowered to it) on such arms: each order adds a
+    #: move of every joint to a path, and EXPLORE's decoding took 95 % of a 37-joint run at order 2
+    manhattan_order: int = 1
 
 
 class Outcome(enum.Enum):

@@ -297,19 +297,31 @@ def _straight_probe(
         if job.straight is None or not len(job.straight) or ctx.termination():
             continue
         targets = job.straight
+        pose = job.pose if "object_poses" in job.mode else None
+        rel = job.pose if "grasp_rel" in job.mode else None
+        margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
         clear = straight_moves_clear(
-            world,
-            np.broadcast_to(q[i], targets.shape),
-            targets,
-            object_pose=job.pose if "object_poses" in job.mode else None,
-            grasp_rel=job.pose if "grasp_rel" in job.mode else None,
-            min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
+            world, np.broadcast_to(q[i], targets.shape), targets, object_pose=pose, grasp_rel=rel, min_margin=margin
         )
-        if clear.any():
-            reached = targets[int(np.argmax(clear))]
+        way = targets[int(np.argmax(clear))][None] if clear.any() else None
+        if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
+            back = ctx.many.approach_radii * world.object.radius / 2
+            retreat = _backed_line(world, q[i], back, ctx.many.approach_steps // 2)
+            for target in targets if retreat is not None else []:
+                approach = _backed_line(world, target, back, ctx.many.approach_steps // 2)
+                if approach is None:
+                    continue
+                path = np.array([q[i], *retreat, *approach[::-1], target])
+                if straight_moves_clear(
+                    world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, min_margin=margin, every=True
+                ).all():
+                    way = path[1:]
+                    break
+        if way is not None:
+            reached = way[-1]
             value = float(job.objective(reached[None], _object_at(ctx, reached[None], job.mode))[0])
             if value < best[i]:
-                waypoints[i].append(reached[None].copy())
+                waypoints[i].append(way.copy())
                 q[i] = reached
                 best[i] = value
 
@@ -608,6 +620,31 @@ def transfer_probe_target(
     return held[0] if len(held) else None
 
 
+def _backed_line(
+    world: World, q: np.ndarray, back: float, steps: int, toward: np.ndarray | None = None
+) -> list[np.ndarray] | None:
+    """Configurations from ``q`` (excluded) with the tip backed by ``back`` (m) in ``steps`` equal steps
+    against its own heading (or, with ``toward``, straight away from the point ``toward``),
+    its angle kept (inverse kinematics from the previous one); ``None`` when the arm cannot follow that line."""
+    robot = world.robot
+    tip = tip_poses(robot, q[None])[0]
+    heading = np.array([np.cos(tip[2]), np.sin(tip[2])])
+    if toward is not None and np.linalg.norm(tip[:2] - toward) > 1e-9:
+        heading = (toward - tip[:2]) / np.linalg.norm(toward - tip[:2])  # backed away from ``toward``
+    line = [q]
+    steps = max(steps, int(np.ceil(back / 0.02)))  # 2 cm at most a step, for the solver to follow
+    for step in range(1, steps + 1):
+        point = tip[:2] - back * step / steps * heading
+        solved = solve_point(
+            robot, line[-1][None], point[None], angles=np.array([tip[2]]), angle_tolerance=1e-4, iterations=100
+        )
+        reached = tip_poses(robot, solved.q)[0]
+        if np.linalg.norm(reached[:2] - point) > 1e-4 or abs(wrap_angle(reached[2] - tip[2])) > 1e-3:
+            return None
+        line.append(solved.q[0])
+    return line[1:]
+
+
 def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -> PathResult | None:
     """Arms of many joints (:class:`ManyJoints`): SEARCH_TRANSFER by straight joint-space moves, checked
     continuously, to a configuration holding the object at the goal (:func:`goal_configurations`, nearest
@@ -622,21 +659,15 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
     for target in held:
         if ctx.termination():
             return None
-        tip = tip_poses(world.robot, target[None])[0]
-        line = [target]
-        for step in range(1, many.approach_steps + 1):
-            d = back * step / many.approach_steps
-            point = tip[:2] - d * np.array([np.cos(tip[2]), np.sin(tip[2])])
-            solved = solve_point(
-                world.robot, line[-1][None], point[None], angles=np.array([tip[2]]), angle_tolerance=1e-4
-            )
-            reached = tip_poses(world.robot, solved.q)[0]
-            if np.linalg.norm(reached[:2] - point) > 1e-4 or abs(wrap_angle(reached[2] - tip[2])) > 1e-3:
-                break
-            line.append(solved.q[0])
         ways = [np.array([job.q0, target])]
-        if len(line) == many.approach_steps + 1:
-            ways.append(np.array([job.q0, *line[::-1]]))
+        # the object backed out along the line from its origin to the grasp, as a gripper pulls it
+        origin = compose(tip_poses(world.robot, target[None]), grasp_rel[None])[0, :2]
+        line = _backed_line(world, target, back, many.approach_steps, toward=origin)
+        if line is not None:
+            ways.append(np.array([job.q0, *line[::-1], target]))
+            turned = job.q0.copy()  # the whole arm turned by joint 1 first (rigidly), then straight
+            turned[0] = line[-1][0]
+            ways.append(np.array([job.q0, turned, *line[::-1], target]))
         for way in ways:
             clear = straight_moves_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, min_margin=margin, every=True)
             if clear.all():

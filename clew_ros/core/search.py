@@ -306,8 +306,8 @@ def _straight_probe(
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
         if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
             back = ctx.many.approach_radii * world.object.radius / 2
-            retreat = _backed_line(world, q[i], back, ctx.many.approach_steps // 2)
-            for target in targets if retreat is not None else []:
+            retreat = _backed_line(world, q[i], back, ctx.many.approach_steps // 2) or []
+            for target in targets if retreat else []:
                 approach = _backed_line(world, target, back, ctx.many.approach_steps // 2)
                 if approach is None:
                     continue

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from clew_ros.core.collision import packed_world
+from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.connect import join
 from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid, straight_moves_clear
 from clew_ros.core.genetic import minimize_islands
@@ -300,18 +300,25 @@ def _straight_probe(
         pose = job.pose if "object_poses" in job.mode else None
         rel = job.pose if "grasp_rel" in job.mode else None
         margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
-        clear = straight_moves_clear(
-            world, np.broadcast_to(q[i], targets.shape), targets, object_pose=pose, grasp_rel=rel, min_margin=margin
-        )
+        starts = np.broadcast_to(q[i], targets.shape)
+        clear = _sampled_clear(world, starts, targets, object_pose=pose, grasp_rel=rel)
+        if clear.any():
+            clear[clear] = straight_moves_clear(
+                world, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, min_margin=margin
+            )
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
         if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
             back = ctx.many.approach_radii * world.object.radius / 2
             retreat = _backed_line(world, q[i], back, ctx.many.approach_steps // 2) or []
             for target in targets if retreat else []:
+                if ctx.termination():
+                    break
                 approach = _backed_line(world, target, back, ctx.many.approach_steps // 2)
                 if approach is None:
                     continue
                 path = np.array([q[i], *retreat, *approach[::-1], target])
+                if not _sampled_clear(world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel).all():
+                    continue
                 if straight_moves_clear(
                     world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, min_margin=margin, every=True
                 ).all():
@@ -620,6 +627,33 @@ def transfer_probe_target(
     return held[0] if len(held) else None
 
 
+def _sampled_clear(
+    world: World,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    *,
+    object_pose: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    step_rad: float = 0.05,
+) -> np.ndarray:
+    """Whether each straight move ``starts[k] -> ends[k]`` is valid at configurations ``step_rad`` apart (a
+    quick screen, so that the continuous check, which can take seconds on a long move of many joints
+    near a contact, runs only on moves that look clear)."""
+    counts = np.maximum(1, np.ceil(np.abs(ends - starts).max(axis=1) / step_rad).astype(int))
+    piece = np.repeat(np.arange(len(starts)), counts + 1)
+    offsets = np.cumsum(counts + 1) - (counts + 1)
+    t = (np.arange(len(piece)) - offsets[piece]) / counts[piece]
+    q = starts[piece] + t[:, None] * (ends[piece] - starts[piece])
+    if grasp_rel is not None:
+        poses = compose(tip_poses(world.robot, q), np.asarray(grasp_rel, float)[None])
+    else:
+        poses = np.broadcast_to(np.asarray(object_pose, float), (len(q), 3))
+    bad = np.unique(piece[~is_valid(world, q, poses)])
+    clear = np.ones(len(starts), dtype=bool)
+    clear[bad] = False
+    return clear
+
+
 def _backed_line(
     world: World, q: np.ndarray, back: float, steps: int, toward: np.ndarray | None = None
 ) -> list[np.ndarray] | None:
@@ -669,6 +703,8 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
             turned[0] = line[-1][0]
             ways.append(np.array([job.q0, turned, *line[::-1], target]))
         for way in ways:
+            if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel).all():
+                continue
             clear = straight_moves_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, min_margin=margin, every=True)
             if clear.all():
                 pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]

@@ -16,7 +16,8 @@ writes ``DIR/families.json`` (every run) and ``DIR/families.md`` (the table in M
 * median and p90 wall time of all runs (a failed run counts at its limit), median CPU time of the run's
   process (steadier than wall time on a shared machine);
 * medians of landmarks, and over successful runs of transfers and joint travel (rad, the plan returned);
-* the witnesses' median transfers and joint travel: a plan that solves the world, for scale.
+* the witnesses' median transfers and joint travel: a plan that solves the world, for scale; and the
+  median over successful runs of the plan's joint travel over its world's witness's.
 
 ``--quick``: one world per family, two seeds, a 3 s limit (about a minute on 2 cores).
 """
@@ -95,6 +96,7 @@ def summarise(family: str, worlds: list[GeneratedBenchWorld], runs: list[dict], 
     walls = [r["wall_s"] if r["success"] or not solvable else max(r["wall_s"], limit_s) for r in runs]
     successes = [r for r in runs if r["success"]]
     joints = sorted({w.joints for w in worlds})
+    witness = {Path(w.path).stem: w.witness_travel_rad for w in worlds}
     return {
         "family": family,
         "solvable": solvable,
@@ -112,6 +114,9 @@ def summarise(family: str, worlds: list[GeneratedBenchWorld], runs: list[dict], 
         "landmarks_median": _median([r["landmarks"] for r in runs]),
         "transfers_median": _median([r["transfers"] for r in successes]),
         "travel_median": _median([r["travel_rad"] for r in successes]),
+        "travel_ratio_median": _median(
+            [r["travel_rad"] / witness[r["world"]] for r in successes if witness.get(r["world"]) and r["travel_rad"]]
+        ),
         "witness_transfers_median": _median([w.witness_transfers for w in worlds]),
         "witness_travel_median": _median([w.witness_travel_rad for w in worlds]),
         "worlds_solved": sum(any(r["success"] for r in runs if r["world"] == Path(w.path).stem) for w in worlds),
@@ -138,6 +143,7 @@ HEADER = [
     "travel rad",
     "witness transfers",
     "witness travel rad",
+    "travel / witness",
     "failures",
 ]
 
@@ -164,6 +170,7 @@ def cells(row: dict) -> list[str]:
         _fmt(row["travel_median"], 1),
         _fmt(row["witness_transfers_median"], 0),
         _fmt(row["witness_travel_median"], 1),
+        _fmt(row.get("travel_ratio_median")),
         failures or "-",
     ]
 

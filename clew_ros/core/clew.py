@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -15,7 +16,7 @@ from clew_ros.core.improve import Improvement, improve
 from clew_ros.core.passage import passage_refusal
 from clew_ros.core.reach import approach_cell, approach_cells, carry_cells, goal_approach_core, nearest_grasp_distance
 from clew_ros.core.search import PlanningContext, goal_error, search_transfer
-from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
 from clew_ros.core.world import World
 
@@ -25,9 +26,6 @@ __all__ = ["PlanResult", "Progress", "plan"]
 #: (put down there) becomes a landmark and SEARCH runs again from it, at most
 #: this many times in a row: a regrasp where the carried object got stuck.
 SEARCH_CHAIN = 2
-#: EXPLORE rounds in a row without a single transit (failed pairs retried each time) before
-#: NO_PATH_AT_RESOLUTION: the transit search is local and stochastic, one miss proves little.
-EXPLORE_ATTEMPTS = 8
 #: After an EXPLORE round without a transit the holding configurations' sample doubles, up to this many
 #: samples x joints (768 samples for 7 joints, 53 for 100).
 HOLD_SAMPLE_JOINTS = 5376
@@ -80,6 +78,9 @@ def plan(
     ``settings`` defaults to :class:`PlannerSettings` ().
     """
     settings = settings or PlannerSettings()
+    many = ManyJoints()
+    if world.robot.dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
+        settings = dataclasses.replace(settings, manhattan_order=many.manhattan_order)  # (ManyJoints)
     goal = np.asarray(world.object.goal if goal is None else goal, dtype=float)
     termination = termination or Termination(settings.time_limit)
     ctx = PlanningContext(world, settings, np.random.default_rng(settings.seed), termination)
@@ -104,30 +105,24 @@ def plan(
     try:
         explorer = Explorer(ctx, tree)
         cores = GoalCores(world, goal)
-        failures = 0
+        tried = _Tried()
         while True:
             reason = termination.reason()
             if reason is not None:
-                return finish(reason, _stopped_message(reason, settings, len(tree)))
+                return finish(reason, _stopped_message(reason, settings, len(tree), tried.summary(explorer, best)))
             exploration = explorer.explore()
             if exploration is None:
-                reason = termination.reason()
-                if reason is not None:
-                    continue
-                failures += 1
+                # No transit from any landmark: no proof of anything (the transit search is local and
+                # stochastic, and the holding configurations a sample), so never NO_PATH_AT_RESOLUTION:
+                # the failed pairs are tried again, with twice the holding configurations (their inverse
+                # kinematics is not interruptible: at most HOLD_SAMPLE_JOINTS samples x joints, a few
+                # tens of milliseconds) and stalled transits joined to them, until the time limit.
+                tried.idle_rounds += 1
                 explorer.forget_failures()
-                # the holding configurations drawn anew, twice as many (their inverse kinematics is not
-                # interruptible: at most HOLD_SAMPLE_JOINTS samples x joints, a few tens of milliseconds)
                 most = HOLD_SAMPLE_JOINTS // world.robot.dof
                 ctx.hold_samples = max(ctx.hold_samples, min(2 * ctx.hold_samples, most))
-                ctx.transit_joins = True  # and stalled transits joined to them
-                if failures >= EXPLORE_ATTEMPTS:
-                    return finish(
-                        Outcome.NO_PATH_AT_RESOLUTION,
-                        f"no grasp of the object can be reached from any of the {len(tree)} landmarks",
-                    )
+                ctx.transit_joins = True
                 continue
-            failures = 0
             ctx.transit_joins = False  # transits found: joins only while EXPLORE finds none (elsewhere they cost more)
             new = tree.add(**exploration.fields)
             landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, cores=cores)
@@ -149,7 +144,9 @@ def plan(
                 result.stats.update(_quality(better))
                 result.first_plan_s = round(searched_s, 4)
                 return result
-            if exploration.distance < settings.resolution:
+            if exploration.distance < settings.resolution and exploration.covered:
+                # the paper's criterion, once EXPLORE has searched every (landmark, grasp) pair's transit:
+                # its farthest new landmark lies within the resolution of the others
                 return finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
                     f"no path at resolution {settings.resolution}: the new landmark lies "
@@ -349,10 +346,26 @@ def _quality(better: Improvement) -> dict[str, Any]:
     return quality
 
 
-def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int) -> str:
+@dataclass
+class _Tried:
+    """What a run tried, for the message of a run stopped without a plan."""
+
+    idle_rounds: int = 0  # EXPLORE rounds that found no transit from any landmark
+
+    def summary(self, explorer: Explorer, best: float) -> str:
+        found = sum(candidate is not None for candidate in explorer.transits.values())
+        text = f"{explorer.transit_searches} transit searches ({found} (landmark, grasp) pairs reached)"
+        if self.idle_rounds:
+            text += f", {self.idle_rounds} EXPLORE rounds without any transit"
+        if np.isfinite(best):
+            text += f", best goal distance {best:.4g} m"
+        return text
+
+
+def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int, tried: str) -> str:
     if reason is Outcome.CANCELED:
-        return f"canceled after {landmarks} landmarks"
-    return f"time limit of {settings.time_limit} s reached after {landmarks} landmarks; no plan found"
+        return f"canceled after {landmarks} landmarks; tried: {tried}"
+    return f"time limit of {settings.time_limit} s reached after {landmarks} landmarks; no plan found; tried: {tried}"
 
 
 def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None:

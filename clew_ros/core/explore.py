@@ -43,6 +43,9 @@ class Exploration:
 
     fields: dict[str, Any]  # LandmarkTree.add's keywords
     distance: float
+    #: whether every (landmark, grasp) pair's transit had been searched when this step chose: EXPLORE's
+    #: search covered the landmark space, so ``distance`` is the paper's epsilon_n
+    covered: bool = True
 
 
 class Explorer:
@@ -53,6 +56,8 @@ class Explorer:
         self.tree = tree
         self._transits: dict[tuple[int, int], _Candidate | None] = {}
         self._aimed: dict[tuple[int, int, bytes], _Candidate | None] = {}  # SEARCH's transits aimed at cells
+        #: transit searches run so far (retries of failed pairs included)
+        self.transit_searches = 0
 
     @property
     def transits(self) -> Mapping[tuple[int, int], _Candidate | None]:
@@ -115,6 +120,7 @@ class Explorer:
 
     def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: np.ndarray | None) -> list[_Candidate | None]:
         """SEARCH_TRANSIT from each landmark to its grasp, all at once: the candidates, None where it failed."""
+        self.transit_searches += len(pairs)
         results = search_transits(
             self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach) for landmark, grasp in pairs]
         )
@@ -182,4 +188,5 @@ class Explorer:
             "transit": chosen_candidate.transit,
             "transfer": np.concatenate([chosen_candidate.start[None], paths.waypoints[0, 1:]]),
         }
-        return Exploration(fields, -result.fitness)
+        covered = len(fresh) <= wanted  # every pair not searched before was searched in this step
+        return Exploration(fields, -result.fitness, covered)

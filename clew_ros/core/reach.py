@@ -29,6 +29,7 @@ __all__ = [
     "goal_approach_core",
     "goal_within_reach",
     "holding_configurations",
+    "holding_configurations_aimed",
     "nearest_grasp_distance",
     "two_link_grasps",
     "within_reach",
@@ -235,6 +236,43 @@ def holding_configurations(
     rng = np.random.default_rng([grasp, *seed.tolist()])
     q, _, holding = _solve_holds(world, np.broadcast_to(target, (samples, 2)), rng, iterations)
     held: np.ndarray = q[holding]
+    if not len(held):
+        return held
+    valid: np.ndarray = held[is_valid(world, held, pose[None])]
+    return valid
+
+
+def holding_configurations_aimed(
+    world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray, samples: int = HOLD_SAMPLES
+) -> np.ndarray:
+    """:func:`holding_configurations` whose last link comes in within an allowed ``approach`` cell (of
+    :func:`approach_cells`): the solver is given the tip's angle too, the centre of an allowed cell drawn
+    for each start (uniformly among the allowed cells), within half a cell. For arms of many joints,
+    where few unaimed samples fall in a narrow set of cells. Seeded by the request as the other."""
+    allowed = np.flatnonzero(approach)
+    if not len(allowed):
+        return np.zeros((0, world.robot.dof))
+    pose = np.asarray(object_pose, float)
+    target = transform_points(pose, np.asarray(world.object.grasps[grasp], float)[None])[0]
+    seed = np.frombuffer(np.round(np.r_[pose, target], 9).tobytes(), dtype=np.uint32)
+    rng = np.random.default_rng([grasp, len(allowed), *seed.tolist()])
+    robot = world.robot
+    cells = allowed[rng.integers(0, len(allowed), samples)]
+    angles = pose[2] + _cell_centres(len(approach))[cells]
+    start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(samples, robot.dof))
+    solved = solve_point(
+        robot,
+        start,
+        np.broadcast_to(target, (samples, 2)),
+        angles=angles,
+        angle_tolerance=np.pi / len(approach),
+        iterations=HOLD_ITERATIONS * 2,
+        tolerance_m=0.25 * world.grasp_tolerance,
+    )
+    tips = tip_poses(robot, solved.q)
+    holding = np.linalg.norm(tips[:, :2] - target, axis=1) <= 0.5 * world.grasp_tolerance
+    holding &= approach[approach_cell(tips[:, 2] - pose[2], len(approach))]
+    held: np.ndarray = solved.q[holding]
     if not len(held):
         return held
     valid: np.ndarray = held[is_valid(world, held, pose[None])]

@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from clew_ros.core.collision import packed_world
+from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.connect import join
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid, straight_moves_clear
 from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import clearly_valid
@@ -44,10 +44,11 @@ from clew_ros.core.reach import (
     approach_excess,
     goal_within_reach,
     holding_configurations,
+    holding_configurations_aimed,
     two_link_grasps,
     within_reach,
 )
-from clew_ros.core.settings import PlannerSettings, Termination
+from clew_ros.core.settings import ManyJoints, PlannerSettings, Termination
 from clew_ros.core.world import World
 
 __all__ = [
@@ -97,6 +98,8 @@ class PlanningContext:
     #: from an EXPLORE round that found no transit at all to the next that finds one (elsewhere joins cost
     #: more than they save).
     transit_joins: bool = False
+    #: how the search adapts to arms of many joints
+    many: ManyJoints = field(default_factory=ManyJoints)
 
     def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
         return run_manhattan(
@@ -147,6 +150,9 @@ class SearchJob:
     #: A configuration ``(n,)`` that meets the target, which the greedy probe heads for (:func:`_greedy_probe`);
     #: ``None``: no probe.
     toward: np.ndarray | None = None
+    #: Configurations ``(m, n)`` meeting the target, nearest first, that a straight joint-space move
+    #: from ``q0`` may reach (:func:`_straight_probe`, arms of many joints); ``None``: no such probe.
+    straight: np.ndarray | None = None
 
     @property
     def pose(self) -> np.ndarray:
@@ -183,9 +189,12 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
         [float(job.objective(q[i][None], _object_at(ctx, q[i][None], job.mode))[0]) for i, job in enumerate(jobs)]
     )
     refine_radius = 0.15 * ctx.world.robot.reach
+    _straight_probe(ctx, jobs, q, best, waypoints)
     if GREEDY_PROBE:
         _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=refine_radius * 0.2)
     searching = np.arange(len(jobs))
+    if not ctx.many.transit_ga:  # arms of many joints: a transit is the straight probe's, or none
+        searching = np.array([i for i, job in enumerate(jobs) if job.straight is None], dtype=int)
     for _ in range(ctx.settings.search_rounds):
         searching = searching[best[searching] > refine_radius * 0.2]
         if not len(searching) or ctx.termination():
@@ -274,6 +283,54 @@ def _greedy_probe(
             waypoints[i].append(paths.waypoints[a, 1:])
             q[i] = paths.final[a]
             best[i] = value
+
+
+def _straight_probe(
+    ctx: PlanningContext, jobs: list[SearchJob], q: np.ndarray, best: np.ndarray, waypoints: list[list[np.ndarray]]
+) -> None:
+    """Jobs with ``straight`` configurations (transits of arms of many joints, :class:`ManyJoints`) try a
+    straight joint-space move from their start to each, nearest first, checked continuously with
+    :data:`~clew_ros.core.continuous.MIN_MARGIN_FACTOR` x the clearance as the improvement's moves are
+    (valid at any checking step); the first clear one ends the search there. Draws nothing at random."""
+    world = ctx.world
+    for i, job in enumerate(jobs):
+        if job.straight is None or not len(job.straight) or ctx.termination():
+            continue
+        targets = job.straight
+        pose = job.pose if "object_poses" in job.mode else None
+        rel = job.pose if "grasp_rel" in job.mode else None
+        margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+        starts = np.broadcast_to(q[i], targets.shape)
+        clear = _sampled_clear(world, starts, targets, object_pose=pose, grasp_rel=rel)
+        if clear.any():
+            clear[clear] = straight_moves_clear(
+                world, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, min_margin=margin
+            )
+        way = targets[int(np.argmax(clear))][None] if clear.any() else None
+        if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
+            back = ctx.many.approach_radii * world.object.radius / 2
+            retreat = _backed_line(world, q[i], back, ctx.many.approach_steps // 2) or []
+            for target in targets if retreat else []:
+                if ctx.termination():
+                    break
+                approach = _backed_line(world, target, back, ctx.many.approach_steps // 2)
+                if approach is None:
+                    continue
+                path = np.array([q[i], *retreat, *approach[::-1], target])
+                if not _sampled_clear(world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel).all():
+                    continue
+                if straight_moves_clear(
+                    world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, min_margin=margin, every=True
+                ).all():
+                    way = path[1:]
+                    break
+        if way is not None:
+            reached = way[-1]
+            value = float(job.objective(reached[None], _object_at(ctx, reached[None], job.mode))[0])
+            if value < best[i]:
+                waypoints[i].append(way.copy())
+                q[i] = reached
+                best[i] = value
 
 
 def join_stalled(
@@ -382,6 +439,8 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
     world = ctx.world
     results: list[PathResult | None] = []
     jobs, slots = [], []
+    many = world.robot.dof >= ctx.many.straight_probe_joints
+    samples = max(ctx.hold_samples, ctx.many.hold_samples) if many else ctx.hold_samples
     for q0, object_pose, grasp, approach in requests:
         job = _transit_job(
             world,
@@ -389,8 +448,9 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             np.asarray(object_pose, float),
             grasp,
             approach,
-            samples=ctx.hold_samples,
+            samples=samples,
             joins=ctx.transit_joins,
+            straight=ctx.many.straight_probes if many else 0,
         )
         if isinstance(job, PathResult):
             results.append(job)
@@ -417,10 +477,11 @@ def _transit_job(
     *,
     samples: int,
     joins: bool,
+    straight: int = 0,
 ) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
-    holds = _holding_configurations(world, object_pose, grasp, approach, samples)
+    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0)
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
     two_joints = world.robot.dof == 2
@@ -447,18 +508,25 @@ def _transit_job(
     held = holds[objective(holds, None) <= 0.5 * world.grasp_tolerance]  # the transit's own success test
     # the greedy probe heads for the nearest of them (joint travel)
     toward = held[np.argmin(np.abs(held - q0).sum(axis=1))] if len(held) else None
+    nearest = held[np.argsort(np.abs(held - q0).sum(axis=1), kind="stable")[:straight]] if straight else None
     if not joins:
-        return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, toward=toward)
+        return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, toward=toward, straight=nearest)
 
     def targets(_stalled: np.ndarray, _rng: np.random.Generator) -> np.ndarray:
         return held
 
     within = JOIN_RADIUS * world.robot.reach
-    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, targets, within, toward)
+    return SearchJob(q0, objective, tip_error, 0.25 * world.grasp_tolerance, mode, targets, within, toward, nearest)
 
 
 def _holding_configurations(
-    world: World, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None, samples: int
+    world: World,
+    object_pose: np.ndarray,
+    grasp: int,
+    approach: np.ndarray | None,
+    samples: int,
+    *,
+    aimed: bool = False,
 ) -> np.ndarray:
     """The valid configurations holding ``grasp`` (with an allowed approach), which a transit can
     only end near: all of them for two-joint arms (:func:`two_link_grasps`), a sample for others
@@ -467,10 +535,12 @@ def _holding_configurations(
         holds = two_link_grasps(world, object_pose, grasp)
     else:
         holds = holding_configurations(world, object_pose, grasp, samples)
-    if approach is None or not len(holds):
+    if approach is None or (not len(holds) and not aimed):
         return holds
     psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]
     allowed: np.ndarray = holds[approach[approach_cell(psi, len(approach))]]
+    if aimed:  # arms of many joints: few unaimed samples come in at an allowed angle
+        allowed = np.vstack([allowed, holding_configurations_aimed(world, object_pose, grasp, approach, samples)])
     return allowed
 
 
@@ -557,6 +627,93 @@ def transfer_probe_target(
     return held[0] if len(held) else None
 
 
+def _sampled_clear(
+    world: World,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    *,
+    object_pose: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    step_rad: float = 0.05,
+) -> np.ndarray:
+    """Whether each straight move ``starts[k] -> ends[k]`` is valid at configurations ``step_rad`` apart (a
+    quick screen, so that the continuous check, which can take seconds on a long move of many joints
+    near a contact, runs only on moves that look clear)."""
+    counts = np.maximum(1, np.ceil(np.abs(ends - starts).max(axis=1) / step_rad).astype(int))
+    piece = np.repeat(np.arange(len(starts)), counts + 1)
+    offsets = np.cumsum(counts + 1) - (counts + 1)
+    t = (np.arange(len(piece)) - offsets[piece]) / counts[piece]
+    q = starts[piece] + t[:, None] * (ends[piece] - starts[piece])
+    if grasp_rel is not None:
+        poses = compose(tip_poses(world.robot, q), np.asarray(grasp_rel, float)[None])
+    else:
+        poses = np.broadcast_to(np.asarray(object_pose, float), (len(q), 3))
+    bad = np.unique(piece[~is_valid(world, q, poses)])
+    clear = np.ones(len(starts), dtype=bool)
+    clear[bad] = False
+    return clear
+
+
+def _backed_line(
+    world: World, q: np.ndarray, back: float, steps: int, toward: np.ndarray | None = None
+) -> list[np.ndarray] | None:
+    """Configurations from ``q`` (excluded) with the tip backed by ``back`` (m) in ``steps`` equal steps
+    against its own heading (or, with ``toward``, straight away from the point ``toward``),
+    its angle kept (inverse kinematics from the previous one); ``None`` when the arm cannot follow that line."""
+    robot = world.robot
+    tip = tip_poses(robot, q[None])[0]
+    heading = np.array([np.cos(tip[2]), np.sin(tip[2])])
+    if toward is not None and np.linalg.norm(tip[:2] - toward) > 1e-9:
+        heading = (toward - tip[:2]) / np.linalg.norm(toward - tip[:2])  # backed away from ``toward``
+    line = [q]
+    steps = max(steps, int(np.ceil(back / 0.02)))  # 2 cm at most a step, for the solver to follow
+    for step in range(1, steps + 1):
+        point = tip[:2] - back * step / steps * heading
+        solved = solve_point(
+            robot, line[-1][None], point[None], angles=np.array([tip[2]]), angle_tolerance=1e-4, iterations=100
+        )
+        reached = tip_poses(robot, solved.q)[0]
+        if np.linalg.norm(reached[:2] - point) > 1e-4 or abs(wrap_angle(reached[2] - tip[2])) > 1e-3:
+            return None
+        line.append(solved.q[0])
+    return line[1:]
+
+
+def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -> PathResult | None:
+    """Arms of many joints (:class:`ManyJoints`): SEARCH_TRANSFER by straight joint-space moves, checked
+    continuously, to a configuration holding the object at the goal (:func:`goal_configurations`, nearest
+    first), directly or by way of the line along which the tip, backed along its own heading, puts the
+    object in place; ``None`` when none is clear. Its own generator (the run's stream is untouched)."""
+    world, many = ctx.world, ctx.many
+    grasp_rel = job.pose
+    rng = _own_generator(ctx, PROBE_STREAM + 1, job.q0, grasp_rel)
+    margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+    held = goal_configurations(world, job.q0, grasp_rel, goal, rng, min_margin=margin)[: many.straight_probes]
+    back = many.approach_radii * world.object.radius
+    for target in held:
+        if ctx.termination():
+            return None
+        ways = [np.array([job.q0, target])]
+        # the object backed out along the line from its origin to the grasp, as a gripper pulls it
+        origin = compose(tip_poses(world.robot, target[None]), grasp_rel[None])[0, :2]
+        line = _backed_line(world, target, back, many.approach_steps, toward=origin)
+        if line is not None:
+            ways.append(np.array([job.q0, *line[::-1], target]))
+            turned = job.q0.copy()  # the whole arm turned by joint 1 first (rigidly), then straight
+            turned[0] = line[-1][0]
+            ways.append(np.array([job.q0, turned, *line[::-1], target]))
+        for way in ways:
+            if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel).all():
+                continue
+            clear = straight_moves_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, min_margin=margin, every=True)
+            if clear.all():
+                pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]
+                distance = float(np.linalg.norm(goal_error(world, pose[None], goal)[0]))
+                if goal_reached(world, pose, goal) and distance <= 0.5 * world.goal_tolerance:
+                    return PathResult(True, way, distance, object_pose=pose)
+    return None
+
+
 def search_transfer(
     ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
 ) -> PathResult:
@@ -586,6 +743,10 @@ def search_transfer(
     within = JOIN_RADIUS * world.robot.reach
     toward = transfer_probe_target(ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
     job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within, toward)
+    if world.robot.dof >= ctx.many.straight_probe_joints:
+        straight = _straight_transfer(ctx, job, goal)
+        if straight is not None:
+            return straight
     [(waypoints, distance)] = local_search(ctx, [job])
 
     def succeeded(path: np.ndarray, reached: float) -> tuple[bool, np.ndarray]:

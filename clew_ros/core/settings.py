@@ -15,7 +15,40 @@ from clew_ros.core.errors import ParameterError
 from clew_ros.core.genetic import GeneticSettings
 from clew_ros.core.parameters import PLANNER_PARAMETERS, RETIRED_PARAMETERS, check_value, retired_message
 
-__all__ = ["PLANNER_PARAMETERS", "Outcome", "PlannerSettings", "Termination"]
+__all__ = ["PLANNER_PARAMETERS", "ManyJoints", "Outcome", "PlannerSettings", "Termination"]
+
+
+@dataclass(frozen=True)
+class ManyJoints:
+    """How SEARCH adapts to arms of many joints (issue 46): chosen from the arm's number of joints, so
+    that arms of at most 10 joints (every other family, the config worlds) plan as before."""
+
+    #: joints (count) from which SEARCH_TRANSIT first tries straight joint-space moves, checked
+    #: continuously, to its holding configurations: on 15-40 joint arms a Manhattan path visits
+    #: every joint k times and each move's free interval costs O(n^2) link pairs, so one decoded
+    #: path costs about 100x a 4-joint one, and the greedy Manhattan probe, which swings joint 1 first,
+    #: rarely gets past a shelf's walls where a straight move does
+    straight_probe_joints: int = 11
+    #: holding configurations (count, nearest first in joint travel) a transit's straight probe tries
+    straight_probes: int = 8
+    #: random starts of the holding configurations on such arms (at least; 24 on others): few of them
+    #: converge where the arm must be nearly straight, and the straight probe needs some to head for
+    hold_samples: int = 96
+    #: SEARCH_TRANSFER's straight probe also tries each goal configuration by way of the configuration
+    #: with the tip backed along its own heading by this many object radii (m / m), reached in
+    #: :attr:`approach_steps` straight moves along that line (the object put in place along the last
+    #: link, as a gripper puts an object into a slot)
+    approach_radii: float = 2.0
+    approach_steps: int = 8
+    #: whether SEARCH_TRANSIT runs its GA rounds on such arms after the straight probe failed: measured on
+    #: the snake family, the GA took 90 % of a run (a 40-joint generation decodes 24 paths of 80 moves at
+    #: about 5 ms each) and never reached a grasp the straight probe missed; without it EXPLORE moves on to
+    #: other pairs and landmarks (a failed pair is tried again, with more holding configurations, after a
+    #: round with no transit)
+    transit_ga: bool = False
+    #: largest Manhattan order (``planner.manhattan_order`` is lowered to it) on such arms: each order adds a
+    #: move of every joint to a path, and EXPLORE's decoding took 95 % of a 37-joint run at order 2
+    manhattan_order: int = 1
 
 
 class Outcome(enum.Enum):

@@ -40,6 +40,16 @@ from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
 from clew_ros.worlds.layouts import Layout, LayoutError, blocks_near, clutter, pocket, ring, shelves, window
 from clew_ros.worlds.regrasp import regrasp_needed
 from clew_ros.worlds.shapes import SHAPES, ObjectShape, make_shape
+from clew_ros.worlds.snake import (
+    SNAKE_JOINTS,
+    WALL_MARGIN_M,
+    make_bar,
+    make_snake_arm,
+    simulate_snake,
+    snake_layout,
+    snake_tree,
+    variant_of,
+)
 from clew_ros.worlds.sweep import Sweep
 from clew_ros.worlds.witness import WitnessError, simulate
 
@@ -79,6 +89,10 @@ class Family:
     angle_tolerances: tuple[float, ...] = (ANY_ANGLE, 0.5, 0.2)
     solvable: bool = True
     needs_regrasp: bool = False  # keep only worlds where :func:`regrasp_needed` proves one transfer too few
+    #: streams tried per world before :class:`GenerationError`
+    attempts: int = MAX_ATTEMPTS
+    #: builds the whole world from (family, seed, stream, attempt) instead of the recipe above (``snake``)
+    build: Callable[[Family, int, np.random.Generator, int], GeneratedWorld] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -220,6 +234,18 @@ FAMILIES: dict[str, Family] = {
             (10,),
             ALL_SHAPES,
             _mixed_layout,
+        ),
+        Family(
+            "snake",
+            "15-40 joints (equal, decreasing, random lengths; loose, tight limits); a bar from a shelf into a slot",
+            SNAKE_JOINTS,
+            ("bar",),
+            None,
+            transfers=(0.0, 1.0, 0.0),
+            angle_tolerances=(0.3,),
+            margin_m=WALL_MARGIN_M,
+            attempts=100,  # a witness of many joints is refused more often (a wall too near it, mostly)
+            build=lambda family, seed, rng, attempt: _snake(family, seed, rng, attempt),  # noqa: PLW0108 (defined below)
         ),
         Family(
             "unsolvable",
@@ -425,6 +451,54 @@ def _unsolvable(family: Family, seed: int, draft: _Draft, rng: np.random.Generat
     )
 
 
+def _snake(family: Family, seed: int, rng: np.random.Generator, attempt: int) -> GeneratedWorld:
+    """A world of the ``snake`` family (:mod:`~clew_ros.worlds.snake`): arm, witness, shelf and slot, checks."""
+    name = f"{family.name}_{seed}"
+    variant = variant_of(seed)
+    arm = make_snake_arm(rng, int(rng.choice(family.joints)), variant)
+    shape = make_bar()
+    tree = snake_tree(name, arm, shape)
+    try:
+        witness, goal_pose = simulate_snake(world_from_parameters({"world": tree}), shape, rng)
+    except WitnessError as error:
+        raise _RejectedError(str(error)) from None
+    start, goal = _pose(witness.object_initial), _pose(goal_pose)
+    tree["robot"]["initial"] = [round(float(v), 6) for v in witness.initial]
+    tree["object"]["initial"] = start
+    tree["object"]["goal"] = goal
+    joint_names = tuple(f"joint_{i + 1}" for i in range(len(arm.link_lengths)))
+    stats = {
+        "generator": "clew_world",
+        "family": family.name,
+        "world_seed": seed,
+        "attempts": attempt + 1,
+        "expected": "solvable",
+        "transfers": 2,
+        "joint_travel_rad": round(_travel(Plan(name, joint_names, True, "", None, witness.segments, None)), 6),
+    }
+    message = "witness of " + name + ": the arm bent in three groups of joints, a regrasp aside (clew_world snake)"
+    plan = Plan(name, joint_names, True, message, None, witness.segments, np.array(goal), (), stats)
+    draft = _Draft(tree, plan, "bar", family.angle_tolerances[0], stats)
+    world = draft.world
+    try:
+        layout = snake_layout(world, Sweep(world, plan, WALL_MARGIN_M), rng, np.array(goal))
+    except LayoutError as error:
+        raise _RejectedError(str(error)) from None
+    final = draft.with_layout(layout)
+    problems = validate_plan(_parsed(final), plan)
+    if problems:
+        raise _RejectedError("the witness fails validation: " + "; ".join(problems[:2]))
+    notes = (
+        (
+            f"{arm.link_lengths.size}-joint arm ({variant.name}), bar, {len(layout.obstacles)} obstacles, "
+            f"goal_angle_tolerance {draft.angle_tolerance:g} rad"
+        ),
+        *layout.notes,
+        f"Witness: 2 transfers, joint travel {stats['joint_travel_rad']:.2f} rad; the arm bent in groups of joints.",
+    )
+    return GeneratedWorld(family.name, seed, {"world": final}, plan, True, notes, attempt + 1, stats)
+
+
 def generate(family: str, seed: int) -> GeneratedWorld:
     """The world of ``family`` (a name of :data:`FAMILIES`) for ``seed`` (an integer >= 0).
 
@@ -440,10 +514,12 @@ def generate(family: str, seed: int) -> GeneratedWorld:
     chosen = FAMILIES[family]
     build = _solvable if chosen.solvable else _unsolvable
     reasons: list[str] = []
-    for attempt in range(MAX_ATTEMPTS):
+    for attempt in range(chosen.attempts):
         rng = _stream(family, int(seed), attempt)
         try:
+            if chosen.build is not None:
+                return chosen.build(chosen, int(seed), rng, attempt)
             return build(chosen, int(seed), _draft(chosen, int(seed), rng, attempt), rng)
         except _RejectedError as rejected:
             reasons.append(str(rejected))
-    raise GenerationError(f"family {family}, seed {seed}: no world in {MAX_ATTEMPTS} attempts (last: {reasons[-1]})")
+    raise GenerationError(f"family {family}, seed {seed}: no world in {chosen.attempts} attempts (last: {reasons[-1]})")

@@ -32,6 +32,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("core",),  # the Ariadne's Clew Algorithm; never imports rclpy
     ("planar", "spatial"),  # the kinds of world the algorithm plans in, side by side
     ("worlds", "motion"),  # clew_world's generated worlds; a plan timed and played back (no ROS)
+    ("scene",),  # one description of what to draw (items, palette) for the picture, RViz and Foxglove
     ("ros",),  # ROS messages, QoS, topics, parameters, frames, URDF: message types, no node
     ("recording",),  # the rosbag2 MCAP writer and reader
     ("render",),  # PNG / GIF / SVG of a world, a plan or a recording

@@ -1,7 +1,8 @@
 """Core values as Foxglove's well-known messages: the one module of the live view that knows them.
 
 Everything is drawn in the plane ``z = 0`` of the frame :data:`FRAME`
-(metres), with the colours of the renderer (:data:`clew_ros.render.shapes.COLORS`).
+(metres); the geometry and the colours are the scene description's
+(:mod:`clew_ros.scene`), as the renderer and the RViz markers draw them.
 Needs ``foxglove-sdk`` (the ``live`` extra); :mod:`clew_ros.live.view` imports
 this module only when it starts.
 """
@@ -9,7 +10,6 @@ this module only when it starts.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from typing import Protocol
 
 import numpy as np
 import shapely
@@ -29,9 +29,9 @@ from foxglove.messages import (
     Vector3,
 )
 
-from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.world import World
-from clew_ros.render.shapes import COLORS
+from clew_ros.scene.items import ArmItems, LandmarkLike, TreeItems, arm_items, tree_items, world_items
+from clew_ros.scene.palette import colour
 
 __all__ = [
     "FRAME",
@@ -50,26 +50,15 @@ FRAME = "world"
 GRIPPER_JOINT = "gripper"
 
 
-class LandmarkLike(Protocol):
-    """What is drawn of a landmark: a :class:`~clew_ros.core.tree.Landmark` or a plan's
-    :class:`~clew_ros.core.plan.PlanLandmark`."""
-
-    @property
-    def id(self) -> int: ...
-    @property
-    def parent(self) -> int | None: ...
-    @property
-    def object_pose(self) -> np.ndarray: ...
-
-
 def timestamp(time_ns: int) -> Timestamp:
     """A Foxglove timestamp from nanoseconds since the epoch."""
     return Timestamp(time_ns // 1_000_000_000, time_ns % 1_000_000_000)
 
 
 def _color(key: str, alpha: float = 1.0) -> Color:
-    r, g, b = COLORS[key]
-    return Color(r=r / 255, g=g / 255, b=b / 255, a=alpha)
+    """The palette's colour ``key`` (:data:`clew_ros.scene.palette.PALETTE`) at opacity ``alpha`` (0-1)."""
+    r, g, b, a = colour(key).fractions(alpha)
+    return Color(r=r, g=g, b=b, a=a)
 
 
 def _points(xy: np.ndarray, z: float = 0.0) -> list[Point3]:
@@ -113,12 +102,6 @@ def _fill(polygon: np.ndarray, key: str, *, alpha: float = 1.0, z: float = 0.0) 
     return TriangleListPrimitive(points=_points(np.array(corners), z), color=_color(key, alpha))
 
 
-def _scale(world: World) -> float:
-    """The workspace's larger side (m): sizes of dots and lines are fractions of it."""
-    xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
-    return max(xmax - xmin, ymax - ymin)
-
-
 def _entity(
     entity_id: str,
     time_ns: int,
@@ -140,28 +123,24 @@ def _entity(
 def world_update(world: World, time_ns: int, *, goal: np.ndarray | None = None) -> SceneUpdate:
     """The world: entities ``bounds``, ``obstacles``, ``start`` (the object where it starts, with its grasp
     points) and ``goal`` (the object at ``goal``, default ``world.object.goal``)."""
-    scale = _scale(world)
+    items = world_items(world, goal)
+    scale = items.span
     line = 0.004 * scale
-    xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
-    bounds = np.array([[xmin, ymin], [xmax, ymin], [xmax, ymax], [xmin, ymax]])
-    goal_pose = np.asarray(world.object.goal if goal is None else goal, dtype=float)
-    start = transform_points(world.object.initial, world.object.polygon)
-    grasps = transform_points(world.object.initial, world.object.grasps)
     entities = [
-        _entity("bounds", time_ns, lines=[_loop(bounds, "field_edge", line)]),
+        _entity("bounds", time_ns, lines=[_loop(items.bounds, items.bounds_key, line)]),
         _entity(
             "obstacles",
             time_ns,
-            triangles=[_fill(o.vertices, "obstacle") for o in world.obstacles],
-            lines=[_loop(o.vertices, "obstacle_edge", line, z=0.001) for o in world.obstacles],
+            triangles=[_fill(o.vertices, o.key) for o in items.obstacles],
+            lines=[_loop(o.vertices, o.edge_key, line, z=0.001) for o in items.obstacles],
         ),
         _entity(
             "start",
             time_ns,
-            lines=[_loop(start, "start", line)],
-            spheres=_dots(grasps, "grasp", 0.012 * scale, z=0.002),
+            lines=[_loop(items.start, items.start_key, line)],
+            spheres=_dots(items.grasps, items.grasp_key, 0.012 * scale, z=0.002),
         ),
-        _entity("goal", time_ns, lines=[_loop(transform_points(goal_pose, world.object.polygon), "goal", line)]),
+        _entity("goal", time_ns, lines=[_loop(items.goal, items.goal_key, line)]),
     ]
     return SceneUpdate(entities=entities)
 
@@ -169,50 +148,46 @@ def world_update(world: World, time_ns: int, *, goal: np.ndarray | None = None) 
 def landmarks_update(world: World, landmarks: Iterable[LandmarkLike], time_ns: int) -> SceneUpdate:
     """The landmark tree as entity ``landmarks``: a dot where the object rests at each landmark, an edge from
     each landmark's parent, and the object's outline at each landmark's placement."""
-    marks = list(landmarks)
-    scale = _scale(world)
-    index = {lm.id: i for i, lm in enumerate(marks)}
-    poses = np.array([np.asarray(lm.object_pose, dtype=float) for lm in marks]).reshape(-1, 3)
-    edges = np.array(
-        [[poses[index[lm.parent], :2], poses[i, :2]] for i, lm in enumerate(marks) if lm.parent in index]
-    ).reshape(-1, 2, 2)
-    outlines = transform_points(poses, world.object.polygon)  # (L, V, 2)
-    sides = np.stack([outlines, np.roll(outlines, -1, axis=1)], axis=2).reshape(-1, 2, 2)
-    lines = [_segments(sides, "tree_edge", 0.002 * scale, alpha=0.35, z=0.003)]
-    if len(edges):
-        lines.append(_segments(edges, "tree_edge", 0.003 * scale, z=0.004))
-    entity = _entity(
-        "landmarks", time_ns, lines=lines, spheres=_dots(poses[:, :2], "tree_node", 0.012 * scale, z=0.005)
-    )
-    return SceneUpdate(entities=[entity])
+    scale = world_items(world).span
+    items = tree_items(landmarks)
+    lines: list[LinePrimitive] = []
+    spheres: list[SpherePrimitive] = []
+    if items is None:
+        lines.append(_segments(np.zeros((0, 2, 2)), TreeItems.edge_key, 0.002 * scale, alpha=0.35, z=0.003))
+    else:
+        outlines = items.outlines(world)  # (L, V, 2)
+        sides = np.stack([outlines, np.roll(outlines, -1, axis=1)], axis=2).reshape(-1, 2, 2)
+        lines.append(_segments(sides, items.edge_key, 0.002 * scale, alpha=0.35, z=0.003))
+        if len(items.edges):
+            lines.append(_segments(items.edges, items.edge_key, 0.003 * scale, z=0.004))
+        spheres = _dots(items.nodes, items.node_key, 0.012 * scale, z=0.005)
+    return SceneUpdate(entities=[_entity("landmarks", time_ns, lines=lines, spheres=spheres)])
 
 
 def arm_update(world: World, joints: np.ndarray, gripper: float, object_pose: np.ndarray, time_ns: int) -> SceneUpdate:
     """The arm at ``joints`` (n,) rad as entity ``arm`` (links, joints, the gripper: green open, red closed)
     and the object at ``object_pose`` (3,) as entity ``object`` (orange while held)."""
-    scale = _scale(world)
-    chain = joint_positions(world.robot, np.asarray(joints, dtype=float)[None])[0]  # (n + 1, 2)
-    width = max(float(world.robot.link_width), 0.006 * scale)
-    holding = gripper > 0.5
+    scale = world_items(world).span
+    items: ArmItems = arm_items(world, joints, gripper, object_pose)
+    chain = items.points  # (n + 1, 2)
+    width = max(items.link_width, 0.006 * scale)
     links = LinePrimitive(
-        type=LinePrimitiveLineType.LineStrip, thickness=width, points=_points(chain, 0.01), color=_color("arm")
+        type=LinePrimitiveLineType.LineStrip, thickness=width, points=_points(chain, 0.01), color=_color(items.arm_key)
     )
     arm = _entity(
         "arm",
         time_ns,
         lines=[links],
         spheres=[
-            *_dots(chain[:-1], "joint", 0.6 * width, z=0.011),
-            *_dots(chain[-1:], "closed" if holding else "open", 1.4 * width, z=0.012),
+            *_dots(chain[:-1], items.joint_key, 0.6 * width, z=0.011),
+            *_dots(chain[-1:], items.gripper_key, 1.4 * width, z=0.012),
         ],
     )
-    outline = transform_points(np.asarray(object_pose, dtype=float), world.object.polygon)
-    key = "object_held" if holding else "object_rest"
     carried = _entity(
         "object",
         time_ns,
-        triangles=[_fill(outline, key, alpha=0.6, z=0.006)],
-        lines=[_loop(outline, key, 0.004 * scale, z=0.007)],
+        triangles=[_fill(items.object, items.object_key, alpha=0.6, z=0.006)],
+        lines=[_loop(items.object, items.object_key, 0.004 * scale, z=0.007)],
     )
     return SceneUpdate(entities=[arm, carried])
 

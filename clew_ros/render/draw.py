@@ -1,4 +1,8 @@
-"""A scene drawn once, into shapes: the one place that knows what a picture shows.
+"""A scene drawn once, into shapes: the one place that knows how a picture lays out the scene.
+
+What is drawn, and in which colour, is the scene description's
+(:mod:`clew_ros.scene`: the items in metres, the palette's keys); this
+module places them in pixels and sizes them.
 
 :func:`draw_still` makes the filmstrip that the PNG and the SVG both write
 (the world, the landmark tree, the tip's path, the arm at poses fading in along
@@ -13,12 +17,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.world import World
-from clew_ros.render.scene import LandmarkGraph, Motion, Scene
+from clew_ros.render.scene import Motion, Scene
 from clew_ros.render.shapes import Animation, Circle, Drawing, Frame, Paint, Point, Polygon, Polyline, Rect, Shape, Text
 from clew_ros.render.text import font_height, text_width
-from clew_ros.render.view import View, arm_points, object_outline
+from clew_ros.render.view import View
+from clew_ros.scene.items import (
+    ArmItems,
+    TreeItems,
+    arm_points,
+    gripper_key,
+    object_key,
+    object_outline,
+    world_items,
+)
 
 __all__ = [
     "END_MS",
@@ -125,34 +137,42 @@ class _Painter:
         self.motion = motion
         self.tips: tuple[Point, ...] = ()
         if motion is not None:  # the tip's path in pixels, once
-            self.tips = _points(self.view.px(joint_positions(self.world.robot, motion.configurations)[:, -1]))
+            self.tips = _points(self.view.px(motion.tips(self.world)))
 
     # ------------------------------------------------------------------ what does not move
 
     def world_shapes(self) -> list[Shape]:
         """Bounds, obstacles, the object's start (outline) and goal (dashed), its grasp points (numbered)."""
-        v, w, lw = self.view, self.world, self.line
-        xmin, ymin, xmax, ymax = (float(b) for b in w.bounds)
-        (x0, y0), (x1, y1) = v.px(np.array([[xmin, ymax], [xmax, ymin]]))
+        v, lw, items = self.view, self.line, world_items(self.world)
+        (x0, y0), (x1, y1) = v.px(np.array([items.bounds[3], items.bounds[1]]))  # top-left, bottom-right
         shapes: list[Shape] = [
-            Rect(float(x0), float(y0), float(x1), float(y1), Paint("field"), Paint("field_edge"), lw, layer="bounds")
+            Rect(
+                float(x0),
+                float(y0),
+                float(x1),
+                float(y1),
+                Paint(items.field_key),
+                Paint(items.bounds_key),
+                lw,
+                layer="bounds",
+            )
         ]
         shapes += [
             Polygon(
                 _points(v.px(obstacle.vertices)),
-                Paint("obstacle"),
-                Paint("obstacle_edge"),
+                Paint(obstacle.key),
+                Paint(obstacle.edge_key),
                 lw,
                 layer="obstacles",
                 title=obstacle.name,
             )
-            for obstacle in w.obstacles
+            for obstacle in items.obstacles
         ]
         shapes.append(
             Polygon(
-                _points(v.px(object_outline(w, w.object.goal))),
-                Paint("goal", 40),
-                Paint("goal"),
+                _points(v.px(items.goal)),
+                Paint(items.goal_key, 40),
+                Paint(items.goal_key),
                 lw,
                 dash=max(4.0, 3.0 * lw),
                 layer="goal",
@@ -160,19 +180,23 @@ class _Painter:
         )
         shapes.append(
             Polygon(
-                _points(v.px(object_outline(w, w.object.initial))),
-                Paint("start", 35),
-                Paint("start"),
+                _points(v.px(items.start)),
+                Paint(items.start_key, 35),
+                Paint(items.start_key),
                 lw,
                 layer="start",
             )
         )
         radius = max(3, 1.3 * lw)
-        centre = v.px(w.object.initial[:2])
-        for index, point in enumerate(v.px(transform_points(w.object.initial, w.object.grasps))):
+        centre = v.px(self.world.object.initial[:2])
+        for index, point in enumerate(v.px(items.grasps)):
             shapes.append(
                 Circle(
-                    (float(point[0]), float(point[1])), radius, Paint("grasp"), layer="grasps", title=f"grasp {index}"
+                    (float(point[0]), float(point[1])),
+                    radius,
+                    Paint(items.grasp_key),
+                    layer="grasps",
+                    title=f"grasp {index}",
                 )
             )
             away = point - centre
@@ -182,7 +206,7 @@ class _Painter:
                 _text(
                     (float(label[0]), float(label[1])),
                     str(index),
-                    Paint("grasp"),
+                    Paint(items.grasp_key),
                     self.layout.small_size,
                     "mm",
                     layer="grasps",
@@ -190,13 +214,14 @@ class _Painter:
             )
         return shapes
 
-    def tree_shapes(self, tree: LandmarkGraph | None) -> list[Shape]:
+    def tree_shapes(self, tree: TreeItems | None) -> list[Shape]:
         """The landmark tree: parent -> child edges, a dot per landmark (the root larger)."""
         if tree is None:
             return []
         v = self.view
         shapes: list[Shape] = [
-            Polyline(_points(edge), Paint("tree_edge", 230), self.line, layer="landmarks") for edge in v.px(tree.edges)
+            Polyline(_points(edge), Paint(tree.edge_key, 230), self.line, layer="landmarks")
+            for edge in v.px(tree.edges)
         ]
         radius = max(2.5, 1.1 * self.line)
         for index, (x, y) in enumerate(v.px(tree.nodes)):
@@ -204,7 +229,7 @@ class _Painter:
                 Circle(
                     (float(x), float(y)),
                     radius * (1.6 if index == tree.root else 1.0),
-                    Paint("tree_node", 230),
+                    Paint(tree.node_key, 230),
                     layer="landmarks",
                     title=f"landmark {index}",
                 )
@@ -212,34 +237,22 @@ class _Painter:
         return shapes
 
     def tip_path(self, upto: int | None = None, alpha: int = 255, width: int | None = None) -> list[Shape]:
-        """The tip's path up to row ``upto`` (all of it: ``None``), blue while in transit, orange while holding."""
-        motion = self.motion
-        if motion is None:
+        """The tip's path up to row ``upto`` (all of it: ``None``), by segment kind (transit, transfer)."""
+        if self.motion is None:
             return []
-        end = len(motion) if upto is None else upto + 1
-        if end < 2:
-            return []
-        held = motion.held[:end] >= 0
         width = width or max(1, self.line - 1)
-        shapes: list[Shape] = []
-        start = 0
-        for i in range(1, end + 1):
-            if i == end or held[i] != held[start]:
-                piece = self.tips[start : min(i + 1, end)]
-                if len(piece) > 1:
-                    key = "transfer" if held[start] else "transit"
-                    shapes.append(Polyline(piece, Paint(key, alpha), width, rounded=True, layer="tip-path"))
-                start = i
-        return shapes
+        return [
+            Polyline(self.tips[p.first : p.stop], Paint(p.kind, alpha), width, rounded=True, layer="tip-path")
+            for p in self.motion.tip_pieces(upto)
+        ]
 
     # ------------------------------------------------------------------ what moves
 
     def object_at(self, pose: np.ndarray, held: bool, alpha: int = 255, layer: str = "poses") -> Shape:
-        outline = _points(self.view.px(object_outline(self.world, pose)))
         return Polygon(
-            outline,
-            Paint("object_held" if held else "object_rest", int(alpha * 0.75)),
-            Paint("arm", int(alpha * 0.6)),
+            _points(self.view.px(object_outline(self.world, pose))),
+            Paint(object_key(held), int(alpha * 0.75)),
+            Paint(ArmItems.arm_key, int(alpha * 0.6)),
             max(1, self.line - 1),
             layer=layer,
         )
@@ -249,17 +262,18 @@ class _Painter:
         v, lw = self.view, self.line
         points = v.px(arm_points(self.world, q))
         width = max(2 * lw, round(v.length(self.world.robot.link_width)))
-        ink = Paint("arm", alpha)
+        ink = Paint(ArmItems.arm_key, alpha)
         shapes: list[Shape] = [Polyline(_points(points), ink, width, rounded=True, layer="poses")]
         r = max(2.5, 1.2 * lw)
         bx, by = (float(c) for c in points[0])
         base = 2.2 * r
         shapes.append(Rect(bx - base, by - base, bx + base, by + base, ink, layer="poses"))
-        shapes += [Circle((float(x), float(y)), r, Paint("joint", alpha), ink, layer="poses") for x, y in points[1:-1]]
+        shapes += [
+            Circle((float(x), float(y)), r, Paint(ArmItems.joint_key, alpha), ink, layer="poses")
+            for x, y in points[1:-1]
+        ]
         x, y = points[-1]
-        shapes.append(
-            Circle((float(x), float(y)), 1.9 * r, Paint("closed" if held else "open", alpha), ink, layer="poses")
-        )
+        shapes.append(Circle((float(x), float(y)), 1.9 * r, Paint(gripper_key(held), alpha), ink, layer="poses"))
         return shapes
 
     # ------------------------------------------------------------------ caption

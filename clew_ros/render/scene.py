@@ -2,8 +2,9 @@
 
 A :class:`Scene` is built from a world alone, a world and a plan, or a
 recording (which holds the world YAML, the trajectory and the events, the
-``landmark`` events among them). :meth:`Scene.motion` replays the plan with
-the core (:func:`clew_ros.core.plan.replay`).
+``landmark`` events among them). What it holds is drawn from the scene
+description (:mod:`clew_ros.scene`): :meth:`Scene.motion` is
+:func:`clew_ros.scene.path.plan_motion`, the tree :class:`~clew_ros.scene.items.TreeItems`.
 """
 
 from __future__ import annotations
@@ -18,9 +19,11 @@ import numpy as np
 import yaml
 
 from clew_ros.core.errors import ClewError, PlanFileError
-from clew_ros.core.plan import Plan, PlanLandmark, replay
+from clew_ros.core.plan import Plan, PlanLandmark
 from clew_ros.core.world import World, load_world, world_from_parameters
 from clew_ros.render.errors import RenderError
+from clew_ros.scene.items import TreeItems
+from clew_ros.scene.path import Motion, plan_motion
 
 __all__ = [
     "LandmarkGraph",
@@ -37,68 +40,8 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
-class LandmarkGraph:
-    """The landmark tree as drawn: node positions (K, 2) and edges (E, 2, 2), in metres."""
-
-    nodes: np.ndarray
-    edges: np.ndarray
-    root: int | None = 0
-
-    @classmethod
-    def from_landmarks(cls, landmarks: Sequence[PlanLandmark]) -> LandmarkGraph | None:
-        """Nodes where the object rests at each landmark (as the node's markers draw them), parent -> child edges;
-        ``None`` without landmarks."""
-        if not landmarks:
-            return None
-        tips = np.array([lm.object_pose[:2] for lm in landmarks], dtype=float)
-        index = {lm.id: i for i, lm in enumerate(landmarks)}
-        edges = [
-            (tips[index[lm.parent]], tips[i])
-            for i, lm in enumerate(landmarks)
-            if lm.parent is not None and lm.parent in index
-        ]
-        root = next((i for i, lm in enumerate(landmarks) if lm.parent is None), None)
-        return cls(tips, np.array(edges, dtype=float).reshape(-1, 2, 2), root)
-
-
-@dataclass(frozen=True)
-class Motion:
-    """A plan replayed: one row per configuration along it.
-
-    ``held[i]`` is the grasp index held at row ``i`` (-1: none);
-    ``events`` lists ``(row, "grasp" | "ungrasp", grasp)`` where the gripper changes.
-    """
-
-    configurations: np.ndarray  # (M, n) rad
-    object_poses: np.ndarray  # (M, 3)
-    held: np.ndarray  # (M,) int
-    segment: np.ndarray  # (M,) int
-    events: list[tuple[int, str, int]]
-
-    def __len__(self) -> int:
-        return len(self.configurations)
-
-    def sample(self, count: int, *, before_events: bool = True) -> list[int]:
-        """About ``count`` rows evenly spaced along the joint-space path, always with the ends and events.
-
-        With ``before_events`` the row just before each event is included too
-        (an animation shows the gripper arrive, then change).
-        """
-        steps = np.max(np.abs(np.diff(self.configurations, axis=0)), axis=1) if len(self) > 1 else np.zeros(0)
-        distance = np.concatenate([[0.0], np.cumsum(steps)])
-        if distance[-1] <= 0 or count <= 1:
-            rows = {0, len(self) - 1}
-        else:
-            targets = np.linspace(0.0, distance[-1], max(2, count))
-            rows = set(np.searchsorted(distance, targets).clip(0, len(self) - 1).tolist())
-        for row, _kind, _grasp in self.events:
-            rows.update({max(0, row - 1), row} if before_events else {row})
-        return sorted(rows)
-
-    def rest_poses(self) -> list[np.ndarray]:
-        """Where the object is put down (after each ungrasp), in order."""
-        return [self.object_poses[row] for row, kind, _grasp in self.events if kind == "ungrasp"]
+#: The landmark tree as a picture draws it: the scene's :class:`~clew_ros.scene.items.TreeItems`.
+LandmarkGraph = TreeItems
 
 
 @dataclass
@@ -114,31 +57,12 @@ class Scene:
 
     def motion(self, step_rad: float = 0.01) -> Motion | None:
         """The plan replayed at ``step_rad`` (rad per joint between rows), or ``None`` without a plan."""
-        if self.plan is None or not self.plan.segments:
+        if self.plan is None:
             return None
-        configurations, poses, held, segment, events = [], [], [], [], []
-        row = 0
-        previous_grasp = -1
         try:
-            for step in replay(self.world, self.plan, step_rad):
-                index, q, p = step.index, step.configurations, step.object_poses
-                grasp_now = int(step.grasp) if step.kind == "transfer" and step.grasp is not None else -1
-                if grasp_now != previous_grasp:
-                    if previous_grasp >= 0:
-                        events.append((row, "ungrasp", previous_grasp))
-                    if grasp_now >= 0:
-                        events.append((row, "grasp", grasp_now))
-                previous_grasp = grasp_now
-                configurations.append(q)
-                poses.append(np.asarray(p))
-                held.append(np.full(len(q), grasp_now))
-                segment.append(np.full(len(q), index))
-                row += len(q)
+            return plan_motion(self.world, self.plan, step_rad)
         except (KeyError, TypeError, ValueError, IndexError) as error:
             raise RenderError(f"the plan cannot be replayed in world {self.world.name!r}: {error!r}") from None
-        return Motion(
-            np.concatenate(configurations), np.concatenate(poses), np.concatenate(held), np.concatenate(segment), events
-        )
 
     @property
     def grasp_count(self) -> int:

@@ -6,7 +6,7 @@ for PNG and GIF, :mod:`clew_ros.render.svg`) write those shapes as they are
 and know nothing of worlds, plans or arms.
 
 Coordinates are pixels, x to the right and y down, origin at the picture's
-top-left corner. Colours are keys of :data:`COLORS` with an opacity
+top-left corner. Colours are keys of the scene's palette (:data:`COLORS`) with an opacity
 (:class:`Paint`); widths and sizes are pixels. ``layer`` names the part of the
 picture a shape belongs to (``"obstacles"``, ``"poses"``, ...: the SVG groups
 and ids); ``title`` is an optional tooltip (SVG only).
@@ -15,6 +15,8 @@ and ids); ``title`` is an optional tooltip (SVG only).
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from clew_ros.scene.palette import PALETTE
 
 __all__ = [
     "COLORS",
@@ -31,29 +33,8 @@ __all__ = [
     "Text",
 ]
 
-#: RGB colours of every picture, by key.
-COLORS: dict[str, tuple[int, int, int]] = {
-    "background": (255, 255, 255),
-    "field": (248, 248, 244),
-    "field_edge": (80, 80, 80),
-    "obstacle": (106, 109, 120),
-    "obstacle_edge": (55, 57, 64),
-    "start": (45, 95, 200),
-    "goal": (20, 150, 70),
-    "grasp": (200, 40, 150),
-    "tree_edge": (150, 100, 200),
-    "tree_node": (115, 60, 175),
-    "transit": (80, 130, 210),
-    "transfer": (235, 125, 25),
-    "arm": (45, 45, 52),
-    "joint": (255, 255, 255),
-    "open": (40, 170, 80),
-    "closed": (215, 45, 45),
-    "object_rest": (110, 150, 225),
-    "object_held": (240, 155, 50),
-    "text": (30, 30, 30),
-    "muted": (110, 110, 110),
-}
+#: RGB colours of every picture, by key: the scene's palette (:data:`clew_ros.scene.palette.PALETTE`).
+COLORS: dict[str, tuple[int, int, int]] = {key: colour.rgb for key, colour in PALETTE.items()}
 
 #: A point in pixels ``(x, y)``.
 Point = tuple[float, float]

@@ -1,4 +1,4 @@
-"""World-to-pixel mapping and the world geometry a picture shows (arm, object)."""
+"""World-to-pixel mapping (the geometry a picture shows is the scene's: :mod:`clew_ros.scene.items`)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.world import World
+from clew_ros.scene.items import arm_points, object_outline
 
 __all__ = ["View", "arm_points", "object_outline"]
 
@@ -45,14 +45,3 @@ class View:
     def length(self, metres: float) -> float:
         """``metres`` in pixels."""
         return metres * self.scale
-
-
-def arm_points(world: World, q: np.ndarray) -> np.ndarray:
-    """Base, joints and tip of the arm at ``q``: ``(n + 1, 2)``."""
-    points: np.ndarray = joint_positions(world.robot, np.asarray(q, dtype=float)[None])[0]
-    return points
-
-
-def object_outline(world: World, pose: np.ndarray) -> np.ndarray:
-    """The object's polygon at ``pose``: ``(V, 2)``."""
-    return transform_points(np.asarray(pose, dtype=float), world.object.polygon)

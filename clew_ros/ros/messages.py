@@ -39,7 +39,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from unique_identifier_msgs.msg import UUID
 from visualization_msgs.msg import Marker, MarkerArray
 
-from clew_ros.core.kinematics import joint_positions, transform_points
+from clew_ros.core.kinematics import transform_points
 from clew_ros.core.parameters import LIMITS
 from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.settings import PlannerSettings
@@ -47,6 +47,8 @@ from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.core.world import World, world_to_parameters
 from clew_ros.motion.playback import Track, TrackState
 from clew_ros.ros.urdf import robot_urdf, visual_width_m
+from clew_ros.scene.items import TreeItems, WorldItems, arm_items, tree_items, world_items
+from clew_ros.scene.palette import colour
 
 __all__ = [
     "FRAME_ID",
@@ -120,7 +122,9 @@ def _point(xy: Iterable[float], z: float = 0.0) -> Point:
     return Point(x=float(x), y=float(y), z=z)
 
 
-def _color(r: float, g: float, b: float, a: float = 1.0) -> ColorRGBA:
+def _color(key: str, alpha: float | None = None) -> ColorRGBA:
+    """The palette's colour ``key`` (:data:`clew_ros.scene.palette.PALETTE`), opacity ``alpha`` (0-1) if given."""
+    r, g, b, a = colour(key).fractions(alpha)
     return ColorRGBA(r=r, g=g, b=b, a=a)
 
 
@@ -306,20 +310,21 @@ def world_markers(world: World, time_ns: int, goal: np.ndarray | None = None) ->
     ``obstacles`` (filled, id = index in ``world.obstacles``),
     ``obstacle_outlines``, ``object_start``, ``object_goal``, ``grasps``
     (the grasp points at the start placement). DELETEALL comes first.
+    Geometry and colours are the scene's (:func:`clew_ros.scene.items.world_items`).
     """
-    goal = world.object.goal if goal is None else np.asarray(goal, dtype=float)
-    xmin, ymin, xmax, ymax = (float(v) for v in world.bounds)
+    items = world_items(world, goal)
     markers = [_delete_all(time_ns)]
-    corners = np.array([[xmin, ymin], [xmax, ymin], [xmax, ymax], [xmin, ymax]])
-    markers.append(_marker("bounds", 0, Marker.LINE_STRIP, time_ns, _color(0.6, 0.6, 0.6), points=_outline(corners)))
-    for index, obstacle in enumerate(world.obstacles):
+    markers.append(
+        _marker("bounds", 0, Marker.LINE_STRIP, time_ns, _color(items.bounds_key), points=_outline(items.bounds))
+    )
+    for index, obstacle in enumerate(items.obstacles):
         markers.append(
             _marker(
                 "obstacles",
                 index,
                 Marker.TRIANGLE_LIST,
                 time_ns,
-                _color(0.35, 0.35, 0.4, 0.9),
+                _color(obstacle.key, 0.9),
                 scale=1.0,
                 points=_triangles(obstacle.vertices),
             )
@@ -330,21 +335,19 @@ def world_markers(world: World, time_ns: int, goal: np.ndarray | None = None) ->
                 index,
                 Marker.LINE_STRIP,
                 time_ns,
-                _color(0.1, 0.1, 0.1),
+                _color(obstacle.edge_key),
                 points=_outline(obstacle.vertices),
             )
         )
-    start = transform_points(world.object.initial, world.object.polygon)
-    target = transform_points(goal, world.object.polygon)
     markers.append(
         _marker(
             "object_start",
             0,
             Marker.LINE_STRIP,
             time_ns,
-            _color(0.1, 0.7, 0.2),
+            _color(items.start_key),
             scale=2 * _LINE_WIDTH_M,
-            points=_outline(start),
+            points=_outline(items.start),
         )
     )
     markers.append(
@@ -353,21 +356,20 @@ def world_markers(world: World, time_ns: int, goal: np.ndarray | None = None) ->
             0,
             Marker.LINE_STRIP,
             time_ns,
-            _color(0.9, 0.2, 0.1),
+            _color(items.goal_key),
             scale=2 * _LINE_WIDTH_M,
-            points=_outline(target),
+            points=_outline(items.goal),
         )
     )
-    grasps = transform_points(world.object.initial, world.object.grasps)
     markers.append(
         _marker(
             "grasps",
             0,
             Marker.SPHERE_LIST,
             time_ns,
-            _color(1.0, 0.8, 0.0),
+            _color(items.grasp_key),
             scale=0.03,
-            points=[_point(g) for g in grasps],
+            points=[_point(g) for g in items.grasps],
         )
     )
     return MarkerArray(markers=markers)
@@ -378,55 +380,54 @@ def landmark_markers(
 ) -> MarkerArray:
     """``~/landmarks``: DELETEALL, then the tree (or a plan's landmarks) drawn at the object's resting positions.
 
-    Namespaces: ``landmarks`` (one SPHERE_LIST, the root green, the others
-    blue), ``tree_edges`` (LINE_LIST parent -> child), ``landmark_ids``
-    (TEXT_VIEW_FACING, marker id = landmark id) and, given the object's
-    ``polygon`` (its own frame), ``landmark_outlines`` (a LINE_STRIP of the
-    object at each landmark's placement, marker id = landmark id).
+    Namespaces: ``landmarks`` (one SPHERE_LIST, the root in the start's
+    colour, the others in the tree's), ``tree_edges`` (LINE_LIST parent ->
+    child), ``landmark_ids`` (TEXT_VIEW_FACING, marker id = landmark id) and,
+    given the object's ``polygon`` (its own frame), ``landmark_outlines`` (a
+    LINE_STRIP of the object at each landmark's placement, marker id =
+    landmark id). Geometry and colours are the scene's
+    (:func:`clew_ros.scene.items.tree_items`).
     """
     landmarks: list[Landmark | PlanLandmark] = list(tree)
+    items = tree_items(landmarks)
     markers = [_delete_all(time_ns)]
+    if items is None:
+        markers.append(_marker("landmarks", 0, Marker.SPHERE_LIST, time_ns, _color(TreeItems.node_key), scale=0.04))
+        markers.append(_marker("tree_edges", 0, Marker.LINE_LIST, time_ns, _color(TreeItems.edge_key, 0.8)))
+        return MarkerArray(markers=markers)
+
+    def key(index: int) -> str:
+        return WorldItems.start_key if index == items.root else items.node_key
+
     spheres = _marker(
-        "landmarks",
-        0,
-        Marker.SPHERE_LIST,
-        time_ns,
-        _color(0.2, 0.4, 1.0),
-        scale=0.04,
-        points=[_point(lm.object_pose[:2]) for lm in landmarks],
+        "landmarks", 0, Marker.SPHERE_LIST, time_ns, _color(items.node_key), scale=0.04, points=map(_point, items.nodes)
     )
-    spheres.colors = [_color(0.1, 0.7, 0.2) if lm.parent is None else _color(0.2, 0.4, 1.0) for lm in landmarks]
+    spheres.colors = [_color(key(i)) for i in range(len(items.ids))]
     markers.append(spheres)
-    edges = []
-    for lm in landmarks:
-        if lm.parent is not None:
-            edges += [_point(landmarks[lm.parent].object_pose[:2]), _point(lm.object_pose[:2])]
-    markers.append(_marker("tree_edges", 0, Marker.LINE_LIST, time_ns, _color(0.2, 0.4, 1.0, 0.8), points=edges))
-    for lm in landmarks:
-        text = _marker("landmark_ids", lm.id, Marker.TEXT_VIEW_FACING, time_ns, _color(1.0, 1.0, 1.0), scale=0.06)
-        text.pose.position = _point(lm.object_pose[:2], z=0.06)
-        text.text = str(lm.id)
+    edges = [_point(end) for edge in items.edges for end in edge]
+    markers.append(_marker("tree_edges", 0, Marker.LINE_LIST, time_ns, _color(items.edge_key, 0.8), points=edges))
+    for node, landmark_id in zip(items.nodes, items.ids, strict=True):
+        text = _marker("landmark_ids", landmark_id, Marker.TEXT_VIEW_FACING, time_ns, _color("label"), scale=0.06)
+        text.pose.position = _point(node, z=0.06)
+        text.text = str(landmark_id)
         markers.append(text)
     if polygon is not None:
+        outlines = transform_points(items.poses, np.asarray(polygon, dtype=float)).reshape(len(items.ids), -1, 2)
         markers.extend(
             _marker(
                 "landmark_outlines",
-                lm.id,
+                landmark_id,
                 Marker.LINE_STRIP,
                 time_ns,
-                _color(0.1, 0.7, 0.2, 0.6) if lm.parent is None else _color(0.2, 0.4, 1.0, 0.6),
-                points=_outline(transform_points(lm.object_pose, polygon)),
+                _color(key(i), 0.6),
+                points=_outline(outline),
             )
-            for lm in landmarks
+            for i, (landmark_id, outline) in enumerate(zip(items.ids, outlines, strict=True))
         )
     return MarkerArray(markers=markers)
 
 
 # --------------------------------------------------------------------------- the arm
-
-#: ``~/scene`` colours of the gripper: open (``gripper`` 0.0) and holding (1.0), as ``clew_render`` draws them.
-GRIPPER_OPEN_COLOR = (0.1, 0.75, 0.2)
-GRIPPER_HOLDING_COLOR = (0.9, 0.1, 0.1)
 
 
 def robot_description_message(world: World) -> String:
@@ -443,31 +444,24 @@ def scene_markers(
     (LINE_STRIP base -> joints -> tip, as wide as the links), ``arm_joints``
     (SPHERE_LIST at the base and the joints), ``gripper`` (a SPHERE at the
     tip, green and small while open, red and larger while holding: ``gripper``
-    >= 0.5), ``object`` (the object's outline, orange while held, grey at rest).
+    >= 0.5), ``object`` (the object's outline, orange while held, blue at rest).
+    Geometry and colours are the scene's (:func:`clew_ros.scene.items.arm_items`), as ``clew_render`` draws them.
     """
-    robot = world.robot
-    points = joint_positions(robot, np.asarray(joints, dtype=float)[None])[0]
-    width = visual_width_m(robot)
-    holding = gripper >= 0.5
-    arm = _marker(
-        "arm", 0, Marker.LINE_STRIP, time_ns, _color(0.45, 0.47, 0.52), scale=width, points=map(_point, points)
-    )
+    items = arm_items(world, joints, gripper, object_pose)
+    points = items.points
+    width = visual_width_m(world.robot)
+    arm = _marker("arm", 0, Marker.LINE_STRIP, time_ns, _color(items.arm_key), scale=width, points=map(_point, points))
     joints_marker = _marker(
         "arm_joints",
         0,
         Marker.SPHERE_LIST,
         time_ns,
-        _color(0.15, 0.15, 0.18),
+        _color(items.joint_key),
         scale=1.5 * width,
         points=map(_point, points[:-1]),
     )
     grip = _marker(
-        "gripper",
-        0,
-        Marker.SPHERE,
-        time_ns,
-        _color(*(GRIPPER_HOLDING_COLOR if holding else GRIPPER_OPEN_COLOR)),
-        scale=(3.0 if holding else 2.0) * width,
+        "gripper", 0, Marker.SPHERE, time_ns, _color(items.gripper_key), scale=(3.0 if items.holding else 2.0) * width
     )
     grip.pose.position = _point(points[-1])
     outline = _marker(
@@ -475,9 +469,9 @@ def scene_markers(
         0,
         Marker.LINE_STRIP,
         time_ns,
-        _color(1.0, 0.55, 0.0) if holding else _color(0.5, 0.5, 0.5),
+        _color(items.object_key),
         scale=2 * _LINE_WIDTH_M,
-        points=_outline(transform_points(np.asarray(object_pose, dtype=float), world.object.polygon)),
+        points=_outline(items.object),
     )
     return MarkerArray(markers=[arm, joints_marker, grip, outline])
 

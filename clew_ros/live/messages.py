@@ -57,7 +57,7 @@ def timestamp(time_ns: int) -> Timestamp:
 
 def _color(key: str, alpha: float = 1.0) -> Color:
     """The palette's colour ``key`` (:data:`clew_ros.scene.palette.PALETTE`) at opacity ``alpha`` (0-1)."""
-    r, g, b, a = colour(key).fractions(alpha)
+    r, g, b, a = colour(key, dark_background=True).fractions(alpha)
     return Color(r=r, g=g, b=b, a=a)
 
 

@@ -124,7 +124,7 @@ def _point(xy: Iterable[float], z: float = 0.0) -> Point:
 
 def _color(key: str, alpha: float | None = None) -> ColorRGBA:
     """The palette's colour ``key`` (:data:`clew_ros.scene.palette.PALETTE`), opacity ``alpha`` (0-1) if given."""
-    r, g, b, a = colour(key).fractions(alpha)
+    r, g, b, a = colour(key, dark_background=True).fractions(alpha)
     return ColorRGBA(r=r, g=g, b=b, a=a)
 
 

@@ -30,11 +30,12 @@ from clew_ros.scene.items import (
     tree_items,
     world_items,
 )
-from clew_ros.scene.palette import PALETTE, Colour, colour
+from clew_ros.scene.palette import ON_DARK, PALETTE, Colour, colour
 from clew_ros.scene.path import Motion, TipPiece, plan_motion
 
 __all__ = [
     "HOLDING_THRESHOLD",
+    "ON_DARK",
     "PALETTE",
     "ArmItems",
     "Colour",

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 
-__all__ = ["PALETTE", "Colour", "colour"]
+__all__ = ["ON_DARK", "PALETTE", "Colour", "colour"]
 
 
 @dataclass(frozen=True)
@@ -77,8 +77,21 @@ PALETTE: Mapping[str, Colour] = MappingProxyType(
 )
 
 
-def colour(key: str) -> Colour:
-    """The palette's colour ``key``; a :class:`KeyError` naming the keys there are otherwise."""
+#: The colours that a 3-D view's dark background (RViz's and Foxglove's defaults) would swallow, lightened there;
+#: every other key is the same in every view.
+ON_DARK: Mapping[str, Colour] = MappingProxyType(
+    {
+        "arm": Colour(200, 200, 210),  # the links: the picture's near-black is invisible on RViz's grey
+        "field_edge": Colour(160, 160, 160),  # the bounds
+    }
+)
+
+
+def colour(key: str, *, dark_background: bool = False) -> Colour:
+    """The palette's colour ``key`` (its :data:`ON_DARK` variant for a view with a dark background); a
+    :class:`KeyError` naming the keys there are otherwise."""
+    if dark_background and key in ON_DARK:
+        return ON_DARK[key]
     try:
         return PALETTE[key]
     except KeyError:

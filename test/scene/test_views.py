@@ -18,7 +18,7 @@ from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.world import load_world
 from clew_ros.live import messages as live
 from clew_ros.ros import messages as ros
-from clew_ros.scene import PALETTE
+from clew_ros.scene import PALETTE, colour
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 NOW_NS = 1_700_000_000_000_000_000
@@ -54,8 +54,8 @@ def test_rviz_and_foxglove_colour_the_world_from_the_palette(world) -> None:
         "grasps": ("start", "grasp"),
     }
     for ns, (_entity, key) in expected.items():
-        assert rgb(markers[(ns, 0)].color) == PALETTE[key].rgb, ns
-    assert rgb(entities_["bounds"]["lines"][0]["color"]) == PALETTE["field_edge"].rgb
+        assert rgb(markers[(ns, 0)].color) == colour(key, dark_background=True).rgb, ns
+    assert rgb(entities_["bounds"]["lines"][0]["color"]) == colour("field_edge", dark_background=True).rgb
     assert rgb(entities_["obstacles"]["triangles"][0]["color"]) == PALETTE["obstacle"].rgb
     assert rgb(entities_["obstacles"]["lines"][0]["color"]) == PALETTE["obstacle_edge"].rgb
     assert rgb(entities_["start"]["lines"][0]["color"]) == PALETTE["start"].rgb
@@ -70,7 +70,11 @@ def test_rviz_and_foxglove_colour_the_arm_the_gripper_and_the_object_alike(world
     markers = {m.ns: m for m in ros.scene_markers(world, q, gripper, pose, NOW_NS).markers}
     entities_ = entities(live.arm_update(world, q, gripper, pose, NOW_NS))
     gripper_key, object_key = ("closed", "object_held") if gripper else ("open", "object_rest")
-    assert rgb(markers["arm"].color) == rgb(entities_["arm"]["lines"][0]["color"]) == PALETTE["arm"].rgb
+    assert (
+        rgb(markers["arm"].color)
+        == rgb(entities_["arm"]["lines"][0]["color"])
+        == colour("arm", dark_background=True).rgb
+    )
     assert rgb(markers["arm_joints"].color) == rgb(entities_["arm"]["spheres"][0]["color"]) == PALETTE["joint"].rgb
     assert rgb(markers["gripper"].color) == rgb(entities_["arm"]["spheres"][-1]["color"]) == PALETTE[gripper_key].rgb
     assert rgb(markers["object"].color) == rgb(entities_["object"]["lines"][0]["color"]) == PALETTE[object_key].rgb
@@ -90,3 +94,10 @@ def test_rviz_and_foxglove_colour_the_landmark_tree_from_the_palette(world) -> N
     entity = entities(live.landmarks_update(world, marks, NOW_NS))["landmarks"]
     assert {rgb(line["color"]) for line in entity["lines"]} == {PALETTE["tree_edge"].rgb}
     assert {rgb(sphere["color"]) for sphere in entity["spheres"]} == {PALETTE["tree_node"].rgb}
+
+
+def test_the_3d_views_lighten_what_a_dark_background_would_swallow() -> None:
+    for key in ("arm", "field_edge"):
+        light, dark = PALETTE[key], colour(key, dark_background=True)
+        assert sum(dark.rgb) > sum(light.rgb) + 150, key  # far lighter than the picture's colour
+    assert colour("goal", dark_background=True) == PALETTE["goal"]  # every other key: one colour everywhere

@@ -421,7 +421,7 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
     """``_Improver.connect`` on an arm with a lattice: the path joins the move's ends, is valid at a fine step,
     is never longer than RRT-Connect's path alone (the same generator), is shorter on some moves, and is
     RRT-Connect's when no lattice path is shorter than ``longest``."""
-    from clew_ros.core import improve as improve_module
+    from clew_ros.core.improve import proposals as improve_module
 
     world, rng = random_box_world(2, 3, 0.04)
     rest = np.asarray(world.object.initial, dtype=float)

@@ -471,6 +471,7 @@ def _regrasp(world, a, b, *, budget=None, shorter_than=40.0, allowance=1e9):
         allowance=allowance,
         expansion_work=0.2,
         release_work=0.1,
+        screen_step_rad=0.1,
     )
 
 

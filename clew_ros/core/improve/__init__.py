@@ -119,11 +119,12 @@ until the work is spent, so the same seed gives the same plan on any machine.
 Only the planner's time limit and cancel stop it by the clock (between
 calls of the checks and between rounds of routing calls, well within 100 ms),
 and then the best plan so far is returned.
+
 Every tuning number is a field of :class:`ImproveSettings` (:mod:`clew_ros.core.improve.settings`), passed to
 :func:`improve`. The package's modules:
 
 ============== ==========================================================================================
-``settings``   :class:`ImproveSettings`: the tuning numbers, with units and why
+``settings``   :class:`ImproveSettings`: the tuning numbers, with units and why (the proposals' in ``regrasp``)
 ``pieces``     the plan as pieces, joint travel, the score and which plan is better
 ``budget``     the work budget, a routing's share of it, :func:`check_work`
 ``prune``      joining a transfer put down and taken again in place (step 1)

@@ -156,6 +156,7 @@ class _LatticeUse(_ImproverBase):
             allowance=allowance,
             expansion_work=self.settings.flood_work,
             release_work=self.settings.release_work,
+            screen_step_rad=self.settings.regrasp.screen_step_rad,
             nodes_known=(self.known("transfer", one.grasp_rel), self.known("transfer", two.grasp_rel)),
         )
         if found is None:

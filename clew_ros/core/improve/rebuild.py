@@ -82,6 +82,7 @@ class _Rebuilding(_Proposals):
                     max_checks=self.proposal_checks(),
                     step_checks=self.settings.ik_work / self.budget.check_work,
                     restarts=self.restarts,
+                    settings=self.settings.regrasp,
                 )
                 self.budget.spend_checks(effort.checks, effort.calls)
                 self.budget.spend(

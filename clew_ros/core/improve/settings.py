@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clew_ros.core.regrasp import RegraspSettings
+
 __all__ = ["ImproveSettings"]
 
 
@@ -130,3 +132,6 @@ class ImproveSettings:
     #: Configurations this close (rad, largest joint difference) count as the same where a transfer is put down
     #: and taken again (the pruning joins the two transfers).
     same_rad: float = 1e-12
+    #: The proposals' tuning (:func:`clew_ros.core.regrasp.propose`, and the goal shortcuts'
+    #: :func:`clew_ros.core.regrasp.goal_holds_near`).
+    regrasp: RegraspSettings = RegraspSettings()

@@ -168,7 +168,9 @@ class _Shortcutting(_ImproverBase):
         w = piece.waypoints
         seeds = w[:-1]
         holding = np.broadcast_to(piece.grasp_rel, (len(seeds), 3))
-        held, ok, effort = goal_holds_near(self.world, holding, seeds, self.goal, margin_m=self.min_margin)
+        held, ok, effort = goal_holds_near(
+            self.world, holding, seeds, self.goal, margin_m=self.min_margin, settings=self.settings.regrasp
+        )
         self.budget.spend_checks(effort.checks, effort.calls)
         self.budget.spend(math.ceil(self.settings.ik_work * effort.steps))
         steps = np.abs(np.diff(w, axis=0)).sum(axis=1)

@@ -2,15 +2,16 @@
 batched call of the compiled checks costs, against what the improvement's budget charges for it (issue 14).
 
 The improvement (:mod:`clew_ros.core.improve`) counts its budget in work units, not seconds, so that the same
-seed gives the same plan on any machine: :data:`~clew_ros.core.improve.WORK_PER_SECOND` units per second of
-``planner.improve_time``. A configuration checked costs
-:data:`~clew_ros.core.improve.BATCH_CHECK_SHARE` x :func:`~clew_ros.core.improve.check_work` units. This
+seed gives the same plan on any machine: :attr:`~clew_ros.core.improve.ImproveSettings.work_per_second` units per
+second of ``planner.improve_time``. A configuration checked costs
+:attr:`~clew_ros.core.improve.ImproveSettings.batch_check_share` x :func:`~clew_ros.core.improve.check_work` units.
+This
 times :func:`clew_ros.core.continuous.straight_moves_clear` on ``N`` random configurations of each world
 (``still``: each checked where it is, as the lattice checks its nodes; ``moves``: a straight move of 0.3 rad
 per joint from each, checked continuously, as shortcuts and routings are), the best of five calls, and prints
 the time per configuration and its ratio to the time the budget charges for it (``charged``: the charge at
-:data:`~clew_ros.core.improve.BATCH_CHECK_SHARE` 1, ``now``: at its value). A ratio below 1: the budget buys
-fewer checks than the time it stands for would; the improvement's whole wall time against its work is the
+:attr:`~clew_ros.core.improve.ImproveSettings.batch_check_share` 1, ``now``: at its value). A ratio below 1: the
+budget buys fewer checks than the time it stands for would; the improvement's whole wall time against its work is the
 last column of :mod:`benchmarks.improvement`.
 """
 
@@ -23,7 +24,7 @@ import numpy as np
 
 from benchmarks.improvement import load_worlds
 from clew_ros.core.continuous import straight_moves_clear
-from clew_ros.core.improve import BATCH_CHECK_SHARE, WORK_PER_SECOND, check_work
+from clew_ros.core.improve import ImproveSettings, check_work
 from clew_ros.core.kernel import warm_up
 
 WORLDS = ("figure1", "single_transfer", "obstacles_8", "obstacles_32", "joints_7")
@@ -50,8 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--batch", type=int, default=8000, help="configurations a call (default 8000)")
     args = parser.parse_args(argv)
     warm_up()
-    unit_us = 1e6 / WORK_PER_SECOND
-    print(f"one work unit stands for {unit_us:.2f} us; BATCH_CHECK_SHARE {BATCH_CHECK_SHARE}")
+    unit_us = 1e6 / ImproveSettings().work_per_second
+    print(f"one work unit stands for {unit_us:.2f} us; batch_check_share {ImproveSettings().batch_check_share}")
     print("| world | check_work | kind | configurations | us a configuration | ratio, charged 1 / now |")
     print("|---|--:|---|--:|--:|---|")
     for world, _parameters in load_worlds(args.worlds):
@@ -74,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
             charged_us = work * unit_us
             print(
                 f"| {world.name} | {work:.2f} | {kind} | {counter.configurations} | {per_us:.3f} "
-                f"| {per_us / charged_us:.2f} / {per_us / (BATCH_CHECK_SHARE * charged_us):.2f} |",
+                f"| {per_us / charged_us:.2f} / {per_us / (ImproveSettings().batch_check_share * charged_us):.2f} |",
                 flush=True,
             )
     return 0

@@ -10,7 +10,7 @@ it), or a parameter file), seeds ``0..N-1``: each seed planned with
 prints a Markdown table row per world: plans found, median joint travel of
 the first and the improved plan (rad), the gain, median transfers, the
 wall time the improvement added (median / max, s), and that time over the
-seconds its work stands for (``improve_work / WORK_PER_SECOND``, median / max:
+seconds its work stands for (``improve_work / ImproveSettings.work_per_second``, median / max:
 under 1, the work counted keeps the improvement within its budget); with
 ``--shortest``, also the shortest improved plan over the seeds (rad). A run whose improved plan the final checks
 refused (``stats.improve_refused``, a fault) is named on standard error.
@@ -30,7 +30,7 @@ from unittest import mock
 from benchmarks.reference import load_worlds
 from clew_ros.core import clew
 from clew_ros.core.clew import plan
-from clew_ros.core.improve import WORK_PER_SECOND, improve
+from clew_ros.core.improve import ImproveSettings, improve
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
 
@@ -94,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{name} seed {seed}: improved plan refused ({better.stats['improve_refused']})", file=sys.stderr)
             if first.success and better.success:
                 s = better.stats
-                nominal = s["improve_work"] / WORK_PER_SECOND  # the seconds the work spent stands for
+                nominal = s["improve_work"] / ImproveSettings().work_per_second  # the seconds the work spent stands for
                 rows.append(
                     (
                         s["first_joint_travel_rad"],

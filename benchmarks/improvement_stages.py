@@ -5,7 +5,7 @@ For each world (names and files as :mod:`benchmarks.improvement` takes them) and
 the improvement on, and each stage of :class:`clew_ros.core.improve._Improver` (rebuilding, routing, the
 lattice's regrasps, fewer transfers, greedy and random shortcuts, the lattice's first grasps) records its wall
 time and the work it was charged. Prints a Markdown row per world and stage, summed over the seeds: wall time
-(s), the seconds its work stands for (``work / WORK_PER_SECOND``) and their ratio. Routing runs inside
+(s), the seconds its work stands for (``work / ImproveSettings.work_per_second``) and their ratio. Routing runs inside
 rebuilding and is counted in both (the lattice's first grasps route their transits themselves). A stage
 whose ratio is far above the others' is charged too little for its Python.
 """
@@ -21,7 +21,7 @@ from unittest import mock
 from benchmarks.improvement import arguments
 from benchmarks.reference import load_worlds
 from clew_ros.core.clew import plan
-from clew_ros.core.improve import WORK_PER_SECOND, _Improver
+from clew_ros.core.improve import ImproveSettings, _Improver
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
 
@@ -67,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
         mock.patch.stopall()
         for stage in STAGES:
             wall, work = totals[stage]
-            nominal = work / WORK_PER_SECOND
+            nominal = work / ImproveSettings().work_per_second
             ratio = f"{wall / nominal:.2f}" if nominal > 0 else "-"
             print(f"| {world.name} | {stage} | {wall:.3f} | {nominal:.3f} | {ratio} |", flush=True)
     return 0

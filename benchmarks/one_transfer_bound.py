@@ -13,7 +13,7 @@ order of their straight joint distance, any that cannot beat the best found skip
 one-transfer plan: the goal position's tolerance, other approaches and paths off the lattice could shorten it.
 
 **The report**: per world, the bound's travel, the time it took and the work units its routings spent (the
-improver's budget is ``improve_time * WORK_PER_SECOND`` of them), the planner's first and improved plans
+improver's budget is ``improve_time * ImproveSettings.work_per_second`` of them), the planner's first and improved plans
 (median over seeds ``0..N-1``, as ``clew_plan WORLD --seed S`` plans them, transfers in brackets), and the
 first plan's median over the bound: the gain a plan of one transfer could give at most about that.
 """
@@ -31,7 +31,7 @@ import numpy as np
 
 from benchmarks.reference import load_worlds, plan_segment, planner_runs, succeeded_plan
 from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_moves_clear
-from clew_ros.core.improve import CALL_WORK, EXPANSION_WORK, MOVE_CALL_WORK, check_work, joint_travel
+from clew_ros.core.improve import ImproveSettings, check_work, joint_travel
 from clew_ros.core.kinematics import compose, relative
 from clew_ros.core.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
 from clew_ros.core.plan import Plan, validate_plan
@@ -50,10 +50,10 @@ class _Unlimited:
         self.spent += units
 
     def spend_move_checks(self, configurations: int) -> None:
-        self.spent += math.ceil(configurations * self.check_work) + MOVE_CALL_WORK
+        self.spent += math.ceil(configurations * self.check_work) + ImproveSettings().move_call_work
 
     def spend_checks(self, configurations: int, calls: int = 1) -> None:
-        self.spent += math.ceil(configurations * self.check_work) + calls * CALL_WORK
+        self.spent += math.ceil(configurations * self.check_work) + calls * ImproveSettings().call_work
 
     def stop(self) -> bool:
         return False
@@ -106,7 +106,7 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
             break
         transit = lattice_route(
             world, start, q[k], object_pose=rest, grasp_rel=None, shorter_than=limit - np.abs(ends[0] - q[k]).sum(),
-            min_margin=margin, budget=budget, allowance=math.inf, expansion_work=EXPANSION_WORK,
+            min_margin=margin, budget=budget, allowance=math.inf, expansion_work=ImproveSettings().expansion_work,
             nodes_known=transit_known, step=step,
         )  # fmt: skip
         if transit is None:
@@ -118,7 +118,8 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
                 break
             carried = lattice_route(
                 world, q[k], end, object_pose=rest, grasp_rel=rels[k], shorter_than=limit, nodes_known=known,
-                min_margin=margin, budget=budget, allowance=math.inf, expansion_work=EXPANSION_WORK, step=step,
+                min_margin=margin, budget=budget, allowance=math.inf, expansion_work=ImproveSettings().expansion_work,
+                step=step,
             )  # fmt: skip
             if carried is not None:
                 best = (joint_travel([transit]) + joint_travel([carried]), transit, carried, int(which[k]))

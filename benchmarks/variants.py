@@ -2,22 +2,26 @@
 --variant NAME=module.CONSTANT:VALUE[,...] [--variant ...] [--families A,B] [--config-worlds figure1,...]
 [--worlds 4] [--seeds 6] [--time-limit 10] [--jobs 2] [--out DIR]``.
 
-A variant sets module constants of ``clew_ros.core`` (for example ``search.JOIN_RADIUS:0``) in the worker
-processes before they plan; ``NAME=`` alone is the code as it is. Only a constant read from its module when
-it is used changes anything: not one another module imported by name, one bound as a default argument, nor
-one the compiled kernel read when it was compiled. Every variant plans every (world, seed):
-the generated families' worlds (:mod:`benchmarks.generated`) and the benchmark worlds named, in worker
-processes of their own (``--jobs`` at a time, one kernel thread each). The figure compared is the time to
-the first plan (``PlanResult.first_plan_s``: what a change of SEARCH or EXPLORE moves; a failed run counts
-at the limit). Per family and in all: success, median first-plan time, median landmarks, and the
-geometric mean over (world, seed) of each run's time over the first variant's (below 1: faster). A
-change of the random stream makes single runs diverge: read the ratios over many runs, not one.
+A variant sets module constants of ``clew_ros.core`` (for example ``search.JOIN_RADIUS:0``) in the worker processes
+before they plan, or fields of the improvement's settings (``improve.FIELD``, a field of
+:class:`clew_ros.core.improve.ImproveSettings`, for example ``improve.work_per_second:0``: the planner's improvement
+is then given a copy with those fields replaced); ``NAME=`` alone is the code as it is. Only a constant read from
+its module when it is used changes anything: not one another module imported by name, one bound as a default
+argument, nor one the compiled kernel read when it was compiled. Every variant plans every (world, seed): the
+generated families' worlds (:mod:`benchmarks.generated`) and the benchmark worlds named, in worker processes of
+their own (``--jobs`` at a time, one kernel thread each). The figure compared is the time to the first plan
+(``PlanResult.first_plan_s``: what a change of SEARCH or EXPLORE moves; a failed run counts at the limit). Per
+family and in all: success, median first-plan time, median landmarks, and the geometric mean over (world, seed) of
+each run's time over the first variant's (below 1: faster). A change of the random stream makes single runs diverge:
+read the ratios over many runs, not one.
 ``DIR/variants.json`` keeps every run.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import functools
 import importlib
 import json
 import math
@@ -28,6 +32,7 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+from unittest import mock
 
 from benchmarks.families import all_worlds, select, write_world
 from benchmarks.generated import GeneratedBenchWorld, build_world, solvable_families
@@ -61,6 +66,13 @@ def parse_variant(text: str) -> tuple[str, dict[str, Any]]:
         module, dot, constant = key.partition(".")
         if not sep or not dot or not constant:
             raise ValueError(f"--variant {text!r}: {item!r} is not module.CONSTANT:VALUE")
+        if module == "improve":
+            from clew_ros.core.improve import ImproveSettings
+
+            if constant not in {f.name for f in dataclasses.fields(ImproveSettings)}:
+                raise ValueError(f"--variant {text!r}: clew_ros.core.improve.ImproveSettings has no {constant}")
+            settings[key] = json.loads(value)
+            continue
         target = importlib.import_module(f"clew_ros.core.{module}")
         if not hasattr(target, constant):
             raise ValueError(f"--variant {text!r}: clew_ros.core.{module} has no {constant}")
@@ -69,10 +81,21 @@ def parse_variant(text: str) -> tuple[str, dict[str, Any]]:
 
 
 def _apply(settings: dict[str, Any]) -> None:
-    """Set the variant's constants (a worker process's initializer), then load the compiled kernel."""
+    """Set the variant's constants and give the planner's improvement the variant's copy of its settings (a
+    worker process's initializer), then load the compiled kernel."""
+    from clew_ros.core import clew
+    from clew_ros.core.improve import ImproveSettings, improve
+
+    improving: dict[str, Any] = {}
     for key, value in settings.items():
         module, constant = key.split(".")
-        setattr(importlib.import_module(f"clew_ros.core.{module}"), constant, value)
+        if module == "improve":
+            improving[constant] = value
+        else:
+            setattr(importlib.import_module(f"clew_ros.core.{module}"), constant, value)
+    if improving:  # clew.plan calls improve by its name in clew
+        chosen = dataclasses.replace(ImproveSettings(), **improving)
+        mock.patch.object(clew, "improve", functools.partial(improve, settings=chosen)).start()
     from clew_ros.core.kernel import warm_up
 
     warm_up()

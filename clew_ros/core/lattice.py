@@ -380,6 +380,7 @@ def lattice_regrasp(
     allowance: float,
     expansion_work: float,
     release_work: float,
+    screen_step_rad: float,
     nodes_known: tuple[KnownNodes, KnownNodes] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The shortest way on the lattice (module docstring) to carry the object from ``first`` (holding it as
@@ -393,7 +394,9 @@ def lattice_regrasp(
     per grasp, not counted), the search has spent ``allowance`` work units or :data:`REGRASP_ROUNDS`
     rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands (a repair the
     nodes it expands again and :data:`REPAIR_PASS_SHARE` of that a node of the lattice for its pass over them), and
-    each round ``release_work`` units a release (totalling them when a search changed, and picking the best)."""
+    each round ``release_work`` units a release (totalling them when a search changed, and picking the best).
+    The put-down and join moves are screened about every ``screen_step_rad`` of joint travel
+    (:func:`clew_ros.core.regrasp.screen_samples`)."""
     step = lattice_step(world)
     first, last = np.asarray(first, dtype=float), np.asarray(last, dtype=float)
     if step is None or world.robot.dof != 3 or float(np.abs(last - first).sum()) >= shorter_than:
@@ -406,6 +409,7 @@ def lattice_regrasp(
         budget=budget,
         allowance=allowance,
         release_work=release_work,
+        screen_step_rad=screen_step_rad,
     )
     if not search.layers(first, last, shorter_than, nodes_known or (KnownNodes(), KnownNodes())):
         return None
@@ -431,8 +435,10 @@ class _RegraspSearch:
         budget: LatticeBudget,
         allowance: float,
         release_work: float,
+        screen_step_rad: float,
     ) -> None:
         self.world, self.lattice, self.budget = world, lattice, budget
+        self.screen_step_rad = screen_step_rad  # rad of joint travel between the screen's samples
         (self.first_rel, self.last_rel), self.min_margin = grasps, min_margin
         self.exhausted = False  # no regrasp left below the bound
         self.release_work = release_work  # work units a release, each round
@@ -590,9 +596,13 @@ class _RegraspSearch:
         sides, rows, nodes = best.sides[fresh], best.rows[fresh], best.nodes[fresh]
         a, b = at[rows], regrasps[sides, rows]
         c = self.lattice.configurations(self.lattice.indices(joined[sides, rows]))
-        down, checked = screen_routes(self.packed, a, b, screen_samples(a, b), resting=poses[rows], grasp_rel=None)
+        down, checked = screen_routes(
+            self.packed, a, b, screen_samples(a, b, self.screen_step_rad), resting=poses[rows], grasp_rel=None
+        )
         held = np.ascontiguousarray(np.broadcast_to(self.last_rel, (len(fresh), 3)))
-        join, more = screen_routes(self.packed, b, c, screen_samples(b, c), resting=None, grasp_rel=held)
+        join, more = screen_routes(
+            self.packed, b, c, screen_samples(b, c, self.screen_step_rad), resting=None, grasp_rel=held
+        )
         self.budget.spend_move_checks(int(checked))  # two compiled calls, charged as straight-move checks
         self.budget.spend_move_checks(int(more))
         passed = (down >= 0) & (join >= 0)

@@ -16,7 +16,7 @@ Key configurations come from inverse kinematics (:func:`clew_ros.core.inverse.so
 seeds: the configuration before (so a redundant arm moves little) and its mirror image about the
 line from the base to the target (the other elbow), plus the plan's own grasp configurations. On
 an arm of three or more joints, the grasp configurations at the placement and, for one transfer, at the
-goal are also solved from seeds drawn around each seed (:data:`RESTARTS`), the valid one nearest the
+goal are also solved from seeds drawn around each seed (:attr:`RegraspSettings.restarts`), the valid one nearest the
 seed added (around the plan's own grasp configuration, the one nearest the arm's configuration):
 a redundant arm's first solution often folds into an obstacle, the object or itself, or lies far
 from where the arm is. Of the restarts' grasp configurations, two-transfer proposals start only
@@ -32,7 +32,7 @@ of its moves (sum over joints of ``|dq|``). Every key configuration is valid wit
 spare; each move is *screened*: configurations sampled along it, straight and one joint after the
 other in either order (:data:`ROUTES`, all as long in joint travel), go through the compiled
 first pass of the validity test, and a move none of whose ways passes counts
-:data:`BLOCKED_PENALTY_RAD` extra in the ranking. The screen samples, it proves nothing:
+:attr:`RegraspSettings.blocked_penalty_rad` extra in the ranking. The screen samples, it proves nothing:
 :mod:`clew_ros.core.improve` checks the moves continuously and keeps a proposal only when the
 plan gets better. Everything is batched (numpy and compiled kernels); :class:`Effort` counts the
 work done, which :mod:`clew_ros.core.improve` charges to its budget.
@@ -53,56 +53,71 @@ from clew_ros.core.kinematics import compose, relative, tip_poses, transform_poi
 from clew_ros.core.search import goals_reached
 from clew_ros.core.world import World
 
-__all__ = ["ROUTES", "Effort", "Proposal", "propose", "route_waypoints", "screen_samples"]
+__all__ = ["ROUTES", "Effort", "Proposal", "RegraspSettings", "propose", "route_waypoints", "screen_samples"]
 
-#: A grasp configuration puts the tip this close to the grasp point (m).
-HOLD_ERROR_M = 1e-9
-#: A goal configuration puts the object's origin this close to the goal, as a share of goal_tolerance.
-GOAL_SHARE = 0.25
-#: The goal's inverse kinematics, in passes of (share of goal_angle_tolerance the object's angle is brought
-#: within, share of goal_tolerance the solver's error may leave, the angle's weight in m/rad or None for the
-#: object's radius); a pass after the first only for the rows the ones before left off the goal, on a goal of
-#: narrow angle and an arm of two joints (more set the angle apart from the position). First with room to
-#: spare; then with nearly all of both tolerances and the angle weighted heavily, so that the position gives
-#: way to it: an arm of two joints may carry a grasp onto the goal only at the edge of both (shapes2 seed 60:
-#: no one-transfer proposal was made and every plan kept a regrasp, 7.43 rad, where the grid reference carries
-#: the object once in 5.84 rad, 0.49 rad and 0.015 m off the goal).
-GOAL_PASSES: tuple[tuple[float, float, float | None], ...] = ((0.8, GOAL_SHARE, None), (0.99, 0.9, 1.0))
-#: Release configurations drawn per grasp configuration (and per its mirror image): along the way to where
-#: the object comes closest to the goal, putting the object down around the goal; and anywhere.
-TOWARDS, NEAR, ANYWHERE = 6, 20, 8
-#: Releases drawn around the goal put the object within this distance of it (m).
-NEAR_RADIUS_M = 0.6
-#: Releases tried per configuration where the plan put the object down (itself, then drawn around it), and
-#: their spread (rad).
-HINTED, HINT_SPREAD_RAD = 4, 0.2
-#: Refinement rounds around the best releases of each grasp configuration: how many are kept, samples
-#: around each, spread (rad).
-ROUNDS = ((4, 6, 0.3), (3, 6, 0.1))
-#: Releases refined in one round lie at least this far apart (rad, largest joint difference).
-DISTINCT_RAD = 0.3
-#: Continuations (grasp and posture after a release) screened per release, and releases screened per grasp
-#: configuration and round (the shortest ways; the others are dropped).
-CONTINUATIONS, SCREENED = 2, 8
-#: Joint travel (rad) between configurations sampled by the screen, about.
-SCREEN_STEP_RAD = 0.1
-#: Joint travel (rad) a move that looks blocked counts extra when proposals are ranked.
-BLOCKED_PENALTY_RAD = 8.0
 #: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
 #: (first joint first), one joint after the other (last joint first). All are as long in joint travel.
 ROUTES = ("straight", "first joint first", "last joint first")
-#: Configurations closer than this (rad, largest joint difference) count as one.
-UNIQUE_RAD = 1e-6
-#: Configurations drawn per placement to seed how each grasp can hold the goal (:func:`_goal_holds`).
-ALIGNED_DRAWS = 4
-#: Proposals returned at most.
-MAX_PROPOSALS = 24
-#: On an arm of three or more joints, inverse kinematics for a placement's grasp configurations and, for
-#: one-transfer proposals, the goal's is also solved from this many seeds drawn around each seed (normal,
-#: these spreads in rad in turn), and the valid solution nearest the seed (joint travel; around the plan's own
-#: grasp configuration, nearest the arm's) is added: a redundant arm's first solution often folds into an
-#: obstacle, the object or itself, or lies far from where the arm is.
-RESTARTS, RESTART_SPREADS_RAD = 8, (0.5, 1.0)
+
+
+@dataclass(frozen=True)
+class RegraspSettings:
+    """Tuning of :func:`propose` and :func:`goal_holds_near` (passed in; a test or a benchmark varies a copy)."""
+
+    #: A grasp configuration puts the tip this close to the grasp point (m).
+    hold_error_m: float = 1e-9
+    #: The goal's inverse kinematics, in passes of (share of goal_angle_tolerance the object's angle is brought
+    #: within, share of goal_tolerance the solver's error may leave, the angle's weight in m/rad or None for the
+    #: object's radius); a pass after the first only for the rows the ones before left off the goal, on a goal of
+    #: narrow angle and an arm of two joints (more set the angle apart from the position). First with room to
+    #: spare (a goal configuration puts the object's origin within a quarter of goal_tolerance); then with nearly
+    #: all of both tolerances and the angle weighted heavily, so that the position gives way to it: an arm of two
+    #: joints may carry a grasp onto the goal only at the edge of both (shapes2 seed 60: no one-transfer proposal
+    #: was made and every plan kept a regrasp, 7.43 rad, where the grid reference carries the object once in 5.84
+    #: rad, 0.49 rad and 0.015 m off the goal).
+    goal_passes: tuple[tuple[float, float, float | None], ...] = ((0.8, 0.25, None), (0.99, 0.9, 1.0))
+    #: Release configurations drawn per grasp configuration (and per its mirror image) along the way to where
+    #: the object comes closest to the goal.
+    towards: int = 6
+    #: Release configurations drawn per grasp configuration (and per its mirror image) putting the object down
+    #: around the goal.
+    near: int = 20
+    #: Release configurations drawn per grasp configuration anywhere.
+    anywhere: int = 8
+    #: Releases drawn around the goal put the object within this distance of it (m).
+    near_radius_m: float = 0.6
+    #: Releases tried per configuration where the plan put the object down (itself, then drawn around it).
+    hinted: int = 4
+    #: The spread (rad) of the releases drawn around where the plan put the object down.
+    hint_spread_rad: float = 0.2
+    #: Refinement rounds around the best releases of each grasp configuration: how many are kept, samples
+    #: around each, spread (rad).
+    rounds: tuple[tuple[int, int, float], ...] = ((4, 6, 0.3), (3, 6, 0.1))
+    #: Releases refined in one round, and proposals returned, lie at least this far apart (rad, largest joint
+    #: difference) when they take the same grasps.
+    distinct_rad: float = 0.3
+    #: Continuations (grasp and posture after a release) screened per release (the shortest ways).
+    continuations: int = 2
+    #: Releases screened per grasp configuration and round (the shortest ways; the others are dropped).
+    screened: int = 8
+    #: Joint travel (rad) between configurations sampled by the screen, about.
+    screen_step_rad: float = 0.1
+    #: Joint travel (rad) a move that looks blocked counts extra when proposals are ranked.
+    blocked_penalty_rad: float = 8.0
+    #: Configurations closer than this (rad, largest joint difference) count as one.
+    unique_rad: float = 1e-6
+    #: Configurations drawn per placement to seed how each grasp can hold the goal (:func:`_goal_holds`).
+    aligned_draws: int = 4
+    #: Proposals returned at most.
+    max_proposals: int = 24
+    #: On an arm of three or more joints, inverse kinematics for a placement's grasp configurations and, for
+    #: one-transfer proposals, the goal's is also solved from this many seeds drawn around each seed (normal,
+    #: :attr:`restart_spreads_rad` in turn), and the valid solution nearest the seed (joint travel; around the
+    #: plan's own grasp configuration, nearest the arm's) is added: a redundant arm's first solution often folds
+    #: into an obstacle, the object or itself, or lies far from where the arm is.
+    restarts: int = 8
+    #: The spreads (rad) of the restarts' seeds, in turn.
+    restart_spreads_rad: tuple[float, ...] = (0.5, 1.0)
 
 
 @dataclass
@@ -128,12 +143,13 @@ class Proposal:
     grasps: tuple[int, ...]
     keys: np.ndarray
     routes: tuple[int, ...]
+    penalty_rad: float  # joint travel a move that looked blocked counts extra (RegraspSettings.blocked_penalty_rad)
 
     @property
     def rank(self) -> tuple[float, int]:
-        """What proposals are ranked by: joint travel plus :data:`BLOCKED_PENALTY_RAD` per move that looked
-        blocked, then fewer transfers."""
-        return self.travel + BLOCKED_PENALTY_RAD * self.blocked, len(self.grasps)
+        """What proposals are ranked by: joint travel plus ``penalty_rad`` per move that looked blocked, then
+        fewer transfers."""
+        return self.travel + self.penalty_rad * self.blocked, len(self.grasps)
 
 
 def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
@@ -152,12 +168,10 @@ def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
     return np.array(points)
 
 
-def screen_samples(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def screen_samples(a: np.ndarray, b: np.ndarray, step_rad: float) -> np.ndarray:
     """How many configurations the screen samples along each move ``a[k] -> b[k]``: about one every
-    :data:`SCREEN_STEP_RAD` of joint travel, at least 8, at most 32."""
-    return (8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / SCREEN_STEP_RAD, 1.0) / 8.0)), 0, 2)).astype(
-        np.int64
-    )
+    ``step_rad`` of joint travel (:attr:`RegraspSettings.screen_step_rad`), at least 8, at most 32."""
+    return (8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / step_rad, 1.0) / 8.0)), 0, 2)).astype(np.int64)
 
 
 class _Kinematics:
@@ -170,7 +184,10 @@ class _Kinematics:
         should_stop: Callable[[], bool] | None = None,
         max_checks: int | None = None,
         step_checks: float = 0.0,
+        *,
+        settings: RegraspSettings | None = None,
     ) -> None:
+        self.settings = RegraspSettings() if settings is None else settings
         self.world = world
         self.packed = dataclasses.replace(packed_world(world), rounding=max(margin_m, packed_world(world).rounding))
         self.effort = Effort()
@@ -245,11 +262,13 @@ class _Kinematics:
     ) -> np.ndarray:
         """Per move ``a[k] -> b[k]``, the first way of :data:`ROUTES` whose sampled configurations are all
         valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is. A move
-        is sampled about every :data:`SCREEN_STEP_RAD` of joint travel (at least 8, at most 32 samples),
+        is sampled about every :attr:`RegraspSettings.screen_step_rad` of joint travel (at least 8, at most 32 samples),
         every fourth sample first; one compiled call (:func:`clew_ros.core.kernel.screen_routes`)."""
         if self.exhausted or not len(a):
             return np.full(len(a), -1)
-        route, checked = screen_routes(self.packed, a, b, screen_samples(a, b), resting=resting, grasp_rel=grasp_rel)
+        route, checked = screen_routes(
+            self.packed, a, b, screen_samples(a, b, self.settings.screen_step_rad), resting=resting, grasp_rel=grasp_rel
+        )
         self.effort.checks += checked
         self.effort.screens += 1
         return route
@@ -264,9 +283,11 @@ class _Kinematics:
         q = np.array(seeds, dtype=float)
         ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
         angles = None if tip_angles is None else tip_angles[ok]
-        solved, error = self.solve(seeds[ok], targets[ok], HOLD_ERROR_M, angles=angles, angle_tolerance=0.0)
+        solved, error = self.solve(
+            seeds[ok], targets[ok], self.settings.hold_error_m, angles=angles, angle_tolerance=0.0
+        )
         q[ok] = solved
-        ok[ok] = error <= HOLD_ERROR_M
+        ok[ok] = error <= self.settings.hold_error_m
         ok[ok] = self.valid(q[ok], placements[ok])
         return q, ok
 
@@ -278,8 +299,8 @@ class _Kinematics:
         origins: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``solve(rows, seeds)`` (configurations for queries ``rows`` from ``seeds``, and which are valid) for
-        each seed; on an arm of three or more joints also from :data:`RESTARTS` seeds drawn around each, whose
-        valid solution nearest the query's origin (joint travel; ``origins`` ``(B, n)``, default the seeds)
+        each seed; on an arm of three or more joints also from :attr:`RegraspSettings.restarts` seeds drawn around
+        each, whose valid solution nearest the query's origin (joint travel; ``origins`` ``(B, n)``, default the seeds)
         comes as one more row when it is nearer than the seed's own. Returns the query of each row, the
         configurations and which are valid."""
         count, n = seeds.shape
@@ -287,10 +308,11 @@ class _Kinematics:
         q, ok = solve(np.arange(count), seeds)
         if self.world.robot.dof < 3 or not count:
             return np.arange(count), q, ok
-        spreads = np.resize(np.asarray(RESTART_SPREADS_RAD, dtype=float), RESTARTS)
-        drawn = seeds[None] + spreads[:, None, None] * rng.normal(0.0, 1.0, size=(RESTARTS, count, n))
-        more, fine = solve(np.tile(np.arange(count), RESTARTS), drawn.reshape(-1, n))
-        more, fine = more.reshape(RESTARTS, count, n), fine.reshape(RESTARTS, count)
+        restarts = self.settings.restarts
+        spreads = np.resize(np.asarray(self.settings.restart_spreads_rad, dtype=float), restarts)
+        drawn = seeds[None] + spreads[:, None, None] * rng.normal(0.0, 1.0, size=(restarts, count, n))
+        more, fine = solve(np.tile(np.arange(count), restarts), drawn.reshape(-1, n))
+        more, fine = more.reshape(restarts, count, n), fine.reshape(restarts, count)
         distance = np.where(fine, np.abs(more - origins[None]).sum(axis=2), np.inf)
         best = np.argmin(distance, axis=0)
         rows = np.arange(count)
@@ -313,7 +335,8 @@ class _Kinematics:
         ok = np.zeros(len(q), dtype=bool)
         # an arm of fewer than three joints cannot set the object's angle apart from its position: on a narrow
         # goal angle its rows the first pass left off the goal try the next
-        passes = GOAL_PASSES if narrow and world.robot.dof < 3 else GOAL_PASSES[:1]
+        goal_passes = self.settings.goal_passes
+        passes = goal_passes if narrow and world.robot.dof < 3 else goal_passes[:1]
         for slack, share, weight in passes:
             reach = _within_reach(lengths, distance, share * world.goal_tolerance)
             rows = np.flatnonzero(reach & ~ok)  # the rows the tighter pass left off the goal try the wider one
@@ -347,12 +370,19 @@ class _Kinematics:
 
 
 def goal_holds_near(
-    world: World, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray, *, margin_m: float
+    world: World,
+    grasp_rel: np.ndarray,
+    seeds: np.ndarray,
+    goal: np.ndarray,
+    *,
+    margin_m: float,
+    settings: RegraspSettings | None = None,
 ) -> tuple[np.ndarray, np.ndarray, Effort]:
     """Configurations near ``seeds`` ``(B, n)`` (inverse kinematics from each) putting the object, held as
     ``grasp_rel`` ``(B, 3)``, on ``goal`` within its tolerances, which ones do, valid with ``margin_m`` to
-    spare, and the work done: the goal configurations of :func:`propose`'s one-transfer proposals."""
-    kinematics = _Kinematics(world, margin_m)
+    spare, and the work done: the goal configurations of :func:`propose`'s one-transfer proposals (``settings``:
+    the tuning, the default :class:`RegraspSettings` when not given)."""
+    kinematics = _Kinematics(world, margin_m, settings=settings)
     q, ok = kinematics.at_goal(np.asarray(grasp_rel, dtype=float), np.asarray(seeds, dtype=float), goal)
     return q, ok, kinematics.effort
 
@@ -382,7 +412,7 @@ def _l1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return distance
 
 
-def _unique_rows(q: np.ndarray, tolerance: float = UNIQUE_RAD) -> np.ndarray:
+def _unique_rows(q: np.ndarray, tolerance: float) -> np.ndarray:
     """Indices of the first of each group of rows closer than ``tolerance`` (largest joint difference)."""
     keep: list[int] = []
     for i in range(len(q)):
@@ -440,6 +470,7 @@ def propose(
     max_checks: int | None = None,
     step_checks: float = 0.0,
     restarts: np.random.Generator | None = None,
+    settings: RegraspSettings | None = None,
 ) -> tuple[list[Proposal], Effort]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
     (if ``one_transfer``) and two (if ``two_transfers``). ``own``: grasp configurations ``(grasp, q)`` of
@@ -447,18 +478,19 @@ def propose(
     configurations where the plan put the object down, tried (and around them) as releases. ``finals``
     ``(m, n)``: the plan's configurations at the goal, from which :func:`_goal_holds` finds how each grasp
     can hold the goal, for grasp configurations here and at releases with that approach. Ranked by joint
-    travel plus :data:`BLOCKED_PENALTY_RAD` per move that looked blocked; alike ones dropped
+    travel plus :attr:`RegraspSettings.blocked_penalty_rad` per move that looked blocked; alike ones dropped
     (:func:`_distinct`).
 
     ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
     milliseconds at most): when it says stop, the proposals found so far are returned; so they are
     once ``max_checks`` configurations have been checked, each inverse-kinematics step (one
     configuration, one iteration) counting ``step_checks`` (moves not checked then count as blocked).
-    ``restarts``: the generator the inverse kinematics' restarts (:data:`RESTARTS`) draw from, default
-    ``rng``; one of its own leaves ``rng``'s stream to the releases.
-    Returns the proposals (at most :data:`MAX_PROPOSALS`) and the work done.
+    ``restarts``: the generator the inverse kinematics' restarts (:attr:`RegraspSettings.restarts`) draw from, default
+    ``rng``; one of its own leaves ``rng``'s stream to the releases. ``settings``: the tuning, the default
+    :class:`RegraspSettings` when not given.
+    Returns the proposals (at most :attr:`RegraspSettings.max_proposals`) and the work done.
     """
-    kinematics = _Kinematics(world, margin_m, should_stop, max_checks, step_checks)
+    kinematics = _Kinematics(world, margin_m, should_stop, max_checks, step_checks, settings=settings)
     restarts = rng if restarts is None else restarts
     start, placement = np.asarray(start, float), np.asarray(placement, float)
     finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
@@ -475,18 +507,20 @@ def propose(
         hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
         proposals += _two_transfers(kinematics, seeded, goal, rng, hints, holds=holds.first_per_grasp())
     proposals.sort(key=lambda p: p.rank)
-    return _distinct(proposals), kinematics.effort
+    return _distinct(proposals, kinematics.settings), kinematics.effort
 
 
-def _distinct(proposals: list[Proposal]) -> list[Proposal]:
-    """The first :data:`MAX_PROPOSALS` of ``proposals`` that differ from every one before them: other grasps,
-    or a key configuration more than :data:`DISTINCT_RAD` away (largest joint difference)."""
+def _distinct(proposals: list[Proposal], settings: RegraspSettings) -> list[Proposal]:
+    """The first :attr:`RegraspSettings.max_proposals` of ``proposals`` that differ from every one before them:
+    other grasps, or a key configuration more than :attr:`RegraspSettings.distinct_rad` away (largest joint
+    difference)."""
     kept: list[Proposal] = []
     for proposal in proposals:
-        if len(kept) == MAX_PROPOSALS:
+        if len(kept) == settings.max_proposals:
             break
         if not any(
-            other.grasps == proposal.grasps and float(np.max(np.abs(other.keys - proposal.keys))) <= DISTINCT_RAD
+            other.grasps == proposal.grasps
+            and float(np.max(np.abs(other.keys - proposal.keys))) <= settings.distinct_rad
             for other in kept
         ):
             kept.append(proposal)
@@ -519,9 +553,9 @@ def _grasps_at_start(
         goal_seeds = np.concatenate([goal_seeds, np.array([e for _, _, e in extra], dtype=float).reshape(-1, n)])
     if not len(first):
         return None
-    unique = _unique_rows(first)
+    unique = _unique_rows(first, kinematics.settings.unique_rad)
     for k in np.flatnonzero(~np.isnan(goal_seeds[:, 0])):  # a row kept for an aligned one takes its goal seed
-        kept = unique[np.max(np.abs(first[unique] - first[k]), axis=1) <= UNIQUE_RAD][0]
+        kept = unique[np.max(np.abs(first[unique] - first[k]), axis=1) <= kinematics.settings.unique_rad][0]
         if np.isnan(goal_seeds[kept, 0]):
             goal_seeds[kept] = goal_seeds[k]
     first, grasps, goal_seeds, drawn = first[unique], grasps[unique], goal_seeds[unique], drawn[unique]
@@ -593,15 +627,16 @@ def _goal_holds(
     kinematics: _Kinematics, start: np.ndarray, goal: np.ndarray, *, finals: np.ndarray, rng: np.random.Generator
 ) -> _GoalHolds:
     """How each grasp can hold the object on the goal, valid with the margin: inverse kinematics from the
-    start, from ``finals`` ``(m, n)`` (the plan's configurations at the goal), from :data:`ALIGNED_DRAWS`
-    configurations drawn within the joint limits and from the mirror images of all these. None for an
-    arm of two joints: it holds a placement in at most two ways (its elbows), which are tried anyway."""
+    start, from ``finals`` ``(m, n)`` (the plan's configurations at the goal), from
+    :attr:`RegraspSettings.aligned_draws` configurations drawn within the joint limits and from the mirror images
+    of all these. None for an arm of two joints: it holds a placement in at most two ways (its elbows), which are
+    tried anyway."""
     world = kinematics.world
     robot = world.robot
     count = len(world.object.grasps)
     if robot.dof < 3 or kinematics.stop():
         return _GoalHolds(np.zeros(0, dtype=int), np.zeros((0, robot.dof)), np.zeros(0))
-    drawn = rng.uniform(robot.joint_lower, robot.joint_upper, size=(ALIGNED_DRAWS, robot.dof))
+    drawn = rng.uniform(robot.joint_lower, robot.joint_upper, size=(kinematics.settings.aligned_draws, robot.dof))
     origins = np.vstack([start[None], finals.reshape(-1, robot.dof), drawn])
     grasps = np.tile(np.arange(count), 2 * len(origins))
     seeds = np.repeat(origins, count, axis=0)
@@ -609,7 +644,7 @@ def _goal_holds(
     goals = np.broadcast_to(goal, (len(grasps), 3))
     held, ok = kinematics.holding(goals, grasps, seeds)
     grasps, held = grasps[ok], held[ok]
-    unique = _unique_rows(held)
+    unique = _unique_rows(held, kinematics.settings.unique_rad)
     grasps, held = grasps[unique], held[unique]
     approach = relative(tip_poses(robot, held), goals[: len(held)])[:, 2]
     return _GoalHolds(grasps, held, approach)
@@ -657,6 +692,7 @@ def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng:
             (int(begin.grasps[a]),),
             np.stack([begin.start, first[a], ends[k]]),
             (int(begin.route[a]), int(route[k])),
+            kinematics.settings.blocked_penalty_rad,
         )
         for k, a in enumerate(rows)
     ]
@@ -684,9 +720,9 @@ class _Releases:
         count: np.ndarray = (self.routes < 0).sum(axis=1)
         return count
 
-    @property
-    def score(self) -> np.ndarray:
-        score: np.ndarray = self.travel + BLOCKED_PENALTY_RAD * self.blocked
+    def score(self, penalty_rad: float) -> np.ndarray:
+        """Joint travel plus ``penalty_rad`` per move that looked blocked."""
+        score: np.ndarray = self.travel + penalty_rad * self.blocked
         return score
 
 
@@ -701,7 +737,7 @@ def _continue(
 ) -> _Releases:
     """For each release configuration ``release`` ``(S, n)`` carried with grasp configuration ``option``:
     the grasp to take next (from the release and its mirror image, and with the approach of each of
-    ``holds``) and the goal configuration after it, the cheapest of the :data:`CONTINUATIONS` shortest
+    ``holds``) and the goal configuration after it, the cheapest of the :attr:`RegraspSettings.continuations` shortest
     once blocked moves count."""
     world = kinematics.world
     n = release.shape[1]
@@ -743,8 +779,8 @@ def _continue(
         group = np.cumsum(starts) - 1
         rank[order] = np.arange(len(order)) - np.flatnonzero(starts)[group]
     total = _l1(begin.start, first[rows]) + _l1(first[rows], release[rows]) + travel
-    screened = _shortest_per_option(option, rows, total, SCREENED)
-    keep = np.flatnonzero((rank < CONTINUATIONS) & np.isin(rows, screened))
+    screened = _shortest_per_option(option, rows, total, kinematics.settings.screened)
+    keep = np.flatnonzero((rank < kinematics.settings.continuations) & np.isin(rows, screened))
     rows, grasp, regrasp, end, rel2, total = rows[keep], grasp[keep], regrasp[keep], end[keep], rel2[keep], total[keep]
     carried = np.unique(rows)
     carry = np.full(len(release), -1)
@@ -752,7 +788,7 @@ def _continue(
     transit = kinematics.routes(release[rows], regrasp, resting=placement[rows])
     last = kinematics.routes(regrasp, end, grasp_rel=rel2)
     routes = np.stack([begin.route[option[rows]], carry[rows], transit, last], axis=1)
-    score = total + BLOCKED_PENALTY_RAD * (routes < 0).sum(axis=1)
+    score = total + kinematics.settings.blocked_penalty_rad * (routes < 0).sum(axis=1)
     order = np.lexsort((score, rows))
     best = order[np.r_[True, rows[order][1:] != rows[order][:-1]]] if len(order) else order
     at = rows[best]
@@ -801,12 +837,13 @@ def _shortest_per_option(option: np.ndarray, rows: np.ndarray, travel: np.ndarra
     return np.concatenate(chosen) if chosen else releases[:0]
 
 
-def _best_distinct(found: _Releases, option: int, keep: int) -> np.ndarray:
+def _best_distinct(found: _Releases, option: int, keep: int, settings: RegraspSettings) -> np.ndarray:
     """The ``keep`` best-scored releases carried with grasp configuration ``option``, at least
-    :data:`DISTINCT_RAD` apart."""
-    rows = np.flatnonzero((found.option == option) & np.isfinite(found.score))
-    ranked = rows[np.argsort(found.score[rows], kind="stable")][: 8 * keep]
-    chosen: np.ndarray = ranked[_unique_rows(found.release[ranked], DISTINCT_RAD)][:keep]
+    :attr:`RegraspSettings.distinct_rad` apart."""
+    score = found.score(settings.blocked_penalty_rad)
+    rows = np.flatnonzero((found.option == option) & np.isfinite(score))
+    ranked = rows[np.argsort(score[rows], kind="stable")][: 8 * keep]
+    chosen: np.ndarray = ranked[_unique_rows(found.release[ranked], settings.distinct_rad)][:keep]
     return chosen
 
 
@@ -823,48 +860,50 @@ def _two_transfers(
     and carried to the goal."""
     world = kinematics.world
     robot = world.robot
+    tuning = kinematics.settings
     first = begin.first
     count, n = first.shape
     goal_side = np.broadcast_to(goal[:2], (count, 2))
     sides = np.tile(np.arange(count), 2)  # from each grasp configuration and its mirror image
     closest = kinematics.toward(begin.grasp_rel[sides], _with_mirrors(world, first, goal_side), goal[:2])
-    share = np.linspace(1.0 / TOWARDS, 1.0, TOWARDS)
+    share = np.linspace(1.0 / tuning.towards, 1.0, tuning.towards)
     along = first[sides][:, None, :] + share[None, :, None] * (closest - first[sides])[:, None, :]
-    # around the goal: the object put down at points drawn within NEAR_RADIUS_M of it (both elbows)
-    radius = NEAR_RADIUS_M * np.sqrt(rng.uniform(0.0, 1.0, size=len(sides) * NEAR))
+    # around the goal: the object put down at points drawn within near_radius_m of it (both elbows)
+    radius = tuning.near_radius_m * np.sqrt(rng.uniform(0.0, 1.0, size=len(sides) * tuning.near))
     angle = rng.uniform(0.0, 2.0 * np.pi, size=len(radius))
     points = goal[:2] + np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1)
-    near_sides = np.repeat(sides, NEAR)
+    near_sides = np.repeat(sides, tuning.near)
     near = kinematics.toward(
-        begin.grasp_rel[near_sides], np.repeat(_with_mirrors(world, first, goal_side), NEAR, axis=0), points
+        begin.grasp_rel[near_sides], np.repeat(_with_mirrors(world, first, goal_side), tuning.near, axis=0), points
     )
-    anywhere = rng.uniform(robot.joint_lower, robot.joint_upper, size=(count * ANYWHERE, n))
-    hinted = np.repeat(hints, HINTED, axis=0)  # each hint itself, then drawn around it
-    drawn = (np.arange(len(hinted)) % HINTED > 0)[:, None]
-    hinted = hinted + drawn * rng.normal(0.0, HINT_SPREAD_RAD, size=hinted.shape)
+    anywhere = rng.uniform(robot.joint_lower, robot.joint_upper, size=(count * tuning.anywhere, n))
+    hinted = np.repeat(hints, tuning.hinted, axis=0)  # each hint itself, then drawn around it
+    drawn = (np.arange(len(hinted)) % tuning.hinted > 0)[:, None]
+    hinted = hinted + drawn * rng.normal(0.0, tuning.hint_spread_rad, size=hinted.shape)
     release = np.concatenate([along.reshape(-1, n), near, anywhere, np.tile(hinted, (count, 1))])
     release = np.clip(release, robot.joint_lower, robot.joint_upper)
     option = np.concatenate(
         [
-            np.repeat(sides, TOWARDS),
+            np.repeat(sides, tuning.towards),
             near_sides,
-            np.repeat(np.arange(count), ANYWHERE),
+            np.repeat(np.arange(count), tuning.anywhere),
             np.repeat(np.arange(count), len(hinted)),
         ]
     )
     found = _continue(kinematics, begin, option, release, goal, holds=holds)
-    for keep, samples, spread in ROUNDS:
+    for keep, samples, spread in tuning.rounds:
         if kinematics.stop():
             break
-        best = np.concatenate([_best_distinct(found, a, keep) for a in range(count)]).astype(int)
+        best = np.concatenate([_best_distinct(found, a, keep, tuning) for a in range(count)]).astype(int)
         if not len(best):
             break
         option = np.repeat(found.option[best], samples)
         centre = np.repeat(found.release[best], samples, axis=0)
         moved = np.clip(centre + rng.normal(0.0, spread, size=centre.shape), robot.joint_lower, robot.joint_upper)
         found = found.joined(_continue(kinematics, begin, option, moved, goal, holds=holds))
-    order = np.argsort(found.score, kind="stable")
-    order = order[np.isfinite(found.score[order])][:MAX_PROPOSALS]
+    score = found.score(tuning.blocked_penalty_rad)
+    order = np.argsort(score, kind="stable")
+    order = order[np.isfinite(score[order])][: tuning.max_proposals]
     return [
         Proposal(
             float(found.travel[k]),
@@ -872,6 +911,7 @@ def _two_transfers(
             (int(begin.grasps[found.option[k]]), int(found.grasp[k])),
             np.stack([begin.start, first[found.option[k]], found.release[k], found.regrasp[k], found.end[k]]),
             tuple(int(r) for r in found.routes[k]),
+            kinematics.settings.blocked_penalty_rad,
         )
         for k in order
     ]

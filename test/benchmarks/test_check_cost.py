@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from benchmarks import check_cost
-from clew_ros.core.improve import BATCH_CHECK_SHARE
+from clew_ros.core.improve import ImproveSettings
 
 
 def test_every_world_gets_a_row_per_kind_with_its_configurations_and_ratios(capsys: pytest.CaptureFixture[str]) -> None:
@@ -24,4 +24,6 @@ def test_every_world_gets_a_row_per_kind_with_its_configurations_and_ratios(caps
         assert int(configurations) == 300 if kind == "still" else int(configurations) > 300, world
         assert float(per_us) > 0.0
         charged_one, now = (float(r) for r in ratios.split("/"))
-        assert now == pytest.approx(charged_one / BATCH_CHECK_SHARE, abs=0.011 / BATCH_CHECK_SHARE)
+        assert now == pytest.approx(
+            charged_one / ImproveSettings().batch_check_share, abs=0.011 / ImproveSettings().batch_check_share
+        )

@@ -15,10 +15,12 @@ def test_a_variant_names_module_constants_with_literal_values() -> None:
         "off",
         {"search.JOIN_RADIUS": 0, "search.JOIN_ROUNDS": 30},
     )
+    assert parse_variant("starved=improve.work_per_second:0") == ("starved", {"improve.work_per_second": 0})
     for bad, named in [
         ("=search.JOIN_RADIUS:0", "NAME="),
         ("x=search.JOIN_RADIUS", "module.CONSTANT:VALUE"),
         ("x=search.NO_SUCH:1", "no NO_SUCH"),
+        ("x=improve.WORK_PER_SECOND:1", "ImproveSettings has no WORK_PER_SECOND"),
     ]:
         with pytest.raises(ValueError, match=named):
             parse_variant(bad)
@@ -28,7 +30,7 @@ def test_two_variants_plan_the_same_runs_and_a_setting_reaches_the_workers(tmp_p
     out = tmp_path / "out"
     args = ["--families", "shapes2", "--config-worlds", "figure1,obstacles_2", "--worlds", "1", "--seeds", "1"]
     # no work per second of planner.improve_time: the improvement cannot shorten the first plan
-    variants = ["--variant", "as_is=", "--variant", "starved=improve.WORK_PER_SECOND:0"]
+    variants = ["--variant", "as_is=", "--variant", "starved=improve.work_per_second:0"]
     assert main([*args, *variants, "--time-limit", "3", "--config-limit", "3", "--out", str(out)]) == 0
     report = json.loads((out / "variants.json").read_text())
     as_is, starved = report["runs"]["as_is"], report["runs"]["starved"]

@@ -17,7 +17,7 @@ from helpers.random_boxes import random_box_world
 from clew_ros.core.clew import IMPROVE_STREAM, plan
 from clew_ros.core.collision import is_valid
 from clew_ros.core.continuous import straight_move_clear, straight_moves_clear
-from clew_ros.core.improve import _Improver, _joined_regrasps, _Piece, _pieces, improve, joint_travel
+from clew_ros.core.improve import ImproveSettings, _Improver, _joined_regrasps, _Piece, _pieces, improve, joint_travel
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import pruned_path
 from clew_ros.core.kinematics import compose, relative, tip_poses
@@ -104,7 +104,7 @@ def test_a_better_plan_the_final_checks_refuse_gives_the_first_plan_and_says_why
     """Every step checks what it builds, so the final checks never refuse a plan unless something is wrong; if
     they do, the first plan comes back and its stats and message say what they found (it once happened
     unseen on a narrow goal angle: test_improvement_ends_on_the_goal_within_a_narrow_angle_tolerance)."""
-    from clew_ros.core import improve as improvement
+    from clew_ros.core.improve import final as improvement
 
     world = _world("figure1")
     first = _plan(world, 0, 0.0)
@@ -411,9 +411,9 @@ def _regrasped_in_place(world) -> tuple[list[Segment], np.ndarray, np.ndarray, n
 def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter(monkeypatch) -> None:
     """A valid plan that puts the object down halfway, takes it again, and wanders: one transfer does. The
     rebuilding finds it (the pruning's joining of regrasps in place, which would too, is turned off here)."""
-    from clew_ros.core import improve as improving
+    from clew_ros.core.improve import base as improving
 
-    monkeypatch.setattr(improving, "_joined_regrasps", lambda pieces: pieces)
+    monkeypatch.setattr(improving, "_joined_regrasps", lambda pieces, same_rad: pieces)
     world = world_from_parameters(OPEN_WORLD)
     segments, start, hold, end = _regrasped_in_place(world)
     first = _plan_of(world, segments)
@@ -436,7 +436,7 @@ def test_a_transfer_put_down_and_taken_again_in_place_becomes_one_transfer() -> 
     world = world_from_parameters(OPEN_WORLD)
     segments, _, _, _ = _regrasped_in_place(world)
     pieces = _pieces(world, segments)
-    joined = _joined_regrasps(pieces)
+    joined = _joined_regrasps(pieces, ImproveSettings().same_rad)
     assert [p.kind for p in joined] == ["transit", "transfer"]
     assert np.array_equal(joined[1].waypoints, np.vstack([pieces[1].waypoints, pieces[3].waypoints[1:]]))
     assert np.array_equal(joined[1].grasp_rel, pieces[1].grasp_rel)
@@ -448,7 +448,7 @@ def test_a_transfer_put_down_and_taken_again_in_place_becomes_one_transfer() -> 
     other = dataclasses.replace(pieces[3], grasp=1)
     elsewhere = dataclasses.replace(pieces[3], waypoints=pieces[3].waypoints + 0.01)
     for changed in ([*pieces[:2], moved, pieces[3]], [*pieces[:3], other], [*pieces[:3], elsewhere]):
-        assert len(_joined_regrasps(changed)) == 4
+        assert len(_joined_regrasps(changed, ImproveSettings().same_rad)) == 4
 
 
 def _improver_on_first_plan(name: str, seed: int = 0):
@@ -618,7 +618,7 @@ def test_proposals_that_looked_clear_are_checked_without_routing_and_blocked_one
 def test_blocked_proposals_are_routed_fewer_transfers_first(monkeypatch) -> None:
     # a plan with fewer transfers always wins, so a blocked one-transfer proposal is routed before any
     # blocked two-transfer one, however long
-    from clew_ros.core import improve as improve_module
+    from clew_ros.core.improve import rebuild as improve_module
 
     original = improve_module.propose
 
@@ -721,7 +721,9 @@ def _on_piece(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float | None:
 
 @pytest.mark.parametrize("joints", [2, 3, 7])
 def test_drawn_shortcuts_join_two_points_of_the_path_and_save_what_they_say(joints: int) -> None:
-    from clew_ros.core.improve import PARTIAL_PIECES, _draw_shortcuts
+    from clew_ros.core.improve import _draw_shortcuts
+
+    partial_pieces = ImproveSettings().partial_pieces
 
     rng = np.random.default_rng(joints)
     kinds = {"waypoints": 0, "straight": 0, "partial": 0}
@@ -730,11 +732,11 @@ def test_drawn_shortcuts_join_two_points_of_the_path_and_save_what_they_say(join
         if len(w) < 3:
             continue
         cumulative = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(w, axis=0)).sum(axis=1))])
-        drawn = _draw_shortcuts(w, rng, 16)
+        drawn = _draw_shortcuts(w, rng, 16, partial_pieces)
         for k in range(16):
             first, last, path = int(drawn.first[k]), int(drawn.last[k]), drawn.paths[k]
             if not np.isfinite(drawn.gain[k]):
-                assert last <= first or last - first > PARTIAL_PIECES
+                assert last <= first or last - first > partial_pieces
                 continue
             assert first < last
             start, end = path[0], path[-1]
@@ -762,14 +764,16 @@ def test_drawn_shortcuts_join_two_points_of_the_path_and_save_what_they_say(join
 
 
 def test_a_batch_of_shortcuts_takes_the_clear_ones_that_do_not_overlap_largest_gain_first(monkeypatch) -> None:
-    from clew_ros.core import improve as improve_module
     from clew_ros.core.improve import _draw_shortcuts
+    from clew_ros.core.improve import base as improve_module
+
+    tuning = ImproveSettings()
 
     _, improver, _ = _improver_on_first_plan("figure1")
     index = int(np.argmax([len(p.waypoints) for p in improver.pieces]))
     before = improver.pieces[index].waypoints.copy()
-    drawn = _draw_shortcuts(before, np.random.default_rng(5), 64)
-    rows = drawn.improving()
+    drawn = _draw_shortcuts(before, np.random.default_rng(5), 64, tuning.partial_pieces)
+    rows = drawn.improving(tuning.travel_eps)
     assert len(rows) >= 3  # a first plan's Manhattan path: many shortcuts would shorten it
     gains = drawn.gain[rows]
     assert np.all(np.diff(gains) <= 0)  # the largest gain first
@@ -804,7 +808,9 @@ def test_a_batch_of_shortcuts_takes_the_clear_ones_that_do_not_overlap_largest_g
         improve_module, "straight_moves_clear", lambda world, starts, ends, **kw: np.zeros(len(starts), bool)
     )
     again = improver.pieces[index].waypoints.copy()
-    assert not improver.take_shortcuts(improver.pieces[index], _draw_shortcuts(again, np.random.default_rng(6), 16))
+    assert not improver.take_shortcuts(
+        improver.pieces[index], _draw_shortcuts(again, np.random.default_rng(6), 16, tuning.partial_pieces)
+    )
     assert np.array_equal(improver.pieces[index].waypoints, again)  # nothing clear: nothing changes
 
 

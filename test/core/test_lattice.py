@@ -421,7 +421,7 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
     """``_Improver.connect`` on an arm with a lattice: the path joins the move's ends, is valid at a fine step,
     is never longer than RRT-Connect's path alone (the same generator), is shorter on some moves, and is
     RRT-Connect's when no lattice path is shorter than ``longest``."""
-    from clew_ros.core import improve as improve_module
+    from clew_ros.core.improve import proposals as improve_module
 
     world, rng = random_box_world(2, 3, 0.04)
     rest = np.asarray(world.object.initial, dtype=float)
@@ -471,6 +471,7 @@ def _regrasp(world, a, b, *, budget=None, shorter_than=40.0, allowance=1e9):
         allowance=allowance,
         expansion_work=0.2,
         release_work=0.1,
+        screen_step_rad=0.1,
     )
 
 

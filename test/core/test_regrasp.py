@@ -11,7 +11,7 @@ import pytest
 
 from clew_ros.core.collision import is_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
-from clew_ros.core.regrasp import DISTINCT_RAD, ROUTES, propose, route_waypoints
+from clew_ros.core.regrasp import ROUTES, RegraspSettings, propose, route_waypoints
 from clew_ros.core.search import goal_reached
 from clew_ros.core.world import load_world
 
@@ -63,7 +63,10 @@ def test_proposals_hold_their_grasps_end_at_the_goal_and_are_valid(name: str) ->
     assert ranks == sorted(ranks)
     for k, later in enumerate(proposals):  # no two alike: other grasps, or a key configuration moved
         for earlier in proposals[:k]:
-            assert earlier.grasps != later.grasps or np.max(np.abs(earlier.keys - later.keys)) > DISTINCT_RAD
+            assert (
+                earlier.grasps != later.grasps
+                or np.max(np.abs(earlier.keys - later.keys)) > RegraspSettings().distinct_rad
+            )
 
 
 def _proposed_from_start(family: str, seed: int):
@@ -317,7 +320,7 @@ def test_regrasps_aligned_at_releases_carry_the_object_onto_the_goal() -> None:
 def test_restarts_add_valid_grasp_configurations_nearer_the_seed_on_a_redundant_arm() -> None:
     # a ten-joint arm's inverse kinematics from its start folds into collisions or ends far away: solutions
     # from seeds drawn around it are added when valid and nearer
-    from clew_ros.core.regrasp import RESTARTS, _Kinematics
+    from clew_ros.core.regrasp import _Kinematics
     from clew_ros.worlds import generate
 
     world = generate("arm10", 0).world()
@@ -338,7 +341,7 @@ def test_restarts_add_valid_grasp_configurations_nearer_the_seed_on_a_redundant_
     assert np.array_equal(ok[: len(grasps)], own_ok)
     added = np.arange(len(grasps), len(rows))
     assert len(added) > 0
-    assert kinematics.effort.steps - steps > RESTARTS * len(grasps)  # the restarts' work is counted
+    assert kinematics.effort.steps - steps > RegraspSettings().restarts * len(grasps)  # the restarts' work is counted
     for k in added:
         row = rows[k]
         assert ok[k]

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from benchmarks.reference import load_worlds, plan_segment, planner_runs, succeeded_plan
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_moves_clear
+from clew_ros.core.continuous import ContinuousSettings, straight_moves_clear
 from clew_ros.core.improve import ImproveSettings, check_work, joint_travel
 from clew_ros.core.kinematics import compose, relative
 from clew_ros.core.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
@@ -158,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
         if world.robot.dof != 3:
             print(f"| {world.name} | not a 3-joint world | | | | | | | |", flush=True)
             continue
-        margin = MIN_MARGIN_FACTOR * PlannerSettings.from_parameters(parameters).clearance
+        margin = ContinuousSettings().min_margin_factor * PlannerSettings.from_parameters(parameters).clearance
         bound = one_transfer_bound(
             world, step=args.step, approaches=args.approaches, goal_angles=args.goal_angles, margin=margin
         )

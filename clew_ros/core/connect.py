@@ -12,33 +12,41 @@ joins each waypoint straight to the farthest later one that the caller's
 ``clear(a, b)`` accepts.
 
 The rounds are compiled (:func:`clew_ros.core.kernel.connect_rounds`),
-:data:`ROUNDS_PER_CALL` to a call: a round in Python cost several times its
+``rounds_per_call`` to a call: a round in Python cost several times its
 checks (the nearest node, the step, the calls), and routing the improvement's
 blocked moves needs hundreds of rounds. The configurations are drawn from the
 caller's generator and the work is bounded by rounds and work units, not
-seconds: the same seed gives the same path.
+seconds: the same seed gives the same path. The tuning is :class:`ConnectSettings`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from clew_ros.core.collision import packed_world
-from clew_ros.core.continuous import COARSE_STRIDE, MAX_MARGIN_M, straight_move_clear
+from clew_ros.core.continuous import ContinuousSettings, straight_move_clear
 from clew_ros.core.kernel import connect_rounds
 from clew_ros.core.world import World
 
-__all__ = ["ROUNDS_PER_CALL", "STEP_RAD", "Clear", "RoutingBudget", "join", "rrt_connect", "shortened"]
+__all__ = ["Clear", "ConnectSettings", "RoutingBudget", "join", "rrt_connect", "shortened"]
 
-#: Largest joint step (rad, largest joint difference) of one tree extension.
-STEP_RAD = 0.35
 
-#: Rounds per compiled call: the clock's stop test and the budget are asked between calls.
-ROUNDS_PER_CALL = 32
+@dataclass(frozen=True)
+class ConnectSettings:
+    """Tuning of :func:`rrt_connect` and :func:`join`."""
+
+    #: Largest joint step (rad, largest joint difference) of one tree extension: long enough to cross the joint
+    #: space in a few steps, short enough that a step is seldom blocked where a shorter one would pass.
+    step_rad: float = 0.35
+    #: Rounds per compiled call (count): the clock's stop test and the budget are asked between calls, so a
+    #: call stays short, and its Python around it small beside its checks.
+    rounds_per_call: int = 32
+
 
 #: ``clear(a, b)``: whether the straight joint-space move ``a -> b`` is valid all along.
 Clear = Callable[[np.ndarray, np.ndarray], bool]
@@ -95,13 +103,19 @@ def rrt_connect(
     min_margin: float,
     rounds: int,
     budget: RoutingBudget,
-    step_rad: float = STEP_RAD,
+    settings: ConnectSettings | None = None,
+    moves: ContinuousSettings | None = None,
 ) -> np.ndarray | None:
     """Waypoints ``(m, n)`` from ``start`` ``(n,)`` to one of ``goals`` ``(g, n)``, the object resting at
     ``object_pose`` (a transit) or carried as ``grasp_rel`` (a transfer), every move clear
     (:func:`clew_ros.core.continuous.straight_move_clear` with ``min_margin``); ``None`` when the trees did
     not meet within ``rounds`` rounds or ``budget``'s allowance, or its stop test said so (asked before each
-    :data:`ROUNDS_PER_CALL` rounds). Configurations are drawn within the joint limits, that many at a time."""
+    ``rounds_per_call`` rounds). Configurations are drawn within the joint limits, that many at a time.
+    ``settings`` default :class:`ConnectSettings`, ``moves`` (the check of each extension) default
+    :class:`~clew_ros.core.continuous.ContinuousSettings`."""
+    tuning = settings if settings is not None else ConnectSettings()
+    check = moves if moves is not None else ContinuousSettings()
+    step_rad, per_call = tuning.step_rad, tuning.rounds_per_call
     lower, upper = world.robot.joint_lower, world.robot.joint_upper
     n = len(lower)
     roots = [np.asarray(start, dtype=float)[None], np.atleast_2d(np.asarray(goals, dtype=float))]
@@ -109,7 +123,7 @@ def rrt_connect(
         expected = f"expected ({n},) and (g >= 1, {n}) configurations"
         raise ValueError(f"start, goals: {expected}, got {roots[0].shape[1:]} and {roots[1].shape}")
     most = 2 + math.ceil(float(np.max(upper - lower)) / step_rad)  # nodes one round may add to a tree
-    capacity = max(len(roots[1]), 1) + ROUNDS_PER_CALL * most
+    capacity = max(len(roots[1]), 1) + per_call * most
     nodes = np.zeros((2, capacity, n))
     parents = np.full((2, capacity), -1, dtype=np.int64)
     sizes = np.array([1, len(roots[1])], dtype=np.int64)
@@ -122,10 +136,10 @@ def rrt_connect(
         allowed = budget.allowance()
         if allowed <= 0 or budget.stop():
             return None
-        if int(sizes.max()) + ROUNDS_PER_CALL * most > nodes.shape[1]:  # room for what the next call may add
+        if int(sizes.max()) + per_call * most > nodes.shape[1]:  # room for what the next call may add
             nodes = np.concatenate([nodes, np.zeros_like(nodes)], axis=1)
             parents = np.concatenate([parents, np.full_like(parents, -1)], axis=1)
-        targets = rng.uniform(lower, upper, size=(min(ROUNDS_PER_CALL, rounds - done), n))
+        targets = rng.uniform(lower, upper, size=(min(per_call, rounds - done), n))
         done += len(targets)
         budget.spend(
             connect_rounds(
@@ -141,8 +155,8 @@ def rrt_connect(
                 round_work=budget.round_work,
                 **mode,
                 min_margin=min_margin,
-                max_margin=MAX_MARGIN_M,
-                coarse_stride=COARSE_STRIDE,
+                max_margin=check.max_margin_m,
+                coarse_stride=check.coarse_stride,
             )
         )
         if state[3]:
@@ -196,17 +210,25 @@ def join(
     min_margin: float,
     rounds: int,
     stop: Callable[[], bool],
+    settings: ConnectSettings | None = None,
+    moves: ContinuousSettings | None = None,
 ) -> np.ndarray | None:
     """Waypoints from ``start`` to one of ``targets`` ``(g, n)``, the object resting at ``object_pose`` (a transit)
     or carried as ``grasp_rel`` (a transfer): :func:`rrt_connect` with every move checked continuously
     (:func:`clew_ros.core.continuous.straight_move_clear`, ``min_margin`` from everything), then
-    :func:`shortened`; ``None`` when the trees did not meet."""
-
+    :func:`shortened`; ``None`` when the trees did not meet. ``settings`` and ``moves`` as :func:`rrt_connect`'s."""
     budget = _Stopping(stop)
 
     def clear(a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(
-            world, a, b, object_pose=object_pose, grasp_rel=grasp_rel, min_margin=min_margin, budget=budget
+            world,
+            a,
+            b,
+            object_pose=object_pose,
+            grasp_rel=grasp_rel,
+            min_margin=min_margin,
+            budget=budget,
+            settings=moves,
         )
 
     path = rrt_connect(
@@ -219,5 +241,7 @@ def join(
         min_margin=min_margin,
         rounds=rounds,
         budget=_Unbounded(stop),
+        settings=settings,
+        moves=moves,
     )
     return None if path is None else shortened(clear, path, stop)

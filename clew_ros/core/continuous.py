@@ -17,14 +17,14 @@ clears the midpoint of a piece ``[t0, t1]`` with every distance past its
 threshold by more than ``V (t1 - t0) / 2``, the whole piece is valid, at
 any checking resolution.
 
-A long move is first rejected when one of every :data:`COARSE_STRIDE`-th
+A long move is first rejected when one of every ``coarse_stride``-th
 midpoint of its first level is not valid at all (most blocked moves end
 there, at a fraction of the cost). Pieces that fail are halved (the margin
 halves with them) down to ``min_margin``; a piece still not cleared rejects
 the move, and so does a midpoint that is not valid at all (at once). A move
 accepted is therefore valid all along, with at least ``min_margin`` to spare
-at every point checked (the improvement and SEARCH's joins ask for half
-``planner.clearance``).
+at every point checked (the improvement and SEARCH's joins ask for
+``min_margin_factor`` x ``planner.clearance``). The tuning is :class:`ContinuousSettings`.
 
 The whole check of a move, every level, is one compiled call
 (:func:`clew_ros.core.kernel.moves_clear`), and so is the check of several
@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -50,10 +51,9 @@ from clew_ros.core.world import World
 
 __all__ = [
     "CHECK_STEP_RAD",
-    "COARSE_STRIDE",
-    "MAX_MARGIN_M",
     "MIN_MARGIN_FACTOR",
     "CheckBudget",
+    "ContinuousSettings",
     "interpolate",
     "path_valid",
     "straight_move_clear",
@@ -63,13 +63,25 @@ __all__ = [
 #: The validator's step (rad per joint, interface.md section 2).
 CHECK_STEP_RAD = 0.002
 
-#: Moves the planner checks this way (the improvement's, SEARCH's joins) keep at least this fraction of
-#: ``planner.clearance`` from everything (m / m).
-MIN_MARGIN_FACTOR = 0.5
-#: Largest margin (m) the first level of a straight-move check asks for.
-MAX_MARGIN_M = 0.05
-#: A long straight move is first rejected by every this-many-th midpoint of its first level, if one is invalid.
-COARSE_STRIDE = 4
+
+@dataclass(frozen=True)
+class ContinuousSettings:
+    """Tuning of the straight-move check (:func:`straight_moves_clear`)."""
+
+    #: Moves the planner checks this way (the improvement's, SEARCH's joins) keep at least this fraction of
+    #: ``planner.clearance`` from everything (m / m): a margin proves a piece clear with fewer halvings, and half
+    #: the clearance still lets moves pass where the paper's validity test does.
+    min_margin_factor: float = 0.5
+    #: Largest margin (m) the first level of a straight-move check asks for: a long move is cut into pieces
+    #: short enough to clear with this, so it is not refused for the whole move's motion at once.
+    max_margin_m: float = 0.05
+    #: A long straight move is first rejected by every this-many-th midpoint of its first level, if one is
+    #: invalid (count): most blocked moves end there, at a fraction of the cost.
+    coarse_stride: int = 4
+
+
+#: :attr:`ContinuousSettings.min_margin_factor` of the default settings, for :mod:`clew_ros.core.search`.
+MIN_MARGIN_FACTOR = ContinuousSettings().min_margin_factor
 
 
 class CheckBudget(Protocol):
@@ -90,6 +102,7 @@ def straight_move_clear(
     grasp_rel: np.ndarray | None = None,
     min_margin: float,
     budget: CheckBudget | None = None,
+    settings: ContinuousSettings | None = None,
 ) -> bool:
     """Whether every configuration of the straight joint-space move ``a`` -> ``b`` is valid with at
     least ``min_margin`` (m) to spare, the object resting at ``object_pose`` (transit) or carried as
@@ -103,6 +116,7 @@ def straight_move_clear(
             grasp_rel=grasp_rel,
             min_margin=min_margin,
             budget=budget,
+            settings=settings,
         )[0]
     )
 
@@ -117,10 +131,13 @@ def straight_moves_clear(
     min_margin: float,
     budget: CheckBudget | None = None,
     every: bool = False,
+    settings: ContinuousSettings | None = None,
 ) -> np.ndarray:
     """:func:`straight_move_clear` of each move ``starts[k] -> ends[k]`` ``(K, n)`` in one compiled call. With
     ``every`` (is every move clear?), the moves after the first that is not clear are not checked and come
-    back not clear. All not clear when ``budget`` says stop before the call."""
+    back not clear. All not clear when ``budget`` says stop before the call. ``settings`` default
+    :class:`ContinuousSettings`."""
+    tuning = settings if settings is not None else ContinuousSettings()
     if budget is not None and budget.stop():
         return np.zeros(len(starts), dtype=bool)
     clear, configurations = moves_clear(
@@ -130,8 +147,8 @@ def straight_moves_clear(
         grasp_rel=grasp_rel,
         resting=None if grasp_rel is not None else object_pose,
         min_margin=float(min_margin),
-        max_margin=MAX_MARGIN_M,
-        coarse_stride=COARSE_STRIDE,
+        max_margin=tuning.max_margin_m,
+        coarse_stride=tuning.coarse_stride,
         every=every,
     )
     if budget is not None:

@@ -6,11 +6,12 @@ orientation (plus a fixed offset) within a tolerance of a target angle. Damped l
 small, least-norm steps, so each answer lies near its seed: a redundant arm keeps its posture
 where it can. Joint limits are enforced at every step. :func:`mirrored` reflects configurations
 about a line through the base: a configuration whose point lies on the line stays on it, so a
-reflected seed finds the other elbow of a two-link arm.
+reflected seed finds the other elbow of a two-link arm. Its tuning is :class:`InverseSettings`.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -18,18 +19,28 @@ import numpy as np
 from clew_ros.core import kernel
 from clew_ros.core.world import Robot
 
-__all__ = ["FULL_TURN_RAD", "ITERATIONS", "TOLERANCE_M", "Solution", "mirrored", "solve_point"]
+__all__ = ["FULL_TURN_RAD", "InverseSettings", "Solution", "mirrored", "solve_point"]
 
 #: Joint limits at least this far apart (rad) let the joint turn all the way round (``full_turns``).
 FULL_TURN_RAD = kernel.FULL_TURN_RAD
-#: Iterations of :func:`solve_point`.
-ITERATIONS = 40
-#: Damping (m^2) of the least-squares step.
-DAMPING = 1e-6
-#: Largest change of one joint in one step (rad).
-MAX_STEP_RAD = 0.4
-#: A configuration whose point is this close to its target (m) stops moving.
-TOLERANCE_M = 1e-12
+
+
+@dataclass(frozen=True)
+class InverseSettings:
+    """Tuning of :func:`solve_point` (a call's ``iterations`` and ``tolerance_m`` override the first two)."""
+
+    #: Iterations (steps per configuration) at most: from a seed near its answer, as the planner's seeds are,
+    #: damped least squares is within micrometres in well under this many.
+    iterations: int = 40
+    #: A configuration whose point is this close to its target (m) stops moving: far below any tolerance of a
+    #: world, so a caller's own tolerance decides.
+    tolerance_m: float = 1e-12
+    #: Damping (m^2) of the least-squares step: keeps the step small near a singular configuration (an arm
+    #: stretched out) without slowing it elsewhere.
+    damping_m2: float = 1e-6
+    #: Largest change of one joint in one step (rad): a step stays within the region where the arm is close to
+    #: linear, and the answer near its seed.
+    max_step_rad: float = 0.4
 
 
 class Solution(NamedTuple):
@@ -50,14 +61,16 @@ def solve_point(
     angles: np.ndarray | None = None,
     angle_tolerance: float = np.pi,
     angle_scale: float = 1.0,
-    iterations: int = ITERATIONS,
-    tolerance_m: float = TOLERANCE_M,
+    iterations: int | None = None,
+    tolerance_m: float | None = None,
     full_turns: bool = False,
+    settings: InverseSettings | None = None,
 ) -> Solution:
     """Configurations ``(B, n)`` from ``seeds`` ``(B, n)`` that put the point at ``offsets`` ``(B, 2)`` (default
     the tip) in the end-effector frame on ``targets`` ``(B, 2)``; with ``angles`` ``(B,)``, also the frame's
     angle within ``angle_tolerance`` of them (the angle error counts ``angle_scale`` m per rad). A
-    configuration stops moving once its error is at most ``tolerance_m``, or after ``iterations`` steps.
+    configuration stops moving once its error is at most ``tolerance_m``, or after ``iterations`` steps (each by
+    default that of ``settings``, default :class:`InverseSettings`).
 
     Joint limits always hold. With ``full_turns``, a joint whose limits are a whole turn apart (to 1e-3 rad, as
     worlds write +-3.14159) goes on past one a turn back from the other (the same angle, to within the gap between
@@ -65,6 +78,7 @@ def solve_point(
     wrong side stops at the limit).
     Compiled (:func:`clew_ros.core.kernel.solve_point`).
     """
+    tuning = settings if settings is not None else InverseSettings()
     seeds = np.array(seeds, dtype=float, ndmin=2)
     count = len(seeds)
     q, error, steps = kernel.solve_point(
@@ -78,10 +92,10 @@ def solve_point(
         np.full(count, np.nan) if angles is None else np.broadcast_to(np.asarray(angles, float), (count,)),
         angle_tolerance=angle_tolerance,
         angle_scale=angle_scale,
-        iterations=iterations,
-        damping=DAMPING,
-        max_step=MAX_STEP_RAD,
-        tolerance=tolerance_m,
+        iterations=tuning.iterations if iterations is None else iterations,
+        damping=tuning.damping_m2,
+        max_step=tuning.max_step_rad,
+        tolerance=tuning.tolerance_m if tolerance_m is None else tolerance_m,
         full_turns=full_turns,
     )
     return Solution(q, error, int(steps.sum()))

@@ -4,7 +4,7 @@ object down between two grasps.
 Shortcuts only straighten a path within its own way round the obstacles, and
 the way round RRT-Connect finds for a blocked move of the improvement is often
 a long one (:meth:`clew_ros.core.improve._Improver.connect` takes this one
-instead when it is shorter). On an arm of at most :data:`MAX_JOINTS` joints
+instead when it is shorter). On an arm of at most ``max_joints`` joints
 the joint space is small enough for a lattice: joint ``j`` takes the values
 ``lower_j + k step`` and an edge moves one joint by one step. In joint travel
 (the L1 metric) a staircase is as long as the diagonal it follows, so the
@@ -32,6 +32,8 @@ arm a tip frame fixes it up to the elbow, :func:`pose_configurations`), and a tr
 Dijkstra search from each end (:func:`clew_ros.core.kernel.lattice_costs`) gives every node's joint travel
 to it, so every release's total is one numpy expression; the best are screened, and the best that passes
 has its lattice edges checked (lazily, as above), then its regrasp's moves continuously.
+
+The tuning is :class:`LatticeSettings`.
 """
 
 from __future__ import annotations
@@ -40,12 +42,13 @@ import dataclasses
 import itertools
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from clew_ros.core.collision import packed_world
-from clew_ros.core.continuous import straight_moves_clear
+from clew_ros.core.continuous import ContinuousSettings, straight_moves_clear
 from clew_ros.core.kernel import (
     EDGE_BLOCKED,
     EDGE_CLEAR,
@@ -62,15 +65,9 @@ from clew_ros.core.regrasp import route_waypoints, screen_samples
 from clew_ros.core.world import Robot, World
 
 __all__ = [
-    "MAX_JOINTS",
-    "MAX_NODES",
-    "MIN_STEP_RAD",
-    "NODE_SHARE",
-    "REGRASP_ROUNDS",
-    "REGRASP_SCREENED",
-    "REPAIR_PASS_SHARE",
     "KnownNodes",
     "LatticeBudget",
+    "LatticeSettings",
     "grasp_configurations",
     "lattice_regrasp",
     "lattice_route",
@@ -78,27 +75,36 @@ __all__ = [
     "pose_configurations",
 ]
 
-#: Arms of more joints than this get no lattice (one of :data:`MAX_NODES` nodes would be too coarse).
-MAX_JOINTS = 3
-#: Cells of a lattice: its step is the one that fills the joint limits with this many (a joint's values include
-#: both ends, so a 3-joint arm with limits of +-pi gets 21^3 = 9,261 nodes 0.31 rad apart, a 2-joint one 90^2).
-MAX_NODES = 8_000
-#: A routing starts only when checking its nodes takes at most this share of its allowance (the rest is for the
-#: edges and the searches: a routing that found its path took 1.5 to 3 times its nodes' checks).
-NODE_SHARE = 0.35
-#: The finest step (rad) of a lattice (a 2-joint arm's lattice is finer than :data:`MAX_NODES` needs).
-MIN_STEP_RAD = 0.05
-#: :func:`lattice_regrasp`: of a round's best regrasps not found blocked, this many are taken; those of them not
-#: screened before are screened (one compiled call for the moves putting the object down, one for the joins).
-REGRASP_SCREENED = 32
-#: :func:`lattice_regrasp`: rounds of searching and checking at most (a round that finds an edge of its paths
-#: blocked repairs its searches, :func:`clew_ros.core.kernel.lattice_repair`); its allowance of work ends it sooner
-#: in a cluttered world.
-REGRASP_ROUNDS = 256
-#: :func:`lattice_regrasp`: a search brought up to date after edges were found blocked
-#: (:func:`clew_ros.core.kernel.lattice_repair`) passes over every node once, at about this share of an expansion's
-#: cost a node (measured: 0.04 ms on 9,261 nodes, an expansion 0.23 us).
-REPAIR_PASS_SHARE = 1.0 / 64.0
+
+@dataclass(frozen=True)
+class LatticeSettings:
+    """Tuning of the lattice (:func:`lattice_step`, :func:`lattice_route`, :func:`lattice_regrasp`)."""
+
+    #: Arms of more joints than this get no lattice (count): one of :attr:`max_nodes` nodes would be too coarse.
+    max_joints: int = 3
+    #: Cells of a lattice (count): its step is the one that fills the joint limits with this many (a joint's
+    #: values include both ends, so a 3-joint arm with limits of +-pi gets 21^3 = 9,261 nodes 0.31 rad apart, a
+    #: 2-joint one 90^2). 20,000 or 4,000 made obstacles_32 and obstacles_24 no better (docs/benchmarks.md).
+    max_nodes: int = 8_000
+    #: A routing starts only when checking its nodes takes at most this share of its allowance (ratio): the rest
+    #: is for the edges and the searches (a routing that found its path took 1.5 to 3 times its nodes' checks).
+    node_share: float = 0.35
+    #: The finest step (rad) of a lattice: a 2-joint arm's lattice is finer than :attr:`max_nodes` needs.
+    min_step_rad: float = 0.05
+    #: :func:`lattice_regrasp`: of a round's best regrasps not found blocked, this many are taken (count); those
+    #: of them not screened before are screened (one compiled call for the moves putting the object down, one for
+    #: the joins), enough that a call's work outweighs the Python around it.
+    regrasp_screened: int = 32
+    #: :func:`lattice_regrasp`: rounds of searching and checking at most (count; a round that finds an edge of its
+    #: paths blocked repairs its searches, :func:`clew_ros.core.kernel.lattice_repair`); its allowance of work ends
+    #: it sooner in a cluttered world.
+    regrasp_rounds: int = 256
+    #: :func:`lattice_regrasp`: a search brought up to date after edges were found blocked
+    #: (:func:`clew_ros.core.kernel.lattice_repair`) passes over every node once, at about this share of an
+    #: expansion's cost a node (ratio; measured: 0.04 ms on 9,261 nodes, an expansion 0.23 us).
+    repair_pass_share: float = 1.0 / 64.0
+
+
 # a regrasp's state in lattice_regrasp: not screened, passed the screen, blocked (by the screen or the check)
 _UNKNOWN, _SCREENED, _BLOCKED = 0, 1, 2
 
@@ -135,14 +141,16 @@ class KnownNodes:
         return self._checked, self._valid
 
 
-def lattice_step(world: World) -> float | None:
-    """The lattice's step (rad) for ``world``'s arm: :data:`MAX_NODES` cells within the joint limits, at
-    least :data:`MIN_STEP_RAD`; ``None`` for an arm of more than :data:`MAX_JOINTS` joints."""
+def lattice_step(world: World, settings: LatticeSettings | None = None) -> float | None:
+    """The lattice's step (rad) for ``world``'s arm: ``max_nodes`` cells within the joint limits, at least
+    ``min_step_rad``; ``None`` for an arm of more than ``max_joints`` joints (``settings`` default
+    :class:`LatticeSettings`)."""
+    tuning = settings if settings is not None else LatticeSettings()
     robot = world.robot
-    if robot.dof > MAX_JOINTS:
+    if robot.dof > tuning.max_joints:
         return None
     volume = float(np.prod(np.asarray(robot.joint_upper) - np.asarray(robot.joint_lower)))
-    return float(max(MIN_STEP_RAD, (volume / MAX_NODES) ** (1.0 / robot.dof)))
+    return float(max(tuning.min_step_rad, (volume / tuning.max_nodes) ** (1.0 / robot.dof)))
 
 
 _Clear = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -203,18 +211,23 @@ def lattice_route(
     expansion_work: float,
     nodes_known: KnownNodes | None = None,
     step: float | None = None,
+    settings: LatticeSettings | None = None,
+    moves: ContinuousSettings | None = None,
 ) -> np.ndarray | None:
     """Waypoints from ``a`` to ``b`` in one mode (the object resting at ``object_pose``, or held as
     ``grasp_rel``), every move clear with ``min_margin`` (m) to spare: the shortest lattice path between
     them (module docstring), through the lattice's nodes. ``None`` when there is none shorter than
     ``shorter_than`` rad of joint travel, the arm has no lattice (:func:`lattice_step`), checking the nodes
-    that could lie on such a path would take more than :data:`NODE_SHARE` of ``allowance`` work units (those
+    that could lie on such a path would take more than ``node_share`` of ``allowance`` work units (those
     checked in the same mode before are not counted), the routing has spent
     ``allowance`` units (it stops between calls), or ``budget`` says stop. Each search costs
     ``expansion_work`` units a node it expands. ``nodes_known``: the nodes checked by earlier routings in the
     same mode with the same margin (not checked again); those this routing checks are added to it. ``step``:
-    the lattice's step (rad), :func:`lattice_step` unless given (a benchmark's finer lattice)."""
-    step = lattice_step(world) if step is None else step
+    the lattice's step (rad), :func:`lattice_step` unless given (a benchmark's finer lattice). ``settings``
+    default :class:`LatticeSettings`; ``moves``: the straight-move check's settings (default
+    :class:`~clew_ros.core.continuous.ContinuousSettings`)."""
+    tuning = settings if settings is not None else LatticeSettings()
+    step = lattice_step(world, tuning) if step is None else step
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     if step is None or float(np.abs(b - a).sum()) >= shorter_than:
         return None
@@ -234,11 +247,12 @@ def lattice_route(
             grasp_rel=grasp_rel,
             min_margin=min_margin,
             budget=budget,
+            settings=moves,
         )
 
     known = nodes_known if nodes_known is not None else KnownNodes()
     checked, valid = known.states(lattice.size)
-    if not len(nodes) or np.count_nonzero(~checked[nodes]) * budget.check_work > NODE_SHARE * allowance:
+    if not len(nodes) or np.count_nonzero(~checked[nodes]) * budget.check_work > tuning.node_share * allowance:
         return None
     layer = _layer(lattice, nodes, clear, checked=checked, valid=valid, budget=budget)
     edges = layer.edges
@@ -382,6 +396,8 @@ def lattice_regrasp(
     release_work: float,
     screen_step_rad: float,
     nodes_known: tuple[KnownNodes, KnownNodes] | None = None,
+    settings: LatticeSettings | None = None,
+    moves: ContinuousSettings | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The shortest way on the lattice (module docstring) to carry the object from ``first`` (holding it as
     ``first_rel``) to ``last`` (holding it as ``last_rel``), putting it down once: a transfer to a lattice
@@ -390,14 +406,15 @@ def lattice_regrasp(
     transfer to ``last``. Returns the three moves' waypoints, shorter than ``shorter_than`` rad of joint
     travel in all, every move clear with ``min_margin`` (m) to spare; ``None`` when there is none, the arm
     has not three joints and a lattice, checking the nodes inside the L1 ellipse of ``first`` and ``last``
-    in both modes would take more than :data:`NODE_SHARE` of ``allowance`` (those of ``nodes_known``, one
-    per grasp, not counted), the search has spent ``allowance`` work units or :data:`REGRASP_ROUNDS`
+    in both modes would take more than ``node_share`` of ``allowance`` (those of ``nodes_known``, one
+    per grasp, not counted), the search has spent ``allowance`` work units or ``regrasp_rounds``
     rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands (a repair the
-    nodes it expands again and :data:`REPAIR_PASS_SHARE` of that a node of the lattice for its pass over them), and
+    nodes it expands again and ``repair_pass_share`` of that a node of the lattice for its pass over them), and
     each round ``release_work`` units a release (totalling them when a search changed, and picking the best).
     The put-down and join moves are screened about every ``screen_step_rad`` of joint travel
-    (:func:`clew_ros.core.regrasp.screen_samples`)."""
-    step = lattice_step(world)
+    (:func:`clew_ros.core.regrasp.screen_samples`). ``settings`` and ``moves`` as :func:`lattice_route`'s."""
+    tuning = settings if settings is not None else LatticeSettings()
+    step = lattice_step(world, tuning)
     first, last = np.asarray(first, dtype=float), np.asarray(last, dtype=float)
     if step is None or world.robot.dof != 3 or float(np.abs(last - first).sum()) >= shorter_than:
         return None
@@ -410,10 +427,12 @@ def lattice_regrasp(
         allowance=allowance,
         release_work=release_work,
         screen_step_rad=screen_step_rad,
+        settings=tuning,
+        moves=moves,
     )
     if not search.layers(first, last, shorter_than, nodes_known or (KnownNodes(), KnownNodes())):
         return None
-    for _ in range(REGRASP_ROUNDS):
+    for _ in range(tuning.regrasp_rounds):
         if search.spent():
             return None
         found = search.round(shorter_than, expansion_work)
@@ -436,8 +455,11 @@ class _RegraspSearch:
         allowance: float,
         release_work: float,
         screen_step_rad: float,
+        settings: LatticeSettings,
+        moves: ContinuousSettings | None,
     ) -> None:
         self.world, self.lattice, self.budget = world, lattice, budget
+        self.settings, self.moves = settings, moves
         self.screen_step_rad = screen_step_rad  # rad of joint travel between the screen's samples
         (self.first_rel, self.last_rel), self.min_margin = grasps, min_margin
         self.exhausted = False  # no regrasp left below the bound
@@ -470,6 +492,7 @@ class _RegraspSearch:
                 grasp_rel=grasp_rel,
                 min_margin=self.min_margin,
                 budget=self.budget,
+                settings=self.moves,
             )
 
         return clear
@@ -481,7 +504,7 @@ class _RegraspSearch:
         nodes = lattice.inside(first, last, bound)  # a node on a shorter way lies inside
         states = [k.states(lattice.size) for k in known]
         todo = sum(int(np.count_nonzero(~checked[nodes])) for checked, _ in states)
-        if not len(nodes) or todo * self.budget.check_work > NODE_SHARE * self.allowance:
+        if not len(nodes) or todo * self.budget.check_work > self.settings.node_share * self.allowance:
             return False
         self.first_layer, self.last_layer = (
             _layer(lattice, nodes, self.clear_in(rel, None), checked=checked, valid=valid, budget=self.budget)
@@ -529,7 +552,7 @@ class _RegraspSearch:
             if not layer.stale:
                 continue
             if len(layer.cost):  # edges were blocked since the last search: only the costs that took them change
-                expanded = lattice.size * REPAIR_PASS_SHARE + lattice_repair(
+                expanded = lattice.size * self.settings.repair_pass_share + lattice_repair(
                     lattice.counts, lattice.step, layer.edges, *layer.ends, bound, layer.cost, layer.previous
                 )
             else:
@@ -546,7 +569,7 @@ class _RegraspSearch:
             )
         joined = self.joined
         total = np.where(self.state[:, releases] == _BLOCKED, np.inf, self.totals).reshape(-1)
-        count = min(REGRASP_SCREENED, len(total))
+        count = min(self.settings.regrasp_screened, len(total))
         order = np.argpartition(total, count - 1)[:count]
         order = order[np.lexsort((order, total[order]))]  # the best, in order (ties: the lower index first)
         order = order[total[order] < bound]

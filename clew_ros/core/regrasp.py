@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.collision import packed_world
-from clew_ros.core.inverse import FULL_TURN_RAD, TOLERANCE_M, mirrored, solve_point
+from clew_ros.core.inverse import FULL_TURN_RAD, mirrored, solve_point
 from clew_ros.core.kernel import clearly_valid, screen_routes
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.search import goals_reached
@@ -212,7 +212,7 @@ class _Kinematics:
         angles: np.ndarray | None = None,
         angle_tolerance: float = np.pi,
         angle_scale: float = 1.0,
-        tolerance_m: float = TOLERANCE_M,
+        tolerance_m: float | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """:func:`solve_point` from ``seeds`` ``(B, n)`` onto ``targets`` (``(B, 2)`` or one point; ``offsets``
         and ``angles`` per row), counting its steps; the rows it leaves more than ``reached_m`` from their

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from clew_ros.core.collision import packed_carrying, packed_world
-from clew_ros.core.continuous import COARSE_STRIDE, MAX_MARGIN_M, straight_move_clear, straight_moves_clear
+from clew_ros.core.continuous import ContinuousSettings, straight_move_clear, straight_moves_clear
 from clew_ros.core.kernel import PackedWorld, clearly_valid
 from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
 from clew_ros.core.world import World, load_world
@@ -60,11 +60,13 @@ def _reference(
             return False
         without_object, links_but_last = packed_carrying(world)
         parts = [(without_object, world.robot.dof), (links_but_last, world.robot.dof - 1)]
+    tuning = ContinuousSettings()
+    stride = tuning.coarse_stride
     motion = float(np.abs(b - a) @ _reach_radii(world, grasp_rel)) * (1.0 + 1e-9) + 1e-12
-    level = max(0, math.ceil(math.log2(max(motion / (2.0 * MAX_MARGIN_M), 1.0))))
+    level = max(0, math.ceil(math.log2(max(motion / (2.0 * tuning.max_margin_m), 1.0))))
     pending = np.arange(2**level, dtype=float)
-    if len(pending) >= 2 * COARSE_STRIDE:
-        t = (pending[COARSE_STRIDE // 2 :: COARSE_STRIDE] + 0.5) / 2.0**level
+    if len(pending) >= 2 * stride:
+        t = (pending[stride // 2 :: stride] + 0.5) / 2.0**level
         q = a + t[:, None] * (b - a)
         if not clearly_valid(packed, q, _poses(world, q, resting, grasp_rel)).all():
             return False

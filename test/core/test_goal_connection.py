@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from clew_ros.core.collision import is_valid
-from clew_ros.core.connect import ROUNDS_PER_CALL, STEP_RAD, join, rrt_connect, shortened
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_move_clear
+from clew_ros.core.connect import ConnectSettings, join, rrt_connect, shortened
+from clew_ros.core.continuous import ContinuousSettings, straight_move_clear
 from clew_ros.core.kinematics import compose, tip_poses
 from clew_ros.core.plan import replay
 from clew_ros.core.search import JOIN_ROUNDS, goal_configurations, goal_reached
@@ -70,7 +70,7 @@ def _joined(family: str, seed: int) -> bool:
             goals,
             np.random.default_rng(seed),
             grasp_rel=grasp_rel,
-            min_margin=MIN_MARGIN_FACTOR * PlannerSettings().clearance,
+            min_margin=ContinuousSettings().min_margin_factor * PlannerSettings().clearance,
             rounds=JOIN_ROUNDS,
             stop=lambda: False,
         )
@@ -135,8 +135,8 @@ def _blocked_move(world, rng: np.random.Generator, margin: float) -> tuple[np.nd
 def test_rrt_connect_goes_round_an_obstacle_to_one_of_several_goals() -> None:
     world = load_world(ROOT / "config" / "figure1.yaml")
     rest = np.asarray(world.object.initial, dtype=float)
-    margin = MIN_MARGIN_FACTOR * PlannerSettings().clearance
-    routed = 0
+    margin = ContinuousSettings().min_margin_factor * PlannerSettings().clearance
+    routed = fine_routed = 0
     for trial in range(3):
         start, goal = _blocked_move(world, np.random.default_rng(trial), margin)
         goals = np.stack([goal, np.clip(goal + 0.05, world.robot.joint_lower, world.robot.joint_upper)])
@@ -156,7 +156,9 @@ def test_rrt_connect_goes_round_an_obstacle_to_one_of_several_goals() -> None:
         path = paths[0]
         assert np.array_equal(path[0], start)
         assert any(np.array_equal(path[-1], g) for g in goals)
-        assert np.max(np.abs(np.diff(path, axis=0))) <= STEP_RAD + 1e-12  # one step per extension at most
+        assert (
+            np.max(np.abs(np.diff(path, axis=0))) <= ConnectSettings().step_rad + 1e-12
+        )  # one step per extension at most
         assert all(
             straight_move_clear(world, u, v, object_pose=rest, min_margin=margin) for u, v in itertools.pairwise(path)
         )
@@ -166,13 +168,19 @@ def test_rrt_connect_goes_round_an_obstacle_to_one_of_several_goals() -> None:
         assert np.array_equal(short[-1], path[-1])
         assert is_valid(world, _fine(short), rest).all()
         assert len(short) <= len(path)
+        fine = rrt_connect(world, start, goals, np.random.default_rng(3), object_pose=rest, min_margin=margin,
+                           rounds=4000, budget=_Routing(), settings=ConnectSettings(step_rad=0.1))  # fmt: skip
+        if fine is not None:  # a copy of the settings: shorter extensions
+            fine_routed += 1
+            assert np.max(np.abs(np.diff(fine, axis=0))) <= 0.1 + 1e-12
     assert routed >= 2
+    assert fine_routed >= 1
 
 
 def test_rrt_connect_gives_up_when_stopped_walled_in_or_out_of_work() -> None:
     world = load_world(ROOT / "config" / "figure1.yaml")
     rest = np.asarray(world.object.initial, dtype=float)
-    margin = MIN_MARGIN_FACTOR * PlannerSettings().clearance
+    margin = ContinuousSettings().min_margin_factor * PlannerSettings().clearance
     start, goal = _blocked_move(world, np.random.default_rng(0), margin)
     route = functools.partial(rrt_connect, world, start, object_pose=rest, rounds=400)
     assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=margin, budget=_Routing()) is not None
@@ -181,7 +189,7 @@ def test_rrt_connect_gives_up_when_stopped_walled_in_or_out_of_work() -> None:
     assert stopped.spent == []
     walled_in = _Routing()  # nothing keeps 10 m from everything: no move is clear
     assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=10.0, budget=walled_in) is None
-    assert len(walled_in.spent) == math.ceil(400 / ROUNDS_PER_CALL)  # every round was tried
+    assert len(walled_in.spent) == math.ceil(400 / ConnectSettings().rounds_per_call)  # every round was tried
     one_round = _Routing(allowance=1e-9)  # the first round passes it: no second round starts
     assert route(goals=goal[None], rng=np.random.default_rng(0), min_margin=margin, budget=one_round) is None
     short = _Routing(allowance=50.0)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from clew_ros.core.inverse import mirrored, solve_point
+from clew_ros.core.inverse import InverseSettings, mirrored, solve_point
 from clew_ros.core.kinematics import compose, tip_poses, wrap_angle
 from clew_ros.core.world import Robot
 
@@ -116,3 +116,18 @@ def test_full_turns_leave_a_joint_with_narrower_limits_stopped_at_them() -> None
     c = solve_point(whole, seeds, target, full_turns=True)
     assert c.error[0] <= 1e-9
     assert whole.joint_lower[0] <= c.q[0, 0] < 0.0
+
+
+def test_settings_bound_the_steps_and_a_call_overrides_them() -> None:
+    """A copy of :class:`InverseSettings` with fewer iterations stops sooner; a call's ``iterations`` wins."""
+    robot = _robot(3)
+    rng = np.random.default_rng(4)
+    truth = rng.uniform(robot.joint_lower, robot.joint_upper, (50, 3))
+    targets = tip_poses(robot, truth)[:, :2]
+    seeds = np.clip(truth + rng.normal(0.0, 0.5, truth.shape), robot.joint_lower, robot.joint_upper)
+    full = solve_point(robot, seeds, targets)
+    one = solve_point(robot, seeds, targets, settings=InverseSettings(iterations=1))
+    assert one.steps <= len(seeds) < full.steps
+    assert one.error.mean() > full.error.mean()
+    again = solve_point(robot, seeds, targets, iterations=40, settings=InverseSettings(iterations=1))
+    assert np.array_equal(again.q, full.q)

@@ -14,7 +14,7 @@ from helpers.random_boxes import random_box_world
 
 from clew_ros.core.collision import is_valid
 from clew_ros.core.continuous import straight_moves_clear
-from clew_ros.core.improve import _Improver, _Piece, joint_travel
+from clew_ros.core.improve import ImproveSettings, _Improver, _Piece, joint_travel
 from clew_ros.core.kernel import (
     EDGE_BLOCKED,
     EDGE_CLEAR,
@@ -26,9 +26,8 @@ from clew_ros.core.kernel import (
 )
 from clew_ros.core.kinematics import compose, relative, tip_poses, wrap_angle
 from clew_ros.core.lattice import (
-    MAX_JOINTS,
-    NODE_SHARE,
     KnownNodes,
+    LatticeSettings,
     _edges_clear,
     _joins,
     _Lattice,
@@ -335,14 +334,18 @@ def test_lattice_routes_carrying_the_object_are_valid_with_it(seed, joints) -> N
 
 
 def test_no_lattice_for_many_joints_or_a_bound_below_the_straight_move() -> None:
-    world, _ = random_box_world(4, MAX_JOINTS + 1, 0.02)
+    world, _ = random_box_world(4, LatticeSettings().max_joints + 1, 0.02)
     assert lattice_step(world) is None
-    a, b = np.zeros(MAX_JOINTS + 1), np.full(MAX_JOINTS + 1, 0.5)
+    a, b = np.zeros(LatticeSettings().max_joints + 1), np.full(LatticeSettings().max_joints + 1, 0.5)
     assert _route(world, a, b, False, 40.0) is None
+    assert lattice_step(world, LatticeSettings(max_joints=4)) is not None  # a copy of the settings decides
     small, _ = random_box_world(4, 2, 0.02)
     step = lattice_step(small)
     assert step is not None
     assert step > 0
+    coarser = lattice_step(small, LatticeSettings(max_nodes=100, min_step_rad=0.0))
+    assert coarser is not None
+    assert coarser > step  # fewer cells in the same limits
     assert _route(small, np.zeros(2), np.full(2, 0.5), False, 1.0) is None  # 1.0 rad is the straight move's travel
 
 
@@ -374,7 +377,9 @@ def test_a_routing_stops_within_its_allowance(monkeypatch) -> None:
         nodes = len(_Lattice(world, lattice_step(world)).inside(a, b, 40.0))
         calls.update({"searches": 0, "edge checks": 0})
         part = _Counter()
-        allowance = 1.01 * nodes / NODE_SHARE  # the nodes fit; any search (1e6 units a node) spends the rest
+        allowance = (
+            1.01 * nodes / LatticeSettings().node_share
+        )  # the nodes fit; any search (1e6 units a node) spends the rest
         assert _route(world, a, b, False, 40.0, part, allowance=allowance, expansion_work=1e6) is None
         assert calls == {"searches": 1, "edge checks": 0}
         assert part.spent >= 1e6
@@ -417,12 +422,10 @@ def test_a_lattice_route_is_as_short_as_dijkstra_over_every_node_and_edge_checke
     assert compared >= 2
 
 
-def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_within_the_bound(monkeypatch) -> None:
+def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_within_the_bound() -> None:
     """``_Improver.connect`` on an arm with a lattice: the path joins the move's ends, is valid at a fine step,
     is never longer than RRT-Connect's path alone (the same generator), is shorter on some moves, and is
     RRT-Connect's when no lattice path is shorter than ``longest``."""
-    from clew_ros.core.improve import proposals as improve_module
-
     world, rng = random_box_world(2, 3, 0.04)
     rest = np.asarray(world.object.initial, dtype=float)
     shorter = 0
@@ -432,12 +435,10 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
         def routed(
             longest: float = math.inf, lattice: bool = True, seed: int = trial, piece=piece, a=a, b=b
         ) -> np.ndarray | None:
-            with monkeypatch.context() as patch:
-                if not lattice:
-                    patch.setattr(improve_module, "lattice_step", lambda world: None)
-                settings = PlannerSettings(seed=seed, improve_time=5.0)
-                ctx = PlanningContext(world, settings, np.random.default_rng([seed, 1]), Termination(30))
-                return _Improver(ctx, [piece], world.object.goal).connect(piece, a, b, longest)
+            tuning = ImproveSettings(lattice=LatticeSettings(max_joints=0 if not lattice else 3))  # 0: no lattice
+            settings = PlannerSettings(seed=seed, improve_time=5.0)
+            ctx = PlanningContext(world, settings, np.random.default_rng([seed, 1]), Termination(30))
+            return _Improver(ctx, [piece], world.object.goal, tuning).connect(piece, a, b, longest)
 
         alone, path = routed(lattice=False), routed()
         if alone is None:

@@ -243,7 +243,7 @@ def test_a_restart_in_place_of_a_seeds_colliding_solution_starts_two_transfer_pr
     # configuration, not from the restarts' besides it; on arm3_regrasp grasp 1's solutions from both seeds
     # collide at the start placement and only a restart's is valid: it takes the seed's place, so every
     # grasp with a valid configuration keeps one (at most one per seed) for the two-transfer proposals
-    from clew_ros.core.continuous import MIN_MARGIN_FACTOR
+    from clew_ros.core.continuous import ContinuousSettings
     from clew_ros.core.inverse import mirrored
     from clew_ros.core.regrasp import _direction, _grasp_configurations, _Kinematics
     from clew_ros.core.settings import PlannerSettings
@@ -251,7 +251,7 @@ def test_a_restart_in_place_of_a_seeds_colliding_solution_starts_two_transfer_pr
     world = load_world(ROOT / "config" / "arm3_regrasp.yaml")
     start = np.asarray(world.robot.initial, dtype=float)
     placement = np.asarray(world.object.initial, dtype=float)
-    kinematics = _Kinematics(world, MIN_MARGIN_FACTOR * PlannerSettings().clearance)
+    kinematics = _Kinematics(world, ContinuousSettings().min_margin_factor * PlannerSettings().clearance)
     target = transform_points(placement, world.object.grasps[1:2])
     seeds = np.vstack([start, mirrored(world.robot, start[None], _direction(world, target))])
     _, own = kinematics.holding(np.vstack([placement, placement]), np.array([1, 1]), seeds)

@@ -96,7 +96,7 @@ absolute motion (rad). The first plan is kept when nothing better is found.
 
 **Every new move is checked continuously**
 (:func:`clew_ros.core.continuous.straight_move_clear`): valid at any
-checking resolution, keeping at least :data:`clew_ros.core.continuous.MIN_MARGIN_FACTOR` x
+checking resolution, keeping at least ``min_margin_factor`` (:attr:`ImproveSettings.moves`) x
 ``planner.clearance`` from everything, like the planner's own paths. The whole improved plan is checked once more
 at the validator's 0.002 rad, and the object's end against the goal's tolerances; if that ever failed,
 the first plan would be returned, and ``improve_refused`` in its stats would say why.
@@ -144,7 +144,6 @@ import itertools
 
 import numpy as np
 
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR
 from clew_ros.core.improve.budget import check_work
 from clew_ros.core.improve.final import _refusal
 from clew_ros.core.improve.pieces import Improvement, _better, _Piece, _pieces, _score, joint_travel
@@ -156,7 +155,6 @@ from clew_ros.core.search import PlanningContext
 from clew_ros.core.tree import Segment
 
 __all__ = [
-    "MIN_MARGIN_FACTOR",
     "ImproveSettings",
     "Improvement",
     "_Improver",

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, straight_moves_clear
+from clew_ros.core.continuous import straight_moves_clear
 from clew_ros.core.improve.budget import _Budget
 from clew_ros.core.improve.final import _dense_count
 from clew_ros.core.improve.pieces import _better, _Piece, joint_travel
@@ -32,7 +32,7 @@ class _ImproverBase:
         self.first = [p.waypoints for p in pieces]
         self.goal = goal
         self.budget = _Budget(ctx, ctx.settings.improve_time * self.settings.work_per_second, self.settings)
-        self.min_margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+        self.min_margin = self.settings.moves.min_margin_factor * ctx.settings.clearance
         self.shortcuts = 0
         self.rebuilt = 0
         self.blocked_moves: list[tuple[str, np.ndarray, np.ndarray]] = []  # (kind, start, end) found blocked
@@ -74,6 +74,7 @@ class _ImproverBase:
             min_margin=self.min_margin,
             budget=self.budget,
             every=every,
+            settings=self.settings.moves,
         )
 
     def reserve(self) -> None:

@@ -37,6 +37,8 @@ class _LatticeUse(_ImproverBase):
             allowance=allowance,
             expansion_work=self.settings.expansion_work,
             nodes_known=known,
+            settings=self.settings.lattice,
+            moves=self.settings.moves,
         )
         return None if path is None else pruned_path(path)
 
@@ -51,7 +53,7 @@ class _LatticeUse(_ImproverBase):
         :attr:`ImproveSettings.regrasp_share` of the budget (its last round may run past it), and new ones only while
         less than :attr:`ImproveSettings.regrasp_total_share` of it is spent, the final check's reserve counted. Returns
         whether the plan changed."""
-        if self.world.robot.dof != 3 or lattice_step(self.world) is None:
+        if self.world.robot.dof != 3 or lattice_step(self.world, self.settings.lattice) is None:
             return False
         changed = False
         while True:
@@ -92,7 +94,7 @@ class _LatticeUse(_ImproverBase):
         transfers = [i for i, p in enumerate(pieces) if p.kind == "transfer"]
         if (
             self.world.robot.dof != 3
-            or lattice_step(self.world) is None
+            or lattice_step(self.world, self.settings.lattice) is None
             or len(transfers) < 2  # one transfer: two, with a regrasp, are never better
             or pieces[0].kind != "transit"
             or transfers[0] != 1
@@ -158,6 +160,8 @@ class _LatticeUse(_ImproverBase):
             release_work=self.settings.release_work,
             screen_step_rad=self.settings.regrasp.screen_step_rad,
             nodes_known=(self.known("transfer", one.grasp_rel), self.known("transfer", two.grasp_rel)),
+            settings=self.settings.lattice,
+            moves=self.settings.moves,
         )
         if found is None:
             return None

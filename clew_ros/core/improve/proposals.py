@@ -154,11 +154,13 @@ class _Proposals(_Shortcutting, _LatticeUse):
             min_margin=self.min_margin,
             rounds=self.settings.connect_steps,
             budget=_RoutingShare(self.budget, limit),
+            settings=self.settings.connect,
+            moves=self.settings.moves,
         )
         if path is None:
             return None
         path = shortened(clear, path, lambda: self.budget.spent > limit)
-        if lattice_step(self.world) is None or self.budget.stop():
+        if lattice_step(self.world, self.settings.lattice) is None or self.budget.stop():
             return path
         bound = min(longest, joint_travel([path])) - self.settings.travel_eps
         shortest = self.lattice(

@@ -6,6 +6,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clew_ros.core.connect import ConnectSettings
+from clew_ros.core.continuous import ContinuousSettings
+from clew_ros.core.lattice import LatticeSettings
 from clew_ros.core.regrasp import RegraspSettings
 
 __all__ = ["ImproveSettings"]
@@ -135,3 +138,10 @@ class ImproveSettings:
     #: The proposals' tuning (:func:`clew_ros.core.regrasp.propose`, and the goal shortcuts'
     #: :func:`clew_ros.core.regrasp.goal_holds_near`).
     regrasp: RegraspSettings = RegraspSettings()
+    #: The straight-move check of every move the improvement changes (its margin, a fraction of
+    #: ``planner.clearance``; :func:`clew_ros.core.continuous.straight_moves_clear`), also within its routings.
+    moves: ContinuousSettings = ContinuousSettings()
+    #: The routings of blocked moves by RRT-Connect (:func:`clew_ros.core.connect.rrt_connect`).
+    connect: ConnectSettings = ConnectSettings()
+    #: The lattice's routings and regrasp searches (:mod:`clew_ros.core.lattice`).
+    lattice: LatticeSettings = LatticeSettings()

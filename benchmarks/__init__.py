@@ -3,7 +3,7 @@
 ``python -m benchmarks.run`` runs the suite and writes JSON, CSV and a plot;
 see ``docs/benchmarks.md``. Modules:
 
-* :mod:`benchmarks.families`: the worlds (``config/*.yaml`` and generated families);
+* :mod:`benchmarks.worlds`: the worlds (``config/*.yaml`` and generated families);
 * :mod:`benchmarks.worker`: one world's planner runs, in a subprocess of its own;
 * :mod:`benchmarks.throughput`: collision-test and free-interval throughput;
 * :mod:`benchmarks.peer`: OMPL RRTConnect against the project on transit sub-problems;

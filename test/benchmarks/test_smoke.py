@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.families import JOINT_COUNTS, OBSTACLE_COUNTS, generated_worlds, write_world
 from benchmarks.run import COLUMNS, DOC_BEGIN, DOC_END, QUICK_WORLDS
+from benchmarks.worlds import JOINT_COUNTS, OBSTACLE_COUNTS, generated_worlds, write_world
 from clew_ros.core.world import load_world
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -1,4 +1,4 @@
-"""The benchmark worlds: every ``config/*.yaml`` plus two generated families.
+"""The benchmark worlds: every ``config/*.yaml`` plus two scaling series (not ``clew_world``'s generated families).
 
 * ``joints_N`` (N = 2, 3, 5, 7, 10): figure1's task (its bounds, blocks, bar,
   start and goal placements, read from ``config/figure1.yaml``) with the

@@ -33,12 +33,13 @@ def test_generated_worlds_are_valid_and_as_specified(tmp_path):
 
 
 def test_quick_suite_writes_every_column(tmp_path):
-    """``--quick`` (the CI smoke run, about 30 s): every output written, every column filled; no speed asserted."""
+    """``suite --quick`` through the entry (the CI smoke run, about 30 s): every output written, every column filled;
+    no speed asserted."""
     out = tmp_path / "bench"
     doc = tmp_path / "doc.md"
     doc.write_text(f"# Benchmarks\n\nkept\n\n{DOC_BEGIN}\nold\n{DOC_END}\n\nkept too\n")
     done = subprocess.run(
-        [sys.executable, "-m", "benchmarks.run", "--quick", "--out", str(out), "--doc", str(doc)],
+        [sys.executable, "-m", "benchmarks", "suite", "--quick", "--out", str(out), "--doc", str(doc)],
         check=False,
         cwd=ROOT,
         capture_output=True,

@@ -4,8 +4,8 @@ Run from the repository root with the package's venv (the ``bench`` extra
 adds OMPL and matplotlib: ``pip install -e '.[bench]'``). Steps, each in
 subprocesses of its own so that memory figures belong to one world:
 
-1. planner runs: every selected world (``config/*.yaml`` and the generated
-   families of :mod:`benchmarks.worlds`), N seeds each (default 20), one
+1. planner runs: every selected world (``config/*.yaml`` and the scaling
+   series of :mod:`benchmarks.worlds`), N seeds each (default 20), one
    worker process per world (:mod:`benchmarks.worker`), ``--jobs`` worlds at
    once (default 2); per-run time limit: the world's ``planner.time_limit``
    capped at 5 s (``--full-limits``: uncapped; ``--time-limit S``: S for all);
@@ -46,7 +46,7 @@ from benchmarks.worlds import BenchWorld, all_worlds, select
 
 ROOT = Path(__file__).absolute().parents[1]
 
-#: Worlds of --quick: a fast one, the default one, one of each generated family (obstacles_2 = joints_3).
+#: Worlds of --quick: a fast one, the default one, one of each scaling series (obstacles_2 = joints_3).
 QUICK_WORLDS = "single_transfer,figure1,joints_3,obstacles_2,obstacles_8"
 #: Worlds of the peer comparison by default: one or two of each kind.
 PEER_WORLDS = "figure1,arm5_regrasp,behind_wall,joints_7,joints_10,obstacles_32"
@@ -65,7 +65,7 @@ DOC_END = "<!-- benchmarks:end -->"
 
 COLUMNS = [
     "world",
-    "family",
+    "series",
     "joints",
     "obstacles",
     "same_as",
@@ -218,7 +218,7 @@ def _median(values: list[float]) -> float | None:
 def _summarise_world(world: BenchWorld, record: dict, same_as: str | None) -> dict:
     row = {
         "world": world.name,
-        "family": world.family,
+        "series": world.series,
         "joints": world.joints,
         "obstacles": world.obstacles,
         "same_as": same_as or "",

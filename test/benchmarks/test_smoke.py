@@ -56,7 +56,7 @@ def test_quick_suite_writes_every_column(tmp_path):
     for row in rows.values():
         for column in (
             "world",
-            "family",
+            "series",
             "joints",
             "obstacles",
             "seeds",

@@ -32,10 +32,10 @@ COMMANDS: dict[str, Command] = {
     "profile": Command("profile", "cProfile of one planner run: top functions by own and cumulative time"),
     "cold_start": Command("cold_start", "compiling and loading the kernel, import, first plan against second"),
     "generated_families": Command("families_run", "the planner on clew_world's generated families, figure1 beside"),
+    "compare": Command("compare", "any command on a git revision and on this checkout, ratios after / before"),
     "generated_families_ab": Command(
         "families_ab", "the generated families planned by clew_plan of a revision and of this checkout, run by run"
     ),
-    "compare": Command("compare", "any command on a git revision and on this checkout, ratios after / before"),
     "kernel_ab": Command("kernel_ab", "a revision's compiled kernel against this one, taking turns in one process"),
     "setting_variants": Command("variants", "planner settings compared on the same worlds: time to the first plan"),
     "improvement_gain": Command("improvement", "what the anytime improvement gains: first and improved plans' travel"),

@@ -79,3 +79,11 @@ def test_compare_names_a_revision_git_does_not_know():
     assert done.returncode == 2
     assert "--baseline" in done.stderr
     assert "no-such-revision-41" in done.stderr
+
+
+def test_docs_list_every_command_in_the_command_table():
+    """docs/benchmarks.md's "Every benchmark command" table names each command, with the module it runs."""
+    text = (ROOT / "docs" / "benchmarks.md").read_text()
+    table = text[text.index("### Every benchmark command") : text.index("### Comparing two revisions")]
+    rows = re.findall(r"^\| `(\w+)[^`]*` \(`(\w+)`\) \|", table, flags=re.MULTILINE)
+    assert rows == [(name, command.module) for name, command in COMMANDS.items()]

@@ -52,4 +52,4 @@ demo: venv
 # The benchmark suite (docs/benchmarks.md): installs the bench extra (OMPL, matplotlib).
 bench: venv
 	$(PY) -m pip install --quiet -e '.[bench]'
-	@$(ROS_ENV) $(PY) -m benchmarks.run --doc docs/benchmarks.md $(BENCH_ARGS)
+	@$(ROS_ENV) $(PY) -m benchmarks suite --doc docs/benchmarks.md $(BENCH_ARGS)

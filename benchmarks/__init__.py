@@ -1,15 +1,14 @@
 """Benchmark suite of clew_ros (not installed; run from the repository root).
 
-``python -m benchmarks.run`` runs the suite and writes JSON, CSV and a plot;
-see ``docs/benchmarks.md``. Modules:
+One entry: ``python -m benchmarks COMMAND [ARGS]`` (:mod:`benchmarks.__main__`; ``python -m benchmarks`` lists
+the commands and the module each runs); ``python -m benchmarks compare --baseline REV COMMAND [ARGS]`` compares
+two revisions on any of them (:mod:`benchmarks.compare`). See ``docs/benchmarks.md``. Modules that are not
+commands:
 
-* :mod:`benchmarks.families`: the worlds (``config/*.yaml`` and generated families);
-* :mod:`benchmarks.worker`: one world's planner runs, in a subprocess of its own;
-* :mod:`benchmarks.throughput`: collision-test and free-interval throughput;
-* :mod:`benchmarks.peer`: OMPL RRTConnect against the project on transit sub-problems;
-* :mod:`benchmarks.profile`: cProfile of one planner run;
-* :mod:`benchmarks.plot`: median time against joints and obstacles;
+* :mod:`benchmarks.worlds`: the benchmark worlds (``config/*.yaml`` and the ``joints_N`` / ``obstacles_M``
+  scaling series);
 * :mod:`benchmarks.generated`: the generated families of :mod:`clew_ros.worlds` as benchmark worlds;
-* :mod:`benchmarks.families_run`: the planner on those families, a table per family next to figure1
-  (``python -m benchmarks.families_run``, apart from :mod:`benchmarks.run`).
+* :mod:`benchmarks.joint_grid`: the joint-space lattice of the grid reference;
+* :mod:`benchmarks.plot`: median time against joints and obstacles;
+* :mod:`benchmarks.report`: the header and files of the comparison tables.
 """

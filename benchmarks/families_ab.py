@@ -23,10 +23,10 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks.compare import ROOT, export
 from benchmarks.families_run import _fmt, summarise
 from benchmarks.generated import add_first_world, build_world, reference_world, world_seeds
 from benchmarks.report import command_line, header, write_report
-from benchmarks.run import ROOT, _export
 from clew_ros.worlds import FAMILIES
 
 
@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     unknown = [f for f in families if f not in FAMILIES]
     if unknown:
         parser.error(f"--families: unknown {unknown}; expected some of {list(FAMILIES)}")
-    baseline = _export(args.baseline)
+    baseline = export(args.baseline)
     started, load = time.monotonic(), os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="clew_families_ab_") as scratch:
         directory = Path(scratch)

@@ -15,7 +15,7 @@ import argparse
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks.families import CONFIG_DIR
+from benchmarks.worlds import CONFIG_DIR
 from clew_ros.worlds import FAMILIES, generate, write_world
 
 __all__ = ["GeneratedBenchWorld", "build_world", "reference_world", "solvable_families"]

@@ -2,7 +2,7 @@
 anytime improvement gains.
 
 For each world (default figure1, arm3_regrasp and arm5_regrasp; any benchmark
-world name of :mod:`benchmarks.families` such as obstacles_32, a generated
+world name of :mod:`benchmarks.worlds` such as obstacles_32, a generated
 family's world such as shapes2_60 (as ``clew_world shapes2 --seed 60`` writes
 it), or a parameter file), seeds ``0..N-1``: each seed planned with
 ``planner.improve_time: 0`` (the first plan) and with the given budget

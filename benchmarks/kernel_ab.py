@@ -35,8 +35,8 @@ from types import ModuleType
 
 import numpy as np
 
-from benchmarks.families import all_worlds, select
 from benchmarks.throughput import random_configurations
+from benchmarks.worlds import all_worlds, select
 from clew_ros.core import kernel
 from clew_ros.core.collision import check_start_and_goal, is_valid, packed_world
 from clew_ros.core.kinematics import compose, tip_poses

@@ -48,8 +48,8 @@ import time
 
 import numpy as np
 
-from benchmarks.families import all_worlds, select
 from benchmarks.throughput import PerStateChecker, random_configurations
+from benchmarks.worlds import all_worlds, select
 from clew_ros.core.collision import check_start_and_goal, is_valid
 from clew_ros.core.genetic import minimize
 from clew_ros.core.search import PlanningContext, SearchJob, local_search

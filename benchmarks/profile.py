@@ -15,7 +15,7 @@ import pstats
 import sys
 from pathlib import Path
 
-from benchmarks.families import all_worlds, select
+from benchmarks.worlds import all_worlds, select
 from clew_ros.core.clew import plan
 from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.kernel import warm_up

@@ -69,7 +69,7 @@ from clew_ros.core.world import World
 __all__ = ["DEFAULT_WORLDS", "ReferenceResult", "ReferenceSettings", "main", "reference_plan"]
 
 ROOT = Path(__file__).absolute().parents[1]
-#: The 2-joint worlds the report covers by default: names of benchmarks.families worlds.
+#: The 2-joint worlds the report covers by default: names of benchmarks.worlds worlds.
 DEFAULT_WORLDS = ("figure1", "single_transfer", "joints_2")
 
 
@@ -525,8 +525,8 @@ def reference_plan(world: World, settings: ReferenceSettings | None = None) -> R
 
 
 def load_worlds(names: list[str]) -> list[tuple[World, dict[str, Any]]]:
-    """Worlds by benchmark name (:mod:`benchmarks.families`) or parameter file path, with their parameters."""
-    from benchmarks.families import all_worlds, select
+    """Worlds by benchmark name (:mod:`benchmarks.worlds`) or parameter file path, with their parameters."""
+    from benchmarks.worlds import all_worlds, select
     from clew_ros.core.world import read_parameter_file, world_from_parameters
 
     worlds = []
@@ -545,10 +545,10 @@ def load_worlds(names: list[str]) -> list[tuple[World, dict[str, Any]]]:
 
 
 def _generated(name: str) -> list[Any]:
-    """``joints_N`` or ``obstacles_M`` for any ``N`` >= 2 or ``M`` >= 2 (:mod:`benchmarks.families` lists a few):
+    """``joints_N`` or ``obstacles_M`` for any ``N`` >= 2 or ``M`` >= 2 (:mod:`benchmarks.worlds` lists a few):
     figure1's task with ``N`` joints, or joints_3 with ``M`` obstacles in all; or ``FAMILY_S``, world ``S`` of a
     :mod:`clew_ros.worlds` family, as ``clew_world FAMILY --seed S`` writes it (shapes2_60, arm7_62, ...)."""
-    from benchmarks.families import joints_world, obstacles_world
+    from benchmarks.worlds import joints_world, obstacles_world
     from clew_ros.worlds import FAMILIES, generate
 
     family, _, count = name.rpartition("_")

@@ -4,8 +4,8 @@ Run from the repository root with the package's venv (the ``bench`` extra
 adds OMPL and matplotlib: ``pip install -e '.[bench]'``). Steps, each in
 subprocesses of its own so that memory figures belong to one world:
 
-1. planner runs: every selected world (``config/*.yaml`` and the generated
-   families of :mod:`benchmarks.families`), N seeds each (default 20), one
+1. planner runs: every selected world (``config/*.yaml`` and the scaling
+   series of :mod:`benchmarks.worlds`), N seeds each (default 20), one
    worker process per world (:mod:`benchmarks.worker`), ``--jobs`` worlds at
    once (default 2); per-run time limit: the world's ``planner.time_limit``
    capped at 5 s (``--full-limits``: uncapped; ``--time-limit S``: S for all);
@@ -33,7 +33,6 @@ import platform
 import shutil
 import subprocess
 import sys
-import tempfile
 import time
 from collections import Counter
 from importlib import metadata
@@ -41,12 +40,13 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.families import BenchWorld, all_worlds, select
+from benchmarks.compare import export
 from benchmarks.plot import plot_scaling
+from benchmarks.worlds import BenchWorld, all_worlds, select
 
 ROOT = Path(__file__).absolute().parents[1]
 
-#: Worlds of --quick: a fast one, the default one, one of each generated family (obstacles_2 = joints_3).
+#: Worlds of --quick: a fast one, the default one, one of each scaling series (obstacles_2 = joints_3).
 QUICK_WORLDS = "single_transfer,figure1,joints_3,obstacles_2,obstacles_8"
 #: Worlds of the peer comparison by default: one or two of each kind.
 PEER_WORLDS = "figure1,arm5_regrasp,behind_wall,joints_7,joints_10,obstacles_32"
@@ -65,7 +65,7 @@ DOC_END = "<!-- benchmarks:end -->"
 
 COLUMNS = [
     "world",
-    "family",
+    "series",
     "joints",
     "obstacles",
     "same_as",
@@ -135,14 +135,6 @@ def _child(module: str, *args: str, timeout: float, tree: Path = ROOT) -> dict:
 
 def _git(*args: str) -> str:
     return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
-
-
-def _export(revision: str) -> Path:
-    """The files of git revision ``revision`` in a new temporary directory (``git archive``)."""
-    tree = Path(tempfile.mkdtemp(prefix="clew_baseline_"))
-    archive = subprocess.run(["git", "archive", "--format=tar", revision], cwd=ROOT, capture_output=True, check=True)
-    subprocess.run(["tar", "-x", "-C", str(tree)], input=archive.stdout, check=True)
-    return tree
 
 
 def _machine() -> dict:
@@ -226,7 +218,7 @@ def _median(values: list[float]) -> float | None:
 def _summarise_world(world: BenchWorld, record: dict, same_as: str | None) -> dict:
     row = {
         "world": world.name,
-        "family": world.family,
+        "series": world.series,
         "joints": world.joints,
         "obstacles": world.obstacles,
         "same_as": same_as or "",
@@ -897,7 +889,7 @@ def _planner_runs(
     to_run = sorted(to_run, key=lambda w: -seeds_for.get(w.name, seeds) * limits[w.name])
     print(f"planner: {len(to_run)} world(s), {seeds} seed(s) each, jobs {args.jobs}", file=sys.stderr)
 
-    baseline_tree = _export(args.baseline) if args.baseline else None
+    baseline_tree = export(args.baseline) if args.baseline else None
     baseline: dict = {}
 
     def work(world: BenchWorld) -> tuple[str, dict]:

@@ -41,7 +41,7 @@ import numpy as np
 import shapely
 import shapely.affinity
 
-from benchmarks.families import all_worlds, select
+from benchmarks.worlds import all_worlds, select
 from clew_ros.core.collision import check_start_and_goal, is_valid
 from clew_ros.core.kinematics import compose, tip_poses, transform_points
 from clew_ros.core.manhattan import free_intervals, run_manhattan

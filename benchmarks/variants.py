@@ -34,11 +34,11 @@ from pathlib import Path
 from typing import Any
 from unittest import mock
 
-from benchmarks.families import all_worlds, select, write_world
 from benchmarks.generated import GeneratedBenchWorld, build_world, solvable_families
 from benchmarks.report import command_line, header, write_report
+from benchmarks.worlds import all_worlds, select, write_world
 
-#: Benchmark worlds (``config/`` and :mod:`benchmarks.families`) planned by default next to the generated
+#: Benchmark worlds (``config/`` and :mod:`benchmarks.worlds`) planned by default next to the generated
 #: families, with their own time limit (``--config-limit``).
 CONFIG_WORLDS = "figure1,obstacles_8,obstacles_32,joints_10,arm5_regrasp"
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benchmarks.families import all_worlds, select
 from benchmarks.kernel_ab import ROOT, baseline_kernel, compare
+from benchmarks.worlds import all_worlds, select
 from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.world import world_from_parameters
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.families import JOINT_COUNTS, OBSTACLE_COUNTS, generated_worlds, write_world
 from benchmarks.run import COLUMNS, DOC_BEGIN, DOC_END, QUICK_WORLDS
+from benchmarks.worlds import JOINT_COUNTS, OBSTACLE_COUNTS, generated_worlds, write_world
 from clew_ros.core.world import load_world
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -33,12 +33,13 @@ def test_generated_worlds_are_valid_and_as_specified(tmp_path):
 
 
 def test_quick_suite_writes_every_column(tmp_path):
-    """``--quick`` (the CI smoke run, about 30 s): every output written, every column filled; no speed asserted."""
+    """``suite --quick`` through the entry (the CI smoke run, about 30 s): every output written, every column filled;
+    no speed asserted."""
     out = tmp_path / "bench"
     doc = tmp_path / "doc.md"
     doc.write_text(f"# Benchmarks\n\nkept\n\n{DOC_BEGIN}\nold\n{DOC_END}\n\nkept too\n")
     done = subprocess.run(
-        [sys.executable, "-m", "benchmarks.run", "--quick", "--out", str(out), "--doc", str(doc)],
+        [sys.executable, "-m", "benchmarks", "suite", "--quick", "--out", str(out), "--doc", str(doc)],
         check=False,
         cwd=ROOT,
         capture_output=True,
@@ -55,7 +56,7 @@ def test_quick_suite_writes_every_column(tmp_path):
     for row in rows.values():
         for column in (
             "world",
-            "family",
+            "series",
             "joints",
             "obstacles",
             "seeds",

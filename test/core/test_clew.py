@@ -114,7 +114,7 @@ def test_explore_retries_join_stalled_transits_before_refusing(seed):
 
 def test_transit_joins_last_only_until_explore_finds_a_transit_again(monkeypatch):
     # a round without a transit turns the joins on for the retry; the round that finds one turns them off
-    from benchmarks.families import obstacles_world
+    from benchmarks.worlds import obstacles_world
     from clew_ros.core.explore import Explorer
     from clew_ros.core.world import world_from_parameters
 

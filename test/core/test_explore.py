@@ -54,7 +54,7 @@ def test_explore_beats_random_single_manipulation_paths():
 def test_a_transit_missed_once_is_tried_again_before_giving_up():
     # obstacles_32 (benchmarks): from the start placement every grasp's transit can miss on the first
     # draw; the planner used to answer NO_PATH_AT_RESOLUTION after about 1 s for seeds 1 and 2
-    from benchmarks.families import obstacles_world
+    from benchmarks.worlds import obstacles_world
     from clew_ros.core.clew import plan
     from clew_ros.core.world import world_from_parameters
 

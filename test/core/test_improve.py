@@ -821,7 +821,7 @@ def _on_any_piece(path: np.ndarray, point: np.ndarray) -> bool:
 def _with_and_without(seed: int, monkeypatch, *steps: str):
     """obstacles_32 (benchmarks) planned with ``seed``: the world, the plan, and the plan with the improver's
     ``steps`` turned off (the same first plan)."""
-    from benchmarks.families import obstacles_world
+    from benchmarks.worlds import obstacles_world
 
     parameters = obstacles_world(32).parameters
     world = world_from_parameters(parameters)

@@ -171,7 +171,7 @@ def test_holding_configurations_are_empty_beyond_reach():
 
 
 def test_goal_approach_core_keeps_the_approaches_most_goal_holds_use():
-    from benchmarks.families import obstacles_world
+    from benchmarks.worlds import obstacles_world
     from clew_ros.core.collision import is_valid
     from clew_ros.core.inverse import solve_point
     from clew_ros.core.reach import APPROACH_CELLS, approach_cell, carry_cells, goal_approach_core

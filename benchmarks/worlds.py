@@ -1,4 +1,4 @@
-"""The benchmark worlds: every ``config/*.yaml`` plus two generated families.
+"""The benchmark worlds: every ``config/*.yaml`` plus two scaling series (not ``clew_world``'s generated families).
 
 * ``joints_N`` (N = 2, 3, 5, 7, 10): figure1's task (its bounds, blocks, bar,
   start and goal placements, read from ``config/figure1.yaml``) with the
@@ -65,16 +65,16 @@ class BenchWorld:
     """One benchmark world: its parameter tree and what the tables group it by."""
 
     name: str
-    family: str  # "config", "joints" or "obstacles"
+    series: str  # "config", "joints" or "obstacles" (the scaling series, or a file of config/)
     parameters: dict  # ros__parameters tree: world (+ planner)
     time_limit_s: float  # default per-run limit
     joints: int
     obstacles: int
 
 
-def _bench_world(name: str, family: str, parameters: dict, time_limit_s: float) -> BenchWorld:
+def _bench_world(name: str, series: str, parameters: dict, time_limit_s: float) -> BenchWorld:
     world = check_start_and_goal(world_from_parameters(parameters))  # raises WorldError: start or goal invalid
-    return BenchWorld(name, family, parameters, time_limit_s, world.robot.dof, len(world.obstacles))
+    return BenchWorld(name, series, parameters, time_limit_s, world.robot.dof, len(world.obstacles))
 
 
 def config_worlds(directory: Path = CONFIG_DIR) -> list[BenchWorld]:

@@ -40,6 +40,10 @@ class ManyJoints:
     #: link, as a gripper puts an object into a slot)
     approach_radii: float = 2.0
     approach_steps: int = 8
+    #: largest sweep (m: ``sum_j |dq_j| R_j``, the bound of :mod:`clew_ros.core.continuous`) of one compiled
+    #: check of the straight probes' moves, the time limit and cancel asked between them: a whole long move of
+    #: 39 joints near a contact, checked at once, took over a second and ended a 20 s run at 21 s
+    check_sweep_m: float = 1.0
     #: whether SEARCH_TRANSIT runs its GA rounds on such arms after the straight probe failed: measured on
     #: the snake family, the GA took 90 % of a run (a 40-joint generation decodes 24 paths of 80 moves at
     #: about 5 ms each) and never reached a grasp the straight probe missed; without it EXPLORE moves on to

@@ -3,13 +3,17 @@ SEARCH, and whole runs on the snake family that end with a plan the validator ac
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from clew_ros.core.clew import plan
+from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import Plan, replay, validate_plan
-from clew_ros.core.search import PlanningContext, search_transfer
+from clew_ros.core.search import PlanningContext, _moves_clear_stopping, search_transfer
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
+from clew_ros.core.world import World
 from clew_ros.worlds import generate
 
 
@@ -35,3 +39,48 @@ def test_a_snake_world_gets_a_valid_plan(seed: int) -> None:
     result = plan(world, PlannerSettings(seed=0, time_limit=60.0))
     assert result.outcome is Outcome.SUCCEEDED, result.message
     assert validate_plan(world, Plan.from_result(world, result), step_rad=0.002) == []
+
+
+class _CountingTermination(Termination):
+    """Says stop from its ``stop_after``-th question on (never when ``None``), counting the questions."""
+
+    def __init__(self, stop_after: int | None) -> None:
+        super().__init__(None)
+        self.asked = 0
+        self.stop_after = stop_after
+
+    def __call__(self) -> bool:
+        self.asked += 1
+        return self.stop_after is not None and self.asked >= self.stop_after
+
+
+def _long_clear_move(world: World) -> tuple[np.ndarray, np.ndarray]:
+    start = np.asarray(world.robot.initial, float)
+    end = start.copy()
+    end[:3] += 0.01  # the first three joints, a little: clear of everything from the start posture
+    return start[None], end[None]
+
+
+def test_a_straight_probe_move_is_checked_in_pieces_asking_the_termination_before_each() -> None:
+    world = generate("snake", 1).world()
+    starts, ends = _long_clear_move(world)
+    many = dataclasses.replace(ManyJoints(), check_sweep_m=5e-3)  # pieces of 5 mm sweep: several of them
+    running = _CountingTermination(None)
+    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), running, many=many)
+    assert _moves_clear_stopping(ctx, starts, ends, object_pose=world.object.initial, until=True).all()
+    assert running.asked >= 5  # asked before each piece, not once for the whole move
+    stopping = _CountingTermination(3)
+    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), stopping, many=many)
+    clear = _moves_clear_stopping(ctx, starts, ends, object_pose=world.object.initial, until=True)
+    assert not clear.any()  # stopped: not proven clear
+    assert stopping.asked <= running.asked // 2  # and no piece was checked after the stop
+
+
+@pytest.mark.parametrize(("world_seed", "planner_seed"), [(1, 1), (5, 0)])
+def test_a_many_joint_run_ends_near_its_time_limit(world_seed: int, planner_seed: int) -> None:
+    warm_up()  # a liveness bound, not a speed figure: the compiler's time is not the planner's
+    world = generate("snake", world_seed).world()
+    limit = 2.0
+    result = plan(world, PlannerSettings(seed=planner_seed, time_limit=limit))
+    if result.outcome is Outcome.TIME_LIMIT:
+        assert result.stats["time_s"] <= limit + 2.0, result.stats

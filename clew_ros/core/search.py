@@ -46,6 +46,7 @@ from clew_ros.core.reach import (
     goal_within_reach,
     holding_configurations,
     holding_configurations_aimed,
+    holding_configurations_near,
     two_link_grasps,
     within_reach,
 )
@@ -449,6 +450,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             samples=samples,
             joins=ctx.transit_joins,
             straight=ctx.many.straight_probes if many else 0,
+            many=ctx.many if many else None,
         )
         if isinstance(job, PathResult):
             results.append(job)
@@ -476,10 +478,17 @@ def _transit_job(
     samples: int,
     joins: bool,
     straight: int = 0,
+    many: ManyJoints | None = None,
 ) -> SearchJob | PathResult:
-    """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
+    """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless. Arms of ``many``
+    joints also get holds solved from ``q0`` itself (:func:`holding_configurations_near`)."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
     holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0)
+    if many is not None:
+        near = holding_configurations_near(
+            world, q0, object_pose, grasp, approach, starts=many.near_holds, spread_rad=many.near_spread_rad
+        )
+        holds = np.vstack([near, holds])
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
     two_joints = world.robot.dof == 2
@@ -793,7 +802,11 @@ def search_transfer(
         straight = _straight_transfer(ctx, job, goal)
         if straight is not None:
             return straight
-    [(waypoints, distance)] = local_search(ctx, [job])
+    if world.robot.dof >= ctx.many.straight_probe_joints and not ctx.many.transfer_ga:
+        start = np.asarray(q0, float)[None]
+        waypoints, distance = start, float(objective(None, _object_at(ctx, start, mode))[0])
+    else:
+        [(waypoints, distance)] = local_search(ctx, [job])
 
     def succeeded(path: np.ndarray, reached: float) -> tuple[bool, np.ndarray]:
         pose = compose(tip_poses(world.robot, path[-1:]), mode["grasp_rel"])[0]

@@ -31,6 +31,13 @@ class ManyJoints:
     straight_probe_joints: int = 11
     #: holding configurations (count, nearest first in joint travel) a transit's straight probe tries
     straight_probes: int = 8
+    #: starts (count) of the inverse kinematics seeded from the arm's own configuration: the start itself and
+    #: this many less one perturbed around it, so that a transit's holds include ones near it in joint space
+    #: (solved from random starts only, the transits of loose-limit arms travelled about 6x the witness)
+    near_holds: int = 12
+    #: spread (rad, standard deviation per joint) of those perturbed starts: large enough to leave a posture
+    #: whose nearest hold is blocked, small against a joint's range so the holds stay near the start
+    near_spread_rad: float = 0.15
     #: random starts of the holding configurations on such arms (at least; 24 on others): few of them
     #: converge where the arm must be nearly straight, and the straight probe needs some to head for
     hold_samples: int = 96
@@ -50,6 +57,11 @@ class ManyJoints:
     #: other pairs and landmarks (a failed pair is tried again, with more holding configurations, after a
     #: round with no transit)
     transit_ga: bool = False
+    #: whether SEARCH_TRANSFER runs its GA rounds on such arms after its straight probe failed: on a 39-joint
+    #: arm two of them took 75 % of a 10 s run (decoding Manhattan paths) and left EXPLORE 2 landmarks;
+    #: without it the transfer is the straight probe's or a join from the grasp (RRT-Connect, when it starts
+    #: near the goal), and EXPLORE places more landmarks in the time
+    transfer_ga: bool = False
     #: largest Manhattan order (``planner.manhattan_order`` is lowered to it) on such arms: each order adds a
     #: move of every joint to a path, and EXPLORE's decoding took 95 % of a 37-joint run at order 2
     manhattan_order: int = 1

@@ -11,6 +11,7 @@ import pytest
 from clew_ros.core.clew import plan
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import Plan, replay, validate_plan
+from clew_ros.core.reach import holding_configurations, holding_configurations_near
 from clew_ros.core.search import PlanningContext, _moves_clear_stopping, search_transfer
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
 from clew_ros.core.world import World
@@ -84,3 +85,31 @@ def test_a_many_joint_run_ends_near_its_time_limit(world_seed: int, planner_seed
     result = plan(world, PlannerSettings(seed=planner_seed, time_limit=limit))
     if result.outcome is Outcome.TIME_LIMIT:
         assert result.stats["time_s"] <= limit + 2.0, result.stats
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_holds_solved_from_the_arms_own_posture_are_nearer_it_than_random_ones(seed: int) -> None:
+    generated = generate("snake", seed)
+    world = generated.world()
+    first = next(iter(replay(world, generated.witness, None)))  # the witness's first transit: to a grasp at rest
+    q0, pose = first.configurations[0], first.object_poses[0]
+    near_travel: list[float] = []
+    random_travel: list[float] = []
+    for g in range(len(world.object.grasps)):
+        near = holding_configurations_near(world, q0, pose, g, None, starts=12, spread_rad=0.15)
+        drawn = holding_configurations(world, pose, g, 96)
+        near_travel += list(np.abs(near - q0).sum(axis=1))
+        random_travel += list(np.abs(drawn - q0).sum(axis=1))
+    assert near_travel, "no hold solved from the arm's posture"
+    assert min(near_travel) < 0.5 * float(np.median(random_travel))
+
+
+def test_a_many_joint_transfer_decodes_no_manhattan_path_when_its_straight_probe_fails() -> None:
+    generated = generate("snake", 0)
+    world = generated.world()
+    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
+    start = np.asarray(world.robot.initial, float)
+    # the object held 5 cm ahead of the tip from the arm's start posture: no straight move puts it in the slot
+    result = search_transfer(ctx, start, np.array([0.05, 0.0, 0.0]), world.object.goal)
+    assert not result.success
+    assert ctx.counters.evaluations == 0  # ManyJoints.transfer_ga is off: no GA round

@@ -62,6 +62,10 @@ class ManyJoints:
     #: without it the transfer is the straight probe's or a join from the grasp (RRT-Connect, when it starts
     #: near the goal), and EXPLORE places more landmarks in the time
     transfer_ga: bool = False
+    #: generations (at most) of EXPLORE's GA on such arms: a 39-joint generation decodes 24 transfer paths
+    #: (8-25 ms each on the loaded 2-core machine), so 12 generations took about 3 s a landmark and a 20 s run
+    #: placed 4-6 landmarks; with 4 the snake worlds 0-11 went from 22/24 to 23/24 plans
+    explore_generations: int = 4
     #: largest Manhattan order (``planner.manhattan_order`` is lowered to it) on such arms: each order adds a
     #: move of every joint to a path, and EXPLORE's decoding took 95 % of a 37-joint run at order 2
     manhattan_order: int = 1

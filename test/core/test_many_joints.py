@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 
 from clew_ros.core.clew import plan
+from clew_ros.core.explore import Explorer
 from clew_ros.core.kernel import warm_up
 from clew_ros.core.plan import Plan, replay, validate_plan
 from clew_ros.core.reach import holding_configurations, holding_configurations_near
 from clew_ros.core.search import PlanningContext, _moves_clear_stopping, search_transfer
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
+from clew_ros.core.tree import LandmarkTree
 from clew_ros.core.world import World
 from clew_ros.worlds import generate
 
@@ -113,3 +115,14 @@ def test_a_many_joint_transfer_decodes_no_manhattan_path_when_its_straight_probe
     result = search_transfer(ctx, start, np.array([0.05, 0.0, 0.0]), world.object.goal)
     assert not result.success
     assert ctx.counters.evaluations == 0  # ManyJoints.transfer_ga is off: no GA round
+
+
+def test_explore_runs_few_generations_on_a_many_joint_arm() -> None:
+    world = generate("snake", 3).world()
+    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
+    assert ctx.settings.generations > ctx.many.explore_generations
+    exploration = Explorer(ctx, LandmarkTree(world.robot.initial, world.object.initial)).explore()
+    assert exploration is not None
+    size = ctx.settings.population
+    # transits decode no Manhattan path on such arms (ManyJoints.transit_ga): every evaluation is EXPLORE's GA
+    assert 0 < ctx.counters.evaluations <= size + ctx.many.explore_generations * (size - ctx.settings.genetic.elite)

@@ -12,6 +12,7 @@ pairs of one step are searched together, one island of a batch each.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -174,9 +175,10 @@ class Explorer:
         initial = np.empty((size, 1 + k * n))
         initial[:, 0] = ctx.rng.integers(0, len(candidates), size=size)
         initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
-        result = minimize(
-            evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(candidates), should_stop=ctx.termination
-        )
+        genetic = ctx.settings.genetic
+        if n >= ctx.many.straight_probe_joints and genetic.generations > ctx.many.explore_generations:
+            genetic = dataclasses.replace(genetic, generations=ctx.many.explore_generations)  # (ManyJoints)
+        result = minimize(evaluate, initial, ctx.rng, genetic, categories=len(candidates), should_stop=ctx.termination)
         index, paths = decode(result.genes[None])
         chosen_candidate = candidates[int(index[0])]
         fields = {

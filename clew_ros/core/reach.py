@@ -17,7 +17,7 @@ import numpy as np
 from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import clearly_valid
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points
+from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.core.world import World
 
 __all__ = [
@@ -30,6 +30,7 @@ __all__ = [
     "goal_within_reach",
     "holding_configurations",
     "holding_configurations_aimed",
+    "holding_configurations_near",
     "nearest_grasp_distance",
     "two_link_grasps",
     "within_reach",
@@ -272,6 +273,61 @@ def holding_configurations_aimed(
     tips = tip_poses(robot, solved.q)
     holding = np.linalg.norm(tips[:, :2] - target, axis=1) <= 0.5 * world.grasp_tolerance
     holding &= approach[approach_cell(tips[:, 2] - pose[2], len(approach))]
+    held: np.ndarray = solved.q[holding]
+    if not len(held):
+        return held
+    valid: np.ndarray = held[is_valid(world, held, pose[None])]
+    return valid
+
+
+def holding_configurations_near(
+    world: World,
+    q0: np.ndarray,
+    object_pose: np.ndarray,
+    grasp: int,
+    approach: np.ndarray | None,
+    *,
+    starts: int,
+    spread_rad: float,
+) -> np.ndarray:
+    """:func:`holding_configurations` solved from the arm's own configuration ``q0`` and ``starts`` - 1
+    configurations drawn around it (``spread_rad`` per joint, within the limits): damped least squares
+    moves the joints little, so these holds are near ``q0`` in joint space and a straight move to them
+    travels little (arms of many joints, whose random holds lie far from any posture). With ``approach``
+    (cells of :func:`approach_cells`), the tip's angle is aimed at the allowed cell nearest the start's.
+    Seeded by the request, as the others."""
+    robot = world.robot
+    q0 = np.asarray(q0, float)
+    pose = np.asarray(object_pose, float)
+    target = transform_points(pose, np.asarray(world.object.grasps[grasp], float)[None])[0]
+    seed = np.frombuffer(np.round(np.r_[q0, pose, target], 9).tobytes(), dtype=np.uint32)
+    rng = np.random.default_rng([grasp, starts, *seed.tolist()])
+    drawn = q0 + rng.normal(0.0, spread_rad, size=(max(0, starts - 1), robot.dof))
+    start = np.clip(np.vstack([q0[None], drawn]), robot.joint_lower, robot.joint_upper)
+    angles = None
+    tolerance = np.pi
+    if approach is not None:
+        allowed = np.flatnonzero(approach)
+        if not len(allowed):
+            return np.zeros((0, robot.dof))
+        centres = _cell_centres(len(approach))[allowed]
+        psi = tip_poses(robot, start)[:, 2] - pose[2]
+        nearest = np.argmin(np.abs(wrap_angle(psi[:, None] - centres[None])), axis=1)
+        angles = pose[2] + centres[nearest]
+        tolerance = np.pi / len(approach)
+    solved = solve_point(
+        robot,
+        start,
+        np.broadcast_to(target, (len(start), 2)),
+        angles=angles,
+        angle_tolerance=tolerance,
+        iterations=HOLD_ITERATIONS * 2,
+        tolerance_m=0.25 * world.grasp_tolerance,
+    )
+    tips = tip_poses(robot, solved.q)
+    holding = np.linalg.norm(tips[:, :2] - target, axis=1) <= 0.5 * world.grasp_tolerance
+    if approach is not None:
+        holding &= approach[approach_cell(tips[:, 2] - pose[2], len(approach))]
     held: np.ndarray = solved.q[holding]
     if not len(held):
         return held

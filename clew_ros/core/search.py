@@ -25,6 +25,7 @@ from a generator of its own. This departs from the paper (docs/algorithm.md).
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -32,7 +33,7 @@ import numpy as np
 
 from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.connect import join
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid, straight_moves_clear
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid, straight_move_clear
 from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import clearly_valid
@@ -45,6 +46,7 @@ from clew_ros.core.reach import (
     goal_within_reach,
     holding_configurations,
     holding_configurations_aimed,
+    holding_configurations_near,
     two_link_grasps,
     within_reach,
 )
@@ -299,12 +301,11 @@ def _straight_probe(
         targets = job.straight
         pose = job.pose if "object_poses" in job.mode else None
         rel = job.pose if "grasp_rel" in job.mode else None
-        margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
         starts = np.broadcast_to(q[i], targets.shape)
         clear = _sampled_clear(world, starts, targets, object_pose=pose, grasp_rel=rel)
         if clear.any():
-            clear[clear] = straight_moves_clear(
-                world, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, min_margin=margin
+            clear[clear] = _moves_clear_stopping(
+                ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
             )
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
         if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
@@ -319,9 +320,7 @@ def _straight_probe(
                 path = np.array([q[i], *retreat, *approach[::-1], target])
                 if not _sampled_clear(world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel).all():
                     continue
-                if straight_moves_clear(
-                    world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, min_margin=margin, every=True
-                ).all():
+                if _moves_clear_stopping(ctx, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, until=False).all():
                     way = path[1:]
                     break
         if way is not None:
@@ -451,6 +450,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             samples=samples,
             joins=ctx.transit_joins,
             straight=ctx.many.straight_probes if many else 0,
+            many=ctx.many if many else None,
         )
         if isinstance(job, PathResult):
             results.append(job)
@@ -478,10 +478,17 @@ def _transit_job(
     samples: int,
     joins: bool,
     straight: int = 0,
+    many: ManyJoints | None = None,
 ) -> SearchJob | PathResult:
-    """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless."""
+    """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless. Arms of ``many``
+    joints also get holds solved from ``q0`` itself (:func:`holding_configurations_near`)."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
     holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0)
+    if many is not None:
+        near = holding_configurations_near(
+            world, q0, object_pose, grasp, approach, starts=many.near_holds, spread_rad=many.near_spread_rad
+        )
+        holds = np.vstack([near, holds])
     excess = approach_excess(approach) if approach is not None else None
     last = float(world.robot.link_lengths[-1])
     two_joints = world.robot.dof == 2
@@ -627,6 +634,55 @@ def transfer_probe_target(
     return held[0] if len(held) else None
 
 
+class _Stopping:
+    """A :class:`~clew_ros.core.continuous.CheckBudget` that counts nothing and stops when ``stop()`` says so."""
+
+    def __init__(self, stop: Callable[[], bool]) -> None:
+        self._stop = stop
+
+    def spend_move_checks(self, configurations: int) -> None:
+        pass
+
+    def stop(self) -> bool:
+        return self._stop()
+
+
+def _moves_clear_stopping(
+    ctx: PlanningContext,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    *,
+    object_pose: np.ndarray | None = None,
+    grasp_rel: np.ndarray | None = None,
+    until: bool,
+) -> np.ndarray:
+    """Arms of many joints: :func:`~clew_ros.core.continuous.straight_moves_clear` (``MIN_MARGIN_FACTOR`` x the
+    clearance) of each move ``starts[k] -> ends[k]`` in turn, each split into pieces that sweep at most
+    :attr:`ManyJoints.check_sweep_m` (the bound ``sum_j |dq_j| R_j`` of the check's module), the termination
+    asked before each piece: one compiled check of a long move near a contact can take seconds, past the time
+    limit. The moves are checked in order until the first whose answer is ``until`` (the first clear one, or
+    the first blocked one); the others, and a move whose check was stopped, come back not clear."""
+    world = ctx.world
+    lengths = world.robot.link_lengths
+    arm = np.cumsum(lengths[::-1])[::-1] + (world.object.radius if grasp_rel is not None else 0.0)
+    margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+    budget = _Stopping(ctx.termination)
+    out = np.zeros(len(starts), dtype=bool)
+    for k, (a, b) in enumerate(zip(starts, ends, strict=True)):
+        sweep = float(np.abs(b - a) @ arm)
+        t = np.linspace(0.0, 1.0, max(1, int(np.ceil(sweep / ctx.many.check_sweep_m))) + 1)[:, None]
+        points = a + t * (b - a)
+        out[k] = all(
+            straight_move_clear(
+                world, p, r, object_pose=object_pose, grasp_rel=grasp_rel, min_margin=margin, budget=budget
+            )
+            for p, r in itertools.pairwise(points)
+        )
+        if out[k] == until or budget.stop():
+            break
+    return out
+
+
 def _sampled_clear(
     world: World,
     starts: np.ndarray,
@@ -705,8 +761,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
         for way in ways:
             if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel).all():
                 continue
-            clear = straight_moves_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, min_margin=margin, every=True)
-            if clear.all():
+            if _moves_clear_stopping(ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
                 pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]
                 distance = float(np.linalg.norm(goal_error(world, pose[None], goal)[0]))
                 if goal_reached(world, pose, goal) and distance <= 0.5 * world.goal_tolerance:
@@ -747,7 +802,11 @@ def search_transfer(
         straight = _straight_transfer(ctx, job, goal)
         if straight is not None:
             return straight
-    [(waypoints, distance)] = local_search(ctx, [job])
+    if world.robot.dof >= ctx.many.straight_probe_joints and not ctx.many.transfer_ga:
+        start = np.asarray(q0, float)[None]
+        waypoints, distance = start, float(objective(None, _object_at(ctx, start, mode))[0])
+    else:
+        [(waypoints, distance)] = local_search(ctx, [job])
 
     def succeeded(path: np.ndarray, reached: float) -> tuple[bool, np.ndarray]:
         pose = compose(tip_poses(world.robot, path[-1:]), mode["grasp_rel"])[0]

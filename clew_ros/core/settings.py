@@ -31,6 +31,13 @@ class ManyJoints:
     straight_probe_joints: int = 11
     #: holding configurations (count, nearest first in joint travel) a transit's straight probe tries
     straight_probes: int = 8
+    #: starts (count) of the inverse kinematics seeded from the arm's own configuration: the start itself and
+    #: this many less one perturbed around it, so that a transit's holds include ones near it in joint space
+    #: (solved from random starts only, the transits of loose-limit arms travelled about 6x the witness)
+    near_holds: int = 12
+    #: spread (rad, standard deviation per joint) of those perturbed starts: large enough to leave a posture
+    #: whose nearest hold is blocked, small against a joint's range so the holds stay near the start
+    near_spread_rad: float = 0.15
     #: random starts of the holding configurations on such arms (at least; 24 on others): few of them
     #: converge where the arm must be nearly straight, and the straight probe needs some to head for
     hold_samples: int = 96
@@ -40,12 +47,25 @@ class ManyJoints:
     #: link, as a gripper puts an object into a slot)
     approach_radii: float = 2.0
     approach_steps: int = 8
+    #: largest sweep (m: ``sum_j |dq_j| R_j``, the bound of :mod:`clew_ros.core.continuous`) of one compiled
+    #: check of the straight probes' moves, the time limit and cancel asked between them: a whole long move of
+    #: 39 joints near a contact, checked at once, took over a second and ended a 20 s run at 21 s
+    check_sweep_m: float = 1.0
     #: whether SEARCH_TRANSIT runs its GA rounds on such arms after the straight probe failed: measured on
     #: the snake family, the GA took 90 % of a run (a 40-joint generation decodes 24 paths of 80 moves at
     #: about 5 ms each) and never reached a grasp the straight probe missed; without it EXPLORE moves on to
     #: other pairs and landmarks (a failed pair is tried again, with more holding configurations, after a
     #: round with no transit)
     transit_ga: bool = False
+    #: whether SEARCH_TRANSFER runs its GA rounds on such arms after its straight probe failed: on a 39-joint
+    #: arm two of them took 75 % of a 10 s run (decoding Manhattan paths) and left EXPLORE 2 landmarks;
+    #: without it the transfer is the straight probe's or a join from the grasp (RRT-Connect, when it starts
+    #: near the goal), and EXPLORE places more landmarks in the time
+    transfer_ga: bool = False
+    #: generations (at most) of EXPLORE's GA on such arms: a 39-joint generation decodes 24 transfer paths
+    #: (8-25 ms each on the loaded 2-core machine), so 12 generations took about 3 s a landmark and a 20 s run
+    #: placed 4-6 landmarks; with 4 the snake worlds 0-11 went from 22/24 to 23/24 plans
+    explore_generations: int = 4
     #: largest Manhattan order (``planner.manhattan_order`` is lowered to it) on such arms: each order adds a
     #: move of every joint to a path, and EXPLORE's decoding took 95 % of a 37-joint run at order 2
     manhattan_order: int = 1

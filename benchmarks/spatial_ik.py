@@ -18,34 +18,16 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from benchmarks.spatial_checker import scene
+from benchmarks.spatial_checker import CONFIG, ROBOTS, scene
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.random_robot import random_robot
 from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.spheres import sphere_model
 from clew_ros.spatial.transforms import pose_matrix
-
-CONFIG = Path(__file__).resolve().parents[1] / "config"
-ROBOTS: dict[str, dict[str, Any]] = {
-    "panda": {
-        "urdf": "robots/panda/panda.urdf",
-        "srdf": "robots/panda/panda.srdf",
-        "base_link": "panda_link0",
-        "tip_link": "panda_hand_tcp",
-    },
-    "ur5": {
-        "urdf": "robots/ur5/ur5.urdf",
-        "srdf": "robots/ur5/ur5.srdf",
-        "base_link": "base_link",
-        "tip_link": "tool0",
-    },
-}
 
 
 def errors(robot: RobotModel, target: np.ndarray, q: np.ndarray) -> tuple[float, float]:

@@ -29,7 +29,7 @@ from typing import Protocol
 import numpy as np
 
 from clew_ros.core.collision import packed_world
-from clew_ros.core.continuous import ContinuousSettings, straight_move_clear
+from clew_ros.core.continuous import ContinuousSettings, StopOnly, straight_move_clear
 from clew_ros.core.kernel import connect_rounds
 from clew_ros.core.world import World
 
@@ -185,20 +185,6 @@ def shortened(clear: Clear, path: np.ndarray, spent: Callable[[], bool] | None =
     return np.array(kept)
 
 
-class _Stopping:
-    """The check budget of :func:`join`'s shortening: counts nothing, and no check starts once ``stop()`` says
-    so (the time limit or cancel)."""
-
-    def __init__(self, stop: Callable[[], bool]) -> None:
-        self._stop = stop
-
-    def spend_move_checks(self, configurations: int) -> None:
-        pass
-
-    def stop(self) -> bool:
-        return self._stop()
-
-
 def join(
     world: World,
     start: np.ndarray,
@@ -217,7 +203,7 @@ def join(
     or carried as ``grasp_rel`` (a transfer): :func:`rrt_connect` with every move checked continuously
     (:func:`clew_ros.core.continuous.straight_move_clear`, ``min_margin`` from everything), then
     :func:`shortened`; ``None`` when the trees did not meet. ``settings`` and ``moves`` as :func:`rrt_connect`'s."""
-    budget = _Stopping(stop)
+    budget = StopOnly(stop)
 
     def clear(a: np.ndarray, b: np.ndarray) -> bool:
         return straight_move_clear(

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -54,6 +55,7 @@ __all__ = [
     "MIN_MARGIN_FACTOR",
     "CheckBudget",
     "ContinuousSettings",
+    "StopOnly",
     "interpolate",
     "path_valid",
     "straight_move_clear",
@@ -91,6 +93,20 @@ class CheckBudget(Protocol):
         """One compiled call of the straight-move check, that checked ``configurations``."""
 
     def stop(self) -> bool: ...
+
+
+class StopOnly:
+    """A :class:`CheckBudget` that counts nothing and stops when ``stop()`` says so (the time limit or cancel):
+    for checks that are not charged to a work budget but must end with the run."""
+
+    def __init__(self, stop: Callable[[], bool]) -> None:
+        self._stop = stop
+
+    def spend_move_checks(self, configurations: int) -> None:
+        pass
+
+    def stop(self) -> bool:
+        return self._stop()
 
 
 def straight_move_clear(

@@ -261,23 +261,9 @@ def holding_configurations_aimed(
     cells = allowed[rng.integers(0, len(allowed), samples)]
     angles = pose[2] + _cell_centres(len(approach))[cells]
     start = rng.uniform(robot.joint_lower, robot.joint_upper, size=(samples, robot.dof))
-    solved = solve_point(
-        robot,
-        start,
-        np.broadcast_to(target, (samples, 2)),
-        angles=angles,
-        angle_tolerance=np.pi / len(approach),
-        iterations=HOLD_ITERATIONS * 2,
-        tolerance_m=0.25 * world.grasp_tolerance,
+    return _aimed_holds(
+        world, start, target, pose, angles=angles, approach=approach, angle_tolerance=np.pi / len(approach)
     )
-    tips = tip_poses(robot, solved.q)
-    holding = np.linalg.norm(tips[:, :2] - target, axis=1) <= 0.5 * world.grasp_tolerance
-    holding &= approach[approach_cell(tips[:, 2] - pose[2], len(approach))]
-    held: np.ndarray = solved.q[holding]
-    if not len(held):
-        return held
-    valid: np.ndarray = held[is_valid(world, held, pose[None])]
-    return valid
 
 
 def holding_configurations_near(
@@ -315,12 +301,29 @@ def holding_configurations_near(
         nearest = np.argmin(np.abs(wrap_angle(psi[:, None] - centres[None])), axis=1)
         angles = pose[2] + centres[nearest]
         tolerance = np.pi / len(approach)
+    return _aimed_holds(world, start, target, pose, angles=angles, approach=approach, angle_tolerance=tolerance)
+
+
+def _aimed_holds(
+    world: World,
+    start: np.ndarray,
+    target: np.ndarray,
+    pose: np.ndarray,
+    *,
+    angles: np.ndarray | None,
+    approach: np.ndarray | None,
+    angle_tolerance: float,
+) -> np.ndarray:
+    """The valid configurations, solved from ``start`` with the tip at ``target`` (and at ``angles`` within
+    ``angle_tolerance`` when given), that hold the grasp within half the grasp tolerance and, with
+    ``approach``, come in within an allowed cell: what the aimed and the near holds share."""
+    robot = world.robot
     solved = solve_point(
         robot,
         start,
         np.broadcast_to(target, (len(start), 2)),
         angles=angles,
-        angle_tolerance=tolerance,
+        angle_tolerance=angle_tolerance,
         iterations=HOLD_ITERATIONS * 2,
         tolerance_m=0.25 * world.grasp_tolerance,
     )

@@ -33,7 +33,7 @@ import numpy as np
 
 from clew_ros.core.collision import is_valid, packed_world
 from clew_ros.core.connect import join
-from clew_ros.core.continuous import MIN_MARGIN_FACTOR, path_valid, straight_move_clear
+from clew_ros.core.continuous import MIN_MARGIN_FACTOR, StopOnly, path_valid, straight_move_clear
 from clew_ros.core.genetic import minimize_islands
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import clearly_valid
@@ -634,19 +634,6 @@ def transfer_probe_target(
     return held[0] if len(held) else None
 
 
-class _Stopping:
-    """A :class:`~clew_ros.core.continuous.CheckBudget` that counts nothing and stops when ``stop()`` says so."""
-
-    def __init__(self, stop: Callable[[], bool]) -> None:
-        self._stop = stop
-
-    def spend_move_checks(self, configurations: int) -> None:
-        pass
-
-    def stop(self) -> bool:
-        return self._stop()
-
-
 def _moves_clear_stopping(
     ctx: PlanningContext,
     starts: np.ndarray,
@@ -666,7 +653,7 @@ def _moves_clear_stopping(
     lengths = world.robot.link_lengths
     arm = np.cumsum(lengths[::-1])[::-1] + (world.object.radius if grasp_rel is not None else 0.0)
     margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
-    budget = _Stopping(ctx.termination)
+    budget = StopOnly(ctx.termination)
     out = np.zeros(len(starts), dtype=bool)
     for k, (a, b) in enumerate(zip(starts, ends, strict=True)):
         sweep = float(np.abs(b - a) @ arm)

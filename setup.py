@@ -38,7 +38,7 @@ setup(
     python_requires=">=3.11",
     install_requires=[
         "numpy>=1.26",
-        "numba>=0.59",  # the compiled planning kernels (clew_ros/core/kernel/)
+        "numba>=0.59",  # the compiled planning kernels (clew_ros/planar/kernel/)
         "shapely>=2.1",
         "pyyaml>=6.0",
         "mcap>=1.2",

@@ -1,16 +1,16 @@
 """``python -m benchmarks.check_cost [--worlds NAME|PATH ...] [--batch N]``: what a configuration checked in a
 batched call of the compiled checks costs, against what the improvement's budget charges for it (issue 14).
 
-The improvement (:mod:`clew_ros.core.improve`) counts its budget in work units, not seconds, so that the same
-seed gives the same plan on any machine: :attr:`~clew_ros.core.improve.ImproveSettings.work_per_second` units per
+The improvement (:mod:`clew_ros.planar.improve`) counts its budget in work units, not seconds, so that the same
+seed gives the same plan on any machine: :attr:`~clew_ros.planar.improve.ImproveSettings.work_per_second` units per
 second of ``planner.improve_time``. A configuration checked costs
-:attr:`~clew_ros.core.improve.ImproveSettings.batch_check_share` x :func:`~clew_ros.core.improve.check_work` units.
+:attr:`~clew_ros.planar.improve.ImproveSettings.batch_check_share` x :func:`~clew_ros.planar.improve.check_work` units.
 This
-times :func:`clew_ros.core.continuous.straight_moves_clear` on ``N`` random configurations of each world
+times :func:`clew_ros.planar.continuous.straight_moves_clear` on ``N`` random configurations of each world
 (``still``: each checked where it is, as the lattice checks its nodes; ``moves``: a straight move of 0.3 rad
 per joint from each, checked continuously, as shortcuts and routings are), the best of five calls, and prints
 the time per configuration and its ratio to the time the budget charges for it (``charged``: the charge at
-:attr:`~clew_ros.core.improve.ImproveSettings.batch_check_share` 1, ``now``: at its value). A ratio below 1: the
+:attr:`~clew_ros.planar.improve.ImproveSettings.batch_check_share` 1, ``now``: at its value). A ratio below 1: the
 budget buys fewer checks than the time it stands for would; the improvement's whole wall time against its work is the
 last column of :mod:`benchmarks.improvement`.
 """
@@ -23,9 +23,9 @@ import time
 import numpy as np
 
 from benchmarks.improvement import load_worlds
-from clew_ros.core.continuous import straight_moves_clear
-from clew_ros.core.improve import ImproveSettings, check_work
-from clew_ros.core.kernel import warm_up
+from clew_ros.planar.continuous import straight_moves_clear
+from clew_ros.planar.improve import ImproveSettings, check_work
+from clew_ros.planar.kernel import warm_up
 
 WORLDS = ("figure1", "single_transfer", "obstacles_8", "obstacles_32", "joints_7")
 REPEATS = 5

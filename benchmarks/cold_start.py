@@ -1,7 +1,7 @@
 """What the compiled kernel costs at start: compiling it, loading it from numba's cache, and the
 first plan against the second.
 
-* ``compile_s``: :func:`clew_ros.core.kernel.warm_up` in a fresh process with an empty cache
+* ``compile_s``: :func:`clew_ros.planar.kernel.warm_up` in a fresh process with an empty cache
   (``NUMBA_CACHE_DIR`` set to a new directory): the first start after an install.
 * ``load_s``: the same in a second fresh process, which loads what the first one cached: every
   later start of the node or ``clew_plan``.
@@ -39,7 +39,7 @@ import time
 t = time.perf_counter()
 import clew_ros.core.clew
 imported = time.perf_counter() - t
-from clew_ros.core.kernel import warm_up
+from clew_ros.planar.kernel import warm_up
 t = time.perf_counter()
 warm_up()
 print(imported, time.perf_counter() - t)
@@ -47,11 +47,11 @@ print(imported, time.perf_counter() - t)
 
 _TWICE = """
 import sys, time
-from clew_ros.core.kernel import warm_up
-from clew_ros.core.clew import plan
+from clew_ros.planar.kernel import warm_up
+from clew_ros.planar.space import plan
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.collision import check_start_and_goal
-from clew_ros.core.world import load_world
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.world import load_world
 warm_up()
 world = check_start_and_goal(load_world(sys.argv[1]))
 times = []

@@ -47,18 +47,18 @@ QUICK = {"worlds": 1, "seeds": 2, "time_limit": 3.0}
 
 def _warm_up() -> None:
     """Each worker process loads (or compiles) the kernel once, before its first timed run."""
-    from clew_ros.core.kernel import warm_up
+    from clew_ros.planar.kernel import warm_up
 
     warm_up()
 
 
 def run_one(path: str, seed: int, time_limit_s: float, threads: int) -> dict:
     """Plan the world file ``path`` once, as ``clew_plan`` does; the run's figures."""
-    from clew_ros.core.clew import plan
-    from clew_ros.core.collision import check_start_and_goal
-    from clew_ros.core.plan import checked_plan
     from clew_ros.core.settings import PlannerSettings
-    from clew_ros.core.world import read_parameter_file, world_from_parameters
+    from clew_ros.planar.collision import check_start_and_goal
+    from clew_ros.planar.plan import checked_plan
+    from clew_ros.planar.space import plan
+    from clew_ros.planar.world import read_parameter_file, world_from_parameters
 
     parameters = read_parameter_file(path)
     world = check_start_and_goal(world_from_parameters(parameters))

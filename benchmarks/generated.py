@@ -83,7 +83,7 @@ def build_world(family: str, seed: int, directory: str | Path) -> GeneratedBench
 
 def reference_world(name: str = "figure1") -> GeneratedBenchWorld:
     """A world of ``config/`` (default figure1) as a family of one world, for the table's reference row."""
-    from clew_ros.core.world import load_world
+    from clew_ros.planar.world import load_world
 
     path = CONFIG_DIR / f"{name}.yaml"
     world = load_world(path)

@@ -28,18 +28,18 @@ from typing import Any
 from unittest import mock
 
 from benchmarks.reference import load_worlds
-from clew_ros.core import clew
-from clew_ros.core.clew import plan
-from clew_ros.core.improve import ImproveSettings, improve
-from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.planar import space as planar_space
+from clew_ros.planar.improve import ImproveSettings, improve
+from clew_ros.planar.kernel import warm_up
+from clew_ros.planar.space import plan
 
 ROOT = Path(__file__).resolve().parents[1]
 WORLDS = ("figure1", "arm3_regrasp", "arm5_regrasp")
 
 
 def _timing_improvement() -> list[float]:
-    """Make the planner's calls of :func:`clew_ros.core.improve.improve` record their wall time (s) in the list
+    """Make the planner's calls of :func:`clew_ros.planar.improve.improve` record their wall time (s) in the list
     returned: the time the improvement adds to a run, measured alone (the difference of two whole runs is noisy
     on a shared machine)."""
     times: list[float] = []
@@ -52,7 +52,7 @@ def _timing_improvement() -> list[float]:
         finally:
             times.append(time.monotonic() - started)
 
-    mock.patch.object(clew, "improve", timed).start()  # clew.plan calls it by its name in clew
+    mock.patch.object(planar_space, "improve", timed).start()  # PlanarSpace.improve calls it by its name
     return times
 
 

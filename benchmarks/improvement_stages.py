@@ -2,7 +2,7 @@
 anytime improvement's time goes, and whether its work counting keeps it within its budget.
 
 For each world (names and files as :mod:`benchmarks.improvement` takes them) and seed, the plan is made with
-the improvement on, and each stage of :class:`clew_ros.core.improve._Improver` (rebuilding, routing, the
+the improvement on, and each stage of :class:`clew_ros.planar.improve._Improver` (rebuilding, routing, the
 lattice's regrasps, fewer transfers, greedy and random shortcuts, the lattice's first grasps) records its wall
 time and the work it was charged. Prints a Markdown row per world and stage, summed over the seeds: wall time
 (s), the seconds its work stands for (``work / ImproveSettings.work_per_second``) and their ratio. Routing runs inside
@@ -20,10 +20,10 @@ from unittest import mock
 
 from benchmarks.improvement import arguments
 from benchmarks.reference import load_worlds
-from clew_ros.core.clew import plan
-from clew_ros.core.improve import ImproveSettings, _Improver
-from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.planar.improve import ImproveSettings, _Improver
+from clew_ros.planar.kernel import warm_up
+from clew_ros.planar.space import plan
 
 STAGES = (
     "rebuild",

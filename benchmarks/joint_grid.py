@@ -8,15 +8,15 @@ shortest paths between them (joint travel, L1). The grid search of :mod:`benchma
   is a shortest one wherever the free space leaves room for its staircase.
 * **Mode.** A transit (the object resting at a placement) or a transfer (the object held as
   ``grasp_rel``). The validity test is interface.md section 1 through the compiled first pass
-  :func:`clew_ros.core.kernel.clearly_valid` (valid beyond rounding; anything doubtful counts as
+  :func:`clew_ros.planar.kernel.clearly_valid` (valid beyond rounding; anything doubtful counts as
   invalid, so the lattice errs on the safe side), over whole windows of the lattice per call.
 * **Edges.** An edge between two valid nodes is valid when its midpoint is clear by the motion
-  bound of :func:`clew_ros.core.continuous.straight_move_clear` (every point of the arm and the
+  bound of :func:`clew_ros.planar.continuous.straight_move_clear` (every point of the arm and the
   carried object moves at most ``h R_j`` along it; half of that from the midpoint): valid at any
   checking step. In a transfer the last link and the object it holds do not move relative to each
   other, so that pair is left out of the margin test (it is checked where the grasp is made) and
   the other links are tested against the object separately. An edge not cleared so is checked at
-  the configurations :func:`clew_ros.core.plan.validate_plan` samples (every 0.002 rad, the same
+  the configurations :func:`clew_ros.planar.plan.validate_plan` samples (every 0.002 rad, the same
   arithmetic), so lattice paths pass the validator.
 * **Off-lattice points** (the start, grasp configurations, exact goal configurations) join the
   lattice through the corners of their cell, by straight moves checked like the validator does.
@@ -33,11 +33,11 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from clew_ros.core.collision import packed_carrying, packed_world
-from clew_ros.core.kernel import PackedWorld, clearly_valid
-from clew_ros.core.kinematics import compose, tip_poses, transform_points
-from clew_ros.core.plan import CHECK_STEP_RAD
-from clew_ros.core.world import World
+from clew_ros.planar.collision import packed_carrying, packed_world
+from clew_ros.planar.kernel import PackedWorld, clearly_valid
+from clew_ros.planar.kinematics import compose, tip_poses, transform_points
+from clew_ros.planar.plan import CHECK_STEP_RAD
+from clew_ros.planar.world import World
 
 __all__ = ["Box", "Graph", "Lattice", "Mode", "dense_clear", "shortest_paths", "trace"]
 
@@ -158,7 +158,7 @@ class Mode:
 def _margin_worlds(world: World, mode: Mode, margin_m: float) -> list[tuple[PackedWorld, int]]:
     """The validity tests that must pass with ``margin_m`` to spare (and how many joints each takes): in a
     transfer all but the pair of the last link and the object it holds
-    (:func:`clew_ros.core.collision.packed_carrying`)."""
+    (:func:`clew_ros.planar.collision.packed_carrying`)."""
     if mode.grasp_rel is None:
         return [(dataclasses.replace(packed_world(world), rounding=margin_m), 2)]
     without_object, links_but_last = packed_carrying(world)
@@ -187,7 +187,7 @@ def valid(world: World, mode: Mode, q: np.ndarray) -> np.ndarray:
 
 def dense_clear(world: World, mode: Mode, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """Whether each straight move ``starts[k] -> ends[k]`` is valid at both ends and at every
-    configuration :func:`clew_ros.core.plan.validate_plan` checks on it (``a + t (b - a)``,
+    configuration :func:`clew_ros.planar.plan.validate_plan` checks on it (``a + t (b - a)``,
     ``t = i / count``, ``count = ceil(max |b - a| / 0.002)``), per move ``(K,)``."""
     starts, ends = np.asarray(starts, float).reshape(-1, 2), np.asarray(ends, float).reshape(-1, 2)
     counts = np.maximum(1, np.ceil(np.max(np.abs(ends - starts), axis=1) / CHECK_STEP_RAD)).astype(np.int64)

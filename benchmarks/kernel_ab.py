@@ -6,7 +6,7 @@ prints one line per world and mode, then one JSON object.
 On this machine the same loop runs up to 1.9x faster or slower from one
 process to the next, so throughput measured in separate processes cannot
 tell a 15 % change from noise. Here both kernels run in one process, taking
-turns: ``REV:clew_ros/core/kernel/`` is loaded as a package of its own
+turns: ``REV:clew_ros/planar/kernel/`` is loaded as a package of its own
 (the kernel imports only numpy and numba), the configurations are the same,
 and each figure is the fastest of ``--repeats`` turns in CPU time. For each
 world and mode (transit: object at rest; transfer: held at grasp 0):
@@ -37,10 +37,10 @@ import numpy as np
 
 from benchmarks.throughput import random_configurations
 from benchmarks.worlds import all_worlds, select
-from clew_ros.core import kernel
-from clew_ros.core.collision import check_start_and_goal, is_valid, packed_world
-from clew_ros.core.kinematics import compose, tip_poses
-from clew_ros.core.world import World, world_from_parameters
+from clew_ros.planar import kernel
+from clew_ros.planar.collision import check_start_and_goal, is_valid, packed_world
+from clew_ros.planar.kinematics import compose, tip_poses
+from clew_ros.planar.world import World, world_from_parameters
 
 __all__ = ["baseline_kernel", "compare"]
 
@@ -49,19 +49,19 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def baseline_kernel(revision: str, directory: Path) -> ModuleType:
     """``revision``'s kernel, loaded as module ``kernel_baseline`` from ``directory``: the package
-    ``clew_ros/core/kernel/`` (its imports of itself renamed), or the single ``kernel.py`` of older revisions."""
-    listed = _git("ls-tree", "--name-only", revision, "clew_ros/core/kernel/").split()
+    ``clew_ros/planar/kernel/`` (its imports of itself renamed), or the single ``kernel.py`` of older revisions."""
+    listed = _git("ls-tree", "--name-only", revision, "clew_ros/planar/kernel/").split()
     files = [name for name in listed if name.endswith(".py")]
     if files:  # a package: its modules import each other by the package's name
         package = directory / "kernel_baseline"
         package.mkdir(exist_ok=True)
         for name in files:
-            source = _git("show", f"{revision}:{name}").replace("clew_ros.core.kernel", "kernel_baseline")
+            source = _git("show", f"{revision}:{name}").replace("clew_ros.planar.kernel", "kernel_baseline")
             (package / Path(name).name).write_text(source)
         path, search = package / "__init__.py", [str(package)]
     else:
         path, search = directory / "kernel_baseline.py", None
-        path.write_text(_git("show", f"{revision}:clew_ros/core/kernel.py"))
+        path.write_text(_git("show", f"{revision}:clew_ros/planar/kernel.py"))
     spec = importlib.util.spec_from_file_location("kernel_baseline", path, submodule_search_locations=search)
     if spec is None or spec.loader is None:
         raise SystemExit(f"kernel_ab: cannot load {path}")

@@ -3,13 +3,13 @@
 what it bounds the improvement's gain to (issue 14).
 
 **The bound** (:func:`one_transfer_bound`): every grasp configuration at the object's start
-(:func:`clew_ros.core.lattice.grasp_configurations`, ``--approaches`` tip angles a grasp point, both elbows)
+(:func:`clew_ros.planar.lattice.grasp_configurations`, ``--approaches`` tip angles a grasp point, both elbows)
 that is valid with the object resting and held; from each, every configuration holding the object on the goal
 position at ``--goal-angles`` angles evenly spaced within the goal's angle tolerance (both elbows). The transit
 from the start and the transfer to the goal are each the shortest path on a lattice of step ``--step``
-(:func:`clew_ros.core.lattice.lattice_route`, with the improver's margin, unlimited work), candidates in the
+(:func:`clew_ros.planar.lattice.lattice_route`, with the improver's margin, unlimited work), candidates in the
 order of their straight joint distance, any that cannot beat the best found skipped. The plan is validated at
-0.002 rad (:func:`clew_ros.core.plan.validate_plan`). It is a plan, so an upper bound on the shortest
+0.002 rad (:func:`clew_ros.planar.plan.validate_plan`). It is a plan, so an upper bound on the shortest
 one-transfer plan: the goal position's tolerance, other approaches and paths off the lattice could shorten it.
 
 **The report**: per world, the bound's travel, the time it took and the work units its routings spent (the
@@ -30,17 +30,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from benchmarks.reference import load_worlds, plan_segment, planner_runs, succeeded_plan
-from clew_ros.core.continuous import ContinuousSettings, straight_moves_clear
-from clew_ros.core.improve import ImproveSettings, check_work, joint_travel
-from clew_ros.core.kinematics import compose, relative
-from clew_ros.core.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
-from clew_ros.core.plan import Plan, validate_plan
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.world import World
+from clew_ros.planar.continuous import ContinuousSettings, straight_moves_clear
+from clew_ros.planar.improve import ImproveSettings, check_work, joint_travel
+from clew_ros.planar.kinematics import compose, relative
+from clew_ros.planar.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
+from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.world import World
 
 
 class _Unlimited:
-    """A :class:`clew_ros.core.lattice.LatticeBudget` that never stops and counts as the improver's does."""
+    """A :class:`clew_ros.planar.lattice.LatticeBudget` that never stops and counts as the improver's does."""
 
     def __init__(self, world: World) -> None:
         self.check_work = check_work(world)
@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.step <= 0 or args.approaches < 1 or args.goal_angles < 1 or args.seeds < 1:
         print("benchmarks.one_transfer_bound: --step > 0, --approaches, --goal-angles, --seeds >= 1", file=sys.stderr)
         return 2
-    from clew_ros.core.kernel import warm_up
+    from clew_ros.planar.kernel import warm_up
 
     warm_up()
     print(HEADER, flush=True)

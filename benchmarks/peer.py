@@ -9,7 +9,7 @@ limits, seeded, kept when both ends are valid and at least 1 rad apart).
 
 * **OMPL** (PyPI ``ompl`` 2.x, nanobind bindings): ``RealVectorStateSpace``
   bounded by the joint limits, ``RRTConnect`` with its default range. The
-  validity test is the project's own, :func:`~clew_ros.core.collision.is_valid`
+  validity test is the project's own, :func:`~clew_ros.planar.collision.is_valid`
   (:class:`ProjectValidity`): the state validity checker calls it on one
   configuration, and a Python :class:`ompl.base.MotionValidator` samples each
   straight motion every ``step_rad`` (joint-space L2, so per joint too) and
@@ -33,7 +33,7 @@ limits, seeded, kept when both ends are valid and at least 1 rad apart).
   it, until success or the time limit. Success: the end is within 1e-3 rad
   (L2) of ``q_goal``.
 
-Both planners' paths are checked afterwards with :func:`~clew_ros.core.collision.is_valid`
+Both planners' paths are checked afterwards with :func:`~clew_ros.planar.collision.is_valid`
 at 0.002 rad per joint (the contract's validator step).
 """
 
@@ -50,11 +50,13 @@ import numpy as np
 
 from benchmarks.throughput import PerStateChecker, random_configurations
 from benchmarks.worlds import all_worlds, select
-from clew_ros.core.collision import check_start_and_goal, is_valid
 from clew_ros.core.genetic import minimize
-from clew_ros.core.search import PlanningContext, SearchJob, local_search
+from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import PlannerSettings, Termination
-from clew_ros.core.world import World, world_from_parameters
+from clew_ros.core.space import PlanningContext
+from clew_ros.planar.collision import check_start_and_goal, is_valid
+from clew_ros.planar.space import PlanarSpace
+from clew_ros.planar.world import World, world_from_parameters
 
 __all__ = ["ompl_unavailable_reason", "path_is_valid", "project_transit", "solve_ompl", "transit_problems"]
 
@@ -103,7 +105,7 @@ def ompl_unavailable_reason() -> str | None:
 
 
 class ProjectValidity:
-    """The project's validity test (:func:`clew_ros.core.collision.is_valid`) as OMPL's checkers see it.
+    """The project's validity test (:func:`clew_ros.planar.collision.is_valid`) as OMPL's checkers see it.
 
     ``state(q)``: one configuration (a batch of 1). ``motion(a, b)``: the
     straight segment sampled every ``step_rad`` (joint-space L2, both ends
@@ -220,7 +222,7 @@ def project_transit(
     """The Ariadne's Clew algorithm on one transit problem (see the module docstring)."""
     settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s, threads=1)  # one core, as OMPL
     termination = Termination(time_limit_s)
-    ctx = PlanningContext(world, settings, np.random.default_rng(seed), termination)
+    ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng(seed), termination)
     mode = {"object_poses": np.asarray(world.object.initial, float)[None]}
     n = world.robot.dof
     k = settings.manhattan_order

@@ -16,11 +16,11 @@ import sys
 from pathlib import Path
 
 from benchmarks.worlds import all_worlds, select
-from clew_ros.core.clew import plan
-from clew_ros.core.collision import check_start_and_goal
-from clew_ros.core.kernel import warm_up
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.world import world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.kernel import warm_up
+from clew_ros.planar.space import plan
+from clew_ros.planar.world import world_from_parameters
 
 
 def _table(profile: cProfile.Profile, key: str, top: int, root: str) -> str:

@@ -31,14 +31,14 @@ a transfer, an exact goal configuration: each joins the lattice at a corner of i
 ``h`` of travel, and back): ``8 h`` for one transfer, ``12 h`` (0.24 rad at 0.02 rad) with one
 regrasp; plus what a release restricted to the subsampled nodes costs; passages
 narrower than about ``h`` in joint space (or cleared by less than the motion bound of an edge)
-are not found. Every plan it returns is checked with :func:`clew_ros.core.plan.validate_plan`
+are not found. Every plan it returns is checked with :func:`clew_ros.planar.plan.validate_plan`
 (its lattice paths are listed node by node, so the validator checks exactly the configurations
 the lattice did, or edges cleared continuously).
 
 **The report** (``main``): per world (``config/figure1.yaml``, ``config/single_transfer.yaml``, the
 ``joints_2`` family world, and any world names or YAML files given), the reference's travel and
 transfers next to the planner's over seeds ``0..N-1``, each run exactly as ``clew_plan WORLD
---seed S`` plans (:func:`clew_ros.core.clew.plan`, then :func:`clew_ros.core.plan.checked_plan`):
+--seed S`` plans (:func:`clew_ros.core.clew.plan`, then :func:`clew_ros.planar.plan.checked_plan`):
 median travel ratio planner / reference, the share of runs with transfers at most the
 reference's + 1, and the first plan's travel against the improved one's. "capped" after the
 reference's figure: a cap cut its search short (the plan is the best it found).
@@ -60,11 +60,11 @@ from typing import Any
 import numpy as np
 
 from benchmarks.joint_grid import Graph, Lattice, Mode, shortest_paths, trace
-from clew_ros.core.collision import check_start_and_goal, packed_world
-from clew_ros.core.kernel import clearly_valid
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
-from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
-from clew_ros.core.world import World
+from clew_ros.planar.collision import check_start_and_goal, packed_world
+from clew_ros.planar.kernel import clearly_valid
+from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
+from clew_ros.planar.plan import Plan, PlanSegment, replay, validate_plan
+from clew_ros.planar.world import World
 
 __all__ = ["DEFAULT_WORLDS", "ReferenceResult", "ReferenceSettings", "main", "reference_plan"]
 
@@ -527,7 +527,7 @@ def reference_plan(world: World, settings: ReferenceSettings | None = None) -> R
 def load_worlds(names: list[str]) -> list[tuple[World, dict[str, Any]]]:
     """Worlds by benchmark name (:mod:`benchmarks.worlds`) or parameter file path, with their parameters."""
     from benchmarks.worlds import all_worlds, select
-    from clew_ros.core.world import read_parameter_file, world_from_parameters
+    from clew_ros.planar.world import read_parameter_file, world_from_parameters
 
     worlds = []
     known = None
@@ -576,9 +576,9 @@ class PlannerRuns:
 
 def planner_runs(world: World, parameters: dict[str, Any], seeds: int, **overrides: Any) -> PlannerRuns:
     """Plan ``world`` with seeds ``0..seeds-1`` exactly as ``clew_plan WORLD --seed S`` does."""
-    from clew_ros.core.clew import plan
-    from clew_ros.core.plan import checked_plan
     from clew_ros.core.settings import PlannerSettings, Termination
+    from clew_ros.planar.plan import checked_plan
+    from clew_ros.planar.space import plan
 
     runs = PlannerRuns(seeds, [], [], [], [], 0)
     for seed in range(seeds):
@@ -649,7 +649,7 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError) as error:
         print(f"benchmarks.reference: {error}", file=sys.stderr)
         return 2
-    from clew_ros.core.kernel import warm_up
+    from clew_ros.planar.kernel import warm_up
 
     warm_up()
     settings = ReferenceSettings(step_rad=args.step, max_transfers=args.max_transfers)

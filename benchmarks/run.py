@@ -500,10 +500,10 @@ def _throughput_section(throughput: dict) -> list[str]:
             "",
             (
                 "Random configurations within the joint limits, object at its start pose. *batched*: "
-                "`clew_ros.core.collision.is_valid` on chunks of 10,000 configurations; *loop*: "
+                "`clew_ros.planar.collision.is_valid` on chunks of 10,000 configurations; *loop*: "
                 "`benchmarks.throughput.PerStateChecker`, a Python loop over the configurations testing "
                 "each link against prepared shapely geometry; *batch of 1*: `is_valid` called once per "
-                "configuration; *free intervals*: `clew_ros.core.manhattan.free_intervals`, the test the "
+                "configuration; *free intervals*: `clew_ros.planar.manhattan.free_intervals`, the test the "
                 "planner actually uses, per configuration and joint, called for one joint of a batch of 24 "
                 "or 1024 configurations; *decoded 24*: the same intervals as the planner computes them, "
                 "a population of 24 decoding its Manhattan paths of order 2 (24 x 2 x n intervals) in one "

@@ -2,7 +2,7 @@
 
 ``python -m benchmarks.throughput WORLD [--configs N]`` prints one JSON object:
 
-* ``batched``: :func:`clew_ros.core.collision.is_valid` on chunks of random
+* ``batched``: :func:`clew_ros.planar.collision.is_valid` on chunks of random
   configurations (shapely 2 ufuncs on arrays), configurations per second;
 * ``batch1``: the same function called once per configuration;
 * ``valid_transfer``: ``is_valid`` on the valid configurations among them
@@ -13,7 +13,7 @@
   prepared union of the obstacles, the object shrunk by the grasp tolerance,
   the bounds and the non-adjacent links); ``agree`` counts configurations on
   which both answer the same (all of them, or the benchmark is wrong);
-* ``intervals``: :func:`clew_ros.core.manhattan.free_intervals`, the test the
+* ``intervals``: :func:`clew_ros.planar.manhattan.free_intervals`, the test the
   planner actually uses: intervals per second for batches of 24 (the GA
   population) and 1024 valid configurations, transit (object at rest) and
   transfer (object held at grasp 0).
@@ -42,10 +42,10 @@ import shapely
 import shapely.affinity
 
 from benchmarks.worlds import all_worlds, select
-from clew_ros.core.collision import check_start_and_goal, is_valid
-from clew_ros.core.kinematics import compose, tip_poses, transform_points
-from clew_ros.core.manhattan import free_intervals, run_manhattan
-from clew_ros.core.world import World, world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal, is_valid
+from clew_ros.planar.kinematics import compose, tip_poses, transform_points
+from clew_ros.planar.manhattan import free_intervals, run_manhattan
+from clew_ros.planar.world import World, world_from_parameters
 
 __all__ = ["PerStateChecker", "measure", "random_configurations"]
 
@@ -55,7 +55,7 @@ class PerStateChecker:
 
     The object rests at ``object_pose`` (transit), so its placement is tested
     and its shrunk outline prepared once. Same semantics as
-    :func:`clew_ros.core.collision.is_valid`: touching counts as collision,
+    :func:`clew_ros.planar.collision.is_valid`: touching counts as collision,
     bounds are closed, links may touch the object but not enter it shrunk by
     ``grasp_tolerance``, non-adjacent links must not meet.
     """

@@ -1,13 +1,12 @@
 """Settings of the planner's modules compared on the same worlds, in one run: ``python -m benchmarks.variants
---variant NAME=module.CONSTANT:VALUE[,...] [--variant ...] [--families A,B] [--config-worlds figure1,...]
+--variant NAME=stage.FIELD:VALUE[,...] [--variant ...] [--families A,B] [--config-worlds figure1,...]
 [--worlds 4] [--seeds 6] [--time-limit 10] [--jobs 2] [--out DIR]``.
 
-A variant sets module constants of ``clew_ros.core`` (for example ``search.JOIN_RADIUS:0``) in the worker processes
-before they plan, or fields of the improvement's settings (``improve.FIELD``, a field of
-:class:`clew_ros.core.improve.ImproveSettings`, for example ``improve.work_per_second:0``: the planner's improvement
-is then given a copy with those fields replaced); ``NAME=`` alone is the code as it is. Only a constant read from
-its module when it is used changes anything: not one another module imported by name, one bound as a default
-argument, nor one the compiled kernel read when it was compiled. Every variant plans every (world, seed): the
+A variant replaces fields of the planner's tuning, :class:`clew_ros.planar.space.PlanarTuning` (``stage.FIELD``:
+``search`` :class:`~clew_ros.core.settings.SearchSettings`, ``many`` :class:`~clew_ros.core.settings.ManyJoints`,
+``reach`` :class:`~clew_ros.planar.reach.ReachSettings`, ``improve`` :class:`~clew_ros.planar.improve.ImproveSettings`;
+for example ``search.join_radius:0`` or ``improve.work_per_second:0``): the workers plan with that copy, nothing
+else changes. ``NAME=`` alone is the code as it is. Every variant plans every (world, seed): the
 generated families' worlds (:mod:`benchmarks.generated`) and the benchmark worlds named, in worker processes of
 their own (``--jobs`` at a time, one kernel thread each). The figure compared is the time to the first plan
 (``PlanResult.first_plan_s``: what a change of SEARCH or EXPLORE moves; a failed run counts at the limit). Per
@@ -21,8 +20,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import functools
-import importlib
 import json
 import math
 import multiprocessing
@@ -32,7 +29,6 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
-from unittest import mock
 
 from benchmarks.generated import GeneratedBenchWorld, build_world, solvable_families
 from benchmarks.report import command_line, header, write_report
@@ -45,7 +41,7 @@ CONFIG_WORLDS = "figure1,obstacles_8,obstacles_32,joints_10,arm5_regrasp"
 
 def bench_world(name: str, directory: str) -> GeneratedBenchWorld:
     """The benchmark world ``name`` written into ``directory``, as a family of one world."""
-    from clew_ros.core.world import load_world
+    from clew_ros.planar.world import load_world
 
     matches = select(all_worlds(), name)
     if len(matches) != 1:
@@ -55,59 +51,66 @@ def bench_world(name: str, directory: str) -> GeneratedBenchWorld:
     return GeneratedBenchWorld(name, 0, str(path), True, world.robot.dof, len(world.obstacles), None, None)
 
 
+def _stages() -> dict[str, type]:
+    """The tuning's stages by name: the dataclasses of :class:`~clew_ros.planar.space.PlanarTuning`'s fields."""
+    from clew_ros.planar.space import PlanarTuning
+
+    return {f.name: type(getattr(PlanarTuning(), f.name)) for f in dataclasses.fields(PlanarTuning)}
+
+
 def parse_variant(text: str) -> tuple[str, dict[str, Any]]:
-    """``NAME=module.CONSTANT:VALUE,...`` → (name, {"module.CONSTANT": value}); values are Python literals."""
+    """``NAME=stage.FIELD:VALUE,...`` → (name, {"stage.FIELD": value}); values are JSON literals."""
     name, _, body = text.partition("=")
     if not name:
-        raise ValueError(f"--variant {text!r}: expected NAME=module.CONSTANT:VALUE[,...]")
+        raise ValueError(f"--variant {text!r}: expected NAME=stage.FIELD:VALUE[,...]")
+    stages = _stages()
     settings: dict[str, Any] = {}
     for item in filter(None, body.split(",")):
         key, sep, value = item.partition(":")
-        module, dot, constant = key.partition(".")
-        if not sep or not dot or not constant:
-            raise ValueError(f"--variant {text!r}: {item!r} is not module.CONSTANT:VALUE")
-        if module == "improve":
-            from clew_ros.core.improve import ImproveSettings
-
-            if constant not in {f.name for f in dataclasses.fields(ImproveSettings)}:
-                raise ValueError(f"--variant {text!r}: clew_ros.core.improve.ImproveSettings has no {constant}")
-            settings[key] = json.loads(value)
-            continue
-        target = importlib.import_module(f"clew_ros.core.{module}")
-        if not hasattr(target, constant):
-            raise ValueError(f"--variant {text!r}: clew_ros.core.{module} has no {constant}")
+        stage, dot, name_ = key.partition(".")
+        if not sep or not dot or not name_:
+            raise ValueError(f"--variant {text!r}: {item!r} is not stage.FIELD:VALUE")
+        if stage not in stages:
+            raise ValueError(f"--variant {text!r}: no stage {stage!r} (expected one of {', '.join(stages)})")
+        if name_ not in {f.name for f in dataclasses.fields(stages[stage])}:
+            raise ValueError(f"--variant {text!r}: {stages[stage].__name__} has no {name_}")
         settings[key] = json.loads(value)
     return name, settings
 
 
-def _apply(settings: dict[str, Any]) -> None:
-    """Set the variant's constants and give the planner's improvement the variant's copy of its settings (a
-    worker process's initializer), then load the compiled kernel."""
-    from clew_ros.core import clew
-    from clew_ros.core.improve import ImproveSettings, improve
+def tuning_of(settings: dict[str, Any]) -> Any:
+    """The :class:`~clew_ros.planar.space.PlanarTuning` with the variant's fields replaced."""
+    from clew_ros.planar.space import PlanarTuning
 
-    improving: dict[str, Any] = {}
+    tuning = PlanarTuning()
+    by_stage: dict[str, dict[str, Any]] = {}
     for key, value in settings.items():
-        module, constant = key.split(".")
-        if module == "improve":
-            improving[constant] = value
-        else:
-            setattr(importlib.import_module(f"clew_ros.core.{module}"), constant, value)
-    if improving:  # clew.plan calls improve by its name in clew
-        chosen = dataclasses.replace(ImproveSettings(), **improving)
-        mock.patch.object(clew, "improve", functools.partial(improve, settings=chosen)).start()
-    from clew_ros.core.kernel import warm_up
+        stage, field = key.split(".")
+        by_stage.setdefault(stage, {})[field] = value
+    changed = {stage: dataclasses.replace(getattr(tuning, stage), **fields) for stage, fields in by_stage.items()}
+    return dataclasses.replace(tuning, **changed)
 
+
+#: The tuning a worker process plans with (set by its initializer, :func:`_apply`).
+_TUNING: list[Any] = []
+
+
+def _apply(settings: dict[str, Any]) -> None:
+    """A worker process's initializer: the variant's tuning kept for its plans, then the compiled kernel loaded."""
+    from clew_ros.planar.kernel import warm_up
+
+    _TUNING[:] = [tuning_of(settings)]
     warm_up()
 
 
 def _plan(job: tuple[str, str, int, float]) -> dict[str, Any]:
-    from clew_ros.core.clew import plan
     from clew_ros.core.settings import PlannerSettings
-    from clew_ros.core.world import load_world
+    from clew_ros.planar.space import plan
+    from clew_ros.planar.world import load_world
 
     family, path, seed, limit = job
-    result = plan(load_world(path), PlannerSettings(seed=seed, time_limit=limit, threads=1))
+    tuning = _TUNING[0] if _TUNING else None
+    result = plan(load_world(path), PlannerSettings(seed=seed, time_limit=limit, threads=1), tuning=tuning)
     first = result.first_plan_s if result.success and result.first_plan_s is not None else limit
     return {
         "family": family,

@@ -16,12 +16,12 @@ import sys
 import time
 
 from benchmarks.worlds import all_worlds, select
-from clew_ros.core.clew import plan
-from clew_ros.core.collision import check_start_and_goal
-from clew_ros.core.kernel import warm_up
-from clew_ros.core.plan import checked_plan
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.world import world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.kernel import warm_up
+from clew_ros.planar.plan import checked_plan
+from clew_ros.planar.space import plan
+from clew_ros.planar.world import world_from_parameters
 
 
 def _maxrss_mb() -> float:

@@ -12,7 +12,7 @@
   clear of the object at its start and goal placements, 10 cm clear of the
   other obstacles and of the base's 0.45 m disc; so the boxes of a smaller
   world are the first boxes of a larger one. Start and goal validity is
-  checked by :func:`clew_ros.core.collision.check_start_and_goal`; that a world
+  checked by :func:`clew_ros.planar.collision.check_start_and_goal`; that a world
   is solvable is not proven, the success rate shows it.
 
 Worlds are built in memory; :func:`write_world` writes one as a ROS 2
@@ -31,8 +31,8 @@ import numpy as np
 import shapely
 import yaml
 
-from clew_ros.core.collision import check_start_and_goal
-from clew_ros.core.world import read_parameter_file, world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.world import read_parameter_file, world_from_parameters
 
 __all__ = [
     "CONFIG_DIR",
@@ -125,7 +125,7 @@ def _box(x: float, y: float) -> list[float]:
 def _scattered_boxes(parameters: dict, count: int) -> list[list[float]]:
     """``count`` boxes, the first ones of one fixed sequence (see the module docstring)."""
     world = check_start_and_goal(world_from_parameters(parameters))
-    from clew_ros.core.kinematics import joint_positions, transform_points
+    from clew_ros.planar.kinematics import joint_positions, transform_points
 
     arm = shapely.LineString(joint_positions(world.robot, world.robot.initial[None])[0])
     placements = [

@@ -117,35 +117,36 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
 
 def test_the_graph_is_read() -> None:
     graph = import_graph()
-    assert "clew_ros.core.collision" in graph["clew_ros.core.clew"]
-    assert "clew_ros.core.world" in graph["clew_ros.core.collision"]
-    assert "clew_ros.core.kernel" in graph["clew_ros.core.collision"]
+    assert "clew_ros.core.explore" in graph["clew_ros.core.clew"]
+    assert "clew_ros.core.clew" in graph["clew_ros.planar.space"]
+    assert "clew_ros.planar.world" in graph["clew_ros.planar.collision"]
+    assert "clew_ros.planar.kernel" in graph["clew_ros.planar.collision"]
 
 
 def test_every_kind_of_import_is_an_edge(tmp_path: Path) -> None:
     source = tmp_path / "m.py"
     source.write_text(
-        "import clew_ros.core.kernel\n"
-        "from clew_ros.core import geometry\n"
-        "from clew_ros.core.world import World\n"
-        "from . import tree\n"
+        "import clew_ros.planar.kernel\n"
+        "from clew_ros.planar import geometry\n"
+        "from clew_ros.planar.world import World\n"
+        "from . import search\n"
         "from ..motion import playback\n"
         "import numpy.linalg\n"
         "def late():\n"
-        "    from clew_ros.core.collision import is_valid\n"
+        "    from clew_ros.planar.collision import is_valid\n"
         "    if True:\n"
-        "        import clew_ros.core.plan as plan\n",
+        "        import clew_ros.planar.plan as plan\n",
         encoding="utf-8",
     )
-    found = imports_of("clew_ros.core.m", source, module_names())
+    found = imports_of("clew_ros.planar.m", source, module_names())
     assert found == {
-        "clew_ros.core.kernel",
-        "clew_ros.core.geometry",
-        "clew_ros.core.world",
-        "clew_ros.core.tree",
+        "clew_ros.planar.kernel",
+        "clew_ros.planar.geometry",
+        "clew_ros.planar.world",
+        "clew_ros.planar.search",
         "clew_ros.motion.playback",
-        "clew_ros.core.collision",
-        "clew_ros.core.plan",
+        "clew_ros.planar.collision",
+        "clew_ros.planar.plan",
     }
 
 
@@ -160,7 +161,7 @@ def test_no_import_cycle() -> None:
 
 
 def test_world_parsing_does_not_import_collision_checks() -> None:
-    assert "clew_ros.core.collision" not in import_graph()["clew_ros.core.world"]
+    assert "clew_ros.planar.collision" not in import_graph()["clew_ros.planar.world"]
 
 
 def package_of(module: str) -> str | None:

@@ -161,7 +161,7 @@ class LocalPool:
         return f"local pool of {self.workers} process{'es' if self.workers > 1 else ''}"
 
     def start(self) -> None:
-        from clew_ros.core.kernel import warm_up
+        from clew_ros.planar.kernel import warm_up
 
         warm_up()  # compiled here first (or loaded): the workers then load numba's cache instead of compiling
         for _ in range(self.workers):

@@ -27,7 +27,7 @@ from multiprocessing.connection import Connection
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from clew_ros.core.plan import Plan
+    from clew_ros.planar.plan import Plan
 
 __all__ = ["JobFunction", "JobOutcome", "JobSpec", "prepare", "run_job", "run_prepared", "serve"]
 
@@ -108,7 +108,7 @@ def run_job(spec: JobSpec) -> JobOutcome:
     without a recording (``recording`` ``None``: the driver tries once more, else the job is redone by
     the next run); its time counts in the job's time-out (time limit + grace).
     """
-    from clew_ros.core.offline import Problem, plan_problem, problem_from_parameters
+    from clew_ros.planar.offline import Problem, plan_problem, problem_from_parameters
 
     started, started_ns = time.monotonic(), time.time_ns()
     problem = problem_from_parameters(
@@ -129,7 +129,7 @@ def run_job(spec: JobSpec) -> JobOutcome:
 
 def prepare() -> None:
     """Ready this process for jobs: compile the kernel, or load numba's cache (once per process)."""
-    from clew_ros.core.kernel import warm_up
+    from clew_ros.planar.kernel import warm_up
 
     warm_up()
 

@@ -58,7 +58,7 @@ from clew_ros.client.run import (
 )
 from clew_ros.core.errors import ClewError
 from clew_ros.core.settings import Outcome
-from clew_ros.core.world import World, world_from_parameters
+from clew_ros.planar.world import World, world_from_parameters
 from clew_ros.recording.trajectory import trajectory_to_plan
 from clew_ros.ros import messages
 from clew_ros.ros.qos import EVENTS_QOS, GOAL_QOS, LATCHED_QOS, STREAM_QOS

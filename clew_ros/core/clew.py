@@ -10,25 +10,13 @@ from typing import Any
 
 import numpy as np
 
-from clew_ros.core.collision import is_placement_valid, is_valid
 from clew_ros.core.explore import Explorer
-from clew_ros.core.improve import Improvement, improve
-from clew_ros.core.passage import passage_refusal
-from clew_ros.core.reach import approach_cell, approach_cells, carry_cells, goal_approach_core, nearest_grasp_distance
-from clew_ros.core.search import PlanningContext, goal_error, search_transfer
-from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
+from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, SearchSettings, Termination
+from clew_ros.core.space import Improvement, PlanningContext, RegraspAims, Space
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
-from clew_ros.core.world import World
 
 __all__ = ["PlanResult", "Progress", "plan"]
 
-#: When SEARCH from a landmark fails, the placement its closest transfer reached
-#: (put down there) becomes a landmark and SEARCH runs again from it, at most
-#: this many times in a row: a regrasp where the carried object got stuck.
-SEARCH_CHAIN = 2
-#: After an EXPLORE round without a transit the holding configurations' sample doubles, up to this many
-#: samples x joints (768 samples for 7 joints, 53 for 100).
-HOLD_SAMPLE_JOINTS = 5376
 #: The improvement's generator is seeded with (planner.seed, this): its own stream of the same seed.
 IMPROVE_STREAM = 14
 
@@ -63,28 +51,34 @@ class PlanResult:
 
 
 def plan(
-    world: World,
+    space: Space,
     settings: PlannerSettings | None = None,
     *,
     goal: np.ndarray | None = None,
     termination: Termination | None = None,
     progress: Callable[[Progress], None] | None = None,
+    search: SearchSettings | None = None,
+    many: ManyJoints | None = None,
 ) -> PlanResult:
-    """Plan a manipulation path from the world's start to ``goal`` (default ``world.object.goal``).
+    """Plan a manipulation path in ``space`` from its start to ``goal`` (default ``space.goal``).
 
     Never raises for planning failures: the outcome says what happened. The
     run stops on success, when EXPLORE's new landmark is closer than
     ``settings.resolution`` to the others, or when ``termination`` says so.
-    ``settings`` defaults to :class:`PlannerSettings` ().
+    ``settings`` defaults to :class:`PlannerSettings` (), ``search`` (SEARCH's
+    own tuning) to :class:`SearchSettings` (), ``many`` (arms of many joints)
+    to :class:`ManyJoints` ().
     """
     settings = settings or PlannerSettings()
-    many = ManyJoints()
-    if world.robot.dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
+    search = search or SearchSettings()
+    many = many or ManyJoints()
+    if space.dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
         settings = dataclasses.replace(settings, manhattan_order=many.manhattan_order)  # (ManyJoints)
-    goal = np.asarray(world.object.goal if goal is None else goal, dtype=float)
+    goal = np.asarray(space.goal if goal is None else goal, dtype=float)
     termination = termination or Termination(settings.time_limit)
-    ctx = PlanningContext(world, settings, np.random.default_rng(settings.seed), termination)
-    tree = LandmarkTree(world.robot.initial, world.object.initial)
+    rng = np.random.default_rng(settings.seed)
+    ctx = PlanningContext(space, settings, rng, termination, hold_samples=search.hold_samples, many=many, search=search)
+    tree = LandmarkTree(space.initial_joints, space.initial_object_pose)
 
     def finish(
         outcome: Outcome, message: str, segments: list[Segment] | None = None, final_pose: np.ndarray | None = None
@@ -98,13 +92,13 @@ def plan(
         }
         return PlanResult(outcome, message, segments or [], final_pose, tree, stats)
 
-    quick = _quick_refusal(world, goal)
+    quick = space.quick_refusal(goal)
     if quick is not None:
         return finish(*quick)
     best = np.inf
     try:
         explorer = Explorer(ctx, tree)
-        cores = GoalCores(world, goal)
+        aims = space.regrasp_aims(goal)
         tried = _Tried()
         while True:
             reason = termination.reason()
@@ -115,17 +109,17 @@ def plan(
                 # No transit from any landmark: no proof of anything (the transit search is local and
                 # stochastic, and the holding configurations a sample), so never NO_PATH_AT_RESOLUTION:
                 # the failed pairs are tried again, with twice the holding configurations (their inverse
-                # kinematics is not interruptible: at most HOLD_SAMPLE_JOINTS samples x joints, a few
-                # tens of milliseconds) and stalled transits joined to them, until the time limit.
+                # kinematics is not interruptible: at most SearchSettings.hold_sample_joints samples x joints,
+                # a few tens of milliseconds) and stalled transits joined to them, until the time limit.
                 tried.idle_rounds += 1
                 explorer.forget_failures()
-                most = HOLD_SAMPLE_JOINTS // world.robot.dof
+                most = search.hold_sample_joints // space.dof
                 ctx.hold_samples = max(ctx.hold_samples, min(2 * ctx.hold_samples, most))
                 ctx.transit_joins = True
                 continue
             ctx.transit_joins = False  # transits found: joins only while EXPLORE finds none (elsewhere they cost more)
             new = tree.add(**exploration.fields)
-            landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, cores=cores)
+            landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims)
             searched_s = termination.elapsed  # when SEARCH ended: the first plan's time if it found one
             best = min(best, closest)
             if progress is not None:
@@ -157,20 +151,6 @@ def plan(
         return finish(Outcome.INTERNAL_ERROR, f"internal error: {error!r}\n{traceback.format_exc(limit=4)}")
 
 
-class GoalCores:
-    """:func:`~clew_ros.core.reach.goal_approach_core` of each grasp at the run's goal, computed when first asked."""
-
-    def __init__(self, world: World, goal: np.ndarray) -> None:
-        self._world = world
-        self._goal = goal
-        self._cores: dict[int, np.ndarray | None] = {}
-
-    def __getitem__(self, grasp: int) -> np.ndarray | None:
-        if grasp not in self._cores:
-            self._cores[grasp] = goal_approach_core(self._world, self._goal, grasp)
-        return self._cores[grasp]
-
-
 @dataclass
 class _Found:
     """SEARCH's answer from one landmark: the reaching path, or on failure the attempt that came closest."""
@@ -191,16 +171,16 @@ def _search_chain(
     landmark: Landmark,
     goal: np.ndarray,
     *,
-    cores: GoalCores,
+    aims: RegraspAims,
 ) -> tuple[Landmark, _Found, float]:
     """SEARCH from a new landmark; while its closest attempt gets nearer the goal, that attempt becomes a
-    landmark and SEARCH goes on from it (at most :data:`SEARCH_CHAIN` times).
+    landmark and SEARCH goes on from it (at most ``SearchSettings.search_chain`` times).
 
     Returns the last landmark, SEARCH's answer from it and the closest goal distance reached (m).
     """
-    found = _search(ctx, explorer, landmark, goal, cores=cores)
+    found = _search(ctx, explorer, landmark, goal, aims=aims)
     closest = found.distance
-    for _ in range(SEARCH_CHAIN):
+    for _ in range(ctx.search.search_chain):
         if found.success or not _worth_chaining(ctx, landmark, found, goal) or ctx.termination():
             break
         assert found.transfer is not None  # worth chaining: SEARCH's closest attempt moved the object
@@ -213,7 +193,7 @@ def _search_chain(
             transit=found.transit,
             transfer=found.transfer,
         )
-        found = _search(ctx, explorer, landmark, goal, cores=cores)
+        found = _search(ctx, explorer, landmark, goal, aims=aims)
         closest = min(closest, found.distance)
     return landmark, found, closest
 
@@ -224,24 +204,24 @@ def _search(
     landmark: Landmark,
     goal: np.ndarray,
     *,
-    cores: GoalCores,
+    aims: RegraspAims,
 ) -> _Found:
-    """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp; then, if that grasp is held outside the
-    goal's core (:func:`~clew_ros.core.reach.goal_approach_core`), with the same grasp taken again in place
-    with an approach in the core; then with every other grasp reachable by a transit at its placement (a
-    regrasp in place, aimed at the core where it can be), until one reaches the goal."""
+    """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp; then, if the space says so
+    (:meth:`~clew_ros.core.space.RegraspAims.retake`: planar, the grasp is held outside the goal's approach
+    core), with the same grasp taken again in place; then with every other grasp reachable by a transit at
+    its placement (a regrasp in place, aimed as :meth:`~clew_ros.core.space.RegraspAims.aim` says), until one
+    reaches the goal."""
     closest = _Found(False, np.inf)
     own = landmark.grasp
     assert own is not None  # SEARCH starts from landmarks holding a grasp
     own_rel = landmark.grasp_rel
     assert own_rel is not None
-    others = [g for g in ctx.rng.permutation(len(ctx.world.object.grasps)).tolist() if g != own]
+    others = [g for g in ctx.rng.permutation(ctx.space.grasp_count).tolist() if g != own]
 
     def tries() -> Iterator[tuple[int, bool]]:  # (grasp, regrasped in place), asked for while SEARCH fails
         yield own, False
-        own_core = cores[own]
-        if own_core is not None and not own_core[approach_cell(-own_rel[2], len(own_core))]:
-            yield own, True  # held outside the goal's core: the same grasp taken again, in the core
+        if aims.retake(own, own_rel):
+            yield own, True  # the same grasp taken again, aimed
         for other in others:
             yield other, True
 
@@ -250,13 +230,13 @@ def _search(
             break
         approach = None
         if regrasp:
-            approach = _aimed_approaches(ctx.world, landmark, grasp, goal, cores)
+            approach = aims.aim(landmark, grasp)
             if approach is None:
                 continue
         candidate = explorer.candidate(landmark.id, grasp, approach)
         if candidate is None:
             continue
-        result = search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
+        result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
         if result.success or result.distance < closest.distance:
             closest = _Found(
                 result.success,
@@ -272,49 +252,20 @@ def _search(
     return closest
 
 
-def _aimed_approaches(
-    world: World, landmark: Landmark, grasp: int, goal: np.ndarray, cores: GoalCores
-) -> np.ndarray | None:
-    """The approach cells a regrasp of ``grasp`` in place at ``landmark`` aims at: those of
-    :func:`_regrasp_approaches` in the goal's core, or all of them when none is (``None``: none at all, or,
-    for the landmark's own grasp, none in the core: it was just tried as it is held)."""
-    approach = _regrasp_approaches(world, landmark.object_pose, grasp, goal)
-    if not approach.any():
-        return None  # no approach angle holds this grasp both here and at the goal: spare the transit
-    core = cores[grasp]
-    if core is not None and (approach & core).any():
-        aimed: np.ndarray = approach & core
-        return aimed
-    return None if grasp == landmark.grasp else approach
-
-
-def _regrasp_approaches(world: World, object_pose: np.ndarray, grasp: int, goal: np.ndarray) -> np.ndarray:
-    """Approach cells that could hold ``grasp`` with the object at ``object_pose`` and at the goal (a
-    rigid grasp keeps its approach during the transfer): a regrasp in place can end at the goal only
-    with one of them."""
-    here = approach_cells(world, object_pose, grasp)
-    there = approach_cells(
-        world, goal, grasp, angle_spread=world.goal_angle_tolerance, position_slack=world.goal_tolerance
-    )
-    cells: np.ndarray = here & there & carry_cells(world, goal, grasp)
-    return cells
-
-
 def _worth_chaining(ctx: PlanningContext, landmark: Landmark, found: _Found, goal: np.ndarray) -> bool:
     """Whether SEARCH's closest attempt ended nearer the goal than ``landmark`` by more than the resolution."""
     if found.transfer is None or len(found.transfer) < 2 or not np.isfinite(found.distance):
         return False
-    here = float(np.linalg.norm(goal_error(ctx.world, landmark.object_pose[None], goal)[0]))
+    here = float(ctx.space.goal_distance(landmark.object_pose[None], goal)[0])
     return found.distance < here - ctx.settings.resolution
 
 
 def _improved(ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray) -> Improvement:
-    """The first plan improved within ``planner.improve_time`` (:mod:`clew_ros.core.improve`), drawing
-    from its own generator, seeded from ``planner.seed``."""
+    """The first plan improved within ``planner.improve_time`` (:meth:`~clew_ros.core.space.Space.improve`),
+    drawing from its own generator, seeded from ``planner.seed``."""
     rng = np.random.default_rng([ctx.settings.seed, IMPROVE_STREAM])
-    return improve(
-        PlanningContext(ctx.world, ctx.settings, rng, ctx.termination, ctx.counters), segments, object_pose, goal
-    )
+    own = dataclasses.replace(ctx, rng=rng, hold_samples=ctx.search.hold_samples, transit_joins=False)
+    return ctx.space.improve(own, segments, object_pose, goal)
 
 
 def _found_message(landmarks: int, better: Improvement, improve_time: float) -> str:
@@ -333,7 +284,7 @@ def _found_message(landmarks: int, better: Improvement, improve_time: float) -> 
 def _quality(better: Improvement) -> dict[str, Any]:
     """The plan's quality for its stats: joint travel (rad, sum over joints of the absolute motion) and
     transfers, of the returned plan and of the first one, and the improvement's work (deterministic); when the
-    final checks refused a better plan (a fault: :func:`clew_ros.core.improve.improve`), what they found."""
+    final checks refused a better plan (a fault of the space's improvement), what they found."""
     quality: dict[str, Any] = {
         "joint_travel_rad": round(better.travel, 6),
         "transfers": better.transfers,
@@ -366,24 +317,3 @@ def _stopped_message(reason: Outcome, settings: PlannerSettings, landmarks: int,
     if reason is Outcome.CANCELED:
         return f"canceled after {landmarks} landmarks; tried: {tried}"
     return f"time limit of {settings.time_limit} s reached after {landmarks} landmarks; no plan found; tried: {tried}"
-
-
-def _quick_refusal(world: World, goal: np.ndarray) -> tuple[Outcome, str] | None:
-    """Answers knowable at once: a colliding start or goal, a goal beyond reach, a proof that none exists."""
-    if not np.all(np.isfinite(goal)) or goal.shape != (3,):
-        return Outcome.INVALID_WORLD, "goal: expected three finite numbers (x, y, theta)"
-    if not is_placement_valid(world, goal[None])[0]:
-        return Outcome.GOAL_IN_COLLISION, f"goal placement {goal.tolist()} collides or leaves world.bounds"
-    if not is_valid(world, world.robot.initial[None], world.object.initial[None])[0]:
-        return Outcome.START_IN_COLLISION, "the start configuration is not valid"
-    nearest = nearest_grasp_distance(world, goal)
-    if nearest > world.robot.reach + world.grasp_tolerance:
-        message = (
-            f"goal placement out of reach: its nearest grasp is {nearest:.3f} m "
-            f"from the base, the arm reaches {world.robot.reach:.3f} m"
-        )
-        return Outcome.GOAL_OUT_OF_REACH, message
-    reason = passage_refusal(world, goal)
-    if reason is not None:
-        return Outcome.NO_PATH_AT_RESOLUTION, reason
-    return None

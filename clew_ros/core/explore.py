@@ -22,9 +22,8 @@ import numpy as np
 
 from clew_ros.core.genetic import minimize
 from clew_ros.core.manhattan import ManhattanPaths
-from clew_ros.core.reach import approach_cell
-from clew_ros.core.search import PlanningContext, search_transits
-from clew_ros.core.tree import Landmark, LandmarkTree, landmark_features
+from clew_ros.core.space import PlanningContext
+from clew_ros.core.tree import Landmark, LandmarkTree
 
 __all__ = ["Exploration", "Explorer"]
 
@@ -34,7 +33,7 @@ class _Candidate:
     parent: int
     grasp: int
     start: np.ndarray  # (n,) joints holding the grasp
-    grasp_rel: np.ndarray  # (3,)
+    grasp_rel: np.ndarray  # (p,) the object's pose in the tool's frame
     transit: np.ndarray | None  # None: the parent's grasp is kept
 
 
@@ -65,11 +64,11 @@ class Explorer:
         """The transits searched so far, by ``(landmark id, grasp)`` (``None``: none found), read only."""
         return MappingProxyType(self._transits)
 
-    def candidate(self, landmark_id: int, grasp: int, approach: np.ndarray | None = None) -> _Candidate | None:
+    def candidate(self, landmark_id: int, grasp: int, approach: Any | None = None) -> _Candidate | None:
         """The single manipulation path's transit part from a landmark to a grasp (cached).
 
-        With ``approach`` (allowed cells of the approach angle, SEARCH's
-        regrasp towards the goal) a cached transit, or the landmark's own
+        With ``approach`` (the space's aim of SEARCH's regrasp towards the
+        goal, :meth:`~clew_ros.core.space.RegraspAims.aim`) a cached transit, or the landmark's own
         grasp, is used only if its approach is allowed; otherwise a transit
         aiming at those cells is searched once per (landmark, grasp, cells), and
         kept for EXPLORE if the pair had no transit yet (never for the
@@ -81,7 +80,7 @@ class Explorer:
             own = self._transits.setdefault(
                 key, _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
             )
-            if approach is None or approach[approach_cell(-landmark.grasp_rel[2], len(approach))]:
+            if approach is None or self.ctx.space.approach_allows(approach, landmark.grasp_rel):
                 return own
             return self._aimed_transit(landmark, grasp, approach)  # the same grasp taken again, another approach
         if approach is None:
@@ -89,17 +88,16 @@ class Explorer:
                 self._transits[key] = self._transit(landmark, grasp, None)
             return self._transits[key]
         cached = self._transits.get(key)
-        # the last link's direction in the object frame is -grasp_rel[2]
-        if cached is not None and approach[approach_cell(-cached.grasp_rel[2], len(approach))]:
+        if cached is not None and self.ctx.space.approach_allows(approach, cached.grasp_rel):
             return cached
         found = self._aimed_transit(landmark, grasp, approach)
         if found is not None and cached is None:
             self._transits[key] = found
         return found
 
-    def _aimed_transit(self, landmark: Landmark, grasp: int, approach: np.ndarray) -> _Candidate | None:
-        """The transit from ``landmark`` to ``grasp`` aimed at the ``approach`` cells, searched once per cells."""
-        key = (landmark.id, grasp, np.packbits(approach).tobytes())
+    def _aimed_transit(self, landmark: Landmark, grasp: int, approach: Any) -> _Candidate | None:
+        """The transit from ``landmark`` to ``grasp`` aimed at ``approach``, searched once per approach."""
+        key = (landmark.id, grasp, np.packbits(np.asarray(approach)).tobytes())
         if key not in self._aimed:
             self._aimed[key] = self._transit(landmark, grasp, approach)
         return self._aimed[key]
@@ -109,7 +107,7 @@ class Explorer:
         stochastic: a transit that failed once may succeed with other draws)."""
         self._transits = {key: found for key, found in self._transits.items() if found is not None}
 
-    def _transit(self, landmark: Landmark, grasp: int, approach: np.ndarray | None) -> _Candidate | None:
+    def _transit(self, landmark: Landmark, grasp: int, approach: Any | None) -> _Candidate | None:
         return self._transits_to([(landmark, grasp)], approach)[0]
 
     def _search_transits(self, pairs: list[tuple[int, int]]) -> None:
@@ -119,10 +117,10 @@ class Explorer:
         found = self._transits_to([(self.tree[i], g) for i, g in pairs], None)
         self._transits.update(zip(pairs, found, strict=True))
 
-    def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: np.ndarray | None) -> list[_Candidate | None]:
+    def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: Any | None) -> list[_Candidate | None]:
         """SEARCH_TRANSIT from each landmark to its grasp, all at once: the candidates, None where it failed."""
         self.transit_searches += len(pairs)
-        results = search_transits(
+        results = self.ctx.space.search_transits(
             self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach) for landmark, grasp in pairs]
         )
         return [
@@ -135,8 +133,8 @@ class Explorer:
     def explore(self) -> Exploration | None:
         """Place one new landmark; ``None`` when no candidate transit succeeded."""
         ctx = self.ctx
-        world = ctx.world
-        grasps = len(world.object.grasps)
+        space = ctx.space
+        grasps = space.grasp_count
         pairs = [(i, g) for i in range(len(self.tree)) for g in range(grasps)]
         fresh = [p for p in pairs if p not in self._transits]
         known = [p for p in pairs if self._transits.get(p) is not None]
@@ -153,11 +151,11 @@ class Explorer:
         if not candidates:
             return None
 
-        n = world.robot.dof
+        n = space.dof
         k = ctx.settings.manhattan_order
         starts = np.array([c.start for c in candidates])
         rels = np.array([c.grasp_rel for c in candidates])
-        features = self.tree.features(ctx.settings.joint_weight, world.object.radius)
+        features = space.landmark_features(self.tree.joints(), self.tree.object_poses(), ctx.settings.joint_weight)
 
         def decode(population: np.ndarray) -> tuple[np.ndarray, ManhattanPaths]:
             index = np.clip(population[:, 0].astype(int), 0, len(candidates) - 1)
@@ -167,7 +165,7 @@ class Explorer:
         def evaluate(population: np.ndarray) -> np.ndarray:
             _, paths = decode(population)
             ctx.counters.evaluations += len(population)
-            ends = landmark_features(paths.final, paths.object_poses, ctx.settings.joint_weight, world.object.radius)
+            ends = space.landmark_features(paths.final, paths.object_poses, ctx.settings.joint_weight)
             nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - features[None], axis=2), axis=1)
             return -nearest
 

@@ -3,46 +3,20 @@
 A Manhattan path of order ``k`` for an ``n``-joint arm is coded as a real vector
 ``(k, n)``: "move joint 1 by x_1, then joint 2 by x_2, ..." repeated ``k``
 times. Before each move the free interval ``[dmin, dmax]`` of the moving joint
-is computed given the moves before it (:func:`free_intervals`), and the gene is
-folded into that interval by a triangular wave (:func:`bounce`). Every real
-vector therefore codes a collision-free path.
-
-The free intervals are closed-form (circle-line and circle-circle
-intersections, after Lozano-Perez 1987, which the paper cites) and computed
-by the compiled kernel :mod:`clew_ros.core.kernel`: a whole population's
-paths are decoded in one call. Every angle inside an interval keeps the
-clearance, continuously, so plans are valid at any checking resolution,
-which is what the plan validator checks at 0.002 rad.
+is computed given the moves before it, and the gene is folded into that
+interval by a triangular wave (:func:`bounce`). Every real vector therefore
+codes a collision-free path. A space decodes a whole population's paths at
+once (:meth:`clew_ros.core.space.Space.manhattan`); this module holds the
+coding's shared parts.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from clew_ros.core import kernel
-from clew_ros.core.collision import packed_world
-from clew_ros.core.kernel import BACKOFF_RAD, MAX_MOVE_RAD
-from clew_ros.core.kinematics import compose, tip_poses
-from clew_ros.core.world import World
-
-__all__ = [
-    "BACKOFF_RAD",
-    "MAX_MOVE_RAD",
-    "Counters",
-    "ManhattanPaths",
-    "bounce",
-    "free_intervals",
-    "run_manhattan",
-    "single_moves",
-]
-
-#: Piece pairs (configurations x pairs per free interval) one kernel call may check: beyond it the
-#: batch is split so that ``should_stop`` is asked often enough on huge worlds (cancel within 100 ms).
-PAIRS_PER_CALL = 1 << 20
+__all__ = ["Counters", "ManhattanPaths", "bounce"]
 
 
 @dataclass
@@ -53,55 +27,16 @@ class Counters:
     evaluations: int = 0  # genetic-algorithm individuals evaluated
 
 
-def _mode(object_poses: np.ndarray | None, grasp_rel: np.ndarray | None) -> tuple[bool, np.ndarray]:
-    if object_poses is not None and grasp_rel is None:
-        return False, object_poses
-    if grasp_rel is not None and object_poses is None:
-        return True, grasp_rel
-    raise ValueError("give exactly one of object_poses (transit) and grasp_rel (transfer)")
+@dataclass
+class ManhattanPaths:
+    """Decoded Manhattan paths of a batch."""
 
+    waypoints: np.ndarray  # (B, k * n + 1, n)
+    object_poses: np.ndarray  # (B, p): where the object ends
 
-def free_intervals(
-    world: World,
-    q: np.ndarray,
-    joint: int,
-    *,
-    object_poses: np.ndarray | None = None,
-    grasp_rel: np.ndarray | None = None,
-    margin_m: float = 1e-3,
-    counters: Counters | None = None,
-    should_stop: Callable[[], bool] | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Free interval ``[dmin, dmax]`` (rad) of ``joint`` for each configuration of ``q`` ``(B, n)``.
-
-    Transit: give the resting object's poses ``object_poses`` ``(B, 3)``.
-    Transfer: give ``grasp_rel`` ``(B, 3)``, the object's pose in the
-    end-effector frame. Every angle of the interval is valid and keeps
-    ``margin_m`` metres of clearance wherever the start had it;
-    ``dmin <= 0 <= dmax``. ``should_stop`` is asked between chunks of huge
-    batches; once it says so the remaining intervals are empty (``[0, 0]``).
-    """
-    q = np.asarray(q)
-    if q.ndim < 2:  # one configuration (or one joint's angle): a batch of one, as np.atleast_2d
-        q = q.reshape(1, -1)
-    transfer, poses = _mode(object_poses, grasp_rel)
-    packed = packed_world(world)
-    step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)
-    if len(q) <= step:  # the usual case: one call
-        low, high = kernel.intervals(packed, q, joint, transfer, poses, margin_m)
-        if counters is not None:
-            counters.clearance_checks += len(q)
-        return low, high
-    poses = np.broadcast_to(np.asarray(poses, dtype=float), (len(q), 3))
-    low, high = np.zeros(len(q)), np.zeros(len(q))
-    for first in range(0, len(q), step):
-        if first and should_stop is not None and should_stop():
-            break
-        rows = slice(first, first + step)
-        low[rows], high[rows] = kernel.intervals(packed, q[rows], joint, transfer, poses[rows], margin_m)
-    if counters is not None:
-        counters.clearance_checks += len(q)
-    return low, high
+    @property
+    def final(self) -> np.ndarray:
+        return self.waypoints[:, -1]
 
 
 def bounce(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -113,87 +48,10 @@ def bounce(x: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     >>> bounce(np.array([0.5, 1.5, -0.25, 2.5]), np.zeros(4), np.ones(4)).tolist()
     [0.5, 0.5, 0.25, 0.5]
     """
-    return kernel.bounce_array(x, low, high)
-
-
-@dataclass
-class ManhattanPaths:
-    """Decoded Manhattan paths of a batch."""
-
-    waypoints: np.ndarray  # (B, k * n + 1, n)
-    object_poses: np.ndarray  # (B, 3): where the object ends
-
-    @property
-    def final(self) -> np.ndarray:
-        return self.waypoints[:, -1]
-
-
-def run_manhattan(
-    world: World,
-    q0: np.ndarray,
-    genes: np.ndarray,
-    *,
-    object_poses: np.ndarray | None = None,
-    grasp_rel: np.ndarray | None = None,
-    margin_m: float = 1e-3,
-    counters: Counters | None = None,
-    should_stop: Callable[[], bool] | None = None,
-    threads: int = 1,
-) -> ManhattanPaths:
-    """Decode genes ``(B, k, n)`` into collision-free Manhattan paths from ``q0`` ``(B, n)``.
-
-    Transit when ``object_poses`` is given (the object rests there), transfer
-    when ``grasp_rel`` is given (the object is carried). The whole batch is
-    decoded by one compiled call, unless the world is so big that this would
-    take long: then it is decoded move by move (and individuals in chunks),
-    asking ``should_stop`` between calls. Once it says so, the remaining moves
-    are skipped (the paths stay where they are, still collision-free), so a
-    time limit or a cancel is honoured within one call. ``threads`` (0: all
-    cores) spreads the individuals over threads; the paths do not depend on it.
-    """
-    genes = np.asarray(genes, dtype=float)
-    batch, order, n = genes.shape
-    transfer, poses = _mode(object_poses, grasp_rel)
-    poses = np.array(np.broadcast_to(np.asarray(poses, dtype=float), (batch, 3)))
-    packed = packed_world(world)
-    columns = order * n + 1
-    waypoints = np.empty((batch, columns, n))
-    waypoints[:, 0] = q0
-    per_move = packed.pairs_per_move * batch
-    if should_stop is None or per_move * (columns - 1) <= PAIRS_PER_CALL:
-        kernel.decode(packed, waypoints, genes, 1, columns, transfer, poses, margin_m, threads)
-    else:
-        step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)
-        for column in range(1, columns):
-            for first in range(0, batch, step):
-                if should_stop():
-                    waypoints[first:, column:] = waypoints[first:, column - 1 : column]
-                    waypoints[:first, column + 1 :] = waypoints[:first, column : column + 1]
-                    break
-                rows = slice(first, first + step)
-                kernel.decode(
-                    packed, waypoints[rows], genes[rows], column, column + 1, transfer, poses[rows], margin_m, threads
-                )
-            else:
-                continue
-            break
-    if counters is not None:
-        counters.clearance_checks += batch * (columns - 1)
-    q = waypoints[:, -1]
-    final_poses = compose(tip_poses(world.robot, q), poses) if transfer else poses.copy()
-    return ManhattanPaths(waypoints, final_poses)
-
-
-def single_moves(world: World, q: np.ndarray, moves: np.ndarray, **kwargs: Any) -> np.ndarray:
-    """Apply joint moves ``moves`` ``(n,)`` one joint at a time, each clamped to its free interval.
-
-    Returns the waypoints ``(n + 1, n)`` of the (collision-free) Manhattan path.
-    Used by numeric refinement, where bouncing would undo the intended step.
-    """
-    q = np.array(q, dtype=float)[None]
-    waypoints = [q[0].copy()]
-    for joint in np.flatnonzero(np.abs(moves) > 1e-12):
-        low, high = free_intervals(world, q, int(joint), **kwargs)
-        q[0, joint] += float(np.clip(moves[joint], low[0], high[0]))
-        waypoints.append(q[0].copy())
-    return np.array(waypoints)
+    x, low, high = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (x, low, high)))
+    width = high - low
+    period = np.where(width > 0.0, 2.0 * width, 1.0)
+    u = (x - low) - period * np.floor((x - low) / period)
+    folded = np.clip(low + np.where(u <= width, u, period - u), low, high)
+    out: np.ndarray = np.where(width > 0.0, folded, low)
+    return out

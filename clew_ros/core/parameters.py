@@ -13,7 +13,7 @@ description), one :class:`ParameterTable` per namespace:
 
 Derived from these tables: the defaults of
 :class:`~clew_ros.core.settings.PlannerSettings`,
-:class:`~clew_ros.core.world.World`, :class:`~clew_ros.core.world.Robot` and
+:class:`~clew_ros.planar.world.World`, :class:`~clew_ros.planar.world.Robot` and
 ``clew_ros.ros.parameters.NodeSettings``; the defaults and required keys of
 the world parser; the checks of scalar parameters (:func:`check_value`); the
 ROS 2 parameter descriptors (``clew_ros.ros.parameters.descriptor_for``);
@@ -23,7 +23,7 @@ and the parameter tables of README.md (:func:`markdown_tables`)::
     python -m clew_ros.cli.parameter_tables --update README.md
 
 The ``world.*`` lists, polygons and the rules that tie several keys together
-are checked by the world parser (:mod:`clew_ros.core.world`). Pure data and
+are checked by the world parser (:mod:`clew_ros.planar.world`). Pure data and
 checks: no ROS, no numpy.
 """
 

@@ -15,7 +15,7 @@ from clew_ros.core.errors import ParameterError
 from clew_ros.core.genetic import GeneticSettings
 from clew_ros.core.parameters import PLANNER_PARAMETERS, RETIRED_PARAMETERS, check_value, retired_message
 
-__all__ = ["PLANNER_PARAMETERS", "ManyJoints", "Outcome", "PlannerSettings", "Termination"]
+__all__ = ["PLANNER_PARAMETERS", "ManyJoints", "Outcome", "PlannerSettings", "SearchSettings", "Termination"]
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ class ManyJoints:
     #: link, as a gripper puts an object into a slot)
     approach_radii: float = 2.0
     approach_steps: int = 8
-    #: largest sweep (m: ``sum_j |dq_j| R_j``, the bound of :mod:`clew_ros.core.continuous`) of one compiled
+    #: largest sweep (m: ``sum_j |dq_j| R_j``, the bound of :mod:`clew_ros.planar.continuous`) of one compiled
     #: check of the straight probes' moves, the time limit and cancel asked between them: a whole long move of
     #: 39 joints near a contact, checked at once, took over a second and ended a 20 s run at 21 s
     check_sweep_m: float = 1.0
@@ -69,6 +69,39 @@ class ManyJoints:
     #: largest Manhattan order (``planner.manhattan_order`` is lowered to it) on such arms: each order adds a
     #: move of every joint to a path, and EXPLORE's decoding took 95 % of a 37-joint run at order 2
     manhattan_order: int = 1
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """SEARCH's and the run's tuning beyond ``planner.*`` (what a user sets): probes, joins, chains, the
+    holding configurations' sample. A benchmark or a test varies a copy (``dataclasses.replace``)."""
+
+    #: whether SEARCH_TRANSIT first tries one Manhattan path straight to the nearest holding configuration
+    #: before the GA rounds (RRT-Connect's greedy connection, one joint at a time); ``False`` is the search as
+    #: the paper has it
+    greedy_probe: bool = True
+    #: whether SEARCH_TRANSFER's greedy probe heads for the nearest configuration holding the object at the
+    #: goal; ``False``: transfers start with the GA (as with :attr:`greedy_probe` off)
+    transfer_probe: bool = True
+    #: a SEARCH_TRANSFER that stalls closer to the goal than this fraction of the arm's reach (m / m) is
+    #: joined to it by RRT-Connect when it can be: the GA's Manhattan paths close the last centimetres slowly
+    join_radius: float = 0.3
+    #: rounds (count) of that RRT-Connect at most: each extends one tree a step and the other as far as it is
+    #: clear; beyond about 30 a join that has not met rarely does, and every round costs continuous checks
+    join_rounds: int = 30
+    #: seeds (count) of the inverse kinematics for the configurations holding the object at the goal: the
+    #: stalled configuration and random ones (more find more goal configurations, each costs a solve)
+    goal_seeds: int = 8
+    #: random starts (count) of the holding configurations that decide whether a transit is hopeless, at the
+    #: start of a run; doubled after each EXPLORE round that found no transit at all
+    hold_samples: int = 24
+    #: ...up to this many samples x joints (768 for 7 joints, 53 for 100): their inverse kinematics is not
+    #: interruptible, this keeps one solve to a few tens of milliseconds
+    hold_sample_joints: int = 5376
+    #: when SEARCH from a landmark fails, the placement its closest transfer reached becomes a landmark and
+    #: SEARCH runs again from it, at most this many times in a row (a regrasp where the carried object got
+    #: stuck; 4 or 8 planned no more worlds than 2 and cost time: docs/benchmarks.md)
+    search_chain: int = 2
 
 
 class Outcome(enum.Enum):

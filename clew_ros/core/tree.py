@@ -108,34 +108,10 @@ class LandmarkTree:
             append_step(segments, landmark.grasp, landmark.transit, landmark.transfer)
         return segments
 
-    def features(self, joint_weight: float, object_radius: float) -> np.ndarray:
-        """Points ``(L, 4 + n)`` whose Euclidean distances are the landmark distances."""
-        return landmark_features(
-            np.array([lm.joints for lm in self.landmarks]),
-            np.array([lm.object_pose for lm in self.landmarks]),
-            joint_weight,
-            object_radius,
-        )
+    def joints(self) -> np.ndarray:
+        """The landmarks' joints ``(L, n)``, by id."""
+        return np.array([lm.joints for lm in self.landmarks])
 
-
-def landmark_features(
-    joints: np.ndarray, object_poses: np.ndarray, joint_weight: float, object_radius: float
-) -> np.ndarray:
-    """Embedding of (joints, object pose) where Euclidean distance is the landmark distance.
-
-    Object position (m), orientation as a chord on a circle of the object's
-    radius (m), joints weighted by ``joint_weight`` (m/rad) times ``sqrt(2 / n)``
-    for ``n`` joints: the joints' part of the distance is then the weighted
-    root mean square over the joints (scaled to a two-joint arm's), so that
-    the angles of many joints do not swamp where the object lies.
-    """
-    theta = object_poses[:, 2]
-    joint_weight = joint_weight * float(np.sqrt(2.0 / joints.shape[1]))
-    return np.concatenate(
-        [
-            object_poses[:, :2],
-            object_radius * np.stack([np.cos(theta), np.sin(theta)], axis=1),
-            joint_weight * joints,
-        ],
-        axis=1,
-    )
+    def object_poses(self) -> np.ndarray:
+        """Where the object rests at each landmark ``(L, p)``, by id."""
+        return np.array([lm.object_pose for lm in self.landmarks])

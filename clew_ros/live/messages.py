@@ -29,7 +29,7 @@ from foxglove.messages import (
     Vector3,
 )
 
-from clew_ros.core.world import World
+from clew_ros.planar.world import World
 from clew_ros.scene.items import ArmItems, LandmarkLike, TreeItems, arm_items, tree_items, world_items
 from clew_ros.scene.palette import colour
 

@@ -29,8 +29,8 @@ import rclpy
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
-from clew_ros.core.kernel import warm_up
 from clew_ros.node.planner_node import PlannerNode, StartupError
+from clew_ros.planar.kernel import warm_up
 
 EXIT_OK = 0
 EXIT_INVALID_PARAMETERS = 2

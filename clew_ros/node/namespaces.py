@@ -25,7 +25,7 @@ from typing import Any
 
 from clew_ros.core.errors import ClewError
 from clew_ros.core.parameters import NODE_PARAMETERS
-from clew_ros.core.world import read_parameter_file
+from clew_ros.planar.world import read_parameter_file
 
 __all__ = [
     "DEMO_WORLDS",

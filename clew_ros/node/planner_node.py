@@ -35,11 +35,11 @@ from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.kernel import warm_up
 from clew_ros.core.parameters import LOCKED_PREFIXES, RETIRED_PARAMETERS, RUNTIME_CHANGES, retired_message
 from clew_ros.core.settings import Outcome
 from clew_ros.node.namespaces import namespaced_directory
 from clew_ros.node.publishing import Publishing
+from clew_ros.planar.kernel import warm_up
 from clew_ros.ros import messages
 from clew_ros.ros.parameters import (
     OWN_PREFIXES,

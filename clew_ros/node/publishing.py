@@ -34,9 +34,9 @@ from action_msgs.msg import GoalStatus
 from rclpy.node import Node
 
 from clew_ros.core.settings import Outcome, PlannerSettings
-from clew_ros.core.world import World
 from clew_ros.node.run import Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
+from clew_ros.planar.world import World
 from clew_ros.ros import frames, messages
 from clew_ros.ros.topics import TF_TOPICS, TOPICS
 

@@ -41,9 +41,9 @@ import numpy as np
 from action_msgs.msg import GoalStatus
 
 from clew_ros.core.settings import Outcome, Termination
-from clew_ros.core.world import World
 from clew_ros.motion.playback import Track
 from clew_ros.node.run_recording import NO_RECORDING, RunRecording
+from clew_ros.planar.world import World
 from clew_ros.ros.events import outcome_status
 from clew_ros.ros.parameters import Configuration
 

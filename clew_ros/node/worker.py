@@ -18,8 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from action_msgs.msg import GoalStatus
 
-from clew_ros.core.clew import PlanResult, Progress, plan
-from clew_ros.core.plan import checked_plan
+from clew_ros.core.clew import PlanResult, Progress
 from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.motion.playback import GripperEvent, Track, TrackState, node_track
@@ -27,6 +26,8 @@ from clew_ros.motion.player import play
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.run import Phase, Run
 from clew_ros.node.run_recording import Recordings
+from clew_ros.planar.plan import checked_plan
+from clew_ros.planar.space import plan
 from clew_ros.ros import messages
 from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields
 from clew_ros.ros.qos import GOAL_QOS
@@ -234,7 +235,7 @@ def timed_plan(run: Run, result: PlanResult) -> tuple[Outcome, str, Track | None
     """A successful result as a validated, timed plan, or ``INTERNAL_ERROR`` if it fails validation.
 
     The plan is checked against the run's problem (its goal) by
-    :func:`~clew_ros.core.plan.checked_plan`; one that fails is never published.
+    :func:`~clew_ros.planar.plan.checked_plan`; one that fails is never published.
     """
     planned = checked_plan(run.world, result)
     if not planned.success:

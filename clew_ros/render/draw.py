@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.world import World
+from clew_ros.planar.world import World
 from clew_ros.render.scene import Motion, Scene
 from clew_ros.render.shapes import Animation, Circle, Drawing, Frame, Paint, Point, Polygon, Polyline, Rect, Shape, Text
 from clew_ros.render.text import font_height, text_width

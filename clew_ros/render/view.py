@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.world import World
+from clew_ros.planar.world import World
 from clew_ros.scene.items import arm_points, object_outline
 
 __all__ = ["View", "arm_points", "object_outline"]

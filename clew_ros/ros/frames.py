@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.world import Robot
+from clew_ros.planar.world import Robot
 from clew_ros.ros.urdf import BASE_LINK, JAW_LINKS, JAW_OPEN_RAD, ROOT_FRAME, TOOL_FRAME, jaw_offset_m, link_name
 
 __all__ = [

@@ -8,8 +8,8 @@ values. Three families:
 - ``world.*``: :data:`~clew_ros.core.parameters.WORLD_PARAMETERS`, the world
   of interface.md §1; ``world.obstacles.<name>`` for each name in
   ``world.obstacle_names``. Checked by the core
-  (:func:`~clew_ros.core.world.world_from_parameters`, then
-  :func:`~clew_ros.core.collision.check_start_and_goal`), so every refusal
+  (:func:`~clew_ros.planar.world.world_from_parameters`, then
+  :func:`~clew_ros.planar.collision.check_start_and_goal`), so every refusal
   names the parameter at fault.
 - ``planner.*``: :data:`~clew_ros.core.parameters.PLANNER_PARAMETERS`,
   checked by :class:`~clew_ros.core.settings.PlannerSettings`.
@@ -47,7 +47,6 @@ from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
-from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.parameters import (
     LIMITS,
@@ -64,7 +63,8 @@ from clew_ros.core.parameters import (
     check_value,
 )
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.world import World, read_parameter_file, world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.world import World, read_parameter_file, world_from_parameters
 
 __all__ = [
     "DEFAULT_WORLD_FILE",

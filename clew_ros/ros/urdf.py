@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from xml.sax.saxutils import quoteattr
 
-from clew_ros.core.world import Robot, World
+from clew_ros.planar.world import Robot, World
 
 __all__ = [
     "BASE_LINK",
@@ -123,7 +123,7 @@ def _joint(
 def robot_urdf(world: World) -> str:
     """The URDF of ``world``'s arm (see the module docstring), as the text ``~/robot_description`` carries.
 
-    >>> from clew_ros.core.world import load_world  # doctest: +SKIP
+    >>> from clew_ros.planar.world import load_world  # doctest: +SKIP
     >>> "joint_2" in robot_urdf(load_world("config/figure1.yaml"))  # doctest: +SKIP
     True
     """

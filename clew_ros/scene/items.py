@@ -15,8 +15,8 @@ from typing import Protocol
 
 import numpy as np
 
-from clew_ros.core.kinematics import joint_positions, transform_points
-from clew_ros.core.world import World
+from clew_ros.planar.kinematics import joint_positions, transform_points
+from clew_ros.planar.world import World
 
 __all__ = [
     "HOLDING_THRESHOLD",
@@ -40,7 +40,7 @@ HOLDING_THRESHOLD = 0.5
 
 class LandmarkLike(Protocol):
     """What is drawn of a landmark: a :class:`~clew_ros.core.tree.Landmark` or a plan's
-    :class:`~clew_ros.core.plan.PlanLandmark`."""
+    :class:`~clew_ros.planar.plan.PlanLandmark`."""
 
     @property
     def id(self) -> int: ...

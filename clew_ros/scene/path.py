@@ -1,7 +1,7 @@
 """A plan as a scene draws it: the configurations along it, the object's poses, the gripper, the tip's path.
 
 :func:`plan_motion` replays the plan with the core
-(:func:`clew_ros.core.plan.replay`); :meth:`Motion.tip_pieces` cuts the
+(:func:`clew_ros.planar.plan.replay`); :meth:`Motion.tip_pieces` cuts the
 tip's path by segment kind (``transit``: the gripper open, ``transfer``:
 holding), each kind a colour of the palette.
 """
@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.kinematics import joint_positions
-from clew_ros.core.plan import Plan, replay
-from clew_ros.core.world import World
+from clew_ros.planar.kinematics import joint_positions
+from clew_ros.planar.plan import Plan, replay
+from clew_ros.planar.world import World
 
 __all__ = ["Motion", "TipPiece", "plan_motion"]
 

@@ -8,14 +8,14 @@ orientation tolerance. :func:`generate` builds the world of a family and seed: f
 random manipulation simulated from the start whose end is the goal, then the layout around it, then
 the checks a user's world gets plus the witness validated at 0.002 rad; the ``unsolvable`` family
 puts the goal where the object provably cannot go
-(:func:`clew_ros.core.passage.separation` proves it). :func:`write_world` writes the parameter file
+(:func:`clew_ros.planar.passage.separation` proves it). :func:`write_world` writes the parameter file
 and the witness plan next to it. Modules: :mod:`~clew_ros.worlds.arms`,
 :mod:`~clew_ros.worlds.shapes`, :mod:`~clew_ros.worlds.witness`, :mod:`~clew_ros.worlds.sweep`,
 :mod:`~clew_ros.worlds.layouts`, :mod:`~clew_ros.worlds.regrasp`,
 :mod:`~clew_ros.worlds.families`, :mod:`~clew_ros.worlds.files`.
 """
 
-from clew_ros.core.passage import separation
+from clew_ros.planar.passage import separation
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
 from clew_ros.worlds.families import FAMILIES, Family, GeneratedWorld, family_names, generate
 from clew_ros.worlds.files import witness_path, world_text, write_world

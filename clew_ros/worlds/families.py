@@ -8,14 +8,14 @@ A solvable world is built in this order (each step from one random stream, see :
    start, the object's start and, where it ends, the goal; it must move the object at least 0.3 m;
 3. the family's layout (:mod:`~clew_ros.worlds.layouts`) around the witness, every obstacle at least
    the family's margin from the arm and the object along the whole witness;
-4. the world checked as a user's would be: parsed by :func:`~clew_ros.core.world.world_from_parameters`,
-   start and goal by :func:`~clew_ros.core.collision.check_start_and_goal`, and the witness by
-   :func:`~clew_ros.core.plan.validate_plan` at 0.002 rad.
+4. the world checked as a user's would be: parsed by :func:`~clew_ros.planar.world.world_from_parameters`,
+   start and goal by :func:`~clew_ros.planar.collision.check_start_and_goal`, and the witness by
+   :func:`~clew_ros.planar.plan.validate_plan` at 0.002 rad.
 
 Any step that fails (no valid candidate, a layout not near enough the motion, a witness the validator
 refuses) starts over with the next stream, at most :data:`MAX_ATTEMPTS` times. The unsolvable family
 puts a ring around a goal the witness reached and keeps the world only when
-:func:`~clew_ros.core.passage.separation` proves that the object cannot get in.
+:func:`~clew_ros.planar.passage.separation` proves that the object cannot get in.
 """
 
 from __future__ import annotations
@@ -29,12 +29,12 @@ from typing import Any
 import numpy as np
 import shapely
 
-from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import WorldError
-from clew_ros.core.kinematics import wrap_angle
-from clew_ros.core.passage import separation
-from clew_ros.core.plan import Plan, PlanSegment, replay, validate_plan
-from clew_ros.core.world import World, world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.kinematics import wrap_angle
+from clew_ros.planar.passage import separation
+from clew_ros.planar.plan import Plan, PlanSegment, replay, validate_plan
+from clew_ros.planar.world import World, world_from_parameters
 from clew_ros.worlds.arms import ArmShape, make_arm
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
 from clew_ros.worlds.layouts import Layout, LayoutError, blocks_near, clutter, pocket, ring, shelves, window

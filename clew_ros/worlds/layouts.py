@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from clew_ros.core.kinematics import joint_positions, transform_points
-from clew_ros.core.world import World
+from clew_ros.planar.kinematics import joint_positions, transform_points
+from clew_ros.planar.world import World
 from clew_ros.worlds.sweep import Sweep
 
 __all__ = [

@@ -2,10 +2,10 @@
 
 Held rigidly, the object keeps the last link's direction in its own frame (the approach angle
 ``psi``) for a whole transfer. A plan with one transfer takes some grasp at the start and leaves it
-at the goal, so some ``psi`` must be possible at both. :func:`clew_ros.core.reach.approach_cells`
+at the goal, so some ``psi`` must be possible at both. :func:`clew_ros.planar.reach.approach_cells`
 says, per cell of ``psi``, when no direction in it can hold a grasp at a placement (the last joint
 out of the annulus the other links sweep; the goal with its position and orientation tolerances),
-and :func:`clew_ros.core.reach.carry_cells` when the object so held cannot be carried to the goal's
+and :func:`clew_ros.planar.reach.carry_cells` when the object so held cannot be carried to the goal's
 position. Both bound from geometry alone, ignoring obstacles and joint limits: a cell they refuse is
 impossible. When, for every grasp, no cell is allowed by all three, every plan needs two transfers
 or more. On two-joint arms (one direction per elbow for each tip position) with a tight goal
@@ -14,8 +14,8 @@ orientation this is often so, as in figure1.
 
 from __future__ import annotations
 
-from clew_ros.core.reach import approach_cells, carry_cells
-from clew_ros.core.world import World
+from clew_ros.planar.reach import approach_cells, carry_cells
+from clew_ros.planar.world import World
 
 __all__ = ["regrasp_needed"]
 

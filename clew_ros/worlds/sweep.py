@@ -1,7 +1,7 @@
 """Where the witness goes: the arm and the object along the whole witness, and which candidate obstacles
 keep clear of them.
 
-The witness is replayed (:func:`clew_ros.core.plan.replay`) and sampled densely enough that between
+The witness is replayed (:func:`clew_ros.planar.plan.replay`) and sampled densely enough that between
 two samples no point of the arm or of the object moves more than ``margin / 2`` (a bound from the
 joint steps and the distances along the chain), so an obstacle ``margin`` away from every sample is
 at least ``margin / 2`` away from the whole continuous motion. The samples go into two STRtrees,
@@ -16,9 +16,9 @@ import math
 import numpy as np
 import shapely
 
-from clew_ros.core.kinematics import compose, joint_positions, tip_poses, transform_points
-from clew_ros.core.plan import Plan, replay
-from clew_ros.core.world import World
+from clew_ros.planar.kinematics import compose, joint_positions, tip_poses, transform_points
+from clew_ros.planar.plan import Plan, replay
+from clew_ros.planar.world import World
 
 __all__ = ["Sweep"]
 

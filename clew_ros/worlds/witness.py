@@ -13,9 +13,9 @@ object at rest or held count, exactly section 1's validity test), then the layou
    the same one from another direction, at a configuration found by sampling the first n - 2 joints
    and solving the last two in closed form, reached by a straight transit or one through a waypoint.
 
-Every straight piece is checked at :data:`~clew_ros.core.plan.CHECK_STEP_RAD` with
-:func:`~clew_ros.core.collision.is_valid`, many candidates in one call. :func:`simulate` returns the
-segments as a :class:`~clew_ros.core.plan.Plan` would hold them, or raises :class:`WitnessError`
+Every straight piece is checked at :data:`~clew_ros.planar.plan.CHECK_STEP_RAD` with
+:func:`~clew_ros.planar.collision.is_valid`, many candidates in one call. :func:`simulate` returns the
+segments as a :class:`~clew_ros.planar.plan.Plan` would hold them, or raises :class:`WitnessError`
 when a step found no valid candidate (the generator then starts over with the next random stream).
 """
 
@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid
-from clew_ros.core.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
-from clew_ros.core.plan import CHECK_STEP_RAD, PlanSegment
-from clew_ros.core.world import World
+from clew_ros.planar.collision import is_valid
+from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
+from clew_ros.planar.plan import CHECK_STEP_RAD, PlanSegment
+from clew_ros.planar.world import World
 from clew_ros.worlds.shapes import ObjectShape
 
 __all__ = [

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from benchmarks import check_cost
-from clew_ros.core.improve import ImproveSettings
+from clew_ros.planar.improve import ImproveSettings
 
 
 def test_every_world_gets_a_row_per_kind_with_its_configurations_and_ratios(capsys: pytest.CaptureFixture[str]) -> None:

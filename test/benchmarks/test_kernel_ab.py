@@ -9,8 +9,8 @@ import pytest
 
 from benchmarks.kernel_ab import ROOT, baseline_kernel, compare
 from benchmarks.worlds import all_worlds, select
-from clew_ros.core.collision import check_start_and_goal
-from clew_ros.core.world import world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.world import world_from_parameters
 
 
 def _in_a_repository() -> bool:

@@ -8,8 +8,8 @@ import pytest
 
 from benchmarks.one_transfer_bound import main, one_transfer_bound
 from benchmarks.reference import load_worlds
-from clew_ros.core.plan import replay
-from clew_ros.core.search import goal_reached
+from clew_ros.planar.plan import replay
+from clew_ros.planar.search import goal_reached
 
 
 def test_the_bound_is_a_valid_one_transfer_plan_to_the_goal() -> None:

@@ -11,9 +11,9 @@ import pytest
 from helpers.open_reach import open_reach
 
 from benchmarks.reference import ReferenceSettings, load_worlds, main, planner_runs, reference_plan
-from clew_ros.core.collision import check_start_and_goal
-from clew_ros.core.plan import validate_plan
-from clew_ros.core.world import World, world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.plan import validate_plan
+from clew_ros.planar.world import World, world_from_parameters
 
 STEP_RAD = 0.04
 #: The reference's error bound for a plan of one transfer (module docstring of benchmarks.reference):
@@ -131,7 +131,7 @@ def test_worlds_by_name_include_any_count_of_joints_or_obstacles() -> None:
 
 
 def test_worlds_by_name_include_a_generated_familys_world_as_clew_world_writes_it(tmp_path) -> None:
-    from clew_ros.core.world import load_world
+    from clew_ros.planar.world import load_world
     from clew_ros.worlds import generate, write_world
 
     ((named, parameters),) = load_worlds(["shapes2_60"])

@@ -11,7 +11,7 @@ import pytest
 
 from benchmarks.run import COLUMNS, DOC_BEGIN, DOC_END, QUICK_WORLDS
 from benchmarks.worlds import JOINT_COUNTS, OBSTACLE_COUNTS, generated_worlds, write_world
-from clew_ros.core.world import load_world
+from clew_ros.planar.world import load_world
 
 ROOT = Path(__file__).resolve().parents[2]
 

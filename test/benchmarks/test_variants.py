@@ -1,5 +1,5 @@
-"""The variants benchmark: a variant sets the constants it names in its workers (a setting that changes the
-plan changes it), and bad variants are refused naming what is wrong; speed is not checked."""
+"""The variants benchmark: a variant replaces the tuning fields it names in its workers (a setting that changes
+the plan changes it), and bad variants are refused naming what is wrong; speed is not checked."""
 
 import json
 from pathlib import Path
@@ -9,17 +9,18 @@ import pytest
 from benchmarks.variants import main, parse_variant
 
 
-def test_a_variant_names_module_constants_with_literal_values() -> None:
+def test_a_variant_names_tuning_fields_with_literal_values() -> None:
     assert parse_variant("as_is=") == ("as_is", {})
-    assert parse_variant("off=search.JOIN_RADIUS:0,search.JOIN_ROUNDS:30") == (
+    assert parse_variant("off=search.join_radius:0,search.join_rounds:30") == (
         "off",
-        {"search.JOIN_RADIUS": 0, "search.JOIN_ROUNDS": 30},
+        {"search.join_radius": 0, "search.join_rounds": 30},
     )
     assert parse_variant("starved=improve.work_per_second:0") == ("starved", {"improve.work_per_second": 0})
     for bad, named in [
-        ("=search.JOIN_RADIUS:0", "NAME="),
-        ("x=search.JOIN_RADIUS", "module.CONSTANT:VALUE"),
-        ("x=search.NO_SUCH:1", "no NO_SUCH"),
+        ("=search.join_radius:0", "NAME="),
+        ("x=search.join_radius", "stage.FIELD:VALUE"),
+        ("x=search.no_such:1", "SearchSettings has no no_such"),
+        ("x=nowhere.join_radius:1", "no stage 'nowhere'"),
         ("x=improve.WORK_PER_SECOND:1", "ImproveSettings has no WORK_PER_SECOND"),
     ]:
         with pytest.raises(ValueError, match=named):
@@ -43,3 +44,14 @@ def test_two_variants_plan_the_same_runs_and_a_setting_reaches_the_workers(tmp_p
     assert as_is[1]["travel_rad"] < as_is[1]["first_travel_rad"]
     table = (out / "variants.md").read_text()
     assert "| all | starved |" in table
+
+
+def test_the_tuning_of_a_variant_replaces_only_its_fields() -> None:
+    from benchmarks.variants import tuning_of
+    from clew_ros.planar.space import PlanarTuning
+
+    tuning = tuning_of({"search.join_radius": 0.0, "reach.goal_core_fraction": 0.25})
+    assert tuning.search.join_radius == 0.0
+    assert tuning.reach.goal_core_fraction == 0.25
+    assert tuning.search.join_rounds == PlanarTuning().search.join_rounds
+    assert tuning.improve == PlanarTuning().improve

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from clew_ros.core.plan import validate_plan
-from clew_ros.core.world import load_world
+from clew_ros.planar.plan import validate_plan
+from clew_ros.planar.world import load_world
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config"
@@ -53,7 +53,7 @@ def test_solvable_worlds_every_seed(name, seed, tmp_path):
 
 
 def test_a_provably_unsolvable_world_is_answered_before_any_exploration(tmp_path):
-    """config/unreachable.yaml: the goal inside a closed ring is refused with the reason (clew_ros.core.passage)."""
+    """config/unreachable.yaml: the goal inside a closed ring is refused with the reason (clew_ros.planar.passage)."""
     output = tmp_path / "plan.json"
     result = clew_plan(CONFIG / "unreachable.yaml", "--output", output)
     assert result.returncode == 1

@@ -42,9 +42,9 @@ from helpers.node_harness import (  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
 from clew_ros.client import PlannerClient, RunHandle, RunResult, RunStatus  # noqa: E402
-from clew_ros.core.plan import validate_plan  # noqa: E402
 from clew_ros.core.settings import Outcome  # noqa: E402
-from clew_ros.core.world import load_world  # noqa: E402
+from clew_ros.planar.plan import validate_plan  # noqa: E402
+from clew_ros.planar.world import load_world  # noqa: E402
 
 pytestmark = pytest.mark.ros
 

@@ -35,9 +35,9 @@ from clew_ros.client import (  # noqa: E402
     RunStatus,
     RunTimeoutError,
 )
-from clew_ros.core.plan import validate_plan  # noqa: E402
 from clew_ros.core.settings import Outcome  # noqa: E402
-from clew_ros.core.world import load_world  # noqa: E402
+from clew_ros.planar.plan import validate_plan  # noqa: E402
+from clew_ros.planar.world import load_world  # noqa: E402
 
 pytestmark = pytest.mark.ros
 

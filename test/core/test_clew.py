@@ -9,10 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from clew_ros.core.clew import Progress, plan
-from clew_ros.core.plan import Plan, validate_plan
+from clew_ros.core.clew import Progress
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.core.world import load_world
+from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.space import plan
+from clew_ros.planar.world import load_world
 
 ROOT = Path(__file__).resolve().parents[2]
 QUICK = ROOT / "test" / "worlds" / "node_quick.yaml"
@@ -88,13 +89,14 @@ def test_time_limit_and_cancel_end_the_run_with_their_outcome() -> None:
 def test_explore_retries_draw_more_holding_configurations_before_refusing():
     # arm7_5 (generated): 24 random starts of the holding configurations find none for any grasp at the
     # start, and the same request draws the same sample; the retries must draw larger ones, not refuse
-    from clew_ros.core.reach import HOLD_SAMPLES, holding_configurations
+    from clew_ros.core.settings import SearchSettings
+    from clew_ros.planar.reach import holding_configurations
     from clew_ros.worlds import generate
 
     world = generate("arm7", 5).world()
     pose = np.asarray(world.object.initial, float)
     assert all(not len(holding_configurations(world, pose, g)) for g in range(len(world.object.grasps)))
-    assert HOLD_SAMPLES == 24
+    assert SearchSettings().hold_samples == 24
     result = plan(world, PlannerSettings(seed=0, time_limit=60))
     assert result.outcome is Outcome.SUCCEEDED, result.message
     assert validate_plan(world, Plan.from_result(world, result)) == []
@@ -116,7 +118,7 @@ def test_transit_joins_last_only_until_explore_finds_a_transit_again(monkeypatch
     # a round without a transit turns the joins on for the retry; the round that finds one turns them off
     from benchmarks.worlds import obstacles_world
     from clew_ros.core.explore import Explorer
-    from clew_ros.core.world import world_from_parameters
+    from clew_ros.planar.world import world_from_parameters
 
     world = world_from_parameters(obstacles_world(8).parameters)
     seen: list[bool] = []
@@ -138,10 +140,12 @@ def test_transit_joins_last_only_until_explore_finds_a_transit_again(monkeypatch
 def test_search_takes_a_grasp_held_outside_the_goal_core_again_inside_it(monkeypatch, fraction):
     # figure1's goal lies past the bare arm's reach: the bar must be held by an end, nearly in line; a
     # landmark holding an end at another angle is given a regrasp of the same end, aimed at the goal's core
-    from clew_ros.core import reach
     from clew_ros.core.explore import Explorer
+    from clew_ros.planar import reach
+    from clew_ros.planar.space import PlanarTuning
 
-    monkeypatch.setattr(reach, "GOAL_CORE_FRACTION", fraction)  # 0: every cell is in the core, no such regrasp
+    # 0: every cell is in the core, no such regrasp
+    tuning = PlanarTuning(reach=reach.ReachSettings(goal_core_fraction=fraction))
     asked = []
     candidate = Explorer.candidate
 
@@ -154,14 +158,14 @@ def test_search_takes_a_grasp_held_outside_the_goal_core_again_inside_it(monkeyp
     monkeypatch.setattr(Explorer, "candidate", spy)
     world = load_world(ROOT / "config" / "figure1.yaml")
     for seed in (0, 2):
-        result = plan(world, PlannerSettings(seed=seed, time_limit=30.0, improve_time=0.0))
+        result = plan(world, PlannerSettings(seed=seed, time_limit=30.0, improve_time=0.0), tuning=tuning)
         assert result.success
     if fraction == 0.0:
         assert asked == []
         return
     assert asked
     for grasp, approach, found in asked:
-        core = reach.goal_approach_core(world, world.object.goal, grasp)
+        core = reach.goal_approach_core(world, world.object.goal, grasp, settings=tuning.reach)
         assert not np.any(approach & ~core)  # the landmark's own grasp is taken again inside the core only
         if found is not None:
             assert approach[reach.approach_cell(-found.grasp_rel[2])]

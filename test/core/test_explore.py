@@ -5,10 +5,11 @@ from pathlib import Path
 import numpy as np
 
 from clew_ros.core.explore import Explorer
-from clew_ros.core.search import PlanningContext
 from clew_ros.core.settings import PlannerSettings, Termination
-from clew_ros.core.tree import LandmarkTree, landmark_features
-from clew_ros.core.world import load_world
+from clew_ros.core.space import PlanningContext
+from clew_ros.core.tree import LandmarkTree
+from clew_ros.planar.space import PlanarSpace
+from clew_ros.planar.world import load_world, world_of
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 
@@ -16,18 +17,18 @@ CONFIG = Path(__file__).resolve().parents[2] / "config"
 def _explorer(name: str, seed: int) -> tuple[Explorer, PlanningContext, LandmarkTree]:
     """An Explorer on ``config/<name>.yaml`` with the root landmark only."""
     world = load_world(CONFIG / f"{name}.yaml")
-    ctx = PlanningContext(world, PlannerSettings(seed=seed), np.random.default_rng(seed), Termination(60))
+    ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=seed), np.random.default_rng(seed), Termination(60))
     tree = LandmarkTree(world.robot.initial, world.object.initial)
     return Explorer(ctx, tree), ctx, tree
 
 
 def test_explore_beats_random_single_manipulation_paths():
     explorer, ctx, tree = _explorer("single_transfer", 3)
-    world, settings = ctx.world, ctx.settings
+    world, settings = world_of(ctx), ctx.settings
     exploration = explorer.explore()
     assert exploration is not None
     landmark = tree.add(**exploration.fields)
-    features = tree.features(settings.joint_weight, world.object.radius)[:1]
+    features = ctx.space.landmark_features(tree.joints(), tree.object_poses(), settings.joint_weight)[:1]
 
     # random single manipulation paths from the same transits
     candidates = [c for c in explorer.transits.values() if c is not None]
@@ -37,14 +38,14 @@ def test_explore_beats_random_single_manipulation_paths():
     for candidate in candidates:
         genes = rng.normal(0, 1.2, (64, settings.manhattan_order, n))
         paths = ctx.manhattan(candidate.start, genes, grasp_rel=candidate.grasp_rel[None])
-        ends = landmark_features(paths.final, paths.object_poses, settings.joint_weight, world.object.radius)
+        ends = ctx.space.landmark_features(paths.final, paths.object_poses, settings.joint_weight)
         distances.append(np.linalg.norm(ends - features, axis=1))
     distances = np.concatenate(distances)
     assert exploration.distance >= np.percentile(distances, 90)
     assert landmark.parent == 0
     assert landmark.grasp is not None
     # the landmark holds its grasp: tip on the grasp point of the placed object
-    from clew_ros.core.kinematics import tip_poses, transform_points
+    from clew_ros.planar.kinematics import tip_poses, transform_points
 
     tip = tip_poses(world.robot, landmark.joints[None])[0, :2]
     grasp = transform_points(landmark.object_pose, world.object.grasps[landmark.grasp][None])[0]
@@ -55,8 +56,8 @@ def test_a_transit_missed_once_is_tried_again_before_giving_up():
     # obstacles_32 (benchmarks): from the start placement every grasp's transit can miss on the first
     # draw; the planner used to answer NO_PATH_AT_RESOLUTION after about 1 s for seeds 1 and 2
     from benchmarks.worlds import obstacles_world
-    from clew_ros.core.clew import plan
-    from clew_ros.core.world import world_from_parameters
+    from clew_ros.planar.space import plan
+    from clew_ros.planar.world import world_from_parameters
 
     world = world_from_parameters(obstacles_world(32).parameters)
     for seed in (1, 2):
@@ -66,7 +67,7 @@ def test_a_transit_missed_once_is_tried_again_before_giving_up():
 
 def test_forget_failures_keeps_only_found_transits():
     explorer, ctx, _tree = _explorer("figure1", 0)
-    found = [explorer.candidate(0, grasp) for grasp in range(len(ctx.world.object.grasps))]
+    found = [explorer.candidate(0, grasp) for grasp in range(len(world_of(ctx).object.grasps))]
     assert any(c is None for c in found)
     assert any(c is not None for c in found)
     explorer.forget_failures()
@@ -76,10 +77,10 @@ def test_forget_failures_keeps_only_found_transits():
 def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp(monkeypatch):
     """EXPLORE's new (landmark, grasp) pairs go to SEARCH_TRANSIT as one batch of islands: every
     found transit ends with the tip on its grasp point, moves validly, and starts at the landmark."""
-    from clew_ros.core import explore, search
-    from clew_ros.core.collision import is_valid
-    from clew_ros.core.kinematics import tip_poses, transform_points
-    from clew_ros.core.plan import CHECK_STEP_RAD
+    from clew_ros.planar import search
+    from clew_ros.planar.collision import is_valid
+    from clew_ros.planar.kinematics import tip_poses, transform_points
+    from clew_ros.planar.plan import CHECK_STEP_RAD
 
     explorer, ctx, tree = _explorer("arm3_regrasp", 1)
     batches = []
@@ -89,9 +90,9 @@ def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp
         batches.append(len(requests))
         return real(context, requests)
 
-    monkeypatch.setattr(explore, "search_transits", spy)
+    monkeypatch.setattr(search, "search_transits", spy)  # PlanarSpace.search_transits calls it by its name
     assert explorer.explore() is not None
-    world = ctx.world
+    world = world_of(ctx)
     assert batches
     assert max(batches) >= 2
     found = [c for c in explorer.transits.values() if c is not None and c.transit is not None]
@@ -109,14 +110,16 @@ def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp
 
 
 def test_a_landmark_takes_its_own_grasp_again_with_another_approach_when_asked():
-    from clew_ros.core.kinematics import relative, tip_poses, transform_points
-    from clew_ros.core.reach import APPROACH_CELLS, approach_cell, approach_cells, approach_excess
+    from clew_ros.planar.kinematics import relative, tip_poses, transform_points
+    from clew_ros.planar.reach import REACH, approach_cell, approach_cells, approach_excess
+
+    APPROACH_CELLS = REACH.approach_cells
 
     explorer, ctx, tree = _explorer("arm3_regrasp", 7)
     exploration = explorer.explore()
     assert exploration is not None
     landmark = tree.add(**exploration.fields)
-    world, grasp = ctx.world, landmark.grasp
+    world, grasp = world_of(ctx), landmark.grasp
     here = approach_cell(-landmark.grasp_rel[2])
     # its own approach allowed: the landmark itself, no transit
     allowed = np.zeros(APPROACH_CELLS, bool)

@@ -8,15 +8,16 @@ import dataclasses
 import numpy as np
 import pytest
 
-from clew_ros.core.clew import plan
 from clew_ros.core.explore import Explorer
-from clew_ros.core.kernel import warm_up
-from clew_ros.core.plan import Plan, replay, validate_plan
-from clew_ros.core.reach import holding_configurations, holding_configurations_near
-from clew_ros.core.search import PlanningContext, _moves_clear_stopping, search_transfer
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
+from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import LandmarkTree
-from clew_ros.core.world import World
+from clew_ros.planar.kernel import warm_up
+from clew_ros.planar.plan import Plan, replay, validate_plan
+from clew_ros.planar.reach import holding_configurations, holding_configurations_near
+from clew_ros.planar.search import _moves_clear_stopping, search_transfer
+from clew_ros.planar.space import PlanarSpace, plan
+from clew_ros.planar.world import World
 from clew_ros.worlds import generate
 
 
@@ -30,7 +31,7 @@ def test_the_transfer_into_the_slot_is_found_from_the_witness_regrasp(seed: int)
     world = generated.world()
     last = list(replay(world, generated.witness, None))[-1]  # the witness's transfer into the slot
     assert last.grasp_rel is not None
-    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
+    ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
     result = search_transfer(ctx, last.configurations[0], last.grasp_rel, world.object.goal)
     assert result.success
     assert ctx.counters.evaluations == 0  # straight moves only: no Manhattan path was decoded
@@ -69,11 +70,11 @@ def test_a_straight_probe_move_is_checked_in_pieces_asking_the_termination_befor
     starts, ends = _long_clear_move(world)
     many = dataclasses.replace(ManyJoints(), check_sweep_m=5e-3)  # pieces of 5 mm sweep: several of them
     running = _CountingTermination(None)
-    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), running, many=many)
+    ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), running, many=many)
     assert _moves_clear_stopping(ctx, starts, ends, object_pose=world.object.initial, until=True).all()
     assert running.asked >= 5  # asked before each piece, not once for the whole move
     stopping = _CountingTermination(3)
-    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), stopping, many=many)
+    ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), stopping, many=many)
     clear = _moves_clear_stopping(ctx, starts, ends, object_pose=world.object.initial, until=True)
     assert not clear.any()  # stopped: not proven clear
     assert stopping.asked <= running.asked // 2  # and no piece was checked after the stop
@@ -109,7 +110,7 @@ def test_holds_solved_from_the_arms_own_posture_are_nearer_it_than_random_ones(s
 def test_a_many_joint_transfer_decodes_no_manhattan_path_when_its_straight_probe_fails() -> None:
     generated = generate("snake", 0)
     world = generated.world()
-    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
+    ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
     start = np.asarray(world.robot.initial, float)
     # the object held 5 cm ahead of the tip from the arm's start posture: no straight move puts it in the slot
     result = search_transfer(ctx, start, np.array([0.05, 0.0, 0.0]), world.object.goal)
@@ -119,7 +120,7 @@ def test_a_many_joint_transfer_decodes_no_manhattan_path_when_its_straight_probe
 
 def test_explore_runs_few_generations_on_a_many_joint_arm() -> None:
     world = generate("snake", 3).world()
-    ctx = PlanningContext(world, PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
+    ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
     assert ctx.settings.generations > ctx.many.explore_generations
     exploration = Explorer(ctx, LandmarkTree(world.robot.initial, world.object.initial)).explore()
     assert exploration is not None

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from clew_ros.core.clew import plan
 from clew_ros.core.settings import Outcome, PlannerSettings
-from clew_ros.core.world import load_world, world_from_parameters
+from clew_ros.planar.space import plan
+from clew_ros.planar.world import load_world, world_from_parameters
 from clew_ros.worlds import generate
 
 ROOT = Path(__file__).resolve().parents[2]

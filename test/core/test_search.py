@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from clew_ros.core.collision import is_valid
-from clew_ros.core.kinematics import compose, tip_poses, transform_points
-from clew_ros.core.plan import interpolate
-from clew_ros.core.search import PlanningContext, goal_error, goal_reached, search_transfer, search_transit
-from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.world import load_world
+from clew_ros.core.settings import PlannerSettings, SearchSettings
+from clew_ros.core.space import PlanningContext
+from clew_ros.planar.collision import is_valid
+from clew_ros.planar.kinematics import compose, tip_poses, transform_points
+from clew_ros.planar.plan import interpolate
+from clew_ros.planar.search import goal_error, goal_reached, search_transfer, search_transit
+from clew_ros.planar.space import PlanarSpace
+from clew_ros.planar.world import load_world
 
 QUICK = Path(__file__).parents[1] / "worlds" / "node_quick.yaml"
 
@@ -23,7 +26,7 @@ def world():
 
 
 def context(world, seed: int = 0) -> PlanningContext:
-    return PlanningContext(world, PlannerSettings(seed=seed), np.random.default_rng(seed))
+    return PlanningContext(PlanarSpace(world), PlannerSettings(seed=seed), np.random.default_rng(seed))
 
 
 def test_search_transit_reaches_a_grasp_without_touching_the_resting_object(world) -> None:
@@ -100,8 +103,7 @@ def test_greedy_probe_takes_an_open_way_without_a_generation_and_is_off_on_reque
     assert distance <= 1e-5
     assert np.allclose(waypoints[-1], goal, atol=1e-3)
     assert np.all(np.count_nonzero(np.diff(waypoints, axis=0), axis=1) <= 1)  # still Manhattan moves
-    monkeypatch.setattr(search, "GREEDY_PROBE", False)
-    ctx = context(world)
+    ctx = dataclasses.replace(context(world), search=SearchSettings(greedy_probe=False))
     search.local_search(ctx, [_joint_space_job(world, q0, goal)])
     assert ctx.counters.evaluations > 1
 
@@ -132,7 +134,7 @@ def test_greedy_probe_into_an_obstacle_stops_short_and_stays_valid(world, monkey
 
 
 def test_transfer_probe_heads_for_a_configuration_holding_the_object_at_the_goal(world, monkeypatch) -> None:
-    from clew_ros.core import search
+    from clew_ros.planar import search
 
     ctx = context(world)
     transit = search_transit(ctx, world.robot.initial, world.object.initial, grasp=1)
@@ -148,5 +150,5 @@ def test_transfer_probe_heads_for_a_configuration_holding_the_object_at_the_goal
     again = search.transfer_probe_target(context(world), q0, transit.grasp_rel, goal)
     assert again is not None
     assert np.array_equal(toward, again)  # same request, same target
-    monkeypatch.setattr(search, "TRANSFER_PROBE", False)
-    assert search.transfer_probe_target(ctx, q0, transit.grasp_rel, goal) is None
+    off = dataclasses.replace(ctx, search=SearchSettings(transfer_probe=False))
+    assert search.transfer_probe_target(off, q0, transit.grasp_rel, goal) is None

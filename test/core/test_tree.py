@@ -6,7 +6,8 @@ import itertools
 
 import numpy as np
 
-from clew_ros.core.tree import LandmarkTree, Segment, append_path, append_step, landmark_features
+from clew_ros.core.tree import LandmarkTree, Segment, append_path, append_step
+from clew_ros.planar.space import landmark_features
 
 
 def path(*points) -> np.ndarray:

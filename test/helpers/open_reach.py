@@ -1,6 +1,6 @@
 """``open_reach``: a 2-joint arm and a small box, no obstacle, the goal a short carry away.
 
-Shared by the improvement's tests (test/core/test_improve.py) and the grid reference's
+Shared by the improvement's tests (test/planar/test_improve.py) and the grid reference's
 (test/benchmarks/test_reference.py): a world whose shortest plan is known to be one transfer.
 """
 

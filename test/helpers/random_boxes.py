@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clew_ros.core.world import World, world_from_parameters
+from clew_ros.planar.world import World, world_from_parameters
 
 __all__ = ["random_box_world", "random_boxes"]
 

@@ -15,7 +15,7 @@ TIME_LIMIT_S = 20.0
 
 @functools.lru_cache(maxsize=1)
 def quick_world():
-    from clew_ros.core.world import load_world
+    from clew_ros.planar.world import load_world
 
     return load_world(WORLD_PATH)
 
@@ -23,9 +23,9 @@ def quick_world():
 @functools.lru_cache(maxsize=1)
 def quick_plan() -> dict:
     """A successful plan for the quick world, as its plan file holds it (a dict); raises if the core finds none."""
-    from clew_ros.core.clew import plan
-    from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
+    from clew_ros.planar.plan import Plan
+    from clew_ros.planar.space import plan
 
     world = quick_world()
     result = plan(world, PlannerSettings(seed=0, time_limit=TIME_LIMIT_S))

@@ -43,7 +43,7 @@ def plan_bytes(name: str) -> bytes:
 def write_recording(directory: Path, world: str, plan_name: str, *, compression: str = "zstd") -> Path:
     """A run of ``plan_name`` in ``world`` recorded as the node records it (small chunks: several of them);
     returns the ``.mcap`` file."""
-    from clew_ros.core.world import load_world
+    from clew_ros.planar.world import load_world
     from clew_ros.recording import RunRecorder
     from helpers import rec_messages
     from helpers.rec_landmark_events import with_landmark_events

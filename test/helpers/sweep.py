@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from clew_ros.core.collision import is_valid
-from clew_ros.core.manhattan import MAX_MOVE_RAD
+from clew_ros.planar.collision import is_valid
+from clew_ros.planar.manhattan import MAX_MOVE_RAD
 
 SWEEP = np.arange(-6.3, 6.3 + 1e-9, 1e-3)
 

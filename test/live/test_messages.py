@@ -13,10 +13,10 @@ pytest.importorskip("google.protobuf")
 
 from helpers.foxglove_client import protobuf_decoder
 
-from clew_ros.core.kinematics import joint_positions, transform_points
 from clew_ros.core.tree import LandmarkTree
-from clew_ros.core.world import load_world
 from clew_ros.live import messages
+from clew_ros.planar.kinematics import joint_positions, transform_points
+from clew_ros.planar.world import load_world
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 NOW_NS = 1_700_000_000_123_456_789

@@ -21,13 +21,14 @@ pytest.importorskip("google.protobuf")
 
 from helpers.foxglove_client import FoxgloveClient, Received
 
-from clew_ros.core.clew import Progress, plan
+from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.kinematics import joint_positions, transform_points
-from clew_ros.core.plan import checked_plan, replay
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.world import load_world
 from clew_ros.live import HOST, LiveView, LiveViewError
+from clew_ros.planar.kinematics import joint_positions, transform_points
+from clew_ros.planar.plan import checked_plan, replay
+from clew_ros.planar.space import plan
+from clew_ros.planar.world import load_world
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 CHANNELS = 6

@@ -27,8 +27,8 @@ from helpers.urdf_fk import urdf_fk  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 
-from clew_ros.core.kinematics import joint_positions, tip_poses  # noqa: E402
-from clew_ros.core.world import (  # noqa: E402
+from clew_ros.planar.kinematics import joint_positions, tip_poses  # noqa: E402
+from clew_ros.planar.world import (  # noqa: E402
     World,
     read_parameter_file,
     world_from_parameters,

@@ -24,9 +24,9 @@ from rcl_interfaces.msg import ParameterType, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import GetParameters, SetParameters  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory  # noqa: E402
 
-from clew_ros.core.plan import validate_plan  # noqa: E402
-from clew_ros.core.world import load_world  # noqa: E402
 from clew_ros.motion.playback import track_from_plan  # noqa: E402
+from clew_ros.planar.plan import validate_plan  # noqa: E402
+from clew_ros.planar.world import load_world  # noqa: E402
 from clew_ros.recording import trajectory_to_plan  # noqa: E402
 
 pytestmark = pytest.mark.ros

@@ -8,7 +8,6 @@ import pytest
 import yaml
 
 from clew_ros.core.parameters import NODE_PARAMETERS
-from clew_ros.core.world import read_parameter_file
 from clew_ros.node.namespaces import (
     DEMO_WORLDS,
     PlannerArgumentError,
@@ -19,6 +18,7 @@ from clew_ros.node.namespaces import (
     parse_planner_pairs,
     world_parameters,
 )
+from clew_ros.planar.world import read_parameter_file
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 

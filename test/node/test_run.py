@@ -15,9 +15,9 @@ pytest.importorskip("action_msgs")
 from action_msgs.msg import GoalStatus
 
 from clew_ros.core.settings import Outcome
-from clew_ros.core.world import read_parameter_file
 from clew_ros.node.run import CancelKind, Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
+from clew_ros.planar.world import read_parameter_file
 from clew_ros.ros.parameters import configuration_from_values, flatten, initial_values
 
 QUICK = Path(__file__).parents[1] / "worlds" / "node_quick.yaml"

@@ -46,8 +46,8 @@ from std_srvs.srv import Trigger  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
-from clew_ros.core.plan import validate_plan  # noqa: E402
-from clew_ros.core.world import load_world, read_parameter_file, world_from_parameters  # noqa: E402
+from clew_ros.planar.plan import validate_plan  # noqa: E402
+from clew_ros.planar.world import load_world, read_parameter_file, world_from_parameters  # noqa: E402
 from clew_ros.recording import trajectory_to_plan  # noqa: E402
 from clew_ros.ros import messages  # noqa: E402
 

@@ -16,7 +16,7 @@ rclpy = pytest.importorskip("rclpy")
 from helpers.node_harness import LATCHED, Client, NodeProcess  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
-from clew_ros.core.world import load_world, world_from_parameters  # noqa: E402
+from clew_ros.planar.world import load_world, world_from_parameters  # noqa: E402
 from clew_ros.ros.parameters import default_world_file  # noqa: E402
 
 pytestmark = pytest.mark.ros
@@ -102,8 +102,8 @@ def test_runs_go_on_without_a_recording(monkeypatch: pytest.MonkeyPatch, tmp_pat
     """Without the recorder, or with a directory it cannot use, a run is planned and says it was not recorded."""
     from rclpy.parameter import Parameter
 
-    from clew_ros.core.world import read_parameter_file
     from clew_ros.node.planner_node import PlannerNode
+    from clew_ros.planar.world import read_parameter_file
     from clew_ros.ros.parameters import flatten
 
     directory = tmp_path / "recordings"
@@ -166,8 +166,8 @@ def test_given_parameters_get_their_descriptors() -> None:
     from rcl_interfaces.msg import ParameterType
     from rclpy.parameter import Parameter
 
-    from clew_ros.core.world import read_parameter_file
     from clew_ros.node.planner_node import PlannerNode
+    from clew_ros.planar.world import read_parameter_file
     from clew_ros.ros.parameters import descriptor_for, flatten
 
     given = flatten(read_parameter_file(QUICK))

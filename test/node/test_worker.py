@@ -13,9 +13,9 @@ rclpy = pytest.importorskip("rclpy")
 from action_msgs.msg import GoalStatus  # noqa: E402
 
 from clew_ros.core.settings import Outcome  # noqa: E402
-from clew_ros.core.world import read_parameter_file  # noqa: E402
 from clew_ros.node import worker  # noqa: E402
 from clew_ros.node.run import Phase  # noqa: E402
+from clew_ros.planar.world import read_parameter_file  # noqa: E402
 from clew_ros.ros.parameters import flatten  # noqa: E402
 
 pytestmark = pytest.mark.ros

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from helpers.rec_plan import quick_plan, quick_world
 
-from clew_ros.core.plan import validate_plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.recording import trajectory_to_plan
 
 

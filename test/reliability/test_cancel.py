@@ -37,7 +37,7 @@ from helpers.rel_node import goal_publisher, received_at, set_parameters, status
 from std_srvs.srv import Trigger  # noqa: E402
 
 from clew_ros.core.settings import Outcome  # noqa: E402
-from clew_ros.core.world import read_parameter_file  # noqa: E402
+from clew_ros.planar.world import read_parameter_file  # noqa: E402
 from clew_ros.ros import messages  # noqa: E402
 from clew_ros.ros.parameters import flatten  # noqa: E402
 

@@ -29,10 +29,10 @@ from helpers.rel_worlds import (
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from clew_ros.core.collision import check_start_and_goal
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.core.world import MAX_LINKS, World, read_parameter_file, world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.world import MAX_LINKS, World, read_parameter_file, world_from_parameters
 
 CLEW_PLAN = [sys.executable, "-m", "clew_ros.cli.plan"]
 ROOT = Path(__file__).resolve().parents[2]
@@ -325,7 +325,7 @@ def test_clew_plan_failures_carry_a_code_and_the_time_limit_holds(tmp_path: Path
 def test_the_time_limit_holds_on_big_worlds(links: int, obstacles: int) -> None:
     """The longest piece of work between two looks at the clock is bounded: the planner stops
     within limit + :data:`TIME_LIMIT_SLACK_S` even when one genetic-algorithm evaluation is expensive."""
-    from clew_ros.core.clew import plan
+    from clew_ros.planar.space import plan
 
     tree = read_parameter_file(ROOT / "test" / "worlds" / "node_quick.yaml")
     if links > 2:

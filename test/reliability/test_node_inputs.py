@@ -34,7 +34,7 @@ from helpers.rel_node import get_parameters, goal_publisher, new_events, set_par
 from std_srvs.srv import Trigger  # noqa: E402
 
 from clew_ros.core.settings import PLANNER_PARAMETERS  # noqa: E402
-from clew_ros.core.world import read_parameter_file  # noqa: E402
+from clew_ros.planar.world import read_parameter_file  # noqa: E402
 from clew_ros.ros import messages  # noqa: E402
 from clew_ros.ros.parameters import NODE_PARAMETERS, flatten  # noqa: E402
 

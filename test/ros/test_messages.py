@@ -19,13 +19,13 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import Marker
 
-from clew_ros.core.clew import plan
-from clew_ros.core.plan import Plan, validate_plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import LandmarkTree
-from clew_ros.core.world import load_world, world_from_parameters
 from clew_ros.motion.playback import track_from_plan
 from clew_ros.motion.timing import quintic_spline
+from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.space import plan
+from clew_ros.planar.world import load_world, world_from_parameters
 from clew_ros.recording import trajectory_to_plan
 from clew_ros.ros import messages
 
@@ -160,7 +160,7 @@ def test_concave_obstacles_are_filled_inside_only(quick) -> None:
 
     import shapely
 
-    from clew_ros.core.world import Obstacle
+    from clew_ros.planar.world import Obstacle
 
     u_shape = np.array([[0, 0], [3, 0], [3, 3], [2, 3], [2, 1], [1, 1], [1, 3], [0, 3]], dtype=float)
     world = dataclasses.replace(quick, obstacles=(Obstacle("u", u_shape),))
@@ -259,7 +259,7 @@ def test_status_feedback_and_events() -> None:
 
 
 def test_world_yaml_is_a_parameter_file_for_the_same_world(tmp_path: Path) -> None:
-    from clew_ros.core.world import read_parameter_file
+    from clew_ros.planar.world import read_parameter_file
 
     world = load_world(WORLDS / "node_behind_wall.yaml")
     settings = PlannerSettings(seed=4, time_limit=3.0)

@@ -13,7 +13,7 @@ pytest.importorskip("rclpy")
 
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.parameters import NODE_PARAMETERS, PLANNER_PARAMETERS, WORLD_PARAMETERS
-from clew_ros.core.world import read_parameter_file
+from clew_ros.planar.world import read_parameter_file
 from clew_ros.ros import parameters
 from clew_ros.ros.parameters import (
     NodeSettings,

@@ -1,5 +1,5 @@
 """The URDF of ``~/robot_description`` read by a URDF library (urdf_parser_py): its forward kinematics at
-random joint states equals the planner's (``clew_ros.core.kinematics``) and the TF frames of
+random joint states equals the planner's (``clew_ros.planar.kinematics``) and the TF frames of
 ``clew_ros.ros.frames``; its joints, limits, link sizes and gripper are the world's.
 """
 
@@ -16,8 +16,8 @@ urdf_lib = pytest.importorskip("urdf_parser_py.urdf")
 
 from helpers.urdf_fk import matrix, urdf_fk  # noqa: E402
 
-from clew_ros.core.kinematics import joint_positions, tip_poses  # noqa: E402
-from clew_ros.core.world import World, load_world, world_from_parameters, world_to_parameters  # noqa: E402
+from clew_ros.planar.kinematics import joint_positions, tip_poses  # noqa: E402
+from clew_ros.planar.world import World, load_world, world_from_parameters, world_to_parameters  # noqa: E402
 from clew_ros.ros import frames, urdf  # noqa: E402
 
 CONFIG = Path(__file__).parents[2] / "config"

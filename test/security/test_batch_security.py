@@ -22,7 +22,7 @@ from clew_ros.batch.recording import write_recording
 from clew_ros.batch.runner import run_batch
 from clew_ros.batch.worker import JobOutcome, JobSpec
 from clew_ros.cli.batch import main as clew_batch
-from clew_ros.core.offline import failed_plan
+from clew_ros.planar.offline import failed_plan
 
 UNSAFE = ["../escaped", "/tmp/absolute", "a/b", "..", ".", "", "nul\x00name", "back\\slash", "x" * 300, 7, None]
 

@@ -25,7 +25,7 @@ from clew_ros.core.parameters import (
     limits_table,
     markdown_tables,
 )
-from clew_ros.core.world import world_from_parameters
+from clew_ros.planar.world import world_from_parameters
 
 #: A tiny valid world (two links, one obstacle), changed by each case.
 BASE: dict[str, Any] = {
@@ -185,7 +185,7 @@ def test_a_goal_frame_id_is_quoted_short_and_printable() -> None:
     pytest.importorskip("rclpy")
     from geometry_msgs.msg import PoseStamped
 
-    from clew_ros.core.world import world_from_parameters as load
+    from clew_ros.planar.world import world_from_parameters as load
     from clew_ros.ros.messages import GoalPoseError, goal_from_pose_stamped
 
     msg = PoseStamped()

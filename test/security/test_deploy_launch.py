@@ -18,7 +18,7 @@ import pytest
 import yaml
 from helpers.launch_api import install, started_nodes
 
-from clew_ros.core.world import read_parameter_file
+from clew_ros.planar.world import read_parameter_file
 
 ROOT = Path(__file__).resolve().parents[2]
 LAUNCH_FILES = sorted((ROOT / "launch").glob("*.launch.py"))

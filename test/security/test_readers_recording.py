@@ -17,7 +17,7 @@ from helpers.security_files import crafted_recordings, records, write_recording
 pytest.importorskip("rclpy")
 pytest.importorskip("mcap")
 
-from clew_ros.core.world import load_world
+from clew_ros.planar.world import load_world
 from clew_ros.recording import Recording, RecordingError, RecordingLimits, TrajectoryError, trajectory_to_plan
 from clew_ros.recording.msgdefs import message_class
 

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from clew_ros.core.kinematics import compose, relative, wrap_angle
-from clew_ros.core.world import World, load_world
+from clew_ros.planar.kinematics import compose, relative, wrap_angle
+from clew_ros.planar.world import World, load_world
 from clew_ros.worlds import generate
 from clew_ros.worlds.regrasp import regrasp_needed
 

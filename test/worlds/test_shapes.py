@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import shapely
 
-from clew_ros.core.world import GRASP_ON_BOUNDARY_TOLERANCE_M
+from clew_ros.planar.world import GRASP_ON_BOUNDARY_TOLERANCE_M
 from clew_ros.worlds.shapes import MIN_EDGE_M, MIN_THICKNESS_M, SHAPES, make_shape
 
 

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from clew_ros.core.collision import check_start_and_goal
-from clew_ros.core.plan import validate_plan
-from clew_ros.core.world import world_from_parameters
+from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.plan import validate_plan
+from clew_ros.planar.world import world_from_parameters
 from clew_ros.worlds import FAMILIES, generate
 from clew_ros.worlds.snake import DECREASE, REACH_M, VARIANTS, variant_of
 

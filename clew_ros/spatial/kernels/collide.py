@@ -36,7 +36,7 @@ Array = NDArray[Any]  # the kernels take float, int and bool arrays
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 # Functions that allocate nothing are compiled without reference counting (numba's ``_nrt`` option), as in
-# clew_ros.core.kernel: every array they get is borrowed from the caller, and the reference counting numba
+# clew_ros.planar.kernel: every array they get is borrowed from the caller, and the reference counting numba
 # would otherwise emit around each call of a helper with many array arguments cost more than the geometry.
 _leaf: _JITWrapper = numba.njit(  # type: ignore[call-overload]  # numba's stubs leave out its underscored options
     cache=True, nogil=True, error_model="numpy", _nrt=False

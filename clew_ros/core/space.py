@@ -1,0 +1,231 @@
+"""What the Ariadne's Clew Algorithm asks of a world: the *space* it plans in.
+
+EXPLORE (:mod:`clew_ros.core.explore`), SEARCH's do-while loop over Manhattan
+paths (:mod:`clew_ros.core.search`), the genetic algorithm
+(:mod:`clew_ros.core.genetic`), the landmark tree (:mod:`clew_ros.core.tree`)
+and the run itself (:func:`clew_ros.core.clew.plan`) use a world only through
+this protocol, as OMPL's planners use a StateSpace, a StateValidityChecker and a
+ProblemDefinition. A kind of world implements it with its own geometry and
+compiled kernels: :class:`clew_ros.planar.space.PlanarSpace` for the planar
+chains of section 1 of the contract.
+
+Vocabulary of the protocol (every array is a batch along its first axis):
+
+- a *configuration* ``q``: ``(n,)`` joint angles (rad), ``n`` = :attr:`Space.dof`;
+- an *object pose*: the resting object's placement (``(3,)`` planar: x, y, theta);
+- a *held pose* ``grasp_rel``: the object's pose in the tool's frame while it is carried;
+- a *mode*: ``{"object_poses": (B, p)}`` (transit: the object rests there) or ``{"grasp_rel": (B, p)}``
+  (transfer: the object is carried), as SEARCH's jobs and the Manhattan decoding take it;
+- an *approach*: whatever a space uses to aim a regrasp (planar: cells of the last link's angle in the
+  object's frame), opaque to the algorithm, ``None`` for no restriction.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+
+from clew_ros.core.manhattan import Counters, ManhattanPaths
+from clew_ros.core.settings import ManyJoints, PlannerSettings, SearchSettings, Termination
+
+if TYPE_CHECKING:
+    from clew_ros.core.settings import Outcome
+    from clew_ros.core.tree import Landmark, Segment
+
+__all__ = ["Improvement", "PathResult", "PlanningContext", "RegraspAims", "Space", "TransitRequest"]
+
+#: One SEARCH_TRANSIT request: start joints ``(n,)``, the resting object's pose, the grasp's index and the
+#: allowed approach (or ``None``): :meth:`Space.search_transits`.
+TransitRequest = tuple[np.ndarray, np.ndarray, int, Any]
+
+
+@dataclass
+class Improvement:
+    """What a space's improvement made of a plan (``segments`` is the first plan when nothing was better)."""
+
+    segments: list[Segment]
+    final_object_pose: np.ndarray
+    first_travel: float  # rad
+    first_transfers: int
+    travel: float  # rad
+    transfers: int
+    shortcuts: int  # straight moves accepted
+    work: int  # work units spent (deterministic)
+    stopped: bool  # the time limit or cancel cut it short
+    refused: str = ""  # why a better plan was not returned: "" (it was, or none was found), or what failed of it
+
+
+class RegraspAims(Protocol):
+    """How SEARCH aims its regrasps in place towards one goal (a space without aiming allows everything)."""
+
+    def retake(self, grasp: int, grasp_rel: np.ndarray) -> bool:
+        """Whether the held ``grasp`` (held as ``grasp_rel``), taken again in place, could carry the object
+        to the goal where holding it as it is could not (planar: held outside the goal's approach core)."""
+        ...
+
+    def aim(self, landmark: Landmark, grasp: int) -> Any | None:
+        """The approach a regrasp of ``grasp`` in place at ``landmark`` aims at; ``None``: that regrasp is
+        not worth a transit."""
+        ...
+
+
+class Space(Protocol):
+    """A world as the Ariadne's Clew Algorithm sees it (see the module's docstring for the vocabulary)."""
+
+    @property
+    def dof(self) -> int:
+        """Joints of the arm (the configuration's size)."""
+        ...
+
+    @property
+    def reach(self) -> float:
+        """The arm's reach (m): the scale of SEARCH's refinement and joins."""
+        ...
+
+    @property
+    def grasp_count(self) -> int:
+        """Grasps of the object (the landmark space's ``[grasp]`` dimension)."""
+        ...
+
+    @property
+    def initial_joints(self) -> np.ndarray:
+        """The start configuration ``(n,)``: the root landmark's joints."""
+        ...
+
+    @property
+    def initial_object_pose(self) -> np.ndarray:
+        """Where the object rests at the start: the root landmark's pose."""
+        ...
+
+    @property
+    def goal(self) -> np.ndarray:
+        """The world's goal placement of the object."""
+        ...
+
+    def manhattan(
+        self,
+        q0: np.ndarray,
+        genes: np.ndarray,
+        *,
+        margin_m: float,
+        counters: Counters | None,
+        should_stop: Callable[[], bool] | None,
+        threads: int,
+        object_poses: np.ndarray | None = None,
+        grasp_rel: np.ndarray | None = None,
+    ) -> ManhattanPaths:
+        """Genes ``(B, k, n)`` decoded into collision-free Manhattan paths from ``q0`` ``(B, n)``: each move
+        bounced into its joint's free interval (paper 1.3.1, 1.3.3). Transit with ``object_poses``,
+        transfer with ``grasp_rel``."""
+        ...
+
+    def single_moves(
+        self, q: np.ndarray, moves: np.ndarray, *, margin_m: float, counters: Counters | None, **mode: np.ndarray
+    ) -> np.ndarray:
+        """Joint moves ``(n,)`` applied one joint at a time, each clamped to its free interval: the
+        waypoints ``(m, n)`` (SEARCH's refinement, where bouncing would undo the step)."""
+        ...
+
+    def held_object_poses(self, q: np.ndarray, grasp_rel: np.ndarray) -> np.ndarray:
+        """Where the held object is at configurations ``q`` ``(B, n)``."""
+        ...
+
+    def landmark_features(self, joints: np.ndarray, object_poses: np.ndarray, joint_weight: float) -> np.ndarray:
+        """Points ``(L, d)`` whose Euclidean distances are the landmark distances EXPLORE maximises."""
+        ...
+
+    def goal_distance(self, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """How far each object pose is from the goal (m): SEARCH_TRANSFER's objective."""
+        ...
+
+    def search_transits(self, ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
+        """SEARCH_TRANSIT for each request: move the arm, the object at rest, until it holds the grasp."""
+        ...
+
+    def search_transfer(
+        self, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
+    ) -> PathResult:
+        """SEARCH_TRANSFER: carry the object held as ``grasp_rel`` from ``q0`` towards the goal placement."""
+        ...
+
+    def straight_probe(
+        self, ctx: PlanningContext, jobs: list[Any], q: np.ndarray, best: np.ndarray, waypoints: list[list[np.ndarray]]
+    ) -> None:
+        """Before SEARCH's GA rounds, jobs with ``straight`` targets try direct moves to them (arms of many
+        joints); kept in ``q``, ``best`` and ``waypoints`` where they get closer."""
+        ...
+
+    def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
+        """Whether a grasp held as ``grasp_rel`` comes in at an allowed ``approach``."""
+        ...
+
+    def regrasp_aims(self, goal: np.ndarray) -> RegraspAims:
+        """How SEARCH aims regrasps in place towards ``goal`` (computed lazily, once per run)."""
+        ...
+
+    def quick_refusal(self, goal: np.ndarray) -> tuple[Outcome, str] | None:
+        """An answer knowable at once (a colliding start or goal, a goal out of reach, a proof that no path
+        exists), or ``None``."""
+        ...
+
+    def improve(
+        self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
+    ) -> Improvement:
+        """The first plan made shorter within ``planner.improve_time`` (never longer, never invalid)."""
+        ...
+
+
+@dataclass
+class PlanningContext:
+    """Everything one planning run shares: the space, settings, randomness, stop test, counters."""
+
+    space: Space
+    settings: PlannerSettings
+    rng: np.random.Generator
+    termination: Termination = field(default_factory=Termination)
+    counters: Counters = field(default_factory=Counters)
+    #: Random starts of the holding configurations that decide whether a transit is hopeless (more of them
+    #: after an EXPLORE round that found no transit at all: the space answers the same request with the same
+    #: sample, so a retry must draw a larger one); ``SearchSettings.hold_samples`` at the start.
+    hold_samples: int = field(default_factory=lambda: SearchSettings().hold_samples)
+    #: Whether a stalled SEARCH_TRANSIT is joined to its holding configurations (the space's joins): only
+    #: from an EXPLORE round that found no transit at all to the next that finds one (elsewhere joins cost
+    #: more than they save).
+    transit_joins: bool = False
+    #: how the search adapts to arms of many joints
+    many: ManyJoints = field(default_factory=ManyJoints)
+    #: SEARCH's own tuning (probes, joins, chains)
+    search: SearchSettings = field(default_factory=SearchSettings)
+
+    def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
+        """:meth:`Space.manhattan` with this run's clearance, counters, stop test and threads."""
+        return self.space.manhattan(
+            q0,
+            genes,
+            margin_m=self.settings.clearance,
+            counters=self.counters,
+            should_stop=self.termination,
+            threads=self.settings.threads,
+            **mode,
+        )
+
+    def initial_genes(self, count: int, islands: int | None = None) -> np.ndarray:
+        """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``); the first individual
+        (of each island) stays put."""
+        n = self.space.dof
+        shape = (count, self.settings.manhattan_order, n)
+        genes = self.rng.normal(0.0, 1.2, size=shape if islands is None else (islands, *shape))
+        genes[..., 0, :, :] = 0.0
+        return genes
+
+
+@dataclass
+class PathResult:
+    success: bool
+    waypoints: np.ndarray  # (m, n), starting at the start configuration
+    distance: float  # final value of the objective (m)
+    grasp_rel: np.ndarray | None = None  # transit: object pose in the end-effector frame at the grasp
+    object_pose: np.ndarray | None = None  # transfer: where the object ends

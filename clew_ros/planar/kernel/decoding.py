@@ -1,0 +1,239 @@
+"""Manhattan decoding of a whole population in one compiled call: each individual's genes become its
+Manhattan path, one joint move at a time within its free interval, bounced (serial and parallel)."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from clew_ros.planar.kernel.free_intervals import _bounce, _interval, _scratch
+from clew_ros.planar.kernel.jit import _jit, _leaf
+from clew_ros.planar.kernel.packed import PackedWorld, _arg, _poses
+
+
+@_leaf
+def _decode_one(
+    b: int,
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    groups: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+    scratch: tuple[np.ndarray, ...],
+    q: np.ndarray,
+) -> None:
+    """Individual ``b``: fill columns ``first .. last - 1`` (>= 1) of ``waypoints[b]`` from column
+    ``first - 1``: move ``c`` turns joint ``(c - 1) mod n`` by gene ``(c - 1)`` bounced into its free
+    interval."""
+    n = lengths.shape[0]
+    for j in range(n):
+        q[j] = waypoints[b, first - 1, j]
+    for column in range(first, last):
+        k, joint = (column - 1) // n, (column - 1) % n
+        low, high = _interval(
+            q,
+            joint,
+            transfer,
+            poses[b],
+            margin,
+            base,
+            lengths,
+            lower,
+            upper,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            groups,
+            object_edges,
+            shrunk_edges,
+            scratch,
+        )
+        q[joint] += _bounce(genes[b, k, joint], low, high)
+        for j in range(n):
+            waypoints[b, column, j] = q[j]
+
+
+@_jit
+def _decode(
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    groups: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+) -> None:
+    """Columns ``first .. last - 1`` of every individual of ``waypoints`` ``(B, k n + 1, n)`` (genes
+    ``(B, k, n)``, ``poses`` ``(B, 3)`` per individual), one after the other."""
+    n = lengths.shape[0]
+    scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
+    q = np.empty(n)
+    for b in range(waypoints.shape[0]):
+        _decode_one(
+            b,
+            waypoints,
+            genes,
+            first,
+            last,
+            transfer,
+            poses,
+            margin,
+            base,
+            lengths,
+            lower,
+            upper,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            groups,
+            object_edges,
+            shrunk_edges,
+            scratch,
+            q,
+        )
+
+
+@numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def _decode_parallel(
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    base: np.ndarray,
+    lengths: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    r: float,
+    self_collision: bool,
+    bounds: np.ndarray,
+    obstacles: np.ndarray,
+    groups: np.ndarray,
+    object_edges: np.ndarray,
+    shrunk_edges: np.ndarray,
+) -> None:
+    """:func:`_decode` with the individuals spread over threads (each computed alone, with work arrays
+    of its own: the same numbers whatever the number of threads)."""
+    n = lengths.shape[0]
+    for b in numba.prange(waypoints.shape[0]):
+        scratch = _scratch(n, obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
+        _decode_one(
+            b,
+            waypoints,
+            genes,
+            first,
+            last,
+            transfer,
+            poses,
+            margin,
+            base,
+            lengths,
+            lower,
+            upper,
+            r,
+            self_collision,
+            bounds,
+            obstacles,
+            groups,
+            object_edges,
+            shrunk_edges,
+            scratch,
+            np.empty(n),
+        )
+
+
+def available_threads() -> int:
+    """Threads the parallel kernel may use here: numba's thread count when a thread-safe threading
+    layer (TBB or OpenMP) loads, else 1."""
+    if not _PARALLEL:
+        try:
+            _decode_parallel(
+                np.zeros((1, 2, 1)),
+                np.zeros((1, 1, 1)),
+                1,
+                2,
+                False,
+                np.zeros((1, 3)),
+                0.0,
+                np.zeros(2),
+                np.ones(1),
+                -np.ones(1),
+                np.ones(1),
+                0.0,
+                False,
+                np.array([-9.0, -9.0, 9.0, 9.0]),
+                np.zeros((0, 2, 2)),
+                np.zeros((0, 5)),
+                np.zeros((0, 2, 2)),
+                np.zeros((0, 2, 2)),
+            )
+            # the workqueue layer (chosen by a user's NUMBA_THREADING_LAYER) aborts on concurrent launches
+            safe = numba.threading_layer() in ("tbb", "omp")  # type: ignore[attr-defined]
+            _PARALLEL.append(int(numba.config.NUMBA_NUM_THREADS) if safe else 1)  # type: ignore[attr-defined]
+        except (ValueError, RuntimeError, ImportError):  # no thread-safe threading layer
+            _PARALLEL.append(1)
+    return _PARALLEL[0]
+
+
+_PARALLEL: list[int] = []
+
+
+def decode(
+    world: PackedWorld,
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    threads: int = 1,
+) -> None:
+    """Compiled: columns ``first .. last - 1`` of ``waypoints`` (C-contiguous float64, filled in place),
+    on ``threads`` threads (0: all); every individual is computed alone, so the numbers do not depend
+    on the number of threads."""
+    if threads != 1:
+        threads = min(threads or available_threads(), available_threads(), len(waypoints))
+    arguments = (
+        waypoints,
+        _arg(genes),
+        first,
+        last,
+        transfer,
+        _poses(poses, len(waypoints)),
+        float(margin),
+        *world.arguments(),
+    )
+    if threads > 1:
+        numba.set_num_threads(threads)  # for this calling thread only
+        _decode_parallel(*arguments)
+    else:
+        _decode(*arguments)

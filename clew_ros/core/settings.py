@@ -89,6 +89,10 @@ class SearchSettings:
     #: rounds (count) of that RRT-Connect at most: each extends one tree a step and the other as far as it is
     #: clear; beyond about 30 a join that has not met rarely does, and every round costs continuous checks
     join_rounds: int = 30
+    #: margin (x ``planner.clearance``) SEARCH's straight probes and joins keep along their moves, checked
+    #: continuously: valid at any checking step with room to spare, as the improvement's moves are
+    #: (``ContinuousSettings.min_margin_factor``)
+    min_margin_factor: float = 0.5
     #: seeds (count) of the inverse kinematics for the configurations holding the object at the goal: the
     #: stalled configuration and random ones (more find more goal configurations, each costs a solve)
     goal_seeds: int = 8

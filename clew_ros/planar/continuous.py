@@ -52,7 +52,6 @@ from clew_ros.planar.world import World
 
 __all__ = [
     "CHECK_STEP_RAD",
-    "MIN_MARGIN_FACTOR",
     "CheckBudget",
     "ContinuousSettings",
     "StopOnly",
@@ -80,10 +79,6 @@ class ContinuousSettings:
     #: A long straight move is first rejected by every this-many-th midpoint of its first level, if one is
     #: invalid (count): most blocked moves end there, at a fraction of the cost.
     coarse_stride: int = 4
-
-
-#: :attr:`ContinuousSettings.min_margin_factor` of the default settings, for :mod:`clew_ros.core.search`.
-MIN_MARGIN_FACTOR = ContinuousSettings().min_margin_factor
 
 
 class CheckBudget(Protocol):

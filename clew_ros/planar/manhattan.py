@@ -17,6 +17,7 @@ which is what the plan validator checks at 0.002 rad.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -30,15 +31,26 @@ from clew_ros.planar.world import World
 
 __all__ = [
     "BACKOFF_RAD",
+    "DECODING",
     "MAX_MOVE_RAD",
+    "DecodingSettings",
     "free_intervals",
     "run_manhattan",
     "single_moves",
 ]
 
-#: Piece pairs (configurations x pairs per free interval) one kernel call may check: beyond it the
-#: batch is split so that ``should_stop`` is asked often enough on huge worlds (cancel within 100 ms).
-PAIRS_PER_CALL = 1 << 20
+
+@dataclass(frozen=True)
+class DecodingSettings:
+    """How the decoding is split so that a stop request is heard."""
+
+    #: piece pairs (count: configurations x pairs per free interval) one kernel call may check: beyond it the
+    #: batch is split so that ``should_stop`` is asked often enough on huge worlds (cancel within 100 ms)
+    pairs_per_call: int = 1 << 20
+
+
+#: The defaults, which the functions below take unless given other settings.
+DECODING = DecodingSettings()
 
 
 def _mode(object_poses: np.ndarray | None, grasp_rel: np.ndarray | None) -> tuple[bool, np.ndarray]:
@@ -59,6 +71,7 @@ def free_intervals(
     margin_m: float = 1e-3,
     counters: Counters | None = None,
     should_stop: Callable[[], bool] | None = None,
+    decoding: DecodingSettings = DECODING,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Free interval ``[dmin, dmax]`` (rad) of ``joint`` for each configuration of ``q`` ``(B, n)``.
 
@@ -74,7 +87,7 @@ def free_intervals(
         q = q.reshape(1, -1)
     transfer, poses = _mode(object_poses, grasp_rel)
     packed = packed_world(world)
-    step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)
+    step = max(1, decoding.pairs_per_call // packed.pairs_per_move)
     if len(q) <= step:  # the usual case: one call
         low, high = kernel.intervals(packed, q, joint, transfer, poses, margin_m)
         if counters is not None:
@@ -103,6 +116,7 @@ def run_manhattan(
     counters: Counters | None = None,
     should_stop: Callable[[], bool] | None = None,
     threads: int = 1,
+    decoding: DecodingSettings = DECODING,
 ) -> ManhattanPaths:
     """Decode genes ``(B, k, n)`` into collision-free Manhattan paths from ``q0`` ``(B, n)``.
 
@@ -124,10 +138,10 @@ def run_manhattan(
     waypoints = np.empty((batch, columns, n))
     waypoints[:, 0] = q0
     per_move = packed.pairs_per_move * batch
-    if should_stop is None or per_move * (columns - 1) <= PAIRS_PER_CALL:
+    if should_stop is None or per_move * (columns - 1) <= decoding.pairs_per_call:
         kernel.decode(packed, waypoints, genes, 1, columns, transfer, poses, margin_m, threads)
     else:
-        step = max(1, PAIRS_PER_CALL // packed.pairs_per_move)
+        step = max(1, decoding.pairs_per_call // packed.pairs_per_move)
         for column in range(1, columns):
             for first in range(0, batch, step):
                 if should_stop():

@@ -29,7 +29,7 @@ from clew_ros.core.settings import ManyJoints, SearchSettings
 from clew_ros.core.space import PathResult, PlanningContext, TransitRequest
 from clew_ros.planar.collision import is_valid, packed_world
 from clew_ros.planar.connect import join
-from clew_ros.planar.continuous import ContinuousSettings, StopOnly, path_valid, straight_move_clear
+from clew_ros.planar.continuous import StopOnly, path_valid, straight_move_clear
 from clew_ros.planar.inverse import solve_point
 from clew_ros.planar.kernel import clearly_valid
 from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
@@ -63,8 +63,6 @@ JOIN_STREAM = 13
 #: The transfer probe's inverse kinematics draws from a generator seeded with (planner.seed, this, where
 #: the transfer starts): its own stream, as a join's.
 PROBE_STREAM = 17
-#: the continuous checks' margin factor (x ``planner.clearance``) of probes and joins, as the improvement's
-MIN_MARGIN_FACTOR = ContinuousSettings().min_margin_factor
 
 
 def straight_probe(
@@ -72,7 +70,7 @@ def straight_probe(
 ) -> None:
     """Jobs with ``straight`` configurations (transits of arms of many joints, :class:`ManyJoints`) try a
     straight joint-space move from their start to each, nearest first, checked continuously with
-    :data:`~clew_ros.planar.continuous.MIN_MARGIN_FACTOR` x the clearance as the improvement's moves are
+    ``SearchSettings.min_margin_factor`` x the clearance as the improvement's moves are
     (valid at any checking step); the first clear one ends the search there. Draws nothing at random."""
     world = world_of(ctx)
     for i, job in enumerate(jobs):
@@ -117,7 +115,7 @@ def join_stalled(
 ) -> tuple[np.ndarray, float]:
     """A search that failed, stalled near its target (``distance`` at most ``job.join_within``), extended by
     RRT-Connect to one of ``job.targets`` (in the same mode, every move checked continuously with
-    :data:`clew_ros.planar.continuous.MIN_MARGIN_FACTOR` x the clearance, at most ``SearchSettings.join_rounds`` rounds,
+    ``SearchSettings.min_margin_factor`` x the clearance, at most ``SearchSettings.join_rounds`` rounds,
     then once more at the validator's 0.002 rad); its waypoints and objective, unchanged when no way was
     found."""
     world = world_of(ctx)
@@ -139,7 +137,7 @@ def join_stalled(
         targets,
         rng,
         **mode,
-        min_margin=MIN_MARGIN_FACTOR * ctx.settings.clearance,
+        min_margin=ctx.search.min_margin_factor * ctx.settings.clearance,
         rounds=ctx.search.join_rounds,
         stop=ctx.termination,
     )
@@ -363,7 +361,7 @@ def transfer_probe_target(
     if not (ctx.search.greedy_probe and ctx.search.transfer_probe):
         return None
     rng = own_generator(ctx, PROBE_STREAM, q0, grasp_rel)
-    margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+    margin = ctx.search.min_margin_factor * ctx.settings.clearance
     held = goal_configurations(world_of(ctx), q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)
     return held[0] if len(held) else None
 
@@ -377,16 +375,17 @@ def _moves_clear_stopping(
     grasp_rel: np.ndarray | None = None,
     until: bool,
 ) -> np.ndarray:
-    """Arms of many joints: :func:`~clew_ros.planar.continuous.straight_moves_clear` (``MIN_MARGIN_FACTOR`` x the
-    clearance) of each move ``starts[k] -> ends[k]`` in turn, each split into pieces that sweep at most
-    :attr:`ManyJoints.check_sweep_m` (the bound ``sum_j |dq_j| R_j`` of the check's module), the termination
-    asked before each piece: one compiled check of a long move near a contact can take seconds, past the time
-    limit. The moves are checked in order until the first whose answer is ``until`` (the first clear one, or
-    the first blocked one); the others, and a move whose check was stopped, come back not clear."""
+    """Arms of many joints: :func:`~clew_ros.planar.continuous.straight_moves_clear`
+    (``SearchSettings.min_margin_factor`` x the clearance) of each move ``starts[k] -> ends[k]`` in turn,
+    each split into pieces that sweep at most :attr:`ManyJoints.check_sweep_m` (the bound
+    ``sum_j |dq_j| R_j`` of the check's module), the termination asked before each piece: one compiled
+    check of a long move near a contact can take seconds, past the time limit. The moves are checked in
+    order until the first whose answer is ``until`` (the first clear one, or the first blocked one); the
+    others, and a move whose check was stopped, come back not clear."""
     world = world_of(ctx)
     lengths = world.robot.link_lengths
     arm = np.cumsum(lengths[::-1])[::-1] + (world.object.radius if grasp_rel is not None else 0.0)
-    margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+    margin = ctx.search.min_margin_factor * ctx.settings.clearance
     budget = StopOnly(ctx.termination)
     out = np.zeros(len(starts), dtype=bool)
     for k, (a, b) in enumerate(zip(starts, ends, strict=True)):
@@ -464,7 +463,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
     world, many = world_of(ctx), ctx.many
     grasp_rel = job.pose
     rng = own_generator(ctx, PROBE_STREAM + 1, job.q0, grasp_rel)
-    margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+    margin = ctx.search.min_margin_factor * ctx.settings.clearance
     held = goal_configurations(world, job.q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)[
         : many.straight_probes
     ]
@@ -515,7 +514,7 @@ def search_transfer(
         )
 
     def targets(stalled: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        margin = MIN_MARGIN_FACTOR * ctx.settings.clearance
+        margin = ctx.search.min_margin_factor * ctx.settings.clearance
         return goal_configurations(
             world, stalled, mode["grasp_rel"][0], goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds
         )

@@ -113,7 +113,7 @@ def test_a_landmark_takes_its_own_grasp_again_with_another_approach_when_asked()
     from clew_ros.planar.kinematics import relative, tip_poses, transform_points
     from clew_ros.planar.reach import REACH, approach_cell, approach_cells, approach_excess
 
-    APPROACH_CELLS = REACH.approach_cells
+    cells_count = REACH.approach_cells
 
     explorer, ctx, tree = _explorer("arm3_regrasp", 7)
     exploration = explorer.explore()
@@ -122,14 +122,14 @@ def test_a_landmark_takes_its_own_grasp_again_with_another_approach_when_asked()
     world, grasp = world_of(ctx), landmark.grasp
     here = approach_cell(-landmark.grasp_rel[2])
     # its own approach allowed: the landmark itself, no transit
-    allowed = np.zeros(APPROACH_CELLS, bool)
+    allowed = np.zeros(cells_count, bool)
     allowed[here] = True
     own = explorer.candidate(landmark.id, grasp, allowed)
     assert own is not None
     assert own.transit is None
     # its own approach refused: a transit from the landmark to the same grasp, held with an allowed approach
-    cells = np.arange(APPROACH_CELLS)
-    apart = np.abs((cells - here + APPROACH_CELLS // 2) % APPROACH_CELLS - APPROACH_CELLS // 2) > APPROACH_CELLS // 8
+    cells = np.arange(cells_count)
+    apart = np.abs((cells - here + cells_count // 2) % cells_count - cells_count // 2) > cells_count // 8
     allowed = approach_cells(world, landmark.object_pose, grasp) & apart
     assert allowed.any()
     again = explorer.candidate(landmark.id, grasp, allowed)

@@ -48,7 +48,7 @@ def test_approach_cells_keep_every_angle_the_arm_holds_a_grasp_with():
     from clew_ros.planar.kinematics import wrap_angle
     from clew_ros.planar.reach import REACH, approach_cells
 
-    APPROACH_CELLS = REACH.approach_cells
+    cells_count = REACH.approach_cells
 
     world = load_world(CONFIG / "arm3_regrasp.yaml")
     rng = np.random.default_rng(2)
@@ -63,10 +63,10 @@ def test_approach_cells_keep_every_angle_the_arm_holds_a_grasp_with():
         c, s = np.cos(theta), np.sin(theta)
         pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
         cells = approach_cells(world, pose, grasp)
-        cell = int(np.floor(wrap_angle(np.array([psi]))[0] % (2 * np.pi) / (2 * np.pi) * APPROACH_CELLS))
-        assert cells[cell % APPROACH_CELLS], (q, psi)
+        cell = int(np.floor(wrap_angle(np.array([psi]))[0] % (2 * np.pi) / (2 * np.pi) * cells_count))
+        assert cells[cell % cells_count], (q, psi)
         # with a spread, nearby orientations of the object keep the cell too
-        assert approach_cells(world, pose + np.array([0.0, 0.0, 0.2]), grasp, angle_spread=0.25)[cell % APPROACH_CELLS]
+        assert approach_cells(world, pose + np.array([0.0, 0.0, 0.2]), grasp, angle_spread=0.25)[cell % cells_count]
         refused += int(np.sum(~cells))
     assert refused > 0, "the bound should refuse some approach angles"
 
@@ -106,20 +106,20 @@ def test_two_link_grasps_finds_the_configuration_that_holds_a_grasp():
 def test_approach_excess_is_zero_in_allowed_cells_and_grows_outside():
     from clew_ros.planar.reach import REACH, approach_excess
 
-    APPROACH_CELLS = REACH.approach_cells
+    cells_count = REACH.approach_cells
 
-    cells = np.zeros(APPROACH_CELLS, bool)
-    cells[: APPROACH_CELLS // 4] = True  # psi in [0, pi/2)
+    cells = np.zeros(cells_count, bool)
+    cells[: cells_count // 4] = True  # psi in [0, pi/2)
     excess = approach_excess(cells)
     assert np.allclose(excess(np.array([0.1, 0.7, 1.4])), 0.0)
     far = excess(np.array([np.pi / 2 + 0.2, np.pi / 2 + 0.5, -0.3]))
-    np.testing.assert_allclose(far, [0.2, 0.5, 0.3], atol=2 * np.pi / APPROACH_CELLS)
+    np.testing.assert_allclose(far, [0.2, 0.5, 0.3], atol=2 * np.pi / cells_count)
 
 
 def test_carry_cells_keep_every_approach_that_holds_the_object_there():
     from clew_ros.planar.reach import REACH, carry_cells
 
-    APPROACH_CELLS = REACH.approach_cells
+    cells_count = REACH.approach_cells
 
     world = load_world(CONFIG / "figure1.yaml")
     rng = np.random.default_rng(5)
@@ -133,11 +133,11 @@ def test_carry_cells_keep_every_approach_that_holds_the_object_there():
             c, s = np.cos(theta), np.sin(theta)
             pose = np.array([tip[0] - c * point[0] + s * point[1], tip[1] - s * point[0] - c * point[1], theta])
             cells = carry_cells(world, pose, grasp)
-            assert cells[int(psi / (2.0 * np.pi) * APPROACH_CELLS) % APPROACH_CELLS], (grasp, q, psi)
+            assert cells[int(psi / (2.0 * np.pi) * cells_count) % cells_count], (grasp, q, psi)
             refused += int(np.sum(~cells))
     # figure1's goal lies beyond the bare arm's reach: only in-line approaches carry the bar there
     goal_cells = carry_cells(world, world.object.goal, 1)
-    assert 0 < goal_cells.sum() < APPROACH_CELLS / 2
+    assert 0 < goal_cells.sum() < cells_count / 2
 
 
 def test_holding_configurations_hold_the_grasp_within_the_limits_and_validly():
@@ -182,7 +182,7 @@ def test_goal_approach_core_keeps_the_approaches_most_goal_holds_use():
     from clew_ros.planar.inverse import solve_point
     from clew_ros.planar.reach import REACH, approach_cell, carry_cells, goal_approach_core
 
-    APPROACH_CELLS = REACH.approach_cells
+    cells_count = REACH.approach_cells
     from clew_ros.planar.world import world_from_parameters
 
     # obstacles_32: the bar's goal lies 2.03 m from the base of a 1.7 m arm; held by an end, only approaches
@@ -207,7 +207,7 @@ def test_goal_approach_core_keeps_the_approaches_most_goal_holds_use():
     poses = np.column_stack([np.broadcast_to(goal[:2], (len(theta), 2)), theta])
     holds = (solved.error <= 1e-4) & is_valid(world, solved.q, poses)
     assert holds.any()
-    assert len(core) == APPROACH_CELLS
+    assert len(core) == cells_count
 
 
 def test_goal_approach_core_is_none_when_nothing_holds_the_goal():

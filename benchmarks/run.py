@@ -682,17 +682,7 @@ def _profile_section(prof: dict | None) -> list[str]:
                 [[f"`{f}`", f"{s:.2f}", f"{100 * share:.0f}%"] for f, s, share in prof["by_file"]],
             ),
             "",
-            "Top functions by own time:",
-            "",
-            "```",
-            prof["tottime"],
-            "```",
-            "",
-            "Top functions by cumulative time:",
-            "",
-            "```",
-            prof["cumulative"],
-            "```",
+            "The top functions by own and by cumulative time: `profile_figure1.txt` in the run's `--out` directory.",
             "",
         ]
     elif prof:

@@ -166,13 +166,14 @@ def _machine() -> dict:
 
 
 def _provenance() -> dict:
-    """Which planner code was measured: the clew_ros imported by the workers, its core's hash, git state."""
+    """Which planner code was measured: the clew_ros imported by the workers, the hash of the planner's
+    packages (``core`` and ``planar``), git state."""
     import clew_ros
 
     package = Path(clew_ros.__file__).parent
     digest = hashlib.sha256()
-    for path in sorted((package / "core").glob("*.py")):
-        digest.update(path.name.encode() + path.read_bytes())
+    for path in sorted([*(package / "core").rglob("*.py"), *(package / "planar").rglob("*.py")]):
+        digest.update(str(path.relative_to(package)).encode() + path.read_bytes())
     out: dict[str, str | bool | None] = {
         "clew_ros": str(package),
         "core_sha256": digest.hexdigest()[:16],
@@ -184,7 +185,11 @@ def _provenance() -> dict:
             ["git", "rev-parse", "--short", "HEAD"], cwd=package, capture_output=True, text=True, check=True
         ).stdout.strip()
         status = subprocess.run(
-            ["git", "status", "--porcelain", "--", "core"], cwd=package, capture_output=True, text=True, check=True
+            ["git", "status", "--porcelain", "--", "core", "planar"],
+            cwd=package,
+            capture_output=True,
+            text=True,
+            check=True,
         ).stdout
         out["core_dirty"] = bool(status.strip())
     except (OSError, subprocess.CalledProcessError):
@@ -456,7 +461,7 @@ def markdown_report(report: dict, plot_name: str | None) -> str:
         f"| ompl / matplotlib | {m['ompl'] or 'not installed'} / {m['matplotlib'] or 'not installed'} |",
         (
             f"| code | git {code['git_head']}{' + uncommitted core changes' if code['core_dirty'] else ''}, "
-            f"`clew_ros/core` sha256 {code['core_sha256']} |"
+            f"`clew_ros/core` + `clew_ros/planar` sha256 {code['core_sha256']} |"
         ),
         "",
     ]

@@ -1,7 +1,7 @@
 """The Ariadne's Clew Algorithm for manipulation (the paper, *On Manipulation Planning*), over a space.
 
 Nothing here looks at a world: the algorithm asks a :class:`~clew_ros.core.space.Space` (the planar world's is
-:class:`clew_ros.planar.space.PlanarSpace`). numpy only, never rclpy.
+:class:`clew_ros.planar.space.PlanarSpace`). numpy only, no ROS.
 
 ==========================================================  =================  ==================================
 paper                                                       module             what

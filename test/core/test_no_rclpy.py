@@ -1,19 +1,29 @@
-"""The planner core runs without ROS: it never imports rclpy."""
+"""The planner runs without ROS: its packages (the algorithm and the worlds it plans in) never import rclpy."""
 
 import subprocess
 import sys
 from pathlib import Path
 
-CORE = Path(__file__).resolve().parents[2] / "clew_ros" / "core"
+PACKAGE = Path(__file__).resolve().parents[2] / "clew_ros"
+#: the planner's packages: the algorithm, and the kinds of world it plans in
+PLANNER = ("core", "planar", "spatial")
 
 
-def test_core_sources_do_not_mention_rclpy():
-    for path in CORE.glob("*.py"):
+def _sources() -> list[Path]:
+    return [path for name in PLANNER for path in sorted((PACKAGE / name).rglob("*.py"))]
+
+
+def test_planner_sources_do_not_mention_rclpy():
+    assert len(_sources()) > 30
+    for path in _sources():
         assert "rclpy" not in path.read_text(), path
 
 
-def test_importing_the_core_and_cli_loads_no_rclpy():
-    modules = [f"clew_ros.core.{p.stem}" for p in CORE.glob("*.py") if p.stem != "__init__"] + ["clew_ros.cli.plan"]
+def test_importing_the_planner_and_cli_loads_no_rclpy():
+    modules = [
+        ".".join(path.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__")
+        for path in _sources()
+    ] + ["clew_ros.cli.plan"]
     code = (
         "import sys\n"
         + "".join(f"import {m}\n" for m in modules)

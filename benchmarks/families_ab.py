@@ -8,7 +8,8 @@ kernel on one thread (``NUMBA_NUM_THREADS=1``), ``--jobs`` such pairs at a time.
 entry point every revision has, so the baseline needs nothing newer than its own code. Times are the
 planner's own (``stats.time_s``: process start-up left out). The table per family, before → after:
 success, median time (a failed run on a solvable world counts at the limit), median landmarks, and over
-the plans found, median transfers and joint travel. ``DIR/families_ab.json`` keeps every run.
+the plans found, median transfers and joint travel; and how many runs gave the same plan file before and after
+(every field but ``stats.time_s``, the clock: same seed, same plan). ``DIR/families_ab.json`` keeps every run.
 """
 
 from __future__ import annotations
@@ -54,6 +55,14 @@ def plan_with(tree: Path, world: str, seed: int, time_limit_s: float, output: Pa
     }
 
 
+def same_plan(before: Path, after: Path) -> bool:
+    """Whether two plan files are the same but for the clock (``stats.time_s``)."""
+    plans = [json.loads(path.read_text()) for path in (before, after)]
+    for plan in plans:
+        plan.get("stats", {}).pop("time_s", None)
+    return bool(plans[0] == plans[1])
+
+
 def _change(before: float | None, after: float | None, digits: int = 2) -> str:
     return f"{_fmt(before, digits)} → {_fmt(after, digits)}"
 
@@ -67,8 +76,8 @@ def _success(row: dict) -> str:
 def markdown(before: list[dict], after: list[dict]) -> str:
     """The before → after table in Markdown."""
     lines = [
-        "| family | n | success | median s | landmarks | transfers | travel rad |",
-        "|---|--:|--:|--:|--:|--:|--:|",
+        "| family | n | success | median s | landmarks | transfers | travel rad | same plan file |",
+        "|---|--:|--:|--:|--:|--:|--:|--:|",
     ]
     for a, b in zip(before, after, strict=True):
         lines.append(
@@ -76,7 +85,8 @@ def markdown(before: list[dict], after: list[dict]) -> str:
             f"| {_change(a['median_s'], b['median_s'])} "
             f"| {_change(a['landmarks_median'], b['landmarks_median'], 0)} "
             f"| {_change(a['transfers_median'], b['transfers_median'], 0)} "
-            f"| {_change(a['travel_median'], b['travel_median'], 1)} |"
+            f"| {_change(a['travel_median'], b['travel_median'], 1)} "
+            f"| {b.get('same_plans', 0)}/{b['runs']} |"
         )
     return "\n".join(lines)
 
@@ -108,10 +118,10 @@ def main(argv: list[str] | None = None) -> int:
         def pair(index: int) -> tuple[dict, dict]:
             world, seed = tasks[index]
             outputs = [directory / f"plan_{index}_{side}.json" for side in ("before", "after")]
-            return (
-                plan_with(baseline, world.path, seed, args.time_limit, outputs[0]),
-                plan_with(ROOT, world.path, seed, args.time_limit, outputs[1]),
-            )
+            before = plan_with(baseline, world.path, seed, args.time_limit, outputs[0])
+            after = plan_with(ROOT, world.path, seed, args.time_limit, outputs[1])
+            after["same_plan"] = same_plan(*outputs)
+            return before, after
 
         with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
             pairs = []
@@ -125,6 +135,7 @@ def main(argv: list[str] | None = None) -> int:
         indices = [i for i, (w, _) in enumerate(tasks) if w.family == family]
         for side, column in (("before", 0), ("after", 1)):
             rows[side].append(summarise(family, chosen, [pairs[i][column] for i in indices], args.time_limit))
+        rows["after"][-1]["same_plans"] = sum(bool(pairs[i][1]["same_plan"]) for i in indices)
     command = command_line("benchmarks.families_ab", argv)
     first = args.first_world
     what = f"{args.worlds} worlds (from {first}) x {args.seeds} seeds per family, limit {args.time_limit:g} s"

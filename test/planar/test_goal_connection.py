@@ -203,9 +203,9 @@ def test_rrt_connect_gives_up_when_stopped_walled_in_or_out_of_work() -> None:
 def test_a_join_that_fails_leaves_the_run_as_it_was(monkeypatch) -> None:
     """Joins draw from a generator of their own: a run whose joins all fail plans exactly what it plans with
     no joins at all; a run whose join succeeds gives a valid plan."""
-    from clew_ros.core import search
+    from clew_ros.planar import search
     from clew_ros.planar.plan import Plan, validate_plan
-    from clew_ros.planar.space import plan
+    from clew_ros.planar.space import PlanarTuning, plan
 
     calls: list[bool] = []
     real_join = search.join
@@ -231,9 +231,7 @@ def test_a_join_that_fails_leaves_the_run_as_it_was(monkeypatch) -> None:
             branches.add("succeeded")
             continue
         branches.add("failed")
-        monkeypatch.setattr(search, "JOIN_RADIUS", 0.0)
-        plain = plan(world, settings)
-        monkeypatch.undo()
+        plain = plan(world, settings, tuning=PlanarTuning(search=SearchSettings(join_radius=0.0)))
         assert [np.asarray(s.waypoints).tolist() for s in joined.segments] == [
             np.asarray(s.waypoints).tolist() for s in plain.segments
         ]

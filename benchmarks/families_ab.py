@@ -1,7 +1,9 @@
 """Before and after on the generated families, in one run: ``python -m benchmarks.families_ab --baseline REV
-[--families A,B] [--worlds 3] [--first-world 0] [--seeds 2] [--time-limit 10] [--jobs 2] [--out DIR]``.
+[--families A,B] [--config-worlds figure1,...] [--worlds 3] [--first-world 0] [--seeds 2] [--time-limit 10]
+[--jobs 2] [--out DIR]``.
 
-The worlds are generated once by this checkout (:mod:`benchmarks.generated`, as ``clew_world`` writes
+The worlds of ``config/`` named (default figure1), each a row of its own, and the generated families' worlds,
+generated once by this checkout (:mod:`benchmarks.generated`, as ``clew_world`` writes
 them), then every (world, seed) is planned twice, by ``clew_plan`` of git revision ``REV`` (exported with
 ``git archive``) and by this checkout's, one right after the other, each in a process of its own with the
 kernel on one thread (``NUMBA_NUM_THREADS=1``), ``--jobs`` such pairs at a time. ``clew_plan`` is the
@@ -95,6 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.families_ab", description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", required=True, help="git revision to compare with")
     parser.add_argument("--families", default=",".join(FAMILIES), help="comma-separated (default: all)")
+    parser.add_argument(
+        "--config-worlds", default="figure1", help="comma-separated worlds of config/, each a row (default figure1)"
+    )
     parser.add_argument("--worlds", type=int, default=3, help="worlds per family, seeds K..K+W-1")
     add_first_world(parser)
     parser.add_argument("--seeds", type=int, default=2, help="planner seeds per world, 0..S-1")
@@ -110,9 +115,8 @@ def main(argv: list[str] | None = None) -> int:
     started, load = time.monotonic(), os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="clew_families_ab_") as scratch:
         directory = Path(scratch)
-        worlds = [reference_world()] + [
-            build_world(f, s, directory) for s in world_seeds(args, args.worlds) for f in families
-        ]
+        configs = [reference_world(name) for name in args.config_worlds.split(",") if name]
+        worlds = configs + [build_world(f, s, directory) for s in world_seeds(args, args.worlds) for f in families]
         tasks = [(w, seed) for seed in range(args.seeds) for w in worlds]
 
         def pair(index: int) -> tuple[dict, dict]:
@@ -130,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
                 if done % 10 == 0:
                     print(f"  {done}/{len(tasks)} pairs, {time.monotonic() - started:.0f} s", file=sys.stderr)
     rows: dict[str, list[dict]] = {"before": [], "after": []}
-    for family in ["figure1", *families]:
+    for family in [*(w.family for w in configs), *families]:
         chosen = [w for w in worlds if w.family == family]
         indices = [i for i, (w, _) in enumerate(tasks) if w.family == family]
         for side, column in (("before", 0), ("after", 1)):

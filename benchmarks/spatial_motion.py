@@ -53,9 +53,11 @@ from clew_ros.spatial.validate import validate_transit, validation_samples
 
 __all__ = [
     "PLANNERS",
+    "ExactScene",
     "OmplSettings",
     "PlannerResult",
     "Run",
+    "exact_scene",
     "load_planner",
     "main",
     "register",
@@ -222,7 +224,7 @@ def ompl_rrtconnect(
 # --------------------------------------------------------------------------------------------- roboplan
 
 
-class _Roboplan:
+class ExactScene:
     """A roboplan scene of one shipped robot (meshes loaded once), its obstacles swapped per problem."""
 
     def __init__(self, robot: str) -> None:
@@ -287,11 +289,12 @@ class _Roboplan:
 
 
 @functools.cache
-def _roboplan(robot: str) -> _Roboplan:
-    return _Roboplan(robot)
+def _roboplan(robot: str) -> ExactScene:
+    return ExactScene(robot)
 
 
-def _roboplan_loaded(problem: MotionProblem) -> _Roboplan:
+def exact_scene(problem: MotionProblem) -> ExactScene:
+    """The exact geometry (roboplan: pinocchio + coal on the URDF's meshes) of the problem's robot and scene."""
     loaded = _context(problem)
     scene = _roboplan(problem.robot)
     scene.load(problem, loaded.obstacles, dict(loaded.robot.fixed_positions))
@@ -302,7 +305,7 @@ def _roboplan_loaded(problem: MotionProblem) -> _Roboplan:
 def roboplan_rrtconnect(problem: MotionProblem, seed: int, time_limit_s: float) -> PlannerResult:
     """roboplan's RRT-Connect and path shortcutter on its exact geometry (see the module docstring)."""
     rrt = importlib.import_module("roboplan.rrt")
-    scene = _roboplan_loaded(problem)
+    scene = exact_scene(problem)
     core = scene.core
     options = rrt.RRTOptions(
         group_name=scene.group,
@@ -373,7 +376,7 @@ def _run(
         else:
             valid = not validate_transit(_context(problem).checker, path)
             if exact:
-                exact_valid = not _roboplan_loaded(problem).path_collides(path)
+                exact_valid = not exact_scene(problem).path_collides(path)
     ok = success and path is not None
     return Run(
         planner=name,

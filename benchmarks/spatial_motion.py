@@ -317,10 +317,14 @@ def roboplan_rrtconnect(problem: MotionProblem, seed: int, time_limit_s: float) 
     planner = rrt.RRT(scene.scene, options)
     planner.setRngSeed(seed)
     started, cpu_started = time.perf_counter(), time.process_time()
-    path = planner.plan(
-        core.JointConfiguration(scene.joint_names, np.asarray(problem.start, dtype=np.float64)),
-        core.JointConfiguration(scene.joint_names, np.asarray(problem.goal, dtype=np.float64)),
-    )
+    try:
+        path = planner.plan(
+            core.JointConfiguration(scene.joint_names, np.asarray(problem.start, dtype=np.float64)),
+            core.JointConfiguration(scene.joint_names, np.asarray(problem.goal, dtype=np.float64)),
+        )
+    except RuntimeError as error:  # roboplan raises when it times out (or the start or goal collides)
+        wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
+        return PlannerResult(False, None, wall, cpu, None, str(error))
     success = path is not None and len(path.positions) > 0
     waypoints = None
     if success:

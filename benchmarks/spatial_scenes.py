@@ -532,6 +532,21 @@ def generate(family: str, robot: str, seed: int, settings: SceneSettings | None 
     raise RuntimeError(f"{name}: no problem in {settings.scene_tries} scenes (the robot reaches none of the targets)")
 
 
+def _turned_towards(solutions: Matrix, near: Matrix, robot: RobotModel) -> Matrix:
+    """Each revolute joint of ``solutions`` (k, n) moved by whole turns as near ``near`` as its limits allow:
+    the same tcp pose, the same collisions (a turn brings every link back), and no needless turn to plan
+    (a UR5's joints span +-2 pi: a solution found a turn away from the start is the same posture)."""
+    turn = 2.0 * math.pi
+    turns = np.round((near - solutions) / turn)
+    turns[:, robot.prismatic] = 0.0
+    moved = solutions + turns * turn
+    # a whole turn that would leave the limits is taken back one turn at a time (at most one is ever needed)
+    moved = np.where(moved > robot.upper, moved - turn, moved)
+    moved = np.where(moved < robot.lower, moved + turn, moved)
+    out: Matrix = np.where((moved >= robot.lower) & (moved <= robot.upper), moved, solutions)
+    return out
+
+
 def _solve(
     sampler: Callable[[np.random.Generator], Matrix],
     checker: SpatialChecker,
@@ -554,6 +569,7 @@ def _solve(
             continue
         if near is None:
             return solutions[0], target
+        solutions = _turned_towards(solutions, near, checker.robot)
         best = int(np.argmin(np.linalg.norm(solutions - near, axis=1)))
         return solutions[best], target
     return None

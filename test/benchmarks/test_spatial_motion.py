@@ -45,6 +45,10 @@ def test_a_problem_starts_and_ends_valid_at_its_tcp_targets_and_its_straight_mov
     straight = validation_samples(problem.start, problem.goal, np.full(loaded.robot.dof, 0.002))
     assert not loaded.checker.valid(straight).all()  # SceneSettings.nontrivial
     assert np.linalg.norm(problem.goal - problem.start) >= spatial_scenes.SceneSettings().min_distance_rad
+    # a joint that may turn whole turns (the UR5's +-2 pi) never makes the goal a needless turn away
+    turns = loaded.robot.upper - loaded.robot.lower >= 2 * np.pi
+    assert np.all(np.abs(problem.goal - problem.start)[turns] <= np.pi + 1e-9)
+    assert turns.any() == (robot == "ur5")
     ids = {item["id"] for item in problem.scene["world"]["collision_objects"]}
     assert "mount" in ids
     assert any(name.startswith((family, "clutter")) for name in ids), ids

@@ -41,7 +41,7 @@ from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle, scene_obstacles
 from clew_ros.spatial.spheres import SphereModel, sphere_model
-from clew_ros.spatial.transforms import pose_matrix, rpy_matrix
+from clew_ros.spatial.transforms import matrix_pose, pose_matrix, rpy_matrix
 from clew_ros.spatial.validate import validation_samples
 
 __all__ = [
@@ -148,18 +148,26 @@ class MotionProblem:
         """The planning scene as YAML text (what MoveIt and MotionBenchMaker write)."""
         return str(yaml.safe_dump(self.scene, sort_keys=False, default_flow_style=None))
 
-    def world_parameters(self, scene_file: str) -> dict[str, Any]:
-        """The ``world.kind: spatial`` parameter tree of this query, reading the scene from ``scene_file``."""
+    def world_parameters(self, scene_file: str | None = None) -> dict[str, Any]:
+        """The ``world.kind: spatial`` parameter tree of this query: the scene read from ``scene_file``, or
+        (``None``) its obstacles inline as ``world.obstacle_names`` / ``world.obstacles`` (a planner called
+        in-process needs no file)."""
         tree = ROBOTS[self.robot]
         robot = {key: str((CONFIG / tree[key]).resolve()) if key in ("urdf", "srdf") else tree[key] for key in tree}
-        return {
-            "world": {
-                "kind": "spatial",
-                "name": self.name,
-                "robot": {**robot, "initial": _rounded(self.start), "goal": _rounded(self.goal)},
-                "scene_file": scene_file,
-            }
+        world: dict[str, Any] = {
+            "kind": "spatial",
+            "name": self.name,
+            "robot": {**robot, "initial": _rounded(self.start), "goal": _rounded(self.goal)},
         }
+        if scene_file is not None:
+            world["scene_file"] = scene_file
+        else:
+            obstacles = scene_obstacles(self.scene, {"world": np.eye(4)}, f"{self.name}.scene")
+            world["obstacle_names"] = [o.name for o in obstacles]
+            world["obstacles"] = {
+                o.name: {"shape": o.shape, "size": list(o.size), "pose": matrix_pose(o.pose)} for o in obstacles
+            }
+        return {"world": world}
 
     def write(self, folder: Path) -> Path:
         """``<name>.scene.yaml`` and ``<name>.yaml`` (the parameter file, node ``clew_planner``) in ``folder``;

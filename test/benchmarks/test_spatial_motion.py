@@ -89,6 +89,10 @@ def test_the_written_files_load_as_a_motion_only_world_with_the_same_obstacles(
     assert {item["primitives"][0]["type"] for item in scene["world"]["collision_objects"]} <= {1, 2, 3}
     with pytest.raises(FileExistsError, match="not overwriting"):
         problem.write(tmp_path)
+    inline = spatial_world_from_parameters(problem.world_parameters(), tmp_path)  # no scene file
+    assert [o.name for o in inline.obstacles] == [o.name for o in world.obstacles]
+    for mine, read in zip(inline.obstacles, world.obstacles, strict=True):
+        assert np.allclose(mine.pose, read.pose, atol=1e-9)
 
 
 def test_an_unknown_family_or_robot_is_refused_by_name() -> None:

@@ -169,3 +169,29 @@ def test_the_exact_reference_finds_the_ends_free_and_the_straight_move_colliding
         assert result.success, (family, result.message)
         assert result.waypoints is not None
         assert not exact.path_collides(result.waypoints), family
+
+
+def _run(success: bool, time_s: float, travel: float | None) -> spatial_motion.Run:
+    return spatial_motion.Run(
+        planner="p", problem="x", family="table", robot="panda", seed=0, success=success, time_s=time_s,
+        cpu_s=time_s, travel_rad=travel, checks=None, waypoints=2 if success else 0, valid=success or None,
+        exact_valid=None,
+    )  # fmt: skip
+
+
+def test_the_summary_counts_a_failure_at_the_time_limit_and_travel_over_the_successes_only() -> None:
+    runs = [_run(True, 0.1, 2.0), _run(True, 0.3, 4.0), _run(False, 0.01, None), _run(False, 9.0, None)]
+    figures = spatial_motion.summary(runs, time_limit_s=5.0)
+    assert figures["success"] == 0.5
+    assert figures["median_s"] == pytest.approx((0.3 + 5.0) / 2)  # times 0.1, 0.3, 5, 5
+    assert figures["p90_s"] == pytest.approx(5.0)
+    assert figures["travel_rad"] == pytest.approx(3.0)
+    assert figures["valid"] == 2
+    assert figures["checks"] is None
+    assert figures["exact_valid"] is None
+
+
+def test_ranges_the_robot_cannot_reach_give_up_with_a_reason() -> None:
+    far = spatial_scenes.SceneSettings(shelf_distance_m=(3.0, 3.5), scene_tries=3, target_tries=2)
+    with pytest.raises(RuntimeError, match=r"shelf_panda_0: no problem in 3 scenes"):
+        spatial_scenes.generate("shelf", "panda", 0, far)

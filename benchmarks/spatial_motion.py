@@ -178,6 +178,8 @@ def ompl_rrtconnect(
 
     settings = settings or OmplSettings()
     ou.setLogLevel(ou.LOG_NONE)
+    # OMPL seeds every planner's sampler from one process-wide generator, seeded once (a later setSeed is
+    # ignored): the same command gives the same runs, and a run depends on the runs before it in the process
     ou.RNG.setSeed(seed + 1)  # OMPL's seed must be positive
     loaded = _context(problem)
     n = loaded.robot.dof

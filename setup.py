@@ -67,8 +67,10 @@ setup(
             "trimesh>=4.0",
             "pycollada>=0.8",
         ],
-        # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile
-        "bench": ["ompl>=2.0", "matplotlib>=3.8"],
+        # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile.
+        # roboplan-rrt: the exact-geometry C++ RRT-Connect peer of `python -m benchmarks spatial_motion` (it
+        # brings pin and coal, as the spatial-ref extra does).
+        "bench": ["ompl>=2.0", "matplotlib>=3.8", "roboplan-rrt>=0.7"],
         # clew_plan --foxglove (clew_ros/live): the run served live to Foxglove over a WebSocket on 127.0.0.1.
         # websockets and protobuf are the tests' client (test/helpers/foxglove_client.py): it subscribes and
         # decodes with the schemas the server advertises, as the Foxglove app does.

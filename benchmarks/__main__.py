@@ -46,6 +46,9 @@ COMMANDS: dict[str, Command] = {
     "batch_throughput": Command("batch", "clew_batch in sequence, on the local pool and on a local Ray; resume"),
     "spatial_checker": Command("spatial_checker", "the spatial checker's speed and agreement with an exact reference"),
     "spatial_ik": Command("spatial_ik", "the spatial tcp inverse kinematics' success rate and speed"),
+    "spatial_motion": Command(
+        "spatial_motion", "motion-only problems (table, shelf, cage, bookshelf): OMPL, roboplan and others by name"
+    ),
 }
 
 

@@ -60,7 +60,11 @@ def cylinder_mesh(height: float, radius: float, sides: int = 24) -> Mesh:
     ring = np.stack([radius * np.cos(angles), radius * np.sin(angles)], axis=1)
     h = height / 2
     vertices = np.vstack(
-        [np.column_stack([ring, np.full(sides, -h)]), np.column_stack([ring, np.full(sides, h)]), [[0, 0, -h], [0, 0, h]]]
+        [
+            np.column_stack([ring, np.full(sides, -h)]),
+            np.column_stack([ring, np.full(sides, h)]),
+            [[0, 0, -h], [0, 0, h]],
+        ]
     )
     k = np.arange(sides)
     nxt = (k + 1) % sides
@@ -80,14 +84,18 @@ def sphere_mesh(radius: float, subdivisions: int = 2) -> Mesh:
     """A sphere of ``radius`` (m) centred on its frame: an icosahedron split ``subdivisions`` times."""
     t = (1.0 + math.sqrt(5.0)) / 2.0
     vertices = np.array(
-        [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t]]
-        + [[t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]],
+        [
+            *([-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t]),
+            *([t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]),
+        ],
         dtype=np.float64,
     )
     faces = np.array(
-        [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6]]
-        + [[7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10]]
-        + [[8, 6, 7], [9, 8, 1]],
+        [
+            *([0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2]),
+            *([10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5]),
+            *([2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]),
+        ],
         dtype=np.int64,
     )
     for _ in range(subdivisions):
@@ -97,9 +105,9 @@ def sphere_mesh(radius: float, subdivisions: int = 2) -> Mesh:
         vertices = np.vstack([vertices, (vertices[unique[:, 0]] + vertices[unique[:, 1]]) / 2])
         a, b, c = faces.T
         ab, bc, ca = middle.T
-        faces = np.vstack(
-            [np.column_stack(f) for f in ((a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca))]
-        ).astype(np.int64)
+        faces = np.vstack([np.column_stack(f) for f in ((a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca))]).astype(
+            np.int64
+        )
     vertices = vertices / np.linalg.norm(vertices, axis=1, keepdims=True) * radius
     return vertices, faces
 
@@ -120,7 +128,9 @@ def simplify(vertices: Array, faces: Faces, max_faces: int) -> Mesh:
         count = np.bincount(label).astype(np.float64)
         merged = np.stack([np.bincount(label, weights=vertices[:, i]) / count for i in range(3)], axis=1)
         remapped = label[faces]
-        keep = (remapped[:, 0] != remapped[:, 1]) & (remapped[:, 1] != remapped[:, 2]) & (remapped[:, 0] != remapped[:, 2])
+        keep = (
+            (remapped[:, 0] != remapped[:, 1]) & (remapped[:, 1] != remapped[:, 2]) & (remapped[:, 0] != remapped[:, 2])
+        )
         kept = np.unique(np.sort(remapped[keep], axis=1), axis=0, return_index=True)[1]
         out = merged, remapped[keep][np.sort(kept)]
         if len(out[1]) <= max_faces:

@@ -154,7 +154,7 @@ def _arm(world: SpatialWorld, joints: Array, held: bool, mesh: MeshSettings) -> 
     """The robot's links at ``joints``: ``arm``, and the gripper links ``closed`` when holding, else ``open``."""
     robot = world.robot
     model = robot_mesh(robot, mesh)
-    vertices = model.at(robot.frames(joints))
+    vertices = model.at(robot.frames(joints.tolist()))
     grippers = np.array([link.name in robot.gripper_links for link in robot.links], dtype=bool)
     rgb = np.where(
         grippers[model.link][:, None] if len(grippers) else np.zeros((len(model.faces), 1), dtype=bool),
@@ -225,7 +225,7 @@ class _Ground:
         ys = np.arange(self.low[1], self.high[1] - 1e-9, self.step)
         gx, gy = (a.ravel() for a in np.meshgrid(xs, ys))
         inset = style.grid_line * self.step / 2
-        corners = []
+        corners: list[Array] = []
         for x0, y0, x1, y1 in (  # the lines: every cell whole; the cell: inset, a hair above
             (gx, gy, gx + self.step, gy + self.step),
             (gx + inset, gy + inset, gx + self.step - inset, gy + self.step - inset),
@@ -298,8 +298,16 @@ def _check_held(held: Any, count: int) -> NDArray[np.bool_]:
 class _Painter:
     """One camera over one world: draws the static part once, the poses and objects over it."""
 
-    def __init__(self, world: SpatialWorld, view: View3D, style: SpatialStyle, sample: Sequence[_Pose],
-                 things: Sequence[_Thing], path: Array | None) -> None:
+    def __init__(
+        self,
+        world: SpatialWorld,
+        view: View3D,
+        style: SpatialStyle,
+        *,
+        sample: Sequence[_Pose],
+        things: Sequence[_Thing],
+        path: Array | None,
+    ) -> None:
         if style.supersample not in (1, 2, 3, 4):
             raise RenderError(f"style supersample: expected 1 to 4, got {style.supersample}")
         self.world, self.view, self.style = world, view, style
@@ -395,7 +403,7 @@ def _fade(index: int, count: int, style: SpatialStyle) -> float:
 
 
 def _tcp_path(world: SpatialWorld, joints: Array) -> Array:
-    return np.array([world.robot.tcp_pose(q)[:3, 3] for q in joints])
+    return np.array([world.robot.tcp_pose(q.tolist())[:3, 3] for q in joints])
 
 
 def _same_pose(a: Array, b: Array) -> bool:
@@ -432,11 +440,13 @@ def draw_spatial_frames(
                 alpha = 1.0 if row == last else _fade(k, len(rows) - 1, style)
                 things.append((row, _Thing(poses[row], key, alpha)))
     goal = []
-    if world.object is not None and not _same_pose(pose_matrix(world.object.goal), poses[last] if poses is not None else np.eye(4)):
+    if world.object is not None and not _same_pose(
+        pose_matrix(world.object.goal), poses[last] if poses is not None else np.eye(4)
+    ):
         goal = [_Thing(pose_matrix(world.object.goal), "goal", style.goal_alpha)]
     path = _tcp_path(world, q) if len(q) > 1 else None
     sample = [_Pose(q[row], bool(held_flags[row]), 1.0) for row in rows]
-    painter = _Painter(world, view, style, sample, [t for _, t in things] + goal, path)
+    painter = _Painter(world, view, style, sample=sample, things=[t for _, t in things] + goal, path=path)
     canvas = painter.background(path, held_flags)
     painter.solid(canvas, sample[-1], [t for row, t in things if row == last])
     for k, row in enumerate(rows[:-1]):
@@ -448,7 +458,9 @@ def draw_spatial_frames(
     return painter.finish(canvas, caption)
 
 
-def draw_spatial_world(world: SpatialWorld, view: View3D | None = None, *, style: SpatialStyle | None = None) -> Image.Image:
+def draw_spatial_world(
+    world: SpatialWorld, view: View3D | None = None, *, style: SpatialStyle | None = None
+) -> Image.Image:
     """The world alone: the arm at its start; the object at its start (blue) and its goal placement ghosted
     (green), or, for a motion-only query, the arm at its goal configuration ghosted."""
     style = style or SpatialStyle()
@@ -462,7 +474,7 @@ def draw_spatial_world(world: SpatialWorld, view: View3D | None = None, *, style
         ]
     goal_pose = _Pose(world.goal, False, style.goal_alpha) if world.goal is not None else None
     sample = [start] + ([goal_pose] if goal_pose is not None else [])
-    painter = _Painter(world, view, style, sample, things, None)
+    painter = _Painter(world, view, style, sample=sample, things=things, path=None)
     canvas = painter.background(None, None)
     painter.solid(canvas, start, things[:1])
     if goal_pose is not None:
@@ -496,7 +508,7 @@ def spatial_gif_frames(
     sample = [_Pose(q[row], bool(held_flags[row]), 1.0) for row in spread]
     things = [_Thing(poses[row], "object_rest", 1.0) for row in spread] if poses is not None else []
     path = _tcp_path(world, q) if len(q) > 1 else None
-    painter = _Painter(world, view, style, sample, things, path)
+    painter = _Painter(world, view, style, sample=sample, things=things, path=path)
     base = painter.background(path, held_flags)
     caption = title if title is not None else world.name
     frames = []

@@ -39,7 +39,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--view",
         metavar="AZ,EL[,DIST]",
-        help="spatial worlds: the camera's azimuth, elevation (degrees) and distance (m; default: framing the scene)",
+        help="spatial worlds: the camera's azimuth, elevation (degrees) and distance (m; default: framing the scene); "
+        "a negative azimuth as --view=-50,28",
     )
     parser.add_argument(
         "--frames",

@@ -217,7 +217,7 @@ def frames_from_document(world: SpatialWorld, data: Any, source: str = "frames")
     joints = _array(raw, (count, world.robot.dof), f"{source}: joints", f"{world.robot.dof} numbers per frame")
     poses = None
     if world.object is not None:
-        value = data.get("object_poses", world.object.initial)
+        value = data.get("object_poses", list(world.object.initial))
         if isinstance(value, list) and value and not isinstance(value[0], list):
             value = [value]
         items = value if isinstance(value, list) else []

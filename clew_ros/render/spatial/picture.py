@@ -219,27 +219,31 @@ class _Ground:
         z = min(0.0, float(points[:, 2].min()))
         return cls(z, (float(low[0]), float(low[1])), (float(high[0]), float(high[1])), step)
 
-    def triangles(self, style: SpatialStyle) -> tuple[Array, Array]:
-        """The grid: the lines (the whole ground, in the line colour) and the cells inset over it."""
+    def paint(self, canvas: Canvas, camera: Camera, scale: int, style: SpatialStyle) -> None:
+        """The grid painted onto the canvas's colour, cell by cell (a line-coloured square, the cell inset over
+        it), without depth: the ground lies under everything, so whatever is drawn after covers it. Cells
+        reaching behind the camera are left out."""
         xs = np.arange(self.low[0], self.high[0] - 1e-9, self.step)
         ys = np.arange(self.low[1], self.high[1] - 1e-9, self.step)
         gx, gy = (a.ravel() for a in np.meshgrid(xs, ys))
         inset = style.grid_line * self.step / 2
-        corners: list[Array] = []
-        for x0, y0, x1, y1 in (  # the lines: every cell whole; the cell: inset, a hair above
+        z = np.full_like(gx, self.z)
+        squares = []
+        for x0, y0, x1, y1 in (
             (gx, gy, gx + self.step, gy + self.step),
             (gx + inset, gy + inset, gx + self.step - inset, gy + self.step - inset),
         ):
-            z = np.full_like(x0, self.z if not corners else self.z + 5e-4)
-            a, b, c, d = (np.stack(p, axis=1) for p in ((x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z)))
-            corners.append(np.concatenate([np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)]))
-        rgb = np.concatenate(
-            [
-                np.broadcast_to(_mix("field", "field_edge", 0.22), (len(corners[0]), 3)),
-                np.broadcast_to(_rgb("field"), (len(corners[1]), 3)),
-            ]
-        )
-        return np.concatenate(corners), rgb
+            corners = np.stack([np.stack(p, axis=1) for p in ((x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z))], 1)
+            squares.append(camera.project(corners, scale))
+        image = Image.fromarray(np.clip(canvas.colour + 0.5, 0, 255).astype(np.uint8), "RGB")
+        draw = ImageDraw.Draw(image)
+        line = tuple(int(v) for v in np.round(_mix("field", "field_edge", 0.22)))
+        cell = colour("field").rgb
+        in_front = np.all(squares[0][:, :, 2] > canvas.settings.near_m, axis=1)
+        for whole, inner in zip(squares[0][in_front], squares[1][in_front], strict=True):
+            draw.polygon([(float(x), float(y)) for x, y, _ in whole], fill=line)
+            draw.polygon([(float(x), float(y)) for x, y, _ in inner], fill=cell)
+        canvas.colour[:] = np.asarray(image, dtype=np.float32)
 
 
 # ------------------------------------------------------------------------------------------- the picture
@@ -333,8 +337,7 @@ class _Painter:
             self.view.width * self.scale, self.view.height * self.scale, colour("background").rgb, style.raster
         )
         if self.camera.eye[2] > self.ground.z:  # seen from above: the ground, and shadows on it
-            grid, grid_rgb = self.ground.triangles(style)
-            canvas.draw(self._project(grid), grid_rgb)
+            self.ground.paint(canvas, self.camera, self.scale, style)
             if style.shadows:
                 self._shadows(canvas, self.static)
         canvas.draw(self._project(self.static.corners), _shade(self.static, self.camera, style))

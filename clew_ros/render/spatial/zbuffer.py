@@ -72,56 +72,67 @@ class Canvas:
         self.colour[front] = (1.0 - alpha) * self.colour[front] + alpha * layer.colour[front]
 
     def _fragments(self, triangles: Array) -> list[tuple[NDArray[np.int64], Array, NDArray[np.int64]]]:
-        """Every covered pixel of every triangle, in batches: (flat pixel index, inverse depth, triangle)."""
+        """Every covered pixel of every triangle, in batches: (flat pixel index, inverse depth, triangle).
+
+        Scanline by scanline, vectorised: for each (triangle, pixel row) pair the span of pixel centres
+        inside all three edges, then the pixels of every span; no pixel outside a triangle is visited."""
         width, height = self.width, self.height
         if len(triangles) == 0:
             return []
         x, y, depth = triangles[:, :, 0], triangles[:, :, 1], triangles[:, :, 2]
         keep = np.all(depth > self.settings.near_m, axis=1) & np.all(np.isfinite(triangles), axis=(1, 2))
-        x0 = np.ceil(x.min(axis=1) - 0.5)
-        x1 = np.floor(x.max(axis=1) - 0.5)
-        y0 = np.ceil(y.min(axis=1) - 0.5)
-        y1 = np.floor(y.max(axis=1) - 0.5)
-        x0, y0 = np.maximum(x0, 0), np.maximum(y0, 0)
-        x1, y1 = np.minimum(x1, width - 1), np.minimum(y1, height - 1)
+        x0 = np.maximum(np.ceil(x.min(axis=1) - 0.5), 0)
+        x1 = np.minimum(np.floor(x.max(axis=1) - 0.5), width - 1)
+        y0 = np.maximum(np.ceil(y.min(axis=1) - 0.5), 0)
+        y1 = np.minimum(np.floor(y.max(axis=1) - 0.5), height - 1)
         # twice the signed area; edge k runs from corner k+1 to corner k+2 and weighs corner k
         area2 = (x[:, 1] - x[:, 0]) * (y[:, 2] - y[:, 0]) - (x[:, 2] - x[:, 0]) * (y[:, 1] - y[:, 0])
         keep &= (x1 >= x0) & (y1 >= y0) & (np.abs(area2) > 1e-12)
         index = np.flatnonzero(keep)
         if len(index) == 0:
             return []
-        x, y, depth, area2 = x[index], y[index], depth[index], area2[index]
-        x0, y0 = x0[index].astype(np.int64), y0[index].astype(np.int64)
-        span_x, span_y = x1[index].astype(np.int64) - x0 + 1, y1[index].astype(np.int64) - y0 + 1
+        x, y, area2 = x[index], y[index], area2[index]
+        x0, x1 = x0[index].astype(np.int64), x1[index].astype(np.int64)
+        y0, rows = y0[index].astype(np.int64), (y1[index] - y0[index]).astype(np.int64) + 1
         nxt, far = [1, 2, 0], [2, 0, 1]
         a = (y[:, nxt] - y[:, far]) / area2[:, None]  # (m, 3): the barycentric weight of corner k is
         b = (x[:, far] - x[:, nxt]) / area2[:, None]  # a_k px + b_k py + c_k at the pixel centre (px, py)
         c = (x[:, nxt] * y[:, far] - x[:, far] * y[:, nxt]) / area2[:, None]
-        inverse = 1.0 / depth
-        # groups of triangles whose bounding boxes fit the same power-of-two rectangle
-        bits_x = np.ceil(np.log2(span_x)).astype(np.int64)
-        bits_y = np.ceil(np.log2(span_y)).astype(np.int64)
-        group = bits_x * 64 + bits_y
+        inverse = 1.0 / depth[index]
+        plane = np.stack([(a * inverse).sum(axis=1), (b * inverse).sum(axis=1), (c * inverse).sum(axis=1)], axis=1)
+        # batches of triangles whose bounding boxes hold at most batch_candidates pixels together
+        boxes = np.cumsum(rows * (x1 - x0 + 1))
+        cuts = np.searchsorted(
+            boxes, np.arange(1, boxes[-1] // self.settings.batch_candidates + 1) * self.settings.batch_candidates
+        )
         out = []
-        for key in np.unique(group):
-            members = np.flatnonzero(group == key)
-            box_w, box_h = 1 << int(key // 64), 1 << int(key % 64)
-            dx = np.tile(np.arange(box_w), box_h)
-            dy = np.repeat(np.arange(box_h), box_w)
-            batch = max(1, self.settings.batch_candidates // (box_w * box_h))
-            for start in range(0, len(members), batch):
-                t = members[start : start + batch]
-                inside = (dx[None, :] < span_x[t, None]) & (dy[None, :] < span_y[t, None])
-                px = x0[t, None] + dx[None, :]
-                py = y0[t, None] + dy[None, :]
-                cx, cy = px + 0.5, py + 0.5
-                weights = [a[t, k, None] * cx + b[t, k, None] * cy + c[t, k, None] for k in range(3)]
-                tolerance = -self.settings.edge_tolerance
-                inside &= (weights[0] >= tolerance) & (weights[1] >= tolerance) & (weights[2] >= tolerance)
-                rows, cols = np.nonzero(inside)
-                if len(rows) == 0:
-                    continue
-                z = sum(weights[k][rows, cols] * inverse[t[rows], k] for k in range(3))
-                pixel = py[rows, cols] * width + px[rows, cols]
-                out.append((pixel, np.asarray(z, dtype=np.float64), index[t[rows]]))
+        for t in np.split(np.arange(len(index)), np.unique(cuts[(cuts > 0) & (cuts < len(index))])):
+            if len(t) == 0:
+                continue
+            # one (triangle, row) pair per pixel row of each bounding box
+            pair_t = np.repeat(t, rows[t])
+            pair_y = y0[pair_t] + np.arange(len(pair_t)) - np.repeat(np.cumsum(rows[t]) - rows[t], rows[t])
+            cy = pair_y + 0.5
+            low = np.full(len(pair_t), -np.inf)
+            high = np.full(len(pair_t), np.inf)
+            for k in range(3):
+                ak, rest = a[pair_t, k], b[pair_t, k] * cy + c[pair_t, k] + self.settings.edge_tolerance
+                # a_k cx + rest >= 0: cx >= -rest / a_k when a_k > 0, cx <= -rest / a_k when a_k < 0
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    bound = -rest / ak
+                low = np.where(ak > 0, np.maximum(low, bound), low)
+                high = np.where(ak < 0, np.minimum(high, bound), high)
+                high = np.where((ak == 0) & (rest < 0), -np.inf, high)
+            first = np.maximum(np.ceil(low - 0.5), x0[pair_t])
+            last = np.minimum(np.floor(high - 0.5), x1[pair_t])
+            count = np.maximum(last - first + 1, 0).astype(np.int64)
+            total = int(count.sum())
+            if total == 0:
+                continue
+            pixel_pair = np.repeat(np.arange(len(pair_t)), count)
+            px = first.astype(np.int64)[pixel_pair] + np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+            py = pair_y[pixel_pair]
+            which = pair_t[pixel_pair]
+            z = plane[which, 0] * (px + 0.5) + plane[which, 1] * (py + 0.5) + plane[which, 2]
+            out.append((py * width + px, z, index[which]))
         return out

@@ -238,6 +238,30 @@ def test_goal_placement_and_held_object_colours(world) -> None:
     assert near(held, "closed") > 20
 
 
+def test_a_motion_only_query_shows_its_goal_configuration(tmp_path: Path) -> None:
+    """No object, a goal configuration: the arm at its start solid, at its goal ghosted (light grey where
+    the start is not)."""
+    import yaml
+
+    tree = yaml.safe_load(WORLD.read_text())
+    world_tree = tree["clew_planner"]["ros__parameters"]["world"]
+    del world_tree["object"]
+    world_tree["robot"]["goal"] = [1.2, 0.3, 0.0, -1.5, 0.0, 1.8, 0.785]
+    for key in ("urdf", "srdf"):
+        world_tree["robot"][key] = str((WORLD.parent / world_tree["robot"][key]).resolve())
+    path = tmp_path / "motion_only.yaml"
+    path.write_text(yaml.safe_dump(tree))
+    motion_only = load_spatial_world(path)
+    fixed = View3D(width=320, height=240, distance_m=2.6, target=(0.3, 0.0, 0.35))
+    both = np.asarray(draw_spatial_world(motion_only, fixed, style=STYLE)).astype(int)
+    start = np.asarray(draw_spatial_frames(motion_only, motion_only.initial, None, fixed, style=STYLE)).astype(int)
+    ghost = np.any(np.abs(both - start) > 20, axis=2)
+    assert ghost.sum() > 300
+    assert (both[ghost].max(axis=1) - both[ghost].min(axis=1) < 25).mean() > 0.8  # grey: the faded arm
+    with pytest.raises(RenderError, match=r"^object_poses: the world has no object"):
+        draw_spatial_frames(motion_only, motion_only.initial, [0, 0, 0, 0, 0, 0])
+
+
 def test_a_still_shows_ghosts_along_the_frames(world) -> None:
     q = np.linspace(world.initial, world.initial + np.array([1.2, 0.4, 0.0, 0.5, 0.0, 0.0, 0.0]), 12)
     fixed = View3D(width=320, height=240, distance_m=2.6, target=(0.3, 0.0, 0.35))

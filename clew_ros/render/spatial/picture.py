@@ -100,11 +100,10 @@ class _Triangles:
 
 @dataclass
 class _Pose:
-    """The arm at ``joints``, gripper closed when ``held``, at opacity ``alpha`` (1: solid)."""
+    """The arm at ``joints``, the gripper closed when ``held``."""
 
     joints: Array
     held: bool
-    alpha: float
 
 
 @dataclass
@@ -443,18 +442,16 @@ def draw_spatial_frames(
                 alpha = 1.0 if row == last else _fade(k, len(rows) - 1, style)
                 things.append((row, _Thing(poses[row], key, alpha)))
     goal = []
-    if world.object is not None and not _same_pose(
-        pose_matrix(world.object.goal), poses[last] if poses is not None else np.eye(4)
-    ):
+    if world.object is not None and poses is not None and not _same_pose(pose_matrix(world.object.goal), poses[last]):
         goal = [_Thing(pose_matrix(world.object.goal), "goal", style.goal_alpha)]
     path = _tcp_path(world, q) if len(q) > 1 else None
-    sample = [_Pose(q[row], bool(held_flags[row]), 1.0) for row in rows]
+    sample = [_Pose(q[row], bool(held_flags[row])) for row in rows]
     painter = _Painter(world, view, style, sample=sample, things=[t for _, t in things] + goal, path=path)
     canvas = painter.background(path, held_flags)
     painter.solid(canvas, sample[-1], [t for row, t in things if row == last])
     for k, row in enumerate(rows[:-1]):
         mine = [t for r, t in things if r == row]
-        painter.ghost(canvas, _Pose(q[row], bool(held_flags[row]), 1.0), mine, _fade(k, len(rows) - 1, style))
+        painter.ghost(canvas, sample[k], mine, _fade(k, len(rows) - 1, style))
     if goal:
         painter.ghost(canvas, None, goal, style.goal_alpha)
     caption = title if title is not None else f"{world.name}: {len(q)} frames, {len(rows)} poses, the last solid"
@@ -468,14 +465,14 @@ def draw_spatial_world(
     (green), or, for a motion-only query, the arm at its goal configuration ghosted."""
     style = style or SpatialStyle()
     view = view or View3D()
-    start = _Pose(world.initial, False, 1.0)
+    start = _Pose(world.initial, False)
     things = []
     if world.object is not None:
         things = [
             _Thing(pose_matrix(world.object.initial), "start", 1.0),
             _Thing(pose_matrix(world.object.goal), "goal", style.goal_alpha),
         ]
-    goal_pose = _Pose(world.goal, False, style.goal_alpha) if world.goal is not None else None
+    goal_pose = _Pose(world.goal, False) if world.goal is not None else None
     sample = [start] + ([goal_pose] if goal_pose is not None else [])
     painter = _Painter(world, view, style, sample=sample, things=things, path=None)
     canvas = painter.background(None, None)
@@ -508,7 +505,7 @@ def spatial_gif_frames(
     poses = _check_object_poses(world, object_poses, len(q))
     held_flags = _check_held(held, len(q))
     spread = sorted({round(r) for r in np.linspace(0, len(q) - 1, min(len(q), 12))})
-    sample = [_Pose(q[row], bool(held_flags[row]), 1.0) for row in spread]
+    sample = [_Pose(q[row], bool(held_flags[row])) for row in spread]
     things = [_Thing(poses[row], "object_rest", 1.0) for row in spread] if poses is not None else []
     path = _tcp_path(world, q) if len(q) > 1 else None
     painter = _Painter(world, view, style, sample=sample, things=things, path=path)
@@ -520,7 +517,7 @@ def spatial_gif_frames(
         objects = []
         if poses is not None:
             objects = [_Thing(poses[row], "object_held" if held_flags[row] else "object_rest", 1.0)]
-        painter.solid(canvas, _Pose(q[row], bool(held_flags[row]), 1.0), objects)
+        painter.solid(canvas, _Pose(q[row], bool(held_flags[row])), objects)
         status = f"frame {row + 1}/{len(q)}" + (", holding" if held_flags[row] else "")
         frames.append(painter.finish(canvas, caption, status))
     return frames

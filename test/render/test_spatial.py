@@ -262,6 +262,34 @@ def test_a_motion_only_query_shows_its_goal_configuration(tmp_path: Path) -> Non
         draw_spatial_frames(motion_only, motion_only.initial, [0, 0, 0, 0, 0, 0])
 
 
+def test_a_camera_pose_is_the_same_view_as_its_angles(world) -> None:
+    """``eye`` and ``target`` (a camera pose) draw what azimuth, elevation and distance around that target do."""
+    target = (0.3, 0.0, 0.35)
+    angles = View3D(azimuth_deg=40.0, elevation_deg=20.0, distance_m=2.5, target=target, width=240, height=180)
+    eye = tuple(float(v) for v in np.asarray(target) + 2.5 * angles.direction())
+    posed = View3D(eye=eye, target=target, width=240, height=180)
+    a = np.asarray(draw_spatial_world(world, angles, style=STYLE)).astype(int)
+    b = np.asarray(draw_spatial_world(world, posed, style=STYLE)).astype(int)
+    assert np.abs(a - b).max() <= 1
+    with pytest.raises(RenderError, match=r"^view eye: expected a point away from the target"):
+        draw_spatial_world(world, View3D(eye=target, target=target))
+
+
+def test_link_meshes_are_simplified_once_and_cached(world) -> None:
+    from clew_ros.render.spatial.meshes import MeshSettings, geometry_mesh, robot_mesh
+    from clew_ros.spatial.robot import Geometry
+
+    assert robot_mesh(world.robot) is robot_mesh(world.robot)
+    coarse = MeshSettings(max_mesh_faces=80)
+    assert robot_mesh(world.robot, coarse) is robot_mesh(world.robot, coarse)
+    assert len(robot_mesh(world.robot, coarse).faces) < len(robot_mesh(world.robot).faces)
+    vertices, faces = sphere_mesh(0.1, 4)
+    big = Geometry("link", "mesh", (), pose_matrix([0.0, 0.0, 0.5, 0.0, 0.0, 0.0]), vertices, faces)
+    small_v, small_f = geometry_mesh(big, MeshSettings(max_mesh_faces=500))
+    assert len(small_f) <= 500
+    assert small_v[:, 2].mean() == pytest.approx(0.5, abs=0.01)  # the geometry's origin applied
+
+
 def test_a_still_shows_ghosts_along_the_frames(world) -> None:
     q = np.linspace(world.initial, world.initial + np.array([1.2, 0.4, 0.0, 0.5, 0.0, 0.0, 0.0]), 12)
     fixed = View3D(width=320, height=240, distance_m=2.6, target=(0.3, 0.0, 0.35))

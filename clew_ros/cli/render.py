@@ -39,8 +39,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--view",
         metavar="AZ,EL[,DIST]",
-        help="spatial worlds: the camera's azimuth, elevation (degrees) and distance (m; default: framing the scene); "
-        "a negative azimuth as --view=-50,28",
+        help="spatial worlds: the camera's azimuth, elevation (degrees) and distance (m; default: framing the scene)",
     )
     parser.add_argument(
         "--frames",
@@ -56,8 +55,19 @@ def _is_recording(path: Path) -> bool:
     )
 
 
+def _view_joined(argv: list[str]) -> list[str]:
+    """``--view -50,28`` as ``--view=-50,28``: argparse would take a value starting with ``-`` for an option."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] == "--view" and len(arg) > 1 and arg[0] == "-" and arg[1] in "0123456789.":
+            out[-1] = f"--view={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    args = _parser().parse_args(_view_joined(list(sys.argv[1:] if argv is None else argv)))
     from clew_ros.render import RenderError, render_gif, render_png, render_svg
     from clew_ros.render.scene import (
         load_world_file,

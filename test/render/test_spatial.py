@@ -124,6 +124,13 @@ def test_a_bad_view_is_refused_naming_it(
     assert not out.exists()
 
 
+def test_a_negative_azimuth_needs_no_equals_sign(tmp_path: Path) -> None:
+    joined, spaced = tmp_path / "joined.png", tmp_path / "spaced.png"
+    assert clew_render([str(WORLD), "-o", str(joined), "--size", "200", "--view=-120,30"]) == 0
+    assert clew_render([str(WORLD), "-o", str(spaced), "--size", "200", "--view", "-120,30"]) == 0
+    assert np.array_equal(np.asarray(Image.open(joined)), np.asarray(Image.open(spaced)))
+
+
 def test_parse_view_keeps_the_size() -> None:
     view = parse_view("30,20,2.5", View3D(width=200, height=150))
     assert (view.azimuth_deg, view.elevation_deg, view.distance_m, view.width, view.height) == (30, 20, 2.5, 200, 150)

@@ -49,6 +49,7 @@ COMMANDS: dict[str, Command] = {
     "spatial_motion": Command(
         "spatial_motion", "motion-only problems (table, shelf, cage, bookshelf): OMPL, roboplan and others by name"
     ),
+    "spatial_render": Command("spatial_render", "how fast the 3-D renderer draws a spatial world, a still, a frame"),
 }
 
 

@@ -24,10 +24,12 @@ def quick_world():
 def quick_plan() -> dict:
     """A successful plan for the quick world, as its plan file holds it (a dict); raises if the core finds none."""
     from clew_ros.core.settings import PlannerSettings
+    from clew_ros.planar.kernel import warm_up
     from clew_ros.planar.plan import Plan
     from clew_ros.planar.space import plan
 
     world = quick_world()
+    warm_up()  # the kernels compiled (a minute on a loaded machine without numba's cache) before the clock starts
     result = plan(world, PlannerSettings(seed=0, time_limit=TIME_LIMIT_S))
     if not result.success:
         raise RuntimeError(f"the core found no plan for {WORLD_PATH.name}: {result.message}")

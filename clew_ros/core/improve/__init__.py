@@ -146,6 +146,7 @@ import numpy as np
 
 from clew_ros.core.improve.budget import check_work
 from clew_ros.core.improve.final import _refusal
+from clew_ros.core.improve.many import _ManyJointMoves
 from clew_ros.core.improve.pieces import Improvement, _better, _Piece, _pieces, _score, joint_travel
 from clew_ros.core.improve.prune import _joined_regrasps
 from clew_ros.core.improve.rebuild import _Rebuilding
@@ -168,7 +169,7 @@ __all__ = [
 ]
 
 
-class _Improver(_Rebuilding):
+class _Improver(_Rebuilding, _ManyJointMoves):
     """The improvement's rounds over one plan (its stages: :mod:`clew_ros.core.improve.rebuild`,
     :mod:`~clew_ros.core.improve.lattice`, :mod:`~clew_ros.core.improve.shortcuts`)."""
 
@@ -177,6 +178,9 @@ class _Improver(_Rebuilding):
         plan better (after the first, the rebuilding may use all that is left: the shortcuts had too little to
         do)."""
         self.prune()
+        many = self.world.robot.dof >= self.ctx.many.straight_probe_joints
+        if many and self.resolve_postures():
+            self.prune()
         while True:
             score = _score(self.pieces)
             self.rebuild()
@@ -185,6 +189,8 @@ class _Improver(_Rebuilding):
             self.shorten()
             if self.lattice_first_grasps():
                 self.shorten()
+            if many:
+                self.many_joints()
             if not self.budget.left() or not self.better(score, _score(self.pieces)):
                 return self.pieces
             self.rebuild_share = 1.0

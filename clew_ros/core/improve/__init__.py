@@ -189,8 +189,6 @@ class _Improver(_Rebuilding, _ManyJointMoves):
             self.shorten()
             if self.lattice_first_grasps():
                 self.shorten()
-            if many:
-                self.many_joints()
             if not self.budget.left() or not self.better(score, _score(self.pieces)):
                 return self.pieces
             self.rebuild_share = 1.0

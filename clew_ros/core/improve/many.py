@@ -1,15 +1,17 @@
-"""Arms of many joints (issue 46): segment ends moved along the arm's redundancy.
+"""Arms of many joints (issue 46): the plan's postures solved again along its tip's path.
 
-A segment's end points are where the arm takes or releases the object; the shortcuts never move them, so
-a plan can be no shorter than the joint travel between them. On a hyper-redundant arm the first plan's ends
-come from EXPLORE's Manhattan paths and from holds solved from random starts, far apart in joint space,
-while the same tip pose (the same grasp of the object at the same place) is held by a whole family of
-configurations. :meth:`_ManyJointMoves.move_ends` moves each end within that family, towards the
-waypoints on either side of it: inverse kinematics for the end's tip pose, seeded from points on the
-straight line between those two neighbours (damped least squares stays near its seed, so the answer is
-near the line), the nearest valid answer whose two moves are clear kept. The object is then held or put
-down exactly where it was, so the rest of both segments stays valid; the shortcuts then straighten the
-segments between the new ends, and the two alternate while they gain (:meth:`_ManyJointMoves.many_joints`).
+EXPLORE's transfers on a hyper-redundant arm are Manhattan paths that turn every joint in turn, and its
+transits end on holds solved from random starts: the arm wanders through postures that the task does not
+need, and the shortcuts, which never move a segment's ends (where the object is taken or put down), cannot
+take that out. The same tip pose, though, is held by a whole family of postures. :meth:`_ManyJointMoves.resolve`
+keeps what the plan does with the object (the tip's path, so every grasp, release and placement, and the
+object's path while carried) and solves the postures again: the points of each move, a few centimetres of
+sweep apart, in turn by damped least squares for the tip's pose, each seeded with the posture solved before,
+so the joints move as little as the tip's path needs and joints that need not move stay nearly still. A
+piece's new end is first joined straight to its start (a transit's path is free), else each move straight,
+else through its points; where such a point is not clear the posture is pulled back towards the first
+plan's there. The result is checked continuously, as every move of the improvement, and kept when better;
+the shortcuts then straighten it (the improvement's rounds, :mod:`clew_ros.core.improve`).
 """
 
 from __future__ import annotations
@@ -24,7 +26,14 @@ from clew_ros.core.improve.shortcuts import _Shortcutting
 from clew_ros.core.inverse import solve_point
 from clew_ros.core.kernel import pruned_path
 from clew_ros.core.kinematics import tip_poses
-from clew_ros.core.regrasp import _Kinematics
+
+
+class _BlockedError(Exception):
+    """A point of a piece solved again could not be joined clear, even to the first plan's posture."""
+
+
+class _OutOfWorkError(Exception):
+    """The budget ran out (or the time limit or cancel) while postures were solved again."""
 
 
 class _ManyJointMoves(_Shortcutting):
@@ -45,146 +54,105 @@ class _ManyJointMoves(_Shortcutting):
             better |= self.resolve(split if failed is None else split + 1, count)[0]
         return better
 
-    def many_joints(self) -> None:
-        """Rounds of :meth:`move_ends` then the shortcuts (greedy, random), while a round makes the plan
-        better and work is left (at most :attr:`ImproveSettings.end_rounds`)."""
-        for _ in range(self.settings.end_rounds):
-            score = _score(self.pieces)
-            if not self.budget.left() or not self.move_ends():
-                return
-            self.shorten()
-            if not self.better(score, _score(self.pieces)):
-                return
-
-    def move_ends(self) -> bool:
-        """:meth:`move_end` of every end shared by two segments, the plan's order. Whether the plan changed."""
-        changed = False
-        for index in range(len(self.pieces) - 1):
-            if not self.budget.left():
-                break
-            changed |= self.move_end(index)
-        if changed:
-            self.reserve()
-        return changed
-
-    def move_end(self, index: int) -> bool:
-        """Move the configuration where piece ``index`` ends and the next begins to one with the same tip pose
-        nearer (joint travel) the straight line between its neighbours (the waypoint before it and the one
-        after), when both moves to it are clear. Whether it moved."""
-        one, two = self.pieces[index], self.pieces[index + 1]
-        end = one.waypoints[-1]
-        before = one.waypoints[-2] if len(one.waypoints) > 1 else end
-        after = two.waypoints[1] if len(two.waypoints) > 1 else end
-        seeds = self.end_seeds(before, after, end)
-        tip = tip_poses(self.world.robot, end[None])[0]
-        kinematics = _Kinematics(self.world, self.min_margin, settings=self.settings.regrasp)
-        reached = self.settings.end_error_m
-        q, error = kinematics.solve(
-            seeds,
-            tip[:2],
-            reached,
-            angles=np.full(len(seeds), tip[2]),
-            angle_tolerance=0.0,
-            tolerance_m=0.1 * reached,
-        )
-        travel = np.abs(q - before).sum(axis=1) + np.abs(after - q).sum(axis=1)
-        old = float(np.abs(end - before).sum() + np.abs(after - end).sum())
-        rows = np.flatnonzero((error <= reached) & (travel < old - self.settings.end_gain_rad))
-        if len(rows):
-            pose = one.end_pose(self.world)
-            valid = kinematics.valid(q[rows], np.broadcast_to(pose, (len(rows), 3)))
-            rows = rows[valid]
-        self.budget.spend_checks(kinematics.effort.checks, kinematics.effort.calls)
-        self.budget.spend(math.ceil(self.settings.ik_work * kinematics.effort.steps))
-        for row in rows[np.argsort(travel[rows], kind="stable")][: self.settings.end_tries].tolist():
-            if not self.budget.left():
-                return False
-            moved = q[row]
-            if self.clear(one, before, moved) and self.clear(two, moved, after):
-                one.waypoints = np.vstack([one.waypoints[:-1], moved[None]])
-                two.waypoints = np.vstack([moved[None], two.waypoints[1:]])
-                return True
-        return False
-
-    def end_seeds(self, before: np.ndarray, after: np.ndarray, end: np.ndarray) -> np.ndarray:
-        """Seeds of :meth:`move_end`'s inverse kinematics: :attr:`ImproveSettings.end_line_seeds` points evenly
-        along the straight line ``before -> after`` (its ends included), and as many drawn around them
-        (:attr:`ImproveSettings.end_spread_rad` per joint, from the improvement's restarts generator), and the end
-        itself drawn around."""
-        line = np.linspace(0.0, 1.0, self.settings.end_line_seeds)[:, None]
-        points = np.vstack([before + line * (after - before), end[None]])
-        drawn = points + self.restarts.normal(0.0, self.settings.end_spread_rad, size=points.shape)
-        return np.vstack([points, drawn])
-
     def resolve(self, first: int, stop: int) -> tuple[bool, int | None]:
-        """Pieces ``first`` to ``stop`` - 1 with their tip's path kept and their postures solved again: the points
-        of each move (:attr:`ImproveSettings.resolve_step_m` of sweep apart) in turn by inverse kinematics for their
-        tip pose, seeded with the configuration solved before (:meth:`chained`), so the joints move as little as the
-        tip's path needs (the postures the first plan wandered through without moving the tip are left out); when
-        pieces follow, the last piece's seeds are pulled back towards the first plan's postures, all the way at its
-        end, where the next piece starts. A move's solved end is joined straight when that is clear, else through its
-        points; a point not joined clear is pulled towards the first plan's posture there (:meth:`pulled`). Kept when
-        every move is clear and the plan better. Whether it was, and the piece that could not be joined (None when
-        none, or the work ran out)."""
-        robot = self.world.robot
-        reach = np.cumsum(robot.link_lengths[::-1])[::-1]  # R_j: the links from joint j on
+        """Pieces ``first`` to ``stop`` - 1 with their tip's path kept and their postures solved again
+        (:meth:`resolved_piece`); when pieces follow, the last one's postures are pulled back towards the first
+        plan's, all the way at its end, where the next piece starts. Kept when every move is clear and the plan
+        better. Whether it was, and the piece that could not be joined (None when none did not, or the work ran
+        out)."""
         previous = self.pieces[first].waypoints[0]
         new: list[_Piece] = []
         for index in range(first, stop):
             piece = self.pieces[index]
-            w = piece.waypoints
-            counts = [
-                max(1, math.ceil(float(np.abs(b - a) @ reach) / self.settings.resolve_step_m))
-                for a, b in itertools.pairwise(w)
-            ]
-            back = np.concatenate([np.arange(1, c + 1) / c for c in counts]) if counts else np.zeros(0)
-            if index == stop - 1 and stop < len(self.pieces):
-                back = np.arange(1, len(back) + 1) / max(1, len(back))  # back to the first plan's end posture
-            else:
-                back = np.zeros(len(back))
-            path = [previous]
-            offset = 0
-            floor = 0.0  # pulled once towards the first plan's postures, the piece's later points stay as near
-            for a, b, count in zip(w[:-1], w[1:], counts, strict=True):
-                old = a + np.linspace(0.0, 1.0, count + 1)[1:, None] * (b - a)
-                tips = tip_poses(robot, old)
-                pull = np.maximum(back[offset : offset + count], floor)
-                offset += count
-                if not self.budget.left():
-                    return False, None
-                chain = self.chained(path[-1], tips, old, pull)
-                if len(chain) == count and self.clear(piece, path[-1], chain[-1]):
-                    path.append(chain[-1])
-                    continue
-                done = 0
-                while done < count:
-                    if not self.budget.left():
-                        return False, None
-                    window = slice(done, done + self.settings.resolve_window)
-                    chain = self.chained(path[-1], tips[window], old[window], np.maximum(pull[window], floor))
-                    clear = np.zeros(0, dtype=bool)
-                    if len(chain):
-                        clear = self.moves_clear(piece, np.array([path[-1], *chain[:-1]]), chain, every=True)
-                    joined = int(np.argmin(clear)) if not clear.all() else len(clear)
-                    path.extend(chain[:joined])
-                    done += joined
-                    if done == count or joined == len(tips[window]):
-                        continue
-                    pulled = self.pulled(piece, path[-1], tips[done], old[done])
-                    if pulled is None:
-                        return False, index
-                    floor = max(floor, pulled[1])
-                    path.append(pulled[0])
-                    done += 1
-            previous = path[-1]
-            waypoints = pruned_path(_without_repeats(path))
+            returns = index == stop - 1 and stop < len(self.pieces)
+            try:
+                waypoints = self.resolved_piece(piece, previous, returns)
+            except _BlockedError:
+                return False, index
+            except _OutOfWorkError:
+                return False, None
             new.append(_Piece(piece.kind, piece.grasp, waypoints, piece.start_pose, piece.grasp_rel))
+            previous = waypoints[-1]
         candidate = [*self.pieces[:first], *new, *self.pieces[stop:]]
         if not self.better(_score(self.pieces), _score(candidate)):
             return False, None
         self.pieces = candidate
         self.reserve()
         return True, None
+
+    def resolved_piece(self, piece: _Piece, start: np.ndarray, returns: bool) -> np.ndarray:
+        """``piece``'s waypoints solved again from ``start``: the points of each of its moves
+        (:attr:`ImproveSettings.resolve_step_m` of sweep apart) in turn (:meth:`chained`), pulled back towards the
+        first plan's postures by shares growing to 1 at its end if ``returns``. Its solved end joined straight to
+        ``start`` when that is clear (one check); else each move's solved end joined straight, else through its
+        points (:meth:`resolved_move`). Raises :class:`_BlockedError` or :class:`_OutOfWorkError`."""
+        robot = self.world.robot
+        reach = np.cumsum(robot.link_lengths[::-1])[::-1]  # R_j: the links from joint j on
+        w = piece.waypoints
+        moves = [
+            a + np.linspace(0.0, 1.0, count + 1)[1:, None] * (b - a)
+            for a, b in itertools.pairwise(w)
+            for count in [max(1, math.ceil(float(np.abs(b - a) @ reach) / self.settings.resolve_step_m))]
+        ]
+        if not moves:
+            return np.array([start])
+        old = np.vstack(moves)
+        tips = tip_poses(robot, old)
+        pull = np.arange(1, len(old) + 1) / len(old) if returns else np.zeros(len(old))
+        if not self.budget.left():
+            raise _OutOfWorkError
+        chain = self.chained(start, tips, old, pull)
+        if len(chain) == len(old) and self.clear(piece, start, chain[-1]):
+            return np.array([start, chain[-1]])
+        path = [start]
+        floor = 0.0  # once pulled towards the first plan's postures, the piece's later points stay as near
+        offset = 0
+        for points in moves:
+            rows = slice(offset, offset + len(points))
+            offset += len(points)
+            floor = self.resolved_move(piece, path, tips=tips[rows], old=old[rows], pull=pull[rows], floor=floor)
+        return pruned_path(_without_repeats(path))
+
+    def resolved_move(
+        self,
+        piece: _Piece,
+        path: list[np.ndarray],
+        *,
+        tips: np.ndarray,
+        old: np.ndarray,
+        pull: np.ndarray,
+        floor: float,
+    ) -> float:
+        """Extend ``path`` by one move solved again (its points' tip poses ``tips``, the first plan's postures
+        there ``old``, the shares ``pull`` towards them, at least ``floor``): its solved end joined straight when
+        that is clear, else its points, :attr:`ImproveSettings.resolve_window` at a time, up to the first not joined
+        clear, which is pulled towards the first plan's posture (:meth:`pulled`). Returns the floor of the pulls
+        from here on."""
+        chain = self.chained(path[-1], tips, old, np.maximum(pull, floor))
+        if len(chain) == len(tips) and self.clear(piece, path[-1], chain[-1]):
+            path.append(chain[-1])
+            return floor
+        done = 0
+        while done < len(tips):
+            if not self.budget.left():
+                raise _OutOfWorkError
+            window = slice(done, done + self.settings.resolve_window)
+            chain = self.chained(path[-1], tips[window], old[window], np.maximum(pull[window], floor))
+            clear = np.zeros(0, dtype=bool)
+            if len(chain):
+                clear = self.moves_clear(piece, np.array([path[-1], *chain[:-1]]), chain, every=True)
+            joined = int(np.argmin(clear)) if not clear.all() else len(clear)
+            path.extend(chain[:joined])
+            done += joined
+            if done == len(tips) or joined == len(tips[window]):
+                continue
+            pulled = self.pulled(piece, path[-1], tips[done], old[done])
+            if pulled is None:
+                raise _BlockedError
+            path.append(pulled[0])
+            floor = max(floor, pulled[1])
+            done += 1
+        return floor
 
     def chained(self, q: np.ndarray, tips: np.ndarray, old: np.ndarray, pull: np.ndarray) -> np.ndarray:
         """Configurations ``(k, n)`` for the tip poses ``tips`` ``(m, 3)`` in turn, each solved from the one
@@ -201,10 +169,10 @@ class _ManyJointMoves(_Shortcutting):
                 tip[None, :2],
                 angles=tip[None, 2],
                 angle_tolerance=0.0,
-                tolerance_m=0.1 * self.settings.end_error_m,
+                tolerance_m=0.1 * self.settings.resolve_error_m,
             )
             steps += solution.steps + 1
-            if solution.error[0] > self.settings.end_error_m:
+            if solution.error[0] > self.settings.resolve_error_m:
                 break
             q = solved[count] = solution.q[0]
             count += 1
@@ -225,10 +193,10 @@ class _ManyJointMoves(_Shortcutting):
             np.broadcast_to(tip[:2], (len(seeds), 2)),
             angles=np.full(len(seeds), tip[2]),
             angle_tolerance=0.0,
-            tolerance_m=0.1 * self.settings.end_error_m,
+            tolerance_m=0.1 * self.settings.resolve_error_m,
         )
         self.budget.spend(math.ceil(self.settings.ik_work * (solution.steps + len(seeds))))
-        for k in np.flatnonzero(solution.error <= self.settings.end_error_m).tolist():
+        for k in np.flatnonzero(solution.error <= self.settings.resolve_error_m).tolist():
             if self.clear(piece, q, solution.q[k]):
                 return solution.q[k], float(shares[k, 0])
         if self.clear(piece, q, old):

@@ -141,23 +141,10 @@ class ImproveSettings:
     #: postures (:mod:`clew_ros.core.improve.many`) about one continuous check of each of its moves, and nothing
     #: after; the improvement then takes about 1-2 s of wall time on 20-40 joints.
     many_budget_joints: int = 10
-    #: Rounds (at most) of the many-joint stage (:mod:`clew_ros.core.improve.many`: segment ends moved along the
-    #: arm's redundancy, then the shortcuts), on arms of at least ``ManyJoints.straight_probe_joints`` joints; the
-    #: rounds also end when one gains nothing.
-    end_rounds: int = 4
-    #: Error (m; the tip's angle counting 1 m per rad) left by the inverse kinematics of a moved segment end: the
-    #: object is then held or put down where it was to within this, far below any tolerance of a world.
-    end_error_m: float = 1e-9
-    #: A segment end is moved only when that shortens the two moves next to it by more than this (rad).
-    end_gain_rad: float = 1e-6
-    #: Seeds of a moved end's inverse kinematics on the straight line between its neighbours (count, both ends
-    #: included); as many more are drawn around them (:attr:`end_spread_rad`).
-    end_line_seeds: int = 5
-    #: Spread (rad, standard deviation per joint) of the seeds drawn around those on the line: other postures
-    #: near it, in case the nearest is blocked.
-    end_spread_rad: float = 0.1
-    #: Moved ends checked (count, nearest first; each two moves checked continuously) before the end is left.
-    end_tries: int = 3
+    #: Error (m; the tip's angle counting 1 m per rad) left by the inverse kinematics of a posture solved again
+    #: (:mod:`clew_ros.core.improve.many`): the object is then held or put down where it was to within this, far
+    #: below any tolerance of a world.
+    resolve_error_m: float = 1e-9
     #: Sweep (m, ``sum_j |dq_j| R_j``) between the points of a path whose postures are solved again
     #: (:meth:`clew_ros.core.improve.many._ManyJointMoves.resolve`): short enough that a straight move between two
     #: solved points keeps the tip near its old path.

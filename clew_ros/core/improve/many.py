@@ -99,52 +99,20 @@ class _ManyJointMoves(_Shortcutting):
         old = np.vstack(moves)
         tips = tip_poses(robot, old)
         pull = np.arange(1, len(old) + 1) / len(old) if returns else np.zeros(len(old))
-        if not self.budget.left():
-            raise _OutOfWorkError
-        chain = self.chained(start, tips, old, pull)
-        if len(chain) == len(old) and self.clear(piece, start, chain[-1]):
-            return np.array([start, chain[-1]])
         path = [start]
         floor = 0.0  # once pulled towards the first plan's postures, the piece's later points stay as near
-        offset = 0
-        for points in moves:
-            rows = slice(offset, offset + len(points))
-            offset += len(points)
-            floor = self.resolved_move(piece, path, tips=tips[rows], old=old[rows], pull=pull[rows], floor=floor)
-        return pruned_path(_without_repeats(path))
-
-    def resolved_move(
-        self,
-        piece: _Piece,
-        path: list[np.ndarray],
-        *,
-        tips: np.ndarray,
-        old: np.ndarray,
-        pull: np.ndarray,
-        floor: float,
-    ) -> float:
-        """Extend ``path`` by one move solved again (its points' tip poses ``tips``, the first plan's postures
-        there ``old``, the shares ``pull`` towards them, at least ``floor``): its solved end joined straight when
-        that is clear, else its points, :attr:`ImproveSettings.resolve_window` at a time, up to the first not joined
-        clear, which is pulled towards the first plan's posture (:meth:`pulled`). Returns the floor of the pulls
-        from here on."""
-        chain = self.chained(path[-1], tips, old, np.maximum(pull, floor))
-        if len(chain) == len(tips) and self.clear(piece, path[-1], chain[-1]):
-            path.append(chain[-1])
-            return floor
         done = 0
-        while done < len(tips):
+        chain = np.zeros((0, robot.dof))
+        while done < len(old):
             if not self.budget.left():
                 raise _OutOfWorkError
-            window = slice(done, done + self.settings.resolve_window)
-            chain = self.chained(path[-1], tips[window], old[window], np.maximum(pull[window], floor))
-            clear = np.zeros(0, dtype=bool)
-            if len(chain):
-                clear = self.moves_clear(piece, np.array([path[-1], *chain[:-1]]), chain, every=True)
-            joined = int(np.argmin(clear)) if not clear.all() else len(clear)
-            path.extend(chain[:joined])
-            done += joined
-            if done == len(tips) or joined == len(tips[window]):
+            if not len(chain):
+                chain = self.chained(path[-1], tips[done:], old[done:], np.maximum(pull[done:], floor))
+            joined = self.farthest_clear(piece, path[-1], chain)
+            if joined:
+                path.append(chain[joined - 1])
+                chain = chain[joined:]
+                done += joined
                 continue
             pulled = self.pulled(piece, path[-1], tips[done], old[done])
             if pulled is None:
@@ -152,7 +120,20 @@ class _ManyJointMoves(_Shortcutting):
             path.append(pulled[0])
             floor = max(floor, pulled[1])
             done += 1
-        return floor
+            chain = chain[:0]
+        return pruned_path(_without_repeats(path))
+
+    def farthest_clear(self, piece: _Piece, q: np.ndarray, chain: np.ndarray) -> int:
+        """How many points of ``chain`` the straight move from ``q`` to its farthest clear one passes: the last
+        tried first, then halfway, a quarter, ... (0: not even the first)."""
+        joined = len(chain)
+        while joined:
+            if not self.budget.left():
+                raise _OutOfWorkError
+            if self.clear(piece, q, chain[joined - 1]):
+                return joined
+            joined //= 2
+        return 0
 
     def chained(self, q: np.ndarray, tips: np.ndarray, old: np.ndarray, pull: np.ndarray) -> np.ndarray:
         """Configurations ``(k, n)`` for the tip poses ``tips`` ``(m, 3)`` in turn, each solved from the one

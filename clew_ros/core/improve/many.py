@@ -130,10 +130,24 @@ class _ManyJointMoves(_Shortcutting):
         while joined:
             if not self.budget.left():
                 raise _OutOfWorkError
-            if self.clear(piece, q, chain[joined - 1]):
+            if self.clear_in_pieces(piece, q, chain[joined - 1]):
                 return joined
             joined //= 2
         return 0
+
+    def clear_in_pieces(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
+        """Whether the straight move ``a -> b`` is clear in ``piece``'s mode, checked in pieces of at most
+        ``ManyJoints.check_sweep_m`` of sweep, the budget asked before each (one compiled check of a long many-joint
+        move near a contact can take a second). Raises :class:`_OutOfWorkError` when the budget runs out."""
+        reach = np.cumsum(self.world.robot.link_lengths[::-1])[::-1]
+        count = max(1, math.ceil(float(np.abs(b - a) @ reach) / self.ctx.many.check_sweep_m))
+        points = a + np.linspace(0.0, 1.0, count + 1)[:, None] * (b - a)
+        for start, end in itertools.pairwise(points):
+            if not self.budget.left():
+                raise _OutOfWorkError
+            if not self.clear(piece, start, end):
+                return False
+        return True
 
     def chained(self, q: np.ndarray, tips: np.ndarray, old: np.ndarray, pull: np.ndarray) -> np.ndarray:
         """Configurations ``(k, n)`` for the tip poses ``tips`` ``(m, 3)`` in turn, each solved from the one
@@ -178,8 +192,8 @@ class _ManyJointMoves(_Shortcutting):
         )
         self.budget.spend(math.ceil(self.settings.ik_work * (solution.steps + len(seeds))))
         for k in np.flatnonzero(solution.error <= self.settings.resolve_error_m).tolist():
-            if self.clear(piece, q, solution.q[k]):
+            if self.clear_in_pieces(piece, q, solution.q[k]):
                 return solution.q[k], float(shares[k, 0])
-        if self.clear(piece, q, old):
+        if self.clear_in_pieces(piece, q, old):
             return old, 1.0
         return None

@@ -71,6 +71,11 @@ class _ManyJointMoves(_Shortcutting):
                 return False, index
             except _OutOfWorkError:
                 return False, None
+            if returns:  # its last point was solved from the next piece's start itself: that start, exactly
+                following = self.pieces[stop].waypoints[0]
+                if float(np.max(np.abs(waypoints[-1] - following))) > self.settings.resolve_error_m:
+                    return False, None
+                waypoints[-1] = following
             new.append(_Piece(piece.kind, piece.grasp, waypoints, piece.start_pose, piece.grasp_rel))
             previous = waypoints[-1]
         candidate = [*self.pieces[:first], *new, *self.pieces[stop:]]
@@ -83,9 +88,11 @@ class _ManyJointMoves(_Shortcutting):
     def resolved_piece(self, piece: _Piece, start: np.ndarray, returns: bool) -> np.ndarray:
         """``piece``'s waypoints solved again from ``start``: the points of each of its moves
         (:attr:`ImproveSettings.resolve_step_m` of sweep apart) in turn (:meth:`chained`), pulled back towards the
-        first plan's postures by shares growing to 1 at its end if ``returns``. Its solved end joined straight to
-        ``start`` when that is clear (one check); else each move's solved end joined straight, else through its
-        points (:meth:`resolved_move`). Raises :class:`_BlockedError` or :class:`_OutOfWorkError`."""
+        first plan's postures by shares growing to 1 at its end if ``returns``; joined from ``start`` to the
+        farthest solved point a straight move reaches clear (:meth:`farthest_clear`: the last first, so a piece
+        becomes one straight move where it can), and on from there; a point that no move reaches clear is solved
+        again nearer the first plan's posture (:meth:`pulled`), and the points after it are solved at least as
+        near. Raises :class:`_BlockedError` or :class:`_OutOfWorkError`."""
         robot = self.world.robot
         reach = np.cumsum(robot.link_lengths[::-1])[::-1]  # R_j: the links from joint j on
         w = piece.waypoints

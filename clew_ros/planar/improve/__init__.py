@@ -90,6 +90,12 @@ better and work is left; after the first, the rebuilding may use the whole
 budget (what the shortcuts left: a plan of straight moves leaves them nothing
 to do).
 
+**Arms of many joints** (at least ``ManyJoints.straight_probe_joints``, so arms of up to 10 joints are
+improved exactly as before): after the pruning and before the rounds, the plan's postures are solved again
+along its tip's path (:mod:`clew_ros.planar.improve.many`: every grasp, release and placement and the
+object's path kept, the joints moving as little as the tip needs), and the budget is multiplied by the
+joints over :attr:`ImproveSettings.many_budget_joints` (a check costs about the square of the joints).
+
 A change is kept only when it lowers ``(transfers, joint travel)`` or keeps
 them and drops waypoints; joint travel is the sum over joints of the
 absolute motion (rad). The first plan is kept when nothing better is found.
@@ -126,6 +132,7 @@ Every tuning number is a field of :class:`ImproveSettings` (:mod:`clew_ros.plana
 ============== ==========================================================================================
 ``settings``   :class:`ImproveSettings`: the tuning numbers, with units and why (the proposals' in ``regrasp``)
 ``pieces``     the plan as pieces, joint travel, the score and which plan is better
+``many``       arms of many joints: the postures solved again along the tip's path
 ``budget``     the work budget, a routing's share of it, :func:`check_work`
 ``prune``      joining a transfer put down and taken again in place (step 1)
 ``base``       the improver's state: continuous checks charged to the budget, the final check's reserve, pruning
@@ -148,6 +155,7 @@ from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Segment
 from clew_ros.planar.improve.budget import check_work
 from clew_ros.planar.improve.final import _refusal
+from clew_ros.planar.improve.many import _ManyJointMoves
 from clew_ros.planar.improve.pieces import Improvement, _better, _Piece, _pieces, _score, joint_travel
 from clew_ros.planar.improve.prune import _joined_regrasps
 from clew_ros.planar.improve.rebuild import _Rebuilding
@@ -169,7 +177,7 @@ __all__ = [
 ]
 
 
-class _Improver(_Rebuilding):
+class _Improver(_Rebuilding, _ManyJointMoves):
     """The improvement's rounds over one plan (its stages: :mod:`clew_ros.planar.improve.rebuild`,
     :mod:`~clew_ros.planar.improve.lattice`, :mod:`~clew_ros.planar.improve.shortcuts`)."""
 
@@ -178,6 +186,9 @@ class _Improver(_Rebuilding):
         plan better (after the first, the rebuilding may use all that is left: the shortcuts had too little to
         do)."""
         self.prune()
+        many = self.world.robot.dof >= self.ctx.many.straight_probe_joints
+        if many and self.resolve_postures():
+            self.prune()
         while True:
             score = _score(self.pieces)
             self.rebuild()

@@ -32,7 +32,9 @@ class _ImproverBase:
         self.pieces = pieces
         self.first = [p.waypoints for p in pieces]
         self.goal = goal
-        self.budget = _Budget(ctx, ctx.settings.improve_time * self.settings.work_per_second, self.settings)
+        joints = world_of(ctx).robot.dof
+        scale = joints / self.settings.many_budget_joints if joints >= ctx.many.straight_probe_joints else 1.0
+        self.budget = _Budget(ctx, ctx.settings.improve_time * self.settings.work_per_second * scale, self.settings)
         self.min_margin = self.settings.moves.min_margin_factor * ctx.settings.clearance
         self.shortcuts = 0
         self.rebuilt = 0

@@ -135,6 +135,28 @@ class ImproveSettings:
     #: Configurations this close (rad, largest joint difference) count as the same where a transfer is put down
     #: and taken again (the pruning joins the two transfers).
     same_rad: float = 1e-12
+    #: On arms of at least ``ManyJoints.straight_probe_joints`` joints the budget is multiplied by the joints over
+    #: this many (count): a configuration check costs about the square of the joints (self-collision pairs,
+    #: :func:`~clew_ros.planar.improve.budget.check_work`), so the default budget bought a 37-joint plan's solved
+    #: postures (:mod:`clew_ros.planar.improve.many`) about one continuous check of each of its moves, and nothing
+    #: after (the snake family's first plans of worlds 0-11 and 24-35 improved: median travel 1.04x the witness's
+    #: and the longest 7.2x without it, 1.00x and 5.3x with it; the improvement then takes 0.4-1.9 s of wall time
+    #: on 15-40 joints).
+    many_budget_joints: int = 10
+    #: Error (m; the tip's angle counting 1 m per rad) left by the inverse kinematics of a posture solved again
+    #: (:mod:`clew_ros.planar.improve.many`): the object is then held or put down where it was to within this, far
+    #: below any tolerance of a world.
+    resolve_error_m: float = 1e-9
+    #: Sweep (m, ``sum_j |dq_j| R_j``) between the points of a path whose postures are solved again
+    #: (:meth:`clew_ros.planar.improve.many._ManyJointMoves.resolve`): short enough that a straight move between two
+    #: solved points keeps the tip near its old path.
+    resolve_step_m: float = 0.05
+    #: Work of one call of the inverse kinematics there (one point), besides its steps (:attr:`ik_work`), in work
+    #: units: a one-row call from Python took 27 microseconds on 21 joints (14 units at :attr:`work_per_second`).
+    resolve_call_work: float = 20.0
+    #: Shares (from the solved posture towards the first plan's) of the seeds a point not joined clear is solved
+    #: from again there; the first plan's own posture is tried last.
+    resolve_pulls: tuple[float, ...] = (0.25, 0.5, 0.75)
     #: The proposals' tuning (:func:`clew_ros.planar.regrasp.propose`, and the goal shortcuts'
     #: :func:`clew_ros.planar.regrasp.goal_holds_near`).
     regrasp: RegraspSettings = RegraspSettings()

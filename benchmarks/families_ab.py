@@ -10,8 +10,9 @@ kernel on one thread (``NUMBA_NUM_THREADS=1``), ``--jobs`` such pairs at a time.
 entry point every revision has, so the baseline needs nothing newer than its own code. Times are the
 planner's own (``stats.time_s``: process start-up left out). The table per family, before → after:
 success, median time (a failed run on a solvable world counts at the limit), median landmarks, and over
-the plans found, median transfers and joint travel; and how many runs gave the same plan file before and after
-(every field but ``stats.time_s``, the clock: same seed, same plan). ``DIR/families_ab.json`` keeps every run.
+the plans found, median transfers and joint travel; and, over the runs that neither side ended at the time
+limit (a run stopped by the clock stops wherever the load let it get), how many gave the same plan file before and
+after (every field but ``stats.time_s``: same seed, same plan). ``DIR/families_ab.json`` keeps every run.
 """
 
 from __future__ import annotations
@@ -88,7 +89,7 @@ def markdown(before: list[dict], after: list[dict]) -> str:
             f"| {_change(a['landmarks_median'], b['landmarks_median'], 0)} "
             f"| {_change(a['transfers_median'], b['transfers_median'], 0)} "
             f"| {_change(a['travel_median'], b['travel_median'], 1)} "
-            f"| {b.get('same_plans', 0)}/{b['runs']} |"
+            f"| {b.get('same_plans', 0)}/{b.get('compared', 0)} |"
         )
     return "\n".join(lines)
 
@@ -139,13 +140,16 @@ def main(argv: list[str] | None = None) -> int:
         indices = [i for i, (w, _) in enumerate(tasks) if w.family == family]
         for side, column in (("before", 0), ("after", 1)):
             rows[side].append(summarise(family, chosen, [pairs[i][column] for i in indices], args.time_limit))
-        rows["after"][-1]["same_plans"] = sum(bool(pairs[i][1]["same_plan"]) for i in indices)
+        compared = [i for i in indices if "TIME_LIMIT" not in (pairs[i][0]["outcome"], pairs[i][1]["outcome"])]
+        rows["after"][-1]["compared"] = len(compared)
+        rows["after"][-1]["same_plans"] = sum(bool(pairs[i][1]["same_plan"]) for i in compared)
     command = command_line("benchmarks.families_ab", argv)
     first = args.first_world
     what = f"{args.worlds} worlds (from {first}) x {args.seeds} seeds per family, limit {args.time_limit:g} s"
     text = f"{header(command, started, load, what, prefix=f'{args.baseline} → this checkout; ')}\n\n"
     text += f"{markdown(rows['before'], rows['after'])}\n"
-    write_report(args.out, "families_ab", text, {"command": command, "rows": rows})
+    runs = [{"before": before, "after": after} for before, after in pairs]
+    write_report(args.out, "families_ab", text, {"command": command, "rows": rows, "runs": runs})
     return 0
 
 

@@ -836,6 +836,8 @@ def _with_and_without(seed: int, monkeypatch, *steps: str):
     for step in steps:
         monkeypatch.setattr(_Improver, step, lambda self: False)
     without = plan(world, settings)
+    assert result.success, result.message
+    assert without.success, without.message
     assert without.stats["first_joint_travel_rad"] == result.stats["first_joint_travel_rad"]
     return world, result, without
 

@@ -1,0 +1,201 @@
+"""Motion-only queries on a spatial world (``world.robot.goal``, no object): the ACA's transit search.
+
+As the paper's closing section suggests, EXPLORE runs for transit paths too: landmarks are collision-free
+configurations, each reached from an earlier one by a Manhattan path (bounced into the free intervals,
+:meth:`~clew_ros.spatial.space.SpatialSpace.manhattan`) that the genetic algorithm
+(:func:`clew_ros.core.genetic.minimize`, the landmark a category gene) places as far as possible from every
+landmark (joint-space distance, weighted as the manipulation landmarks' joints are). From the start and from
+each new landmark, SEARCH_TRANSIT (:func:`clew_ros.core.search.local_search`) minimises the joint distance to
+the goal: a straight move to the goal checked at the validator's 0.002 rad, the greedy Manhattan probe,
+the GA's rounds, and from where it ends a straight move to the goal again. The first search that reaches the
+goal ends the run; its path (the landmarks' paths from the start, then the search's) is shortcut
+(:mod:`clew_ros.spatial.shortcut`).
+"""
+
+from __future__ import annotations
+
+import math
+import traceback
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from clew_ros.core import clew
+from clew_ros.core.genetic import minimize
+from clew_ros.core.search import SearchJob, local_search
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.space import PlanningContext
+from clew_ros.core.tree import LandmarkTree, Segment
+from clew_ros.spatial.shortcut import shortcut_path
+from clew_ros.spatial.space import SpatialSpace, SpatialTuning
+from clew_ros.spatial.world import SpatialWorld
+
+__all__ = ["plan_motion"]
+
+#: The improvement draws from its own generator seeded with (planner.seed, this), as core's.
+IMPROVE_STREAM = clew.IMPROVE_STREAM
+
+
+def plan_motion(
+    world: SpatialWorld,
+    settings: PlannerSettings | None = None,
+    *,
+    goal: np.ndarray | None = None,
+    termination: Termination | None = None,
+    progress: Callable[[clew.Progress], None] | None = None,
+    tuning: SpatialTuning | None = None,
+) -> clew.PlanResult:
+    """A collision-free motion from ``world.initial`` to ``goal`` (joints; default ``world.robot.goal``),
+    as one transit segment; never raises for planning failures."""
+    settings = settings or PlannerSettings()
+    tuning = tuning or SpatialTuning()
+    termination = termination or Termination(settings.time_limit)
+    space = SpatialSpace(world, tuning)
+    rng = np.random.default_rng(settings.seed)
+    ctx = PlanningContext(space, settings, rng, termination, search=tuning.search, many=tuning.many)
+    none = np.zeros(6)
+    tree = LandmarkTree(world.initial, none)
+    robot = world.robot
+
+    def finish(outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
+        stats: dict[str, Any] = {
+            "time_s": round(termination.elapsed, 4),
+            "landmarks": len(tree),
+            "collision_checks": ctx.counters.clearance_checks,
+            "evaluations": ctx.counters.evaluations,
+            "seed": settings.seed,
+        }
+        segments = [Segment("transit", None, list(waypoints))] if waypoints is not None else []
+        return clew.PlanResult(outcome, message, segments, None, tree, stats)
+
+    target = world.goal if goal is None else goal
+    if target is None:
+        return finish(Outcome.INVALID_WORLD, "world.robot.goal: missing (a motion-only query needs the goal joints)")
+    target = np.asarray(target, dtype=float)
+    if target.shape != (robot.dof,) or not np.all(np.isfinite(target)):
+        return finish(Outcome.INVALID_WORLD, f"world.robot.goal: expected {robot.dof} finite joint values")
+    if np.any(target < robot.lower) or np.any(target > robot.upper):
+        return finish(Outcome.INVALID_WORLD, "world.robot.goal: outside the joint limits")
+    checker = world.checker
+    if not checker.valid(world.initial[None])[0]:
+        return finish(Outcome.START_IN_COLLISION, "the start configuration is not valid")
+    if not checker.valid(target[None])[0]:
+        return finish(Outcome.GOAL_IN_COLLISION, "the goal configuration is not valid")
+    weight = tuning.motion_weight
+
+    def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
+        out: np.ndarray = weight * np.linalg.norm(q - target, axis=1)
+        return out
+
+    def error(q: np.ndarray) -> np.ndarray:
+        out: np.ndarray = weight * (q - target)
+        return out
+
+    def search(q0: np.ndarray) -> np.ndarray:
+        """SEARCH_TRANSIT from ``q0`` to the goal: its waypoints (ending at the goal when it got there)."""
+        job = SearchJob(q0, objective, error, 1e-9, {"object_poses": none[None]}, toward=target, straight=target[None])
+        waypoints, _ = local_search(ctx, [job])[0]
+        if np.max(np.abs(waypoints[-1] - target)) > 1e-9 and space.clear(checker, waypoints[-1:], target[None])[0]:
+            waypoints = np.vstack([waypoints, target[None]])
+        return waypoints
+
+    try:
+        best = math.inf
+        landmark = tree[0]
+        features = weight * math.sqrt(2.0 / robot.dof)
+        while True:
+            reason = termination.reason()
+            if reason is not None:
+                return finish(reason, f"{reason.name.lower()} after {len(tree)} landmarks; best {best:.4g} rad away")
+            found = search(landmark.joints)
+            gap = float(np.max(np.abs(found[-1] - target)))
+            best = min(best, gap)
+            if progress is not None:
+                progress(clew.Progress(len(tree), best, termination.elapsed, tree))
+            if gap <= 1e-9:
+                pieces = [lm.transit for lm in tree.lineage(landmark.id)[1:] if lm.transit is not None]
+                path = np.vstack([world.initial[None], *(p[1:] for p in pieces), found[1:]])
+                path[-1] = target
+                first = float(np.abs(np.diff(path, axis=0)).sum())
+                shortcuts = 0
+                if settings.improve_time > 0:
+                    improve_rng = np.random.default_rng([settings.seed, IMPROVE_STREAM])
+                    path, shortcuts, _, _ = shortcut_path(
+                        space, checker, path, tuning.shortcut_tries, improve_rng, termination
+                    )
+                result = finish(
+                    Outcome.SUCCEEDED,
+                    f"motion found with {len(tree)} landmarks, joint travel {np.abs(np.diff(path, axis=0)).sum():.2f} "
+                    f"rad (first: {first:.2f} rad)",
+                    path,
+                )
+                result.stats.update(
+                    {
+                        "joint_travel_rad": round(float(np.abs(np.diff(path, axis=0)).sum()), 6),
+                        "first_joint_travel_rad": round(first, 6),
+                        "transfers": 0,
+                        "shortcuts": shortcuts,
+                    }
+                )
+                return result
+            if len(tree) >= tuning.motion_landmarks:
+                return finish(
+                    Outcome.NO_PATH_AT_RESOLUTION,
+                    f"no motion found after {len(tree)} landmarks; best {best:.4g} rad from the goal",
+                )
+            explored = _explore(ctx, space, tree, features)
+            if explored is None:
+                continue
+            parent, path, distance = explored
+            landmark = tree.add(
+                parent=parent,
+                joints=path[-1].copy(),
+                object_pose=none,
+                grasp=None,
+                grasp_rel=None,
+                transit=path,
+                transfer=None,
+            )
+            if distance < settings.resolution:
+                return finish(
+                    Outcome.NO_PATH_AT_RESOLUTION,
+                    f"no path at resolution {settings.resolution}: the new landmark lies {distance:.4g} from the "
+                    f"others after {len(tree)} landmarks",
+                )
+    except Exception as problem:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
+        return finish(Outcome.INTERNAL_ERROR, f"internal error: {problem!r}\n{traceback.format_exc(limit=4)}")
+
+
+def _explore(
+    ctx: PlanningContext, space: SpatialSpace, tree: LandmarkTree, weight: float
+) -> tuple[int, np.ndarray, float] | None:
+    """EXPLORE for transit: the landmark (a category gene) and Manhattan genes whose decoded end lies
+    farthest (joint distance times ``weight``) from every landmark; its parent, path and that distance."""
+    n = space.dof
+    k = ctx.settings.manhattan_order
+    joints = tree.joints()
+    none = np.zeros((1, 6))
+
+    def decode(population: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        index = np.clip(population[:, 0].astype(int), 0, len(joints) - 1)
+        genes = population[:, 1:].reshape(-1, k, n)
+        paths = ctx.manhattan(joints[index], genes, object_poses=np.repeat(none, len(population), axis=0))
+        return index, paths.waypoints
+
+    def evaluate(population: np.ndarray) -> np.ndarray:
+        _, waypoints = decode(population)
+        ctx.counters.evaluations += len(population)
+        ends = waypoints[:, -1]
+        nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - joints[None], axis=2), axis=1)
+        return -weight * nearest
+
+    size = ctx.settings.population
+    initial = np.empty((size, 1 + k * n))
+    initial[:, 0] = ctx.rng.integers(0, len(joints), size=size)
+    initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
+    result = minimize(evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(joints), should_stop=ctx.termination)
+    if not np.isfinite(result.fitness):
+        return None
+    index, waypoints = decode(result.genes[None])
+    return int(index[0]), waypoints[0], -result.fitness

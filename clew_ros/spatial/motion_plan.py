@@ -51,120 +51,157 @@ def plan_motion(
     settings = settings or PlannerSettings()
     tuning = tuning or SpatialTuning()
     termination = termination or Termination(settings.time_limit)
-    space = SpatialSpace(world, tuning)
-    rng = np.random.default_rng(settings.seed)
-    ctx = PlanningContext(space, settings, rng, termination, search=tuning.search, many=tuning.many)
-    none = np.zeros(6)
-    tree = LandmarkTree(world.initial, none)
-    robot = world.robot
+    run = _MotionRun(world, settings, termination, tuning)
+    refusal = _refusal(world, world.goal if goal is None else goal)
+    if isinstance(refusal, tuple):
+        return run.finish(*refusal)
+    try:
+        return run.search_all(refusal, progress)
+    except Exception as problem:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
+        return run.finish(Outcome.INTERNAL_ERROR, f"internal error: {problem!r}\n{traceback.format_exc(limit=4)}")
 
-    def finish(outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
+
+def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray:
+    """The goal joints, or the outcome and reason of a query answered at once."""
+    robot = world.robot
+    if goal is None:
+        return Outcome.INVALID_WORLD, "world.robot.goal: missing (a motion-only query needs the goal joints)"
+    target = np.asarray(goal, dtype=float)
+    if target.shape != (robot.dof,) or not np.all(np.isfinite(target)):
+        return Outcome.INVALID_WORLD, f"world.robot.goal: expected {robot.dof} finite joint values"
+    if np.any(target < robot.lower) or np.any(target > robot.upper):
+        return Outcome.INVALID_WORLD, "world.robot.goal: outside the joint limits"
+    if not world.checker.valid(world.initial[None])[0]:
+        return Outcome.START_IN_COLLISION, "the start configuration is not valid"
+    if not world.checker.valid(target[None])[0]:
+        return Outcome.GOAL_IN_COLLISION, "the goal configuration is not valid"
+    return target
+
+
+class _MotionRun:
+    """One motion-only run: its space, context, landmark tree."""
+
+    def __init__(
+        self, world: SpatialWorld, settings: PlannerSettings, termination: Termination, tuning: SpatialTuning
+    ) -> None:
+        self.world = world
+        self.settings = settings
+        self.tuning = tuning
+        self.termination = termination
+        self.space = SpatialSpace(world, tuning)
+        rng = np.random.default_rng(settings.seed)
+        self.ctx = PlanningContext(self.space, settings, rng, termination, search=tuning.search, many=tuning.many)
+        self.none = np.zeros(6)
+        self.tree = LandmarkTree(world.initial, self.none)
+
+    def finish(self, outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
         stats: dict[str, Any] = {
-            "time_s": round(termination.elapsed, 4),
-            "landmarks": len(tree),
-            "collision_checks": ctx.counters.clearance_checks,
-            "evaluations": ctx.counters.evaluations,
-            "seed": settings.seed,
+            "time_s": round(self.termination.elapsed, 4),
+            "landmarks": len(self.tree),
+            "collision_checks": self.ctx.counters.clearance_checks,
+            "evaluations": self.ctx.counters.evaluations,
+            "seed": self.settings.seed,
         }
         segments = [Segment("transit", None, list(waypoints))] if waypoints is not None else []
-        return clew.PlanResult(outcome, message, segments, None, tree, stats)
+        return clew.PlanResult(outcome, message, segments, None, self.tree, stats)
 
-    target = world.goal if goal is None else goal
-    if target is None:
-        return finish(Outcome.INVALID_WORLD, "world.robot.goal: missing (a motion-only query needs the goal joints)")
-    target = np.asarray(target, dtype=float)
-    if target.shape != (robot.dof,) or not np.all(np.isfinite(target)):
-        return finish(Outcome.INVALID_WORLD, f"world.robot.goal: expected {robot.dof} finite joint values")
-    if np.any(target < robot.lower) or np.any(target > robot.upper):
-        return finish(Outcome.INVALID_WORLD, "world.robot.goal: outside the joint limits")
-    checker = world.checker
-    if not checker.valid(world.initial[None])[0]:
-        return finish(Outcome.START_IN_COLLISION, "the start configuration is not valid")
-    if not checker.valid(target[None])[0]:
-        return finish(Outcome.GOAL_IN_COLLISION, "the goal configuration is not valid")
-    weight = tuning.motion_weight
+    def search(self, q0: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """SEARCH_TRANSIT from ``q0`` to ``target``: its waypoints (ending there when it got there)."""
+        weight = self.tuning.motion_weight
 
-    def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
-        out: np.ndarray = weight * np.linalg.norm(q - target, axis=1)
-        return out
+        def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
+            out: np.ndarray = weight * np.linalg.norm(q - target, axis=1)
+            return out
 
-    def error(q: np.ndarray) -> np.ndarray:
-        out: np.ndarray = weight * (q - target)
-        return out
+        def error(q: np.ndarray) -> np.ndarray:
+            out: np.ndarray = weight * (q - target)
+            return out
 
-    def search(q0: np.ndarray) -> np.ndarray:
-        """SEARCH_TRANSIT from ``q0`` to the goal: its waypoints (ending at the goal when it got there)."""
-        job = SearchJob(q0, objective, error, 1e-9, {"object_poses": none[None]}, toward=target, straight=target[None])
-        waypoints, _ = local_search(ctx, [job])[0]
-        if np.max(np.abs(waypoints[-1] - target)) > 1e-9 and space.clear(checker, waypoints[-1:], target[None])[0]:
+        job = SearchJob(
+            q0, objective, error, 1e-9, {"object_poses": self.none[None]}, toward=target, straight=target[None]
+        )
+        waypoints, _ = local_search(self.ctx, [job])[0]
+        end = waypoints[-1:]
+        if np.max(np.abs(end - target)) > 1e-9 and self.space.clear(self.world.checker, end, target[None])[0]:
             waypoints = np.vstack([waypoints, target[None]])
         return waypoints
 
-    try:
+    def search_all(self, target: np.ndarray, progress: Callable[[clew.Progress], None] | None) -> clew.PlanResult:
+        """SEARCH from the start, then EXPLORE and SEARCH from each new landmark, until one reaches ``target``."""
         best = math.inf
-        landmark = tree[0]
-        features = weight * math.sqrt(2.0 / robot.dof)
+        landmark = self.tree[0]
+        tree = self.tree
+        weight = self.tuning.motion_weight * math.sqrt(2.0 / self.world.robot.dof)
         while True:
-            reason = termination.reason()
+            reason = self.termination.reason()
             if reason is not None:
-                return finish(reason, f"{reason.name.lower()} after {len(tree)} landmarks; best {best:.4g} rad away")
-            found = search(landmark.joints)
+                return self.finish(
+                    reason, f"{reason.name.lower()} after {len(tree)} landmarks; best {best:.4g} rad away"
+                )
+            found = self.search(landmark.joints, target)
             gap = float(np.max(np.abs(found[-1] - target)))
             best = min(best, gap)
             if progress is not None:
-                progress(clew.Progress(len(tree), best, termination.elapsed, tree))
+                progress(clew.Progress(len(tree), best, self.termination.elapsed, tree))
             if gap <= 1e-9:
-                pieces = [lm.transit for lm in tree.lineage(landmark.id)[1:] if lm.transit is not None]
-                path = np.vstack([world.initial[None], *(p[1:] for p in pieces), found[1:]])
-                path[-1] = target
-                first = float(np.abs(np.diff(path, axis=0)).sum())
-                shortcuts = 0
-                if settings.improve_time > 0:
-                    improve_rng = np.random.default_rng([settings.seed, IMPROVE_STREAM])
-                    path, shortcuts, _, _ = shortcut_path(
-                        space, checker, path, tuning.shortcut_tries, improve_rng, termination
-                    )
-                result = finish(
-                    Outcome.SUCCEEDED,
-                    f"motion found with {len(tree)} landmarks, joint travel {np.abs(np.diff(path, axis=0)).sum():.2f} "
-                    f"rad (first: {first:.2f} rad)",
-                    path,
-                )
-                result.stats.update(
-                    {
-                        "joint_travel_rad": round(float(np.abs(np.diff(path, axis=0)).sum()), 6),
-                        "first_joint_travel_rad": round(first, 6),
-                        "transfers": 0,
-                        "shortcuts": shortcuts,
-                    }
-                )
-                return result
-            if len(tree) >= tuning.motion_landmarks:
-                return finish(
+                return self.success(landmark.id, found, target)
+            if len(tree) >= self.tuning.motion_landmarks:
+                return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
                     f"no motion found after {len(tree)} landmarks; best {best:.4g} rad from the goal",
                 )
-            explored = _explore(ctx, space, tree, features)
+            explored = _explore(self.ctx, self.space, tree, weight)
             if explored is None:
                 continue
             parent, path, distance = explored
             landmark = tree.add(
                 parent=parent,
                 joints=path[-1].copy(),
-                object_pose=none,
+                object_pose=self.none,
                 grasp=None,
                 grasp_rel=None,
                 transit=path,
                 transfer=None,
             )
-            if distance < settings.resolution:
-                return finish(
+            if distance < self.settings.resolution:
+                return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
-                    f"no path at resolution {settings.resolution}: the new landmark lies {distance:.4g} from the "
-                    f"others after {len(tree)} landmarks",
+                    f"no path at resolution {self.settings.resolution}: the new landmark lies {distance:.4g} from "
+                    f"the others after {len(tree)} landmarks",
                 )
-    except Exception as problem:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
-        return finish(Outcome.INTERNAL_ERROR, f"internal error: {problem!r}\n{traceback.format_exc(limit=4)}")
+
+    def success(self, landmark_id: int, found: np.ndarray, target: np.ndarray) -> clew.PlanResult:
+        """The path from the start to the landmark, then SEARCH's to the goal, shortcut."""
+        pieces = [lm.transit for lm in self.tree.lineage(landmark_id)[1:] if lm.transit is not None]
+        path = np.vstack([self.world.initial[None], *(p[1:] for p in pieces), found[1:]])
+        path[-1] = target
+        first = float(np.abs(np.diff(path, axis=0)).sum())
+        shortcuts = 0
+        if self.settings.improve_time > 0:
+            improve_rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
+            path, shortcuts, _, _ = shortcut_path(
+                self.space,
+                self.world.checker,
+                path,
+                tries=self.tuning.shortcut_tries,
+                rng=improve_rng,
+                stop=self.termination,
+            )
+        travel = float(np.abs(np.diff(path, axis=0)).sum())
+        result = self.finish(
+            Outcome.SUCCEEDED,
+            f"motion found with {len(self.tree)} landmarks, joint travel {travel:.2f} rad (first: {first:.2f} rad)",
+            path,
+        )
+        result.stats.update(
+            {
+                "joint_travel_rad": round(travel, 6),
+                "first_joint_travel_rad": round(first, 6),
+                "transfers": 0,
+                "shortcuts": shortcuts,
+            }
+        )
+        return result
 
 
 def _explore(
@@ -194,7 +231,9 @@ def _explore(
     initial = np.empty((size, 1 + k * n))
     initial[:, 0] = ctx.rng.integers(0, len(joints), size=size)
     initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
-    result = minimize(evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(joints), should_stop=ctx.termination)
+    result = minimize(
+        evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(joints), should_stop=ctx.termination
+    )
     if not np.isfinite(result.fitness):
         return None
     index, waypoints = decode(result.genes[None])

@@ -12,6 +12,7 @@ same seed gives the same plan; the time limit or a cancel stops it early.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -48,7 +49,13 @@ def _point(path: Array, cumulative: Array, s: float) -> tuple[int, Array]:
 
 
 def shortcut_path(
-    space: SpatialSpace, checker: SpatialChecker, path: Array, tries: int, rng: np.random.Generator, stop: object
+    space: SpatialSpace,
+    checker: SpatialChecker,
+    path: Array,
+    *,
+    tries: int,
+    rng: np.random.Generator,
+    stop: Callable[[], bool] | None = None,
 ) -> tuple[Array, int, int, bool]:
     """``path`` (m, n) shortened: first its two ends joined, then ``tries`` random shortcuts. Returns the
     path, the shortcuts taken, the tries spent and whether ``stop()`` cut it short."""
@@ -59,7 +66,7 @@ def shortcut_path(
     if space.clear(checker, path[:1], path[-1:])[0]:
         return np.array([path[0], path[-1]]), 1, 1, False
     for _ in range(tries):
-        if callable(stop) and stop():
+        if stop is not None and stop():
             return path, taken, spent, True
         spent += 1
         cumulative = np.r_[0.0, np.cumsum(np.abs(np.diff(path, axis=0)).sum(axis=1))]
@@ -104,7 +111,7 @@ def shortcut_segments(
             checker = space.transit_checker(resting)
         if not stopped:
             path, taken, spent, stopped = shortcut_path(
-                space, checker, path, space.tuning.shortcut_tries, ctx.rng, ctx.termination
+                space, checker, path, tries=space.tuning.shortcut_tries, rng=ctx.rng, stop=ctx.termination
             )
             shortcuts += taken
             work += spent

@@ -273,9 +273,7 @@ class SpatialSpace:
                 "object", thing.shape.shape, thing.shape.size, matrices(object_pose)[0], "world.object"
             )
             world = self.world
-            checker = SpatialChecker(
-                world.robot, world.spheres, world.obstacles, world.bounds, resting_object=resting
-            )
+            checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, resting_object=resting)
             self._transit_checkers[key] = checker
         return checker
 
@@ -385,9 +383,7 @@ class SpatialSpace:
         thing = self.world.object
         assert thing is not None
         rot, center = object_pose[:3, :3], object_pose[:3, 3]
-        face = min(
-            thing.shape.faces, key=lambda f: float(rot[2, _FACE_NORMALS[f][0]] * _FACE_NORMALS[f][1])
-        )
+        face = min(thing.shape.faces, key=lambda f: float(rot[2, _FACE_NORMALS[f][0]] * _FACE_NORMALS[f][1]))
         turned = rot @ rpy_matrix(*FACE_RPY[face]).T
         yaw = math.atan2(float(turned[1, 0]), float(turned[0, 0]))
         bottom = float(center[2]) - thing.shape.height(face)
@@ -521,7 +517,8 @@ class SpatialSpace:
 
     def grasp_rel(self, grasp: int) -> Array:
         """The object's nominal pose in the tcp's frame while it holds ``grasp``."""
-        return poses(_inverse(self._grasps[grasp])[None])[0]
+        rel: Array = poses(_inverse(self._grasps[grasp])[None])[0]
+        return rel
 
     def search_transits(self, ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
         results: list[PathResult | None] = []
@@ -529,9 +526,9 @@ class SpatialSpace:
         slots: list[int] = []
         targets: list[Array] = []
         weight = self.tuning.angle_weight_m
-        for q0, object_pose, grasp, _approach in requests:
-            q0 = np.asarray(q0, dtype=float)
-            object_pose = np.asarray(object_pose, dtype=float)
+        for start, resting, grasp, _approach in requests:
+            q0 = np.asarray(start, dtype=float)
+            object_pose = np.asarray(resting, dtype=float)
             holds = self.holds(ctx, q0, object_pose, grasp)
             if not len(holds):
                 results.append(PathResult(False, q0[None], math.inf))
@@ -562,8 +559,8 @@ class SpatialSpace:
             )
         if jobs:
             answers = local_search(ctx, jobs)
-            for slot, job, holds, (waypoints, _value) in zip(slots, jobs, targets, answers, strict=True):
-                waypoints = self._finish(ctx, job, waypoints, holds)
+            for slot, job, holds, (searched, _value) in zip(slots, jobs, targets, answers, strict=True):
+                waypoints = self._finish(ctx, job, searched, holds)
                 grasp = requests[slot][2]
                 e = job.error(waypoints[-1:])[0]
                 success = bool(
@@ -675,9 +672,11 @@ class SpatialSpace:
             names = ", ".join(s.name for s in world.supports) or "none"
             return (
                 Outcome.INVALID_WORLD,
-                f"goal {np.round(goal, 6).tolist()} is not a stable placement: no flat face of the "
-                f"{thing.shape.shape} lies within {world.tolerances['placement_tolerance']} m of a support's top "
-                f"face with its centre above it (supports: {names})",
+                (
+                    f"goal {np.round(goal, 6).tolist()} is not a stable placement: no flat face of the "
+                    f"{thing.shape.shape} lies within {world.tolerances['placement_tolerance']} m of a support's "
+                    f"top face with its centre above it (supports: {names})"
+                ),
             )
         hit = self._object_collides(goal)
         if hit:
@@ -689,8 +688,10 @@ class SpatialSpace:
         if nearest > self._reach:
             return (
                 Outcome.GOAL_OUT_OF_REACH,
-                f"goal placement out of reach: its nearest grasp is {nearest:.3f} m from the first joint, "
-                f"the arm reaches at most {self._reach:.3f} m",
+                (
+                    f"goal placement out of reach: its nearest grasp is {nearest:.3f} m from the first joint, "
+                    f"the arm reaches at most {self._reach:.3f} m"
+                ),
             )
         return None
 
@@ -727,7 +728,7 @@ class SpatialSpace:
     def improve(
         self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
     ) -> Improvement:
-        from clew_ros.spatial.shortcut import shortcut_segments  # noqa: PLC0415 - the improvement's module
+        from clew_ros.spatial.shortcut import shortcut_segments
 
         return shortcut_segments(self, ctx, segments, object_pose)
 
@@ -757,7 +758,7 @@ def plan(
     ``world.robot.goal``)."""
     tuning = tuning or SpatialTuning()
     if world.object is None:
-        from clew_ros.spatial.motion_plan import plan_motion  # noqa: PLC0415 - a sibling that imports this one
+        from clew_ros.spatial.motion_plan import plan_motion
 
         return plan_motion(world, settings, goal=goal, termination=termination, progress=progress, tuning=tuning)
     space = SpatialSpace(world, tuning)

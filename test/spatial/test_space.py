@@ -4,6 +4,7 @@ every plan checked at the validator's 0.002 rad under the checker of its mode.""
 from __future__ import annotations
 
 import copy
+import itertools
 import math
 from pathlib import Path
 from typing import Any
@@ -102,7 +103,7 @@ def check_plan(world: SpatialWorld, segments: list[Any], final: np.ndarray) -> N
     assert world.object is not None
     resting = np.array(world.object.initial)
     assert np.allclose(segments[0].waypoints[0], world.initial, atol=1e-9)
-    for before, after in zip(segments, segments[1:], strict=False):
+    for before, after in itertools.pairwise(segments):
         assert np.allclose(before.waypoints[-1], after.waypoints[0], atol=1e-6)
     for segment in segments:
         path = np.array(segment.waypoints)
@@ -156,7 +157,8 @@ def test_same_seed_same_plan(table: SpatialWorld) -> None:
     for a, b in zip(first.segments, second.segments, strict=True):
         assert (a.kind, a.grasp) == (b.kind, b.grasp)
         assert np.array_equal(np.array(a.waypoints), np.array(b.waypoints))
-    assert first.final_object_pose is not None and second.final_object_pose is not None
+    assert first.final_object_pose is not None
+    assert second.final_object_pose is not None
     assert np.array_equal(first.final_object_pose, second.final_object_pose)
 
 
@@ -164,8 +166,10 @@ def test_a_goal_that_is_no_stable_placement_is_refused_at_once(table: SpatialWor
     floating = np.array([0.5, -0.3, 0.3, 0.0, 0.0, 0.0])  # 12 cm above the table
     result = plan(table, SETTINGS, goal=floating)
     assert result.outcome is Outcome.INVALID_WORLD
-    assert "is not a stable placement" in result.message and "table" in result.message
-    assert len(result.tree) == 1 and result.stats["evaluations"] == 0
+    assert "is not a stable placement" in result.message
+    assert "table" in result.message
+    assert len(result.tree) == 1
+    assert result.stats["evaluations"] == 0
     tilted = np.array([0.5, -0.3, 0.18, 0.3, 0.0, 0.0])
     assert plan(table, SETTINGS, goal=tilted).outcome is Outcome.INVALID_WORLD
 

@@ -17,18 +17,21 @@ from __future__ import annotations
 import math
 import traceback
 from collections.abc import Callable
-from typing import Any
+from functools import partial
+from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from clew_ros.core import clew
 from clew_ros.core.genetic import minimize
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import PlanningContext, Space
 from clew_ros.core.tree import LandmarkTree, Segment
+from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.shortcut import shortcut_path
-from clew_ros.spatial.space import SpatialSpace, SpatialTuning
+from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["plan_motion"]
@@ -37,21 +40,32 @@ __all__ = ["plan_motion"]
 IMPROVE_STREAM = clew.IMPROVE_STREAM
 
 
+class MotionSpace(Space, Protocol):
+    """What the motion-only search asks of a spatial space (:class:`clew_ros.spatial.space.SpatialSpace`)."""
+
+    @property
+    def world(self) -> SpatialWorld: ...
+
+    @property
+    def tuning(self) -> SpatialTuning: ...
+
+    def clear(self, checker: SpatialChecker, starts: np.ndarray, ends: np.ndarray) -> NDArray[np.bool_]: ...
+
+
 def plan_motion(
-    world: SpatialWorld,
+    space: MotionSpace,
     settings: PlannerSettings | None = None,
     *,
     goal: np.ndarray | None = None,
     termination: Termination | None = None,
     progress: Callable[[clew.Progress], None] | None = None,
-    tuning: SpatialTuning | None = None,
 ) -> clew.PlanResult:
-    """A collision-free motion from ``world.initial`` to ``goal`` (joints; default ``world.robot.goal``),
-    as one transit segment; never raises for planning failures."""
+    """A collision-free motion in ``space.world`` from ``world.initial`` to ``goal`` (joints; default
+    ``world.robot.goal``), as one transit segment; never raises for planning failures."""
     settings = settings or PlannerSettings()
-    tuning = tuning or SpatialTuning()
     termination = termination or Termination(settings.time_limit)
-    run = _MotionRun(world, settings, termination, tuning)
+    world = space.world
+    run = _MotionRun(space, settings, termination)
     refusal = _refusal(world, world.goal if goal is None else goal)
     if isinstance(refusal, tuple):
         return run.finish(*refusal)
@@ -81,18 +95,16 @@ def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray
 class _MotionRun:
     """One motion-only run: its space, context, landmark tree."""
 
-    def __init__(
-        self, world: SpatialWorld, settings: PlannerSettings, termination: Termination, tuning: SpatialTuning
-    ) -> None:
-        self.world = world
+    def __init__(self, space: MotionSpace, settings: PlannerSettings, termination: Termination) -> None:
+        self.world = space.world
         self.settings = settings
-        self.tuning = tuning
+        tuning = self.tuning = space.tuning
         self.termination = termination
-        self.space = SpatialSpace(world, tuning)
+        self.space = space
         rng = np.random.default_rng(settings.seed)
         self.ctx = PlanningContext(self.space, settings, rng, termination, search=tuning.search, many=tuning.many)
         self.none = np.zeros(6)
-        self.tree = LandmarkTree(world.initial, self.none)
+        self.tree = LandmarkTree(self.world.initial, self.none)
 
     def finish(self, outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
         stats: dict[str, Any] = {
@@ -180,8 +192,7 @@ class _MotionRun:
         if self.settings.improve_time > 0:
             improve_rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
             path, shortcuts, _, _ = shortcut_path(
-                self.space,
-                self.world.checker,
+                partial(self.space.clear, self.world.checker),
                 path,
                 tries=self.tuning.shortcut_tries,
                 rng=improve_rng,
@@ -205,7 +216,7 @@ class _MotionRun:
 
 
 def _explore(
-    ctx: PlanningContext, space: SpatialSpace, tree: LandmarkTree, weight: float
+    ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float
 ) -> tuple[int, np.ndarray, float] | None:
     """EXPLORE for transit: the landmark (a category gene) and Manhattan genes whose decoded end lies
     farthest (joint distance times ``weight``) from every landmark; its parent, path and that distance."""

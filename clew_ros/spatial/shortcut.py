@@ -13,24 +13,16 @@ same seed gives the same plan; the time limit or a cancel stops it early.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from clew_ros.core.space import Improvement, PlanningContext
-from clew_ros.core.tree import Segment
-
-if TYPE_CHECKING:
-    from clew_ros.spatial.checker import SpatialChecker
-    from clew_ros.spatial.space import SpatialSpace
-
-__all__ = ["shortcut_path", "shortcut_segments"]
+__all__ = ["path_travel", "shortcut_path"]
 
 Array = NDArray[np.float64]
 
 
-def _travel(path: Array) -> float:
+def path_travel(path: Array) -> float:
     return float(np.abs(np.diff(path, axis=0)).sum()) if len(path) > 1 else 0.0
 
 
@@ -49,21 +41,21 @@ def _point(path: Array, cumulative: Array, s: float) -> tuple[int, Array]:
 
 
 def shortcut_path(
-    space: SpatialSpace,
-    checker: SpatialChecker,
+    clear: Callable[[Array, Array], NDArray[np.bool_]],
     path: Array,
     *,
     tries: int,
     rng: np.random.Generator,
     stop: Callable[[], bool] | None = None,
 ) -> tuple[Array, int, int, bool]:
-    """``path`` (m, n) shortened: first its two ends joined, then ``tries`` random shortcuts. Returns the
-    path, the shortcuts taken, the tries spent and whether ``stop()`` cut it short."""
+    """``path`` (m, n) shortened (``clear(starts, ends)``: whether each straight move is valid): first its two
+    ends joined, then ``tries`` random shortcuts. Returns the path, the shortcuts taken, the tries spent and
+    whether ``stop()`` cut it short."""
     path = _dedupe(np.asarray(path, dtype=float))
     taken = spent = 0
     if len(path) < 3:
         return path, 0, 0, False
-    if space.clear(checker, path[:1], path[-1:])[0]:
+    if clear(path[:1], path[-1:])[0]:
         return np.array([path[0], path[-1]]), 1, 1, False
     for _ in range(tries):
         if stop is not None and stop():
@@ -78,47 +70,11 @@ def shortcut_path(
         j, r = _point(path, cumulative, b)
         if j <= i:
             continue  # both on one straight piece: nothing to gain
-        before = _travel(np.vstack([p, path[i + 1 : j + 1], r]))
+        before = path_travel(np.vstack([p, path[i + 1 : j + 1], r]))
         if np.abs(r - p).sum() >= before - 1e-9:
             continue
-        if not space.clear(checker, p[None], r[None])[0]:
+        if not clear(p[None], r[None])[0]:
             continue
         path = _dedupe(np.vstack([path[: i + 1], p, r, path[j + 1 :]]))
         taken += 1
     return path, taken, spent, False
-
-
-def shortcut_segments(
-    space: SpatialSpace, ctx: PlanningContext, segments: list[Segment], object_pose: Array
-) -> Improvement:
-    """The plan's segments shortcut (the module's docstring); ``object_pose``: where the object ends."""
-    first_travel = sum(_travel(np.array(s.waypoints)) for s in segments)
-    transfers = sum(s.kind == "transfer" for s in segments)
-    if ctx.settings.improve_time <= 0:
-        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, 0, False)
-    resting = space.initial_object_pose
-    out: list[Segment] = []
-    shortcuts = work = 0
-    stopped = False
-    for segment in segments:
-        path = np.array(segment.waypoints)
-        if segment.kind == "transfer":
-            assert segment.grasp is not None
-            rel = space.grasp_rel(segment.grasp)
-            checker = space.transfer_checker(rel)
-        else:
-            rel = None
-            checker = space.transit_checker(resting)
-        if not stopped:
-            path, taken, spent, stopped = shortcut_path(
-                space, checker, path, tries=space.tuning.shortcut_tries, rng=ctx.rng, stop=ctx.termination
-            )
-            shortcuts += taken
-            work += spent
-        out.append(Segment(segment.kind, segment.grasp, list(path)))
-        if rel is not None:
-            resting = space.held_object_poses(path[-1:], rel)[0]
-    travel = sum(_travel(np.array(s.waypoints)) for s in out)
-    if travel > first_travel:  # (never: each shortcut is shorter than what it replaces)
-        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, work, stopped)
-    return Improvement(out, object_pose, first_travel, transfers, travel, transfers, shortcuts, work, stopped)

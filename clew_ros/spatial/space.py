@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -39,16 +39,19 @@ from numpy.typing import NDArray
 from clew_ros.core import clew
 from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
-from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, SearchSettings, Termination
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
 from clew_ros.core.tree import Landmark, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
+from clew_ros.spatial.motion_plan import plan_motion
 from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
 from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
+from clew_ros.spatial.shortcut import path_travel, shortcut_path
 from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.transforms import rpy_matrix
+from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.spatial.world import SpatialWorld
 
@@ -71,45 +74,6 @@ GOAL_STREAM = 22
 #: The improvement's shortcuts draw from the run's improvement generator (core's IMPROVE_STREAM).
 
 _FACE_NORMALS = {"-z": (2, -1.0), "+z": (2, 1.0), "+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
-
-
-@dataclass(frozen=True)
-class SpatialTuning:
-    """Every tuning value of a spatial run beyond ``planner.*``; a benchmark or a test plans with a copy."""
-
-    search: SearchSettings = field(default_factory=SearchSettings)
-    #: arms of many joints as core has them, but with the GA rounds kept when a job has ``straight``
-    #: targets: a 7-joint arm decodes a generation in milliseconds, and the straight moves to inverse
-    #: kinematics' targets miss behind any obstacle
-    many: ManyJoints = field(default_factory=lambda: ManyJoints(transit_ga=True, transfer_ga=True))
-    #: largest joint move (rad, max over joints) of the step that sets a carried object down: beyond it
-    #: the linearised inverse kinematics from the decoded end rarely lands near it, and the move sweeps far
-    settle_max_rad: float = 0.8
-    #: highest (m) a carried object may be above a support and still be set down on it by that step; a
-    #: little above (``settle_rise_m``) is allowed too (the object's face a few mm below the top)
-    settle_drop_m: float = 0.3
-    settle_rise_m: float = 0.01
-    #: a transit holds its grasp when the tcp is this close (m, rad) to it: the object then rides on the
-    #: nominal grasp within the plan file's 1e-4 replay tolerance
-    hold_tolerance_m: float = 1e-5
-    hold_tolerance_rad: float = 1e-5
-    #: a transfer reaches the goal when the object's face is this close (rad) to the goal's face down,
-    #: besides world.goal_tolerance on the centre and world.goal_angle_tolerance on the yaw
-    face_tolerance_rad: float = 1e-3
-    #: straight moves (count, nearest first) SEARCH tries to the targets inverse kinematics found
-    straight_probes: int = 8
-    #: a straight move is checked first at every this-many-th sample of the validator's (cheap refusals),
-    #: then at every sample
-    coarse_every: int = 16
-    #: weight (m/rad) of the tcp's and the object's angles against their positions in SEARCH's objectives
-    angle_weight_m: float = 0.1
-    #: shortcuts tried per segment of a found plan (the improvement's work, deterministic)
-    shortcut_tries: int = 48
-    #: motion-only queries: weight (m/rad) of the joint distance to the goal in SEARCH_TRANSIT's objective
-    motion_weight: float = 0.1
-    #: motion-only queries: landmarks (count) EXPLORE places at most (each followed by a SEARCH_TRANSIT
-    #: to the goal) before the run gives up with NO_PATH_AT_RESOLUTION's epsilon test
-    motion_landmarks: int = 200
 
 
 def matrices(poses: Array) -> Array:
@@ -728,9 +692,7 @@ class SpatialSpace:
     def improve(
         self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
     ) -> Improvement:
-        from clew_ros.spatial.shortcut import shortcut_segments
-
-        return shortcut_segments(self, ctx, segments, object_pose)
+        return _shortcut_segments(self, ctx, segments, object_pose)
 
 
 class _AllowAll:
@@ -758,9 +720,7 @@ def plan(
     ``world.robot.goal``)."""
     tuning = tuning or SpatialTuning()
     if world.object is None:
-        from clew_ros.spatial.motion_plan import plan_motion
-
-        return plan_motion(world, settings, goal=goal, termination=termination, progress=progress, tuning=tuning)
+        return plan_motion(SpatialSpace(world, tuning), settings, goal=goal, termination=termination, progress=progress)
     space = SpatialSpace(world, tuning)
     return clew.plan(
         space, settings, goal=goal, termination=termination, progress=progress, search=tuning.search, many=tuning.many
@@ -770,3 +730,43 @@ def plan(
 def segment_travel(segments: Sequence[Segment]) -> float:
     """Joint travel (rad): the sum over segments and joints of the absolute motion."""
     return float(sum(np.abs(np.diff(np.array(s.waypoints), axis=0)).sum() for s in segments if len(s.waypoints) > 1))
+
+
+def _shortcut_segments(
+    space: SpatialSpace, ctx: PlanningContext, segments: list[Segment], object_pose: Array
+) -> Improvement:
+    """The plan's segments shortcut (the module's docstring); ``object_pose``: where the object ends."""
+    first_travel = sum(path_travel(np.array(s.waypoints)) for s in segments)
+    transfers = sum(s.kind == "transfer" for s in segments)
+    if ctx.settings.improve_time <= 0:
+        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, 0, False)
+    resting = space.initial_object_pose
+    out: list[Segment] = []
+    shortcuts = work = 0
+    stopped = False
+    for segment in segments:
+        path = np.array(segment.waypoints)
+        if segment.kind == "transfer":
+            assert segment.grasp is not None
+            rel = space.grasp_rel(segment.grasp)
+            checker = space.transfer_checker(rel)
+        else:
+            rel = None
+            checker = space.transit_checker(resting)
+        if not stopped:
+            path, taken, spent, stopped = shortcut_path(
+                partial(space.clear, checker),
+                path,
+                tries=space.tuning.shortcut_tries,
+                rng=ctx.rng,
+                stop=ctx.termination,
+            )
+            shortcuts += taken
+            work += spent
+        out.append(Segment(segment.kind, segment.grasp, list(path)))
+        if rel is not None:
+            resting = space.held_object_poses(path[-1:], rel)[0]
+    travel = sum(path_travel(np.array(s.waypoints)) for s in out)
+    if travel > first_travel:  # (never: each shortcut is shorter than what it replaces)
+        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, work, stopped)
+    return Improvement(out, object_pose, first_travel, transfers, travel, transfers, shortcuts, work, stopped)

@@ -5,7 +5,8 @@ Problems (all with the shipped Panda, ``config/robots/panda``, its mesh sphere m
 front of it):
 
 - ``motion_post``: motion-only, from one side of a 0.9 m post on the table to the other, a shelf board above;
-- ``motion_reach``: motion-only, from the arm folded up to reaching over the table between two posts;
+- ``motion_frame``: motion-only, from the hand down inside a gate (two posts and a bar on the table) to the
+  hand down beside it;
 - ``table``: pick a 4 x 4 x 12 cm box on the table and put it down 0.6 m away (top-down grasps);
 - ``shelf``: from the table onto a shelf board beside the arm, under a roof;
 - ``on_side``: the box from standing to lying on its side (another face down: only the side grasps, from
@@ -72,15 +73,16 @@ PROBLEMS: dict[str, dict[str, Any]] = {
         initial=[0.8, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8],
         robot={"goal": [-0.8, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8]},
     ),
-    "motion_reach": world(
-        "motion_reach",
+    "motion_frame": world(
+        "motion_frame",
         {
             "table": TABLE,
-            "left": {"shape": "box", "size": [0.06, 0.06, 0.5], "pose": [0.45, 0.2, 0.37, 0, 0, 0]},
-            "right": {"shape": "box", "size": [0.06, 0.06, 0.5], "pose": [0.45, -0.2, 0.37, 0, 0, 0]},
+            "left": {"shape": "box", "size": [0.06, 0.06, 0.7], "pose": [0.5, 0.3, 0.47, 0, 0, 0]},
+            "right": {"shape": "box", "size": [0.06, 0.06, 0.7], "pose": [0.5, -0.3, 0.47, 0, 0, 0]},
+            "bar": {"shape": "box", "size": [0.06, 0.66, 0.06], "pose": [0.5, 0.0, 0.85, 0, 0, 0]},
         },
-        initial=[0.0, -1.2, 0.0, -2.8, 0.0, 1.8, 0.8],
-        robot={"goal": [0.0, 0.6, 0.0, -1.6, 0.0, 2.2, 0.8]},
+        initial=[0.002, -0.042, -0.002, -2.334, 0.0, 2.293, 0.785],
+        robot={"goal": [0.921, 0.45, -0.097, -1.649, 0.049, 2.097, 1.594]},
     ),
     "table": world(
         "table",

@@ -324,7 +324,7 @@ class SpatialSpace:
                 way[:, step + 1 :] = q[:, None]
                 break
             for checker, idx in groups:
-                lo, hi, ok = checker.free_intervals(q[idx], j)
+                lo, hi, ok = checker.free_intervals(q[idx], j, self.tuning.intervals)
                 moved = bounce(q[idx, j] + genes[idx, r, j], lo, hi)
                 q[idx, j] = np.where(ok, moved, q[idx, j])
             if counters is not None:

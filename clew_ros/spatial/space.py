@@ -538,19 +538,16 @@ class SpatialSpace:
         return [r for r in results if r is not None]
 
     def _finish(self, ctx: PlanningContext, job: SearchJob, waypoints: Array, targets: Array) -> Array:
-        """A search's waypoints, ended with a straight move to the nearest target clear from its end (none
-        clear: as they were)."""
+        """A search's waypoints, ended by straight moves (:meth:`way`) to the nearest target they reach from its
+        end (none: as they were)."""
         end = waypoints[-1]
         if ctx.termination() or not len(targets):
             return waypoints
         if np.min(np.max(np.abs(targets - end), axis=1)) < 1e-9:
             return waypoints
-        order = np.argsort(np.abs(targets - end).sum(axis=1), kind="stable")[: self.tuning.straight_probes]
-        near = targets[order]
-        clear = self.clear(self.checker_of(job.mode), np.broadcast_to(end, near.shape), near)
-        if clear.any():
-            return np.vstack([waypoints, near[int(np.argmax(clear))][None]])
-        return waypoints
+        order = np.argsort(np.abs(targets - end).sum(axis=1), kind="stable")
+        found = self.way(job.mode, end, targets[order])
+        return waypoints if found is None else np.vstack([waypoints, found])
 
     def search_transfer(
         self, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
@@ -600,21 +597,66 @@ class SpatialSpace:
         best: np.ndarray,
         waypoints: list[list[np.ndarray]],
     ) -> None:
-        """Each job with ``straight`` targets tries a straight move to them, nearest first, checked at the
-        validator's resolution; kept where it gets closer."""
+        """Each job with ``straight`` targets tries straight moves to them (:meth:`way`); kept where it gets
+        closer."""
         for i, job in enumerate(jobs):
             if job.straight is None or not len(job.straight) or ctx.termination():
                 continue
-            targets = job.straight
-            clear = self.clear(self.checker_of(job.mode), np.broadcast_to(q[i], targets.shape), targets)
-            if not clear.any():
+            found = self.way(job.mode, q[i], job.straight)
+            if found is None:
                 continue
-            reached = targets[int(np.argmax(clear))]
+            reached = found[-1]
             value = float(job.objective(reached[None], object_at(ctx, reached[None], job.mode))[0])
             if value < best[i]:
-                waypoints[i].append(reached[None].copy())
+                waypoints[i].append(found.copy())
                 q[i] = reached
                 best[i] = value
+
+    def offsets(self, mode: dict[str, np.ndarray], qs: Array) -> Array:
+        """Configurations (m, n) near ``qs`` (m, n) with the tcp moved :attr:`SpatialTuning.approach_m` away
+        along its own -z (transit: backed off a grasp's approach) or up (transfer: the object lifted); a row
+        is NaN where inverse kinematics seeded at it found none within its joint limits."""
+        poses_ = self.tcp(qs)
+        shift = self.tuning.approach_m
+        if mode.get("grasp_rel") is not None:
+            poses_[:, 2, 3] += shift
+        else:
+            poses_[:, :3, 3] -= shift * poses_[:, :3, 2]
+        found = self._settle_ik.solve_many(list(poses_), np.random.default_rng(0), seeds=[q[None] for q in qs])
+        out = np.full(qs.shape, np.nan)
+        for k, solutions in enumerate(found):
+            if len(solutions):
+                out[k] = solutions[0]
+        return out
+
+    def way(self, mode: dict[str, np.ndarray], q: Array, targets: Array) -> Array | None:
+        """Waypoints (without ``q``) of straight joint-space moves from ``q`` to the first of ``targets``
+        (nearest first) it reaches, each move checked at the validator's 0.002 rad in ``mode``: directly, or by
+        way of the target's approach (:meth:`offsets`: the tcp backed off, the object lifted), or from ``q``'s
+        own retreat; ``None`` if none is clear."""
+        checker = self.checker_of(mode)
+        targets = targets[: self.tuning.straight_probes]
+        count = len(targets)
+        starts = np.broadcast_to(q, targets.shape)
+        clear = self.clear(checker, starts, targets)
+        if clear.any():
+            direct: Array = targets[int(np.argmax(clear))][None]
+            return direct
+        if self.tuning.approach_m <= 0:
+            return None
+        vias = self.offsets(mode, targets)
+        retreat = self.offsets(mode, q[None])[0]
+        fine = [k for k in range(count) if not np.isnan(vias[k]).any()]
+        ways = [[vias[k], targets[k]] for k in fine]
+        if not np.isnan(retreat).any():
+            ways += [[retreat, vias[k], targets[k]] for k in fine]
+            ways += [[retreat, targets[k]] for k in range(count)]
+        for path in ways:
+            points = np.array([q, *path])
+            if self.clear(checker, points[:-1], points[1:]).all():
+                via: Array = points[1:]
+                return via
+        return None
 
     # -- regrasps, refusals, improvement --------------------------------------------------------------
     def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:

@@ -36,6 +36,10 @@ class SpatialTuning:
     #: a transfer reaches the goal when the object's face is this close (rad) to the goal's face down,
     #: besides world.goal_tolerance on the centre and world.goal_angle_tolerance on the yaw
     face_tolerance_rad: float = 1e-3
+    #: SEARCH's straight moves to a target also go by way of its approach: the tcp backed off this far (m)
+    #: along its own -z (a grasp) or the object lifted this far (a placement), and from the start's own such
+    #: retreat (0: direct moves only); a gripper's approach, as MoveIt Task Constructor's stages have it
+    approach_m: float = 0.1
     #: straight moves (count, nearest first) SEARCH tries to the targets inverse kinematics found
     straight_probes: int = 8
     #: a straight move is checked first at every this-many-th sample of the validator's (cheap refusals),

@@ -14,6 +14,7 @@ goal ends the run; its path (the landmarks' paths from the start, then the searc
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import traceback
 from collections.abc import Callable
@@ -65,6 +66,9 @@ def plan_motion(
     settings = settings or PlannerSettings()
     termination = termination or Termination(settings.time_limit)
     world = space.world
+    many = space.tuning.many
+    if world.robot.dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
+        settings = dataclasses.replace(settings, manhattan_order=many.manhattan_order)  # as core's plan does
     run = _MotionRun(space, settings, termination)
     refusal = _refusal(world, world.goal if goal is None else goal)
     if isinstance(refusal, tuple):
@@ -242,9 +246,10 @@ def _explore(
     initial = np.empty((size, 1 + k * n))
     initial[:, 0] = ctx.rng.integers(0, len(joints), size=size)
     initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
-    result = minimize(
-        evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(joints), should_stop=ctx.termination
-    )
+    genetic = ctx.settings.genetic
+    if n >= ctx.many.straight_probe_joints and genetic.generations > ctx.many.explore_generations:
+        genetic = dataclasses.replace(genetic, generations=ctx.many.explore_generations)  # as core's EXPLORE
+    result = minimize(evaluate, initial, ctx.rng, genetic, categories=len(joints), should_stop=ctx.termination)
     if not np.isfinite(result.fitness):
         return None
     index, waypoints = decode(result.genes[None])

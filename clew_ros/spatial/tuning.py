@@ -15,10 +15,16 @@ class SpatialTuning:
     """Every tuning value of a spatial run beyond ``planner.*``; a benchmark or a test plans with a copy."""
 
     search: SearchSettings = field(default_factory=SearchSettings)
-    #: arms of many joints as core has them, but with the GA rounds kept when a job has ``straight``
-    #: targets: a 7-joint arm decodes a generation in milliseconds, and the straight moves to inverse
-    #: kinematics' targets miss behind any obstacle
-    many: ManyJoints = field(default_factory=lambda: ManyJoints(transit_ga=True, transfer_ga=True))
+    #: how core adapts the search to arms of many joints, from 7 joints here: Manhattan paths of order 1
+    #: (``planner.manhattan_order`` lowered to it) and at most 4 generations of EXPLORE's GA: a free interval
+    #: costs 0.13-0.25 ms on the Panda, and with them the pick-and-place problems of
+    #: benchmarks/spatial_plan.py planned in a median 0.44-0.7 s instead of 0.8-2.0 s, as often; the GA rounds
+    #: are kept when a job has ``straight`` targets (they miss behind any obstacle)
+    many: ManyJoints = field(
+        default_factory=lambda: ManyJoints(
+            straight_probe_joints=7, transit_ga=True, transfer_ga=True, manhattan_order=1, explore_generations=4
+        )
+    )
     #: how the Manhattan decoding's free intervals step (the checker's defaults: coarser steps measured no
     #: faster on the Panda, 130-250 us an interval either way)
     intervals: IntervalSettings = field(default_factory=IntervalSettings)

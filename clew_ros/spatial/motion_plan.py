@@ -9,12 +9,14 @@ each new landmark, SEARCH_TRANSIT (:func:`clew_ros.core.search.local_search`) mi
 the goal: a straight move to the goal checked at the validator's 0.002 rad, the greedy Manhattan probe,
 the GA's rounds, and from where it ends a straight move to the goal again. The first search that reaches the
 goal ends the run; its path (the landmarks' paths from the start, then the search's) is shortcut
-(:mod:`clew_ros.spatial.shortcut`).
+(:mod:`clew_ros.spatial.shortcut`). Paths have ``planner.manhattan_order`` and the GA ``planner.generations``
+as set: unlike manipulation, they are not lowered for 7-joint arms (:attr:`SpatialTuning.many`), since with
+order 1 SEARCH from the start stopped reaching the goal on ``benchmarks/spatial_plan.py``'s motion_post
+and the run took twice as long.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import traceback
 from collections.abc import Callable
@@ -66,9 +68,6 @@ def plan_motion(
     settings = settings or PlannerSettings()
     termination = termination or Termination(settings.time_limit)
     world = space.world
-    many = space.tuning.many
-    if world.robot.dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
-        settings = dataclasses.replace(settings, manhattan_order=many.manhattan_order)  # as core's plan does
     run = _MotionRun(space, settings, termination)
     refusal = _refusal(world, world.goal if goal is None else goal)
     if isinstance(refusal, tuple):
@@ -247,8 +246,6 @@ def _explore(
     initial[:, 0] = ctx.rng.integers(0, len(joints), size=size)
     initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
     genetic = ctx.settings.genetic
-    if n >= ctx.many.straight_probe_joints and genetic.generations > ctx.many.explore_generations:
-        genetic = dataclasses.replace(genetic, generations=ctx.many.explore_generations)  # as core's EXPLORE
     result = minimize(evaluate, initial, ctx.rng, genetic, categories=len(joints), should_stop=ctx.termination)
     if not np.isfinite(result.fitness):
         return None

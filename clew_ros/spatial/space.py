@@ -556,9 +556,11 @@ class SpatialSpace:
         rel = np.asarray(grasp_rel, dtype=float)
         goal = np.asarray(goal, dtype=float)
         checker = self.transfer_checker(rel)
-        tcp_goal = matrices(goal)[0] @ _inverse(matrices(rel)[0])
         rng = own_generator(ctx, GOAL_STREAM, q0, np.r_[rel, goal])
-        found = self.ik(ctx.search.goal_seeds).solve(tcp_goal, rng, seeds=q0[None], checker=checker)
+        solver = self.ik(ctx.search.goal_seeds)
+        tcp_goals = [pose @ _inverse(matrices(rel)[0]) for pose in self.goal_poses(goal)]
+        solutions = solver.solve_many(tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=checker)
+        found = np.vstack(solutions)
         found = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
         weight = self.tuning.angle_weight_m
         target = matrices(goal)[0]
@@ -588,6 +590,20 @@ class SpatialSpace:
         success = self.at_goal(held[-1], goal)
         distance = float(self.goal_distance(held[-1:], goal)[0])
         return PathResult(success, waypoints, 0.0 if success else distance, object_pose=held[-1])
+
+    def goal_poses(self, goal: Array) -> list[Array]:
+        """The goal placement (4x4) turned about world z through its centre by each of
+        :attr:`SpatialTuning.goal_yaws` within ``world.goal_angle_tolerance`` (the goal's own first): every
+        one of them reaches the goal."""
+        base = matrices(goal)[0]
+        tolerance = self.world.tolerances["goal_angle_tolerance"]
+        out = []
+        for yaw in self.tuning.goal_yaws:
+            if abs(yaw) <= tolerance + 1e-12:
+                turned = base.copy()
+                turned[:3, :3] = rpy_matrix(0.0, 0.0, yaw) @ base[:3, :3]
+                out.append(turned)
+        return out
 
     def straight_probe(
         self,
@@ -734,7 +750,40 @@ class SpatialSpace:
     def improve(
         self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
     ) -> Improvement:
-        return _shortcut_segments(self, ctx, segments, object_pose)
+        """Shortcuts (:func:`_shortcut_segments`); a plan of several transfers is also tried as one, from the
+        start: each grasp's transit at the initial placement, then SEARCH_TRANSFER to the goal, shortcut; the
+        one-transfer plan replaces it where it is no longer."""
+        better = _shortcut_segments(self, ctx, segments, object_pose)
+        if better.transfers <= 1 or ctx.settings.improve_time <= 0 or better.stopped:
+            return better
+        for grasp in range(self.grasp_count):
+            if ctx.termination():
+                break
+            pose = self.initial_object_pose
+            transit = self.search_transits(ctx, [(self.initial_joints, pose, grasp, None)])[0]
+            if not transit.success or transit.grasp_rel is None:
+                continue
+            carried = self.search_transfer(ctx, transit.waypoints[-1], transit.grasp_rel, goal)
+            if not carried.success or carried.object_pose is None:
+                continue
+            single = [
+                Segment("transit", None, list(transit.waypoints)),
+                Segment("transfer", grasp, list(carried.waypoints)),
+            ]
+            direct = _shortcut_segments(self, ctx, single, carried.object_pose)
+            if direct.travel <= better.travel:
+                return Improvement(
+                    direct.segments,
+                    carried.object_pose,
+                    better.first_travel,
+                    better.first_transfers,
+                    direct.travel,
+                    direct.transfers,
+                    better.shortcuts + direct.shortcuts,
+                    better.work + direct.work + 1,
+                    direct.stopped,
+                )
+        return better
 
 
 class _AllowAll:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from clew_ros.core.settings import ManyJoints, SearchSettings
@@ -46,6 +47,10 @@ class SpatialTuning:
     #: along its own -z (a grasp) or the object lifted this far (a placement), and from the start's own such
     #: retreat (0: direct moves only); a gripper's approach, as MoveIt Task Constructor's stages have it
     approach_m: float = 0.1
+    #: SEARCH_TRANSFER's goal configurations hold the object at the goal turned about world z by each of these
+    #: (rad) within world.goal_angle_tolerance: any of them reaches the goal, and an arm holding a grasp often
+    #: reaches only some (with the goal's own yaw only, 1 run in 5 of the on_side problem needed a regrasp)
+    goal_yaws: tuple[float, ...] = (0.0, math.pi / 2, -math.pi / 2, math.pi)
     #: straight moves (count, nearest first) SEARCH tries to the targets inverse kinematics found
     straight_probes: int = 8
     #: a straight move is checked first at every this-many-th sample of the validator's (cheap refusals),

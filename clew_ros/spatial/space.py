@@ -555,13 +555,7 @@ class SpatialSpace:
         q0 = np.asarray(q0, dtype=float)
         rel = np.asarray(grasp_rel, dtype=float)
         goal = np.asarray(goal, dtype=float)
-        checker = self.transfer_checker(rel)
-        rng = own_generator(ctx, GOAL_STREAM, q0, np.r_[rel, goal])
-        solver = self.ik(ctx.search.goal_seeds)
-        tcp_goals = [pose @ _inverse(matrices(rel)[0]) for pose in self.goal_poses(goal)]
-        solutions = solver.solve_many(tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=checker)
-        found = np.vstack(solutions)
-        found = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
+        found = self.goal_configurations(ctx, q0, rel, goal)
         weight = self.tuning.angle_weight_m
         target = matrices(goal)[0]
 
@@ -590,6 +584,20 @@ class SpatialSpace:
         success = self.at_goal(held[-1], goal)
         distance = float(self.goal_distance(held[-1:], goal)[0])
         return PathResult(success, waypoints, 0.0 if success else distance, object_pose=held[-1])
+
+    def goal_configurations(self, ctx: PlanningContext, q0: Array, grasp_rel: Array, goal: Array) -> Array:
+        """Valid configurations (m, n) holding the object (as ``grasp_rel``) at the goal (:meth:`goal_poses`),
+        nearest ``q0`` first: inverse kinematics seeded at ``q0`` and ``SearchSettings.goal_seeds`` random
+        starts drawn from a generator of the request's own."""
+        rng = own_generator(ctx, GOAL_STREAM, q0, np.r_[grasp_rel, goal])
+        back = _inverse(matrices(grasp_rel)[0])
+        tcp_goals = [pose @ back for pose in self.goal_poses(goal)]
+        solutions = self.ik(ctx.search.goal_seeds).solve_many(
+            tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=self.transfer_checker(grasp_rel)
+        )
+        found = np.vstack(solutions)
+        ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
+        return ordered
 
     def goal_poses(self, goal: Array) -> list[Array]:
         """The goal placement (4x4) turned about world z through its centre by each of
@@ -759,6 +767,8 @@ class SpatialSpace:
         for grasp in range(self.grasp_count):
             if ctx.termination():
                 break
+            if not len(self.goal_configurations(ctx, self.initial_joints, self.grasp_rel(grasp), goal)):
+                continue  # no configuration holds the object at the goal with this grasp: spare its searches
             pose = self.initial_object_pose
             transit = self.search_transits(ctx, [(self.initial_joints, pose, grasp, None)])[0]
             if not transit.success or transit.grasp_rel is None:

@@ -556,6 +556,9 @@ class SpatialSpace:
         rel = np.asarray(grasp_rel, dtype=float)
         goal = np.asarray(goal, dtype=float)
         found = self.goal_configurations(ctx, q0, rel, goal)
+        if not len(found) and self.tuning.hopeless_transfers:
+            start = self.held_object_poses(q0[None], rel)
+            return PathResult(False, q0[None], float(self.goal_distance(start, goal)[0]), object_pose=start[0])
         weight = self.tuning.angle_weight_m
         target = matrices(goal)[0]
 

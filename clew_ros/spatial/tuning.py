@@ -51,6 +51,10 @@ class SpatialTuning:
     #: (rad) within world.goal_angle_tolerance: any of them reaches the goal, and an arm holding a grasp often
     #: reaches only some (with the goal's own yaw only, 1 run in 5 of the on_side problem needed a regrasp)
     goal_yaws: tuple[float, ...] = (0.0, math.pi / 2, -math.pi / 2, math.pi)
+    #: whether SEARCH_TRANSFER gives up at once with a grasp that holds the object at the goal in no
+    #: configuration its inverse kinematics finds (the start and SearchSettings.goal_seeds random starts, at
+    #: every yaw of goal_yaws): its GA could only bring the object near, never place it
+    hopeless_transfers: bool = True
     #: straight moves (count, nearest first) SEARCH tries to the targets inverse kinematics found
     straight_probes: int = 8
     #: a straight move is checked first at every this-many-th sample of the validator's (cheap refusals),

@@ -1,13 +1,14 @@
 """``python -m benchmarks.spatial_plan [--seeds 5] [--time-limit 20] [--problems NAME ...]``: the Ariadne's Clew
-planner on spatial worlds (issue 44), a handful of Panda problems.
+planner on spatial worlds (issue 44), a handful of problems.
 
-Problems (all with the shipped Panda, ``config/robots/panda``, its mesh sphere model; a table 0.6 x 1.2 m in
-front of it):
+Problems (with the shipped Panda, ``config/robots/panda``, but one with the UR5; mesh sphere models; a table
+0.6 x 1.2 m in front of the arm):
 
 - ``motion_post``: motion-only, from one side of a 0.9 m post on the table to the other, a shelf board above;
 - ``motion_frame``: motion-only, from the hand down inside a gate (two posts and a bar on the table) to the
   hand down beside it;
 - ``table``: pick a 4 x 4 x 12 cm box on the table and put it down 0.6 m away (top-down grasps);
+- ``table_ur5``: the same with the shipped UR5 (6 joints);
 - ``shelf``: from the table onto a shelf board beside the arm, under a roof;
 - ``on_side``: the box from standing to lying on its side (another face down: only the side grasps, from
   its +x face turned towards the arm, can do it; top-down grasps are offered too).
@@ -52,8 +53,22 @@ TOP_DOWN = [0, 0, 0.02, math.pi, 0, 0, 0, 0, 0.02, math.pi, 0, math.pi / 2]
 SIDE = [0.0, 0.0, 0.02, 0.0, -math.pi / 2, 0.0, 0.0, 0.0, -0.02, 0.0, -math.pi / 2, 0.0]
 
 
+#: the shipped UR5 with a tcp 5 cm beyond its tool flange (no gripper geometry: the wrist's last links may
+#: touch the object)
+UR5: dict[str, Any] = {
+    "urdf": str(CONFIG / "robots/ur5/ur5.urdf"),
+    "srdf": str(CONFIG / "robots/ur5/ur5.srdf"),
+    "base_link": "base_link",
+    "tip_link": "tool0",
+    "tcp": [0, 0, 0.05, 0, 0, 0],
+    "gripper_links": ["wrist_3_link", "ee_link"],
+    "initial": [0.0, -1.57, 1.57, -1.57, -1.57, 0.0],
+}
+
+
 def world(name: str, obstacles: dict[str, Any], **extra: Any) -> dict[str, Any]:
-    robot = {**ROBOT, "initial": extra.pop("initial", READY), **extra.pop("robot", {})}
+    arm = extra.pop("arm", ROBOT)
+    robot = {**arm, "initial": extra.pop("initial", arm.get("initial", READY)), **extra.pop("robot", {})}
     return {
         "world": {
             "kind": "spatial",
@@ -92,6 +107,13 @@ PROBLEMS: dict[str, dict[str, Any]] = {
     "table": world(
         "table",
         {"table": TABLE},
+        supports=["table"],
+        object={**BOX, "initial": [0.5, 0.3, 0.18, 0, 0, 0.3], "goal": [0.5, -0.3, 0.18, 0, 0, 0], "grasps": TOP_DOWN},
+    ),
+    "table_ur5": world(
+        "table_ur5",
+        {"table": TABLE},
+        arm=UR5,
         supports=["table"],
         object={**BOX, "initial": [0.5, 0.3, 0.18, 0, 0, 0.3], "goal": [0.5, -0.3, 0.18, 0, 0, 0], "grasps": TOP_DOWN},
     ),

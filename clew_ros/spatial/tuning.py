@@ -16,14 +16,14 @@ class SpatialTuning:
     """Every tuning value of a spatial run beyond ``planner.*``; a benchmark or a test plans with a copy."""
 
     search: SearchSettings = field(default_factory=SearchSettings)
-    #: how core adapts the search to arms of many joints, from 7 joints here: Manhattan paths of order 1
+    #: how core adapts the search to arms of many joints, from 6 joints here (a UR5, a Panda): Manhattan paths of order 1
     #: (``planner.manhattan_order`` lowered to it) and at most 4 generations of EXPLORE's GA: a free interval
     #: costs 0.13-0.25 ms on the Panda, and with them the pick-and-place problems of
     #: benchmarks/spatial_plan.py planned in a median 0.44-0.7 s instead of 0.8-2.0 s, as often; the GA rounds
     #: are kept when a job has ``straight`` targets (they miss behind any obstacle)
     many: ManyJoints = field(
         default_factory=lambda: ManyJoints(
-            straight_probe_joints=7, transit_ga=True, transfer_ga=True, manhattan_order=1, explore_generations=4
+            straight_probe_joints=6, transit_ga=True, transfer_ga=True, manhattan_order=1, explore_generations=4
         )
     )
     #: how the Manhattan decoding's free intervals step (the checker's defaults: coarser steps measured no

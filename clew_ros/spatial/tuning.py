@@ -16,9 +16,9 @@ class SpatialTuning:
     """Every tuning value of a spatial run beyond ``planner.*``; a benchmark or a test plans with a copy."""
 
     search: SearchSettings = field(default_factory=SearchSettings)
-    #: how core adapts the search to arms of many joints, from 6 joints here (a UR5, a Panda): Manhattan paths of order 1
-    #: (``planner.manhattan_order`` lowered to it) and at most 4 generations of EXPLORE's GA: a free interval
-    #: costs 0.13-0.25 ms on the Panda, and with them the pick-and-place problems of
+    #: how core adapts the search to arms of many joints, from 6 joints here (a UR5, a Panda): Manhattan
+    #: paths of order 1 (``planner.manhattan_order`` lowered to it) and at most 4 generations of EXPLORE's GA:
+    #: a free interval costs 0.13-0.25 ms on the Panda, and with them the pick-and-place problems of
     #: benchmarks/spatial_plan.py planned in a median 0.44-0.7 s instead of 0.8-2.0 s, as often; the GA rounds
     #: are kept when a job has ``straight`` targets (they miss behind any obstacle)
     many: ManyJoints = field(

@@ -191,3 +191,51 @@ def test_a_goal_in_collision_or_out_of_reach_is_refused_at_once(tmp_path: Path) 
     result = plan(spatial_world_from_parameters(far, tmp_path, COARSE), SETTINGS)
     assert result.outcome is Outcome.GOAL_OUT_OF_REACH
     assert "out of reach" in result.message
+
+
+def test_decoded_transfers_end_with_the_object_resting(table: SpatialWorld) -> None:
+    space = SpatialSpace(table)
+    assert table.object is not None
+    initial = np.array(table.object.initial)
+    rel = space.grasp_rel(0)
+    target = matrices(initial)[0] @ matrices(table.object.grasps[0])[0]
+    holds = space.ik(32).solve(target, np.random.default_rng(0), checker=space.transit_checker(initial))
+    holds = holds[space.transfer_checker(rel).valid(holds)]
+    assert len(holds) > 0
+    start = holds[0]
+    # lifted 8 cm: set down again on the table, by a clear straight move
+    lifted_pose = space.tcp(start[None])[0]
+    lifted_pose[2, 3] += 0.08
+    lifted = space.ik(0).solve(lifted_pose, np.random.default_rng(0), seeds=start[None])
+    assert len(lifted) > 0
+    settled, ok = space.settle(space.transfer_checker(rel), rel, lifted[:1])
+    assert ok.tolist() == [True]
+    assert space.rests(space.held_object_poses(settled, rel)[0])
+    # random Manhattan transfers from the hold: every end rests (set down, or the path stays at its start)
+    genes = np.random.default_rng(1).normal(0.0, 0.6, size=(12, 1, space.dof))
+    paths = space.manhattan(
+        np.repeat(start[None], 12, axis=0),
+        genes,
+        margin_m=0.0,
+        counters=None,
+        should_stop=None,
+        threads=1,
+        grasp_rel=np.repeat(rel[None], 12, axis=0),
+    )
+    assert all(space.rests(pose) for pose in paths.object_poses)
+    checker = space.transfer_checker(rel)
+    for path in paths.waypoints:
+        assert checker.valid(path).all()
+
+
+def test_motion_only_refusals(boxes: SpatialWorld) -> None:
+    assert boxes.goal is not None
+    colliding = np.array([0.0, 0.6, 0.0, -1.4, 0.0, 2.0, 0.8])
+    assert not boxes.checker.valid(colliding[None])[0]
+    result = plan(boxes, SETTINGS, goal=colliding)
+    assert result.outcome is Outcome.GOAL_IN_COLLISION
+    beyond = boxes.goal.copy()
+    beyond[3] = 0.5  # joint 4's upper limit is -0.0698
+    result = plan(boxes, SETTINGS, goal=beyond)
+    assert result.outcome is Outcome.INVALID_WORLD
+    assert "world.robot.goal" in result.message

@@ -324,8 +324,11 @@ class SpatialSpace:
                 way[:, step + 1 :] = q[:, None]
                 break
             for checker, idx in groups:
-                lo, hi, ok = checker.free_intervals(q[idx], j, self.tuning.intervals)
-                moved = bounce(q[idx, j] + genes[idx, r, j], lo, hi)
+                move = genes[idx, r, j]
+                # searched only as far as the move reaches: the same fold as over the whole interval, unless a
+                # path folds twice (then it folds inside the reach, as free)
+                lo, hi, ok = checker.free_intervals(q[idx], j, self.tuning.intervals, reach=np.abs(move) + 1e-9)
+                moved = bounce(q[idx, j] + move, lo, hi)
                 q[idx, j] = np.where(ok, moved, q[idx, j])
             if counters is not None:
                 counters.clearance_checks += count
@@ -403,7 +406,7 @@ class SpatialSpace:
         current = np.array(q, dtype=float)
         out = [current.copy()]
         for j in np.flatnonzero(np.abs(moves) > 0.0):
-            lo, hi, ok = checker.free_intervals(current[None], int(j))
+            lo, hi, ok = checker.free_intervals(current[None], int(j), reach=abs(float(moves[j])) + 1e-9)
             if counters is not None:
                 counters.clearance_checks += 1
             if not ok[0]:

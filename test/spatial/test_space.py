@@ -239,3 +239,17 @@ def test_motion_only_refusals(boxes: SpatialWorld) -> None:
     result = plan(boxes, SETTINGS, goal=beyond)
     assert result.outcome is Outcome.INVALID_WORLD
     assert "world.robot.goal" in result.message
+
+
+def test_free_intervals_searched_only_as_far_as_asked(boxes: SpatialWorld) -> None:
+    rng = np.random.default_rng(2)
+    qs = rng.uniform(boxes.robot.lower, boxes.robot.upper, size=(400, boxes.robot.dof))
+    qs = qs[boxes.checker.valid(qs)][:40]
+    reach = rng.uniform(0.0, 1.5, size=len(qs))
+    for joint in (0, 3):
+        lo, hi, ok = boxes.checker.free_intervals(qs, joint)
+        near_lo, near_hi, near_ok = boxes.checker.free_intervals(qs, joint, reach=reach)
+        assert np.array_equal(ok, near_ok)
+        # the same steps from the start, stopped at the reach: the whole interval clipped to it
+        assert np.allclose(near_hi, np.minimum(hi, qs[:, joint] + reach), atol=1e-12)
+        assert np.allclose(near_lo, np.maximum(lo, qs[:, joint] - reach), atol=1e-12)

@@ -764,11 +764,30 @@ class SpatialSpace:
     def improve(
         self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
     ) -> Improvement:
-        """Shortcuts (:func:`_shortcut_segments`); a plan of several transfers is also tried as one, from the
-        start: each grasp's transit at the initial placement, then SEARCH_TRANSFER to the goal, shortcut; the
-        one-transfer plan replaces it where it is no longer."""
+        """Shortcuts (:func:`_shortcut_segments`); then the straight plan (:meth:`straight_plan`) where it is
+        shorter; then a plan still of several transfers is tried as one, from the start: each grasp's transit
+        at the initial placement, then SEARCH_TRANSFER to the goal, shortcut; the one-transfer plan replaces it
+        where it is no longer."""
         better = _shortcut_segments(self, ctx, segments, object_pose)
-        if better.transfers <= 1 or ctx.settings.improve_time <= 0 or better.stopped:
+        if ctx.settings.improve_time <= 0 or better.stopped:
+            return better
+        straight = self.straight_plan(ctx, goal)
+        if straight is not None:
+            single, pose = straight
+            direct = _shortcut_segments(self, ctx, single, pose)
+            if direct.travel < better.travel:
+                better = Improvement(
+                    direct.segments,
+                    pose,
+                    better.first_travel,
+                    better.first_transfers,
+                    direct.travel,
+                    direct.transfers,
+                    better.shortcuts + direct.shortcuts,
+                    better.work + direct.work + 1,
+                    direct.stopped,
+                )
+        if better.transfers <= 1 or better.stopped:
             return better
         for grasp in range(self.grasp_count):
             if ctx.termination():
@@ -790,7 +809,7 @@ class SpatialSpace:
             if direct.travel <= better.travel:
                 return Improvement(
                     direct.segments,
-                    carried.object_pose,
+                    direct.final_object_pose,
                     better.first_travel,
                     better.first_transfers,
                     direct.travel,
@@ -800,6 +819,40 @@ class SpatialSpace:
                     direct.stopped,
                 )
         return better
+
+    def straight_plan(self, ctx: PlanningContext, goal: Array) -> tuple[list[Segment], Array] | None:
+        """The shortest plan of one transfer made of straight moves (:meth:`way`: direct or by way of the
+        approaches) from the start to a hold and from it to a goal configuration, over every grasp: for each,
+        the :attr:`SpatialTuning.straight_pairs` (hold, goal configuration) pairs of least joint travel in
+        straight lines, the first whose moves are clear; ``None`` if none is."""
+        start, pose = self.initial_joints, self.initial_object_pose
+        best: tuple[float, list[Segment], Array] | None = None
+        for grasp in range(self.grasp_count):
+            if ctx.termination():
+                break
+            rel = self.grasp_rel(grasp)
+            goals = self.goal_configurations(ctx, start, rel, goal)
+            holds = self.holds(ctx, start, pose, grasp) if len(goals) else goals
+            if not len(holds):
+                continue
+            cost = np.abs(holds - start).sum(axis=1)[:, None] + np.abs(holds[:, None] - goals[None]).sum(axis=2)
+            for flat in np.argsort(cost, axis=None, kind="stable")[: self.tuning.straight_pairs]:
+                i, j = np.unravel_index(flat, cost.shape)
+                if best is not None and cost[i, j] >= best[0]:
+                    break
+                reach = self.way({"object_poses": pose[None]}, start, holds[i][None])
+                carry = None if reach is None else self.way({"grasp_rel": rel[None]}, holds[i], goals[j][None])
+                if reach is None or carry is None:
+                    continue
+                segments = [
+                    Segment("transit", None, [start, *reach]),
+                    Segment("transfer", grasp, [holds[i], *carry]),
+                ]
+                travel = sum(path_travel(np.array(s.waypoints)) for s in segments)
+                if best is None or travel < best[0]:
+                    best = (travel, segments, self.held_object_poses(goals[j][None], rel)[0])
+                break
+        return None if best is None else (best[1], best[2])
 
 
 class _AllowAll:

@@ -62,6 +62,9 @@ class SpatialTuning:
     coarse_every: int = 16
     #: weight (m/rad) of the tcp's and the object's angles against their positions in SEARCH's objectives
     angle_weight_m: float = 0.1
+    #: the improvement's straight plan tries this many (hold, goal configuration) pairs per grasp, least
+    #: straight-line joint travel first (each costs up to a few straight moves checked at 0.002 rad)
+    straight_pairs: int = 16
     #: shortcuts tried per segment of a found plan (the improvement's work, deterministic): each is one
     #: straight move checked at 0.002 rad (0.1-1 ms on the Panda); 48 left the Manhattan detours about twice
     #: as long as 200 did on benchmarks/spatial_plan.py

@@ -10,6 +10,7 @@ Problems (with the shipped Panda, ``config/robots/panda``, but one with the UR5;
 - ``table``: pick a 4 x 4 x 12 cm box on the table and put it down 0.6 m away (top-down grasps);
 - ``table_ur5``: the same with the shipped UR5 (6 joints);
 - ``shelf``: from the table onto a shelf board beside the arm, under a roof;
+- ``clutter``: a can (cylinder, 4 top-down grasps) carried across a table with four obstacles on it;
 - ``on_side``: the box from standing to lying on its side (another face down: only the side grasps, from
   its +x face turned towards the arm, can do it; top-down grasps are offered too).
 
@@ -126,6 +127,24 @@ PROBLEMS: dict[str, dict[str, Any]] = {
         },
         supports=["table", "board"],
         object={**BOX, "initial": [0.5, 0.2, 0.18, 0, 0, 0], "goal": [0.0, 0.55, 0.48, 0, 0, 0], "grasps": TOP_DOWN},
+    ),
+    "clutter": world(
+        "clutter",
+        {
+            "table": TABLE,
+            "c1": {"shape": "box", "size": [0.08, 0.08, 0.2], "pose": [0.5, 0.0, 0.22, 0, 0, 0]},
+            "c2": {"shape": "cylinder", "size": [0.25, 0.04], "pose": [0.6, 0.15, 0.245, 0, 0, 0]},
+            "c3": {"shape": "box", "size": [0.06, 0.2, 0.15], "pose": [0.4, -0.15, 0.195, 0, 0, 0.3]},
+            "c4": {"shape": "sphere", "size": [0.05], "pose": [0.65, -0.2, 0.17, 0, 0, 0]},
+        },
+        supports=["table"],
+        object={
+            "shape": "cylinder",
+            "size": [0.1, 0.025],
+            "initial": [0.45, 0.3, 0.17, 0, 0, 0],
+            "goal": [0.55, -0.35, 0.17, 0, 0, 0],
+            "grasps": [v for k in range(4) for v in (0, 0, 0.01, math.pi, 0, k * math.pi / 4)],
+        },
     ),
     "on_side": world(
         "on_side",

@@ -29,7 +29,7 @@ unchanged; this module gives it the spatial world (docs/spatial.md, "Planning"):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from functools import partial
 from typing import Any
 
@@ -885,11 +885,6 @@ def plan(
     return clew.plan(
         space, settings, goal=goal, termination=termination, progress=progress, search=tuning.search, many=tuning.many
     )
-
-
-def segment_travel(segments: Sequence[Segment]) -> float:
-    """Joint travel (rad): the sum over segments and joints of the absolute motion."""
-    return float(sum(np.abs(np.diff(np.array(s.waypoints), axis=0)).sum() for s in segments if len(s.waypoints) > 1))
 
 
 def _shortcut_segments(

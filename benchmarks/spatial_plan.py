@@ -208,19 +208,20 @@ def run(name: str, built: SpatialWorld, seeds: int, time_limit: float) -> None:
     )
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--time-limit", type=float, default=20.0)
     parser.add_argument("--problems", nargs="*", default=list(PROBLEMS), choices=list(PROBLEMS))
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     built = {name: spatial_world_from_parameters(PROBLEMS[name], CONFIG) for name in args.problems}
     for name in args.problems:  # compiles (or loads) the kernels: not timed
         plan(built[name], PlannerSettings(seed=99, time_limit=5.0))
         break
     for name in args.problems:
         run(name, built[name], args.seeds, args.time_limit)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

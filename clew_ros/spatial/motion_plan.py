@@ -150,8 +150,13 @@ class _MotionRun:
         while True:
             reason = self.termination.reason()
             if reason is not None:
+                stopped = (
+                    "canceled" if reason is Outcome.CANCELED else f"time limit of {self.settings.time_limit} s reached"
+                )
                 return self.finish(
-                    reason, f"{reason.name.lower()} after {len(tree)} landmarks; best {best:.4g} rad away"
+                    reason,
+                    f"{stopped} after {len(tree)} landmarks; no motion found; the nearest search ended {best:.4g} rad "
+                    "(largest joint difference) from the goal",
                 )
             found = self.search(landmark.joints, target)
             gap = float(np.max(np.abs(found[-1] - target)))

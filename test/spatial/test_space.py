@@ -253,3 +253,11 @@ def test_free_intervals_searched_only_as_far_as_asked(boxes: SpatialWorld) -> No
         # the same steps from the start, stopped at the reach: the whole interval clipped to it
         assert np.allclose(near_hi, np.minimum(hi, qs[:, joint] + reach), atol=1e-12)
         assert np.allclose(near_lo, np.maximum(lo, qs[:, joint] - reach), atol=1e-12)
+
+
+def test_a_motion_stopped_by_its_time_limit_says_so(boxes: SpatialWorld) -> None:
+    result = plan(boxes, PlannerSettings(seed=1, time_limit=0.01))
+    assert result.outcome is Outcome.TIME_LIMIT
+    assert result.message.startswith("time limit of 0.01 s reached after ")
+    assert "landmarks; no motion found" in result.message
+    assert result.segments == []

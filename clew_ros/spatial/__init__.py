@@ -17,6 +17,10 @@
   each invalid piece named with its first invalid configuration and why.
 - :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
+- :mod:`~clew_ros.spatial.space`: the world as the Ariadne's Clew Algorithm's space
+  (:class:`~clew_ros.spatial.space.SpatialSpace`) and :func:`~clew_ros.spatial.space.plan`, the spatial
+  planner's entry point; :mod:`~clew_ros.spatial.motion_plan` (motion-only queries: the ACA's transit
+  search), :mod:`~clew_ros.spatial.shortcut` (the improvement's shortcuts), :mod:`~clew_ros.spatial.tuning`.
 
-It runs without ROS (a test keeps it so); nothing outside it imports it yet (planning on it is issue 44).
+It runs without ROS (a test keeps it so).
 """

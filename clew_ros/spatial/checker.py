@@ -206,11 +206,13 @@ class SpatialChecker:
         return out
 
     def free_intervals(
-        self, qs: Any, joint: int, settings: IntervalSettings | None = None
+        self, qs: Any, joint: int, settings: IntervalSettings | None = None, *, reach: Any = None
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
         """For each row of ``qs``: ``(lo, hi, valid)``, the values of ``joint`` (0-based, chain order) around
         the row's own over which the row, the other joints fixed, stays valid for the sphere model
-        (within the joint's limits); ``valid`` false where the row itself is not (then ``lo = hi``)."""
+        (within the joint's limits, and within ``reach`` (rad, m; one per row or one for all; default: no
+        bound) of the row's own: a caller that needs no more spares the steps beyond); ``valid`` false where
+        the row itself is not (then ``lo = hi``)."""
         settings = settings or IntervalSettings()
         batch = self._batch(qs)
         if not 0 <= joint < self.robot.dof:
@@ -218,6 +220,7 @@ class SpatialChecker:
         lo = np.empty(len(batch))
         hi = np.empty(len(batch))
         ok = np.empty(len(batch), dtype=np.bool_)
+        bound = np.ascontiguousarray(np.broadcast_to(np.inf if reach is None else reach, len(batch)), dtype=np.float64)
         if self.static_collision:
             lo[:] = hi[:] = batch[:, joint]
             ok[:] = False
@@ -229,7 +232,7 @@ class SpatialChecker:
             a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"],
             a["pairs"], a["bounds"], a["has_bounds"], a["held_link"], a["held_points"], a["held_disc"],
             a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"], settings.margin_m, settings.min_step,
-            settings.max_steps, lo, hi, ok,
+            settings.max_steps, bound, lo, hi, ok,
         )  # fmt: skip
         return lo, hi, ok
 

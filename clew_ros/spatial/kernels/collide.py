@@ -850,13 +850,15 @@ def free_intervals(  # noqa: PLR0917
     margin: float,
     min_step: float,
     max_steps: int,
+    reach: Array,
     out_lo: Array,
     out_hi: Array,
     out_valid: Array,
 ) -> None:
     """For each configuration ``qs[b]``: ``[out_lo[b], out_hi[b]]``, an interval of joint ``joint``'s value
-    around ``qs[b, joint]`` (within its limits) over which, the other joints fixed, no sphere touches
-    anything (``out_valid[b]``: the configuration itself is valid; else the interval is the point).
+    around ``qs[b, joint]`` (within its limits, and within ``reach[b]`` of it: ``inf`` for no bound) over
+    which, the other joints fixed, no sphere touches anything (``out_valid[b]``: the configuration itself is
+    valid; else the interval is the point).
 
     Conservative: from the current value it steps, each way, by the largest move no moving sphere can
     collide within (:func:`_step_bound`), and stops at a limit, where a step falls under ``min_step``, or
@@ -920,7 +922,7 @@ def free_intervals(  # noqa: PLR0917
             bounds, has_bounds, margin, rel_obs, rel_bounds, rel_pair,
         )  # fmt: skip
         for direction in (1.0, -1.0):
-            limit = upper[joint] if direction > 0.0 else lower[joint]
+            limit = min(upper[joint], start + reach[b]) if direction > 0.0 else max(lower[joint], start - reach[b])
             value = start
             for _ in range(max_steps):
                 q[joint] = value

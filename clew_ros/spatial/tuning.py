@@ -1,0 +1,76 @@
+"""The spatial planner's tuning beyond ``planner.*`` (:class:`SpatialTuning`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from clew_ros.core.settings import ManyJoints, SearchSettings
+from clew_ros.spatial.checker import IntervalSettings
+
+__all__ = ["SpatialTuning"]
+
+
+@dataclass(frozen=True)
+class SpatialTuning:
+    """Every tuning value of a spatial run beyond ``planner.*``; a benchmark or a test plans with a copy."""
+
+    search: SearchSettings = field(default_factory=SearchSettings)
+    #: how core adapts the search to arms of many joints, from 6 joints here (a UR5, a Panda): Manhattan
+    #: paths of order 1 (``planner.manhattan_order`` lowered to it) and at most 4 generations of EXPLORE's GA:
+    #: a free interval costs 0.13-0.25 ms on the Panda, and with them the pick-and-place problems of
+    #: benchmarks/spatial_plan.py planned in a median 0.44-0.7 s instead of 0.8-2.0 s, as often; the GA rounds
+    #: are kept when a job has ``straight`` targets (they miss behind any obstacle)
+    many: ManyJoints = field(
+        default_factory=lambda: ManyJoints(
+            straight_probe_joints=6, transit_ga=True, transfer_ga=True, manhattan_order=1, explore_generations=4
+        )
+    )
+    #: how the Manhattan decoding's free intervals step (the checker's defaults: coarser steps measured no
+    #: faster on the Panda, 130-250 us an interval either way)
+    intervals: IntervalSettings = field(default_factory=IntervalSettings)
+    #: largest joint move (rad, max over joints) of the step that sets a carried object down: beyond it
+    #: the linearised inverse kinematics from the decoded end rarely lands near it, and the move sweeps far
+    settle_max_rad: float = 0.8
+    #: highest (m) a carried object may be above a support and still be set down on it by that step; a
+    #: little above (``settle_rise_m``) is allowed too (the object's face a few mm below the top)
+    settle_drop_m: float = 0.3
+    settle_rise_m: float = 0.01
+    #: a transit holds its grasp when the tcp is this close (m, rad) to it: the object then rides on the
+    #: nominal grasp within the plan file's 1e-4 replay tolerance
+    hold_tolerance_m: float = 1e-5
+    hold_tolerance_rad: float = 1e-5
+    #: a transfer reaches the goal when the object's face is this close (rad) to the goal's face down,
+    #: besides world.goal_tolerance on the centre and world.goal_angle_tolerance on the yaw
+    face_tolerance_rad: float = 1e-3
+    #: SEARCH's straight moves to a target also go by way of its approach: the tcp backed off this far (m)
+    #: along its own -z (a grasp) or the object lifted this far (a placement), and from the start's own such
+    #: retreat (0: direct moves only); a gripper's approach, as MoveIt Task Constructor's stages have it
+    approach_m: float = 0.1
+    #: SEARCH_TRANSFER's goal configurations hold the object at the goal turned about world z by each of these
+    #: (rad) within world.goal_angle_tolerance: any of them reaches the goal, and an arm holding a grasp often
+    #: reaches only some (with the goal's own yaw only, 1 run in 5 of the on_side problem needed a regrasp)
+    goal_yaws: tuple[float, ...] = (0.0, math.pi / 2, -math.pi / 2, math.pi)
+    #: whether SEARCH_TRANSFER gives up at once with a grasp that holds the object at the goal in no
+    #: configuration its inverse kinematics finds (the start and SearchSettings.goal_seeds random starts, at
+    #: every yaw of goal_yaws): its GA could only bring the object near, never place it
+    hopeless_transfers: bool = True
+    #: straight moves (count, nearest first) SEARCH tries to the targets inverse kinematics found
+    straight_probes: int = 8
+    #: a straight move is checked first at every this-many-th sample of the validator's (cheap refusals),
+    #: then at every sample
+    coarse_every: int = 16
+    #: weight (m/rad) of the tcp's and the object's angles against their positions in SEARCH's objectives
+    angle_weight_m: float = 0.1
+    #: the improvement's straight plan tries this many (hold, goal configuration) pairs per grasp, least
+    #: straight-line joint travel first (each costs up to a few straight moves checked at 0.002 rad)
+    straight_pairs: int = 16
+    #: shortcuts tried per segment of a found plan (the improvement's work, deterministic): each is one
+    #: straight move checked at 0.002 rad (0.1-1 ms on the Panda); 48 left the Manhattan detours about twice
+    #: as long as 200 did on benchmarks/spatial_plan.py
+    shortcut_tries: int = 200
+    #: motion-only queries: weight (m/rad) of the joint distance to the goal in SEARCH_TRANSIT's objective
+    motion_weight: float = 0.1
+    #: motion-only queries: landmarks (count) EXPLORE places at most (each followed by a SEARCH_TRANSIT
+    #: to the goal) before the run gives up with NO_PATH_AT_RESOLUTION's epsilon test
+    motion_landmarks: int = 200

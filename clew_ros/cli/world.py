@@ -44,14 +44,23 @@ def _argument_problem(args: argparse.Namespace) -> str | None:
     """What is wrong with the arguments of a generation (the argument named first), or ``None``."""
     if args.family is None:
         return f"FAMILY: expected one of {', '.join([*FAMILIES, *SPATIAL_FAMILIES])} (or --list)"
-    if args.robot is not None and args.family not in SPATIAL_FAMILIES:
-        return f"--robot: only the spatial_* families take a robot, not {args.family}"
-    if args.robot is not None and args.robot not in SPATIAL_ROBOTS:
-        return f"--robot: expected one of {', '.join(SPATIAL_ROBOTS)}, got {args.robot}"
+    if args.family not in FAMILIES and args.family not in SPATIAL_FAMILIES:
+        return f"FAMILY: {UnknownFamilyError(args.family, [*FAMILIES, *SPATIAL_FAMILIES])}"
+    robot = _robot_problem(args)
+    if robot:
+        return robot
     if args.output is None:
         return "--output: expected the parameter file to write (WORLD.yaml)"
     if args.seed < 0:
         return f"--seed: expected an integer >= 0, got {args.seed}"
+    return None
+
+
+def _robot_problem(args: argparse.Namespace) -> str | None:
+    if args.robot is not None and args.family not in SPATIAL_FAMILIES:
+        return f"--robot: only the spatial_* families take a robot, not {args.family}"
+    if args.robot is not None and args.robot not in SPATIAL_ROBOTS:
+        return f"--robot: expected one of {', '.join(SPATIAL_ROBOTS)}, got {args.robot}"
     return None
 
 

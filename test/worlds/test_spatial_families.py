@@ -4,6 +4,7 @@ unsolvable family's goal is provably out of the object's way, and the same seed 
 
 from __future__ import annotations
 
+import functools
 import itertools
 from pathlib import Path
 
@@ -44,8 +45,9 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> dict[tuple[str, str], P
     return paths
 
 
+@functools.cache
 def load(path: Path) -> tuple[SpatialWorld, Plan]:
-    """The world as clew_plan reads it (its robot files relative to the file), and the witness."""
+    """The world as clew_plan reads it (its robot files relative to the file), and the witness (read once)."""
     world = spatial_world_from_parameters(read_parameter_file(path), path.parent)
     return world, Plan.read(path.with_name(path.stem + ".witness.json"))
 

@@ -1,0 +1,251 @@
+"""Motion-only queries on a spatial world (``world.robot.goal``, no object): the ACA's transit search.
+
+As the paper's closing section suggests, EXPLORE runs for transit paths too: landmarks are collision-free
+configurations, each reached from an earlier one by a Manhattan path (bounced into the free intervals,
+:meth:`~clew_ros.spatial.space.SpatialSpace.manhattan`) that the genetic algorithm
+(:func:`clew_ros.core.genetic.minimize`, the landmark a category gene) places as far as possible from every
+landmark (joint-space distance, weighted as the manipulation landmarks' joints are). From the start and from
+each new landmark, SEARCH_TRANSIT (:func:`clew_ros.core.search.local_search`) minimises the joint distance to
+the goal: a straight move to the goal checked at the validator's 0.002 rad, the greedy Manhattan probe,
+the GA's rounds, and from where it ends a straight move to the goal again. The first search that reaches the
+goal ends the run; its path (the landmarks' paths from the start, then the search's) is shortcut
+(:mod:`clew_ros.spatial.shortcut`).
+"""
+
+from __future__ import annotations
+
+import math
+import traceback
+from collections.abc import Callable
+from functools import partial
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from clew_ros.core import clew
+from clew_ros.core.genetic import minimize
+from clew_ros.core.search import SearchJob, local_search
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.space import PlanningContext, Space
+from clew_ros.core.tree import LandmarkTree, Segment
+from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.shortcut import shortcut_path
+from clew_ros.spatial.tuning import SpatialTuning
+from clew_ros.spatial.world import SpatialWorld
+
+__all__ = ["plan_motion"]
+
+#: The improvement draws from its own generator seeded with (planner.seed, this), as core's.
+IMPROVE_STREAM = clew.IMPROVE_STREAM
+
+
+class MotionSpace(Space, Protocol):
+    """What the motion-only search asks of a spatial space (:class:`clew_ros.spatial.space.SpatialSpace`)."""
+
+    @property
+    def world(self) -> SpatialWorld: ...
+
+    @property
+    def tuning(self) -> SpatialTuning: ...
+
+    def clear(self, checker: SpatialChecker, starts: np.ndarray, ends: np.ndarray) -> NDArray[np.bool_]: ...
+
+
+def plan_motion(
+    space: MotionSpace,
+    settings: PlannerSettings | None = None,
+    *,
+    goal: np.ndarray | None = None,
+    termination: Termination | None = None,
+    progress: Callable[[clew.Progress], None] | None = None,
+) -> clew.PlanResult:
+    """A collision-free motion in ``space.world`` from ``world.initial`` to ``goal`` (joints; default
+    ``world.robot.goal``), as one transit segment; never raises for planning failures."""
+    settings = settings or PlannerSettings()
+    termination = termination or Termination(settings.time_limit)
+    world = space.world
+    run = _MotionRun(space, settings, termination)
+    refusal = _refusal(world, world.goal if goal is None else goal)
+    if isinstance(refusal, tuple):
+        return run.finish(*refusal)
+    try:
+        return run.search_all(refusal, progress)
+    except Exception as problem:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
+        return run.finish(Outcome.INTERNAL_ERROR, f"internal error: {problem!r}\n{traceback.format_exc(limit=4)}")
+
+
+def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray:
+    """The goal joints, or the outcome and reason of a query answered at once."""
+    robot = world.robot
+    if goal is None:
+        return Outcome.INVALID_WORLD, "world.robot.goal: missing (a motion-only query needs the goal joints)"
+    target = np.asarray(goal, dtype=float)
+    if target.shape != (robot.dof,) or not np.all(np.isfinite(target)):
+        return Outcome.INVALID_WORLD, f"world.robot.goal: expected {robot.dof} finite joint values"
+    if np.any(target < robot.lower) or np.any(target > robot.upper):
+        return Outcome.INVALID_WORLD, "world.robot.goal: outside the joint limits"
+    if not world.checker.valid(world.initial[None])[0]:
+        return Outcome.START_IN_COLLISION, "the start configuration is not valid"
+    if not world.checker.valid(target[None])[0]:
+        return Outcome.GOAL_IN_COLLISION, "the goal configuration is not valid"
+    return target
+
+
+class _MotionRun:
+    """One motion-only run: its space, context, landmark tree."""
+
+    def __init__(self, space: MotionSpace, settings: PlannerSettings, termination: Termination) -> None:
+        self.world = space.world
+        self.settings = settings
+        tuning = self.tuning = space.tuning
+        self.termination = termination
+        self.space = space
+        rng = np.random.default_rng(settings.seed)
+        self.ctx = PlanningContext(self.space, settings, rng, termination, search=tuning.search, many=tuning.many)
+        self.none = np.zeros(6)
+        self.tree = LandmarkTree(self.world.initial, self.none)
+
+    def finish(self, outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
+        stats: dict[str, Any] = {
+            "time_s": round(self.termination.elapsed, 4),
+            "landmarks": len(self.tree),
+            "collision_checks": self.ctx.counters.clearance_checks,
+            "evaluations": self.ctx.counters.evaluations,
+            "seed": self.settings.seed,
+        }
+        segments = [Segment("transit", None, list(waypoints))] if waypoints is not None else []
+        return clew.PlanResult(outcome, message, segments, None, self.tree, stats)
+
+    def search(self, q0: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """SEARCH_TRANSIT from ``q0`` to ``target``: its waypoints (ending there when it got there)."""
+        weight = self.tuning.motion_weight
+
+        def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
+            out: np.ndarray = weight * np.linalg.norm(q - target, axis=1)
+            return out
+
+        def error(q: np.ndarray) -> np.ndarray:
+            out: np.ndarray = weight * (q - target)
+            return out
+
+        job = SearchJob(
+            q0, objective, error, 1e-9, {"object_poses": self.none[None]}, toward=target, straight=target[None]
+        )
+        waypoints, _ = local_search(self.ctx, [job])[0]
+        end = waypoints[-1:]
+        if np.max(np.abs(end - target)) > 1e-9 and self.space.clear(self.world.checker, end, target[None])[0]:
+            waypoints = np.vstack([waypoints, target[None]])
+        return waypoints
+
+    def search_all(self, target: np.ndarray, progress: Callable[[clew.Progress], None] | None) -> clew.PlanResult:
+        """SEARCH from the start, then EXPLORE and SEARCH from each new landmark, until one reaches ``target``."""
+        best = math.inf
+        landmark = self.tree[0]
+        tree = self.tree
+        weight = self.tuning.motion_weight * math.sqrt(2.0 / self.world.robot.dof)
+        while True:
+            reason = self.termination.reason()
+            if reason is not None:
+                return self.finish(
+                    reason, f"{reason.name.lower()} after {len(tree)} landmarks; best {best:.4g} rad away"
+                )
+            found = self.search(landmark.joints, target)
+            gap = float(np.max(np.abs(found[-1] - target)))
+            best = min(best, gap)
+            if progress is not None:
+                progress(clew.Progress(len(tree), best, self.termination.elapsed, tree))
+            if gap <= 1e-9:
+                return self.success(landmark.id, found, target)
+            if len(tree) >= self.tuning.motion_landmarks:
+                return self.finish(
+                    Outcome.NO_PATH_AT_RESOLUTION,
+                    f"no motion found after {len(tree)} landmarks; best {best:.4g} rad from the goal",
+                )
+            explored = _explore(self.ctx, self.space, tree, weight)
+            if explored is None:
+                continue
+            parent, path, distance = explored
+            landmark = tree.add(
+                parent=parent,
+                joints=path[-1].copy(),
+                object_pose=self.none,
+                grasp=None,
+                grasp_rel=None,
+                transit=path,
+                transfer=None,
+            )
+            if distance < self.settings.resolution:
+                return self.finish(
+                    Outcome.NO_PATH_AT_RESOLUTION,
+                    f"no path at resolution {self.settings.resolution}: the new landmark lies {distance:.4g} from "
+                    f"the others after {len(tree)} landmarks",
+                )
+
+    def success(self, landmark_id: int, found: np.ndarray, target: np.ndarray) -> clew.PlanResult:
+        """The path from the start to the landmark, then SEARCH's to the goal, shortcut."""
+        pieces = [lm.transit for lm in self.tree.lineage(landmark_id)[1:] if lm.transit is not None]
+        path = np.vstack([self.world.initial[None], *(p[1:] for p in pieces), found[1:]])
+        path[-1] = target
+        first = float(np.abs(np.diff(path, axis=0)).sum())
+        shortcuts = 0
+        if self.settings.improve_time > 0:
+            improve_rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
+            path, shortcuts, _, _ = shortcut_path(
+                partial(self.space.clear, self.world.checker),
+                path,
+                tries=self.tuning.shortcut_tries,
+                rng=improve_rng,
+                stop=self.termination,
+            )
+        travel = float(np.abs(np.diff(path, axis=0)).sum())
+        result = self.finish(
+            Outcome.SUCCEEDED,
+            f"motion found with {len(self.tree)} landmarks, joint travel {travel:.2f} rad (first: {first:.2f} rad)",
+            path,
+        )
+        result.stats.update(
+            {
+                "joint_travel_rad": round(travel, 6),
+                "first_joint_travel_rad": round(first, 6),
+                "transfers": 0,
+                "shortcuts": shortcuts,
+            }
+        )
+        return result
+
+
+def _explore(
+    ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float
+) -> tuple[int, np.ndarray, float] | None:
+    """EXPLORE for transit: the landmark (a category gene) and Manhattan genes whose decoded end lies
+    farthest (joint distance times ``weight``) from every landmark; its parent, path and that distance."""
+    n = space.dof
+    k = ctx.settings.manhattan_order
+    joints = tree.joints()
+    none = np.zeros((1, 6))
+
+    def decode(population: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        index = np.clip(population[:, 0].astype(int), 0, len(joints) - 1)
+        genes = population[:, 1:].reshape(-1, k, n)
+        paths = ctx.manhattan(joints[index], genes, object_poses=np.repeat(none, len(population), axis=0))
+        return index, paths.waypoints
+
+    def evaluate(population: np.ndarray) -> np.ndarray:
+        _, waypoints = decode(population)
+        ctx.counters.evaluations += len(population)
+        ends = waypoints[:, -1]
+        nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - joints[None], axis=2), axis=1)
+        return -weight * nearest
+
+    size = ctx.settings.population
+    initial = np.empty((size, 1 + k * n))
+    initial[:, 0] = ctx.rng.integers(0, len(joints), size=size)
+    initial[:, 1:] = ctx.initial_genes(size).reshape(size, -1)
+    result = minimize(
+        evaluate, initial, ctx.rng, ctx.settings.genetic, categories=len(joints), should_stop=ctx.termination
+    )
+    if not np.isfinite(result.fitness):
+        return None
+    index, waypoints = decode(result.genes[None])
+    return int(index[0]), waypoints[0], -result.fitness

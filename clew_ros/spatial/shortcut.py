@@ -1,0 +1,80 @@
+"""The spatial plans' improvement: shortcuts between points of a segment, each checked at the validator's
+resolution, taken only when shorter.
+
+Within each segment (a transit with the object at rest where it lies then, a transfer holding it), points
+are drawn along the path (by joint travel, from the run's improvement generator) and joined by a straight
+joint-space move when every configuration the validator would check on it is valid under that segment's
+checker; the segment's ends never move (the grasp, the placement). Joint travel (the sum over joints of
+the absolute motion) only shrinks: a straight move is never longer than the path it replaces. The work is
+a fixed number of tries per segment (:attr:`~clew_ros.spatial.space.SpatialTuning.shortcut_tries`), so the
+same seed gives the same plan; the time limit or a cancel stops it early.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["path_travel", "shortcut_path"]
+
+Array = NDArray[np.float64]
+
+
+def path_travel(path: Array) -> float:
+    return float(np.abs(np.diff(path, axis=0)).sum()) if len(path) > 1 else 0.0
+
+
+def _dedupe(path: Array) -> Array:
+    keep = np.r_[True, np.max(np.abs(np.diff(path, axis=0)), axis=1) > 1e-12] if len(path) > 1 else np.ones(1, bool)
+    keep[-1] = True
+    return path[keep]
+
+
+def _point(path: Array, cumulative: Array, s: float) -> tuple[int, Array]:
+    """The piece index ``i`` (``path[i] -> path[i + 1]``) holding travel ``s`` and the point there."""
+    i = int(np.clip(np.searchsorted(cumulative, s, side="right") - 1, 0, len(path) - 2))
+    length = cumulative[i + 1] - cumulative[i]
+    t = 0.0 if length <= 0 else (s - cumulative[i]) / length
+    return i, path[i] + t * (path[i + 1] - path[i])
+
+
+def shortcut_path(
+    clear: Callable[[Array, Array], NDArray[np.bool_]],
+    path: Array,
+    *,
+    tries: int,
+    rng: np.random.Generator,
+    stop: Callable[[], bool] | None = None,
+) -> tuple[Array, int, int, bool]:
+    """``path`` (m, n) shortened (``clear(starts, ends)``: whether each straight move is valid): first its two
+    ends joined, then ``tries`` random shortcuts. Returns the path, the shortcuts taken, the tries spent and
+    whether ``stop()`` cut it short."""
+    path = _dedupe(np.asarray(path, dtype=float))
+    taken = spent = 0
+    if len(path) < 3:
+        return path, 0, 0, False
+    if clear(path[:1], path[-1:])[0]:
+        return np.array([path[0], path[-1]]), 1, 1, False
+    for _ in range(tries):
+        if stop is not None and stop():
+            return path, taken, spent, True
+        spent += 1
+        cumulative = np.r_[0.0, np.cumsum(np.abs(np.diff(path, axis=0)).sum(axis=1))]
+        total = cumulative[-1]
+        if total <= 0 or len(path) < 3:
+            break
+        a, b = np.sort(rng.uniform(0.0, total, size=2))
+        i, p = _point(path, cumulative, a)
+        j, r = _point(path, cumulative, b)
+        if j <= i:
+            continue  # both on one straight piece: nothing to gain
+        before = path_travel(np.vstack([p, path[i + 1 : j + 1], r]))
+        if np.abs(r - p).sum() >= before - 1e-9:
+            continue
+        if not clear(p[None], r[None])[0]:
+            continue
+        path = _dedupe(np.vstack([path[: i + 1], p, r, path[j + 1 :]]))
+        taken += 1
+    return path, taken, spent, False

@@ -1,0 +1,772 @@
+"""A spatial world as the Ariadne's Clew Algorithm's space (:class:`clew_ros.core.space.Space`).
+
+The generic algorithm (EXPLORE, SEARCH's do-while loop, the genetic algorithm, the landmark tree) runs
+unchanged; this module gives it the spatial world (docs/spatial.md, "Planning"):
+
+- *poses*: an object pose is 6 numbers ``[x, y, z, roll, pitch, yaw]`` (section 1b); a held pose
+  ``grasp_rel`` is the object's pose in the tcp's frame, always the *nominal* one of the grasp (the inverse
+  of ``world.object.grasps[g]``): a transit succeeds only when the tcp holds the grasp within
+  :attr:`SpatialTuning.hold_tolerance_m` / ``_rad``, so the object rides on the grasp as the plan says.
+- *Manhattan decoding*: each move bounced (:func:`clew_ros.core.manhattan.bounce`) into its joint's free
+  interval from :meth:`SpatialChecker.free_intervals` (one compiled call per joint move and per distinct
+  mode in the batch: a resting pose in transit, a grasp in transfer, each with its own checker, cached).
+- *stable ends*: a decoded transfer ends with the object **set down** (:meth:`SpatialSpace.settle`): the
+  face most nearly down is rested on the highest support under the object's centre (within
+  :attr:`SpatialTuning.settle_drop_m` below it), the configuration holding it there found by inverse
+  kinematics seeded at the decoded end, and the straight move to it checked at the validator's
+  resolution. An end that cannot be set down counts as no move at all (the path stays at its start,
+  where the object rests): the placement search is inside the optimisation, as the paper suggests, and
+  every landmark's object rests on a support.
+- *SEARCH*: SEARCH_TRANSIT minimises the tcp's pose error to the grasp; SEARCH_TRANSFER the object's
+  distance to the goal placement (:meth:`SpatialSpace.goal_distance`). Both get configurations meeting
+  their target from inverse kinematics (holds of the grasp; configurations holding the object at the goal)
+  as ``toward`` (the greedy Manhattan probe) and ``straight`` (straight joint-space moves, checked at the
+  validator's 0.002 rad) targets, and try those straight moves again from where the search ended.
+- *improvement*: shortcuts between waypoints of a segment, each straight move checked at 0.002 rad,
+  taken only when shorter (:mod:`clew_ros.spatial.shortcut`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from functools import partial
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from clew_ros.core import clew
+from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
+from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
+from clew_ros.core.tree import Landmark, Segment
+from clew_ros.spatial.checker import Held, SpatialChecker
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics
+from clew_ros.spatial.kernels.collide import clearance_of_sphere
+from clew_ros.spatial.motion_plan import plan_motion
+from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
+from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
+from clew_ros.spatial.shortcut import path_travel, shortcut_path
+from clew_ros.spatial.spheres import SphereSettings, cover
+from clew_ros.spatial.transforms import rpy_matrix
+from clew_ros.spatial.tuning import SpatialTuning
+from clew_ros.spatial.validate import ValidationSettings, validation_samples
+from clew_ros.spatial.world import SpatialWorld
+
+__all__ = [
+    "SpatialSpace",
+    "SpatialTuning",
+    "matrices",
+    "plan",
+    "poses",
+    "rotation_angle",
+]
+
+Array = NDArray[np.float64]
+
+#: The holding configurations' inverse kinematics draws from a generator seeded with (planner.seed, this,
+#: the request): the same request gets the same sample, and the run's stream is left as it was.
+HOLD_STREAM = 21
+#: The goal configurations' inverse kinematics: its own stream too.
+GOAL_STREAM = 22
+#: The improvement's shortcuts draw from the run's improvement generator (core's IMPROVE_STREAM).
+
+_FACE_NORMALS = {"-z": (2, -1.0), "+z": (2, 1.0), "+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
+
+
+def matrices(poses: Array) -> Array:
+    """4x4 transforms (B, 4, 4) of poses (B, 6) ``[x, y, z, roll, pitch, yaw]`` (vectorised
+    :func:`~clew_ros.spatial.transforms.pose_matrix`)."""
+    poses = np.asarray(poses, dtype=float).reshape(-1, 6)
+    cr, sr = np.cos(poses[:, 3]), np.sin(poses[:, 3])
+    cp, sp = np.cos(poses[:, 4]), np.sin(poses[:, 4])
+    cy, sy = np.cos(poses[:, 5]), np.sin(poses[:, 5])
+    out = np.zeros((len(poses), 4, 4))
+    out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = -sp, cp * sr, cp * cr
+    out[:, :3, 3] = poses[:, :3]
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def poses(transforms: Array) -> Array:
+    """Poses (B, 6) of 4x4 transforms (B, 4, 4) (vectorised :func:`~clew_ros.spatial.transforms.matrix_pose`)."""
+    r = np.asarray(transforms, dtype=float).reshape(-1, 4, 4)
+    pitch = np.arcsin(np.clip(-r[:, 2, 0], -1.0, 1.0))
+    flat = np.abs(np.cos(pitch)) < 1e-9
+    roll = np.where(flat, 0.0, np.arctan2(r[:, 2, 1], r[:, 2, 2]))
+    yaw = np.where(flat, np.arctan2(-r[:, 0, 1], r[:, 1, 1]), np.arctan2(r[:, 1, 0], r[:, 0, 0]))
+    return np.column_stack([r[:, 0, 3], r[:, 1, 3], r[:, 2, 3], roll, pitch, yaw])
+
+
+def _rotation_vectors(rotations: Array) -> Array:
+    """Rotation vectors (B, 3) (axis times angle, rad) of rotations (B, 3, 3)."""
+    vec = 0.5 * np.stack(
+        [
+            rotations[:, 2, 1] - rotations[:, 1, 2],
+            rotations[:, 0, 2] - rotations[:, 2, 0],
+            rotations[:, 1, 0] - rotations[:, 0, 1],
+        ],
+        axis=1,
+    )
+    sine = np.linalg.norm(vec, axis=1)
+    cosine = np.clip((np.trace(rotations, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arctan2(sine, cosine)
+    scale = np.where(sine > 1e-12, angle / np.maximum(sine, 1e-300), 1.0)
+    out: Array = vec * scale[:, None]
+    return out
+
+
+def rotation_angle(rotations: Array) -> Array:
+    """The angle (rad) of each rotation (B, 3, 3)."""
+    cosine = np.clip((np.trace(rotations, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    return np.asarray(np.arccos(cosine))
+
+
+def _inverse(transform: Array) -> Array:
+    out = np.eye(4)
+    out[:3, :3] = transform[:3, :3].T
+    out[:3, 3] = -transform[:3, :3].T @ transform[:3, 3]
+    return out
+
+
+def _pose_errors(transforms: Array, target: Array, weight: float) -> Array:
+    """(B, 6): position error (m) and ``weight`` x rotation vector (m) of transforms (B, 4, 4) to ``target``."""
+    dp = transforms[:, :3, 3] - target[:3, 3]
+    rv = _rotation_vectors(np.einsum("ji,bjk->bik", target[:3, :3], transforms[:, :3, :3]))
+    return np.concatenate([dp, weight * rv], axis=1)
+
+
+def straight_samples_clear(
+    checker: SpatialChecker, starts: Array, ends: Array, *, coarse_every: int, settings: ValidationSettings
+) -> NDArray[np.bool_]:
+    """Whether each straight joint-space move ``starts[i] -> ends[i]`` is valid at every configuration the
+    validator checks (steps of at most 0.002 rad per revolute joint, 0.001 m per prismatic one): first at
+    every ``coarse_every``-th of those samples (cheap refusals), then at all of them."""
+    robot = checker.robot
+    steps = np.where(robot.prismatic, settings.step_m, settings.step_rad)
+    samples = [validation_samples(a, b, steps) for a, b in zip(starts, ends, strict=True)]
+    clear = np.ones(len(samples), dtype=bool)
+    for stride in (coarse_every, 1):
+        pick = np.flatnonzero(clear)
+        if not len(pick):
+            break
+        parts = [samples[i][::stride] if stride > 1 else samples[i] for i in pick]
+        if stride > 1:
+            parts = [np.vstack([p, samples[i][-1:]]) for p, i in zip(parts, pick, strict=True)]
+        valid = checker.valid(np.vstack(parts))
+        bounds = np.cumsum([0, *(len(p) for p in parts)])
+        for a, i in enumerate(pick):
+            clear[i] = bool(valid[bounds[a] : bounds[a + 1]].all())
+    return clear
+
+
+def _footprint_inside(world: SpatialWorld, support: Support, face: str, pose: Array) -> bool:
+    assert world.object is not None
+    thing = world.object.shape
+    if thing.shape == "cylinder":
+        return bool(support.contains(pose[None, :2, 3], inset=thing.size[1])[0])
+    corners = thing.face_points(face) @ pose[:3, :3].T + pose[:3, 3]
+    return bool(support.contains(corners[:, :2]).all())
+
+
+class SpatialSpace:
+    """A spatial world (contract section 1b) with an object, as the ACA's space; motion-only worlds use
+    it for their transit checks (their mode's pose is ignored)."""
+
+    def __init__(self, world: SpatialWorld, tuning: SpatialTuning | None = None) -> None:
+        self.world = world
+        self.tuning = tuning or SpatialTuning()
+        self.validation = ValidationSettings()
+        self._ik: dict[int, InverseKinematics] = {}
+        self._settle_ik = InverseKinematics(world.robot, IKSettings(seeds=0, max_iterations=40))
+        self._transit_checkers: dict[bytes, SpatialChecker] = {}
+        self._transfer_checkers: dict[bytes, SpatialChecker] = {}
+        thing = world.object
+        self._grasps = matrices(thing.grasps) if thing is not None else np.zeros((0, 4, 4))
+        #: the object's size scale (m): its half diagonal, the radius of the orientation's chord
+        self.object_radius = float(np.linalg.norm(thing.shape.size) / 2) if thing is not None else 0.1
+        robot = world.robot
+        origin_steps = np.linalg.norm(robot.origins[1:, :3, 3], axis=1).sum()
+        travel = float(np.sum(np.maximum(np.abs(robot.lower), np.abs(robot.upper))[robot.prismatic]))
+        #: an upper bound (m) of the tcp's distance from the first joint's origin, whatever the joints
+        self._reach = float(origin_steps + np.linalg.norm(robot.tcp[:3, 3]) + travel)
+        first = robot.base @ robot.origins[0]
+        self._shoulder = first[:3, 3].copy()
+
+    # -- the protocol's properties --------------------------------------------------------------------
+    @property
+    def dof(self) -> int:
+        return self.world.robot.dof
+
+    @property
+    def reach(self) -> float:
+        return self._reach
+
+    @property
+    def grasp_count(self) -> int:
+        return len(self._grasps)
+
+    @property
+    def initial_joints(self) -> np.ndarray:
+        return self.world.initial
+
+    @property
+    def initial_object_pose(self) -> np.ndarray:
+        thing = self.world.object
+        return np.asarray(thing.initial if thing is not None else np.zeros(6), dtype=float)
+
+    @property
+    def goal(self) -> np.ndarray:
+        thing = self.world.object
+        return np.asarray(thing.goal if thing is not None else np.zeros(6), dtype=float)
+
+    # -- checkers -------------------------------------------------------------------------------------
+    def transit_checker(self, object_pose: Array) -> SpatialChecker:
+        """The checker with the object resting at ``object_pose`` (6 numbers); the world's own without one."""
+        thing = self.world.object
+        if thing is None:
+            return self.world.checker
+        key = np.round(np.asarray(object_pose, dtype=float), 9).tobytes()
+        checker = self._transit_checkers.get(key)
+        if checker is None:
+            resting = make_obstacle(
+                "object", thing.shape.shape, thing.shape.size, matrices(object_pose)[0], "world.object"
+            )
+            world = self.world
+            checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, resting_object=resting)
+            self._transit_checkers[key] = checker
+        return checker
+
+    def transfer_checker(self, grasp_rel: Array) -> SpatialChecker:
+        """The checker with the object held as ``grasp_rel`` (its pose in the tcp's frame, 6 numbers)."""
+        thing = self.world.object
+        assert thing is not None  # transfers carry the object
+        key = np.round(np.asarray(grasp_rel, dtype=float), 9).tobytes()
+        checker = self._transfer_checkers.get(key)
+        if checker is None:
+            world = self.world
+            held = Held(
+                thing.shape,
+                _inverse(matrices(grasp_rel)[0]),
+                world.supports,
+                world.tolerances["placement_tolerance"],
+            )
+            checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, held=held)
+            self._transfer_checkers[key] = checker
+        return checker
+
+    def checker_of(self, mode: dict[str, np.ndarray]) -> SpatialChecker:
+        """The checker of a mode ``{"object_poses": (1, 6)}`` or ``{"grasp_rel": (1, 6)}``."""
+        if mode.get("grasp_rel") is not None:
+            return self.transfer_checker(mode["grasp_rel"].reshape(-1)[:6])
+        return self.transit_checker(mode["object_poses"].reshape(-1)[:6])
+
+    def ik(self, seeds: int) -> InverseKinematics:
+        """The tcp's inverse kinematics with ``seeds`` random starts per target."""
+        if seeds not in self._ik:
+            self._ik[seeds] = InverseKinematics(self.world.robot, IKSettings(seeds=seeds))
+        return self._ik[seeds]
+
+    def tcp(self, q: Array) -> Array:
+        """The tcp's 4x4 poses (B, 4, 4) at configurations ``q`` (B, n)."""
+        return self._settle_ik.tcp_poses(np.asarray(q, dtype=float).reshape(-1, self.dof))
+
+    def clear(self, checker: SpatialChecker, starts: Array, ends: Array) -> NDArray[np.bool_]:
+        """Whether each straight move is valid at the validator's resolution."""
+        return straight_samples_clear(
+            checker, starts, ends, coarse_every=self.tuning.coarse_every, settings=self.validation
+        )
+
+    # -- Manhattan paths ------------------------------------------------------------------------------
+    def _groups(self, rows: Array, transfer: bool) -> list[tuple[SpatialChecker, np.ndarray]]:
+        """The batch's rows grouped by their mode's pose, each with its checker (first-seen order)."""
+        keys = np.round(rows, 9)
+        _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        out = []
+        for u in np.argsort(first):
+            idx = np.flatnonzero(inverse == u)
+            pose = rows[idx[0]]
+            out.append((self.transfer_checker(pose) if transfer else self.transit_checker(pose), idx))
+        return out
+
+    def manhattan(
+        self,
+        q0: np.ndarray,
+        genes: np.ndarray,
+        *,
+        margin_m: float,
+        counters: Counters | None,
+        should_stop: Callable[[], bool] | None,
+        threads: int,
+        object_poses: np.ndarray | None = None,
+        grasp_rel: np.ndarray | None = None,
+    ) -> ManhattanPaths:
+        """Genes (B, k, n) decoded from ``q0`` (B, n): each move bounced into its joint's free interval; a
+        transfer then sets the object down (:meth:`settle`). The waypoints are (B, k n + 2, n): the moves,
+        then the settled end (a repeat of the last move's in transit)."""
+        genes = np.asarray(genes, dtype=float)
+        count, order, n = genes.shape
+        q = np.array(q0, dtype=float).reshape(count, n)
+        transfer = grasp_rel is not None
+        modes = np.asarray(grasp_rel if transfer else object_poses, dtype=float).reshape(-1, 6)
+        modes = np.broadcast_to(modes, (count, 6))
+        groups = self._groups(modes, transfer)
+        way = np.empty((count, order * n + 2, n))
+        way[:, 0] = q
+        for step in range(order * n):
+            r, j = divmod(step, n)
+            if j == 0 and r > 0 and should_stop is not None and should_stop():
+                way[:, step + 1 :] = q[:, None]
+                break
+            for checker, idx in groups:
+                lo, hi, ok = checker.free_intervals(q[idx], j)
+                moved = bounce(q[idx, j] + genes[idx, r, j], lo, hi)
+                q[idx, j] = np.where(ok, moved, q[idx, j])
+            if counters is not None:
+                counters.clearance_checks += count
+            way[:, step + 1] = q
+        way[:, -1] = way[:, -2]
+        if transfer:
+            for checker, idx in groups:
+                settled, ok = self.settle(checker, modes[idx[0]], way[idx, -2])
+                way[idx[ok], -1] = settled[ok]
+                way[idx[~ok]] = way[idx[~ok], :1]  # no stable end: the path stays where the object rests
+            held = self.held_object_poses(way[:, -1], modes)
+            return ManhattanPaths(way, held)
+        return ManhattanPaths(way, np.array(modes, dtype=float))
+
+    def rest_below(self, object_pose: Array) -> Array | None:
+        """The stable placement (4x4) under a carried object at ``object_pose`` (4x4): its face most nearly
+        down, on the highest support under its centre at most :attr:`SpatialTuning.settle_drop_m` below
+        that face, at the same x, y and yaw, its footprint inside the support's top; ``None`` if none."""
+        thing = self.world.object
+        assert thing is not None
+        rot, center = object_pose[:3, :3], object_pose[:3, 3]
+        face = min(thing.shape.faces, key=lambda f: float(rot[2, _FACE_NORMALS[f][0]] * _FACE_NORMALS[f][1]))
+        turned = rot @ rpy_matrix(*FACE_RPY[face]).T
+        yaw = math.atan2(float(turned[1, 0]), float(turned[0, 0]))
+        bottom = float(center[2]) - thing.shape.height(face)
+        tuning = self.tuning
+        under = [
+            s
+            for s in self.world.supports
+            if -tuning.settle_rise_m <= bottom - s.top <= tuning.settle_drop_m and s.contains(center[None, :2])[0]
+        ]
+        for support in sorted(under, key=lambda s: -s.top):
+            placed = placement_pose(thing.shape, support, face, x=float(center[0]), y=float(center[1]), yaw=yaw)
+            if _footprint_inside(self.world, support, face, placed):
+                return placed
+        return None
+
+    def settle(self, checker: SpatialChecker, grasp_rel: Array, ends: Array) -> tuple[Array, NDArray[np.bool_]]:
+        """Configurations (B, n) near ``ends`` (B, n) that set the object held as ``grasp_rel`` down on a
+        support (:meth:`rest_below`), and whether each was found with a clear straight move to it."""
+        rel = matrices(grasp_rel)[0]
+        back = _inverse(rel)
+        held = self.tcp(ends) @ rel
+        out = ends.copy()
+        ok = np.zeros(len(ends), dtype=bool)
+        targets, rows = [], []
+        for b, pose in enumerate(held):
+            placed = self.rest_below(pose)
+            if placed is not None:
+                targets.append(placed @ back)
+                rows.append(b)
+        if not rows:
+            return out, ok
+        found = self._settle_ik.solve_many(
+            targets, np.random.default_rng(0), seeds=[ends[b][None] for b in rows]
+        )  # no random seeds: the generator is never drawn from
+        moves = [
+            (b, solutions[0])
+            for b, solutions in zip(rows, found, strict=True)
+            if len(solutions) and np.max(np.abs(solutions[0] - ends[b])) <= self.tuning.settle_max_rad
+        ]
+        if not moves:
+            return out, ok
+        index = np.array([b for b, _ in moves])
+        goals = np.array([s for _, s in moves])
+        clear = self.clear(checker, ends[index], goals)
+        out[index[clear]] = goals[clear]
+        ok[index[clear]] = True
+        return out, ok
+
+    def single_moves(
+        self, q: np.ndarray, moves: np.ndarray, *, margin_m: float, counters: Counters | None, **mode: np.ndarray
+    ) -> np.ndarray:
+        checker = self.checker_of(mode)
+        current = np.array(q, dtype=float)
+        out = [current.copy()]
+        for j in np.flatnonzero(np.abs(moves) > 0.0):
+            lo, hi, ok = checker.free_intervals(current[None], int(j))
+            if counters is not None:
+                counters.clearance_checks += 1
+            if not ok[0]:
+                break
+            current[j] = float(np.clip(current[j] + moves[j], lo[0], hi[0]))
+            out.append(current.copy())
+        return np.array(out)
+
+    def held_object_poses(self, q: np.ndarray, grasp_rel: np.ndarray) -> np.ndarray:
+        q = np.asarray(q, dtype=float).reshape(-1, self.dof)
+        rel = matrices(np.broadcast_to(np.asarray(grasp_rel, dtype=float).reshape(-1, 6), (len(q), 6)))
+        return poses(self.tcp(q) @ rel)
+
+    # -- distances ------------------------------------------------------------------------------------
+    def landmark_features(self, joints: np.ndarray, object_poses: np.ndarray, joint_weight: float) -> np.ndarray:
+        """Object position (m); orientation as its rotation matrix times the object's radius over sqrt 2
+        (distances are then chords, m, of a circle of that radius: the face down and the yaw both count);
+        joints times ``joint_weight`` (m/rad) times ``sqrt(2 / n)``, as the planar space weighs them."""
+        rot = matrices(object_poses)[:, :3, :3].reshape(len(object_poses), 9)
+        weight = joint_weight * float(np.sqrt(2.0 / joints.shape[1]))
+        return np.concatenate(
+            [np.asarray(object_poses)[:, :3], self.object_radius / math.sqrt(2.0) * rot, weight * joints], axis=1
+        )
+
+    def goal_parts(self, object_poses: Array, goal: Array) -> tuple[Array, Array, Array]:
+        """Per pose: the centre's distance to the goal's (m), the angle (rad) between the world's up seen
+        from the object and from the goal (0: the same face down), and the yaw error beyond
+        ``world.goal_angle_tolerance`` (rad)."""
+        mats = matrices(object_poses)
+        target = matrices(goal)[0]
+        distance = np.linalg.norm(mats[:, :3, 3] - target[:3, 3], axis=1)
+        up_here = mats[:, 2, :3]  # world z in the object's frame: row 2 of R
+        up_goal = target[2, :3]
+        tilt = np.arccos(np.clip(up_here @ up_goal, -1.0, 1.0))
+        relative = mats[:, :3, :3] @ target[:3, :3].T  # about world z when the faces agree
+        yaw = np.abs(np.arctan2(relative[:, 1, 0], relative[:, 0, 0]))
+        excess = np.maximum(yaw - self.world.tolerances["goal_angle_tolerance"], 0.0)
+        return distance, tilt, excess
+
+    def goal_distance(self, object_poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """The centre's distance (m) plus ``SpatialTuning.angle_weight_m`` x (the face's tilt + the yaw beyond
+        its tolerance): 0 at the goal."""
+        distance, tilt, excess = self.goal_parts(object_poses, goal)
+        out: np.ndarray = distance + self.tuning.angle_weight_m * (tilt + excess)
+        return out
+
+    def at_goal(self, object_pose: Array, goal: Array) -> bool:
+        """Whether the object rests at ``object_pose`` within the goal's tolerances (section 1b)."""
+        distance, tilt, excess = self.goal_parts(object_pose[None], goal)
+        tol = self.world.tolerances
+        return bool(
+            distance[0] <= tol["goal_tolerance"]
+            and tilt[0] <= self.tuning.face_tolerance_rad
+            and excess[0] <= 0.0
+            and self.rests(object_pose)
+        )
+
+    def rests(self, object_pose: Array) -> bool:
+        """Whether the object at ``object_pose`` (6 numbers) is at a stable placement."""
+        thing = self.world.object
+        assert thing is not None
+        tolerance = self.world.tolerances["placement_tolerance"]
+        return resting_on(thing.shape, matrices(object_pose)[0], self.world.supports, tolerance) is not None
+
+    # -- SEARCH ---------------------------------------------------------------------------------------
+    def holds(self, ctx: PlanningContext, q0: Array, object_pose: Array, grasp: int) -> Array:
+        """Configurations (m, n) holding ``grasp`` with the object at ``object_pose``, valid in transit and
+        in transfer, nearest ``q0`` first (joint travel)."""
+        target = matrices(object_pose)[0] @ self._grasps[grasp]
+        rng = own_generator(ctx, HOLD_STREAM, q0, np.r_[object_pose, grasp])
+        found = self.ik(ctx.hold_samples).solve(target, rng, seeds=q0[None], checker=self.transit_checker(object_pose))
+        if len(found):
+            found = found[self.transfer_checker(self.grasp_rel(grasp)).valid(found)]
+        return found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
+
+    def grasp_rel(self, grasp: int) -> Array:
+        """The object's nominal pose in the tcp's frame while it holds ``grasp``."""
+        rel: Array = poses(_inverse(self._grasps[grasp])[None])[0]
+        return rel
+
+    def search_transits(self, ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
+        results: list[PathResult | None] = []
+        jobs: list[SearchJob] = []
+        slots: list[int] = []
+        targets: list[Array] = []
+        weight = self.tuning.angle_weight_m
+        for start, resting, grasp, _approach in requests:
+            q0 = np.asarray(start, dtype=float)
+            object_pose = np.asarray(resting, dtype=float)
+            holds = self.holds(ctx, q0, object_pose, grasp)
+            if not len(holds):
+                results.append(PathResult(False, q0[None], math.inf))
+                continue
+            target = matrices(object_pose)[0] @ self._grasps[grasp]
+
+            def error(q: Array, target: Array = target) -> Array:
+                return _pose_errors(self.tcp(q), target, weight)
+
+            def objective(q: Array, _poses: Array, error: Callable[[Array], Array] = error) -> Array:
+                e = error(q)
+                out: Array = np.linalg.norm(e[:, :3], axis=1) + np.linalg.norm(e[:, 3:], axis=1)
+                return out
+
+            slots.append(len(results))
+            results.append(None)
+            targets.append(holds)
+            jobs.append(
+                SearchJob(
+                    q0,
+                    objective,
+                    error,
+                    accept=1e-7,
+                    mode={"object_poses": object_pose[None]},
+                    toward=holds[0],
+                    straight=holds[: self.tuning.straight_probes],
+                )
+            )
+        if jobs:
+            answers = local_search(ctx, jobs)
+            for slot, job, holds, (searched, _value) in zip(slots, jobs, targets, answers, strict=True):
+                waypoints = self._finish(ctx, job, searched, holds)
+                grasp = requests[slot][2]
+                e = job.error(waypoints[-1:])[0]
+                success = bool(
+                    np.linalg.norm(e[:3]) <= self.tuning.hold_tolerance_m
+                    and np.linalg.norm(e[3:]) / weight <= self.tuning.hold_tolerance_rad
+                )
+                distance = float(np.linalg.norm(e))
+                results[slot] = PathResult(
+                    success, waypoints, distance, grasp_rel=self.grasp_rel(grasp) if success else None
+                )
+        return [r for r in results if r is not None]
+
+    def _finish(self, ctx: PlanningContext, job: SearchJob, waypoints: Array, targets: Array) -> Array:
+        """A search's waypoints, ended with a straight move to the nearest target clear from its end (none
+        clear: as they were)."""
+        end = waypoints[-1]
+        if ctx.termination() or not len(targets):
+            return waypoints
+        if np.min(np.max(np.abs(targets - end), axis=1)) < 1e-9:
+            return waypoints
+        order = np.argsort(np.abs(targets - end).sum(axis=1), kind="stable")[: self.tuning.straight_probes]
+        near = targets[order]
+        clear = self.clear(self.checker_of(job.mode), np.broadcast_to(end, near.shape), near)
+        if clear.any():
+            return np.vstack([waypoints, near[int(np.argmax(clear))][None]])
+        return waypoints
+
+    def search_transfer(
+        self, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
+    ) -> PathResult:
+        q0 = np.asarray(q0, dtype=float)
+        rel = np.asarray(grasp_rel, dtype=float)
+        goal = np.asarray(goal, dtype=float)
+        checker = self.transfer_checker(rel)
+        tcp_goal = matrices(goal)[0] @ _inverse(matrices(rel)[0])
+        rng = own_generator(ctx, GOAL_STREAM, q0, np.r_[rel, goal])
+        found = self.ik(ctx.search.goal_seeds).solve(tcp_goal, rng, seeds=q0[None], checker=checker)
+        found = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
+        weight = self.tuning.angle_weight_m
+        target = matrices(goal)[0]
+
+        def error(q: Array) -> Array:
+            return _pose_errors(self.tcp(q) @ matrices(rel)[0], target, weight)
+
+        def objective(_q: Array, object_poses: Array) -> Array:
+            return self.goal_distance(object_poses, goal)
+
+        job = SearchJob(
+            q0,
+            objective,
+            error,
+            accept=1e-7,
+            mode={"grasp_rel": rel[None]},
+            toward=found[0] if len(found) else None,
+            straight=found[: self.tuning.straight_probes] if len(found) else None,
+        )
+        waypoints, _ = local_search(ctx, [job])[0]
+        waypoints = self._finish(ctx, job, waypoints, found)
+        held = self.held_object_poses(waypoints, rel)
+        if not self.at_goal(held[-1], goal):
+            resting = [i for i in range(len(waypoints)) if self.rests(held[i])]
+            last = resting[-1] if resting else 0  # (the start rests)
+            waypoints, held = waypoints[: last + 1], held[: last + 1]
+        success = self.at_goal(held[-1], goal)
+        distance = float(self.goal_distance(held[-1:], goal)[0])
+        return PathResult(success, waypoints, 0.0 if success else distance, object_pose=held[-1])
+
+    def straight_probe(
+        self,
+        ctx: PlanningContext,
+        jobs: list[SearchJob],
+        q: np.ndarray,
+        best: np.ndarray,
+        waypoints: list[list[np.ndarray]],
+    ) -> None:
+        """Each job with ``straight`` targets tries a straight move to them, nearest first, checked at the
+        validator's resolution; kept where it gets closer."""
+        for i, job in enumerate(jobs):
+            if job.straight is None or not len(job.straight) or ctx.termination():
+                continue
+            targets = job.straight
+            clear = self.clear(self.checker_of(job.mode), np.broadcast_to(q[i], targets.shape), targets)
+            if not clear.any():
+                continue
+            reached = targets[int(np.argmax(clear))]
+            value = float(job.objective(reached[None], object_at(ctx, reached[None], job.mode))[0])
+            if value < best[i]:
+                waypoints[i].append(reached[None].copy())
+                q[i] = reached
+                best[i] = value
+
+    # -- regrasps, refusals, improvement --------------------------------------------------------------
+    def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
+        return True  # no aiming: every approach is allowed
+
+    def regrasp_aims(self, goal: np.ndarray) -> _AllowAll:
+        return _AllowAll()
+
+    def quick_refusal(self, goal: np.ndarray) -> tuple[Outcome, str] | None:
+        """A goal that is no stable placement or that collides, a start in collision, a goal no grasp can
+        reach (the tcp's distance from the first joint beyond the arm's reach: a proof)."""
+        world = self.world
+        thing = world.object
+        assert thing is not None
+        goal = np.asarray(goal, dtype=float)
+        if goal.shape != (6,) or not np.all(np.isfinite(goal)):
+            return Outcome.INVALID_WORLD, "goal: expected a pose of six finite numbers [x, y, z, roll, pitch, yaw]"
+        if not self.rests(goal):
+            names = ", ".join(s.name for s in world.supports) or "none"
+            return (
+                Outcome.INVALID_WORLD,
+                (
+                    f"goal {np.round(goal, 6).tolist()} is not a stable placement: no flat face of the "
+                    f"{thing.shape.shape} lies within {world.tolerances['placement_tolerance']} m of a support's "
+                    f"top face with its centre above it (supports: {names})"
+                ),
+            )
+        hit = self._object_collides(goal)
+        if hit:
+            return Outcome.GOAL_IN_COLLISION, f"the object at its goal placement touches {hit}"
+        if not self.transit_checker(self.initial_object_pose).valid(world.initial[None])[0]:
+            return Outcome.START_IN_COLLISION, "the start configuration is not valid (object resting at initial)"
+        tcps = matrices(goal)[0] @ self._grasps
+        nearest = float(np.min(np.linalg.norm(tcps[:, :3, 3] - self._shoulder, axis=1)))
+        if nearest > self._reach:
+            return (
+                Outcome.GOAL_OUT_OF_REACH,
+                (
+                    f"goal placement out of reach: its nearest grasp is {nearest:.3f} m from the first joint, "
+                    f"the arm reaches at most {self._reach:.3f} m"
+                ),
+            )
+        return None
+
+    def _object_collides(self, object_pose: Array) -> str:
+        """The obstacles (names) the object at ``object_pose`` touches, its support but from above allowed,
+        or the bounds it leaves; "" if none (tested on its conservative sphere cover)."""
+        world = self.world
+        thing = world.object
+        assert thing is not None
+        pose = matrices(object_pose)[0]
+        found = resting_on(thing.shape, pose, world.supports, world.tolerances["placement_tolerance"])
+        support = found[0].name if found is not None else ""
+        centers, radii = cover(thing.shape.geometry(), SphereSettings())
+        placed = centers @ pose[:3, :3].T + pose[:3, 3]
+        others = [o for o in world.obstacles if o.name != support]
+        packed = obstacle_arrays(others)
+        hits = [
+            o.name
+            for k, o in enumerate(others)
+            if any(
+                clearance_of_sphere(
+                    p, r, packed["obs_kind"][k], packed["obs_r"][k], packed["obs_t"][k], packed["obs_dims"][k]
+                )
+                <= 0.0
+                for p, r in zip(placed, radii, strict=True)
+            )
+        ]
+        if world.bounds is not None:
+            low, high = world.bounds[:3], world.bounds[3:]
+            if np.any(placed - radii[:, None] < low) or np.any(placed + radii[:, None] > high):
+                hits.append("the world's bounds")
+        return ", ".join(hits)
+
+    def improve(
+        self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
+    ) -> Improvement:
+        return _shortcut_segments(self, ctx, segments, object_pose)
+
+
+class _AllowAll:
+    """Regrasp aims that allow everything (:class:`clew_ros.core.space.RegraspAims`)."""
+
+    def retake(self, grasp: int, grasp_rel: np.ndarray) -> bool:
+        return False
+
+    def aim(self, landmark: Landmark, grasp: int) -> np.ndarray:
+        return np.ones(1, dtype=bool)
+
+
+def plan(
+    world: SpatialWorld,
+    settings: PlannerSettings | None = None,
+    *,
+    goal: np.ndarray | None = None,
+    termination: Termination | None = None,
+    progress: Callable[[clew.Progress], None] | None = None,
+    tuning: SpatialTuning | None = None,
+) -> clew.PlanResult:
+    """Plan in a spatial world: :func:`clew_ros.core.clew.plan` on :class:`SpatialSpace` with an object
+    (``goal`` defaults to ``world.object.goal``), the motion-only ACA
+    (:func:`clew_ros.spatial.motion_plan.plan_motion`) without one (``goal``: joints, default
+    ``world.robot.goal``)."""
+    tuning = tuning or SpatialTuning()
+    if world.object is None:
+        return plan_motion(SpatialSpace(world, tuning), settings, goal=goal, termination=termination, progress=progress)
+    space = SpatialSpace(world, tuning)
+    return clew.plan(
+        space, settings, goal=goal, termination=termination, progress=progress, search=tuning.search, many=tuning.many
+    )
+
+
+def segment_travel(segments: Sequence[Segment]) -> float:
+    """Joint travel (rad): the sum over segments and joints of the absolute motion."""
+    return float(sum(np.abs(np.diff(np.array(s.waypoints), axis=0)).sum() for s in segments if len(s.waypoints) > 1))
+
+
+def _shortcut_segments(
+    space: SpatialSpace, ctx: PlanningContext, segments: list[Segment], object_pose: Array
+) -> Improvement:
+    """The plan's segments shortcut (the module's docstring); ``object_pose``: where the object ends."""
+    first_travel = sum(path_travel(np.array(s.waypoints)) for s in segments)
+    transfers = sum(s.kind == "transfer" for s in segments)
+    if ctx.settings.improve_time <= 0:
+        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, 0, False)
+    resting = space.initial_object_pose
+    out: list[Segment] = []
+    shortcuts = work = 0
+    stopped = False
+    for segment in segments:
+        path = np.array(segment.waypoints)
+        if segment.kind == "transfer":
+            assert segment.grasp is not None
+            rel = space.grasp_rel(segment.grasp)
+            checker = space.transfer_checker(rel)
+        else:
+            rel = None
+            checker = space.transit_checker(resting)
+        if not stopped:
+            path, taken, spent, stopped = shortcut_path(
+                partial(space.clear, checker),
+                path,
+                tries=space.tuning.shortcut_tries,
+                rng=ctx.rng,
+                stop=ctx.termination,
+            )
+            shortcuts += taken
+            work += spent
+        out.append(Segment(segment.kind, segment.grasp, list(path)))
+        if rel is not None:
+            resting = space.held_object_poses(path[-1:], rel)[0]
+    travel = sum(path_travel(np.array(s.waypoints)) for s in out)
+    if travel > first_travel:  # (never: each shortcut is shorter than what it replaces)
+        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, work, stopped)
+    return Improvement(out, object_pose, first_travel, transfers, travel, transfers, shortcuts, work, stopped)

@@ -1,0 +1,193 @@
+"""clew_ros.spatial.space: the Ariadne's Clew planner on spatial worlds (motion-only and pick-and-place),
+every plan checked at the validator's 0.002 rad under the checker of its mode."""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from clew_ros.core.settings import Outcome, PlannerSettings
+from clew_ros.spatial.space import SpatialSpace, matrices, plan
+from clew_ros.spatial.spheres import SphereSettings
+from clew_ros.spatial.validate import ValidationSettings, validate_transit, validation_samples
+from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters
+
+from .conftest import CONFIG
+
+#: a coarse sphere model (conservative, builds fast): these tests are about planning on it
+COARSE = SphereSettings(cell_m=0.03, protrusion_m=0.06)
+
+ROBOT: dict[str, Any] = {
+    "urdf": str(CONFIG / "robots/panda/panda.urdf"),
+    "srdf": str(CONFIG / "robots/panda/panda.srdf"),
+    "base_link": "panda_link0",
+    "tip_link": "panda_hand_tcp",
+    "gripper_links": ["panda_hand", "panda_leftfinger", "panda_rightfinger"],
+}
+BOUNDS = [-1.2, -1.2, -0.2, 1.2, 1.2, 1.6]
+
+#: a motion-only query: swing from one side of a post on a table to the other, under a shelf
+BOXES: dict[str, Any] = {
+    "world": {
+        "kind": "spatial",
+        "name": "boxes",
+        "bounds": BOUNDS,
+        "robot": {
+            **ROBOT,
+            "initial": [0.8, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8],
+            "goal": [-0.8, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8],
+        },
+        "obstacle_names": ["table", "post", "shelf"],
+        "obstacles": {
+            "table": {"shape": "box", "size": [0.6, 1.2, 0.04], "pose": [0.55, 0.0, 0.1, 0, 0, 0]},
+            "post": {"shape": "box", "size": [0.08, 0.08, 0.9], "pose": [0.5, 0.0, 0.55, 0, 0, 0]},
+            "shelf": {"shape": "box", "size": [0.4, 0.4, 0.04], "pose": [0.0, 0.6, 0.9, 0, 0, 0]},
+        },
+    }
+}
+
+#: pick a box up on a table and put it down 0.6 m away: one transfer, top-down grasps
+TABLE: dict[str, Any] = {
+    "world": {
+        "kind": "spatial",
+        "name": "table",
+        "bounds": BOUNDS,
+        "robot": {**ROBOT, "initial": [0.0, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8]},
+        "obstacle_names": ["table"],
+        "obstacles": {"table": {"shape": "box", "size": [0.6, 1.2, 0.04], "pose": [0.55, 0.0, 0.1, 0, 0, 0]}},
+        "supports": ["table"],
+        "object": {
+            "shape": "box",
+            "size": [0.04, 0.04, 0.12],
+            "initial": [0.5, 0.3, 0.18, 0, 0, 0.3],
+            "goal": [0.5, -0.3, 0.18, 0, 0, 0],
+            "grasps": [0, 0, 0.02, math.pi, 0, 0, 0, 0, 0.02, math.pi, 0, math.pi / 2],
+        },
+    }
+}
+
+SETTINGS = PlannerSettings(seed=1, time_limit=60.0)
+
+
+@pytest.fixture(scope="module")
+def boxes(tmp_path_factory: pytest.TempPathFactory) -> SpatialWorld:
+    return spatial_world_from_parameters(BOXES, Path(tmp_path_factory.mktemp("w")), COARSE)
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory: pytest.TempPathFactory) -> SpatialWorld:
+    # the default model: the coarse one's fingers reach into the table under a top-down grasp
+    return spatial_world_from_parameters(TABLE, Path(tmp_path_factory.mktemp("w")))
+
+
+def transfer_problems(space: SpatialSpace, grasp: int, waypoints: np.ndarray) -> list[int]:
+    """Pieces of a transfer with an invalid configuration at the validator's steps (the object held)."""
+    checker = space.transfer_checker(space.grasp_rel(grasp))
+    steps = np.full(space.dof, ValidationSettings().step_rad)
+    return [
+        i
+        for i in range(len(waypoints) - 1)
+        if not checker.valid(validation_samples(waypoints[i], waypoints[i + 1], steps)).all()
+    ]
+
+
+def check_plan(world: SpatialWorld, segments: list[Any], final: np.ndarray) -> None:
+    """Every piece valid in its mode; a transfer starts holding its grasp and ends at a stable placement."""
+    space = SpatialSpace(world)
+    assert world.object is not None
+    resting = np.array(world.object.initial)
+    assert np.allclose(segments[0].waypoints[0], world.initial, atol=1e-9)
+    for before, after in itertools.pairwise(segments):
+        assert np.allclose(before.waypoints[-1], after.waypoints[0], atol=1e-6)
+    for segment in segments:
+        path = np.array(segment.waypoints)
+        if segment.kind == "transit":
+            assert validate_transit(space.transit_checker(resting), path) == []
+            continue
+        tcp = space.tcp(path[:1])[0]
+        held_at = matrices(resting)[0] @ matrices(world.object.grasps[segment.grasp])[0]
+        assert np.allclose(tcp, held_at, atol=1e-4)  # it holds the grasp where the object rests
+        assert transfer_problems(space, segment.grasp, path) == []
+        resting = space.held_object_poses(path[-1:], space.grasp_rel(segment.grasp))[0]
+        assert space.rests(resting)
+    assert np.allclose(resting, final, atol=1e-4)
+    assert space.at_goal(final, np.array(world.object.goal))
+
+
+def test_a_motion_among_boxes_is_valid_at_the_validators_step(boxes: SpatialWorld) -> None:
+    result = plan(boxes, SETTINGS)
+    assert result.outcome is Outcome.SUCCEEDED, result.message
+    assert [s.kind for s in result.segments] == ["transit"]
+    path = np.array(result.segments[0].waypoints)
+    assert np.array_equal(path[0], boxes.initial)
+    assert boxes.goal is not None
+    assert np.max(np.abs(path[-1] - boxes.goal)) <= 1e-6
+    assert validate_transit(boxes.checker, path) == []
+    assert result.final_object_pose is None
+    # the straight move is blocked (the post): the planner went round it, and its shortcuts never lengthen
+    assert validate_transit(boxes.checker, np.array([boxes.initial, boxes.goal])) != []
+    assert result.stats["joint_travel_rad"] <= result.stats["first_joint_travel_rad"]
+
+
+def test_a_pick_and_place_on_a_table(table: SpatialWorld) -> None:
+    result = plan(table, SETTINGS)
+    assert result.outcome is Outcome.SUCCEEDED, result.message
+    kinds = [s.kind for s in result.segments]
+    assert kinds[:2] == ["transit", "transfer"]
+    assert result.stats["transfers"] >= 1
+    assert result.final_object_pose is not None
+    check_plan(table, result.segments, result.final_object_pose)
+    # every landmark's object rests on a support (EXPLORE's transfers end at stable placements)
+    space = SpatialSpace(table)
+    assert all(space.rests(landmark.object_pose) for landmark in result.tree)
+
+
+def test_same_seed_same_plan(table: SpatialWorld) -> None:
+    settings = PlannerSettings(seed=3, time_limit=60.0)
+    first, second = plan(table, settings), plan(table, settings)
+    assert first.outcome is Outcome.SUCCEEDED, first.message
+    assert second.outcome is first.outcome
+    assert len(first.segments) == len(second.segments)
+    for a, b in zip(first.segments, second.segments, strict=True):
+        assert (a.kind, a.grasp) == (b.kind, b.grasp)
+        assert np.array_equal(np.array(a.waypoints), np.array(b.waypoints))
+    assert first.final_object_pose is not None
+    assert second.final_object_pose is not None
+    assert np.array_equal(first.final_object_pose, second.final_object_pose)
+
+
+def test_a_goal_that_is_no_stable_placement_is_refused_at_once(table: SpatialWorld) -> None:
+    floating = np.array([0.5, -0.3, 0.3, 0.0, 0.0, 0.0])  # 12 cm above the table
+    result = plan(table, SETTINGS, goal=floating)
+    assert result.outcome is Outcome.INVALID_WORLD
+    assert "is not a stable placement" in result.message
+    assert "table" in result.message
+    assert len(result.tree) == 1
+    assert result.stats["evaluations"] == 0
+    tilted = np.array([0.5, -0.3, 0.18, 0.3, 0.0, 0.0])
+    assert plan(table, SETTINGS, goal=tilted).outcome is Outcome.INVALID_WORLD
+
+
+def test_a_goal_in_collision_or_out_of_reach_is_refused_at_once(tmp_path: Path) -> None:
+    tree = copy.deepcopy(TABLE)
+    tree["world"]["obstacle_names"] = ["table", "block"]
+    tree["world"]["obstacles"]["block"] = {"shape": "box", "size": [0.1, 0.1, 0.1], "pose": [0.5, -0.3, 0.2, 0, 0, 0]}
+    world = spatial_world_from_parameters(tree, tmp_path, COARSE)
+    result = plan(world, SETTINGS)
+    assert result.outcome is Outcome.GOAL_IN_COLLISION
+    assert "block" in result.message
+    far = copy.deepcopy(TABLE)
+    far["world"]["obstacle_names"] = ["table", "far"]
+    far["world"]["obstacles"]["far"] = {"shape": "box", "size": [0.6, 0.6, 0.04], "pose": [3.0, 0.0, 0.1, 0, 0, 0]}
+    far["world"]["supports"] = ["table", "far"]
+    far["world"]["bounds"] = [-1.2, -1.2, -0.2, 3.6, 1.2, 1.6]
+    far["world"]["object"]["goal"] = [3.0, 0.0, 0.18, 0, 0, 0]
+    result = plan(spatial_world_from_parameters(far, tmp_path, COARSE), SETTINGS)
+    assert result.outcome is Outcome.GOAL_OUT_OF_REACH
+    assert "out of reach" in result.message

@@ -1,13 +1,18 @@
 """``clew_render``: draw a world, a plan or a recorded run as PNG, GIF or SVG.
 
-    clew_render INPUT -o OUT.{png,gif,svg} [--world WORLD.yaml] [--size PX]
+    clew_render INPUT -o OUT.{png,gif,svg} [--world WORLD.yaml] [--size PX] [--view AZ,EL[,DIST]] [--frames F.json]
 
 INPUT is a recording (run directory or ``.mcap``), a plan file (``clew-plan/1``
 JSON, needs ``--world``) or a world parameter file alone. A recording holds
 its world (``~/world_yaml``); ``--world`` replaces it. PNG: the world, the
 landmark tree, the tip's path and the arm at fading poses along the plan; GIF:
 the plan animated, holding at every grasp and ungrasp; SVG: the PNG's picture
-as vector graphics. Exit 0: written; 2: invalid input (message on stderr).
+as vector graphics. A spatial world (``world.kind: spatial``) is drawn in 3-D
+as PNG or GIF, seen from ``--view`` (azimuth and elevation in degrees, distance
+in metres; default: from the front right, framing the scene): alone, the arm
+at its start with the goal ghosted; with a plan (INPUT) or ``--frames`` (a plan
+or a frames file), the arm along the frames. Exit 0: written; 2: invalid input
+(message on stderr).
 """
 
 from __future__ import annotations
@@ -31,6 +36,16 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--size", type=int, default=None, metavar="PX", help="picture width in pixels (default 800; 600 for GIF)"
     )
+    parser.add_argument(
+        "--view",
+        metavar="AZ,EL[,DIST]",
+        help="spatial worlds: the camera's azimuth, elevation (degrees) and distance (m; default: framing the scene)",
+    )
+    parser.add_argument(
+        "--frames",
+        metavar="FRAMES.json",
+        help="spatial worlds: a plan file or a frames file ({joints, object_poses, held}) to draw along",
+    )
     return parser
 
 
@@ -40,8 +55,19 @@ def _is_recording(path: Path) -> bool:
     )
 
 
+def _view_joined(argv: list[str]) -> list[str]:
+    """``--view -50,28`` as ``--view=-50,28``: argparse would take a value starting with ``-`` for an option."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] == "--view" and len(arg) > 1 and arg[0] == "-" and arg[1] in "0123456789.":
+            out[-1] = f"--view={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    args = _parser().parse_args(_view_joined(list(sys.argv[1:] if argv is None else argv)))
     from clew_ros.render import RenderError, render_gif, render_png, render_svg
     from clew_ros.render.scene import (
         load_world_file,
@@ -67,6 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if not source.exists():
             raise RenderError(f"{source} does not exist")
+        if _spatial(source, args, output, size):
+            print(f"clew_render: wrote {output}")
+            return EXIT_OK
         world = load_world_file(args.world) if args.world else None
         if _is_recording(source):
             scene = scene_from_recording(source, world)
@@ -90,6 +119,53 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INVALID
     print(f"clew_render: wrote {output}")
     return EXIT_OK
+
+
+def _spatial(source: Path, args: argparse.Namespace, output: Path, size: int) -> bool:
+    """Draw a spatial world (INPUT or ``--world`` says ``world.kind: spatial``) and say so; ``False`` for a
+    planar world, which takes neither ``--view`` nor ``--frames``."""
+    from clew_ros.render import RenderError
+    from clew_ros.render.spatial.frames import is_spatial_world_file
+
+    candidate = Path(args.world) if args.world else source if source.suffix.lower() in (".yaml", ".yml") else None
+    if candidate is not None and candidate.is_file() and is_spatial_world_file(candidate):
+        _render_spatial(candidate, source, args, output, size)
+        return True
+    for flag, value in (("--view", args.view), ("--frames", args.frames)):
+        if value is not None:
+            raise RenderError(f"{flag}: only for spatial worlds (world.kind: spatial)")
+    return False
+
+
+def _render_spatial(world_file: Path, source: Path, args: argparse.Namespace, output: Path, size: int) -> None:
+    """A spatial world drawn: alone (INPUT the world) or along a plan (INPUT, with ``--world``) or ``--frames``."""
+    from clew_ros.render import RenderError
+    from clew_ros.render.spatial import View3D, draw_spatial_frames, draw_spatial_world, parse_view, write_spatial_gif
+    from clew_ros.render.spatial.frames import load_spatial_world, read_frames
+
+    if output.suffix.lower() == ".svg":
+        raise RenderError("--output: a spatial world is drawn as .png or .gif, not .svg")
+    frames_file = Path(args.frames) if args.frames else source if source != world_file else None
+    if args.frames and source != world_file:
+        raise RenderError("--frames: give the frames either as INPUT (with --world) or with --frames, not both")
+    base = View3D(width=size, height=round(size * 0.75))
+    view = parse_view(args.view, base) if args.view is not None else base
+    if frames_file is not None and not frames_file.is_file():
+        raise RenderError(f"--frames: {frames_file} does not exist")
+    world = load_spatial_world(world_file)
+    if frames_file is None:
+        if output.suffix.lower() == ".gif":
+            write_spatial_gif(output, world, world.initial, None, view, title=f"{world.name}: the start")
+        else:
+            draw_spatial_world(world, view).save(output, format="PNG", optimize=True)
+        return
+    frames = read_frames(frames_file, world)
+    if output.suffix.lower() == ".gif":
+        write_spatial_gif(output, world, frames.joints, frames.object_poses, view, held=frames.held, title=frames.title)
+    else:
+        draw_spatial_frames(world, frames.joints, frames.object_poses, view, held=frames.held, title=frames.title).save(
+            output, format="PNG", optimize=True
+        )
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from clew_ros.core.errors import PlanFileError
-from clew_ros.core.plan import Plan, PlanSegment
+from clew_ros.planar.plan import Plan, PlanSegment
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.scene import make_obstacle
@@ -235,8 +235,8 @@ def test_malformed_files_are_refused_naming_the_field(world: SpatialWorld, holds
 
 
 def test_a_planar_validator_refuses_a_spatial_plan(world: SpatialWorld, holds: dict[str, np.ndarray]) -> None:
-    from clew_ros.core.plan import validate_plan as planar_validate
-    from clew_ros.core.world import load_world
+    from clew_ros.planar.plan import validate_plan as planar_validate
+    from clew_ros.planar.world import load_world
 
     figure1 = load_world(CONFIG / "figure1.yaml")
     assert planar_validate(figure1, witness(world, holds)) == [

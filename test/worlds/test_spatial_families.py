@@ -15,8 +15,8 @@ pytest.importorskip("trimesh")
 pytest.importorskip("urdf_parser_py")
 
 from clew_ros.cli.world import main
-from clew_ros.core.plan import Plan
-from clew_ros.core.world import read_parameter_file
+from clew_ros.planar.plan import Plan
+from clew_ros.planar.world import read_parameter_file
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.placements import resting_on
 from clew_ros.spatial.plan import validate_plan

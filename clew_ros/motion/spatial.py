@@ -158,10 +158,15 @@ class UrdfTree:
                     values[joint.name] = min(max(0.0, joint.lower), joint.upper)
         return values
 
-    def joint_transforms(self, values: Mapping[str, float]) -> list[tuple[str, str, Matrix]]:
-        """``(parent link, child link, 4x4 pose of the child in the parent)`` of every joint at ``values``."""
+    def joint_transforms(
+        self, values: Mapping[str, float], movable: bool | None = None
+    ) -> list[tuple[str, str, Matrix]]:
+        """``(parent link, child link, 4x4 pose of the child in the parent)`` of every joint at ``values``
+        (``movable``: only the movable joints, or only the others)."""
         out = []
         for joint in self._order:
+            if movable is not None and joint.movable != movable:
+                continue
             transform = joint.origin
             if joint.movable:
                 axis = np.asarray(joint.axis) / np.linalg.norm(joint.axis)

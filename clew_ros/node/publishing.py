@@ -135,6 +135,7 @@ class Publishing:
         self.publish("world_yaml", spatial.world_yaml_message(setup, world, planner, self._node_name), recording)
         self.publish("world_markers", spatial.world_markers(world, now), recording)
         self.publish("robot_description", String(data=setup.description), recording)
+        self.publish_tf(spatial.static_transforms(setup, world), now, recording, static=True)
         pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)
         velocities = np.zeros(world.robot.dof)
         self._spatial_state(

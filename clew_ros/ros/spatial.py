@@ -63,6 +63,7 @@ __all__ = [
     "robot_description",
     "scene_markers",
     "state_transforms",
+    "static_transforms",
     "with_goal",
     "world_markers",
     "world_yaml_message",
@@ -324,17 +325,26 @@ def joint_state(
 def state_transforms(
     setup: SpatialSetup, world: SpatialWorld, joints: Vector, object_pose: Vector | None
 ) -> list[SpatialTransform]:
-    """``/tf`` at one state: ``world`` -> the URDF's root link (``base_link`` at ``world.robot.base_pose``),
-    every joint's parent -> child link, and ``world`` -> ``object`` (when the world has one)."""
+    """``/tf`` at one state: every movable joint's parent -> child link, and ``world`` -> ``object`` (when
+    the world has one); the rest is on ``/tf_static`` (:func:`static_transforms`)."""
     from clew_ros.spatial.transforms import pose_matrix
 
     values = _values(setup, world, joints)
+    moving = setup.joints.joint_transforms(values, movable=True)
+    out = [SpatialTransform.of(parent, child, m) for parent, child, m in moving]
+    if object_pose is not None and world.object is not None:
+        out.append(SpatialTransform.of(FRAME_ID, OBJECT_FRAME, pose_matrix([float(v) for v in object_pose])))
+    return out
+
+
+def static_transforms(setup: SpatialSetup, world: SpatialWorld) -> list[SpatialTransform]:
+    """``/tf_static``: ``world`` -> the URDF's root link (``base_link`` at ``world.robot.base_pose``) and
+    every fixed joint's parent -> child link, as ``robot_state_publisher`` puts them."""
+    values = _values(setup, world, world.initial)
     tree = setup.joints
     root = tree.root_pose(world.robot.base_link, world.robot.base, values)
     out = [SpatialTransform.of(FRAME_ID, tree.root, root)]
-    out.extend(SpatialTransform.of(parent, child, m) for parent, child, m in tree.joint_transforms(values))
-    if object_pose is not None and world.object is not None:
-        out.append(SpatialTransform.of(FRAME_ID, OBJECT_FRAME, pose_matrix([float(v) for v in object_pose])))
+    out.extend(SpatialTransform.of(parent, child, m) for parent, child, m in tree.joint_transforms(values, False))
     return out
 
 

@@ -200,6 +200,8 @@ class RunWorker:
         fields = outcome_fields(
             outcome, run.message, landmarks=run.landmarks, time_s=run.elapsed_s, recording=run.recording.text
         )
+        if run.track is not None and not run.track.gripper_joint:
+            fields |= spatial_plan_fields(run.track, has_object=getattr(run.world, "object", None) is not None)
         out.event(run.id, outcome_event(outcome), run.recording, **fields)
         if run.track is None:
             run.recording.close()  # no playback follows: the recording is complete before the answer goes out
@@ -289,6 +291,24 @@ def _timed_spatial_plan(run: Run, world: SpatialWorld, result: PlanResult) -> tu
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
     return result.outcome, result.message, spatial_track(world, planned, setup.joints, run.config.node)
+
+
+def spatial_plan_fields(track: Track, *, has_object: bool) -> dict[str, object]:
+    """What a spatial run's ``succeeded`` event adds, so that a client rebuilds the plan from
+    ``~/trajectory`` alone (its points carry no ``gripper``): ``segments``, each ``kind``, ``grasp`` and
+    the number of trajectory ``points`` it has (in order; together every point), and ``final_object_pose``
+    (6 numbers; ``None`` in a motion-only world)."""
+    segments = []
+    for index, grasp in enumerate(track.grasps):
+        segments.append(
+            {
+                "kind": "transit" if grasp is None else "transfer",
+                "grasp": grasp,
+                "points": int(np.count_nonzero(track.segment == index)),
+            }
+        )
+    final = [float(v) for v in track.object_poses[-1]] if has_object else None
+    return {"segments": segments, "final_object_pose": final}
 
 
 def _root_tree(world: World | SpatialWorld) -> LandmarkTree:

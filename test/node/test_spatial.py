@@ -315,3 +315,31 @@ def test_goal_pose_refuses_an_unstable_placement_and_a_run_is_canceled_quickly(t
     assert took.group(1) == accepted["run_id"], response.message
     assert int(took.group(2)) < 100, response.message
     session.wait_status(accepted["run_id"], GoalStatus.STATUS_CANCELED)
+
+
+def test_planner_client_sends_a_3d_goal_and_rebuilds_a_valid_plan(transfer: Served) -> None:
+    import rclpy
+
+    from clew_ros.client import PlannerClient
+    from clew_ros.ros.spatial import with_goal
+
+    goal = (0.45, -0.25, 0.17, 0.0, 0.0, 1.0)  # on table_b, turned 1 rad
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("clew_spatial_client", context=context)
+    try:
+        client = PlannerClient(node, transfer.node.name)
+        client.wait_for_planner(timeout_s=20.0)
+        result = client.send_goal(goal).wait(timeout_s=60.0)
+        assert result.succeeded, result.message
+        assert result.plan is not None
+        assert result.plan.world_kind == "spatial"
+        assert result.plan.grasp_count == 1
+        assert validate_plan(with_goal(transfer.world, goal), result.plan) == []
+        refused = client.send_goal((0.45, -0.25, 0.2, 0.0, 0.0, 1.0)).wait(timeout_s=20.0)  # 3 cm up
+        assert refused.outcome.name == "INVALID_WORLD"
+        assert "0.0300 m off support table_b's top face" in refused.message
+        client.destroy()
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)

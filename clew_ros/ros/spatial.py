@@ -60,6 +60,7 @@ __all__ = [
     "landmark_markers",
     "load_spatial",
     "pose_stamped",
+    "resolved_parameters",
     "robot_description",
     "scene_markers",
     "state_transforms",
@@ -119,6 +120,32 @@ def load_spatial(tree: Mapping[str, Any], folder: Path) -> tuple[SpatialWorld, S
         description=robot_description(text, urdf_folder),
     )
     return world, setup
+
+
+#: The spatial world's parameters that name files (interface.md section 1b), by their path in the tree.
+FILE_PARAMETERS = (("robot", "urdf"), ("robot", "srdf"), ("scene_file",))
+
+
+def resolved_parameters(world_file: Path) -> dict[str, Any]:
+    """The ``ros__parameters`` of a spatial world file with the files it names (``world.robot.urdf``,
+    ``world.robot.srdf``, ``world.scene_file``) made absolute, relative to the file's folder, as
+    ``clew_plan`` reads them (``package://`` and ``file://`` URIs are kept): what a launch file hands the
+    node, which reads relative paths from its working directory."""
+    from clew_ros.planar.world import read_parameter_file
+
+    parameters = read_parameter_file(world_file)
+    world = parameters.get("world")
+    if not isinstance(world, dict):
+        return parameters
+    folder = Path(world_file).resolve().parent
+    for keys in FILE_PARAMETERS:
+        tree = world
+        for key in keys[:-1]:
+            tree = tree.get(key) if isinstance(tree, dict) else None  # type: ignore[assignment]
+        value = tree.get(keys[-1]) if isinstance(tree, dict) else None
+        if isinstance(value, str) and not value.startswith(("package://", "file://")) and value:
+            tree[keys[-1]] = str(folder / value) if not Path(value).is_absolute() else value
+    return parameters
 
 
 # ----------------------------------------------------------------------------------------- the URDF

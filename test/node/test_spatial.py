@@ -343,3 +343,30 @@ def test_planner_client_sends_a_3d_goal_and_rebuilds_a_valid_plan(transfer: Serv
     finally:
         node.destroy_node()
         rclpy.try_shutdown(context=context)
+
+
+def test_the_trajectory_follower_follows_a_spatial_trajectory(transfer: Served) -> None:
+    import subprocess
+    import sys
+
+    latest = transfer.session.trajectory.messages[-1]
+    follower = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "clew_ros.examples.trajectory_follower",
+            "--planner",
+            transfer.node.name,
+            "--count",
+            "1",
+            "--rate",
+            "100",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert follower.returncode == 0, follower.stdout + follower.stderr
+    duration = _seconds(latest.points[-1].time_from_start)
+    assert f"followed {len(latest.points)} points over {duration:.2f} s\n" in follower.stdout, follower.stdout

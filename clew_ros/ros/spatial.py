@@ -144,7 +144,7 @@ def resolved_parameters(world_file: Path) -> dict[str, Any]:
             tree = tree.get(key) if isinstance(tree, dict) else None  # type: ignore[assignment]
         value = tree.get(keys[-1]) if isinstance(tree, dict) else None
         if isinstance(value, str) and not value.startswith(("package://", "file://")) and value:
-            tree[keys[-1]] = str(folder / value) if not Path(value).is_absolute() else value
+            tree[keys[-1]] = str((folder / value).resolve()) if not Path(value).is_absolute() else value
     return parameters
 
 

@@ -240,6 +240,12 @@ class PlannerNode(Node):
         """The Foxglove live view on ``live.foxglove_port`` (0: none); a failure is logged, the node serves on."""
         if settings.foxglove_port == 0:
             return None
+        if self._config.spatial is not None:
+            self.get_logger().warning(
+                "live.foxglove_port: the live view draws planar worlds only; this spatial world is served without "
+                "it (its recordings open in Foxglove)"
+            )
+            return None
         from clew_ros.live import LiveView, LiveViewError
 
         live = LiveView(

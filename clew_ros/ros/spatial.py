@@ -25,6 +25,7 @@ it, in ROS terms:
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import math
@@ -53,11 +54,13 @@ if TYPE_CHECKING:
 
 __all__ = [
     "OBJECT_FRAME",
+    "LinkMarkerSettings",
     "SpatialSetup",
     "SpatialTransform",
     "goal_from_pose_stamped",
     "joint_state",
     "landmark_markers",
+    "link_markers",
     "load_spatial",
     "pose_stamped",
     "resolved_parameters",
@@ -79,6 +82,15 @@ _POINT_M = 0.02
 Matrix = np.ndarray
 #: Joint values or a pose: a sequence of numbers or a numpy vector.
 Vector = Sequence[float] | np.ndarray
+
+
+@dataclass(frozen=True)
+class LinkMarkerSettings:
+    """How ``~/world_markers`` draws the arm's links (so that a recording alone draws the arm, in frames
+    that ``/tf`` places): their collision geometry, each mesh simplified to at most ``max_link_faces``
+    triangles (11 Panda links x 400 triangles: about 0.3 MB a message, recorded once per run)."""
+
+    max_link_faces: int = 400
 
 
 @dataclass(frozen=True, eq=False)
@@ -423,10 +435,41 @@ def _bounds_lines(bounds: np.ndarray) -> list[tuple[float, float, float]]:
     return lines
 
 
-def world_markers(world: SpatialWorld, time_ns: int) -> MarkerArray:
+def link_markers(world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings) -> list[Marker]:
+    """The arm's links as ``robot_links`` markers (id: one per geometry), each in its link's frame and
+    ``frame_locked``: a primitive as CUBE / CYLINDER / SPHERE, a mesh as a TRIANGLE_LIST (simplified; left
+    out where the picture package, ``clew_ros.render``, cannot be imported)."""
+    simplify: Any = None
+    with contextlib.suppress(ImportError):  # the picture package's dependencies missing: primitives only
+        from clew_ros.render.spatial.meshes import simplify
+    color = _color("arm")
+    markers: list[Marker] = []
+    for link in world.robot.links:
+        for geometry in link.geometries:
+            if geometry.kind in ("box", "cylinder", "sphere"):
+                marker = _solid(
+                    "robot_links", 0, geometry.kind, geometry.size, geometry.origin, time_ns=time_ns, color=color
+                )
+            elif simplify is not None and len(geometry.faces):
+                vertices, faces = simplify(
+                    np.asarray(geometry.vertices), np.asarray(geometry.faces), settings.max_link_faces
+                )
+                placed = vertices @ geometry.origin[:3, :3].T + geometry.origin[:3, 3]
+                corners = placed[faces.reshape(-1)]
+                marker = _points("robot_links", Marker.TRIANGLE_LIST, corners, time_ns=time_ns, color=color, scale=1.0)
+            else:
+                continue
+            marker.id = len(markers)
+            marker.header.frame_id = link.name
+            marker.frame_locked = True
+            markers.append(marker)
+    return markers
+
+
+def world_markers(world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings | None = None) -> MarkerArray:
     """``~/world_markers`` in 3-D: DELETEALL, then ``bounds`` (LINE_LIST), ``obstacles`` and ``supports``
     (CUBE / CYLINDER / SPHERE, id = index in the world's obstacles), ``object_start`` and ``object_goal``
-    (the object at its initial and goal placements)."""
+    (the object at its initial and goal placements), and the arm's links (:func:`link_markers`)."""
     markers = [Marker(header=_header(time_ns), action=Marker.DELETEALL)]
     if world.bounds is not None:
         markers.append(
@@ -470,6 +513,7 @@ def world_markers(world: SpatialWorld, time_ns: int) -> MarkerArray:
                 color=_color("goal", 0.5),
             )
         )
+    markers.extend(link_markers(world, time_ns, settings or LinkMarkerSettings()))
     return MarkerArray(markers=markers)
 
 

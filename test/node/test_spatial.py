@@ -261,6 +261,10 @@ def test_recording_decodes_and_its_tf_is_the_checkers_forward_kinematics(
     markers = served.recording[f"{name}/world_markers"][-1][1].markers
     solids = [m for m in markers if m.ns in ("obstacles", "supports")]
     assert len(solids) == len(served.world.obstacles)
+    links = [m for m in markers if m.ns == "robot_links"]  # the arm drawn from the recording alone
+    assert {m.header.frame_id for m in links} == {link.name for link in robot.links}
+    assert all(m.frame_locked for m in links)
+    assert sum(len(m.points) for m in links) > 1000
 
 
 def _goal_pose(pose: list[float], stamp_s: int) -> PoseStamped:

@@ -20,12 +20,15 @@ pytest.importorskip("urdf_parser_py")
 
 from geometry_msgs.msg import PoseStamped
 from helpers.launch_api import install, started_nodes
+from visualization_msgs.msg import Marker
 
 from clew_ros.motion.spatial import UrdfTree, velocity_limits
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.ros.messages import GoalPoseError
 from clew_ros.ros.spatial import (
+    LinkMarkerSettings,
     goal_from_pose_stamped,
+    link_markers,
     load_spatial,
     pose_stamped,
     resolved_parameters,
@@ -73,6 +76,26 @@ def test_a_mimic_joint_follows_and_velocity_limits_take_the_lower(loaded) -> Non
     limits = velocity_limits(setup.joints, world.robot.joint_names, 2.4)
     assert limits.tolist() == [2.175, 2.175, 2.175, 2.175, 2.4, 2.4, 2.4]  # panda.urdf: 2.175 and 2.61 rad/s
     assert velocity_limits(setup.joints, world.robot.joint_names, [1.0] * 7).tolist() == [1.0] * 7
+
+
+def test_the_links_are_markers_in_their_frames(loaded) -> None:  # type: ignore[no-untyped-def]
+    world, _setup = loaded
+    markers = link_markers(world, 0, LinkMarkerSettings(max_link_faces=100))
+    assert [m.id for m in markers] == list(range(len(markers)))
+    assert {m.header.frame_id for m in markers} == {link.name for link in world.robot.links}
+    meshes = [m for m in markers if m.type == Marker.TRIANGLE_LIST]
+    assert len(meshes) >= 8  # the Panda's links are meshes (and a few primitives)
+    assert all(m.frame_locked for m in markers)
+    assert {m.type for m in markers} <= {Marker.TRIANGLE_LIST, Marker.CUBE, Marker.CYLINDER, Marker.SPHERE}
+    for marker in meshes:
+        assert 0 < len(marker.points) <= 300
+        assert len(marker.points) % 3 == 0
+    hand = next(link for link in world.robot.links if link.name == "panda_hand")
+    (geometry,) = hand.geometries
+    corners = np.array([[p.x, p.y, p.z] for m in meshes if m.header.frame_id == "panda_hand" for p in m.points])
+    low, high = geometry.vertices.min(axis=0), geometry.vertices.max(axis=0)
+    assert np.all(corners >= low - 1e-9)
+    assert np.all(corners <= high + 1e-9)  # the simplified mesh stays within the link's (origin is identity)
 
 
 def test_mesh_uris_are_package_uris_when_installed_else_file_uris(tmp_path: Path) -> None:

@@ -51,6 +51,16 @@ from clew_ros.recording.cdr import tf_message
 __all__ = ["Publishing", "have_tf2_msgs"]
 
 
+def _mesh_simplifier() -> spatial.Simplify | None:
+    """The picture package's mesh simplification, for the links drawn in ``~/world_markers`` (``None`` when
+    its dependencies are not installed: the links' meshes are left out, their primitives drawn)."""
+    try:
+        from clew_ros.render.spatial.meshes import simplify
+    except ImportError:
+        return None
+    return simplify
+
+
 def have_tf2_msgs() -> bool:
     """Whether ``tf2_msgs`` is importable, so that ``/tf`` and ``/tf_static`` are published live."""
     return importlib.util.find_spec("tf2_msgs") is not None
@@ -133,7 +143,7 @@ class Publishing:
     ) -> None:
         now = self.now_ns()
         self.publish("world_yaml", spatial.world_yaml_message(setup, world, planner, self._node_name), recording)
-        self.publish("world_markers", spatial.world_markers(world, now), recording)
+        self.publish("world_markers", spatial.world_markers(world, now, simplify=_mesh_simplifier()), recording)
         self.publish("robot_description", String(data=setup.description), recording)
         self.publish_tf(spatial.static_transforms(setup, world), now, recording, static=True)
         pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)

@@ -25,12 +25,11 @@ it, in ROS terms:
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import dataclasses
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -435,13 +434,17 @@ def _bounds_lines(bounds: np.ndarray) -> list[tuple[float, float, float]]:
     return lines
 
 
-def link_markers(world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings) -> list[Marker]:
+#: Simplifies a mesh ``(vertices, faces, max_faces) -> (vertices, faces)``
+#: (:func:`clew_ros.render.spatial.meshes.simplify`, which the node passes in).
+Simplify = Callable[[np.ndarray, np.ndarray, int], tuple[np.ndarray, np.ndarray]]
+
+
+def link_markers(
+    world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings, simplify: Simplify | None = None
+) -> list[Marker]:
     """The arm's links as ``robot_links`` markers (id: one per geometry), each in its link's frame and
-    ``frame_locked``: a primitive as CUBE / CYLINDER / SPHERE, a mesh as a TRIANGLE_LIST (simplified; left
-    out where the picture package, ``clew_ros.render``, cannot be imported)."""
-    simplify: Any = None
-    with contextlib.suppress(ImportError):  # the picture package's dependencies missing: primitives only
-        from clew_ros.render.spatial.meshes import simplify
+    ``frame_locked``: a primitive as CUBE / CYLINDER / SPHERE, a mesh as a TRIANGLE_LIST simplified by
+    ``simplify`` (meshes are left out without it)."""
     color = _color("arm")
     markers: list[Marker] = []
     for link in world.robot.links:
@@ -466,7 +469,9 @@ def link_markers(world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings
     return markers
 
 
-def world_markers(world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings | None = None) -> MarkerArray:
+def world_markers(
+    world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings | None = None, simplify: Simplify | None = None
+) -> MarkerArray:
     """``~/world_markers`` in 3-D: DELETEALL, then ``bounds`` (LINE_LIST), ``obstacles`` and ``supports``
     (CUBE / CYLINDER / SPHERE, id = index in the world's obstacles), ``object_start`` and ``object_goal``
     (the object at its initial and goal placements), and the arm's links (:func:`link_markers`)."""
@@ -513,7 +518,7 @@ def world_markers(world: SpatialWorld, time_ns: int, settings: LinkMarkerSetting
                 color=_color("goal", 0.5),
             )
         )
-    markers.extend(link_markers(world, time_ns, settings or LinkMarkerSettings()))
+    markers.extend(link_markers(world, time_ns, settings or LinkMarkerSettings(), simplify))
     return MarkerArray(markers=markers)
 
 

@@ -24,6 +24,7 @@ from visualization_msgs.msg import Marker
 
 from clew_ros.motion.spatial import UrdfTree, velocity_limits
 from clew_ros.planar.world import read_parameter_file
+from clew_ros.render.spatial.meshes import simplify
 from clew_ros.ros.messages import GoalPoseError
 from clew_ros.ros.spatial import (
     LinkMarkerSettings,
@@ -80,7 +81,7 @@ def test_a_mimic_joint_follows_and_velocity_limits_take_the_lower(loaded) -> Non
 
 def test_the_links_are_markers_in_their_frames(loaded) -> None:  # type: ignore[no-untyped-def]
     world, _setup = loaded
-    markers = link_markers(world, 0, LinkMarkerSettings(max_link_faces=100))
+    markers = link_markers(world, 0, LinkMarkerSettings(max_link_faces=100), simplify)
     assert [m.id for m in markers] == list(range(len(markers)))
     assert {m.header.frame_id for m in markers} == {link.name for link in world.robot.links}
     meshes = [m for m in markers if m.type == Marker.TRIANGLE_LIST]

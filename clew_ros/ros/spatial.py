@@ -146,9 +146,14 @@ def resolved_parameters(world_file: Path) -> dict[str, Any]:
 
     parameters = read_parameter_file(world_file)
     world = parameters.get("world")
-    if not isinstance(world, dict):
-        return parameters
-    folder = Path(world_file).resolve().parent
+    if isinstance(world, dict):
+        absolute_paths(world, Path(world_file).resolve().parent)
+    return parameters
+
+
+def absolute_paths(world: dict[str, Any], folder: Path) -> None:
+    """Make the files a ``world`` tree names (:data:`FILE_PARAMETERS`) absolute, relative to ``folder``
+    (``package://`` and ``file://`` URIs kept); in place."""
     for keys in FILE_PARAMETERS:
         tree = world
         for key in keys[:-1]:
@@ -156,7 +161,6 @@ def resolved_parameters(world_file: Path) -> dict[str, Any]:
         value = tree.get(keys[-1]) if isinstance(tree, dict) else None
         if isinstance(value, str) and not value.startswith(("package://", "file://")) and value:
             tree[keys[-1]] = str((folder / value).resolve()) if not Path(value).is_absolute() else value
-    return parameters
 
 
 # ----------------------------------------------------------------------------------------- the URDF
@@ -570,9 +574,10 @@ def scene_markers(
 
 
 def world_yaml_message(setup: SpatialSetup, world: SpatialWorld, settings: PlannerSettings, node_name: str) -> String:
-    """``~/world_yaml``: the ``world.*`` parameters (with the run's goal) and ``planner.*`` as a parameter
-    file."""
+    """``~/world_yaml``: the ``world.*`` parameters (with the run's goal, and the files they name as
+    absolute paths) and ``planner.*`` as a parameter file ``clew_plan`` reads from anywhere."""
     tree = copy.deepcopy(dict(setup.tree["world"]))
+    absolute_paths(tree, setup.folder)
     if world.object is not None and "object" in tree:
         tree["object"]["goal"] = [float(v) for v in world.object.goal]
     parameters = {"world": tree, "planner": dataclasses.asdict(settings)}

@@ -267,6 +267,31 @@ def test_recording_decodes_and_its_tf_is_the_checkers_forward_kinematics(
     assert sum(len(m.points) for m in links) > 1000
 
 
+def test_parameters_change_as_for_a_planar_world_and_world_yaml_names_absolute_files(motion: Served) -> None:
+    from rcl_interfaces.msg import Parameter as ParameterMsg
+    from rcl_interfaces.msg import ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    session = motion.session
+
+    def set_parameter(name: str, value: ParameterValue) -> Any:
+        request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
+        return session.client.call(session.srv("set_parameters"), SetParameters, request, timeout_s=20.0).results[0]
+
+    seed = set_parameter("planner.seed", ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=3))
+    assert seed.successful, seed.reason
+    initial = ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[0.0] * 7)
+    refused = set_parameter("world.robot.initial", initial)
+    assert not refused.successful
+    assert "world.robot.initial" in refused.reason
+    (text,) = {m.data for _t, m in motion.recording[f"{motion.node.name}/world_yaml"]}
+    world = next(iter(yaml.safe_load(text).values()))["ros__parameters"]["world"]
+    assert world["kind"] == "spatial"
+    for path in (world["robot"]["urdf"], world["robot"]["srdf"], world["scene_file"]):
+        assert Path(path).is_absolute()
+        assert Path(path).is_file()
+
+
 def _goal_pose(pose: list[float], stamp_s: int) -> PoseStamped:
     from clew_ros.ros.spatial import _pose_msg
     from clew_ros.spatial.transforms import pose_matrix

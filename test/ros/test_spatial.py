@@ -161,3 +161,21 @@ def test_the_spatial_launch_file_hands_the_node_absolute_paths(monkeypatch: pyte
     assert (
         resolved_parameters(motion)["world"]["robot"]["goal"] == read_parameter_file(motion)["world"]["robot"]["goal"]
     )
+
+
+def test_world_yaml_names_the_files_absolutely(loaded) -> None:  # type: ignore[no-untyped-def]
+    import yaml
+
+    from clew_ros.core.settings import PlannerSettings
+    from clew_ros.ros.spatial import with_goal, world_yaml_message
+
+    world, setup = loaded
+    assert setup.tree["world"]["robot"]["urdf"] == "../robots/panda/panda.urdf"  # as given
+    goal = [0.45, -0.25, 0.17, 0.0, 0.0, 1.0]
+    text = world_yaml_message(setup, with_goal(world, goal), PlannerSettings(seed=4), "clew_planner").data
+    parameters = yaml.safe_load(text)["clew_planner"]["ros__parameters"]
+    assert Path(parameters["world"]["robot"]["urdf"]) == PANDA
+    assert Path(parameters["world"]["robot"]["srdf"]).is_file()
+    assert parameters["world"]["object"]["goal"] == goal
+    assert parameters["planner"]["seed"] == 4
+    assert setup.tree["world"]["robot"]["urdf"] == "../robots/panda/panda.urdf"  # the setup's tree unchanged

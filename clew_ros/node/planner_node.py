@@ -152,7 +152,8 @@ class PlannerNode(Node):
     def request_plan(
         self, source: Source = "plan", goal: np.ndarray | None = None, goal_stamp_ns: int | None = None
     ) -> tuple[Run | None, str]:
-        """Start a run to ``goal`` (``(x, y, theta)``; ``None``: ``world.object.goal``), or refuse it.
+        """Start a run to ``goal`` (``(x, y, theta)``, a spatial world's ``(x, y, z, roll, pitch, yaw)``;
+        ``None``: ``world.object.goal``, or a spatial motion-only query's ``world.robot.goal``), or refuse it.
 
         ``goal_stamp_ns``, the stamp of the ``~/goal_pose`` that asks, is echoed
         in the run's ``accepted`` event or in the refusal's ``aborted`` event.

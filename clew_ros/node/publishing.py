@@ -15,6 +15,12 @@ published where ``tf2_msgs`` is importable (a native install; the PyPI wheels
 lack it) and always recorded: :func:`clew_ros.recording.cdr.tf_message` encodes the message once, and
 the same bytes are recorded and published.
 
+A spatial world (interface.md section 1b) goes out through :mod:`clew_ros.ros.spatial` instead: its
+URDF as ``~/robot_description``, ``/tf_static`` (``world`` to the URDF's root, the fixed joints) and, at
+rest and at every playback sample (:meth:`Publishing.spatial_sample`), ``~/joint_states`` with every
+movable joint, ``/tf`` with every movable joint's link frame and the object, ``~/object_pose`` and
+``~/scene``.
+
 ``~/status`` and ``~/feedback`` are built and published under one lock, so
 that the latched ``~/status`` never ends on an older snapshot and no
 ``planning`` feedback follows a run's outcome.

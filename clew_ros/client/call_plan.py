@@ -1,6 +1,6 @@
 """Ask a running ``clew_planner`` for a plan and print the outcome: a small program on :mod:`clew_ros.client`.
 
-    python -m clew_ros.client.call_plan [--node /clew_planner] [--goal X,Y,YAW] [--timeout S] [--wait-playback]
+    python -m clew_ros.client.call_plan [--node /clew_planner] [--goal X,Y,YAW or X,Y,Z,ROLL,PITCH,YAW] [--timeout S] [--wait-playback]
 
 Plans to the planner's own goal (its ``world.object.goal`` parameter), or to
 ``--goal``, the way ``ros2 service call /clew_planner/plan
@@ -30,7 +30,12 @@ EXIT_SUCCESS, EXIT_NO_PLAN, EXIT_NO_ANSWER = 0, 1, 2
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="call_plan", description=__doc__.splitlines()[0])
     parser.add_argument("--node", default="/clew_planner", help="the planner node's name (default /clew_planner)")
-    parser.add_argument("--goal", type=goal_argument, default=None, help="object goal X,Y,YAW (default: the planner's)")
+    parser.add_argument(
+        "--goal",
+        type=goal_argument,
+        default=None,
+        help="object goal X,Y,YAW or X,Y,Z,ROLL,PITCH,YAW (default: the planner's)",
+    )
     parser.add_argument(
         "--timeout", type=float, default=120.0, help="seconds to wait for the planner and for the answer (default 120)"
     )

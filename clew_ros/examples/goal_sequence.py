@@ -1,6 +1,6 @@
 """Plan to a sequence of object goals with :class:`~clew_ros.client.PlannerClient`, logging each result.
 
-    python -m clew_ros.examples.goal_sequence [--planner /clew_planner] X,Y,YAW [X,Y,YAW ...]
+    python -m clew_ros.examples.goal_sequence [--planner /clew_planner] X,Y,YAW [X,Y,YAW ...]   (spatial: X,Y,Z,ROLL,PITCH,YAW)
 
 A node of its own, spun by a ``SingleThreadedExecutor``: it never blocks in a
 callback. A timer sends the next goal once the planner is there and the
@@ -59,7 +59,12 @@ class GoalSequence(Node):
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="goal_sequence", description=__doc__.splitlines()[0])
-    parser.add_argument("goals", nargs="+", type=goal_argument, help="object goals X,Y,YAW in frame world")
+    parser.add_argument(
+        "goals",
+        nargs="+",
+        type=goal_argument,
+        help="object goals X,Y,YAW (spatial: X,Y,Z,ROLL,PITCH,YAW) in frame world",
+    )
     parser.add_argument("--planner", default="/clew_planner", help="the planner node (default /clew_planner)")
     args, ros_args = parser.parse_known_args(argv)
     rclpy.init(args=ros_args)

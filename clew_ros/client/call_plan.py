@@ -1,9 +1,9 @@
 """Ask a running ``clew_planner`` for a plan and print the outcome: a small program on :mod:`clew_ros.client`.
 
-    python -m clew_ros.client.call_plan [--node /clew_planner] [--goal X,Y,YAW or X,Y,Z,ROLL,PITCH,YAW] [--timeout S] [--wait-playback]
+    python -m clew_ros.client.call_plan [--node /clew_planner] [--goal X,Y,YAW] [--timeout S] [--wait-playback]
 
 Plans to the planner's own goal (its ``world.object.goal`` parameter), or to
-``--goal``, the way ``ros2 service call /clew_planner/plan
+``--goal`` (``X,Y,YAW``; a spatial planner's ``X,Y,Z,ROLL,PITCH,YAW``), the way ``ros2 service call /clew_planner/plan
 std_srvs/srv/Trigger`` does, usable without the ``ros2`` CLI (pip installs
 have none). With ``--wait-playback`` it returns only after the node has
 played the plan back, so that the run's recording is complete.

@@ -1,6 +1,8 @@
 """Plan to a sequence of object goals with :class:`~clew_ros.client.PlannerClient`, logging each result.
 
-    python -m clew_ros.examples.goal_sequence [--planner /clew_planner] X,Y,YAW [X,Y,YAW ...]   (spatial: X,Y,Z,ROLL,PITCH,YAW)
+    python -m clew_ros.examples.goal_sequence [--planner /clew_planner] X,Y,YAW [X,Y,YAW ...]
+
+(a spatial planner's goals: X,Y,Z,ROLL,PITCH,YAW.)
 
 A node of its own, spun by a ``SingleThreadedExecutor``: it never blocks in a
 callback. A timer sends the next goal once the planner is there and the

@@ -293,14 +293,9 @@ def test_parameters_change_as_for_a_planar_world_and_world_yaml_names_absolute_f
 
 
 def _goal_pose(pose: list[float], stamp_s: int) -> PoseStamped:
-    from clew_ros.ros.spatial import _pose_msg
-    from clew_ros.spatial.transforms import pose_matrix
+    from clew_ros.ros.spatial import pose_stamped
 
-    msg = PoseStamped()
-    msg.header.frame_id = "world"
-    msg.header.stamp.sec = stamp_s
-    msg.pose = _pose_msg(pose_matrix(pose))
-    return msg
+    return pose_stamped(pose, stamp_s * 10**9)  # frame world, the full orientation
 
 
 def test_goal_pose_refuses_an_unstable_placement_and_a_run_is_canceled_quickly(transfer: Served) -> None:

@@ -31,6 +31,11 @@ setup(
             sorted(glob("config/*.yaml") + glob("config/*.json")),
         ),
         *robot_files(),
+        # the spatial example worlds, their witness plans and the MoveIt scene one of them reads (docs/spatial.md)
+        (
+            "share/" + package_name + "/config/spatial",
+            sorted(glob("config/spatial/*.yaml") + glob("config/spatial/*.json")),
+        ),
         ("share/" + package_name + "/launch", sorted(glob("launch/*.py"))),
         # the SROS2 policy of the node (docs/security.md)
         ("share/" + package_name + "/config/sros2", sorted(glob("config/sros2/*.xml"))),

@@ -135,7 +135,11 @@ def test_setup_py_installs_ament_files(setup_kwargs: dict[str, Any]) -> None:
     assert data_files["share/ament_index/resource_index/packages"] == ["resource/clew_ros"]
     assert (ROOT / "resource" / "clew_ros").is_file()
     assert data_files["share/clew_ros"] == ["package.xml"]
-    assert data_files["share/clew_ros/launch"] == ["launch/clew_planner.launch.py", "launch/clew_planners.launch.py"]
+    assert data_files["share/clew_ros/launch"] == [
+        "launch/clew_planner.launch.py",
+        "launch/clew_planners.launch.py",
+        "launch/clew_spatial_planner.launch.py",
+    ]
 
 
 def test_setup_py_installs_config_worlds(tmp_path: Path) -> None:

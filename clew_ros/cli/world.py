@@ -1,5 +1,7 @@
-"""``clew_world FAMILY --seed N -o WORLD.yaml [--no-witness]``: generate a world of a family, solvable by
-construction; ``clew_world --list`` lists the families.
+"""``clew_world FAMILY --seed N -o WORLD.yaml [--robot panda|ur5|random] [--no-witness]``: generate a world of
+a family, solvable by construction; ``clew_world --list`` lists the families. The ``spatial_*`` families
+(:mod:`clew_ros.worlds.spatial`) build spatial worlds on the robot ``--robot`` names (default panda); the
+others are planar and take no ``--robot``.
 
 Writes the ROS 2 parameter file WORLD.yaml (``clew_plan`` and the node read it as any world) and,
 unless ``--no-witness``, the witness plan WORLD.witness.json next to it (``clew-plan/1``: the
@@ -15,6 +17,7 @@ import sys
 from pathlib import Path
 
 from clew_ros.worlds import FAMILIES, GenerationError, UnknownFamilyError, generate, write_world
+from clew_ros.worlds.spatial import SPATIAL_FAMILIES, SPATIAL_ROBOTS, generate_spatial, write_spatial_world
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -26,6 +29,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("family", nargs="?", help="the family of worlds (--list shows them)")
     parser.add_argument("--seed", type=int, default=0, help="the world's seed, an integer >= 0 (default 0)")
     parser.add_argument("--output", "-o", type=Path, help="parameter file to write (WORLD.yaml)")
+    parser.add_argument("--robot", help=f"the arm of a spatial_* family: {', '.join(SPATIAL_ROBOTS)} (default panda)")
     parser.add_argument("--no-witness", action="store_true", help="do not write WORLD.witness.json")
     parser.add_argument("--list", action="store_true", help="list the families, one line each, and exit")
     return parser
@@ -39,7 +43,12 @@ def _invalid(message: str) -> int:
 def _argument_problem(args: argparse.Namespace) -> str | None:
     """What is wrong with the arguments of a generation (the argument named first), or ``None``."""
     if args.family is None:
-        return f"FAMILY: expected one of {', '.join(FAMILIES)} (or --list)"
+        return f"FAMILY: expected one of {', '.join([*FAMILIES, *SPATIAL_FAMILIES])} (or --list)"
+    if args.family not in FAMILIES and args.family not in SPATIAL_FAMILIES:
+        return f"FAMILY: {UnknownFamilyError(args.family, [*FAMILIES, *SPATIAL_FAMILIES])}"
+    robot = _robot_problem(args)
+    if robot:
+        return robot
     if args.output is None:
         return "--output: expected the parameter file to write (WORLD.yaml)"
     if args.seed < 0:
@@ -47,20 +56,45 @@ def _argument_problem(args: argparse.Namespace) -> str | None:
     return None
 
 
+def _robot_problem(args: argparse.Namespace) -> str | None:
+    if args.robot is not None and args.family not in SPATIAL_FAMILIES:
+        return f"--robot: only the spatial_* families take a robot, not {args.family}"
+    if args.robot is not None and args.robot not in SPATIAL_ROBOTS:
+        return f"--robot: expected one of {', '.join(SPATIAL_ROBOTS)}, got {args.robot}"
+    return None
+
+
 def _list() -> int:
-    width = max(len(name) for name in FAMILIES)
-    for name, family in FAMILIES.items():
-        print(f"{name:<{width}}  {family.summary}")
+    summaries = {name: family.summary for name, family in FAMILIES.items()}
+    summaries.update({name: family.summary for name, family in SPATIAL_FAMILIES.items()})
+    width = max(len(name) for name in summaries)
+    for name, summary in summaries.items():
+        print(f"{name:<{width}}  {summary}")
+    return EXIT_OK
+
+
+def _spatial(args: argparse.Namespace) -> int:
+    try:
+        generated = generate_spatial(args.family, args.seed, args.robot or "panda")
+        written = write_spatial_world(generated, args.output, witness=not args.no_witness)
+    except GenerationError as error:
+        print(f"clew_world: no world: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    except OSError as error:
+        return _invalid(f"--output: cannot write {args.output} ({error.strerror})")
+    what = f"{'solvable' if generated.solvable else 'unsolvable'}, "
+    what += f"{len(generated.parameters['world'].get('obstacle_names', []))} obstacles"
+    print(f"clew_world: {generated.name} ({what}) -> {', '.join(str(p) for p in written)}", file=sys.stderr)
     return EXIT_OK
 
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    if args.list:
-        return _list()
-    problem = _argument_problem(args)
-    if problem:
-        return _invalid(problem)
+    problem = None if args.list else _argument_problem(args)
+    if args.list or problem:
+        return _list() if args.list else _invalid(str(problem))
+    if args.family in SPATIAL_FAMILIES:
+        return _spatial(args)
     try:
         generated = generate(args.family, args.seed)
         written = write_world(generated, args.output, witness=not args.no_witness)

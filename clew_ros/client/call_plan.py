@@ -3,7 +3,7 @@
     python -m clew_ros.client.call_plan [--node /clew_planner] [--goal X,Y,YAW] [--timeout S] [--wait-playback]
 
 Plans to the planner's own goal (its ``world.object.goal`` parameter), or to
-``--goal``, the way ``ros2 service call /clew_planner/plan
+``--goal`` (``X,Y,YAW``; a spatial planner's ``X,Y,Z,ROLL,PITCH,YAW``), the way ``ros2 service call /clew_planner/plan
 std_srvs/srv/Trigger`` does, usable without the ``ros2`` CLI (pip installs
 have none). With ``--wait-playback`` it returns only after the node has
 played the plan back, so that the run's recording is complete.
@@ -30,7 +30,12 @@ EXIT_SUCCESS, EXIT_NO_PLAN, EXIT_NO_ANSWER = 0, 1, 2
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="call_plan", description=__doc__.splitlines()[0])
     parser.add_argument("--node", default="/clew_planner", help="the planner node's name (default /clew_planner)")
-    parser.add_argument("--goal", type=goal_argument, default=None, help="object goal X,Y,YAW (default: the planner's)")
+    parser.add_argument(
+        "--goal",
+        type=goal_argument,
+        default=None,
+        help="object goal X,Y,YAW or X,Y,Z,ROLL,PITCH,YAW (default: the planner's)",
+    )
     parser.add_argument(
         "--timeout", type=float, default=120.0, help="seconds to wait for the planner and for the answer (default 120)"
     )

@@ -58,12 +58,13 @@ from clew_ros.client.run import (
 )
 from clew_ros.core.errors import ClewError
 from clew_ros.core.settings import Outcome
+from clew_ros.planar.plan import Plan, PlanSegment
 from clew_ros.planar.world import World, world_from_parameters
 from clew_ros.recording.trajectory import trajectory_to_plan
 from clew_ros.ros import messages
 from clew_ros.ros.qos import EVENTS_QOS, GOAL_QOS, LATCHED_QOS, STREAM_QOS
 
-__all__ = ["PlannerClient"]
+__all__ = ["PlannerClient", "spatial_trajectory_plan"]
 
 _STATUS = {GoalStatus.STATUS_ACCEPTED: RunStatus.ACCEPTED, GoalStatus.STATUS_EXECUTING: RunStatus.EXECUTING}
 _OUTCOME_EVENTS = ("succeeded", "aborted", "canceled")
@@ -144,8 +145,9 @@ class PlannerClient:
                 "with the same ROS_DOMAIN_ID?)"
             )
 
-    def default_goal(self, timeout_s: float | None = 10.0) -> tuple[float, float, float]:
-        """The planner's ``world.object.goal`` parameter (through its standard ``get_parameters`` service)."""
+    def default_goal(self, timeout_s: float | None = 10.0) -> tuple[float, ...]:
+        """The planner's ``world.object.goal`` parameter (through its standard ``get_parameters`` service):
+        ``(x, y, yaw)``, or a spatial world's ``(x, y, z, roll, pitch, yaw)``."""
         if not self._parameters.wait_for_service(timeout_sec=timeout_s):
             raise PlannerNotFoundError(f"{self.planner}/get_parameters did not answer within {timeout_s} s")
         future = self._parameters.call_async(GetParameters.Request(names=["world.object.goal"]))
@@ -153,9 +155,9 @@ class PlannerClient:
             raise RunTimeoutError(f"{self.planner}/get_parameters did not answer within {timeout_s} s")
         values = future.result().values
         goal = [float(v) for v in (values[0].double_array_value or values[0].integer_array_value)] if values else []
-        if len(goal) != 3:
-            raise PlannerNotFoundError(f"{self.planner} has no world.object.goal parameter of three numbers")
-        return (goal[0], goal[1], goal[2])
+        if len(goal) not in (3, 6):
+            raise PlannerNotFoundError(f"{self.planner} has no world.object.goal parameter of three or six numbers")
+        return tuple(goal)
 
     # -- goals ---------------------------------------------------------------------------------------
 
@@ -167,8 +169,10 @@ class PlannerClient:
     ) -> RunHandle:
         """Send a goal; returns its handle at once.
 
-        ``goal``: the object's goal placement ``(x, y, yaw)`` in frame ``world``
-        (or a ``PoseStamped`` in that frame); ``None``: the planner's own
+        ``goal``: the object's goal placement ``(x, y, yaw)`` in frame ``world``,
+        for a spatial planner ``(x, y, z, roll, pitch, yaw)`` (URDF's ``rpy``; it
+        must be a stable placement, else the run is refused saying why), or a
+        ``PoseStamped`` in that frame (any orientation); ``None``: the planner's own
         ``world.object.goal`` (asked with :meth:`default_goal`, which waits for
         the parameter service). ``on_feedback(handle, feedback)`` is called on
         each ``~/feedback`` of the run. Raises :class:`PlannerNotFoundError`
@@ -181,17 +185,27 @@ class PlannerClient:
         with self._lock:  # wall-clock ns (a sim clock may be at 0 in every client): unique goal stamps
             stamp_ns = max(time.time_ns(), self._last_stamp_ns + 1)
             self._last_stamp_ns = stamp_ns
+        target: tuple[float, ...]
         if isinstance(goal, PoseStamped):
             msg = goal
             msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 10**9)
-            yaw = 2.0 * math.atan2(msg.pose.orientation.z, msg.pose.orientation.w)
-            target = (msg.pose.position.x, msg.pose.position.y, yaw)
+            p, q = msg.pose.position, msg.pose.orientation
+            if self._world_kind() == "spatial":
+                from clew_ros.spatial.transforms import matrix_pose, quaternion_matrix
+
+                target = tuple(matrix_pose(quaternion_matrix([p.x, p.y, p.z], [q.x, q.y, q.z, q.w])))
+            else:
+                target = (p.x, p.y, 2.0 * math.atan2(q.z, q.w))
         else:
-            values = [float(v) for v in goal]
-            if len(values) != 3:
-                raise ValueError(f"goal: expected (x, y, yaw), got {goal!r}")
-            target = (values[0], values[1], values[2])
-            msg = messages.goal_pose_stamped(np.array(target), stamp_ns)
+            target = tuple(float(v) for v in goal)
+            if len(target) == 6:
+                from clew_ros.ros.spatial import pose_stamped
+
+                msg = pose_stamped(target, stamp_ns)
+            elif len(target) == 3:
+                msg = messages.goal_pose_stamped(np.array(target), stamp_ns)
+            else:
+                raise ValueError(f"goal: expected (x, y, yaw) or (x, y, z, roll, pitch, yaw), got {goal!r}")
         handle = RunHandle(self, target, stamp_ns, on_feedback)
         with self._lock:
             self._pending[stamp_ns] = handle
@@ -316,6 +330,7 @@ class PlannerClient:
             recording_note=note,
         )
         if outcome is Outcome.SUCCEEDED:
+            handle.outcome_fields = event
             handle.outcome_event = result  # completed when its trajectory is here
             self._complete_success(handle)
         else:
@@ -327,12 +342,23 @@ class PlannerClient:
         if result is None or handle.done():
             return
         trajectory = self._trajectory_of(handle)
-        world = self._world()
-        if trajectory is None or world is None:
+        if trajectory is None:
             return
         try:
-            plan = trajectory_to_plan(world, trajectory, message=result.message, strict=True)
-        except (ValueError, IndexError) as error:  # the world changed under the run (another joint count)
+            if self._world_kind() == "spatial":
+                name = self._world_parameter("name", "spatial") or "spatial"
+                plan = spatial_trajectory_plan(trajectory, handle.outcome_fields, result.message, name)
+            else:
+                world = self._world()
+                if world is None:
+                    return
+                plan = trajectory_to_plan(world, trajectory, message=result.message, strict=True)
+        except (
+            ValueError,
+            IndexError,
+            KeyError,
+            TypeError,
+        ) as error:  # the world changed under the run (another joint count)
             handle.finish(
                 dataclasses.replace(
                     result, outcome=Outcome.INTERNAL_ERROR, message=f"the client cannot rebuild the plan: {error}"
@@ -350,6 +376,21 @@ class PlannerClient:
         with self._lock:
             later = [t for t in self._trajectories if t.header.stamp.sec * 10**9 + t.header.stamp.nanosec >= accepted]
         return later[0] if later else None
+
+    def _world_parameter(self, key: str, default: str) -> str | None:
+        """``world.<key>`` as the planner's ``~/world_yaml`` says (``None``: not seen yet)."""
+        if self._world_text is None:
+            return None
+        try:
+            document = yaml.safe_load(self._world_text)
+            value = next(iter(document.values()))["ros__parameters"]["world"].get(key, default)
+        except (yaml.YAMLError, AttributeError, KeyError, StopIteration, TypeError):
+            return None
+        return str(value)
+
+    def _world_kind(self) -> str | None:
+        """``planar`` or ``spatial``, as the planner's ``~/world_yaml`` says (``None``: not seen yet)."""
+        return self._world_parameter("kind", "planar")
 
     def _world(self) -> World | None:
         if self._world_text is None:
@@ -418,3 +459,35 @@ class PlannerClient:
             handle.cancel_requested = True
             return
         self._cancel.call_async(Trigger.Request())
+
+
+def spatial_trajectory_plan(trajectory: JointTrajectory, fields: dict[str, Any], message: str, world: str) -> Plan:
+    """A spatial run's plan, rebuilt from its ``~/trajectory`` and its ``succeeded`` event's ``segments``
+    (each ``kind``, ``grasp`` and how many of the trajectory's points it has, in order) and
+    ``final_object_pose``; ``ValueError`` when they do not fit together."""
+    points = np.array([list(p.positions) for p in trajectory.points], dtype=float)
+    segments, start = [], 0
+    for segment in fields["segments"]:
+        count = int(segment["points"])
+        if count < 1 or start + count > len(points):
+            raise ValueError(f"the event's segments do not fit the trajectory's {len(points)} points")
+        grasp = segment["grasp"]
+        segments.append(
+            PlanSegment(str(segment["kind"]), None if grasp is None else int(grasp), points[start : start + count])
+        )
+        start += count
+    if start != len(points):
+        raise ValueError(f"the event's segments hold {start} points, the trajectory {len(points)}")
+    final = fields.get("final_object_pose")
+    return Plan(
+        world=world,
+        joint_names=tuple(trajectory.joint_names),
+        success=True,
+        message=message,
+        code=Outcome.SUCCEEDED.name,
+        segments=tuple(segments),
+        final_object_pose=None if final is None else np.array(final, dtype=float),
+        landmarks=(),
+        stats={},
+        world_kind="spatial",
+    )

@@ -12,7 +12,7 @@ import enum
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 from trajectory_msgs.msg import JointTrajectory
 
@@ -30,13 +30,18 @@ __all__ = [
 ]
 
 
-def goal_argument(text: str) -> tuple[float, float, float]:
-    """An object goal ``X,Y,YAW`` (m, m, rad, frame ``world``) typed on a command line: an ``argparse`` type."""
+def goal_argument(text: str) -> tuple[float, ...]:
+    """An object goal ``X,Y,YAW`` (m, m, rad, frame ``world``), or a spatial world's ``X,Y,Z,ROLL,PITCH,YAW``,
+    typed on a command line: an ``argparse`` type."""
     try:
-        x, y, yaw = (float(v) for v in text.split(","))
+        values = tuple(float(v) for v in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected X,Y,YAW (three numbers), got {text!r}") from None
-    return (x, y, yaw)
+        values = ()
+    if len(values) not in (3, 6):
+        raise argparse.ArgumentTypeError(
+            f"expected X,Y,YAW (three numbers) or X,Y,Z,ROLL,PITCH,YAW (six), got {text!r}"
+        ) from None
+    return values
 
 
 class PlannerNotFoundError(RuntimeError):
@@ -119,7 +124,7 @@ class RunHandle:
     def __init__(
         self,
         client: Follower,
-        goal: tuple[float, float, float] | None,
+        goal: tuple[float, ...] | None,
         stamp_ns: int,
         on_feedback: Callable[[RunHandle, Feedback], None] | None = None,
     ) -> None:
@@ -141,6 +146,8 @@ class RunHandle:
         self.cancel_requested = False  # cancel() before the planner answered: sent once it accepts the run
         self.recording: tuple[str | None, str] = (None, "")  # (directory, note) from the accepted event
         self.outcome_event: RunResult | None = None  # a success waiting for its ~/trajectory
+        #: The outcome event's fields (a spatial success says how the trajectory splits into segments).
+        self.outcome_fields: dict[str, Any] = {}
 
     # -- what the caller reads ----------------------------------------------------------------------
 

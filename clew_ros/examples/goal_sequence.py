@@ -2,6 +2,8 @@
 
     python -m clew_ros.examples.goal_sequence [--planner /clew_planner] X,Y,YAW [X,Y,YAW ...]
 
+(a spatial planner's goals: X,Y,Z,ROLL,PITCH,YAW.)
+
 A node of its own, spun by a ``SingleThreadedExecutor``: it never blocks in a
 callback. A timer sends the next goal once the planner is there and the
 previous run has ended; :meth:`RunHandle.add_done_callback` logs the result.
@@ -59,7 +61,12 @@ class GoalSequence(Node):
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="goal_sequence", description=__doc__.splitlines()[0])
-    parser.add_argument("goals", nargs="+", type=goal_argument, help="object goals X,Y,YAW in frame world")
+    parser.add_argument(
+        "goals",
+        nargs="+",
+        type=goal_argument,
+        help="object goals X,Y,YAW (spatial: X,Y,Z,ROLL,PITCH,YAW) in frame world",
+    )
     parser.add_argument("--planner", default="/clew_planner", help="the planner node (default /clew_planner)")
     args, ros_args = parser.parse_known_args(argv)
     rclpy.init(args=ros_args)

@@ -5,10 +5,12 @@
 
 Subscribes to ``<planner>/trajectory`` (transient-local, as the planner
 offers it) and, for each trajectory, steps through its points in time and
-publishes ``~/joint_states`` (the arm's joints
-and ``gripper``) at ``--rate``. Prints ``following <topic>`` once the
-planner is found, then one line per trajectory followed, ``followed 12
-points over 3.42 s, 2 grasps``, and exits after ``--count`` trajectories
+publishes ``~/joint_states`` (the trajectory's joints: a planar arm's and
+``gripper``, or a spatial world's planned URDF joints) at ``--rate``. Prints
+``following <topic>`` once the planner is found, then one line per
+trajectory followed, ``followed 12 points over 3.42 s, 2 grasps`` (a spatial
+trajectory has no ``gripper``: its grasps are the planner's ``grasp`` events,
+and the line ends at the time), and exits after ``--count`` trajectories
 (0: runs until Ctrl-C). Between points it interpolates as
 ``joint_trajectory_controller`` does: quintic splines when the points carry
 velocities and accelerations (the planner's do: every point at rest, so the
@@ -28,6 +30,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
+from clew_ros.motion.playback import GRIPPER_JOINT
 from clew_ros.motion.timing import quintic_spline
 from clew_ros.ros.qos import LATCHED_QOS, STREAM_QOS
 
@@ -42,6 +45,7 @@ class TrajectoryFollower(Node):
         self._times_s = np.zeros(0)
         self._positions = np.zeros((0, 0))
         self._rates: tuple[np.ndarray, np.ndarray] | None = None  # velocities, accelerations: quintic splines
+        self._gripper = False  # the last joint is the planar gripper
         self._started_s = 0.0
         self._states = self.create_publisher(JointState, "~/joint_states", STREAM_QOS)
         self._subscription = self.create_subscription(
@@ -59,6 +63,7 @@ class TrajectoryFollower(Node):
         self._trajectory = msg
         self._times_s = np.array([p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in msg.points])
         self._positions = np.array([list(p.positions) for p in msg.points], dtype=float)
+        self._gripper = bool(msg.joint_names) and msg.joint_names[-1] == GRIPPER_JOINT
         width = self._positions.shape[1]
         complete = all(len(p.velocities) == len(p.accelerations) == width for p in msg.points)
         self._rates = None
@@ -79,17 +84,20 @@ class TrajectoryFollower(Node):
             positions = self._positions[-1]
         elif self._rates is not None:
             positions = quintic_spline(self._times_s, self._positions, *self._rates, np.array([t]))[0]
-            positions[-1] = self._positions[k][-1]  # the gripper switches, it does not slide
+            if self._gripper:
+                positions[-1] = self._positions[k][-1]  # the gripper switches, it does not slide
         else:
             alpha = (t - self._times_s[k]) / (self._times_s[k + 1] - self._times_s[k])
             positions = self._positions[k] + alpha * (self._positions[k + 1] - self._positions[k])
-            positions[-1] = self._positions[k][-1]  # the gripper switches, it does not slide
+            if self._gripper:
+                positions[-1] = self._positions[k][-1]  # the gripper switches, it does not slide
         state = JointState(name=list(self._trajectory.joint_names), position=positions.tolist())
         state.header.stamp = self.get_clock().now().to_msg()
         self._states.publish(state)
         if k >= len(self._times_s) - 1:
-            grasps = int(np.sum(np.diff(self._positions[:, -1]) > 0.5))
-            text = f"followed {len(self._times_s)} points over {self._times_s[-1]:.2f} s, {grasps} grasps"
+            text = f"followed {len(self._times_s)} points over {self._times_s[-1]:.2f} s"
+            if self._gripper:
+                text += f", {int(np.sum(np.diff(self._positions[:, -1]) > 0.5))} grasps"
             self.get_logger().info(text)
             print(text, flush=True)
             self.followed += 1

@@ -108,6 +108,12 @@ class Track:
     tip_pose_fn: Callable[[np.ndarray], np.ndarray]  # (N, n) -> (N, 3), the robot's tip poses
     max_velocity: np.ndarray
     max_acceleration: np.ndarray
+    #: The held object's pose at joints ``q`` from ``grasp_rel`` (a spatial track's: 6 numbers); ``None``: the
+    #: planar composition with ``tip_pose_fn``.
+    held_pose_fn: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+    #: Whether ``~/trajectory`` and ``~/joint_states`` carry the ``gripper`` joint after the arm's (planar
+    #: worlds; a spatial world's trajectory carries the planned URDF joints only).
+    gripper_joint: bool = True
 
     @property
     def duration_s(self) -> float:
@@ -166,8 +172,11 @@ class Track:
         joints, velocities, _ = self.joints_at(np.array([t_ns * 1e-9]))
         q = joints[0]
         same_transfer = self.segment[k] == self.segment[k + 1] and self.grasp_rel[self.segment[k]] is not None
-        if same_transfer:
-            pose = compose(self.tip_pose_fn(q[None])[0], self.grasp_rel[self.segment[k]])
+        held = self.grasp_rel[self.segment[k]]
+        if same_transfer and held is not None and self.held_pose_fn is not None:
+            pose = self.held_pose_fn(q, held)
+        elif same_transfer:
+            pose = compose(self.tip_pose_fn(q[None])[0], held)
         else:
             pose = self.object_poses[k].copy()
         return TrackState(q, velocities[0], float(self.gripper[k]), pose)

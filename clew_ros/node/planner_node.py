@@ -40,6 +40,7 @@ from clew_ros.core.settings import Outcome
 from clew_ros.node.namespaces import namespaced_directory
 from clew_ros.node.publishing import Publishing
 from clew_ros.planar.kernel import warm_up
+from clew_ros.planar.world import World
 from clew_ros.ros import messages
 from clew_ros.ros.parameters import (
     OWN_PREFIXES,
@@ -59,6 +60,7 @@ if TYPE_CHECKING:
 from clew_ros.node.run import CancelKind, Run, Source
 from clew_ros.node.run_recording import NO_RECORDING, Recordings
 from clew_ros.node.worker import RunWorker
+from clew_ros.ros.spatial import goal_from_pose_stamped as spatial_goal_from_pose_stamped
 
 __all__ = ["NODE_NAME", "PlannerNode", "StartupError"]
 
@@ -150,7 +152,8 @@ class PlannerNode(Node):
     def request_plan(
         self, source: Source = "plan", goal: np.ndarray | None = None, goal_stamp_ns: int | None = None
     ) -> tuple[Run | None, str]:
-        """Start a run to ``goal`` (``(x, y, theta)``; ``None``: ``world.object.goal``), or refuse it.
+        """Start a run to ``goal`` (``(x, y, theta)``, a spatial world's ``(x, y, z, roll, pitch, yaw)``;
+        ``None``: ``world.object.goal``, or a spatial motion-only query's ``world.robot.goal``), or refuse it.
 
         ``goal_stamp_ns``, the stamp of the ``~/goal_pose`` that asks, is echoed
         in the run's ``accepted`` event or in the refusal's ``aborted`` event.
@@ -238,6 +241,12 @@ class PlannerNode(Node):
         """The Foxglove live view on ``live.foxglove_port`` (0: none); a failure is logged, the node serves on."""
         if settings.foxglove_port == 0:
             return None
+        if self._config.spatial is not None:
+            self.get_logger().warning(
+                "live.foxglove_port: the live view draws planar worlds only; this spatial world is served without "
+                "it (its recordings open in Foxglove)"
+            )
+            return None
         from clew_ros.live import LiveView, LiveViewError
 
         live = LiveView(
@@ -289,7 +298,10 @@ class PlannerNode(Node):
             world = self._config.world
         stamp_ns = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         try:
-            goal = messages.goal_from_pose_stamped(msg, world)
+            if isinstance(world, World):
+                goal = messages.goal_from_pose_stamped(msg, world)
+            else:  # a spatial world: a full orientation, a stable placement
+                goal = spatial_goal_from_pose_stamped(msg, world)
         except messages.GoalPoseError as error:
             self._refuse(Outcome.INVALID_WORLD, f"refused: {error}", "goal_pose", stamp_ns)
             return
@@ -304,7 +316,7 @@ class PlannerNode(Node):
         """``~/world_yaml`` and ``~/world_markers`` of the parameters (a run publishes its own problem)."""
         with self._lock:
             config = self._config
-        self._out.world(config.world, config.planner, NO_RECORDING)
+        self._out.world(config.world, config.planner, NO_RECORDING, config.spatial)
 
     # ----------------------------------------------------------------- parameters
 
@@ -419,7 +431,7 @@ class PlannerNode(Node):
                 )
                 return SetParametersResult(successful=False, reason=reason)
             try:
-                config = configuration_from_values(values, listed_obstacles_only=True)
+                config = configuration_from_values(values, listed_obstacles_only=True, previous=self._config)
             except ParameterError as error:
                 return SetParametersResult(successful=False, reason=str(error))
             self._pending_world_change = world_change or any(p.name.startswith("planner.") for p in own)

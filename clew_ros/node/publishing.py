@@ -15,6 +15,12 @@ published where ``tf2_msgs`` is importable (a native install; the PyPI wheels
 lack it) and always recorded: :func:`clew_ros.recording.cdr.tf_message` encodes the message once, and
 the same bytes are recorded and published.
 
+A spatial world (interface.md section 1b) goes out through :mod:`clew_ros.ros.spatial` instead: its
+URDF as ``~/robot_description``, ``/tf_static`` (``world`` to the URDF's root, the fixed joints) and, at
+rest and at every playback sample (:meth:`Publishing.spatial_sample`), ``~/joint_states`` with every
+movable joint, ``/tf`` with every movable joint's link frame and the object, ``~/object_pose`` and
+``~/scene``.
+
 ``~/status`` and ``~/feedback`` are built and published under one lock, so
 that the latched ``~/status`` never ends on an older snapshot and no
 ``planning`` feedback follows a run's outcome.
@@ -32,19 +38,33 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from action_msgs.msg import GoalStatus
 from rclpy.node import Node
+from std_msgs.msg import String
 
 from clew_ros.core.settings import Outcome, PlannerSettings
+from clew_ros.motion.playback import TrackState
 from clew_ros.node.run import Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
 from clew_ros.planar.world import World
-from clew_ros.ros import frames, messages
+from clew_ros.ros import frames, messages, spatial
 from clew_ros.ros.topics import TF_TOPICS, TOPICS
 
 if TYPE_CHECKING:
     from clew_ros.live import LiveView
+    from clew_ros.ros.spatial import SpatialSetup
+    from clew_ros.spatial.world import SpatialWorld
 from clew_ros.recording.cdr import tf_message
 
 __all__ = ["Publishing", "have_tf2_msgs"]
+
+
+def _mesh_simplifier() -> spatial.Simplify | None:
+    """The picture package's mesh simplification, for the links drawn in ``~/world_markers`` (``None`` when
+    its dependencies are not installed: the links' meshes are left out, their primitives drawn)."""
+    try:
+        from clew_ros.render.spatial.meshes import simplify
+    except ImportError:
+        return None
+    return simplify
 
 
 def have_tf2_msgs() -> bool:
@@ -104,15 +124,74 @@ class Publishing:
             if not self._closing.is_set():
                 self._logger.error(f"cannot publish on {publisher.topic_name}: {error}")
 
-    def world(self, world: World, planner: PlannerSettings, recording: RunRecording) -> None:
+    def world(
+        self,
+        world: World | SpatialWorld,
+        planner: PlannerSettings,
+        recording: RunRecording,
+        spatial: SpatialSetup | None = None,
+    ) -> None:
         """``~/world_yaml``, ``~/world_markers`` and the arm of a problem: ``~/robot_description``,
         ``/tf_static``, and ``/tf`` and ``~/scene`` at the start (arm at ``robot.initial``, gripper open,
-        object at its initial pose)."""
+        object at its initial pose). A spatial world comes with its ``spatial`` setup."""
+        if not isinstance(world, World):
+            assert spatial is not None  # a spatial world has its setup
+            self._spatial_world(world, spatial, planner, recording)
+            return
         for name, msg in messages.world_messages(world, planner, self._node_name, self.now_ns()):
             self.publish(name, msg, recording)
         self.publish_tf(frames.static_transforms(world.robot), self.now_ns(), recording, static=True)
         self.to_live("the world", lambda live: live.publish_world(world, goal=world.object.goal))
         self.arm(world, world.robot.initial, 0.0, world.object.initial, time_ns=self.now_ns(), recording=recording)
+
+    def _spatial_world(
+        self, world: SpatialWorld, setup: SpatialSetup, planner: PlannerSettings, recording: RunRecording
+    ) -> None:
+        now = self.now_ns()
+        self.publish("world_yaml", spatial.world_yaml_message(setup, world, planner, self._node_name), recording)
+        self.publish("world_markers", spatial.world_markers(world, now, simplify=_mesh_simplifier()), recording)
+        self.publish("robot_description", String(data=setup.description), recording)
+        self.publish_tf(spatial.static_transforms(setup, world), now, recording, static=True)
+        pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)
+        velocities = np.zeros(world.robot.dof)
+        self._spatial_state(
+            world, setup, world.initial, velocities, gripper=0.0, object_pose=pose, time_ns=now, recording=recording
+        )
+
+    def spatial_sample(
+        self, world: SpatialWorld, setup: SpatialSetup, state: TrackState, *, time_ns: int, recording: RunRecording
+    ) -> None:
+        """One played-back state of a spatial run: ``~/joint_states`` (every movable joint of the URDF),
+        ``~/object_pose``, ``/tf`` (every link, the object) and ``~/scene``."""
+        pose = None if world.object is None else state.object_pose
+        self._spatial_state(
+            world,
+            setup,
+            state.joints,
+            state.velocities,
+            gripper=state.gripper,
+            object_pose=pose,
+            time_ns=time_ns,
+            recording=recording,
+        )
+
+    def _spatial_state(
+        self,
+        world: SpatialWorld,
+        setup: SpatialSetup,
+        joints: np.ndarray,
+        velocities: np.ndarray,
+        *,
+        gripper: float,
+        object_pose: np.ndarray | None,
+        time_ns: int,
+        recording: RunRecording,
+    ) -> None:
+        self.publish("joint_states", spatial.joint_state(setup, world, joints, time_ns, velocities), recording)
+        if object_pose is not None:
+            self.publish("object_pose", spatial.pose_stamped(object_pose, time_ns), recording)
+        self.publish_tf(spatial.state_transforms(setup, world, joints, object_pose), time_ns, recording)
+        self.publish("scene", spatial.scene_markers(world, joints, gripper, object_pose, time_ns), recording)
 
     def arm(
         self,
@@ -135,7 +214,12 @@ class Publishing:
         self.to_live("a state", lambda live: live.publish_sample(names, np.asarray(joints), gripper, object_pose))
 
     def publish_tf(
-        self, transforms: list[frames.FrameTransform], time_ns: int, recording: RunRecording, *, static: bool = False
+        self,
+        transforms: Sequence[frames.FrameTransform | spatial.SpatialTransform],
+        time_ns: int,
+        recording: RunRecording,
+        *,
+        static: bool = False,
     ) -> None:
         """``transforms`` stamped ``time_ns`` on ``/tf`` (or ``/tf_static``): recorded, and published where
         ``tf2_msgs`` is installed; never raises."""

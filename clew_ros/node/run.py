@@ -35,7 +35,7 @@ import time
 import uuid
 from collections import OrderedDict
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from action_msgs.msg import GoalStatus
@@ -46,6 +46,9 @@ from clew_ros.node.run_recording import NO_RECORDING, RunRecording
 from clew_ros.planar.world import World
 from clew_ros.ros.events import outcome_status
 from clew_ros.ros.parameters import Configuration
+
+if TYPE_CHECKING:
+    from clew_ros.spatial.world import SpatialWorld
 
 __all__ = [
     "STATUS_HISTORY",
@@ -61,6 +64,16 @@ STATUS_HISTORY = 100
 
 #: What started a run (the ``source`` of its ``accepted`` event).
 Source = Literal["plan", "goal_pose"]
+
+
+def default_goal(world: World | SpatialWorld) -> np.ndarray:
+    """What ``~/plan`` plans to: the object's goal (planar ``(x, y, theta)``, spatial 6 numbers), or a
+    spatial motion-only query's ``world.robot.goal`` (joints)."""
+    if isinstance(world, World):
+        return np.asarray(world.object.goal, dtype=float)
+    if world.object is not None:
+        return np.asarray(world.object.goal, dtype=float)
+    return np.asarray(world.goal, dtype=float)
 
 
 class Phase(enum.Enum):
@@ -113,7 +126,7 @@ class Run:
         self.id = uuid.uuid4()
         self.goal_stamp_ns = goal_stamp_ns
         self.source: Source = source
-        self.goal = np.array(config.world.object.goal if goal is None else goal, dtype=float)
+        self.goal = np.array(default_goal(config.world) if goal is None else goal, dtype=float)
         self.config = config
         self.accepted_ns = accepted_ns
         self.start_s = time.monotonic()  # when accepted, on time.monotonic()
@@ -146,9 +159,13 @@ class Run:
         return self.id.hex
 
     @cached_property
-    def world(self) -> World:
+    def world(self) -> World | SpatialWorld:
         """The problem this run solves: the configured world with the run's goal."""
         world = self.config.world
+        if not isinstance(world, World):  # a spatial world: its goal placement (a motion-only query: as it is)
+            from clew_ros.ros.spatial import with_goal
+
+            return world if self.source == "plan" else with_goal(world, self.goal)
         return dataclasses.replace(world, object=dataclasses.replace(world.object, goal=self.goal))
 
     @property

@@ -11,6 +11,7 @@ fault in it ends the run ``INTERNAL_ERROR`` and never the node.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 from typing import TYPE_CHECKING
@@ -23,17 +24,23 @@ from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.motion.playback import GripperEvent, Track, TrackState, node_track
 from clew_ros.motion.player import play
+from clew_ros.motion.spatial import spatial_track
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.run import Phase, Run
 from clew_ros.node.run_recording import Recordings
-from clew_ros.planar.plan import checked_plan
+from clew_ros.planar.plan import Plan, checked_plan
 from clew_ros.planar.space import plan
+from clew_ros.planar.world import World
 from clew_ros.ros import messages
+from clew_ros.ros import spatial as spatial_messages
 from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields
 from clew_ros.ros.qos import GOAL_QOS
 
 if TYPE_CHECKING:
     from rclpy.impl.rcutils_logger import RcutilsLogger
+    from visualization_msgs.msg import MarkerArray
+
+    from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["RunWorker", "timed_plan"]
 
@@ -85,9 +92,12 @@ class RunWorker:
         out, config = self._out, run.config
         run.recording = self._recordings.open(config.node, run.hex)
         out.set_status(run.id, run.accepted_ns, GoalStatus.STATUS_ACCEPTED, current=True)
-        out.world(run.world, config.planner, run.recording)
+        out.world(run.world, config.planner, run.recording, config.spatial)
         now = out.now_ns()
-        run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)
+        if config.spatial is None:
+            run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)
+        elif len(run.goal) == 6:  # a spatial object goal (a motion-only query's goal is joints: no pose)
+            run.recording.write(self._goal_topic, spatial_messages.pose_stamped(run.goal, now), now, GOAL_QOS)
         out.publish_status(run.recording)
         request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}
         fields = accepted_fields(
@@ -129,9 +139,8 @@ class RunWorker:
         run.begin_planning()
         out.set_status(run.id, run.accepted_ns, run.status)
         out.publish_status(run.recording)
-        tree = LandmarkTree(config.world.robot.initial, config.world.object.initial)
-        polygon = config.world.object.polygon
-        out.publish("landmarks", messages.landmark_markers(tree, out.now_ns(), polygon), run.recording)
+        tree = _root_tree(run.world)
+        out.publish("landmarks", _landmark_markers(run.world, tree, out.now_ns()), run.recording)
         announced = [1]  # landmarks already announced (the root)
 
         out.to_live("the landmark tree", lambda live: live.publish_landmarks(tree))
@@ -144,13 +153,19 @@ class RunWorker:
             except Exception as error:  # noqa: BLE001 - never let a publishing fault end the planning
                 self._logger.error(f"run {run.hex}: cannot publish progress: {error!r}")
 
-        result = plan(
-            config.world,
-            config.planner,
-            goal=None if run.source == "plan" else run.goal,
-            termination=run.termination(),
-            progress=on_progress,
-        )
+        world = run.world
+        if isinstance(world, World):
+            result = plan(
+                world,
+                config.planner,
+                goal=None if run.source == "plan" else run.goal,
+                termination=run.termination(),
+                progress=on_progress,
+            )
+        else:  # a spatial world, its goal in it: clew_plan's planner, same settings, same plan
+            from clew_ros.spatial.space import plan as spatial_plan
+
+            result = spatial_plan(world, config.planner, termination=run.termination(), progress=on_progress)
         canceled = run.end_planning()
         run.landmarks = len(result.tree)
         self._announce_landmarks(run, result.tree, announced)
@@ -173,9 +188,7 @@ class RunWorker:
         for landmark in landmarks[announced[0] :]:
             self._out.event(run.id, "landmark", run.recording, **landmark_fields(landmark))
         announced[0] = len(landmarks)
-        self._out.publish(
-            "landmarks", messages.landmark_markers(tree, self._out.now_ns(), run.world.object.polygon), run.recording
-        )
+        self._out.publish("landmarks", _landmark_markers(run.world, tree, self._out.now_ns()), run.recording)
 
     def _publish_outcome(self, run: Run) -> None:
         """Publish the concluded outcome; then the ``~/plan`` answer goes out."""
@@ -187,6 +200,8 @@ class RunWorker:
         fields = outcome_fields(
             outcome, run.message, landmarks=run.landmarks, time_s=run.elapsed_s, recording=run.recording.text
         )
+        if run.track is not None and not run.track.gripper_joint:
+            fields |= spatial_plan_fields(run.track, has_object=getattr(run.world, "object", None) is not None)
         out.event(run.id, outcome_event(outcome), run.recording, **fields)
         if run.track is None:
             run.recording.close()  # no playback follows: the recording is complete before the answer goes out
@@ -212,9 +227,14 @@ class RunWorker:
 
         def on_sample(state: TrackState) -> None:
             now = out.now_ns()
+            world = run.world
+            if not isinstance(world, World):
+                assert run.config.spatial is not None  # a spatial world has its setup
+                out.spatial_sample(world, run.config.spatial, state, time_ns=now, recording=run.recording)
+                return
             for name, msg in messages.playback_messages(track.joint_names, state, now):
                 out.publish(name, msg, run.recording)
-            out.arm(run.world, state.joints, state.gripper, state.object_pose, time_ns=now, recording=run.recording)
+            out.arm(world, state.joints, state.gripper, state.object_pose, time_ns=now, recording=run.recording)
 
         def on_event(event: GripperEvent) -> None:
             out.event(run.id, event.kind, run.recording, at_s=float(event.time_s), grasp=event.grasp)
@@ -237,7 +257,69 @@ def timed_plan(run: Run, result: PlanResult) -> tuple[Outcome, str, Track | None
     The plan is checked against the run's problem (its goal) by
     :func:`~clew_ros.planar.plan.checked_plan`; one that fails is never published.
     """
-    planned = checked_plan(run.world, result)
+    world = run.world
+    if not isinstance(world, World):
+        return _timed_spatial_plan(run, world, result)
+    planned = checked_plan(world, result)
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
-    return result.outcome, result.message, node_track(run.world, planned, run.config.node)
+    return result.outcome, result.message, node_track(world, planned, run.config.node)
+
+
+def spatial_plan_file(world: SpatialWorld, result: PlanResult) -> Plan:
+    """The ``clew-plan/1`` plan of a spatial run (``"world_kind": "spatial"``, 6-number poses), validated
+    by :func:`clew_ros.spatial.plan.validate_plan`: a success that fails it becomes ``INTERNAL_ERROR``."""
+    from clew_ros.spatial.plan import WORLD_KIND, validate_plan
+
+    planned = dataclasses.replace(Plan.from_result(world, result), world_kind=WORLD_KIND)  # type: ignore[arg-type]
+    if world.object is None and planned.success:
+        planned = dataclasses.replace(planned, final_object_pose=None)
+    if not planned.success:
+        return planned
+    problems = validate_plan(world, planned)
+    if not problems:
+        return planned
+    return planned.failed(
+        Outcome.INTERNAL_ERROR, "internal error: the plan failed validation: " + "; ".join(problems[:3])
+    )
+
+
+def _timed_spatial_plan(run: Run, world: SpatialWorld, result: PlanResult) -> tuple[Outcome, str, Track | None]:
+    setup = run.config.spatial
+    assert setup is not None  # a spatial world has its setup
+    planned = spatial_plan_file(world, result)
+    if not planned.success:
+        return Outcome.INTERNAL_ERROR, planned.message, None
+    return result.outcome, result.message, spatial_track(world, planned, setup.joints, run.config.node)
+
+
+def spatial_plan_fields(track: Track, *, has_object: bool) -> dict[str, object]:
+    """What a spatial run's ``succeeded`` event adds, so that a client rebuilds the plan from
+    ``~/trajectory`` alone (its points carry no ``gripper``): ``segments``, each ``kind``, ``grasp`` and
+    the number of trajectory ``points`` it has (in order; together every point), and ``final_object_pose``
+    (6 numbers; ``None`` in a motion-only world)."""
+    segments = []
+    for index, grasp in enumerate(track.grasps):
+        segments.append(
+            {
+                "kind": "transit" if grasp is None else "transfer",
+                "grasp": grasp,
+                "points": int(np.count_nonzero(track.segment == index)),
+            }
+        )
+    final = [float(v) for v in track.object_poses[-1]] if has_object else None
+    return {"segments": segments, "final_object_pose": final}
+
+
+def _root_tree(world: World | SpatialWorld) -> LandmarkTree:
+    """The landmark tree's root (the start), as the planner's tree starts."""
+    if isinstance(world, World):
+        return LandmarkTree(world.robot.initial, world.object.initial)
+    pose = np.zeros(6) if world.object is None else np.asarray(world.object.initial, dtype=float)
+    return LandmarkTree(world.initial, pose)
+
+
+def _landmark_markers(world: World | SpatialWorld, tree: LandmarkTree, time_ns: int) -> MarkerArray:
+    if isinstance(world, World):
+        return messages.landmark_markers(tree, time_ns, world.object.polygon)
+    return spatial_messages.landmark_markers(world, tree, time_ns)

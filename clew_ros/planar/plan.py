@@ -43,6 +43,9 @@ __all__ = [
 FORMAT = "clew-plan/1"
 #: The segment kinds, in the order a plan alternates them.
 KINDS = ("transit", "transfer")
+#: ``world_kind`` (section 1b) and the numbers of an object pose in its plans: planar (x, y, theta), spatial
+#: (x, y, z, roll, pitch, yaw).
+POSE_WIDTH = {"planar": 3, "spatial": 6}
 
 
 def _numbers(values: Any, depth: int) -> bool:
@@ -129,7 +132,7 @@ class PlanLandmark:
         }
 
     @classmethod
-    def from_dict(cls, data: Any, what: str) -> PlanLandmark:
+    def from_dict(cls, data: Any, what: str, pose_width: int = 3) -> PlanLandmark:
         if not isinstance(data, Mapping):
             raise PlanFileError(f"{what}: expected an object with id, parent, joints, object_pose and grasp")
         identifier = _optional_int(data.get("id"), f"{what}.id")
@@ -139,7 +142,7 @@ class PlanLandmark:
             identifier,
             _optional_int(data.get("parent"), f"{what}.parent"),
             _array(data.get("joints"), f"{what}.joints", (None,)),
-            _array(data.get("object_pose"), f"{what}.object_pose", (3,)),
+            _array(data.get("object_pose"), f"{what}.object_pose", (pose_width,)),
             _optional_int(data.get("grasp"), f"{what}.grasp"),
         )
 
@@ -151,7 +154,9 @@ class Plan:
     ``code`` is the run's outcome name (``SUCCEEDED``, ``TIME_LIMIT``, ...;
     ``None`` for a plan rebuilt from a recorded trajectory, which has none);
     ``success`` is true exactly when the plan has segments to follow. A
-    failed plan has no segments and no ``final_object_pose``.
+    failed plan has no segments and no ``final_object_pose``. ``world_kind``
+    is ``planar`` or ``spatial`` (section 1b: object poses of 6 numbers; the
+    file says ``"world_kind": "spatial"``, a planar plan's file omits it).
     """
 
     world: str
@@ -163,6 +168,7 @@ class Plan:
     final_object_pose: np.ndarray | None = None
     landmarks: tuple[PlanLandmark, ...] = ()
     stats: Mapping[str, Any] = field(default_factory=dict)
+    world_kind: str = "planar"
 
     @property
     def outcome(self) -> Outcome | None:
@@ -204,6 +210,7 @@ class Plan:
         document: dict[str, Any] = {
             "format": FORMAT,
             "world": self.world,
+            **({} if self.world_kind == "planar" else {"world_kind": self.world_kind}),
             "success": self.success,
             "message": self.message,
         }
@@ -261,9 +268,13 @@ class Plan:
         if not isinstance(message, str):
             raise PlanFileError(f"{source}: message: expected text, got {short_repr(message)}")
         final = data.get("final_object_pose")
+        kind = data.get("world_kind", "planar")
+        if not isinstance(kind, str) or kind not in POSE_WIDTH:
+            raise PlanFileError(f"{source}: world_kind: expected one of {list(POSE_WIDTH)}, got {kind!r:.80}")
+        width = POSE_WIDTH[kind]
         read_segments = tuple(PlanSegment.from_dict(s, f"{source}: segments[{i}]") for i, s in enumerate(segments))
         read_landmarks = tuple(
-            PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]") for i, lm in enumerate(landmarks)
+            PlanLandmark.from_dict(lm, f"{source}: landmarks[{i}]", width) for i, lm in enumerate(landmarks)
         )
         _check_widths(source, len(names), read_segments, read_landmarks)
         return cls(
@@ -273,9 +284,10 @@ class Plan:
             message=message,
             code=code,
             segments=read_segments,
-            final_object_pose=None if final is None else _array(final, f"{source}: final_object_pose", (3,)),
+            final_object_pose=None if final is None else _array(final, f"{source}: final_object_pose", (width,)),
             landmarks=read_landmarks,
             stats=dict(stats),
+            world_kind=kind,
         )
 
     @classmethod
@@ -455,6 +467,8 @@ def validate_plan(world: World, plan: Plan | Mapping[str, Any], step_rad: float 
 def _structure_problems(world: World, plan: Plan) -> list[str]:
     """What section 2 says of the plan's shape, before any configuration is checked."""
     problems = []
+    if plan.world_kind != "planar":
+        return [f"world_kind: expected planar (the world's kind), got {plan.world_kind!r}"]
     if plan.world != world.name:
         problems.append(f"world: expected {world.name!r}, got {plan.world!r}")
     if list(plan.joint_names) != world.robot.joint_names:

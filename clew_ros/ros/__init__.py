@@ -8,6 +8,8 @@
   (:class:`~clew_ros.ros.parameters.NodeSettings`).
 - ``urdf``: the arm's URDF (``~/robot_description``) generated from the world; no rclpy.
 - ``frames``: the arm's and the object's TF frames (``/tf``, ``/tf_static``) at a joint state; no rclpy.
+- ``spatial``: spatial worlds (interface.md section 1b) in ROS terms: the world of the parameters, the
+  world's URDF as published, ``~/goal_pose`` as a stable placement, 3-D markers, every joint and link frame.
 
 The node (:mod:`clew_ros.node`), its client (:mod:`clew_ros.client`) and the recordings made offline
 (``clew_batch --record``) build their messages here, so they agree on every field. Importing this package

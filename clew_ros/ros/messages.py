@@ -483,16 +483,17 @@ def joint_trajectory(track: Track, time_ns: int) -> JointTrajectory:
     """``~/trajectory``: the track's points; ``header.stamp`` is when playback starts.
 
     Every point carries positions, velocities and accelerations of every
-    joint (``gripper``: velocity and acceleration 0), as
-    ``joint_trajectory_controller`` expects.
+    joint (``gripper``: velocity and acceleration 0; a spatial track has no
+    ``gripper`` joint), as ``joint_trajectory_controller`` expects.
     """
     msg = JointTrajectory(header=_header(time_ns), joint_names=list(track.joint_names))
     for k in range(len(track.times_ns)):
+        gripper, zero = ([float(track.gripper[k])], [0.0]) if track.gripper_joint else ([], [])
         msg.points.append(
             JointTrajectoryPoint(
-                positions=[float(v) for v in track.positions[k]] + [float(track.gripper[k])],
-                velocities=[float(v) for v in track.velocities[k]] + [0.0],
-                accelerations=[float(v) for v in track.accelerations[k]] + [0.0],
+                positions=[float(v) for v in track.positions[k]] + gripper,
+                velocities=[float(v) for v in track.velocities[k]] + zero,
+                accelerations=[float(v) for v in track.accelerations[k]] + zero,
                 time_from_start=duration_msg(int(track.times_ns[k])),
             )
         )

@@ -43,7 +43,7 @@ import dataclasses
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
@@ -66,10 +66,15 @@ from clew_ros.core.settings import PlannerSettings
 from clew_ros.planar.collision import check_start_and_goal
 from clew_ros.planar.world import World, read_parameter_file, world_from_parameters
 
+if TYPE_CHECKING:
+    from clew_ros.ros.spatial import SpatialSetup
+    from clew_ros.spatial.world import SpatialWorld
+
 __all__ = [
     "DEFAULT_WORLD_FILE",
     "NODE_PARAMETERS",
     "OWN_PREFIXES",
+    "SPATIAL_PARAMETER",
     "WORLD_PARAMETERS",
     "Configuration",
     "NodeSettings",
@@ -79,6 +84,7 @@ __all__ = [
     "descriptor_for",
     "flatten",
     "initial_values",
+    "is_spatial",
     "nest",
     "node_settings",
     "plain_value",
@@ -171,11 +177,36 @@ assert sorted(SETTINGS_FIELDS.values()) == sorted(NODE_PARAMETERS)
 
 @dataclass(frozen=True)
 class Configuration:
-    """Everything the parameters describe, checked: the world, the planner and the node settings."""
+    """Everything the parameters describe, checked: the world, the planner and the node settings.
 
-    world: World
+    A spatial world (``world.kind: spatial``, interface.md section 1b) comes with its ``spatial`` setup
+    (:class:`~clew_ros.ros.spatial.SpatialSetup`); a planar one has none.
+    """
+
+    world: World | SpatialWorld
     planner: PlannerSettings
     node: NodeSettings
+    spatial: SpatialSetup | None = None
+
+
+#: The value of ``world.kind`` that selects a spatial world (section 1b); ``planar`` is the default.
+SPATIAL_KIND = "spatial"
+
+#: The spec of a spatial world's parameters other than those of :data:`WORLD_PARAMETERS` (the spatial
+#: world parser checks them, naming the one at fault).
+SPATIAL_PARAMETER = ParameterSpec(
+    "world.<spatial>",
+    ParameterType.STRING,
+    None,
+    "A parameter of a spatial world (interface.md section 1b: world.kind spatial), checked with the whole "
+    "world when the node starts.",
+    locked=True,
+)
+
+
+def is_spatial(values: Mapping[str, Any]) -> bool:
+    """Whether parameter values (full name -> value) describe a spatial world (``world.kind: spatial``)."""
+    return plain_value(values.get("world.kind")) == SPATIAL_KIND
 
 
 # --------------------------------------------------------------------------- trees and values
@@ -240,12 +271,17 @@ def initial_values(overrides: Mapping[str, Any], default_file: Path | None = Non
     overrides = {k: plain_value(v) for k, v in overrides.items() if k.startswith(OWN_PREFIXES)}
     values: dict[str, Any] = {}
     has_world = any(name.startswith("world.") for name in overrides)
+    tables = (
+        (PLANNER_PARAMETERS, NODE_PARAMETERS)
+        if is_spatial(overrides)
+        else (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS)
+    )
     embedded: dict[str, Any] = {}
     if not has_world:
         path = default_world_file() if default_file is None else default_file
         tree = read_parameter_file(path)
         embedded = {k: v for k, v in flatten(tree).items() if k.startswith(("world.", "planner."))}
-    for table in (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS):
+    for table in tables:
         for spec in table.values():
             values[spec.name] = None if spec.required else spec.default
     values.update(embedded)
@@ -256,9 +292,11 @@ def initial_values(overrides: Mapping[str, Any], default_file: Path | None = Non
 # --------------------------------------------------------------------------- checks
 
 
-def _check_known(name: str) -> None:
+def _check_known(name: str, *, spatial: bool = False) -> None:
     if name in RETIRED_PARAMETERS:
         return  # accepted and ignored (the node warns at start: retired_names)
+    if spatial and name.startswith("world."):
+        return  # the spatial world parser checks the whole tree, naming the parameter at fault
     if name.startswith("world."):
         key = name[len("world.") :]
         if key in WORLD_PARAMETERS:
@@ -290,12 +328,14 @@ def _world_tree(values: Mapping[str, Any], *, listed_obstacles_only: bool) -> di
         world = {
             k: v
             for k, v in world.items()
-            if not k.startswith("world.obstacles.") or k[len("world.obstacles.") :] in names
+            if not k.startswith("world.obstacles.") or k[len("world.obstacles.") :].split(".")[0] in names
         }
     return nest(world)
 
 
-def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_only: bool = False) -> Configuration:
+def configuration_from_values(
+    values: Mapping[str, Any], *, listed_obstacles_only: bool = False, previous: Configuration | None = None
+) -> Configuration:
     """Check every value (full name -> value) and build the configuration.
 
     Raises :class:`~clew_ros.core.errors.ParameterError` (or its subclass
@@ -303,20 +343,43 @@ def configuration_from_values(values: Mapping[str, Any], *, listed_obstacles_onl
     ``listed_obstacles_only``, ``world.obstacles.<name>`` parameters whose
     name is not in ``world.obstacle_names`` are ignored (a parameter cannot
     be undeclared by ``ros2 param set``, so removing a name from the list
-    retires its polygon); without it they are an error (at start).
+    retires its polygon); without it they are an error (at start). A spatial world
+    (``world.kind: spatial``) is read by :func:`clew_ros.ros.spatial.load_spatial`; ``previous``'s is
+    reused when its ``world.*`` values are the same.
     """
     values = {k: plain_value(v) for k, v in values.items() if k.startswith(OWN_PREFIXES)}
+    spatial = is_spatial(values)
     for name in values:
-        _check_known(name)
+        _check_known(name, spatial=spatial)
     world_tree = _world_tree(values, listed_obstacles_only=listed_obstacles_only)
-    world = check_start_and_goal(world_from_parameters(world_tree))
+    setup = None
+    world: World | SpatialWorld
+    if spatial:
+        world, setup = _spatial_world(world_tree, previous)
+    else:
+        world = check_start_and_goal(world_from_parameters(world_tree))
     planner_tree = {
         k[len("planner.") :]: v
         for k, v in values.items()
         if k.startswith("planner.") and v is not None and k not in RETIRED_PARAMETERS
     }
     planner = PlannerSettings.from_parameters({"planner": planner_tree})
-    return Configuration(world, planner, node_settings(values, world.robot.dof))
+    return Configuration(world, planner, node_settings(values, world.robot.dof), setup)
+
+
+def _spatial_world(tree: dict[str, Any], previous: Configuration | None) -> tuple[SpatialWorld, SpatialSetup]:
+    """The spatial world of a ``world`` tree, relative paths read from the working directory; the previous
+    configuration's world when its tree is the same (loading the robot and its sphere model takes seconds)."""
+    if previous is not None and previous.spatial is not None and previous.spatial.tree == tree:
+        return previous.world, previous.spatial  # type: ignore[return-value]  # a spatial setup: a spatial world
+    from clew_ros.ros.spatial import load_spatial
+
+    try:
+        return load_spatial(tree, Path.cwd())
+    except ImportError as error:
+        raise WorldError(
+            "world.kind", f"spatial worlds need the spatial extra (pip install 'clew_ros[spatial]'): {error}"
+        ) from None
 
 
 def node_settings(values: Mapping[str, Any], dof: int) -> NodeSettings:
@@ -367,10 +430,11 @@ def descriptor_for(name: str, *, allow_runtime_changes: bool = False) -> Paramet
 
 
 def _spec_of(name: str) -> ParameterSpec:
-    if name.startswith("world.obstacles."):
+    if name.startswith("world.obstacles.") and name.count(".") == 2:
         return OBSTACLE_PARAMETER
     if name.startswith("world."):
-        return WORLD_PARAMETERS[name[len("world.") :]]
+        key = name[len("world.") :]
+        return WORLD_PARAMETERS.get(key, SPATIAL_PARAMETER)
     if name.startswith("planner."):
         return PLANNER_PARAMETERS[name[len("planner.") :]]
     return NODE_PARAMETERS[name]

@@ -112,6 +112,12 @@ class SpatialChecker:
             raise ValueError("resting_object and held: the object either rests or is held, not both")
         self.robot = robot
         self.spheres = spheres
+        #: The scene's obstacles (without the resting object), the bounds, the held and the resting object, as
+        #: given: what :func:`~clew_ros.spatial.validate.explain_invalid` tries one at a time.
+        self.scene_obstacles = tuple(obstacles)
+        self.bounds = None if bounds is None else np.asarray(bounds, dtype=np.float64)
+        self.held = held
+        self.resting_object = resting_object
         self.obstacles = tuple(obstacles) + ((resting_object,) if resting_object is not None else ())
         n_links = len(robot.links)
         gripper = [link.name in robot.gripper_links for link in robot.links]

@@ -1,4 +1,4 @@
-"""The validator's check of a spatial transit path (interface.md section 1b, "A spatial configuration is valid").
+"""The validator's check of a spatial path (interface.md section 1b, "A spatial configuration is valid").
 
 :func:`validate_transit` takes joint waypoints and checks every configuration along the straight
 joint-space pieces between consecutive ones, sampled so that no revolute joint moves more than
@@ -7,19 +7,22 @@ joint-space pieces between consecutive ones, sampled so that no revolute joint m
 :class:`~clew_ros.spatial.checker.SpatialChecker` (joint limits, obstacles, bounds, self-collision, on
 the sphere model that covers the URDF's geometry). It returns the problems found, one per piece that has
 any (empty: the path is valid), each naming the piece, the first invalid configuration on it and why.
-Transit only: no object is carried.
+The checker says what the object does: resting where it lies (a transit) or held (a transfer, with
+:class:`~clew_ros.spatial.checker.Held`); :func:`explain_invalid` names the held object's collisions too.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.checker import Held, SpatialChecker
+from clew_ros.spatial.scene import Obstacle
 
 __all__ = ["ValidationSettings", "explain_invalid", "validate_transit", "validation_samples"]
 
@@ -32,9 +35,14 @@ class ValidationSettings:
     step_rad: float = 0.002
     #: Largest move of a prismatic joint between two checked configurations (m): the contract's 0.001.
     step_m: float = 0.001
+    #: How far (rad, m) a segment's first waypoint may be from where the previous one ended (or from
+    #: ``world.robot.initial``), and a motion-only plan's end from ``world.robot.goal``: the contract's 1e-6.
+    match_rad: float = 1e-6
+    #: How far ``final_object_pose`` may be from the replayed pose (m, and rad of rotation): the contract's 1e-4.
+    pose_match: float = 1e-4
 
     def __post_init__(self) -> None:
-        for name in ("step_rad", "step_m"):
+        for name in ("step_rad", "step_m", "match_rad", "pose_match"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
                 raise ValueError(f"ValidationSettings.{name}: expected a positive finite number, got {value!r}")
@@ -53,8 +61,9 @@ def validation_samples(
 
 
 def explain_invalid(checker: SpatialChecker, q: NDArray[np.float64]) -> str:
-    """Why ``checker`` calls configuration ``q`` invalid: a joint outside its limits, the obstacles it
-    touches, a self-collision, or the bounds."""
+    """Why ``checker`` calls configuration ``q`` invalid: a joint outside its limits, the obstacles a link
+    touches, the resting object touched by a link that may not touch it, a self-collision, the held object
+    touching an obstacle or a link, or the bounds (each cause tried alone)."""
     robot = checker.robot
     for j, name in enumerate(robot.joint_names):
         if not robot.lower[j] <= q[j] <= robot.upper[j]:
@@ -62,14 +71,44 @@ def explain_invalid(checker: SpatialChecker, q: NDArray[np.float64]) -> str:
     if checker.static_collision:
         return "a link no joint moves touches an obstacle or leaves the bounds"
     row = q[None]
-    reasons = [
-        f"touches obstacle {obstacle.name!r}"
-        for obstacle in checker.obstacles
-        if not SpatialChecker(robot, checker.spheres, [obstacle]).valid(row)[0]
-    ]
+
+    def free(obstacles: Sequence[Obstacle] = (), **options: Any) -> bool:
+        alone = SpatialChecker(robot, checker.spheres, obstacles, self_collision=False, **options)
+        return bool(alone.valid(row)[0])
+
+    arm_touches = [o for o in checker.scene_obstacles if not free([o])]
+    reasons = [f"touches obstacle {o.name!r}" for o in arm_touches]
+    if checker.resting_object is not None and not free(resting_object=checker.resting_object):
+        reasons.append("a link other than the gripper links touches the object where it rests")
     if not SpatialChecker(robot, checker.spheres).valid(row)[0]:
         reasons.append("a self-collision (two links not exempted touch)")
+    held = checker.held
+    if held is not None:
+        reasons += _held_reasons(checker, held, arm_touches, free)
+    if checker.bounds is not None and not reasons:
+        if not free(bounds=checker.bounds):
+            reasons.append("leaves the bounds")
+        elif held is not None and not free(bounds=checker.bounds, held=replace(held, supports=())):
+            reasons.append("the held object leaves the bounds")
     return ", ".join(reasons) or "leaves the bounds"
+
+
+def _held_reasons(
+    checker: SpatialChecker, held: Held, arm_touches: Sequence[Obstacle], free: Callable[..., bool]
+) -> list[str]:
+    """What the held object touches: a link other than the gripper links, or obstacles (a support from
+    below its top) the arm itself does not touch."""
+    if not free(held=replace(held, supports=())):
+        return ["the held object touches a link other than the gripper links"]
+    reasons = []
+    for obstacle in checker.scene_obstacles:
+        if obstacle in arm_touches:
+            continue
+        own = tuple(s for s in held.supports if s.name == obstacle.name)
+        if not free([obstacle], held=replace(held, supports=own)):
+            where = "sinks below the top of support" if own else "touches obstacle"
+            reasons.append(f"the held object {where} {obstacle.name!r}")
+    return reasons
 
 
 def validate_transit(checker: SpatialChecker, waypoints: Any, settings: ValidationSettings | None = None) -> list[str]:

@@ -152,10 +152,16 @@ def _object(
 
 
 def spatial_world_from_parameters(
-    parameters: Mapping[str, Any], folder: Path, settings: SphereSettings | None = None
+    parameters: Mapping[str, Any],
+    folder: Path,
+    settings: SphereSettings | None = None,
+    *,
+    prepared: tuple[RobotModel, SphereModel] | None = None,
 ) -> SpatialWorld:
     """The spatial world of a ``ros__parameters`` tree (its ``world`` key, ``world.kind: spatial``); paths are
-    read relative to ``folder`` (the parameter file's). ``settings`` tune the sphere model."""
+    read relative to ``folder`` (the parameter file's). ``settings`` tune the sphere model. ``prepared``: the
+    robot of ``world.robot`` and its sphere model, already loaded (a generator building many worlds around one
+    arm); ``world.robot`` is then read only for ``initial`` and ``goal``."""
     tree = parameters.get("world") if isinstance(parameters, Mapping) else None
     if not isinstance(tree, Mapping):
         raise WorldError("world", f"expected a mapping of world parameters, got {short_repr(tree)}")
@@ -166,7 +172,7 @@ def spatial_world_from_parameters(
         raise WorldError("world.name", f"expected a non-empty string, got {short_repr(name)}")
     if not isinstance(tree.get("robot"), Mapping):
         raise WorldError("world.robot", "expected the robot's parameters (urdf or description, base_link, tip_link)")
-    robot = robot_from_parameters(tree["robot"], folder)
+    robot = robot_from_parameters(tree["robot"], folder) if prepared is None else prepared[0]
     obstacles = world_obstacles(tree, folder, {robot.base_link: robot.base})
     bounds = bounds_from_parameters(tree)
     supports = supports_from_parameters(tree, obstacles)
@@ -189,7 +195,7 @@ def spatial_world_from_parameters(
         thing = _object(tree, supports, tolerances["placement_tolerance"], tolerances["grasp_tolerance"])
     if thing is None and goal is None:
         raise WorldError("world.object", "expected an object to move, or world.robot.goal for a motion-only query")
-    spheres = sphere_model(robot, settings)
+    spheres = sphere_model(robot, settings) if prepared is None else prepared[1]
     return SpatialWorld(
         name=name,
         robot=robot,

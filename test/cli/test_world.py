@@ -15,6 +15,7 @@ from clew_ros.planar.collision import check_start_and_goal
 from clew_ros.planar.plan import Plan, validate_plan
 from clew_ros.planar.world import load_world
 from clew_ros.worlds import FAMILIES
+from clew_ros.worlds.spatial import SPATIAL_FAMILIES
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -33,7 +34,7 @@ def run(module: str, *args: object, timeout: float = 300) -> subprocess.Complete
 def test_list_prints_every_family_on_a_line(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--list"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert [line.split()[0] for line in lines] == list(FAMILIES)
+    assert [line.split()[0] for line in lines] == [*FAMILIES, *SPATIAL_FAMILIES]
     assert all(len(line.split(None, 1)[1]) > 20 for line in lines)
 
 

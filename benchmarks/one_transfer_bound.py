@@ -30,12 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from benchmarks.reference import load_worlds, plan_segment, planner_runs, succeeded_plan
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.planar.continuous import ContinuousSettings, straight_moves_clear
 from clew_ros.planar.improve import ImproveSettings, check_work, joint_travel
 from clew_ros.planar.kinematics import compose, relative
 from clew_ros.planar.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
-from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.world import World
 
 

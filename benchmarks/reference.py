@@ -60,10 +60,11 @@ from typing import Any
 import numpy as np
 
 from benchmarks.joint_grid import Graph, Lattice, Mode, shortest_paths, trace
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.planar.collision import check_start_and_goal, packed_world
 from clew_ros.planar.kernel import clearly_valid
 from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
-from clew_ros.planar.plan import Plan, PlanSegment, replay, validate_plan
+from clew_ros.planar.plan import replay, validate_plan
 from clew_ros.planar.world import World
 
 __all__ = ["DEFAULT_WORLDS", "ReferenceResult", "ReferenceSettings", "main", "reference_plan"]

@@ -33,10 +33,10 @@ from pathlib import Path
 import numpy as np
 from action_msgs.msg import GoalStatus
 
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.motion.playback import node_track
 from clew_ros.motion.player import scheduled_samples
-from clew_ros.planar.plan import Plan
 from clew_ros.planar.world import World
 from clew_ros.recording import RecordingError, RunRecorder
 from clew_ros.recording.cdr import tf_message

@@ -31,8 +31,8 @@ from clew_ros.core.files import private_folders
 
 if TYPE_CHECKING:
     from clew_ros.batch.jobs import BatchWorld
+    from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
-    from clew_ros.planar.plan import Plan
     from clew_ros.planar.world import World
 
 __all__ = [

@@ -37,8 +37,8 @@ from clew_ros.batch.recording import has_recording, recording_files, write_recor
 from clew_ros.batch.worker import JobOutcome, JobSpec
 from clew_ros.core.errors import PlanFileError
 from clew_ros.core.files import private_folders
+from clew_ros.core.plan import Plan
 from clew_ros.planar.offline import failed_plan
-from clew_ros.planar.plan import Plan
 
 __all__ = ["DEFAULT_GRACE_S", "BatchReport", "has_valid_output", "job_spec", "run_batch"]
 

@@ -27,7 +27,7 @@ from multiprocessing.connection import Connection
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from clew_ros.planar.plan import Plan
+    from clew_ros.core.plan import Plan
 
 __all__ = ["JobFunction", "JobOutcome", "JobSpec", "prepare", "run_job", "run_prepared", "serve"]
 

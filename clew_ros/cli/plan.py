@@ -27,10 +27,10 @@ from pathlib import Path
 
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
+from clew_ros.core.plan import Plan
 from clew_ros.live import DEFAULT_PORT, HOST, INSTALL_HINT, LiveView, LiveViewError, LiveViewUnavailableError
 from clew_ros.planar.kernel import warm_up
 from clew_ros.planar.offline import Problem, plan_problem, problem_from_parameters
-from clew_ros.planar.plan import Plan
 from clew_ros.planar.world import World, read_parameter_file
 
 EXIT_ABORTED = 130

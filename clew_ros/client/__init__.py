@@ -4,7 +4,7 @@
   namespace) and follows the runs they start;
 - :class:`RunHandle` is one goal: its run id, :class:`RunStatus`, latest
   :class:`Feedback`, and when it ends a :class:`RunResult` (outcome code,
-  message, the :class:`~clew_ros.planar.plan.Plan` and its timed trajectory,
+  message, the :class:`~clew_ros.core.plan.Plan` and its timed trajectory,
   the recording directory);
 - :class:`PlannerNotFoundError` and :class:`RunTimeoutError` say that no
   planner answered, or not in time; everything else is an outcome code

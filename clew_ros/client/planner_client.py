@@ -57,8 +57,8 @@ from clew_ros.client.run import (
     RunTimeoutError,
 )
 from clew_ros.core.errors import ClewError
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.core.settings import Outcome
-from clew_ros.planar.plan import Plan, PlanSegment
 from clew_ros.planar.world import World, world_from_parameters
 from clew_ros.recording.trajectory import trajectory_to_plan
 from clew_ros.ros import messages

@@ -16,8 +16,8 @@ from typing import Any, Protocol
 
 from trajectory_msgs.msg import JointTrajectory
 
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome
-from clew_ros.planar.plan import Plan
 
 __all__ = [
     "Feedback",

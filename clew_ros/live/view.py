@@ -52,8 +52,8 @@ import numpy as np
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.parameters import NODE_PARAMETERS, ParameterType, check_joint_count, check_value
+from clew_ros.core.plan import Plan
 from clew_ros.live.errors import LiveViewError, LiveViewUnavailableError
-from clew_ros.planar.plan import Plan
 from clew_ros.planar.world import World
 
 if TYPE_CHECKING:

@@ -1,6 +1,6 @@
 """The timed form of a plan: trajectory points, grasp events and playback samples.
 
-Pure NumPy over the core's :class:`~clew_ros.planar.plan.Plan` and kinematics;
+Pure NumPy over the core's :class:`~clew_ros.core.plan.Plan` and kinematics;
 no rclpy, so it is tested without a ROS graph. ``messages`` turns a
 :class:`Track` into a ``JointTrajectory``; the node samples it in time to
 publish ``~/joint_states`` and ``~/object_pose``.
@@ -36,9 +36,10 @@ from typing import Protocol
 import numpy as np
 
 from clew_ros.core.parameters import NODE_PARAMETERS
+from clew_ros.core.plan import Plan
 from clew_ros.motion.timing import profile, rest_to_rest_duration_s
 from clew_ros.planar.kinematics import compose, tip_poses
-from clew_ros.planar.plan import Plan, replay
+from clew_ros.planar.plan import replay
 from clew_ros.planar.world import World
 
 __all__ = [

@@ -30,7 +30,7 @@ from clew_ros.motion.timing import rest_to_rest_duration_s
 from clew_ros.spatial.transforms import axis_motion, matrix_pose, pose_matrix
 
 if TYPE_CHECKING:
-    from clew_ros.planar.plan import Plan
+    from clew_ros.core.plan import Plan
     from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["UrdfJoint", "UrdfTree", "spatial_track", "velocity_limits"]

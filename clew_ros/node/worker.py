@@ -20,6 +20,7 @@ import numpy as np
 from action_msgs.msg import GoalStatus
 
 from clew_ros.core.clew import PlanResult, Progress
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.motion.playback import GripperEvent, Track, TrackState, node_track
@@ -28,7 +29,7 @@ from clew_ros.motion.spatial import spatial_track
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.run import Phase, Run
 from clew_ros.node.run_recording import Recordings
-from clew_ros.planar.plan import Plan, checked_plan
+from clew_ros.planar.plan import checked_plan
 from clew_ros.planar.space import plan
 from clew_ros.planar.world import World
 from clew_ros.ros import messages
@@ -271,7 +272,7 @@ def spatial_plan_file(world: SpatialWorld, result: PlanResult) -> Plan:
     by :func:`clew_ros.spatial.plan.validate_plan`: a success that fails it becomes ``INTERNAL_ERROR``."""
     from clew_ros.spatial.plan import WORLD_KIND, validate_plan
 
-    planned = dataclasses.replace(Plan.from_result(world, result), world_kind=WORLD_KIND)  # type: ignore[arg-type]
+    planned = dataclasses.replace(Plan.from_result(world, result), world_kind=WORLD_KIND)
     if world.object is None and planned.success:
         planned = dataclasses.replace(planned, final_object_pose=None)
     if not planned.success:

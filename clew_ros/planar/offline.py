@@ -1,4 +1,4 @@
-"""Offline planning: a parameter file (or its parsed tree) to a checked :class:`~clew_ros.planar.plan.Plan`.
+"""Offline planning: a parameter file (or its parsed tree) to a checked :class:`~clew_ros.core.plan.Plan`.
 
 The one path ``clew_plan`` and ``clew_batch`` share, so that a batch job
 gives exactly the plan ``clew_plan WORLD --seed S`` gives:
@@ -24,10 +24,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from clew_ros.core.clew import PlanResult, Progress
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.planar.collision import check_start_and_goal
-from clew_ros.planar.plan import Plan, checked_plan
+from clew_ros.planar.plan import checked_plan
 from clew_ros.planar.space import plan
 from clew_ros.planar.world import World, world_from_parameters
 

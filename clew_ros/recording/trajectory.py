@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 
 from clew_ros.core.errors import short_repr
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.planar.kinematics import tip_poses, transform_points
-from clew_ros.planar.plan import Plan, PlanSegment, replay
+from clew_ros.planar.plan import replay
 from clew_ros.planar.world import World
 from clew_ros.recording.errors import TrajectoryError
 
@@ -71,7 +72,7 @@ def trajectory_to_plan(
     strict: bool = False,
     source: str = "trajectory",
 ) -> Plan:
-    """The :class:`~clew_ros.planar.plan.Plan` that a ``JointTrajectory`` plays.
+    """The :class:`~clew_ros.core.plan.Plan` that a ``JointTrajectory`` plays.
 
     Parameters
     ----------

@@ -19,7 +19,7 @@ import numpy as np
 import yaml
 
 from clew_ros.core.errors import ClewError, PlanFileError
-from clew_ros.planar.plan import Plan, PlanLandmark
+from clew_ros.core.plan import Plan, PlanLandmark
 from clew_ros.planar.world import World, load_world, world_from_parameters
 from clew_ros.render.errors import RenderError
 from clew_ros.scene.items import TreeItems

@@ -40,11 +40,11 @@ from unique_identifier_msgs.msg import UUID
 from visualization_msgs.msg import Marker, MarkerArray
 
 from clew_ros.core.parameters import LIMITS
+from clew_ros.core.plan import PlanLandmark
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.motion.playback import Track, TrackState
 from clew_ros.planar.kinematics import transform_points
-from clew_ros.planar.plan import PlanLandmark
 from clew_ros.planar.world import World, world_to_parameters
 from clew_ros.ros.urdf import robot_urdf, visual_width_m
 from clew_ros.scene.items import TreeItems, WorldItems, arm_items, tree_items, world_items

@@ -40,7 +40,7 @@ HOLDING_THRESHOLD = 0.5
 
 class LandmarkLike(Protocol):
     """What is drawn of a landmark: a :class:`~clew_ros.core.tree.Landmark` or a plan's
-    :class:`~clew_ros.planar.plan.PlanLandmark`."""
+    :class:`~clew_ros.core.plan.PlanLandmark`."""
 
     @property
     def id(self) -> int: ...

@@ -12,8 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clew_ros.core.plan import Plan
 from clew_ros.planar.kinematics import joint_positions
-from clew_ros.planar.plan import Plan, replay
+from clew_ros.planar.plan import replay
 from clew_ros.planar.world import World
 
 __all__ = ["Motion", "TipPiece", "plan_motion"]

@@ -1,6 +1,6 @@
 """Spatial plans (interface.md section 1b "Plan file", and section 2): the file, its replay and validator.
 
-The file is core's ``clew-plan/1`` (:class:`~clew_ros.planar.plan.Plan`: one reader, one writer, the same
+The file is core's ``clew-plan/1`` (:class:`~clew_ros.core.plan.Plan`: one reader, one writer, the same
 limits and errors) with ``"world_kind": "spatial"`` and object poses of 6 numbers ``[x, y, z, roll,
 pitch, yaw]`` (``final_object_pose``, landmarks' ``object_pose``). :func:`replay` carries the object
 through a plan: it rests where it lies during a transit; during a transfer it keeps the pose relative to
@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import PlanFileError
-from clew_ros.planar.plan import Plan, PlanLandmark, PlanSegment
+from clew_ros.core.plan import Plan, PlanLandmark, PlanSegment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere

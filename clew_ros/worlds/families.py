@@ -30,10 +30,11 @@ import numpy as np
 import shapely
 
 from clew_ros.core.errors import WorldError
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.planar.collision import check_start_and_goal
 from clew_ros.planar.kinematics import wrap_angle
 from clew_ros.planar.passage import separation
-from clew_ros.planar.plan import Plan, PlanSegment, replay, validate_plan
+from clew_ros.planar.plan import replay, validate_plan
 from clew_ros.planar.world import World, world_from_parameters
 from clew_ros.worlds.arms import ArmShape, make_arm
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError

@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
+from clew_ros.core.plan import PlanSegment
 from clew_ros.planar.collision import is_valid
 from clew_ros.planar.kinematics import compose, tip_poses, transform_points, wrap_angle
-from clew_ros.planar.plan import PlanSegment
 from clew_ros.planar.world import World
 from clew_ros.worlds.arms import FULL_TURN_RAD, ArmShape
 from clew_ros.worlds.layouts import Layout, LayoutError, polygons, rectangle

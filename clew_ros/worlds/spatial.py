@@ -41,7 +41,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from clew_ros.planar.plan import Plan
+from clew_ros.core.plan import Plan
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere

@@ -16,8 +16,9 @@ import math
 import numpy as np
 import shapely
 
+from clew_ros.core.plan import Plan
 from clew_ros.planar.kinematics import compose, joint_positions, tip_poses, transform_points
-from clew_ros.planar.plan import Plan, replay
+from clew_ros.planar.plan import replay
 from clew_ros.planar.world import World
 
 __all__ = ["Sweep"]

@@ -15,7 +15,7 @@ object at rest or held count, exactly section 1's validity test), then the layou
 
 Every straight piece is checked at :data:`~clew_ros.planar.plan.CHECK_STEP_RAD` with
 :func:`~clew_ros.planar.collision.is_valid`, many candidates in one call. :func:`simulate` returns the
-segments as a :class:`~clew_ros.planar.plan.Plan` would hold them, or raises :class:`WitnessError`
+segments as a :class:`~clew_ros.core.plan.Plan` would hold them, or raises :class:`WitnessError`
 when a step found no valid candidate (the generator then starts over with the next random stream).
 """
 
@@ -27,9 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clew_ros.core.plan import PlanSegment
 from clew_ros.planar.collision import is_valid
 from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
-from clew_ros.planar.plan import CHECK_STEP_RAD, PlanSegment
+from clew_ros.planar.plan import CHECK_STEP_RAD
 from clew_ros.planar.world import World
 from clew_ros.worlds.shapes import ObjectShape
 

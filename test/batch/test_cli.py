@@ -26,7 +26,8 @@ from helpers.batch_cli import (
 from benchmarks.batch import group_alive
 from clew_ros.batch.index import COLUMNS
 from clew_ros.cli.batch import main
-from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.core.plan import Plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.world import load_world
 
 #: Long enough that a kill lands mid-batch: every job plans single_transfer (about 0.2-2 s each).

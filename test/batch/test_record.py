@@ -16,7 +16,7 @@ from helpers.batch_cli import CONFIG, ROOT, index_lines, run_batch_cli, without_
 pytest.importorskip("rclpy", reason="--record needs rclpy (the ros extra)")
 pytest.importorskip("mcap_ros2", reason="reading recordings back needs mcap-ros2-support")
 
-from clew_ros.planar.plan import Plan
+from clew_ros.core.plan import Plan
 from clew_ros.planar.world import load_world
 from clew_ros.recording import Recording, trajectory_to_plan
 

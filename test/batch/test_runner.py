@@ -15,7 +15,7 @@ from clew_ros.batch.executors import Finished, LocalPool
 from clew_ros.batch.jobs import load_worlds, make_jobs
 from clew_ros.batch.runner import has_valid_output, run_batch
 from clew_ros.batch.worker import JobSpec
-from clew_ros.planar.plan import Plan
+from clew_ros.core.plan import Plan
 
 
 def test_failed_jobs_are_recorded_with_their_reason_after_retries(

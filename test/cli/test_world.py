@@ -11,8 +11,9 @@ from pathlib import Path
 import pytest
 
 from clew_ros.cli.world import main
+from clew_ros.core.plan import Plan
 from clew_ros.planar.collision import check_start_and_goal
-from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.world import load_world
 from clew_ros.worlds import FAMILIES
 from clew_ros.worlds.spatial import SPATIAL_FAMILIES

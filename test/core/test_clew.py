@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from clew_ros.core.clew import Progress
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.space import plan
 from clew_ros.planar.world import load_world
 

@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from clew_ros.core.explore import Explorer
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.planar.kernel import warm_up
-from clew_ros.planar.plan import Plan, replay, validate_plan
+from clew_ros.planar.plan import replay, validate_plan
 from clew_ros.planar.reach import holding_configurations, holding_configurations_near
 from clew_ros.planar.search import _moves_clear_stopping, search_transfer
 from clew_ros.planar.space import PlanarSpace, plan

@@ -23,9 +23,9 @@ def quick_world():
 @functools.lru_cache(maxsize=1)
 def quick_plan() -> dict:
     """A successful plan for the quick world, as its plan file holds it (a dict); raises if the core finds none."""
+    from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
     from clew_ros.planar.kernel import warm_up
-    from clew_ros.planar.plan import Plan
     from clew_ros.planar.space import plan
 
     world = quick_world()

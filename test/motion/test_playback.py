@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from helpers.rec_plan import quick_plan, quick_world
 
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.motion.playback import MIN_STEP_NS, Track, track_from_plan
 from clew_ros.motion.timing import quintic_spline
 from clew_ros.planar.kinematics import compose, relative, tip_poses
-from clew_ros.planar.plan import Plan, PlanSegment
 from clew_ros.planar.space import plan
 from clew_ros.planar.world import World, load_world, read_parameter_file
 

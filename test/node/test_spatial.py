@@ -37,10 +37,11 @@ from mcap_ros2.decoder import DecoderFactory  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
+from clew_ros.core.plan import Plan  # noqa: E402
 from clew_ros.core.settings import PlannerSettings  # noqa: E402
 from clew_ros.motion.spatial import UrdfTree  # noqa: E402
 from clew_ros.motion.timing import PEAK_ACCELERATION, PEAK_VELOCITY  # noqa: E402
-from clew_ros.planar.plan import Plan, PlanSegment  # noqa: E402
+from clew_ros.planar.plan import PlanSegment  # noqa: E402
 from clew_ros.planar.world import read_parameter_file  # noqa: E402
 from clew_ros.ros.qos import GOAL_QOS  # noqa: E402
 from clew_ros.spatial.plan import make_plan, validate_plan  # noqa: E402

@@ -203,8 +203,9 @@ def test_rrt_connect_gives_up_when_stopped_walled_in_or_out_of_work() -> None:
 def test_a_join_that_fails_leaves_the_run_as_it_was(monkeypatch) -> None:
     """Joins draw from a generator of their own: a run whose joins all fail plans exactly what it plans with
     no joins at all; a run whose join succeeds gives a valid plan."""
+    from clew_ros.core.plan import Plan
     from clew_ros.planar import search
-    from clew_ros.planar.plan import Plan, validate_plan
+    from clew_ros.planar.plan import validate_plan
     from clew_ros.planar.space import PlanarTuning, plan
 
     calls: list[bool] = []

@@ -15,6 +15,7 @@ from helpers.open_reach import open_reach
 from helpers.random_boxes import random_box_world
 
 from clew_ros.core.clew import IMPROVE_STREAM
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Segment
@@ -25,7 +26,7 @@ from clew_ros.planar.inverse import solve_point
 from clew_ros.planar.kernel import pruned_path
 from clew_ros.planar.kinematics import compose, relative, tip_poses
 from clew_ros.planar.manhattan import run_manhattan
-from clew_ros.planar.plan import Plan, PlanSegment, replay, validate_plan
+from clew_ros.planar.plan import replay, validate_plan
 from clew_ros.planar.regrasp import goal_holds_near
 from clew_ros.planar.space import PlanarSpace, plan
 from clew_ros.planar.world import load_world, world_from_parameters

@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 
 from clew_ros.core.clew import IMPROVE_STREAM, PlanResult
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext
 from clew_ros.planar.improve import Improvement, _Improver, _pieces, _score, improve, joint_travel
-from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.space import PlanarSpace, plan
 from clew_ros.planar.world import World
 from clew_ros.worlds import generate

@@ -356,9 +356,9 @@ def test_the_compiled_first_pass_never_changes_the_validity_test(case):
 def test_the_same_seed_gives_the_same_plan_on_one_thread_and_on_all():
     """``planner.threads`` spreads a population over threads; every individual is decoded alone, so
     the plan is the same whatever the number of threads."""
+    from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
     from clew_ros.planar.kernel import available_threads
-    from clew_ros.planar.plan import Plan
     from clew_ros.planar.space import plan
     from clew_ros.planar.world import load_world
 

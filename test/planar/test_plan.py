@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from clew_ros.core.plan import FORMAT, Plan
 from clew_ros.core.settings import Outcome, PlannerSettings
-from clew_ros.planar.plan import FORMAT, Plan, validate_plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.space import plan
 from clew_ros.planar.world import load_world
 

@@ -16,7 +16,7 @@ import pytest
 from helpers.rec_plan import quick_plan, quick_world
 from PIL import Image
 
-from clew_ros.planar.plan import Plan
+from clew_ros.core.plan import Plan
 from clew_ros.render import (
     LandmarkGraph,
     draw_animation,

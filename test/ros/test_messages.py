@@ -19,11 +19,12 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import Marker
 
+from clew_ros.core.plan import Plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.motion.playback import track_from_plan
 from clew_ros.motion.timing import quintic_spline
-from clew_ros.planar.plan import Plan, validate_plan
+from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.space import plan
 from clew_ros.planar.world import load_world, world_from_parameters
 from clew_ros.recording import trajectory_to_plan

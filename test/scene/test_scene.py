@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from clew_ros.core.plan import PlanLandmark
 from clew_ros.planar.kinematics import joint_positions, transform_points
-from clew_ros.planar.plan import PlanLandmark
 from clew_ros.planar.world import load_world
 from clew_ros.render.shapes import COLORS, Paint
 from clew_ros.scene import (

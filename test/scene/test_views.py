@@ -14,8 +14,8 @@ pytest.importorskip("foxglove")
 
 from helpers.foxglove_client import protobuf_decoder
 
+from clew_ros.core.plan import PlanLandmark
 from clew_ros.live import messages as live
-from clew_ros.planar.plan import PlanLandmark
 from clew_ros.planar.world import load_world
 from clew_ros.ros import messages as ros
 from clew_ros.scene import PALETTE, colour

@@ -37,7 +37,7 @@ pytest.importorskip("mcap")
 from clew_ros.cli.render import main as clew_render
 from clew_ros.cli.replay import main as clew_replay
 from clew_ros.core.errors import PlanFileError
-from clew_ros.planar.plan import Plan
+from clew_ros.core.plan import Plan
 from clew_ros.recording import Recording, RecordingError
 
 #: The recordings mutated: the first world's run with each chunk compression, the second's with zstd.

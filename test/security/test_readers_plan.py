@@ -12,7 +12,7 @@ from helpers.security_files import plan_bytes, world_path
 
 from clew_ros.cli.render import main as clew_render
 from clew_ros.core.errors import PlanFileError
-from clew_ros.planar.plan import Plan, PlanFileLimits
+from clew_ros.core.plan import Plan, PlanFileLimits
 
 GOOD = json.loads(plan_bytes("figure1_seed0"))
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from clew_ros.planar.plan import Plan
+from clew_ros.core.plan import Plan
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.spatial.plan import validate_plan
 from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters

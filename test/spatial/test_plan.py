@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from clew_ros.core.errors import PlanFileError
-from clew_ros.planar.plan import Plan, PlanSegment
+from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.scene import make_obstacle

@@ -17,9 +17,10 @@ import shapely
 from shapely.ops import polylabel
 
 from clew_ros.core.parameters import WORLD_PARAMETERS
+from clew_ros.core.plan import Plan
 from clew_ros.planar.collision import check_start_and_goal
 from clew_ros.planar.kinematics import joint_positions, transform_points
-from clew_ros.planar.plan import Plan, replay, validate_plan
+from clew_ros.planar.plan import replay, validate_plan
 from clew_ros.planar.world import World, read_parameter_file, world_from_parameters
 from clew_ros.worlds import FAMILIES, UnknownFamilyError, generate, separation, witness_path, world_text, write_world
 from clew_ros.worlds.shapes import SHAPES

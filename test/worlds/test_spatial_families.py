@@ -15,7 +15,7 @@ pytest.importorskip("trimesh")
 pytest.importorskip("urdf_parser_py")
 
 from clew_ros.cli.world import main
-from clew_ros.planar.plan import Plan
+from clew_ros.core.plan import Plan
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.placements import resting_on

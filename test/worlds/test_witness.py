@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from clew_ros.core.plan import Plan
 from clew_ros.planar.kinematics import compose, tip_poses, transform_points, wrap_angle
-from clew_ros.planar.plan import Plan, replay, validate_plan
+from clew_ros.planar.plan import replay, validate_plan
 from clew_ros.planar.world import World, world_from_parameters
 from clew_ros.worlds.arms import make_arm
 from clew_ros.worlds.shapes import ObjectShape, make_shape

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import ClewError
-from clew_ros.planar.plan import FORMAT, PlanFileLimits
+from clew_ros.core.plan import FORMAT, PlanFileLimits
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.render.errors import RenderError
 from clew_ros.spatial.transforms import pose_matrix

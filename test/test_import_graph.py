@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[1] / PACKAGE
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("core",),  # the Ariadne's Clew Algorithm; never imports rclpy
     ("planar", "spatial"),  # the kinds of world the algorithm plans in, side by side
-    ("worlds", "motion"),  # clew_world's generated worlds; a plan timed and played back (no ROS)
+    ("worlds", "motion", "offline"),  # clew_world's worlds; a plan timed and played back; a file to a plan
     ("scene",),  # one description of what to draw (items, palette) for the picture, RViz and Foxglove
     ("ros",),  # ROS messages, QoS, topics, parameters, frames, URDF: message types, no node
     ("recording",),  # the rosbag2 MCAP writer and reader

@@ -20,6 +20,7 @@ under the output folder (the folder is the world file's name without
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 from collections.abc import Iterable, Mapping, Sequence
@@ -33,7 +34,7 @@ from clew_ros.batch.errors import BatchInputError
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.parameters import PLANNER_PARAMETERS, check_value
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.planar.offline import Problem, problem_from_parameters
+from clew_ros.offline import AnyProblem, problem_from_parameters
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.worlds import GenerationError, UnknownFamilyError, generate, write_world
 
@@ -69,7 +70,7 @@ class BatchWorld:
     path: Path
     folder: str
     parameters: Mapping[str, Any]
-    problem: Problem
+    problem: AnyProblem
 
     @property
     def name(self) -> str:
@@ -110,9 +111,9 @@ class Job:
         )
 
     @property
-    def problem(self) -> Problem:
+    def problem(self) -> AnyProblem:
         """The world and the settings this job plans with."""
-        return Problem(self.world.problem.world, self.settings)
+        return dataclasses.replace(self.world.problem, settings=self.settings)
 
     @property
     def fingerprint(self) -> str:
@@ -185,7 +186,7 @@ def load_worlds(paths: Sequence[Path]) -> list[BatchWorld]:
         folders[folder] = path
         try:
             parameters = read_parameter_file(path)
-            problem = problem_from_parameters(parameters)
+            problem = problem_from_parameters(parameters, path.resolve().parent)
         except ParameterError as error:
             raise BatchInputError(str(path), str(error)) from None
         worlds.append(BatchWorld(path, folder, parameters, problem))

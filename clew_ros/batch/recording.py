@@ -68,9 +68,12 @@ def recording_unavailable() -> str | None:
 def check_recording_parameters(worlds: Sequence[BatchWorld]) -> None:
     """``--record``: the node parameters of every world file (``playback.*``, ``trajectory.*``) checked
     before any job runs; :class:`~clew_ros.batch.errors.BatchInputError` names the file and parameter."""
+    from clew_ros.planar.world import World
     from clew_ros.ros.parameters import flatten, node_settings
 
     for world in worlds:
+        if not isinstance(world.problem.world, World):
+            raise BatchInputError(str(world.path), "--record: recordings of spatial worlds come from the node only")
         try:
             node_settings(flatten(world.parameters), world.problem.world.robot.dof)
         except ParameterError as error:

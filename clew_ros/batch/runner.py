@@ -38,7 +38,8 @@ from clew_ros.batch.worker import JobOutcome, JobSpec
 from clew_ros.core.errors import PlanFileError
 from clew_ros.core.files import private_folders
 from clew_ros.core.plan import Plan
-from clew_ros.planar.offline import failed_plan
+from clew_ros.offline import failed_plan
+from clew_ros.planar.world import World
 
 __all__ = ["DEFAULT_GRACE_S", "BatchReport", "has_valid_output", "job_spec", "run_batch"]
 
@@ -133,6 +134,7 @@ def job_spec(job: Job, grace_s: float, *, record: bool = False) -> JobSpec:
     return JobSpec(
         key=job.key,
         parameters=job.world.parameters,
+        folder=str(job.world.path.resolve().parent),
         seed=job.seed,
         time_limit_s=job.time_limit_s,
         improve_time_s=job.improve_time_s,
@@ -196,7 +198,7 @@ class _Driver:
                 outcome, failure = None, f"the worker sent back a recording file that was not written: {error}"
         if outcome is None:
             elapsed = time.monotonic() - running.submitted
-            plan = failed_plan(job.world.problem.world, job.settings, f"internal error: {failure}", elapsed)
+            plan = failed_plan(job.problem, f"internal error: {failure}", elapsed)
             outcome = JobOutcome.from_plan(job.key, plan, elapsed)
         if outcome.code == "INTERNAL_ERROR" and running.attempts <= self.retries:
             self.report.retried += 1
@@ -218,6 +220,8 @@ class _Driver:
         if outcome.recording is not None:
             return outcome.recording
         problem = job.problem
+        if not isinstance(problem.world, World):
+            return None  # --record is refused for spatial worlds before any job runs
         try:
             plan = Plan.from_json(outcome.plan_json)
             return recording_files(job.world.parameters, problem.world, problem.settings, plan, start_ns=submitted_ns)

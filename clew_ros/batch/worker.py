@@ -24,6 +24,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from multiprocessing.connection import Connection
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -40,6 +41,8 @@ class JobSpec:
 
     key: str
     parameters: Mapping[str, Any]
+    #: the world file's folder: where the paths of a spatial world (URDF, SRDF, scene file) start
+    folder: str
     seed: int
     time_limit_s: float | None
     improve_time_s: float | None
@@ -108,16 +111,23 @@ def run_job(spec: JobSpec) -> JobOutcome:
     without a recording (``recording`` ``None``: the driver tries once more, else the job is redone by
     the next run); its time counts in the job's time-out (time limit + grace).
     """
-    from clew_ros.planar.offline import Problem, plan_problem, problem_from_parameters
+    from clew_ros.offline import plan_problem, problem_from_parameters, warm_up
+    from clew_ros.planar.world import World
 
     started, started_ns = time.monotonic(), time.time_ns()
     problem = problem_from_parameters(
-        spec.parameters, seed=spec.seed, time_limit=spec.time_limit_s, improve_time=spec.improve_time_s
+        spec.parameters,
+        Path(spec.folder),
+        seed=spec.seed,
+        time_limit=spec.time_limit_s,
+        improve_time=spec.improve_time_s,
     )
-    plan = plan_problem(Problem(problem.world, replace(problem.settings, threads=1)))
+    if not isinstance(problem.world, World):  # a spatial world's kernels, compiled once per process
+        warm_up(problem)
+    plan = plan_problem(replace(problem, settings=replace(problem.settings, threads=1)))
     wall_time_s = time.monotonic() - started
     recording = None
-    if spec.record:
+    if spec.record and isinstance(problem.world, World):
         from clew_ros.batch.recording import recording_files
 
         try:

@@ -29,8 +29,7 @@ from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.plan import Plan
 from clew_ros.live import DEFAULT_PORT, HOST, INSTALL_HINT, LiveView, LiveViewError, LiveViewUnavailableError
-from clew_ros.planar.kernel import warm_up
-from clew_ros.planar.offline import Problem, plan_problem, problem_from_parameters
+from clew_ros.offline import AnyProblem, plan_problem, problem_from_parameters, warm_up
 from clew_ros.planar.world import World, read_parameter_file
 
 EXIT_ABORTED = 130
@@ -154,13 +153,20 @@ def main(argv: list[str] | None = None) -> int:
     try:
         parameters = read_parameter_file(args.world)
         problem = problem_from_parameters(
-            parameters, seed=args.seed, time_limit=args.time_limit, improve_time=args.improve_time
+            parameters,
+            Path(args.world).resolve().parent,
+            seed=args.seed,
+            time_limit=args.time_limit,
+            improve_time=args.improve_time,
         )
     except ParameterError as error:
         print(f"clew_plan: invalid input: {error}", file=sys.stderr)
         return 2
     if args.foxglove is None:
         return _plan(args, problem, None)
+    if not isinstance(problem.world, World):
+        print("clew_plan: --foxglove: the live view draws planar worlds only", file=sys.stderr)
+        return 2
     view = _start_live_view(parameters, args.foxglove, problem.world.robot.dof)
     if isinstance(view, str):
         print(f"clew_plan: {view}", file=sys.stderr)
@@ -171,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
         view.stop()
 
 
-def _plan(args: argparse.Namespace, problem: Problem, view: LiveView | None) -> int:
+def _plan(args: argparse.Namespace, problem: AnyProblem, view: LiveView | None) -> int:
     """Plan, write the plan file, and with a live view play the plan back until a signal; the exit code."""
     progress = _ProgressLine(not args.quiet)
 
@@ -180,10 +186,10 @@ def _plan(args: argparse.Namespace, problem: Problem, view: LiveView | None) -> 
         if view is not None:
             view.on_progress(update)
 
-    warm_up()  # compile the kernel (or load numba's cache) before the clock starts: no plan pays for it
+    warm_up(problem)  # compile the kernels (or load numba's cache) before the clock starts: no plan pays for it
     cancel = threading.Event()
     restore = _cancel_on_signals(cancel)
-    if view is not None and not _show_world(view, problem.world, cancel):
+    if view is not None and isinstance(problem.world, World) and not _show_world(view, problem.world, cancel):
         restore()
         print("clew_plan: aborted; no plan file written", file=sys.stderr)
         return EXIT_ABORTED

@@ -11,7 +11,6 @@ fault in it ends the run ``INTERNAL_ERROR`` and never the node.
 
 from __future__ import annotations
 
-import dataclasses
 import threading
 import time
 from typing import TYPE_CHECKING
@@ -20,7 +19,6 @@ import numpy as np
 from action_msgs.msg import GoalStatus
 
 from clew_ros.core.clew import PlanResult, Progress
-from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.motion.playback import GripperEvent, Track, TrackState, node_track
@@ -267,28 +265,12 @@ def timed_plan(run: Run, result: PlanResult) -> tuple[Outcome, str, Track | None
     return result.outcome, result.message, node_track(world, planned, run.config.node)
 
 
-def spatial_plan_file(world: SpatialWorld, result: PlanResult) -> Plan:
-    """The ``clew-plan/1`` plan of a spatial run (``"world_kind": "spatial"``, 6-number poses), validated
-    by :func:`clew_ros.spatial.plan.validate_plan`: a success that fails it becomes ``INTERNAL_ERROR``."""
-    from clew_ros.spatial.plan import WORLD_KIND, validate_plan
-
-    planned = dataclasses.replace(Plan.from_result(world, result), world_kind=WORLD_KIND)
-    if world.object is None and planned.success:
-        planned = dataclasses.replace(planned, final_object_pose=None)
-    if not planned.success:
-        return planned
-    problems = validate_plan(world, planned)
-    if not problems:
-        return planned
-    return planned.failed(
-        Outcome.INTERNAL_ERROR, "internal error: the plan failed validation: " + "; ".join(problems[:3])
-    )
-
-
 def _timed_spatial_plan(run: Run, world: SpatialWorld, result: PlanResult) -> tuple[Outcome, str, Track | None]:
     setup = run.config.spatial
     assert setup is not None  # a spatial world has its setup
-    planned = spatial_plan_file(world, result)
+    from clew_ros.spatial.offline import checked_plan as checked_spatial_plan
+
+    planned = checked_spatial_plan(world, result)
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
     return result.outcome, result.message, spatial_track(world, planned, setup.joints, run.config.node)

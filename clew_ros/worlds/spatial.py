@@ -81,6 +81,9 @@ class SpatialGeneration:
     #: The tcp backs off this far (m) along its approach axis above a grasp (approach and lift): room for the
     #: hand to leave the object without dragging it.
     approach_m: float = 0.1
+    #: With the object, the tcp first rises this far (m) straight up, then backs off along its approach axis
+    #: (up for a grasp from above, out for one from the side): the object leaves its support without sliding.
+    lift_m: float = 0.015
     #: Every obstacle but the supports is screened inflated by this much (m) against the whole witness: the
     #: witness keeps that clearance, so the check at 0.002 rad never hangs on rounding.
     margin_m: float = 0.02
@@ -121,6 +124,8 @@ class SpatialFamily:
     one_table: bool = False
     solvable: bool = True
     angle_tolerances: tuple[float, ...] = (math.pi, 0.3)
+    #: the arm starts at the approach of the start's grasp (not at its home, which may reach over a shelf)
+    start_at_approach: bool = False
 
 
 SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
@@ -147,6 +152,7 @@ SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
             "spatial: shelf to shelf, lids and walls as close as the witness lets them",
             "narrow",
             grasps="side",
+            start_at_approach=True,
         ),
         SpatialFamily(
             "spatial_unsolvable",
@@ -271,14 +277,14 @@ def _object(rng: np.random.Generator) -> MovableObject:
     return MovableObject("cylinder", (round(rng.uniform(0.06, 0.14), 3), round(rng.uniform(0.015, 0.03), 3)))
 
 
-def _grasp(normal: NDArray[np.float64], up: NDArray[np.float64], reach: float) -> list[float]:
-    """The tcp pose (6 numbers, object frame) entering along ``-normal`` from the face ``reach`` out, its x
-    axis along ``up``."""
+def _grasp(normal: NDArray[np.float64], up: NDArray[np.float64], reach: float, raised: float = 0.0) -> list[float]:
+    """The tcp pose (6 numbers, object frame) entering along ``-normal`` from the face ``reach`` out (and
+    ``raised`` along ``up``), its x axis along ``up``."""
     z = -normal
     y = np.cross(z, up)
     matrix = np.eye(4)
     matrix[:3, :3] = np.column_stack([up, y, z])
-    matrix[:3, 3] = normal * reach
+    matrix[:3, 3] = normal * reach + up * raised
     return [round(v, 9) for v in matrix_pose(matrix)]
 
 
@@ -294,7 +300,8 @@ def _grasps(thing: MovableObject, depth: float) -> list[tuple[str, list[float]]]
     else:
         radius = thing.size[1]
         sides = [(np.array([math.cos(a), math.sin(a), 0.0]), radius) for a in (0.0, math.pi / 2, math.pi, -math.pi / 2)]
-    out += [("side", _grasp(n, ez, half - min(depth, 0.4 * half))) for n, half in sides]
+    # the side grasps hold the upper part (a quarter of the height above the centre): the hand clear of the support
+    out += [("side", _grasp(n, ez, half - min(depth, 0.4 * half), half_z / 2)) for n, half in sides]
     return out
 
 
@@ -312,6 +319,8 @@ class _Solver:
         self.robot = arm.robot
         self.kinematics = InverseKinematics(arm.robot)
         self.settings = settings
+        #: the arm alone (limits, self-collision)
+        self.alone = SpatialChecker(arm.robot, arm.spheres)
 
     def solve(self, q0: NDArray[np.float64], residual: Callable[[Matrix], Matrix]) -> tuple[NDArray[np.float64], float]:
         robot, h = self.robot, 1e-7
@@ -369,7 +378,8 @@ APPROACH_STEPS = (0.1, 0.25, 0.5, 0.75, 1.0)
 @dataclass
 class _Hold:
     q: NDArray[np.float64]  # holds the object at pose
-    path: list[NDArray[np.float64]]  # backing off from it, to the approach
+    path: list[NDArray[np.float64]]  # backing off from it along the tcp's approach axis, to the approach
+    lift: list[NDArray[np.float64]]  # raising the object off its support, then backing off (the object held)
     pose: Matrix  # the object's placement (4x4)
     face: str
 
@@ -379,13 +389,43 @@ class _Hold:
 
     @property
     def leaving(self) -> list[NDArray[np.float64]]:
-        """From the hold to the approach."""
+        """From the hold to the approach (the hand leaving the object)."""
         return [self.q, *self.path]
 
     @property
     def coming(self) -> list[NDArray[np.float64]]:
         """From the approach to the hold."""
         return self.leaving[::-1]
+
+    @property
+    def raising(self) -> list[NDArray[np.float64]]:
+        """From the hold, the object lifted off its support."""
+        return [self.q, *self.lift]
+
+    @property
+    def lowering(self) -> list[NDArray[np.float64]]:
+        """Down onto the support, to the hold."""
+        return self.raising[::-1]
+
+
+def _follow(
+    solver: _Solver, arm: _Arm, q: NDArray[np.float64], targets: Sequence[Matrix], rng: np.random.Generator
+) -> list[NDArray[np.float64]] | None:
+    """Configurations putting the tcp at each of ``targets`` in turn, each the solution nearest the one
+    before (the exact inverse kinematics on 6 joints or more; else the tcp's position only, as near as the
+    arm gets); ``None`` when one is out of reach."""
+    path, last = [], q
+    start = solver.kinematics.tcp_poses(q[None])[0]
+    for target in targets:
+        found = solver.kinematics.solve(target, rng, seeds=last[None]) if arm.robot.dof >= 6 else np.zeros((0, 1))
+        if len(found):
+            last = found[np.argmin(np.abs(found - last).max(axis=1))]
+        else:
+            last, miss = solver.solve(last, _position_error(target))
+            if miss > 0.3 * float(np.linalg.norm(target[:3, 3] - start[:3, 3])):
+                return None
+        path.append(last)
+    return path
 
 
 def _hold(
@@ -403,10 +443,10 @@ def _hold(
     given), and the approach above it; ``None`` when the solve does not get there."""
     seeds = [s for s in (near, arm.home) if s is not None]
     seeds += list(rng.uniform(arm.robot.lower, arm.robot.upper, size=(solver.settings.hold_seeds, arm.robot.dof)))
-    for seed in seeds:  # the first seed that gets there
+    for seed in seeds:  # the first seed that gets there, the arm clear of itself
         q, _ = solver.solve(seed, _level(grasp, face, list(point), 1.0))
         q, error = solver.solve(q, _level(grasp, face, [None, None, height], 10.0))
-        if error <= solver.settings.level_tolerance:
+        if error <= solver.settings.level_tolerance and solver.alone.valid(q[None])[0]:
             break
     else:
         return None
@@ -416,18 +456,14 @@ def _hold(
     if pose[2, axis] * sign > -0.5:
         return None
     pose[:3, :3] = rpy_matrix(0.0, 0.0, math.atan2(*_yaw_vector(pose, face))) @ rpy_matrix(*FACE_RPY[face])
-    path, last = [], q
-    for fraction in APPROACH_STEPS:  # backing off in short steps: nearly straight for the tcp
-        target = tcp @ pose_matrix([0.0, 0.0, -fraction * solver.settings.approach_m, 0.0, 0.0, 0.0])
-        found = solver.kinematics.solve(target, rng, seeds=last[None]) if arm.robot.dof >= 6 else np.zeros((0, 1))
-        if len(found):  # the exact inverse kinematics, the solution nearest the last one
-            last = found[np.argmin(np.abs(found - last).max(axis=1))]
-        else:  # the tcp's position only, as near as the arm gets (fewer than 6 joints)
-            last, miss = solver.solve(last, _position_error(target))
-            if miss > 0.3 * fraction * solver.settings.approach_m:
-                return None
-        path.append(last)
-    return _Hold(q, path, pose, face)
+    distance = solver.settings.approach_m  # in short steps: nearly straight for the tcp
+    back = [tcp @ pose_matrix([0.0, 0.0, -f * distance, 0.0, 0.0, 0.0]) for f in APPROACH_STEPS]
+    raised = [pose_matrix([0.0, 0.0, f * solver.settings.lift_m, 0.0, 0.0, 0.0]) @ tcp for f in (0.5, 1.0)]
+    up = [*raised, *(raised[-1] @ pose_matrix([0.0, 0.0, -f * distance, 0.0, 0.0, 0.0]) for f in APPROACH_STEPS)]
+    path, lift = _follow(solver, arm, q, back, rng), _follow(solver, arm, q, up, rng)
+    if path is None or lift is None:
+        return None
+    return _Hold(q, path, lift, pose, face)
 
 
 def _yaw_vector(pose: Matrix, face: str) -> tuple[float, float]:
@@ -581,11 +617,14 @@ class _Builder:
             offset = centres[0, :2] - self.arm.shoulder[:2]
             yaw = math.atan2(offset[1], offset[0])
             length, width = self.rng.uniform(0.2, 0.4), self.rng.uniform(0.25, 0.45)
-            middle = centres[0, :2] + self.rng.uniform(-0.04, 0.04, size=2)
+            # the object near the edge that faces the arm (a few cm in), the top reaching away from it
+            inset = float(np.max(np.abs(_footprint(self.thing, hold)))) + self.rng.uniform(0.02, 0.06)
+            middle = centres[0, :2] + (length / 2 - inset) * np.array([math.cos(yaw), math.sin(yaw)])
+            middle += self.rng.uniform(-0.03, 0.03) * np.array([-math.sin(yaw), math.cos(yaw)])
         for _ in range(2):  # as drawn, else as small as the object's footprint allows
             entry = _box(name, [length, width, thickness], [*middle, top - thickness / 2, 0, 0, yaw])
             table = SpatialChecker(self.arm.robot, self.arm.spheres, [_obstacle(name, entry)], self_collision=False)
-            configurations = np.array([q for h in (hold, *extra) for q in h.leaving])
+            configurations = np.array([q for h in (hold, *extra) for q in (*h.leaving, *h.lift)])
             if table.valid(configurations).all():
                 break
             middle = centres[:, :2].mean(axis=0)
@@ -638,6 +677,8 @@ class _Builder:
         resting = SpatialChecker(
             world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose)
         )
+        if self.family.start_at_approach:
+            return start.up
         candidates = [] if self.arm.home is None else [self.arm.home]
         candidates += list(
             self.rng.uniform(world.robot.lower, world.robot.upper, size=(self.settings.via_tries, world.robot.dof))
@@ -651,13 +692,13 @@ class _Builder:
         """The transfer's waypoints: straight from approach to approach, else through a via configuration."""
         held = Held(self.thing, grasp_rel, world.supports, world.tolerances["placement_tolerance"])
         checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, held=held)
-        direct = [*start.leaving, *goal.coming]
+        direct = [*start.raising, *goal.lowering]
         if not validate_transit(checker, direct):
             return direct
         vias = self.rng.uniform(world.robot.lower, world.robot.upper, size=(self.settings.via_tries, world.robot.dof))
         vias = vias[checker.valid(vias)]
         for via in vias:
-            path = [*start.leaving, via, *goal.coming]
+            path = [*start.raising, via, *goal.lowering]
             if not validate_transit(checker, path):
                 return path
         raise _RejectedError(
@@ -931,8 +972,8 @@ def _closed_box(builder: _Builder, goal: _Hold) -> None:
     t = settings.board_thickness_m
     floor = builder.obstacles["table_b"]
     floor["size"] = [
-        round(max(floor["size"][0], 2 * (half[0] + t) + 0.02), 6),
-        round(max(floor["size"][1], 2 * (half[1] + t) + 0.02), 6),
+        round(float(max(floor["size"][0], 2 * (half[0] + t) + 0.02)), 6),
+        round(float(max(floor["size"][1], 2 * (half[1] + t) + 0.02)), 6),
         floor["size"][2],
     ]
     floor["pose"][3:] = [0, 0, 0]

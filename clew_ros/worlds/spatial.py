@@ -94,7 +94,7 @@ class SpatialGeneration:
     #: Streams tried per world before :class:`~clew_ros.worlds.errors.GenerationError`...
     attempts: int = 40
     #: ... on a random arm (each stream draws another arm: many cannot hold the object level where asked).
-    random_attempts: int = 120
+    random_attempts: int = 200
     #: Damped least-squares steps per hold at most (each one forward kinematics of n + 1 configurations).
     solve_iterations: int = 120
     #: A hold is level when its face's normal is this close (its horizontal part) to straight down.

@@ -13,14 +13,20 @@
   batched): every distinct solution within the joint limits, optionally only collision-free ones.
 - :mod:`~clew_ros.spatial.random_robot`: random serial arms (4-8 revolute joints, capsule, box and cylinder
   links) as URDF text, seeded, so tests and benchmarks are never tuned to one arm.
-- :mod:`~clew_ros.spatial.validate`: transit paths checked at 0.002 rad per joint under the checker,
-  each invalid piece named with its first invalid configuration and why.
+- :mod:`~clew_ros.spatial.validate`: paths checked at 0.002 rad per joint under the checker (the object
+  resting or held), each invalid piece named with its first invalid configuration and why.
+- :mod:`~clew_ros.spatial.plan`: the spatial plan file (``world_kind: spatial``, 6-number poses), its
+  replay and :func:`~clew_ros.spatial.plan.validate_plan` (transit and transfer segments, grasps, stable
+  placements, the goal).
 - :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 - :mod:`~clew_ros.spatial.space`: the world as the Ariadne's Clew Algorithm's space
   (:class:`~clew_ros.spatial.space.SpatialSpace`) and :func:`~clew_ros.spatial.space.plan`, the spatial
   planner's entry point; :mod:`~clew_ros.spatial.motion_plan` (motion-only queries: the ACA's transit
   search), :mod:`~clew_ros.spatial.shortcut` (the improvement's shortcuts), :mod:`~clew_ros.spatial.tuning`.
+
+- :mod:`~clew_ros.spatial.offline`: a parameter tree to a checked spatial plan (what ``clew_plan``,
+  ``clew_batch`` and the node share).
 
 It runs without ROS (a test keeps it so).
 """

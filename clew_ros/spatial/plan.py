@@ -268,6 +268,9 @@ def _segment_problems(world: SpatialWorld, segments: Sequence[PlanSegment], sett
     previous_end = world.initial
     for index, segment in enumerate(segments):
         waypoints, grasp = segment.waypoints, segment.grasp
+        if waypoints.ndim != 2 or waypoints.shape[1] != robot.dof or not len(waypoints):
+            problems.append(f"segment {index}: expected waypoints of {robot.dof} joint values each")
+            continue
         if index and segment.kind == segments[index - 1].kind:
             problems.append(f"segment {index}: kinds must alternate (two {segment.kind} segments in a row)")
         outside = (waypoints < robot.lower - 1e-9) | (waypoints > robot.upper + 1e-9)

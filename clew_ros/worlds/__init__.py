@@ -12,7 +12,9 @@ puts the goal where the object provably cannot go
 and the witness plan next to it. Modules: :mod:`~clew_ros.worlds.arms`,
 :mod:`~clew_ros.worlds.shapes`, :mod:`~clew_ros.worlds.witness`, :mod:`~clew_ros.worlds.sweep`,
 :mod:`~clew_ros.worlds.layouts`, :mod:`~clew_ros.worlds.regrasp`,
-:mod:`~clew_ros.worlds.families`, :mod:`~clew_ros.worlds.files`.
+:mod:`~clew_ros.worlds.families`, :mod:`~clew_ros.worlds.files`. Spatial worlds (a URDF arm in 3-D):
+:mod:`~clew_ros.worlds.spatial` (``clew_world spatial_* --robot panda|ur5|random``) and
+:mod:`~clew_ros.worlds.spatial_holds`.
 """
 
 from clew_ros.planar.passage import separation

@@ -23,7 +23,8 @@ An attempt that fails at any step (no level hold near the drawn point, a support
 clear, a witness the validator refuses) starts over with the next stream. The unsolvable family puts the
 goal inside a closed box (walls, a lid and the support as its floor, the object starting outside it), or
 on a table out of every grasp's reach (the arm's reach bounded by its link offsets); the witness is then a
-failed plan that says why.
+failed plan that says why. The pieces (the arms, grasps, holds, the witness's sweep) are
+:mod:`~clew_ros.worlds.spatial_holds`.
 """
 
 from __future__ import annotations
@@ -43,18 +44,25 @@ from numpy.typing import NDArray
 
 from clew_ros.core.plan import Plan
 from clew_ros.spatial.checker import Held, SpatialChecker
-from clew_ros.spatial.inverse import InverseKinematics
-from clew_ros.spatial.kernels.collide import clearance_of_sphere
-from clew_ros.spatial.placements import FACE_RPY, MovableObject
-from clew_ros.spatial.plan import WORLD_KIND, make_plan, object_obstacle, replay, resting_problems, validate_plan
-from clew_ros.spatial.random_robot import BASE_LINK, TIP_LINK, random_robot_urdf
-from clew_ros.spatial.robot import RobotModel, load_robot, robot_from_parameters
-from clew_ros.spatial.scene import Obstacle, make_obstacle, obstacle_arrays
-from clew_ros.spatial.spheres import SphereModel, SphereSettings, cover, sphere_model
+from clew_ros.spatial.placements import FACE_RPY
+from clew_ros.spatial.plan import WORLD_KIND, make_plan, object_obstacle, resting_problems, validate_plan
+from clew_ros.spatial.scene import Obstacle, make_obstacle
 from clew_ros.spatial.transforms import matrix_pose, pose_matrix, rpy_matrix
 from clew_ros.spatial.validate import validate_transit
 from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
+from clew_ros.worlds.spatial_holds import (
+    Hold,
+    Solver,
+    SpatialGeneration,
+    Sweep,
+    config_folder,
+    draw_object,
+    find_hold,
+    footprint,
+    grasps_of,
+    load_arm,
+)
 
 __all__ = [
     "SPATIAL_FAMILIES",
@@ -75,39 +83,6 @@ SPATIAL_ROBOTS = ("panda", "ur5", "random")
 
 
 @dataclass(frozen=True)
-class SpatialGeneration:
-    """The numbers the spatial generator builds with."""
-
-    #: The tcp backs off this far (m) along its approach axis above a grasp (approach and lift): room for the
-    #: hand to leave the object without dragging it.
-    approach_m: float = 0.1
-    #: Every obstacle but the supports is screened inflated by this much (m) against the whole witness: the
-    #: witness keeps that clearance, so the check at 0.002 rad never hangs on rounding.
-    margin_m: float = 0.02
-    #: The witness carries the object at least this far (m, centre to centre).
-    min_carry_m: float = 0.25
-    #: The tcp sits this deep (m) inside the object at a grasp (at most 40% of the half extent it enters by).
-    grasp_depth_m: float = 0.015
-    #: Streams tried per world before :class:`~clew_ros.worlds.errors.GenerationError`...
-    attempts: int = 40
-    #: ... on a random arm (each stream draws another arm: many cannot hold the object level where asked).
-    random_attempts: int = 120
-    #: Damped least-squares steps per hold at most (each one forward kinematics of n + 1 configurations).
-    solve_iterations: int = 120
-    #: A hold is level when its face's normal is this close (its horizontal part) to straight down.
-    level_tolerance: float = 1e-10
-    #: Random seeds a hold is solved from, after the arm's home and the start's hold.
-    hold_seeds: int = 4
-    #: Random via configurations tried when the straight transfer between the two approaches collides.
-    via_tries: int = 40
-    #: Table tops and shelf boards (m thick).
-    table_thickness_m: float = 0.03
-    board_thickness_m: float = 0.02
-    #: Steps of the bisection that puts a shelf's lid and walls as near the witness as it allows.
-    bisection_steps: int = 7
-
-
-@dataclass(frozen=True)
 class SpatialFamily:
     """A family of spatial worlds: ``layout`` builds the supports and obstacles around the witness's holds;
     ``grasps`` which grasps a witness may use (``top``, ``side``, ``any``); ``reorient``: the goal rests on
@@ -121,6 +96,8 @@ class SpatialFamily:
     one_table: bool = False
     solvable: bool = True
     angle_tolerances: tuple[float, ...] = (math.pi, 0.3)
+    #: the arm starts at the approach of the start's grasp (not at its home, which may reach over a shelf)
+    start_at_approach: bool = False
 
 
 SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
@@ -147,6 +124,7 @@ SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
             "spatial: shelf to shelf, lids and walls as close as the witness lets them",
             "narrow",
             grasps="side",
+            start_at_approach=True,
         ),
         SpatialFamily(
             "spatial_unsolvable",
@@ -187,306 +165,6 @@ class _RejectedError(Exception):
     """This stream gave no acceptable world."""
 
 
-def config_folder() -> Path:
-    """The package's ``config`` folder (the source tree's, else the installed share)."""
-    source = Path(__file__).resolve().parents[2] / "config"
-    if (source / "robots").is_dir():
-        return source
-    from ament_index_python.packages import get_package_share_directory  # an installed package only
-
-    return Path(get_package_share_directory("clew_ros")) / "config"
-
-
-# --------------------------------------------------------------------------------------------- the arms
-
-
-@dataclass(frozen=True, eq=False)
-class _Arm:
-    tree: dict[str, Any]  # world.robot without initial
-    robot: RobotModel
-    spheres: SphereModel
-    home: NDArray[np.float64] | None
-    reach: float  # the tcp is never farther than this from the first joint (m)
-    shoulder: NDArray[np.float64]  # the first joint's origin in world
-
-
-def _reach(robot: RobotModel) -> tuple[float, NDArray[np.float64]]:
-    """A bound on the tcp's distance from the first joint (sum of the offsets after it, prismatic travel
-    added), and that joint's origin."""
-    offsets = [float(np.linalg.norm(robot.origins[j][:3, 3])) for j in range(1, robot.dof)]
-    travel = [max(abs(robot.lower[j]), abs(robot.upper[j])) for j in range(robot.dof) if robot.prismatic[j]]
-    tcp = float(np.linalg.norm(robot.tcp[:3, 3]))
-    shoulder = (robot.base @ robot.origins[0])[:3, 3]
-    return sum(offsets) + sum(travel) + tcp, shoulder
-
-
-@functools.cache
-def _shipped(name: str) -> _Arm:
-    robots = config_folder() / "robots"
-    if name == "panda":
-        tree: dict[str, Any] = {
-            "urdf": str(robots / "panda/panda.urdf"),
-            "srdf": str(robots / "panda/panda.srdf"),
-            "base_link": "panda_link0",
-            "tip_link": "panda_hand_tcp",
-            "gripper_links": ["panda_hand", "panda_leftfinger", "panda_rightfinger"],
-        }
-        home = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
-    else:
-        tree = {
-            "urdf": str(robots / "ur5/ur5.urdf"),
-            "srdf": str(robots / "ur5/ur5.srdf"),
-            "base_link": "base_link",
-            "tip_link": "tool0",
-            "tcp": [0.0, 0.0, 0.05, 0.0, 0.0, 0.0],
-            "gripper_links": ["wrist_3_link", "ee_link"],
-        }
-        home = np.array([0.0, -1.9, 1.9, -1.571, -1.571, 0.0])
-    robot = robot_from_parameters(tree, robots)
-    reach, shoulder = _reach(robot)
-    return _Arm(tree, robot, sphere_model(robot), home, reach, shoulder)
-
-
-def _arm(name: str, rng: np.random.Generator) -> _Arm:
-    if name != "random":
-        return _shipped(name)
-    text = random_robot_urdf(rng)
-    robot = load_robot(text, folder=Path.cwd(), base_link=BASE_LINK, tip_link=TIP_LINK, source="random_robot")
-    last = f"link_{robot.dof}"
-    tree = {"description": text, "base_link": BASE_LINK, "tip_link": TIP_LINK, "gripper_links": [last]}
-    robot = replace(robot, gripper_links=(last,))
-    reach, shoulder = _reach(robot)
-    return _Arm(tree, robot, sphere_model(robot), None, reach, shoulder)
-
-
-# ----------------------------------------------------------------------------------- object and grasps
-
-
-def _object(rng: np.random.Generator) -> MovableObject:
-    if rng.random() < 0.6:
-        return MovableObject(
-            "box",
-            (round(rng.uniform(0.03, 0.06), 3), round(rng.uniform(0.03, 0.06), 3), round(rng.uniform(0.06, 0.14), 3)),
-        )
-    return MovableObject("cylinder", (round(rng.uniform(0.06, 0.14), 3), round(rng.uniform(0.015, 0.03), 3)))
-
-
-def _grasp(normal: NDArray[np.float64], up: NDArray[np.float64], reach: float) -> list[float]:
-    """The tcp pose (6 numbers, object frame) entering along ``-normal`` from the face ``reach`` out, its x
-    axis along ``up``."""
-    z = -normal
-    y = np.cross(z, up)
-    matrix = np.eye(4)
-    matrix[:3, :3] = np.column_stack([up, y, z])
-    matrix[:3, 3] = normal * reach
-    return [round(v, 9) for v in matrix_pose(matrix)]
-
-
-def _grasps(thing: MovableObject, depth: float) -> list[tuple[str, list[float]]]:
-    """Named grasps: ``top`` (down into the +z face; a box also turned a quarter) and ``side`` ones."""
-    out = []
-    ez, ex, ey = np.array([0.0, 0, 1]), np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
-    half_z = thing.size[2] / 2 if thing.shape == "box" else thing.size[0] / 2
-    out.append(("top", _grasp(ez, ex, half_z - min(depth, 0.4 * half_z))))
-    out.append(("top", _grasp(ez, ey, half_z - min(depth, 0.4 * half_z))))
-    if thing.shape == "box":
-        sides = [(ex, thing.size[0] / 2), (-ex, thing.size[0] / 2), (ey, thing.size[1] / 2), (-ey, thing.size[1] / 2)]
-    else:
-        radius = thing.size[1]
-        sides = [(np.array([math.cos(a), math.sin(a), 0.0]), radius) for a in (0.0, math.pi / 2, math.pi, -math.pi / 2)]
-    out += [("side", _grasp(n, ez, half - min(depth, 0.4 * half))) for n, half in sides]
-    return out
-
-
-_NORMAL = {"-z": (2, -1.0), "+z": (2, 1.0), "+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
-
-
-# ---------------------------------------------------------------------------------- holds by least squares
-
-
-class _Solver:
-    """Damped least squares on residuals of the tcp's pose (numerical Jacobian, one compiled forward
-    kinematics call per step), within the joint limits."""
-
-    def __init__(self, arm: _Arm, settings: SpatialGeneration) -> None:
-        self.robot = arm.robot
-        self.kinematics = InverseKinematics(arm.robot)
-        self.settings = settings
-
-    def solve(self, q0: NDArray[np.float64], residual: Callable[[Matrix], Matrix]) -> tuple[NDArray[np.float64], float]:
-        robot, h = self.robot, 1e-7
-        low, high = robot.lower + 1e-6, robot.upper - 1e-6
-        q = np.clip(q0, low, high)
-        r = residual(self.kinematics.tcp_poses(q[None]))[0]
-        damping = 1e-3
-        for _ in range(self.settings.solve_iterations):
-            if float(r @ r) < 1e-22:
-                break
-            probes = q[None] + np.vstack([np.zeros(robot.dof), h * np.eye(robot.dof)])
-            values = residual(self.kinematics.tcp_poses(probes))
-            jacobian = ((values[1:] - values[0]) / h).T  # (m, n)
-            step = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping * np.eye(len(r)), r)
-            step *= min(1.0, 0.4 / max(float(np.max(np.abs(step))), 1e-12))
-            trial = np.clip(q + step, low, high)
-            new = residual(self.kinematics.tcp_poses(trial[None]))[0]
-            if float(new @ new) < float(r @ r):
-                q, r, damping = trial, new, max(damping / 3, 1e-12)
-            else:
-                damping *= 5
-                if damping > 1e6:
-                    break
-        return q, float(np.sqrt(r @ r))
-
-
-def _level(grasp: Matrix, face: str, target: Sequence[float | None], weight: float) -> Callable[[Matrix], Matrix]:
-    """Residuals of holding the object (by ``grasp``) with ``face`` straight down, its centre near ``target``
-    (``None``: that coordinate free), position errors weighted ``weight``."""
-    inverse = np.linalg.inv(grasp)
-    axis, sign = _NORMAL[face]
-    chosen = [i for i, t in enumerate(target) if t is not None]
-    goal = np.array([target[i] for i in chosen], dtype=np.float64)
-
-    def residual(tcp: Matrix) -> Matrix:
-        placed = tcp @ inverse
-        normal = placed[:, :3, axis] * sign
-        normal[:, 2] += 1.0  # straight down: (0, 0, -1)
-        return np.hstack([normal, weight * (placed[:, chosen, 3] - goal)])
-
-    return residual
-
-
-def _position_error(target: Matrix) -> Callable[[Matrix], Matrix]:
-    def residual(tcp: Matrix) -> Matrix:
-        return np.asarray(tcp[:, :3, 3] - target[:3, 3])
-
-    return residual
-
-
-#: The approach is followed through these fractions of :attr:`SpatialGeneration.approach_m`.
-APPROACH_STEPS = (0.1, 0.25, 0.5, 0.75, 1.0)
-
-
-@dataclass
-class _Hold:
-    q: NDArray[np.float64]  # holds the object at pose
-    path: list[NDArray[np.float64]]  # backing off from it, to the approach
-    pose: Matrix  # the object's placement (4x4)
-    face: str
-
-    @property
-    def up(self) -> NDArray[np.float64]:
-        return self.path[-1]
-
-    @property
-    def leaving(self) -> list[NDArray[np.float64]]:
-        """From the hold to the approach."""
-        return [self.q, *self.path]
-
-    @property
-    def coming(self) -> list[NDArray[np.float64]]:
-        """From the approach to the hold."""
-        return self.leaving[::-1]
-
-
-def _hold(
-    solver: _Solver,
-    arm: _Arm,
-    grasp: Matrix,
-    face: str,
-    point: NDArray[np.float64],
-    *,
-    height: float | None,
-    rng: np.random.Generator,
-    near: NDArray[np.float64] | None = None,
-) -> _Hold | None:
-    """A configuration holding the object level on ``face`` near ``point`` (its centre at ``height`` when
-    given), and the approach above it; ``None`` when the solve does not get there."""
-    seeds = [s for s in (near, arm.home) if s is not None]
-    seeds += list(rng.uniform(arm.robot.lower, arm.robot.upper, size=(solver.settings.hold_seeds, arm.robot.dof)))
-    for seed in seeds:  # the first seed that gets there
-        q, _ = solver.solve(seed, _level(grasp, face, list(point), 1.0))
-        q, error = solver.solve(q, _level(grasp, face, [None, None, height], 10.0))
-        if error <= solver.settings.level_tolerance:
-            break
-    else:
-        return None
-    tcp = solver.kinematics.tcp_poses(q[None])[0]
-    pose = tcp @ np.linalg.inv(grasp)
-    axis, sign = _NORMAL[face]
-    if pose[2, axis] * sign > -0.5:
-        return None
-    pose[:3, :3] = rpy_matrix(0.0, 0.0, math.atan2(*_yaw_vector(pose, face))) @ rpy_matrix(*FACE_RPY[face])
-    path, last = [], q
-    for fraction in APPROACH_STEPS:  # backing off in short steps: nearly straight for the tcp
-        target = tcp @ pose_matrix([0.0, 0.0, -fraction * solver.settings.approach_m, 0.0, 0.0, 0.0])
-        found = solver.kinematics.solve(target, rng, seeds=last[None]) if arm.robot.dof >= 6 else np.zeros((0, 1))
-        if len(found):  # the exact inverse kinematics, the solution nearest the last one
-            last = found[np.argmin(np.abs(found - last).max(axis=1))]
-        else:  # the tcp's position only, as near as the arm gets (fewer than 6 joints)
-            last, miss = solver.solve(last, _position_error(target))
-            if miss > 0.3 * fraction * solver.settings.approach_m:
-                return None
-        path.append(last)
-    return _Hold(q, path, pose, face)
-
-
-def _yaw_vector(pose: Matrix, face: str) -> tuple[float, float]:
-    turned = pose[:3, :3] @ rpy_matrix(*FACE_RPY[face]).T
-    return float(turned[1, 0]), float(turned[0, 0])
-
-
-# -------------------------------------------------------------------------------------- the witness sweep
-
-
-class _Sweep:
-    """The witness's configurations (0.002 rad apart), the held object's relation and the resting placements:
-    what a new obstacle must clear."""
-
-    def __init__(self, world: SpatialWorld, plan: Plan, margin: float) -> None:
-        self.world, self.margin = world, margin
-        motions = list(replay(world, plan))
-        self.all = np.concatenate([m.configurations for m in motions])
-        transfers = [m for m in motions if m.kind == "transfer"]
-        self.held = np.concatenate([m.configurations for m in transfers])
-        assert transfers[0].grasp_rel is not None
-        self.grasp_rel = transfers[0].grasp_rel
-        assert world.object is not None
-        self.shape = world.object.shape
-        self.rests = [m.object_matrices[0] for m in motions if m.kind == "transit" and m.object_matrices is not None]
-        self.cover = cover(self.shape.geometry(), SphereSettings())
-
-    def clear(self, obstacle: Obstacle, *, inflate: bool = True) -> bool:
-        grown = _inflated(obstacle, self.margin) if inflate else obstacle
-        robot, spheres = self.world.robot, self.world.spheres
-        if not SpatialChecker(robot, spheres, [grown], self_collision=False).valid(self.all).all():
-            return False
-        held = Held(self.shape, self.grasp_rel, ())
-        if not SpatialChecker(robot, spheres, [grown], self_collision=False, held=held).valid(self.held).all():
-            return False
-        return all(_object_clear(self.cover, pose, grown) for pose in self.rests)
-
-
-def _object_clear(cover_: tuple[Matrix, Matrix], pose: Matrix, obstacle: Obstacle) -> bool:
-    centers, radii = cover_
-    packed = obstacle_arrays([obstacle])
-    placed = centers @ pose[:3, :3].T + pose[:3, 3]
-    return all(
-        clearance_of_sphere(p, r, packed["obs_kind"][0], packed["obs_r"][0], packed["obs_t"][0], packed["obs_dims"][0])
-        > 0.0
-        for p, r in zip(placed, radii, strict=True)
-    )
-
-
-def _inflated(obstacle: Obstacle, margin: float) -> Obstacle:
-    if obstacle.shape == "box":
-        size = tuple(v + 2 * margin for v in obstacle.size)
-    elif obstacle.shape == "cylinder":
-        size = (obstacle.size[0] + 2 * margin, obstacle.size[1] + margin)
-    else:
-        size = (obstacle.size[0] + margin,)
-    return Obstacle(obstacle.name, obstacle.shape, size, obstacle.pose)
-
-
 # ------------------------------------------------------------------------------------------- building
 
 
@@ -506,10 +184,10 @@ class _Builder:
     ) -> None:
         self.family, self.seed, self.rng, self.settings = family, seed, rng, settings
         self.robot_name = robot
-        self.arm = _arm(robot, rng)
-        self.solver = _Solver(self.arm, settings)
-        self.thing = _object(rng)
-        self.grasps = _grasps(self.thing, settings.grasp_depth_m)
+        self.arm = load_arm(robot, rng)
+        self.solver = Solver(self.arm, settings)
+        self.thing = draw_object(rng)
+        self.grasps = grasps_of(self.thing, settings.grasp_depth_m)
         self.obstacles: dict[str, dict[str, Any]] = {}
         self.supports: list[str] = []
         self.notes: list[str] = []
@@ -527,7 +205,7 @@ class _Builder:
             ]
         )
 
-    def holds(self) -> tuple[int, _Hold, _Hold]:
+    def holds(self) -> tuple[int, Hold, Hold]:
         kinds = {"any": ("top", "side"), "top": ("top",), "side": ("side",)}[self.family.grasps]
         usable = [i for i, (kind, _) in enumerate(self.grasps) if kind in kinds]
         index = int(self.rng.choice(usable))
@@ -535,14 +213,14 @@ class _Builder:
         face_a = "-z"
         face_b = self._goal_face(grasp) if self.family.reorient else face_a
         angle = self.rng.uniform(-math.pi, math.pi)
-        start = _hold(self.solver, self.arm, grasp, face_a, self._point(angle), height=None, rng=self.rng)
+        start = find_hold(self.solver, self.arm, grasp, face_a, self._point(angle), height=None, rng=self.rng)
         if start is None:
             raise _RejectedError("no level hold near the start point")
         turn = self.rng.uniform(0.5, 1.2 if self.family.one_table else 2.2) * self.rng.choice([-1.0, 1.0])
         height = None
         if self.family.one_table:
             height = start.pose[2, 3] - self.thing.height(face_a) + self.thing.height(face_b)
-        goal = _hold(
+        goal = find_hold(
             self.solver, self.arm, grasp, face_b, self._point(angle + turn), height=height, rng=self.rng, near=start.q
         )
         if goal is None:
@@ -565,7 +243,7 @@ class _Builder:
 
     # -- supports
 
-    def table(self, name: str, hold: _Hold, *, extra: Sequence[_Hold] = ()) -> None:
+    def table(self, name: str, hold: Hold, *, extra: Sequence[Hold] = ()) -> None:
         """A table under ``hold``'s placement (and ``extra``'s: one table for both), facing the arm."""
         poses = [hold.pose, *[h.pose for h in extra]]
         centres = np.array([p[:3, 3] for p in poses])
@@ -581,16 +259,19 @@ class _Builder:
             offset = centres[0, :2] - self.arm.shoulder[:2]
             yaw = math.atan2(offset[1], offset[0])
             length, width = self.rng.uniform(0.2, 0.4), self.rng.uniform(0.25, 0.45)
-            middle = centres[0, :2] + self.rng.uniform(-0.04, 0.04, size=2)
+            # the object near the edge that faces the arm (a few cm in), the top reaching away from it
+            inset = float(np.max(np.abs(footprint(self.thing, hold)))) + self.rng.uniform(0.02, 0.06)
+            middle = centres[0, :2] + (length / 2 - inset) * np.array([math.cos(yaw), math.sin(yaw)])
+            middle += self.rng.uniform(-0.03, 0.03) * np.array([-math.sin(yaw), math.cos(yaw)])
         for _ in range(2):  # as drawn, else as small as the object's footprint allows
             entry = _box(name, [length, width, thickness], [*middle, top - thickness / 2, 0, 0, yaw])
             table = SpatialChecker(self.arm.robot, self.arm.spheres, [_obstacle(name, entry)], self_collision=False)
-            configurations = np.array([q for h in (hold, *extra) for q in h.leaving])
+            configurations = np.array([q for h in (hold, *extra) for q in (*h.leaving, *h.lift)])
             if table.valid(configurations).all():
                 break
             middle = centres[:, :2].mean(axis=0)
             reach = float(np.max(np.linalg.norm(centres[:, :2] - middle, axis=1)))
-            length = width = 2 * (reach + float(np.max(np.abs(_footprint(self.thing, hold)))) + 0.01)
+            length = width = 2 * (reach + float(np.max(np.abs(footprint(self.thing, hold)))) + 0.01)
         else:
             raise _RejectedError(f"the arm holding the object reaches through {name}")
         self.obstacles[name] = entry
@@ -598,7 +279,7 @@ class _Builder:
 
     # -- the world and its witness
 
-    def tree(self, start: _Hold, goal: _Hold, initial: NDArray[np.float64]) -> dict[str, Any]:
+    def tree(self, start: Hold, goal: Hold, initial: NDArray[np.float64]) -> dict[str, Any]:
         reach, shoulder = self.arm.reach, self.arm.shoulder
         span = reach + 0.5
         bounds = [
@@ -632,12 +313,14 @@ class _Builder:
             {"world": tree}, config_folder(), prepared=(self.arm.robot, self.arm.spheres)
         )
 
-    def initial(self, world: SpatialWorld, start: _Hold) -> NDArray[np.float64]:
+    def initial(self, world: SpatialWorld, start: Hold) -> NDArray[np.float64]:
         """The arm's start: its home (or a random configuration) from which the straight move to the approach
         is free, else the approach itself."""
         resting = SpatialChecker(
             world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose)
         )
+        if self.family.start_at_approach:
+            return start.up
         candidates = [] if self.arm.home is None else [self.arm.home]
         candidates += list(
             self.rng.uniform(world.robot.lower, world.robot.upper, size=(self.settings.via_tries, world.robot.dof))
@@ -647,24 +330,24 @@ class _Builder:
                 return np.asarray(q)
         return start.up
 
-    def carry(self, world: SpatialWorld, grasp_rel: Matrix, start: _Hold, goal: _Hold) -> list[NDArray[np.float64]]:
+    def carry(self, world: SpatialWorld, grasp_rel: Matrix, start: Hold, goal: Hold) -> list[NDArray[np.float64]]:
         """The transfer's waypoints: straight from approach to approach, else through a via configuration."""
         held = Held(self.thing, grasp_rel, world.supports, world.tolerances["placement_tolerance"])
         checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, held=held)
-        direct = [*start.leaving, *goal.coming]
+        direct = [*start.raising, *goal.lowering]
         if not validate_transit(checker, direct):
             return direct
         vias = self.rng.uniform(world.robot.lower, world.robot.upper, size=(self.settings.via_tries, world.robot.dof))
         vias = vias[checker.valid(vias)]
         for via in vias:
-            path = [*start.leaving, via, *goal.coming]
+            path = [*start.raising, via, *goal.lowering]
             if not validate_transit(checker, path):
                 return path
         raise _RejectedError(
             f"no straight or single-via transfer between the approaches: {validate_transit(checker, direct)[0]}"
         )
 
-    def witness(self, tree: dict[str, Any], index: int, start: _Hold, goal: _Hold) -> tuple[SpatialWorld, Plan]:
+    def witness(self, tree: dict[str, Any], index: int, start: Hold, goal: Hold) -> tuple[SpatialWorld, Plan]:
         world = self.world(tree)
         initial = self.initial(world, start)
         tree["robot"]["initial"] = [round(float(v), 9) for v in initial]
@@ -701,7 +384,7 @@ def _bisect(fits: Callable[[float], bool], low: float, high: float, steps: int) 
     return high
 
 
-def _shelf(builder: _Builder, sweep: _Sweep, name: str, hold: _Hold, *, narrow: bool) -> None:
+def _shelf(builder: _Builder, sweep: Sweep, name: str, hold: Hold, *, narrow: bool) -> None:
     """A shelf around a placement: its board (the support, already in), a lid and two side walls, as near
     as the witness allows (``narrow``) or a few cm farther."""
     rng, settings = builder.rng, builder.settings
@@ -748,11 +431,11 @@ def _shelf(builder: _Builder, sweep: _Sweep, name: str, hold: _Hold, *, narrow: 
     builder.notes.append(f"{name}: lid {gap:.3f} m above the board ({'narrow' if narrow else 'with room'})")
 
 
-def _wall_clear(sweep: _Sweep, wall: Callable[[float, float], dict[str, Any]], side: float, offset: float) -> bool:
+def _wall_clear(sweep: Sweep, wall: Callable[[float, float], dict[str, Any]], side: float, offset: float) -> bool:
     return sweep.clear(_obstacle("wall", wall(side, offset)))
 
 
-def _clutter(builder: _Builder, sweep: _Sweep, table: str) -> None:
+def _clutter(builder: _Builder, sweep: Sweep, table: str) -> None:
     rng = builder.rng
     entry = builder.obstacles[table]
     length, width, thickness = entry["size"]
@@ -818,7 +501,7 @@ def _solvable(builder: _Builder) -> SpatialGenerated:
             builder.supports[0] = "shelf_a"
     tree = builder.tree(start, goal, start.up)
     world, plan = builder.witness(tree, index, start, goal)
-    sweep = _Sweep(world, plan, builder.settings.margin_m)
+    sweep = Sweep(world, plan, builder.settings.margin_m)
     if family.layout == "shelf":
         _shelf(builder, sweep, "shelf", goal, narrow=False)
     elif family.layout == "narrow":
@@ -918,11 +601,11 @@ def _unsolvable(builder: _Builder) -> SpatialGenerated:
     )
 
 
-def _closed_box(builder: _Builder, goal: _Hold) -> None:
+def _closed_box(builder: _Builder, goal: Hold) -> None:
     """Walls and a lid around the goal placement, on ``table_b`` (which then reaches under the walls)."""
     rng, settings = builder.rng, builder.settings
     thing = builder.thing
-    corners = _footprint(thing, goal)
+    corners = footprint(thing, goal)
     gap = float(rng.uniform(0.02, 0.04))
     half = np.abs(corners).max(axis=0) + gap
     centre = goal.pose[:3, 3]
@@ -931,8 +614,8 @@ def _closed_box(builder: _Builder, goal: _Hold) -> None:
     t = settings.board_thickness_m
     floor = builder.obstacles["table_b"]
     floor["size"] = [
-        round(max(floor["size"][0], 2 * (half[0] + t) + 0.02), 6),
-        round(max(floor["size"][1], 2 * (half[1] + t) + 0.02), 6),
+        round(float(max(floor["size"][0], 2 * (half[0] + t) + 0.02)), 6),
+        round(float(max(floor["size"][1], 2 * (half[1] + t) + 0.02)), 6),
         floor["size"][2],
     ]
     floor["pose"][3:] = [0, 0, 0]
@@ -949,16 +632,6 @@ def _closed_box(builder: _Builder, goal: _Hold) -> None:
     builder.obstacles["box_lid"] = _box(
         "box_lid", [2 * (half[0] + t), 2 * (half[1] + t), t], [centre[0], centre[1], top + height + t / 2, 0, 0, 0]
     )
-
-
-def _footprint(thing: MovableObject, hold: _Hold) -> NDArray[np.float64]:
-    """The object's extent about its centre in world x, y (corners of its bounding box, (8, 2))."""
-    if thing.shape == "box":
-        half = np.asarray(thing.size) / 2
-    else:
-        half = np.array([thing.size[1], thing.size[1], thing.size[0] / 2])
-    local = np.array(np.meshgrid(*[[-h, h] for h in half], indexing="ij")).reshape(3, -1).T
-    return np.asarray((local @ hold.pose[:3, :3].T)[:, :2])
 
 
 # ------------------------------------------------------------------------------------------- entry points

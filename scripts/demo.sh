@@ -16,8 +16,8 @@ export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-$(( $$ % 90 + 10 ))}"
 PY=.venv/bin/python
 BIN=.venv/bin
 WORLD=config/figure1.yaml
-# The spatial world drawn in 3-D (world.kind: spatial); override with SPATIAL_WORLD=path make demo.
-SPATIAL_WORLD="${SPATIAL_WORLD:-test/data/spatial/panda_table.yaml}"
+# The spatial world planned and drawn in 3-D (world.kind: spatial); override with SPATIAL_WORLD=path make demo.
+SPATIAL_WORLD="${SPATIAL_WORLD:-config/spatial/panda_table_to_table.yaml}"
 OUT=demo_out
 
 if [[ ! -x "$PY" ]]; then
@@ -49,15 +49,20 @@ else
     esac
 fi
 
-# Step 1b: a spatial world drawn in 3-D with clew_render (the arm at its start, the goal ghosted).
+# Step 1b: a spatial world (world.kind: spatial, a Panda): planned with clew_plan and drawn in 3-D
+# with clew_render (the arm along the plan, the object, the scene).
 if [[ ! -f "$SPATIAL_WORLD" ]]; then
     not_built+=("spatial world $SPATIAL_WORLD")
 else
-    echo "demo: clew_render $SPATIAL_WORLD -o $OUT/spatial.png"
-    if "$BIN/clew_render" "$SPATIAL_WORLD" -o "$OUT/spatial.png"; then
-        echo "demo: the spatial world drawn in $OUT/spatial.png"
+    echo "demo: clew_plan $SPATIAL_WORLD --output $OUT/spatial_plan.json --seed 0"
+    set +e
+    "$BIN/clew_plan" "$SPATIAL_WORLD" --output "$OUT/spatial_plan.json" --seed 0 --quiet
+    rc=$?
+    set -e
+    if [[ $rc -eq 0 ]] && "$BIN/clew_render" "$OUT/spatial_plan.json" --world "$SPATIAL_WORLD" -o "$OUT/spatial.png"; then
+        echo "demo: the spatial plan drawn in $OUT/spatial.png"
     else
-        echo "demo: clew_render failed on $SPATIAL_WORLD" >&2
+        echo "demo: planning or drawing $SPATIAL_WORLD failed (clew_plan exit $rc)" >&2
         [[ $status -eq 0 ]] && status=1
     fi
 fi

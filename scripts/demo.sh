@@ -135,6 +135,48 @@ if [[ -n "$run_id" && -f "$RUN_DIR/metadata.yaml" ]]; then
 fi
 # Replay it for RViz/Foxglove: "$BIN/clew_replay" "$RUN_DIR" --rate 4
 
+# Step 3: the node on the spatial world (the Panda): started in the world file's folder (a node reads the
+# world's relative paths, URDF and SRDF, from its working directory; the launch file
+# clew_spatial_planner.launch.py makes them absolute instead), a client calls for a plan, the run is recorded
+# (the arm's links and /tf in it), then SIGINT stops the node.
+if [[ -f "$SPATIAL_WORLD" ]]; then
+    SPATIAL_RECORDINGS="$(pwd)/$OUT/recordings_spatial"
+    mkdir -p "$SPATIAL_RECORDINGS"
+    echo "demo: (cd $(dirname "$SPATIAL_WORLD") && clew_planner --ros-args --params-file $(basename "$SPATIAL_WORLD")" \
+         "-p record.directory:=$SPATIAL_RECORDINGS) (log: $OUT/clew_planner_spatial.log)"
+    planner="$(pwd)/$BIN/clew_planner"
+    (cd "$(dirname "$SPATIAL_WORLD")" && exec "$planner" --ros-args \
+        --params-file "$(basename "$SPATIAL_WORLD")" -p "record.directory:=$SPATIAL_RECORDINGS" \
+        -p trajectory.max_velocity:=3.0 -p trajectory.max_acceleration:=12.0) \
+        >"$OUT/clew_planner_spatial.log" 2>&1 &
+    node_pid=$!
+    set +e
+    "$PY" -m clew_ros.client.call_plan --node /clew_planner --timeout 300 | tee "$OUT/spatial_plan_call.txt"
+    rc=${PIPESTATUS[0]}
+    set -e
+    case $rc in
+        0) echo "demo: the node planned the spatial world" ;;
+        *) echo "demo: the spatial run failed (exit $rc); the node's log:" >&2
+           cat "$OUT/clew_planner_spatial.log" >&2; [[ $status -eq 0 ]] && status=1 ;;
+    esac
+    kill -INT "$node_pid" 2>/dev/null || true
+    set +e
+    wait "$node_pid"
+    node_rc=$?
+    set -e
+    node_pid=""
+    if [[ $node_rc -ne 0 ]]; then
+        echo "demo: the spatial clew_planner exited with code $node_rc" >&2
+        [[ $status -eq 0 ]] && status=$node_rc
+    fi
+    spatial_run=$(grep -oE 'run [0-9a-f]{32}' "$OUT/spatial_plan_call.txt" | head -1 | cut -d' ' -f2 || true)
+    if [[ -n "$spatial_run" && -f "$SPATIAL_RECORDINGS/$spatial_run/metadata.yaml" ]]; then
+        echo "demo: spatial run recorded in $SPATIAL_RECORDINGS/$spatial_run (open it in Foxglove or RViz)"
+    else
+        not_built+=("recording of the spatial run")
+    fi
+fi
+
 if [[ ${#not_built[@]} -gt 0 ]]; then
     echo "demo: not built yet: $(IFS=','; echo "${not_built[*]}" | sed 's/,/, /g')"
 fi

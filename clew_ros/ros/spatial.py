@@ -257,12 +257,18 @@ def _unstable_reason(world: SpatialWorld, pose: Matrix) -> str:
     )
 
 
+#: A ``~/goal_pose`` whose pose matrix differs from the world's own goal by at most this (m, and rotation
+#: matrix entries) is that goal: a pose message's quaternion changes the goal's numbers by round-off only, and
+#: the same seed must give clew_plan's plan (interface.md section 3).
+SAME_GOAL = 1e-9
+
+
 def goal_from_pose_stamped(msg: PoseStamped, world: SpatialWorld) -> np.ndarray:
     """The object's goal placement ``[x, y, z, roll, pitch, yaw]`` of a ``~/goal_pose``, checked: frame
     ``world`` (or empty), finite, a unit quaternion (any orientation), a stable placement (else the
     reason). Raises :class:`~clew_ros.ros.messages.GoalPoseError` saying why not."""
     from clew_ros.spatial.placements import resting_on
-    from clew_ros.spatial.transforms import matrix_pose
+    from clew_ros.spatial.transforms import matrix_pose, pose_matrix
 
     if world.object is None:
         raise GoalPoseError(
@@ -292,6 +298,9 @@ def goal_from_pose_stamped(msg: PoseStamped, world: SpatialWorld) -> np.ndarray:
     tolerance = world.tolerances["placement_tolerance"]
     if resting_on(world.object.shape, pose, world.supports, tolerance) is None:
         raise GoalPoseError(f"goal_pose: not a stable placement: {_unstable_reason(world, pose)}")
+    own = np.asarray(world.object.goal, dtype=float)
+    if np.max(np.abs(pose_matrix(own.tolist()) - pose)) <= SAME_GOAL:
+        return own  # the world's own goal, sent as a pose: the plan is clew_plan's (no quaternion round-off)
     return np.array(matrix_pose(pose), dtype=float)
 
 

@@ -140,6 +140,18 @@ def test_goal_pose_is_a_stable_placement_or_refused_with_the_reason(loaded) -> N
         goal_from_pose_stamped(elsewhere, world)
 
 
+def test_the_worlds_own_goal_sent_as_a_pose_is_that_goal_to_the_last_bit(loaded) -> None:  # type: ignore[no-untyped-def]
+    """A client that sends ``world.object.goal`` as a PoseStamped gets clew_plan's plan: the quaternion's
+    round-off does not move the goal (a goal 1e-6 away is a goal of its own)."""
+    world, _setup = loaded
+    own = np.asarray(world.object.goal, dtype=float)
+    assert np.array_equal(goal_from_pose_stamped(_goal(own.tolist()), world), own)
+    nearby = own + np.array([1e-6, 0.0, 0.0, 0.0, 0.0, 0.0])
+    moved = goal_from_pose_stamped(_goal(nearby.tolist()), world)
+    assert not np.array_equal(moved, own)
+    assert np.allclose(moved, nearby, atol=1e-12)
+
+
 def test_the_spatial_launch_file_hands_the_node_absolute_paths(monkeypatch: pytest.MonkeyPatch) -> None:
     install(monkeypatch, ROOT)
     launch = ROOT / "launch" / "clew_spatial_planner.launch.py"

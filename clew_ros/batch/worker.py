@@ -1,7 +1,9 @@
 """What runs in a worker process: one job (:func:`run_job`), and the local pool's worker loop (:func:`serve`).
 
 A job travels as a :class:`JobSpec` (the world's parameter tree, not its
-path, so that a Ray worker on another machine needs no shared folder) and
+path, so that a Ray worker on another machine needs no shared folder for a
+planar world; a spatial world's URDF, SRDF and scene files are read from the
+world file's folder, which such a worker must see at the same path) and
 comes back as a :class:`JobOutcome` holding the plan file's text (and, with
 ``--record``, the recording's files); only the driver writes files. Each
 worker process warms the compiled kernel once (:func:`prepare`), before its
@@ -41,13 +43,13 @@ class JobSpec:
 
     key: str
     parameters: Mapping[str, Any]
-    #: the world file's folder: where the paths of a spatial world (URDF, SRDF, scene file) start
-    folder: str
     seed: int
     time_limit_s: float | None
     improve_time_s: float | None
     timeout_s: float
     record: bool = False
+    #: the world file's folder: where the relative paths of a spatial world (URDF, SRDF, scene file) start
+    folder: str = "."
 
 
 @dataclass(frozen=True)

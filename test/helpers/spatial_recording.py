@@ -2,9 +2,10 @@
 its witness plan, written through :class:`~clew_ros.recording.RunRecorder` with the node's own builders
 (:mod:`clew_ros.ros.spatial`, :func:`~clew_ros.motion.spatial.spatial_track`,
 :func:`~clew_ros.node.worker.spatial_plan_fields`): ``~/world_yaml``, ``~/world_markers``,
-``~/robot_description``, ``/tf_static``, ``~/trajectory``, the ``accepted`` and ``succeeded`` events, and the
-playback's ``~/joint_states``, ``~/object_pose``, ``/tf``, ``~/scene`` and grasp events. A few seconds, no
-planning (the witness is a checked plan); the node's own recording is tested in test/node/test_spatial.py.
+``~/robot_description``, ``/tf_static``, ``~/landmarks``, ``~/trajectory``, the ``accepted`` and
+``succeeded`` events, and the playback's ``~/joint_states``, ``~/object_pose``, ``/tf``, ``~/scene`` and grasp
+events. A few seconds, no planning (the witness is a checked plan); the node's own recording is tested in
+test/node/test_spatial.py.
 """
 
 from __future__ import annotations
@@ -66,6 +67,7 @@ def record_witness(directory: Path, *, start_ns: int = 1_700_000_000 * _NS, urdf
         tf(spatial.state_transforms(setup, world, world.initial, world.object.initial), now)
         event("accepted", now, source="plan", world=world.name)
         now += _NS
+        write("landmarks", spatial.landmark_markers(world, plan.landmarks, now), now)  # type: ignore[arg-type]
         write("trajectory", messages.joint_trajectory(track, now), now)
         event("succeeded", now, code="SUCCEEDED", message="witness", **spatial_plan_fields(track, has_object=True))
         for t_s, state, events in scheduled_samples(track, 10.0):

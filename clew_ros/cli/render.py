@@ -142,6 +142,8 @@ def _spatial(source: Path, args: argparse.Namespace, output: Path, size: int) ->
     if _is_recording(source) and (world_file is not None or args.world is None):
         if _render_spatial_recording(source, world_file, args, output, size):
             return True
+    elif _is_recording(source) and _recorded_spatial(source):
+        raise RenderError(f"--world: {args.world} is a planar world; the recording is of a spatial run")
     elif world_file is not None:
         _render_spatial(world_file, source, args, output, size)
         return True
@@ -149,6 +151,12 @@ def _spatial(source: Path, args: argparse.Namespace, output: Path, size: int) ->
         if value is not None:
             raise RenderError(f"{flag}: only for spatial worlds (world.kind: spatial)")
     return False
+
+
+def _recorded_spatial(source: Path) -> bool:
+    from clew_ros.render.spatial.recording import is_spatial_recording
+
+    return is_spatial_recording(source)
 
 
 def _view(args: argparse.Namespace, output: Path, size: int) -> View3D:

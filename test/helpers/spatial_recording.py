@@ -32,9 +32,12 @@ NODE = "clew_planner"
 _NS = 1_000_000_000
 
 
-def record_witness(directory: Path, *, start_ns: int = 1_700_000_000 * _NS, urdf: str | None = None) -> Path:
+def record_witness(
+    directory: Path, *, start_ns: int = 1_700_000_000 * _NS, urdf: str | None = None, succeeded: bool = True
+) -> Path:
     """Record the witness run in ``directory``; return the run's directory. ``urdf``: the path
-    ``~/world_yaml`` names for the URDF instead of the real one (a recording carried to another machine)."""
+    ``~/world_yaml`` names for the URDF instead of the real one (a recording carried to another machine);
+    ``succeeded=False``: the run is aborted (``TIME_LIMIT``) after its start, no trajectory."""
     tree = read_parameter_file(WORLD_FILE)
     world, setup = spatial.load_spatial(tree, WORLD_FILE.parent)
     planner = PlannerSettings.from_parameters({"planner": tree.get("planner", {})})
@@ -67,6 +70,9 @@ def record_witness(directory: Path, *, start_ns: int = 1_700_000_000 * _NS, urdf
         tf(spatial.state_transforms(setup, world, world.initial, world.object.initial), now)
         event("accepted", now, source="plan", world=world.name)
         now += _NS
+        if not succeeded:
+            event("aborted", now, code="TIME_LIMIT", message="no plan within the time limit")
+            return recorder.close()
         write("landmarks", spatial.landmark_markers(world, plan.landmarks, now), now)  # type: ignore[arg-type]
         write("trajectory", messages.joint_trajectory(track, now), now)
         event("succeeded", now, code="SUCCEEDED", message="witness", **spatial_plan_fields(track, has_object=True))

@@ -87,3 +87,23 @@ def test_gif_of_a_spatial_recording(recorded: Path, tmp_path: Path, capsys: pyte
 def test_a_recording_with_frames_is_refused(recorded: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert clew_render([str(recorded), "-o", str(tmp_path / "x.png"), "--frames", str(WITNESS)]) == 2
     assert "--frames: a recording holds its plan" in capsys.readouterr().err
+
+
+def test_a_planar_world_for_a_spatial_recording_is_refused(
+    recorded: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    planar = Path(__file__).resolve().parents[2] / "config" / "figure1.yaml"
+    assert clew_render([str(recorded), "-o", str(tmp_path / "x.png"), "--world", str(planar)]) == 2
+    assert "is a planar world; the recording is of a spatial run" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_an_aborted_run_draws_the_start_and_says_so(tmp_path: Path) -> None:
+    run = spatial_recording(record_witness(tmp_path, succeeded=False))
+    assert run is not None
+    assert len(run.frames.joints) == 1
+    np.testing.assert_allclose(run.frames.joints[0], run.world.initial)
+    assert "aborted: no plan within the time limit" in run.frames.title
+    out = tmp_path / "aborted.png"
+    assert clew_render([str(tmp_path / f"{0x45B:032x}"), "-o", str(out), "--size", "160"]) == 0
+    assert out.stat().st_size > 0

@@ -29,7 +29,7 @@ from clew_ros.render.spatial.frames import FrameSampling, SpatialFrames, frames_
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.world import SpatialWorld
 
-__all__ = ["RecordedSpatialRun", "recorded_parameters", "spatial_recording"]
+__all__ = ["RecordedSpatialRun", "is_spatial_recording", "recorded_parameters", "spatial_recording"]
 
 _OUTCOMES = ("succeeded", "aborted", "canceled")
 
@@ -107,6 +107,19 @@ def _events(recording: Any) -> list[dict[str, Any]]:
 def _start(world: SpatialWorld, title: str) -> SpatialFrames:
     rest = None if world.object is None else pose_matrix(world.object.initial)[None]
     return SpatialFrames(world.initial[None], rest, np.zeros(1, dtype=bool), title)
+
+
+def is_spatial_recording(path: str | Path) -> bool:
+    """Whether the recording at ``path`` is of a spatial run (its last ``~/world_yaml`` says so)."""
+    from clew_ros.recording import Recording, RecordingError
+
+    try:
+        recording = Recording(path)
+        topic = _topic(recording, "world_yaml")
+        message = recording.last(topic) if topic else None
+    except RecordingError as error:
+        raise RenderError(str(error)) from None
+    return message is not None and recorded_parameters(message.data, f"{path} ({topic})") is not None
 
 
 def spatial_recording(

@@ -32,7 +32,7 @@ topic                          schema (encoding)           content
                                                            ``playback_done``
 =============================  ==========================  ==========================================
 
-A spatial world (``LiveView(spatial=True)``, interface.md section 1b) is drawn in 3-D
+A spatial world (interface.md section 1b) is drawn in 3-D
 (:mod:`clew_ros.live.spatial`): ``<namespace>/scene`` holds ``bounds``,
 ``obstacles``, ``supports``, ``start`` and ``goal`` as solids; two more
 channels, ``<namespace>/links`` (``foxglove.SceneUpdate``: the arm's links,
@@ -142,7 +142,8 @@ class LiveView:
     ``grasp_dwell_s`` time the playback as the node's ``playback.rate``,
     ``trajectory.max_velocity``, ``trajectory.max_acceleration`` and
     ``trajectory.grasp_dwell`` (their defaults are those parameters').
-    ``spatial``: serve spatial worlds (the ``links`` and ``tf`` channels; see the module docstring).
+    ``spatial``: advertise the ``links`` and ``tf`` channels of spatial worlds from the start (see the
+    module docstring; without it they are added when a spatial world is published).
     A context manager: ``with LiveView() as view:`` starts and stops it.
 
     >>> view = LiveView(port=0)                       # doctest: +SKIP
@@ -416,8 +417,7 @@ class LiveView:
         start; the landmarks cleared."""
         from clew_ros.live import spatial
 
-        if not self._spatial:
-            raise LiveViewError("a spatial world needs a live view made with spatial=True (its links and tf)")
+        self._add_spatial_channels()
         self._world = world
         now = time.time_ns()
         self._send("scene", spatial.world_update(world, now), latch=True)
@@ -426,6 +426,25 @@ class LiveView:
         pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)
         self._send_spatial_state(world, world.initial, 0.0, pose, now)
         self._send("events", {"kind": "world", "world": world.name})
+
+    def publish_spatial_sample(self, joints: np.ndarray, gripper: float, object_pose: np.ndarray | None) -> None:
+        """One state of a spatial playback run elsewhere (the node's): the links' transforms, the tcp and the
+        object, the joint states."""
+        world = self._current_world()
+        if isinstance(world, World):
+            raise LiveViewError("publish_spatial_sample: the world published is planar; use publish_sample")
+        self._send_spatial_state(world, np.asarray(joints, dtype=float), gripper, object_pose, time.time_ns())
+
+    def _add_spatial_channels(self) -> None:
+        """The ``links`` and ``tf`` channels, when the view was not made with ``spatial=True`` (advertised to
+        the clients connected from now on and to those connected already)."""
+        if self._server is None or "tf" in self._channels:
+            return
+        from foxglove.channels import FrameTransformsChannel, SceneUpdateChannel
+
+        with self._lock:
+            self._channels["links"] = SceneUpdateChannel(self.topic("links"), context=self._context)
+            self._channels["tf"] = FrameTransformsChannel(self.topic("tf"), context=self._context)
 
     def _send_spatial_state(
         self, world: SpatialWorld, joints: np.ndarray, gripper: float, object_pose: np.ndarray | None, now: int

@@ -116,6 +116,14 @@ def test_the_plan_played_back_moves_the_links_and_carries_the_box(view: LiveView
     np.testing.assert_allclose(box, planned.final_object_pose[:3], atol=1e-6)
 
 
-def test_a_spatial_world_needs_a_spatial_view(world: SpatialWorld) -> None:
-    with LiveView(port=0) as live, pytest.raises(LiveViewError, match="spatial=True"):
+def test_a_view_made_for_planar_worlds_adds_the_spatial_channels(world: SpatialWorld) -> None:
+    with LiveView(port=0) as live:
         live.publish_world(world)
+        live.publish_spatial_sample(world.initial, 1.0, np.asarray(world.object.initial))
+        with FoxgloveClient.connect(live.port, channels=CHANNELS) as client:
+            received = {m.topic: m for m in (client.receive() for _ in range(5))}
+    assert {"/clew_plan/links", "/clew_plan/tf"} <= set(received)
+    (gripper,) = [e for e in received["/clew_plan/arm"].data["entities"] if e["id"] == "gripper"]
+    assert gripper["spheres"]  # the tcp, red: holding (gripper 1.0)
+    with LiveView(port=0) as live, pytest.raises(LiveViewError, match="publish_world"):
+        live.publish_spatial_sample(world.initial, 0.0, None)

@@ -12,7 +12,8 @@ over a WebSocket on 127.0.0.1 (PORT 8765; 0: any free port, printed): it
 waits for a client, shows the world and the landmark tree as it grows, writes
 the plan file as usual, then plays the plan back again and again until
 Ctrl-C (SIGINT) or SIGTERM; the exit code is the run's. The live view only
-observes: same seed, same plan. Channels: :mod:`clew_ros.live.view`.
+observes: same seed, same plan. A spatial world is served in 3-D (its links
+and their transforms too). Channels: :mod:`clew_ros.live.view`.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
@@ -31,6 +33,9 @@ from clew_ros.core.plan import Plan
 from clew_ros.live import DEFAULT_PORT, HOST, INSTALL_HINT, LiveView, LiveViewError, LiveViewUnavailableError
 from clew_ros.offline import AnyProblem, plan_problem, problem_from_parameters, warm_up
 from clew_ros.planar.world import World, read_parameter_file
+
+if TYPE_CHECKING:
+    from clew_ros.spatial.world import SpatialWorld
 
 EXIT_ABORTED = 130
 
@@ -109,11 +114,11 @@ def _cancel_on_signals(cancel: threading.Event, doing: str = "canceling the run"
     return restore
 
 
-def _start_live_view(parameters: dict, port: int, joints: int) -> LiveView | str:
-    """The started live view (timed for a robot of ``joints`` joints), or why it cannot start (a message for
-    stderr)."""
+def _start_live_view(parameters: dict, port: int, joints: int, *, spatial: bool) -> LiveView | str:
+    """The started live view (timed for a robot of ``joints`` joints; ``spatial``: drawing a spatial world),
+    or why it cannot start (a message for stderr)."""
     try:
-        return LiveView.from_parameters(parameters, port=port, joints=joints).start()
+        return LiveView.from_parameters(parameters, port=port, joints=joints, spatial=spatial).start()
     except LiveViewUnavailableError:
         return f"--foxglove needs foxglove-sdk, which is not installed: {INSTALL_HINT}"
     except (LiveViewError, ParameterError) as error:
@@ -136,7 +141,7 @@ def _serve_until_signal(view: LiveView, planned: Plan) -> None:
         restore()
 
 
-def _show_world(view: LiveView, world: World, cancel: threading.Event) -> bool:
+def _show_world(view: LiveView, world: World | SpatialWorld, cancel: threading.Event) -> bool:
     """Publish the world, then wait for a Foxglove client or ``cancel``; ``False``: aborted (a second signal)."""
     view.publish_world(world)
     print(f"clew_plan: live view on {view.url}: waiting for a Foxglove client (Ctrl-C to stop)", file=sys.stderr)
@@ -164,10 +169,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.foxglove is None:
         return _plan(args, problem, None)
-    if not isinstance(problem.world, World):
-        print("clew_plan: --foxglove: the live view draws planar worlds only", file=sys.stderr)
-        return 2
-    view = _start_live_view(parameters, args.foxglove, problem.world.robot.dof)
+    spatial = not isinstance(problem.world, World)
+    view = _start_live_view(parameters, args.foxglove, problem.world.robot.dof, spatial=spatial)
     if isinstance(view, str):
         print(f"clew_plan: {view}", file=sys.stderr)
         return 2
@@ -189,7 +192,7 @@ def _plan(args: argparse.Namespace, problem: AnyProblem, view: LiveView | None) 
     warm_up(problem)  # compile the kernels (or load numba's cache) before the clock starts: no plan pays for it
     cancel = threading.Event()
     restore = _cancel_on_signals(cancel)
-    if view is not None and isinstance(problem.world, World) and not _show_world(view, problem.world, cancel):
+    if view is not None and not _show_world(view, problem.world, cancel):
         restore()
         print("clew_plan: aborted; no plan file written", file=sys.stderr)
         return EXIT_ABORTED

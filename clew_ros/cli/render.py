@@ -11,8 +11,12 @@ as vector graphics. A spatial world (``world.kind: spatial``) is drawn in 3-D
 as PNG or GIF, seen from ``--view`` (azimuth and elevation in degrees, distance
 in metres; default: from the front right, framing the scene): alone, the arm
 at its start with the goal ghosted; with a plan (INPUT) or ``--frames`` (a plan
-or a frames file), the arm along the frames. Exit 0: written; 2: invalid input
-(message on stderr).
+or a frames file), the arm along the frames. A recording of a spatial run is
+drawn the same way along its plan, rebuilt from ``~/trajectory`` and the
+``succeeded`` event (the world: the recording's ``~/world_yaml``, the robot from
+``~/robot_description`` when the URDF file it names is not here; ``--world``
+replaces it: :mod:`clew_ros.render.spatial.recording`). Exit 0: written; 2:
+invalid input (message on stderr).
 """
 
 from __future__ import annotations
@@ -20,8 +24,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from clew_ros.cli.oneline import one_line
+
+if TYPE_CHECKING:
+    from clew_ros.render.spatial import View3D
 
 EXIT_OK = 0
 EXIT_INVALID = 2
@@ -122,14 +130,22 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _spatial(source: Path, args: argparse.Namespace, output: Path, size: int) -> bool:
-    """Draw a spatial world (INPUT or ``--world`` says ``world.kind: spatial``) and say so; ``False`` for a
-    planar world, which takes neither ``--view`` nor ``--frames``."""
+    """Draw a spatial world (INPUT or ``--world`` says ``world.kind: spatial``, or INPUT is a recording of a
+    spatial run) and say so; ``False`` for a planar world, which takes neither ``--view`` nor ``--frames``."""
     from clew_ros.render import RenderError
     from clew_ros.render.spatial.frames import is_spatial_world_file
 
     candidate = Path(args.world) if args.world else source if source.suffix.lower() in (".yaml", ".yml") else None
+    world_file = None
     if candidate is not None and candidate.is_file() and is_spatial_world_file(candidate):
-        _render_spatial(candidate, source, args, output, size)
+        world_file = candidate
+    if _is_recording(source) and (world_file is not None or args.world is None):
+        if _render_spatial_recording(source, world_file, args, output, size):
+            return True
+    elif _is_recording(source) and _recorded_spatial(source):
+        raise RenderError(f"--world: {args.world} is a planar world; the recording is of a spatial run")
+    elif world_file is not None:
+        _render_spatial(world_file, source, args, output, size)
         return True
     for flag, value in (("--view", args.view), ("--frames", args.frames)):
         if value is not None:
@@ -137,19 +153,60 @@ def _spatial(source: Path, args: argparse.Namespace, output: Path, size: int) ->
     return False
 
 
-def _render_spatial(world_file: Path, source: Path, args: argparse.Namespace, output: Path, size: int) -> None:
-    """A spatial world drawn: alone (INPUT the world) or along a plan (INPUT, with ``--world``) or ``--frames``."""
+def _recorded_spatial(source: Path) -> bool:
+    from clew_ros.render.spatial.recording import is_spatial_recording
+
+    return is_spatial_recording(source)
+
+
+def _view(args: argparse.Namespace, output: Path, size: int) -> View3D:
     from clew_ros.render import RenderError
-    from clew_ros.render.spatial import View3D, draw_spatial_frames, draw_spatial_world, parse_view, write_spatial_gif
-    from clew_ros.render.spatial.frames import load_spatial_world, read_frames
+    from clew_ros.render.spatial import View3D, parse_view
 
     if output.suffix.lower() == ".svg":
         raise RenderError("--output: a spatial world is drawn as .png or .gif, not .svg")
+    base = View3D(width=size, height=round(size * 0.75))
+    return parse_view(args.view, base) if args.view is not None else base
+
+
+def _render_spatial_recording(
+    source: Path, world_file: Path | None, args: argparse.Namespace, output: Path, size: int
+) -> bool:
+    """A recorded spatial run drawn along its plan (the world: the recording's, or ``world_file``);
+    ``False`` when the recording is of a planar run."""
+    from clew_ros.render import RenderError
+    from clew_ros.render.spatial import draw_spatial_frames, write_spatial_gif
+    from clew_ros.render.spatial.frames import load_spatial_world
+    from clew_ros.render.spatial.recording import spatial_recording
+
+    run = spatial_recording(source, load_spatial_world(world_file) if world_file is not None else None)
+    if run is None:
+        return False
+    if args.frames is not None:
+        raise RenderError("--frames: a recording holds its plan; give either a recording or --frames")
+    view, frames = _view(args, output, size), run.frames
+    if output.suffix.lower() == ".gif":
+        write_spatial_gif(
+            output, run.world, frames.joints, frames.object_poses, view, held=frames.held, title=frames.title
+        )
+    else:
+        picture = draw_spatial_frames(
+            run.world, frames.joints, frames.object_poses, view, held=frames.held, title=frames.title
+        )
+        picture.save(output, format="PNG", optimize=True)
+    return True
+
+
+def _render_spatial(world_file: Path, source: Path, args: argparse.Namespace, output: Path, size: int) -> None:
+    """A spatial world drawn: alone (INPUT the world) or along a plan (INPUT, with ``--world``) or ``--frames``."""
+    from clew_ros.render import RenderError
+    from clew_ros.render.spatial import draw_spatial_frames, draw_spatial_world, write_spatial_gif
+    from clew_ros.render.spatial.frames import load_spatial_world, read_frames
+
+    view = _view(args, output, size)
     frames_file = Path(args.frames) if args.frames else source if source != world_file else None
     if args.frames and source != world_file:
         raise RenderError("--frames: give the frames either as INPUT (with --world) or with --frames, not both")
-    base = View3D(width=size, height=round(size * 0.75))
-    view = parse_view(args.view, base) if args.view is not None else base
     if frames_file is not None and not frames_file.is_file():
         raise RenderError(f"--frames: {frames_file} does not exist")
     world = load_spatial_world(world_file)

@@ -57,10 +57,9 @@ from clew_ros.client.run import (
     RunTimeoutError,
 )
 from clew_ros.core.errors import ClewError
-from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.core.settings import Outcome
 from clew_ros.planar.world import World, world_from_parameters
-from clew_ros.recording.trajectory import trajectory_to_plan
+from clew_ros.recording.trajectory import spatial_trajectory_plan, trajectory_to_plan
 from clew_ros.ros import messages
 from clew_ros.ros.qos import EVENTS_QOS, GOAL_QOS, LATCHED_QOS, STREAM_QOS
 
@@ -459,35 +458,3 @@ class PlannerClient:
             handle.cancel_requested = True
             return
         self._cancel.call_async(Trigger.Request())
-
-
-def spatial_trajectory_plan(trajectory: JointTrajectory, fields: dict[str, Any], message: str, world: str) -> Plan:
-    """A spatial run's plan, rebuilt from its ``~/trajectory`` and its ``succeeded`` event's ``segments``
-    (each ``kind``, ``grasp`` and how many of the trajectory's points it has, in order) and
-    ``final_object_pose``; ``ValueError`` when they do not fit together."""
-    points = np.array([list(p.positions) for p in trajectory.points], dtype=float)
-    segments, start = [], 0
-    for segment in fields["segments"]:
-        count = int(segment["points"])
-        if count < 1 or start + count > len(points):
-            raise ValueError(f"the event's segments do not fit the trajectory's {len(points)} points")
-        grasp = segment["grasp"]
-        segments.append(
-            PlanSegment(str(segment["kind"]), None if grasp is None else int(grasp), points[start : start + count])
-        )
-        start += count
-    if start != len(points):
-        raise ValueError(f"the event's segments hold {start} points, the trajectory {len(points)}")
-    final = fields.get("final_object_pose")
-    return Plan(
-        world=world,
-        joint_names=tuple(trajectory.joint_names),
-        success=True,
-        message=message,
-        code=Outcome.SUCCEEDED.name,
-        segments=tuple(segments),
-        final_object_pose=None if final is None else np.array(final, dtype=float),
-        landmarks=(),
-        stats={},
-        world_kind="spatial",
-    )

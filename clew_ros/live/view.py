@@ -32,7 +32,19 @@ topic                          schema (encoding)           content
                                                            ``playback_done``
 =============================  ==========================  ==========================================
 
-Everything is drawn in the frame ``world`` at ``z = 0``. The scene, the
+A spatial world (interface.md section 1b) is drawn in 3-D
+(:mod:`clew_ros.live.spatial`): ``<namespace>/scene`` holds ``bounds``,
+``obstacles``, ``supports``, ``start`` and ``goal`` as solids; two more
+channels, ``<namespace>/links`` (``foxglove.SceneUpdate``: the arm's links,
+entity ``link/<name>`` each in its link's frame, ``frame_locked``) and
+``<namespace>/tf`` (``foxglove.FrameTransforms``: ``world`` -> every link and
+``world`` -> ``object`` at the start and at each playback sample) draw the arm
+as ``~/world_markers`` and ``/tf`` draw it from a recording; ``/arm`` holds
+``gripper`` (the tool centre point) and ``object``; ``/landmarks`` the tcp at
+each landmark, the tree's edges and the object's centre at each;
+``/joint_states`` the planned joints' URDF names and ``gripper``.
+
+Everything planar is drawn in the frame ``world`` at ``z = 0``. The scene, the
 landmarks, the arm and the progress are latched: a client that subscribes
 late is sent the latest message of each (to every subscriber of that
 channel; a scene update replaces entities of the same id, so nothing is
@@ -45,6 +57,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -61,6 +74,8 @@ if TYPE_CHECKING:
     from foxglove.websocket import ServerListener, WebSocketServer
 
     from clew_ros.live.messages import LandmarkLike
+    from clew_ros.motion.playback import Track
+    from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["DEFAULT_PORT", "HOST", "LiveView", "is_available"]
 
@@ -127,6 +142,8 @@ class LiveView:
     ``grasp_dwell_s`` time the playback as the node's ``playback.rate``,
     ``trajectory.max_velocity``, ``trajectory.max_acceleration`` and
     ``trajectory.grasp_dwell`` (their defaults are those parameters').
+    ``spatial``: advertise the ``links`` and ``tf`` channels of spatial worlds from the start (see the
+    module docstring; without it they are added when a spatial world is published).
     A context manager: ``with LiveView() as view:`` starts and stops it.
 
     >>> view = LiveView(port=0)                       # doctest: +SKIP
@@ -145,6 +162,7 @@ class LiveView:
         max_velocity_rad_s: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_velocity"),
         max_acceleration_rad_s2: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_acceleration"),
         grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell"),
+        spatial: bool = False,
     ) -> None:
         if not 0 <= port <= 65535:
             raise LiveViewError(f"port {port} is not a TCP port, must be in [0, 65535]")
@@ -158,6 +176,7 @@ class LiveView:
         self._max_velocity_rad_s = max_velocity_rad_s
         self._max_acceleration_rad_s2 = max_acceleration_rad_s2
         self._grasp_dwell_s = grasp_dwell_s
+        self._spatial = spatial
         self._server: WebSocketServer | None = None
         self._context: foxglove.Context | None = None
         self._channels: dict[str, Any] = {}
@@ -167,11 +186,16 @@ class LiveView:
         self._resends: queue.SimpleQueue[int | None] = queue.SimpleQueue()  # channel ids subscribed to
         self._resender: threading.Thread | None = None
         self._stopping = threading.Event()
-        self._world: World | None = None
+        self._world: World | SpatialWorld | None = None
 
     @classmethod
     def from_parameters(
-        cls, parameters: Mapping[str, Any], *, port: int = DEFAULT_PORT, joints: int | None = None
+        cls,
+        parameters: Mapping[str, Any],
+        *,
+        port: int = DEFAULT_PORT,
+        joints: int | None = None,
+        spatial: bool = False,
     ) -> LiveView:
         """A live view timed by a ``ros__parameters`` tree's ``playback.rate`` and ``trajectory.*`` (the node's;
         absent ones take their defaults; ``trajectory.joint_speed``, if set, is the velocity limit). Raises
@@ -187,7 +211,7 @@ class LiveView:
                 values[keyword] = check_value(NODE_PARAMETERS[key], tree[leaf])
                 if joints is not None and NODE_PARAMETERS[key].type is ParameterType.DOUBLE_PER_JOINT:
                     check_joint_count(NODE_PARAMETERS[key], values[keyword], joints)
-        return cls(port=port, **values)
+        return cls(port=port, spatial=spatial, **values)
 
     # ------------------------------------------------------------------ life
 
@@ -214,7 +238,7 @@ class LiveView:
             raise LiveViewError("the live view is started already")
         try:
             import foxglove
-            from foxglove.channels import JointStatesChannel, SceneUpdateChannel
+            from foxglove.channels import FrameTransformsChannel, JointStatesChannel, SceneUpdateChannel
         except ImportError as error:
             raise LiveViewUnavailableError from error
         # Our own context (channels of other code in this process are not served), kept alive with the server:
@@ -228,6 +252,9 @@ class LiveView:
             "progress": foxglove.Channel(self.topic("progress"), schema=PROGRESS_SCHEMA, context=context),
             "events": foxglove.Channel(self.topic("events"), schema=EVENT_SCHEMA, context=context),
         }
+        if self._spatial:
+            self._channels["links"] = SceneUpdateChannel(self.topic("links"), context=context)
+            self._channels["tf"] = FrameTransformsChannel(self.topic("tf"), context=context)
         self._stopping.clear()
         try:
             self._server = foxglove.start_server(
@@ -274,11 +301,15 @@ class LiveView:
 
     # ------------------------------------------------------------------ publishing
 
-    def publish_world(self, world: World, *, goal: np.ndarray | None = None) -> None:
+    def publish_world(self, world: World | SpatialWorld, *, goal: np.ndarray | None = None) -> None:
         """Publish ``world`` (its goal, or ``goal`` (3,)) and the arm at its start; the world
-        :meth:`publish_landmarks` and :meth:`play` draw in from now on. Clears the landmarks."""
+        :meth:`publish_landmarks` and :meth:`play` draw in from now on. Clears the landmarks. A spatial
+        world needs a view made with ``spatial=True`` (its goal is its own)."""
         from clew_ros.live import messages
 
+        if not isinstance(world, World):
+            self._publish_spatial_world(world)
+            return
         self._world = world
         now = time.time_ns()
         self._send("scene", messages.world_update(world, now, goal=goal), latch=True)
@@ -290,7 +321,13 @@ class LiveView:
         """Publish the landmark tree: a :class:`~clew_ros.core.tree.LandmarkTree` or a plan's landmarks."""
         from clew_ros.live import messages
 
-        self._send("landmarks", messages.landmarks_update(self._current_world(), landmarks, time.time_ns()), latch=True)
+        world = self._current_world()
+        if not isinstance(world, World):
+            from clew_ros.live import spatial
+
+            self._send("landmarks", spatial.landmarks_update(world, landmarks, time.time_ns()), latch=True)
+            return
+        self._send("landmarks", messages.landmarks_update(world, landmarks, time.time_ns()), latch=True)
 
     def publish_progress(self, progress: Progress) -> None:
         """Publish a run's progress (``/progress``) and its landmark tree."""
@@ -325,14 +362,18 @@ class LiveView:
         world = self._current_world()
         if not plan.segments:
             return True
-        track = track_from_plan(
-            world,
-            plan,
-            max_velocity_rad_s=self._max_velocity_rad_s,
-            max_acceleration_rad_s2=self._max_acceleration_rad_s2,
-            grasp_dwell_s=self._grasp_dwell_s,
-        )
-        names = track.joint_names[:-1]
+        if isinstance(world, World):
+            track = track_from_plan(
+                world,
+                plan,
+                max_velocity_rad_s=self._max_velocity_rad_s,
+                max_acceleration_rad_s2=self._max_acceleration_rad_s2,
+                grasp_dwell_s=self._grasp_dwell_s,
+            )
+            names = track.joint_names[:-1]
+        else:
+            track = self._spatial_track(world, plan)
+            names = list(track.joint_names)
 
         def wait_stop(timeout_s: float) -> bool:
             if stop is None:
@@ -341,7 +382,10 @@ class LiveView:
 
         def on_sample(state: TrackState) -> None:
             now = time.time_ns()
-            self._send_arm(state.joints, state.gripper, state.object_pose, now)
+            if isinstance(world, World):
+                self._send_arm(state.joints, state.gripper, state.object_pose, now)
+            else:
+                self._send_spatial_state(world, state.joints, state.gripper, state.object_pose, now)
             self._send("joint_states", messages.joint_states(names, state.joints, state.gripper, now))
 
         def on_event(event: GripperEvent) -> None:
@@ -368,7 +412,58 @@ class LiveView:
 
     # ------------------------------------------------------------------ internals
 
-    def _current_world(self) -> World:
+    def _publish_spatial_world(self, world: SpatialWorld) -> None:
+        """The spatial world (:mod:`clew_ros.live.spatial`): the scene, the links (latched), the arm at its
+        start; the landmarks cleared."""
+        from clew_ros.live import spatial
+
+        self._add_spatial_channels()
+        self._world = world
+        now = time.time_ns()
+        self._send("scene", spatial.world_update(world, now), latch=True)
+        self._send("links", spatial.links_update(world, now, _mesh_simplifier()), latch=True)
+        self._send("landmarks", spatial.landmarks_update(world, [], now), latch=True)
+        pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)
+        self._send_spatial_state(world, world.initial, 0.0, pose, now)
+        self._send("events", {"kind": "world", "world": world.name})
+
+    def publish_spatial_sample(self, joints: np.ndarray, gripper: float, object_pose: np.ndarray | None) -> None:
+        """One state of a spatial playback run elsewhere (the node's): the links' transforms, the tcp and the
+        object, the joint states."""
+        world = self._current_world()
+        if isinstance(world, World):
+            raise LiveViewError("publish_spatial_sample: the world published is planar; use publish_sample")
+        self._send_spatial_state(world, np.asarray(joints, dtype=float), gripper, object_pose, time.time_ns())
+
+    def _add_spatial_channels(self) -> None:
+        """The ``links`` and ``tf`` channels, when the view was not made with ``spatial=True`` (advertised to
+        the clients connected from now on and to those connected already)."""
+        if self._server is None or "tf" in self._channels:
+            return
+        from foxglove.channels import FrameTransformsChannel, SceneUpdateChannel
+
+        with self._lock:
+            self._channels["links"] = SceneUpdateChannel(self.topic("links"), context=self._context)
+            self._channels["tf"] = FrameTransformsChannel(self.topic("tf"), context=self._context)
+
+    def _send_spatial_state(
+        self, world: SpatialWorld, joints: np.ndarray, gripper: float, object_pose: np.ndarray | None, now: int
+    ) -> None:
+        from clew_ros.live import messages, spatial
+
+        pose = None if world.object is None else object_pose
+        self._send("tf", spatial.transforms(world, joints, pose, now), latch=True)
+        self._send("arm", spatial.state_update(world, joints, gripper, pose, now), latch=True)
+        self._send("joint_states", messages.joint_states(list(world.robot.joint_names), joints, gripper, now))
+
+    def _spatial_track(self, world: SpatialWorld, plan: Plan) -> Track:
+        """A spatial plan timed as the node times it: the URDF's velocity limits and this view's."""
+        from clew_ros.motion.spatial import UrdfTree, spatial_track
+
+        timing = _Timing(self._max_velocity_rad_s, self._max_acceleration_rad_s2, self._grasp_dwell_s)
+        return spatial_track(world, plan, UrdfTree(world.robot.urdf), timing)
+
+    def _current_world(self) -> World | SpatialWorld:
         if self._world is None:
             raise LiveViewError("publish_world() first: the live view draws in the world it was given")
         return self._world
@@ -376,7 +471,9 @@ class LiveView:
     def _send_arm(self, joints: np.ndarray, gripper: float, object_pose: np.ndarray, now: int) -> None:
         from clew_ros.live import messages
 
-        self._send("arm", messages.arm_update(self._current_world(), joints, gripper, object_pose, now), latch=True)
+        world = self._current_world()
+        assert isinstance(world, World)  # a spatial world's arm: _send_spatial_state
+        self._send("arm", messages.arm_update(world, joints, gripper, object_pose, now), latch=True)
 
     def _send(self, name: str, message: Any, *, latch: bool = False) -> None:
         """Log ``message`` on channel ``name`` (nothing when not started); ``latch``: keep it for late subscribers."""
@@ -406,6 +503,33 @@ class LiveView:
             self._channels = {}
             self._latched = {}
             self._context = None
+
+
+@dataclass(frozen=True)
+class _Timing:
+    """This view's playback limits as :class:`~clew_ros.motion.playback.TrackTiming` (the node's names)."""
+
+    velocity_limit_rad_s: float | tuple[float, ...]
+    max_acceleration_rad_s2: float | tuple[float, ...]
+    grasp_dwell_s: float
+
+    def __init__(self, velocity: float | Sequence[float], acceleration: float | Sequence[float], dwell: float) -> None:
+        def plain(value: float | Sequence[float]) -> float | tuple[float, ...]:
+            return float(value) if np.ndim(value) == 0 else tuple(float(v) for v in value)  # type: ignore[arg-type, union-attr]
+
+        object.__setattr__(self, "velocity_limit_rad_s", plain(velocity))
+        object.__setattr__(self, "max_acceleration_rad_s2", plain(acceleration))
+        object.__setattr__(self, "grasp_dwell_s", float(dwell))
+
+
+def _mesh_simplifier() -> Callable[[np.ndarray, np.ndarray, int], tuple[np.ndarray, np.ndarray]] | None:
+    """The picture package's mesh simplification for the links' meshes (``None`` without its dependencies:
+    the links' primitives alone are drawn)."""
+    try:
+        from clew_ros.render.spatial.meshes import simplify
+    except ImportError:
+        return None
+    return simplify
 
 
 def _listener(subscribed: threading.Event, resend: Callable[[int], None]) -> ServerListener:

@@ -241,12 +241,6 @@ class PlannerNode(Node):
         """The Foxglove live view on ``live.foxglove_port`` (0: none); a failure is logged, the node serves on."""
         if settings.foxglove_port == 0:
             return None
-        if self._config.spatial is not None:
-            self.get_logger().warning(
-                "live.foxglove_port: the live view draws planar worlds only; this spatial world is served without "
-                "it (its recordings open in Foxglove)"
-            )
-            return None
         from clew_ros.live import LiveView, LiveViewError
 
         live = LiveView(
@@ -257,6 +251,7 @@ class PlannerNode(Node):
             max_velocity_rad_s=settings.velocity_limit_rad_s,
             max_acceleration_rad_s2=settings.max_acceleration_rad_s2,
             grasp_dwell_s=settings.grasp_dwell_s,
+            spatial=self._config.spatial is not None,
         )
         try:
             live.start()

@@ -152,6 +152,7 @@ class Publishing:
         self.publish("world_markers", spatial.world_markers(world, now, simplify=_mesh_simplifier()), recording)
         self.publish("robot_description", String(data=setup.description), recording)
         self.publish_tf(spatial.static_transforms(setup, world), now, recording, static=True)
+        self.to_live("the world", lambda live: live.publish_world(world))
         pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)
         velocities = np.zeros(world.robot.dof)
         self._spatial_state(
@@ -192,6 +193,7 @@ class Publishing:
             self.publish("object_pose", spatial.pose_stamped(object_pose, time_ns), recording)
         self.publish_tf(spatial.state_transforms(setup, world, joints, object_pose), time_ns, recording)
         self.publish("scene", spatial.scene_markers(world, joints, gripper, object_pose, time_ns), recording)
+        self.to_live("a state", lambda live: live.publish_spatial_sample(joints, gripper, object_pose))
 
     def arm(
         self,

@@ -37,7 +37,7 @@ from clew_ros.recording.recorder import (
     RunRecorder,
     default_offered_qos,
 )
-from clew_ros.recording.trajectory import GRIPPER_JOINT, trajectory_to_plan
+from clew_ros.recording.trajectory import GRIPPER_JOINT, spatial_trajectory_plan, trajectory_to_plan
 
 __all__ = [
     "GRIPPER_JOINT",
@@ -53,5 +53,6 @@ __all__ = [
     "default_offered_qos",
     "find_mcap",
     "recover_recording",
+    "spatial_trajectory_plan",
     "trajectory_to_plan",
 ]

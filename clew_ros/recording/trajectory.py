@@ -18,12 +18,13 @@ import numpy as np
 
 from clew_ros.core.errors import short_repr
 from clew_ros.core.plan import Plan, PlanSegment
+from clew_ros.core.settings import Outcome
 from clew_ros.planar.kinematics import tip_poses, transform_points
 from clew_ros.planar.plan import replay
 from clew_ros.planar.world import World
 from clew_ros.recording.errors import TrajectoryError
 
-__all__ = ["GRIPPER_JOINT", "trajectory_to_plan"]
+__all__ = ["GRIPPER_JOINT", "spatial_trajectory_plan", "trajectory_to_plan"]
 
 #: Name of the extra joint that says whether the arm holds the object.
 GRIPPER_JOINT = "gripper"
@@ -159,3 +160,35 @@ def trajectory_to_plan(
         segments[motion.index] = replace(segments[motion.index], grasp=grasp)
     final = transfers[-1].object_poses[-1] if transfers else np.asarray(world.object.initial, dtype=float)
     return replace(rebuilt, segments=tuple(segments), final_object_pose=np.array(final))
+
+
+def spatial_trajectory_plan(trajectory: Any, fields: dict[str, Any], message: str, world: str) -> Plan:
+    """A spatial run's plan, rebuilt from its ``~/trajectory`` and its ``succeeded`` event's ``segments``
+    (each ``kind``, ``grasp`` and how many of the trajectory's points it has, in order) and
+    ``final_object_pose``; ``ValueError`` when they do not fit together."""
+    points = np.array([list(p.positions) for p in trajectory.points], dtype=float)
+    segments, start = [], 0
+    for segment in fields["segments"]:
+        count = int(segment["points"])
+        if count < 1 or start + count > len(points):
+            raise ValueError(f"the event's segments do not fit the trajectory's {len(points)} points")
+        grasp = segment["grasp"]
+        segments.append(
+            PlanSegment(str(segment["kind"]), None if grasp is None else int(grasp), points[start : start + count])
+        )
+        start += count
+    if start != len(points):
+        raise ValueError(f"the event's segments hold {start} points, the trajectory {len(points)}")
+    final = fields.get("final_object_pose")
+    return Plan(
+        world=world,
+        joint_names=tuple(trajectory.joint_names),
+        success=True,
+        message=message,
+        code=Outcome.SUCCEEDED.name,
+        segments=tuple(segments),
+        final_object_pose=None if final is None else np.array(final, dtype=float),
+        landmarks=(),
+        stats={},
+        world_kind="spatial",
+    )

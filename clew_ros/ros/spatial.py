@@ -46,6 +46,7 @@ from clew_ros.core.settings import PlannerSettings
 from clew_ros.motion.spatial import UrdfTree
 from clew_ros.ros.messages import FRAME_ID, QUATERNION_TOLERANCE, GoalPoseError, quoted_text, time_msg
 from clew_ros.scene.palette import colour
+from clew_ros.spatial.transforms import matrix_quaternion
 
 if TYPE_CHECKING:
     from clew_ros.core.tree import LandmarkTree
@@ -210,25 +211,6 @@ def _quaternion_matrix(x: float, y: float, z: float, w: float) -> Matrix:
     )
 
 
-def _matrix_quaternion(r: Matrix) -> tuple[float, float, float, float]:
-    """A unit quaternion ``(x, y, z, w)`` of a rotation matrix (3x3)."""
-    trace = float(r[0, 0] + r[1, 1] + r[2, 2])
-    if trace > 0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s)
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
-        q = (0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s)
-    elif r[1, 1] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
-        q = ((r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s)
-    else:
-        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
-        q = ((r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s)
-    x, y, z, w = (float(v) for v in q)
-    return x, y, z, w
-
-
 def _unstable_reason(world: SpatialWorld, pose: Matrix) -> str:
     """Why ``pose`` is no stable placement: the face most nearly down, its tilt, how far it lies off the
     top face of the support under the object's centre (or that none is under it)."""
@@ -323,7 +305,7 @@ def _pose_msg(pose: Vector) -> Pose:
     matrix = np.asarray(pose, dtype=float)
     if matrix.shape != (4, 4):
         matrix = pose_matrix([float(v) for v in matrix])
-    x, y, z, w = _matrix_quaternion(matrix[:3, :3])
+    x, y, z, w = matrix_quaternion(matrix[:3, :3])
     t = matrix[:3, 3]
     return Pose(position=Point(x=float(t[0]), y=float(t[1]), z=float(t[2])), orientation=Quaternion(x=x, y=y, z=z, w=w))
 
@@ -349,7 +331,7 @@ class SpatialTransform:
     @classmethod
     def of(cls, parent: str, child: str, matrix: Matrix) -> SpatialTransform:
         t = matrix[:3, 3]
-        return cls(parent, child, (float(t[0]), float(t[1]), float(t[2])), _matrix_quaternion(matrix[:3, :3]))
+        return cls(parent, child, (float(t[0]), float(t[1]), float(t[2])), matrix_quaternion(matrix[:3, :3]))
 
 
 def _values(setup: SpatialSetup, world: SpatialWorld, joints: Vector) -> dict[str, float]:

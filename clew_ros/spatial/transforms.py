@@ -12,7 +12,15 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["axis_motion", "matrix_pose", "pose_matrix", "quaternion_matrix", "rpy_matrix", "translation_matrix"]
+__all__ = [
+    "axis_motion",
+    "matrix_pose",
+    "matrix_quaternion",
+    "pose_matrix",
+    "quaternion_matrix",
+    "rpy_matrix",
+    "translation_matrix",
+]
 
 Matrix = NDArray[np.float64]
 
@@ -82,3 +90,22 @@ def matrix_pose(matrix: NDArray[np.float64]) -> list[float]:
     else:
         roll, yaw = math.atan2(float(r[2, 1]), float(r[2, 2])), math.atan2(float(r[1, 0]), float(r[0, 0]))
     return [float(matrix[0, 3]), float(matrix[1, 3]), float(matrix[2, 3]), roll, pitch, yaw]
+
+
+def matrix_quaternion(r: Matrix) -> tuple[float, float, float, float]:
+    """A unit quaternion ``(x, y, z, w)`` of a rotation matrix (3x3)."""
+    trace = float(r[0, 0] + r[1, 1] + r[2, 2])
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s)
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = (0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s)
+    elif r[1, 1] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = ((r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = ((r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s)
+    x, y, z, w = (float(v) for v in q)
+    return x, y, z, w

@@ -14,6 +14,7 @@ import sys
 import threading
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -193,3 +194,49 @@ def test_a_busy_port_or_a_bad_playback_parameter_exits_2(tmp_path) -> None:
     assert result.returncode == 2, result.stderr
     assert "trajectory.joint_speed" in result.stderr
     assert not output.exists()
+
+
+def test_a_spatial_run_served_live_draws_the_arm_in_3d(tmp_path, live_client) -> None:
+    """The Panda table-to-table world: the scene in 3-D, the links and their transforms, the plan played back."""
+    from clew_ros.render.spatial.frames import load_spatial_world
+    from clew_ros.spatial.transforms import quaternion_matrix
+
+    source = CONFIG / "spatial" / "panda_table_to_table.yaml"
+    document = yaml.safe_load(source.read_text())
+    parameters = document["clew_planner"]["ros__parameters"]
+    for key in ("urdf", "srdf"):
+        parameters["world"]["robot"][key] = str((source.parent / parameters["world"]["robot"][key]).resolve())
+    parameters["trajectory"] = {"max_velocity": 20.0, "max_acceleration": 200.0, "grasp_dwell": 0.05}
+    parameters["playback"] = {"rate": 25.0}
+    world_file = tmp_path / source.name
+    world_file.write_text(yaml.safe_dump(document))
+    output = tmp_path / "plan.json"
+    run = Run(world_file, "--output", output, "--seed", 1)
+    try:
+        port = int(run.wait_for_line(r"live view on ws://127\.0\.0\.1:(\d+)").group(1))
+        with live_client.connect(port, channels=8) as client:
+            received = client.receive_until(
+                lambda m: m.topic == "/clew_plan/events" and m.data["kind"] == "playback_done", timeout_s=120
+            )
+        code = run.interrupt()
+    finally:
+        run.kill()
+    assert code == 0, run.stderr()
+    planned = json.loads(output.read_text())
+    assert planned["code"] == "SUCCEEDED"
+    assert {m.topic for m in received} >= {f"/clew_plan/{n}" for n in ("scene", "links", "tf", "arm", "joint_states")}
+    scene = next(m for m in received if m.topic == "/clew_plan/scene")
+    assert {e["id"] for e in scene.data["entities"]} == {"bounds", "obstacles", "supports", "start", "goal"}
+    world = load_spatial_world(world_file)
+    links = next(m for m in received if m.topic == "/clew_plan/links")
+    assert {e["frame_id"] for e in links.data["entities"]} == {link.name for link in world.robot.links}
+    last = [m for m in received if m.topic == "/clew_plan/joint_states"][-1].data["joints"]
+    joints = [j["position"] for j in last[:-1]]
+    assert joints == pytest.approx(planned["segments"][-1]["waypoints"][-1])
+    transforms = [m for m in received if m.topic == "/clew_plan/tf"][-1].data["transforms"]
+    for t in transforms:
+        if t["child_frame_id"] == "object":
+            continue
+        v, q = t["translation"], t["rotation"]
+        placed = quaternion_matrix([v["x"], v["y"], v["z"]], [q["x"], q["y"], q["z"], q["w"]])
+        np.testing.assert_allclose(placed, world.robot.link_poses(joints)[t["child_frame_id"]], atol=1e-6)

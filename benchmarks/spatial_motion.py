@@ -6,6 +6,10 @@ Planners are looked up by name in :data:`PLANNERS` (``name -> callable(problem, 
 :class:`PlannerResult`), or given as ``module:function`` with that signature, so a planner is added without
 touching the harness (``--planners ompl_rrtconnect mypackage.motion:plan``). The shipped ones:
 
+* ``aca``: the project's Ariadne's Clew planner, :func:`clew_ros.spatial.space.plan` on the problem's
+  motion-only world (``world.robot.goal``; EXPLORE for transit, SEARCH_TRANSIT, shortcuts checked at
+  0.002 rad), default ``planner.*`` but the seed and the time limit, on the same sphere checker as the
+  OMPL peer (the checker object itself); its kernels are warmed before the clock, as ``clew_plan`` does.
 * ``ompl_rrtconnect``: OMPL 2.x (PyPI ``ompl``, nanobind bindings) ``RRTConnect`` (default range) then its
   ``PathSimplifier`` (``SimpleSetup.simplifySolution`` for what is left of the time limit, at least
   :attr:`OmplSettings.simplify_min_s`), on the project's collision model: the state validity checker is
@@ -31,6 +35,7 @@ sphere model and checker, loading meshes): what a MoveIt user sees per query.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import importlib
 import itertools
@@ -48,8 +53,12 @@ from numpy.typing import NDArray
 from benchmarks.spatial_checker import CONFIG, ROBOTS
 from benchmarks.spatial_scenes import FAMILIES, MotionProblem, ProblemContext, problems
 from benchmarks.spatial_scenes import context as problem_context
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.spatial.offline import warm_up
 from clew_ros.spatial.scene import Obstacle
+from clew_ros.spatial.space import plan as spatial_plan
 from clew_ros.spatial.validate import validate_transit, validation_samples
+from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters
 
 __all__ = [
     "PLANNERS",
@@ -57,6 +66,7 @@ __all__ = [
     "OmplSettings",
     "PlannerResult",
     "Run",
+    "aca",
     "exact_scene",
     "load_planner",
     "main",
@@ -337,6 +347,38 @@ def roboplan_rrtconnect(problem: MotionProblem, seed: int, time_limit_s: float) 
         success = time.perf_counter() - started <= time_limit_s
     wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
     return PlannerResult(success, waypoints, wall, cpu, None, "" if success else "no path within the time limit")
+
+
+# ----------------------------------------------------------------------------------------------- the ACA
+
+
+@functools.cache
+def _aca_world(problem: MotionProblem) -> SpatialWorld:
+    """The problem's motion-only world (its parameters, read as ``clew_plan`` reads them), planned on the
+    problem's own sphere checker: the peers' collision model, object for object."""
+    loaded = _context(problem)
+    built = spatial_world_from_parameters(
+        problem.world_parameters(), CONFIG, prepared=(loaded.robot, loaded.spheres)
+    )
+    return dataclasses.replace(built, checker=loaded.checker)
+
+
+@register("aca")
+def aca(problem: MotionProblem, seed: int, time_limit_s: float) -> PlannerResult:
+    """The project's planner: :func:`clew_ros.spatial.space.plan` on the problem's motion-only world
+    (EXPLORE and SEARCH_TRANSIT, then its shortcuts), default ``planner.*`` but ``seed`` and ``time_limit``,
+    on the sphere checker the peers use; the kernels warmed (:func:`clew_ros.spatial.offline.warm_up`)
+    before the clock, as ``clew_plan`` does."""
+    world = _aca_world(problem)
+    warm_up(world)
+    started, cpu_started = time.perf_counter(), time.process_time()
+    result = spatial_plan(world, PlannerSettings(seed=seed, time_limit=time_limit_s))
+    wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
+    waypoints = np.array(result.segments[0].waypoints, dtype=np.float64) if result.success else None
+    checks = result.stats.get("collision_checks")
+    return PlannerResult(
+        result.success, waypoints, wall, cpu, None if checks is None else int(checks), result.message
+    )
 
 
 # --------------------------------------------------------------------------------------------- the runs

@@ -118,8 +118,10 @@ def _figures(runs: Sequence[FamilyRun], time_limit_s: float) -> str:
 def rows(runs: Sequence[FamilyRun], time_limit_s: float) -> list[str]:
     """The markdown table: each family on each robot, then the family over all robots."""
     lines = [
-        "| family | robot | runs | success (unsolvable: outcomes) | median s | p90 s | transfers (plan / witness, "
-        "median) | transfers <= witness + 1 | valid |",
+        (
+            "| family | robot | runs | success (unsolvable: outcomes) | median s | p90 s | transfers (plan / "
+            "witness, median) | transfers <= witness + 1 | valid |"
+        ),
         "|---|---|--:|--:|--:|--:|--:|--:|--:|",
     ]
     robots = [robot for robot in SPATIAL_ROBOTS if any(r.robot == robot for r in runs)]
@@ -140,9 +142,7 @@ def rows(runs: Sequence[FamilyRun], time_limit_s: float) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m benchmarks spatial_families", description=__doc__.split("\n\n")[0]
-    )
+    parser = argparse.ArgumentParser(prog="python -m benchmarks spatial_families", description=__doc__.split("\n\n")[0])
     parser.add_argument("--families", nargs="+", default=list(SPATIAL_FAMILIES), choices=list(SPATIAL_FAMILIES))
     parser.add_argument("--robots", nargs="+", default=list(SPATIAL_ROBOTS), choices=list(SPATIAL_ROBOTS))
     parser.add_argument("--worlds", type=int, default=2, help="worlds per family and robot (default 2)")

@@ -67,6 +67,8 @@ __all__ = [
     "PlannerResult",
     "Run",
     "aca",
+    "aca_world",
+    "cached_context",
     "exact_scene",
     "load_planner",
     "main",
@@ -126,7 +128,8 @@ def load_planner(name: str) -> Planner:
 
 
 @functools.cache
-def _context(problem: MotionProblem) -> ProblemContext:
+def cached_context(problem: MotionProblem) -> ProblemContext:
+    """The problem loaded (:func:`benchmarks.spatial_scenes.context`) once per process: every planner's checker."""
     return problem_context(problem)
 
 
@@ -191,7 +194,7 @@ def ompl_rrtconnect(
     # OMPL seeds every planner's sampler from one process-wide generator, seeded once (a later setSeed is
     # ignored): the same command gives the same runs, and a run depends on the runs before it in the process
     ou.RNG.setSeed(seed + 1)  # OMPL's seed must be positive
-    loaded = _context(problem)
+    loaded = cached_context(problem)
     n = loaded.robot.dof
     test = _Validity(loaded, settings)
 
@@ -307,7 +310,7 @@ def _roboplan(robot: str) -> ExactScene:
 
 def exact_scene(problem: MotionProblem) -> ExactScene:
     """The exact geometry (roboplan: pinocchio + coal on the URDF's meshes) of the problem's robot and scene."""
-    loaded = _context(problem)
+    loaded = cached_context(problem)
     scene = _roboplan(problem.robot)
     scene.load(problem, loaded.obstacles, dict(loaded.robot.fixed_positions))
     return scene
@@ -353,13 +356,11 @@ def roboplan_rrtconnect(problem: MotionProblem, seed: int, time_limit_s: float) 
 
 
 @functools.cache
-def _aca_world(problem: MotionProblem) -> SpatialWorld:
+def aca_world(problem: MotionProblem) -> SpatialWorld:
     """The problem's motion-only world (its parameters, read as ``clew_plan`` reads them), planned on the
     problem's own sphere checker: the peers' collision model, object for object."""
-    loaded = _context(problem)
-    built = spatial_world_from_parameters(
-        problem.world_parameters(), CONFIG, prepared=(loaded.robot, loaded.spheres)
-    )
+    loaded = cached_context(problem)
+    built = spatial_world_from_parameters(problem.world_parameters(), CONFIG, prepared=(loaded.robot, loaded.spheres))
     return dataclasses.replace(built, checker=loaded.checker)
 
 
@@ -369,7 +370,7 @@ def aca(problem: MotionProblem, seed: int, time_limit_s: float) -> PlannerResult
     (EXPLORE and SEARCH_TRANSIT, then its shortcuts), default ``planner.*`` but ``seed`` and ``time_limit``,
     on the sphere checker the peers use; the kernels warmed (:func:`clew_ros.spatial.offline.warm_up`)
     before the clock, as ``clew_plan`` does."""
-    world = _aca_world(problem)
+    world = aca_world(problem)
     warm_up(world)
     started, cpu_started = time.perf_counter(), time.process_time()
     result = spatial_plan(world, PlannerSettings(seed=seed, time_limit=time_limit_s))
@@ -421,7 +422,7 @@ def _run(
         if ends > 1e-6:
             success, message = False, f"the path's ends are {ends:.2g} rad from the start or goal"
         else:
-            valid = not validate_transit(_context(problem).checker, path)
+            valid = not validate_transit(cached_context(problem).checker, path)
             if exact:
                 exact_valid = not exact_scene(problem).path_collides(path)
     ok = success and path is not None
@@ -572,7 +573,7 @@ def main(argv: list[str] | None = None) -> int:
             query.write(args.write_scenes)
         print(f"scenes and parameter files written to {args.write_scenes}")
     for query in queries:  # one-off setup, not timed: sphere model, checker, meshes, compiled kernels
-        _context(query).checker.valid(query.start[None])
+        cached_context(query).checker.valid(query.start[None])
         if "roboplan_rrtconnect" in planners or exact:
             _roboplan(query.robot)
     runs = [

@@ -148,8 +148,8 @@ def test_a_tiny_run_prints_a_row_per_planner_and_catches_an_invalid_path(capsys:
 
 def test_the_aca_plans_valid_paths_on_the_peers_checker_and_the_same_seed_the_same_path() -> None:
     problem = spatial_scenes.generate("table", "panda", 0)
-    loaded = spatial_motion._context(problem)  # the context the harness and the peers use
-    assert spatial_motion._aca_world(problem).checker is loaded.checker  # the peers' collision model
+    loaded = spatial_motion.cached_context(problem)  # the context the harness and the peers use
+    assert spatial_motion.aca_world(problem).checker is loaded.checker  # the peers' collision model
     result = spatial_motion.aca(problem, 0, 10.0)
     assert result.success, result.message
     assert result.waypoints is not None

@@ -16,10 +16,12 @@ grasps held, the object resting stably, the goal reached). Its transfers are com
 (the generator's plan, solvable by construction): "no needless regrasp" counts the runs with transfers at
 most the witness's + 1.
 
-Per family and robot, and per family over the robots: runs, success within the time limit, median and p90
-time (a failure counts at the limit), median transfers against the witness's, the share with transfers <=
-the witness's + 1, valid plans. On the unsolvable family (no witness plan: the goal boxed in or out of reach)
-the outcomes and their median time instead: a quick answer is one well inside the limit.
+Per family and robot, and per family over the robots: runs, success (a valid plan within the time limit,
+what ``clew_plan`` gives: a plan the validator refuses is an ``INTERNAL_ERROR``), median and p90 time (a
+failure counts at the limit), median transfers against the witness's, the share with transfers <= the
+witness's + 1, and the plans the validator passed over those the planner returned. On the unsolvable
+family (no witness plan: the goal boxed in or out of reach) the outcomes and their median time instead: a
+quick answer is one well inside the limit.
 """
 
 from __future__ import annotations
@@ -94,13 +96,14 @@ def run_world(family: str, robot: str, world_seed: int, seeds: Sequence[int], ti
 
 def _figures(runs: Sequence[FamilyRun], time_limit_s: float) -> str:
     """One table row's cells after its label."""
-    times = [r.time_s if r.success or not r.solvable else time_limit_s for r in runs]
+    times = [r.time_s if (r.success and r.valid) or not r.solvable else time_limit_s for r in runs]
     median, p90 = statistics.median(times), float(np.percentile(times, 90))
     if not runs[0].solvable:
         outcomes = Counter(r.outcome for r in runs)
         said = ", ".join(f"{name} {count}" for name, count in outcomes.most_common())
         return f"{len(runs)} | {said} | {median:.3f} | {p90:.3f} | - | - | - |"
-    good = [r for r in runs if r.success]
+    returned = [r for r in runs if r.success]
+    good = [r for r in returned if r.valid]  # what clew_plan gives: a plan the validator refuses is an error
     transfers = [r.transfers for r in good if r.transfers is not None]
     witness = [r.witness_transfers for r in runs if r.witness_transfers is not None]
     needless = [
@@ -111,7 +114,7 @@ def _figures(runs: Sequence[FamilyRun], time_limit_s: float) -> str:
     lean = f"{len(needless)}/{len(good)}" if good else "-"
     return (
         f"{len(runs)} | {len(good) / len(runs):.0%} | {median:.3f} | {p90:.3f} | "
-        f"{plan_transfers} / {statistics.median(witness):g} | {lean} | {sum(bool(r.valid) for r in good)}/{len(good)} |"
+        f"{plan_transfers} / {statistics.median(witness):g} | {lean} | {len(good)}/{len(returned)} |"
     )
 
 
@@ -172,9 +175,11 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(f"time limit {args.time_limit:g} s a run; whole run {time.perf_counter() - started:.0f} s")
     print("\n".join(rows(runs, args.time_limit)))
-    failed = [r for r in runs if r.solvable and not r.success]
-    for r in failed:
-        print(f"failed: {r.family} {r.robot} world {r.world_seed} seed {r.seed}: {r.outcome} {r.message[:160]}")
+    for r in runs:
+        if r.valid is False:
+            print(f"invalid: {r.family} {r.robot} world {r.world_seed} seed {r.seed}: {r.message[:400]}")
+        elif r.solvable and not r.success:
+            print(f"failed: {r.family} {r.robot} world {r.world_seed} seed {r.seed}: {r.outcome} {r.message[:160]}")
     return 1 if any(r.valid is False for r in runs) else 0  # a plan the validator refuses is a bug
 
 

@@ -3,6 +3,8 @@ witness; its table counts a failure at the limit and gives the unsolvable family
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 pytest.importorskip("trimesh")
@@ -31,12 +33,13 @@ def test_the_table_counts_failures_at_the_limit_needless_regrasps_and_the_unsolv
         _run("spatial_table", True, 0.2, 1),
         _run("spatial_table", True, 0.4, 3),  # two more grasps than the witness: a needless regrasp
         _run("spatial_table", False, 10.0, None),
+        dataclasses.replace(_run("spatial_table", True, 0.1, 1), valid=False),  # refused by the validator
         _run("spatial_unsolvable", False, 0.05, None, solvable=False),
         _run("spatial_unsolvable", False, 0.07, None, solvable=False),
     ]
     lines = spatial_families.rows(runs, time_limit_s=10.0)
     table = {tuple(_cells(line)[:2]): _cells(line)[2:] for line in lines[2:]}
-    assert table["spatial_table", "panda"] == ["3", "67%", "0.400", "8.080", "2 / 1", "1/2", "2/2"]
+    assert table["spatial_table", "panda"] == ["4", "50%", "5.200", "10.000", "2 / 1", "1/2", "2/3"]
     unsolvable = table["spatial_unsolvable", "panda"]
     assert unsolvable[:3] == ["2", "NO_PATH_AT_RESOLUTION 2", "0.060"]  # timed as they came, not at the limit
     assert table["solvable", "all"] == table["spatial_table", "panda"]

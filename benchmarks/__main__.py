@@ -49,6 +49,9 @@ COMMANDS: dict[str, Command] = {
     "spatial_motion": Command(
         "spatial_motion", "motion-only problems (table, shelf, cage, bookshelf): OMPL, roboplan and others by name"
     ),
+    "spatial_families": Command(
+        "spatial_families", "the planner on clew_world's spatial families (Panda, UR5, random arms): witness beside"
+    ),
     "spatial_render": Command("spatial_render", "how fast the 3-D renderer draws a spatial world, a still, a frame"),
 }
 

@@ -6,6 +6,10 @@ Planners are looked up by name in :data:`PLANNERS` (``name -> callable(problem, 
 :class:`PlannerResult`), or given as ``module:function`` with that signature, so a planner is added without
 touching the harness (``--planners ompl_rrtconnect mypackage.motion:plan``). The shipped ones:
 
+* ``aca``: the project's Ariadne's Clew planner, :func:`clew_ros.spatial.space.plan` on the problem's
+  motion-only world (``world.robot.goal``; EXPLORE for transit, SEARCH_TRANSIT, shortcuts checked at
+  0.002 rad), default ``planner.*`` but the seed and the time limit, on the same sphere checker as the
+  OMPL peer (the checker object itself); its kernels are warmed before the clock, as ``clew_plan`` does.
 * ``ompl_rrtconnect``: OMPL 2.x (PyPI ``ompl``, nanobind bindings) ``RRTConnect`` (default range) then its
   ``PathSimplifier`` (``SimpleSetup.simplifySolution`` for what is left of the time limit, at least
   :attr:`OmplSettings.simplify_min_s`), on the project's collision model: the state validity checker is
@@ -31,6 +35,7 @@ sphere model and checker, loading meshes): what a MoveIt user sees per query.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import importlib
 import itertools
@@ -48,8 +53,12 @@ from numpy.typing import NDArray
 from benchmarks.spatial_checker import CONFIG, ROBOTS
 from benchmarks.spatial_scenes import FAMILIES, MotionProblem, ProblemContext, problems
 from benchmarks.spatial_scenes import context as problem_context
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.spatial.offline import warm_up
 from clew_ros.spatial.scene import Obstacle
+from clew_ros.spatial.space import plan as spatial_plan
 from clew_ros.spatial.validate import validate_transit, validation_samples
+from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters
 
 __all__ = [
     "PLANNERS",
@@ -57,6 +66,9 @@ __all__ = [
     "OmplSettings",
     "PlannerResult",
     "Run",
+    "aca",
+    "aca_world",
+    "cached_context",
     "exact_scene",
     "load_planner",
     "main",
@@ -116,7 +128,8 @@ def load_planner(name: str) -> Planner:
 
 
 @functools.cache
-def _context(problem: MotionProblem) -> ProblemContext:
+def cached_context(problem: MotionProblem) -> ProblemContext:
+    """The problem loaded (:func:`benchmarks.spatial_scenes.context`) once per process: every planner's checker."""
     return problem_context(problem)
 
 
@@ -181,7 +194,7 @@ def ompl_rrtconnect(
     # OMPL seeds every planner's sampler from one process-wide generator, seeded once (a later setSeed is
     # ignored): the same command gives the same runs, and a run depends on the runs before it in the process
     ou.RNG.setSeed(seed + 1)  # OMPL's seed must be positive
-    loaded = _context(problem)
+    loaded = cached_context(problem)
     n = loaded.robot.dof
     test = _Validity(loaded, settings)
 
@@ -297,7 +310,7 @@ def _roboplan(robot: str) -> ExactScene:
 
 def exact_scene(problem: MotionProblem) -> ExactScene:
     """The exact geometry (roboplan: pinocchio + coal on the URDF's meshes) of the problem's robot and scene."""
-    loaded = _context(problem)
+    loaded = cached_context(problem)
     scene = _roboplan(problem.robot)
     scene.load(problem, loaded.obstacles, dict(loaded.robot.fixed_positions))
     return scene
@@ -337,6 +350,35 @@ def roboplan_rrtconnect(problem: MotionProblem, seed: int, time_limit_s: float) 
         success = time.perf_counter() - started <= time_limit_s
     wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
     return PlannerResult(success, waypoints, wall, cpu, None, "" if success else "no path within the time limit")
+
+
+# ----------------------------------------------------------------------------------------------- the ACA
+
+
+@functools.cache
+def aca_world(problem: MotionProblem) -> SpatialWorld:
+    """The problem's motion-only world (its parameters, read as ``clew_plan`` reads them), planned on the
+    problem's own sphere checker: the peers' collision model, object for object."""
+    loaded = cached_context(problem)
+    built = spatial_world_from_parameters(problem.world_parameters(), CONFIG, prepared=(loaded.robot, loaded.spheres))
+    return dataclasses.replace(built, checker=loaded.checker)
+
+
+@register("aca")
+def aca(problem: MotionProblem, seed: int, time_limit_s: float) -> PlannerResult:
+    """The project's planner: :func:`clew_ros.spatial.space.plan` on the problem's motion-only world
+    (EXPLORE and SEARCH_TRANSIT, then its shortcuts), default ``planner.*`` but ``seed`` and ``time_limit``,
+    on the sphere checker the peers use; the kernels warmed (:func:`clew_ros.spatial.offline.warm_up`)
+    before the clock, as ``clew_plan`` does."""
+    world = aca_world(problem)
+    warm_up(world)
+    started, cpu_started = time.perf_counter(), time.process_time()
+    result = spatial_plan(world, PlannerSettings(seed=seed, time_limit=time_limit_s))
+    wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
+    waypoints = np.array(result.segments[0].waypoints, dtype=np.float64) if result.success else None
+    # its collision_checks stat counts free intervals (one per configuration and joint move), not
+    # configurations: not the peers' figure, so not reported
+    return PlannerResult(result.success, waypoints, wall, cpu, None, result.message)
 
 
 # --------------------------------------------------------------------------------------------- the runs
@@ -380,7 +422,7 @@ def _run(
         if ends > 1e-6:
             success, message = False, f"the path's ends are {ends:.2g} rad from the start or goal"
         else:
-            valid = not validate_transit(_context(problem).checker, path)
+            valid = not validate_transit(cached_context(problem).checker, path)
             if exact:
                 exact_valid = not exact_scene(problem).path_collides(path)
     ok = success and path is not None
@@ -531,7 +573,7 @@ def main(argv: list[str] | None = None) -> int:
             query.write(args.write_scenes)
         print(f"scenes and parameter files written to {args.write_scenes}")
     for query in queries:  # one-off setup, not timed: sphere model, checker, meshes, compiled kernels
-        _context(query).checker.valid(query.start[None])
+        cached_context(query).checker.valid(query.start[None])
         if "roboplan_rrtconnect" in planners or exact:
             _roboplan(query.robot)
     runs = [

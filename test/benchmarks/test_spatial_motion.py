@@ -105,10 +105,11 @@ def test_an_unknown_family_or_robot_is_refused_by_name() -> None:
 def test_planners_are_named_or_given_as_module_function() -> None:
     assert spatial_motion.load_planner("ompl_rrtconnect") is spatial_motion.PLANNERS["ompl_rrtconnect"]
     assert spatial_motion.load_planner("helpers.straight_planner:straight_line") is straight_line
+    assert spatial_motion.load_planner("aca") is spatial_motion.aca
     with pytest.raises(
-        ValueError, match=r"unknown planner 'aca'; expected one of ompl_rrtconnect, roboplan_rrtconnect"
+        ValueError, match=r"unknown planner 'rrt'; expected one of ompl_rrtconnect, roboplan_rrtconnect, aca"
     ):
-        spatial_motion.load_planner("aca")
+        spatial_motion.load_planner("rrt")
     with pytest.raises(ValueError, match=r"cannot load 'no_such_module:plan'"):
         spatial_motion.load_planner("no_such_module:plan")
 
@@ -143,6 +144,32 @@ def test_a_tiny_run_prints_a_row_per_planner_and_catches_an_invalid_path(capsys:
         assert float(ompl[5]) > 0  # travel
         assert int(ompl[6].replace(",", "")) > 0  # checks
     assert re.search(r"ompl_rrtconnect / helpers.straight_planner:straight_line: median time [\d.]+", out)
+
+
+def test_the_aca_plans_valid_paths_on_the_peers_checker_and_the_same_seed_the_same_path() -> None:
+    problem = spatial_scenes.generate("table", "panda", 0)
+    loaded = spatial_motion.cached_context(problem)  # the context the harness and the peers use
+    assert spatial_motion.aca_world(problem).checker is loaded.checker  # the peers' collision model
+    result = spatial_motion.aca(problem, 0, 10.0)
+    assert result.success, result.message
+    assert result.waypoints is not None
+    assert np.array_equal(result.waypoints[0], problem.start)
+    assert np.array_equal(result.waypoints[-1], problem.goal)
+    assert validate_transit(loaded.checker, result.waypoints) == []
+    again = spatial_motion.aca(problem, 0, 10.0)
+    assert again.waypoints is not None
+    assert again.waypoints.tobytes() == result.waypoints.tobytes()
+
+
+def test_a_tiny_run_of_the_aca_prints_its_row_with_its_paths_checked(capsys: pytest.CaptureFixture[str]) -> None:
+    arguments = ["--families", "table", "--robots", "panda", "--problems", "1", "--time-limit", "10"]
+    assert spatial_motion.main([*arguments, "--planners", "aca"]) == 0
+    row = _rows(capsys.readouterr().out)["table panda", "aca"]
+    assert row[0] == "1"  # runs
+    assert row[1] == "100%"
+    assert float(row[5]) > 0  # travel
+    assert row[6] == "-"  # its work is counted in free intervals, not configurations
+    assert row[-2] == "1/1"  # valid under the sphere checker at 0.002 rad
 
 
 def test_ompl_plans_valid_paths_between_the_generated_ends() -> None:

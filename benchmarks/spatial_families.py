@@ -1,0 +1,187 @@
+"""``python -m benchmarks spatial_families [--families ...] [--robots panda ur5 random] [--worlds 2] [--seeds 2]
+[--time-limit 10]``: the Ariadne's Clew planner on ``clew_world``'s generated spatial families.
+
+For each family (:data:`clew_ros.worlds.spatial.SPATIAL_FAMILIES`), robot (the shipped Panda and UR5, random
+serial arms of 4-8 joints) and world seed (``--first-world`` .. + ``--worlds`` - 1), the world is generated
+(:func:`~clew_ros.worlds.spatial.generate_spatial`, not timed) and loaded as a user's file is
+(:meth:`~clew_ros.worlds.spatial.SpatialGenerated.world`, its sphere model built, not timed), its kernels
+warmed (:func:`clew_ros.spatial.offline.warm_up`, not timed), then planned by
+:func:`clew_ros.spatial.space.plan` with planner seeds 0 .. ``--seeds`` - 1 (default ``planner.*`` but the
+seed and ``--time-limit``; the improvement runs within its default ``planner.improve_time``). The wall time
+of each run is measured around that call alone.
+
+Every successful plan is checked as ``clew_plan`` checks it: its ``clew-plan/1`` plan validated by
+:func:`clew_ros.spatial.plan.validate_plan` (every configuration of every straight piece at 0.002 rad, the
+grasps held, the object resting stably, the goal reached). Its transfers are compared with the witness's
+(the generator's plan, solvable by construction): "no needless regrasp" counts the runs with transfers at
+most the witness's + 1.
+
+Per family and robot, and per family over the robots: runs, success (a valid plan within the time limit,
+what ``clew_plan`` gives: a plan the validator refuses is an ``INTERNAL_ERROR``), median and p90 time (a
+failure counts at the limit), median transfers against the witness's, the share with transfers <= the
+witness's + 1, and the plans the validator passed over those the planner returned. On the unsolvable
+family (no witness plan: the goal boxed in or out of reach) the outcomes and their median time instead: a
+quick answer is one well inside the limit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from clew_ros.core.settings import PlannerSettings
+from clew_ros.spatial.offline import checked_plan, warm_up
+from clew_ros.spatial.space import plan
+from clew_ros.worlds.spatial import SPATIAL_FAMILIES, SPATIAL_ROBOTS, generate_spatial
+
+__all__ = ["FamilyRun", "main", "rows", "run_world"]
+
+
+@dataclass(frozen=True)
+class FamilyRun:
+    """One planner run on one generated world."""
+
+    family: str
+    robot: str
+    world_seed: int
+    seed: int
+    dof: int
+    solvable: bool
+    outcome: str
+    success: bool
+    time_s: float
+    transfers: int | None  # the plan's (None: no plan)
+    witness_transfers: int | None  # the witness's (None: unsolvable)
+    valid: bool | None  # the plan passed validate_plan (None: no plan)
+    message: str
+
+
+def run_world(family: str, robot: str, world_seed: int, seeds: Sequence[int], time_limit_s: float) -> list[FamilyRun]:
+    """Generate one world and plan it with every planner seed of ``seeds``."""
+    generated = generate_spatial(family, world_seed, robot)
+    world = generated.world()
+    warm_up(world)
+    witness = generated.witness.grasp_count if generated.solvable else None
+    out = []
+    for seed in seeds:
+        started = time.perf_counter()
+        result = plan(world, PlannerSettings(seed=seed, time_limit=time_limit_s))
+        elapsed = time.perf_counter() - started
+        checked = checked_plan(world, result) if result.success else None
+        out.append(
+            FamilyRun(
+                family=family,
+                robot=robot,
+                world_seed=world_seed,
+                seed=seed,
+                dof=world.robot.dof,
+                solvable=generated.solvable,
+                outcome=result.outcome.name,
+                success=result.success and elapsed <= time_limit_s,
+                time_s=elapsed,
+                transfers=None if checked is None else sum(s.kind == "transfer" for s in result.segments),
+                witness_transfers=witness,
+                valid=None if checked is None else checked.success,
+                message=result.message if checked is None or checked.success else checked.message,
+            )
+        )
+    return out
+
+
+def _figures(runs: Sequence[FamilyRun], time_limit_s: float) -> str:
+    """One table row's cells after its label."""
+    times = [r.time_s if (r.success and r.valid) or not r.solvable else time_limit_s for r in runs]
+    median, p90 = statistics.median(times), float(np.percentile(times, 90))
+    if not runs[0].solvable:
+        outcomes = Counter(r.outcome for r in runs)
+        said = ", ".join(f"{name} {count}" for name, count in outcomes.most_common())
+        return f"{len(runs)} | {said} | {median:.3f} | {p90:.3f} | - | - | - |"
+    returned = [r for r in runs if r.success]
+    good = [r for r in returned if r.valid]  # what clew_plan gives: a plan the validator refuses is an error
+    transfers = [r.transfers for r in good if r.transfers is not None]
+    witness = [r.witness_transfers for r in runs if r.witness_transfers is not None]
+    needless = [
+        r for r in good if r.transfers is not None and r.witness_transfers is not None
+        and r.transfers <= r.witness_transfers + 1
+    ]  # fmt: skip
+    plan_transfers = f"{statistics.median(transfers):g}" if transfers else "-"
+    lean = f"{len(needless)}/{len(good)}" if good else "-"
+    return (
+        f"{len(runs)} | {len(good) / len(runs):.0%} | {median:.3f} | {p90:.3f} | "
+        f"{plan_transfers} / {statistics.median(witness):g} | {lean} | {len(good)}/{len(returned)} |"
+    )
+
+
+def rows(runs: Sequence[FamilyRun], time_limit_s: float) -> list[str]:
+    """The markdown table: each family on each robot, then the family over all robots."""
+    lines = [
+        (
+            "| family | robot | runs | success (unsolvable: outcomes) | median s | p90 s | transfers (plan / "
+            "witness, median) | transfers <= witness + 1 | valid |"
+        ),
+        "|---|---|--:|--:|--:|--:|--:|--:|--:|",
+    ]
+    robots = [robot for robot in SPATIAL_ROBOTS if any(r.robot == robot for r in runs)]
+    for family in SPATIAL_FAMILIES:
+        chosen = [r for r in runs if r.family == family]
+        if not chosen:
+            continue
+        for robot in robots:
+            mine = [r for r in chosen if r.robot == robot]
+            if mine:
+                lines.append(f"| {family} | {robot} | {_figures(mine, time_limit_s)}")
+        if len(robots) > 1:
+            lines.append(f"| {family} | all | {_figures(chosen, time_limit_s)}")
+    solvable = [r for r in runs if r.solvable]
+    if solvable:
+        lines.append(f"| solvable | all | {_figures(solvable, time_limit_s)}")
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks spatial_families", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--families", nargs="+", default=list(SPATIAL_FAMILIES), choices=list(SPATIAL_FAMILIES))
+    parser.add_argument("--robots", nargs="+", default=list(SPATIAL_ROBOTS), choices=list(SPATIAL_ROBOTS))
+    parser.add_argument("--worlds", type=int, default=2, help="worlds per family and robot (default 2)")
+    parser.add_argument("--first-world", type=int, default=0, help="the first world's seed (default 0)")
+    parser.add_argument("--seeds", type=int, default=2, help="planner seeds per world (default 2)")
+    parser.add_argument("--time-limit", type=float, default=10.0, help="per run (s; default 10)")
+    args = parser.parse_args(argv)
+    if args.worlds < 1 or args.seeds < 1 or args.first_world < 0 or not args.time_limit > 0:
+        parser.error(
+            "--worlds and --seeds: expected at least 1; --first-world: expected >= 0; "
+            "--time-limit: expected a positive number"
+        )
+    started = time.perf_counter()
+    runs: list[FamilyRun] = []
+    for family in args.families:
+        for robot in args.robots:
+            for world_seed in range(args.first_world, args.first_world + args.worlds):
+                for r in run_world(family, robot, world_seed, range(args.seeds), args.time_limit):
+                    runs.append(r)
+                    said = "" if r.transfers is None else f" transfers {r.transfers} (witness {r.witness_transfers})"
+                    invalid = " INVALID" if r.valid is False else ""
+                    print(
+                        f"{family} {robot} world {world_seed} ({r.dof} joints) seed {r.seed}: {r.outcome} "
+                        f"{r.time_s:.3f} s{said}{invalid}  {r.message[:100]}",
+                        flush=True,
+                    )
+    print()
+    print(f"time limit {args.time_limit:g} s a run; whole run {time.perf_counter() - started:.0f} s")
+    print("\n".join(rows(runs, args.time_limit)))
+    for r in runs:
+        if r.valid is False:
+            print(f"invalid: {r.family} {r.robot} world {r.world_seed} seed {r.seed}: {r.message[:400]}")
+        elif r.solvable and not r.success:
+            print(f"failed: {r.family} {r.robot} world {r.world_seed} seed {r.seed}: {r.outcome} {r.message[:160]}")
+    return 1 if any(r.valid is False for r in runs) else 0  # a plan the validator refuses is a bug
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

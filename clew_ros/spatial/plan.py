@@ -42,6 +42,7 @@ __all__ = [
     "SpatialMotion",
     "make_plan",
     "object_obstacle",
+    "path_problems",
     "replay",
     "resting_problems",
     "rotation_angle",
@@ -359,6 +360,28 @@ def validate_plan(
     problems = _structure_problems(world, plan, settings)
     if problems or not plan.success:
         return problems
+    problems, pose = _motion_problems(world, plan, settings)
+    if world.object is not None and pose is not None:
+        problems += _goal_problems(world, plan, pose, settings)
+    return problems
+
+
+def path_problems(world: SpatialWorld, plan: Plan, settings: ValidationSettings | None = None) -> list[str]:
+    """:func:`validate_plan` but for the goal: the segments' structure, every configuration along them, the
+    grasps and the placements the object is let go of at (what a plan's improvement must keep, whatever goal
+    its run was given)."""
+    settings = settings or ValidationSettings()
+    problems = _structure_problems(world, plan, settings)
+    if problems or not plan.success:
+        return problems
+    return _motion_problems(world, plan, settings)[0]
+
+
+def _motion_problems(
+    world: SpatialWorld, plan: Plan, settings: ValidationSettings
+) -> tuple[list[str], NDArray[np.float64] | None]:
+    """The problems of every segment's motion, and where the object ends (``None``: motion-only)."""
+    problems: list[str] = []
     robot, spheres = world.robot, world.spheres
     thing = world.object
     kinematics = InverseKinematics(robot)
@@ -394,6 +417,4 @@ def validate_plan(
                     f"placement (no flat face within world.placement_tolerance "
                     f"{world.tolerances['placement_tolerance']} m of a support's top face with its centre above it)"
                 )
-    if thing is not None and pose is not None:
-        problems += _goal_problems(world, plan, pose, settings)
-    return problems
+    return problems, pose

@@ -47,6 +47,7 @@ from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.motion_plan import plan_motion
 from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
+from clew_ros.spatial.plan import make_plan, path_problems
 from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
 from clew_ros.spatial.shortcut import path_travel, shortcut_path
 from clew_ros.spatial.spheres import SphereSettings, cover
@@ -762,6 +763,33 @@ class SpatialSpace:
         return ", ".join(hits)
 
     def improve(
+        self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
+    ) -> Improvement:
+        """:meth:`improved`, returned only if the plan validator's checks of every segment
+        (:func:`clew_ros.spatial.plan.path_problems`, the grasps and placements included) pass it; else the
+        first plan, with what was refused (the planner's own checks sample the moves where the validator's
+        samples may fall elsewhere: an improved move grazing a support within its tolerance is not kept)."""
+        better = self.improved(ctx, segments, object_pose, goal)
+        if better.segments is segments:
+            return better
+        built = [(s.kind, s.grasp, np.asarray(s.waypoints, dtype=float)) for s in better.segments]
+        problems = path_problems(self.world, make_plan(self.world, built))
+        if not problems:
+            return better
+        return Improvement(
+            segments,
+            object_pose,
+            better.first_travel,
+            better.first_transfers,
+            better.first_travel,
+            better.first_transfers,
+            0,
+            better.work,
+            better.stopped,
+            refused="; ".join(problems[:2]),
+        )
+
+    def improved(
         self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
     ) -> Improvement:
         """Shortcuts (:func:`_shortcut_segments`); then the straight plan (:meth:`straight_plan`) where it is

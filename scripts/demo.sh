@@ -172,6 +172,12 @@ if [[ -f "$SPATIAL_WORLD" ]]; then
     spatial_run=$(grep -oE 'run [0-9a-f]{32}' "$OUT/spatial_plan_call.txt" | head -1 | cut -d' ' -f2 || true)
     if [[ -n "$spatial_run" && -f "$SPATIAL_RECORDINGS/$spatial_run/metadata.yaml" ]]; then
         echo "demo: spatial run recorded in $SPATIAL_RECORDINGS/$spatial_run (open it in Foxglove or RViz)"
+        if "$BIN/clew_render" "$SPATIAL_RECORDINGS/$spatial_run" -o "$OUT/spatial_run.gif"; then
+            echo "demo: the recorded spatial run drawn in $OUT/spatial_run.gif"
+        else
+            echo "demo: clew_render failed on the spatial recording" >&2
+            [[ $status -eq 0 ]] && status=1
+        fi
     else
         not_built+=("recording of the spatial run")
     fi

@@ -29,7 +29,7 @@ unchanged; this module gives it the spatial world (docs/spatial.md, "Planning"):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any
 
@@ -770,8 +770,8 @@ class SpatialSpace:
         first plan, with what was refused (the planner's own checks sample the moves where the validator's
         samples may fall elsewhere: an improved move grazing a support within its tolerance is not kept)."""
         better = self.improved(ctx, segments, object_pose, goal)
-        if better.segments is segments:
-            return better
+        if _same_waypoints(better.segments, segments):
+            return better  # nothing changed: the first plan, checked by the planner as it was found
         built = [(s.kind, s.grasp, np.asarray(s.waypoints, dtype=float)) for s in better.segments]
         problems = path_problems(self.world, make_plan(self.world, built))
         if not problems:
@@ -912,6 +912,14 @@ def plan(
     space = SpatialSpace(world, tuning)
     return clew.plan(
         space, settings, goal=goal, termination=termination, progress=progress, search=tuning.search, many=tuning.many
+    )
+
+
+def _same_waypoints(a: Sequence[Segment], b: Sequence[Segment]) -> bool:
+    """Whether two plans are the same segments through the same waypoints."""
+    return len(a) == len(b) and all(
+        x.kind == y.kind and x.grasp == y.grasp and np.array_equal(np.asarray(x.waypoints), np.asarray(y.waypoints))
+        for x, y in zip(a, b, strict=True)
     )
 
 

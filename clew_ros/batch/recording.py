@@ -17,6 +17,7 @@ here. Without ``--record`` nothing here imports ROS.
 
 from __future__ import annotations
 
+import copy
 import shutil
 import tempfile
 import uuid
@@ -34,6 +35,7 @@ if TYPE_CHECKING:
     from clew_ros.core.plan import Plan
     from clew_ros.core.settings import PlannerSettings
     from clew_ros.planar.world import World
+    from clew_ros.spatial.world import SpatialWorld
 
 __all__ = [
     "RECORDING_TEXT",
@@ -68,12 +70,9 @@ def recording_unavailable() -> str | None:
 def check_recording_parameters(worlds: Sequence[BatchWorld]) -> None:
     """``--record``: the node parameters of every world file (``playback.*``, ``trajectory.*``) checked
     before any job runs; :class:`~clew_ros.batch.errors.BatchInputError` names the file and parameter."""
-    from clew_ros.planar.world import World
     from clew_ros.ros.parameters import flatten, node_settings
 
     for world in worlds:
-        if not isinstance(world.problem.world, World):
-            raise BatchInputError(str(world.path), "--record: recordings of spatial worlds come from the node only")
         try:
             node_settings(flatten(world.parameters), world.problem.world.robot.dof)
         except ParameterError as error:
@@ -81,22 +80,40 @@ def check_recording_parameters(worlds: Sequence[BatchWorld]) -> None:
 
 
 def recording_files(
-    parameters: Mapping[str, Any], world: World, planner: PlannerSettings, plan: Plan, *, start_ns: int
+    parameters: Mapping[str, Any],
+    world: World | SpatialWorld,
+    planner: PlannerSettings,
+    plan: Plan,
+    *,
+    start_ns: int,
+    folder: Path | None = None,
 ) -> dict[str, bytes]:
     """The recording of the run that made ``plan``: file name -> content (``metadata.yaml`` and the MCAP).
 
     ``parameters`` is the world file's tree (its ``playback.*`` and ``trajectory.*`` time the playback,
     as the node would); ``planner`` the job's settings; ``start_ns`` (ns since the epoch) when the job
-    started. Raises :class:`~clew_ros.recording.RecordingError` or
-    :class:`~clew_ros.core.errors.ParameterError` (a node parameter of the world file is invalid).
+    started; ``folder`` where a spatial world's relative paths (URDF, SRDF, scene file) start (the
+    recording's ``~/world_yaml`` names them absolute, as the node's launch file hands them). Raises
+    :class:`~clew_ros.recording.RecordingError` or :class:`~clew_ros.core.errors.ParameterError` (a node
+    parameter of the world file is invalid).
     """
     from clew_ros.batch.plan_recording import record_plan
+    from clew_ros.planar.world import World
     from clew_ros.ros.parameters import flatten, node_settings
 
     node = node_settings(flatten(parameters), world.robot.dof)
-    with tempfile.TemporaryDirectory(prefix="clew_batch_record_") as folder:
+    setup = None
+    if not isinstance(world, World):
+        from clew_ros.ros.spatial import absolute_paths, load_spatial
+
+        start = Path() if folder is None else folder
+        tree = copy.deepcopy(dict(parameters))
+        if isinstance(tree.get("world"), dict):
+            absolute_paths(tree["world"], start.resolve())
+        _, setup = load_spatial(tree, start)
+    with tempfile.TemporaryDirectory(prefix="clew_batch_record_") as temporary:
         path = record_plan(
-            folder,
+            temporary,
             world,
             plan,
             planner=planner,
@@ -104,6 +121,7 @@ def recording_files(
             run_id=uuid.uuid4(),
             start_ns=start_ns,
             recording_text=RECORDING_TEXT,
+            setup=setup,
         )
         return {file.name: file.read_bytes() for file in sorted(path.iterdir())}
 

@@ -39,7 +39,6 @@ from clew_ros.core.errors import PlanFileError
 from clew_ros.core.files import private_folders
 from clew_ros.core.plan import Plan
 from clew_ros.offline import failed_plan
-from clew_ros.planar.world import World
 
 __all__ = ["DEFAULT_GRACE_S", "BatchReport", "has_valid_output", "job_spec", "run_batch"]
 
@@ -220,11 +219,16 @@ class _Driver:
         if outcome.recording is not None:
             return outcome.recording
         problem = job.problem
-        if not isinstance(problem.world, World):
-            return None  # --record is refused for spatial worlds before any job runs
         try:
             plan = Plan.from_json(outcome.plan_json)
-            return recording_files(job.world.parameters, problem.world, problem.settings, plan, start_ns=submitted_ns)
+            return recording_files(
+                job.world.parameters,
+                problem.world,
+                problem.settings,
+                plan,
+                start_ns=submitted_ns,
+                folder=job.world.path.resolve().parent,
+            )
         except Exception:  # noqa: BLE001 - a job without its recording is left for the next run
             return None
 

@@ -129,11 +129,13 @@ def run_job(spec: JobSpec) -> JobOutcome:
     plan = plan_problem(replace(problem, settings=replace(problem.settings, threads=1)))
     wall_time_s = time.monotonic() - started
     recording = None
-    if spec.record and isinstance(problem.world, World):
+    if spec.record:
         from clew_ros.batch.recording import recording_files
 
         try:
-            recording = recording_files(spec.parameters, problem.world, problem.settings, plan, start_ns=started_ns)
+            recording = recording_files(
+                spec.parameters, problem.world, problem.settings, plan, start_ns=started_ns, folder=Path(spec.folder)
+            )
         except Exception:  # noqa: BLE001 - the plan is kept; the driver records it, or leaves it for the next run
             recording = None
     return JobOutcome.from_plan(spec.key, plan, wall_time_s, recording)

@@ -32,7 +32,7 @@ from clew_ros.planar.space import plan
 from clew_ros.planar.world import World
 from clew_ros.ros import messages
 from clew_ros.ros import spatial as spatial_messages
-from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields
+from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields, spatial_plan_fields
 from clew_ros.ros.qos import GOAL_QOS
 
 if TYPE_CHECKING:
@@ -274,24 +274,6 @@ def _timed_spatial_plan(run: Run, world: SpatialWorld, result: PlanResult) -> tu
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
     return result.outcome, result.message, spatial_track(world, planned, setup.joints, run.config.node)
-
-
-def spatial_plan_fields(track: Track, *, has_object: bool) -> dict[str, object]:
-    """What a spatial run's ``succeeded`` event adds, so that a client rebuilds the plan from
-    ``~/trajectory`` alone (its points carry no ``gripper``): ``segments``, each ``kind``, ``grasp`` and
-    the number of trajectory ``points`` it has (in order; together every point), and ``final_object_pose``
-    (6 numbers; ``None`` in a motion-only world)."""
-    segments = []
-    for index, grasp in enumerate(track.grasps):
-        segments.append(
-            {
-                "kind": "transit" if grasp is None else "transfer",
-                "grasp": grasp,
-                "points": int(np.count_nonzero(track.segment == index)),
-            }
-        )
-    final = [float(v) for v in track.object_poses[-1]] if has_object else None
-    return {"segments": segments, "final_object_pose": final}
 
 
 def _root_tree(world: World | SpatialWorld) -> LandmarkTree:

@@ -10,8 +10,16 @@ import numpy as np
 from action_msgs.msg import GoalStatus
 
 from clew_ros.core.settings import Outcome
+from clew_ros.motion.playback import Track
 
-__all__ = ["accepted_fields", "landmark_fields", "outcome_event", "outcome_fields", "outcome_status"]
+__all__ = [
+    "accepted_fields",
+    "landmark_fields",
+    "outcome_event",
+    "outcome_fields",
+    "outcome_status",
+    "spatial_plan_fields",
+]
 
 
 def outcome_status(outcome: Outcome) -> int:
@@ -58,3 +66,21 @@ def landmark_fields(landmark: Any) -> dict[str, Any]:
         "object_pose": landmark.object_pose,
         "joints": landmark.joints,
     }
+
+
+def spatial_plan_fields(track: Track, *, has_object: bool) -> dict[str, object]:
+    """What a spatial run's ``succeeded`` event adds, so that a client rebuilds the plan from
+    ``~/trajectory`` alone (its points carry no ``gripper``): ``segments``, each ``kind``, ``grasp`` and
+    the number of trajectory ``points`` it has (in order; together every point), and ``final_object_pose``
+    (6 numbers; ``None`` in a motion-only world)."""
+    segments = []
+    for index, grasp in enumerate(track.grasps):
+        segments.append(
+            {
+                "kind": "transit" if grasp is None else "transfer",
+                "grasp": grasp,
+                "points": int(np.count_nonzero(track.segment == index)),
+            }
+        )
+    final = [float(v) for v in track.object_poses[-1]] if has_object else None
+    return {"segments": segments, "final_object_pose": final}

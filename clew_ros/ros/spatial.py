@@ -49,7 +49,8 @@ from clew_ros.scene.palette import colour
 from clew_ros.spatial.transforms import matrix_quaternion
 
 if TYPE_CHECKING:
-    from clew_ros.core.tree import LandmarkTree
+    from clew_ros.core.plan import PlanLandmark
+    from clew_ros.core.tree import Landmark, LandmarkTree
     from clew_ros.spatial.world import SpatialWorld
 
 __all__ = [
@@ -517,12 +518,13 @@ def world_markers(
     return MarkerArray(markers=markers)
 
 
-def landmark_markers(world: SpatialWorld, tree: LandmarkTree, time_ns: int) -> MarkerArray:
-    """``~/landmarks`` in 3-D: ``landmarks`` (SPHERE_LIST, the tcp at each landmark), ``landmark_edges``
+def landmark_markers(world: SpatialWorld, tree: LandmarkTree | Sequence[PlanLandmark], time_ns: int) -> MarkerArray:
+    """``~/landmarks`` in 3-D (``tree``: the planner's tree or a plan file's landmarks): ``landmarks``
+    (SPHERE_LIST, the tcp at each landmark), ``landmark_edges``
     (LINE_LIST, each landmark's tcp to its parent's) and ``landmark_objects`` (POINTS, the object's centre
     at each landmark)."""
     robot = world.robot
-    landmarks = list(tree)
+    landmarks: list[Landmark | PlanLandmark] = list(tree)
     tcps = {lm.id: robot.tcp_pose(np.asarray(lm.joints, dtype=float).tolist())[:3, 3] for lm in landmarks}
     edges: list[Vector] = []
     for lm in landmarks:

@@ -182,3 +182,80 @@ def test_a_recording_that_fails_in_the_worker_keeps_the_plan(tmp_path: Path) -> 
     assert record["code"] == "SUCCEEDED"
     assert record["attempts"] == 1
     _check_recording(out, record)
+
+
+SPATIAL = CONFIG / "spatial" / "panda_table_to_table.yaml"
+#: Topics a recorded spatial pick-and-place job holds (interface.md section 3's spatial paragraph).
+SPATIAL_TOPICS = TOPICS | {"/clew_planner/world_yaml", "/clew_planner/goal_pose"}
+
+
+def test_record_a_spatial_world_as_the_node_records_it(tmp_path: Path) -> None:
+    """A spatial job's recording holds its world (with absolute file paths), every URDF joint's states, and the
+    ``succeeded`` event's segments from which ``~/trajectory`` gives back the plan file's plan; ``clew_render``'s
+    reader draws it as a recorded spatial run."""
+    from clew_ros.recording import spatial_trajectory_plan
+    from clew_ros.render.spatial.recording import spatial_recording
+
+    out = tmp_path / "spatial"
+    done = run_batch_cli(SPATIAL, "--seeds", 1, "--out", out, "--jobs", 1, "--time-limit", 20, "--quiet", "--record")
+    assert done.returncode == 0, done.stderr
+    (record,) = index_lines(out)
+    assert record["success"] is True, record
+    folder = out / str(record["recording"])
+    recording = Recording(folder)
+    assert recording.complete
+    assert set(recording.topics) >= SPATIAL_TOPICS
+    assert all(recording.topics[topic].message_count > 0 for topic in SPATIAL_TOPICS)
+
+    plan = Plan.read(out / str(record["plan"]))
+    events = [json.loads(m.data) for m in recording.decoded("/clew_planner/events")]
+    succeeded = next(e for e in events if e["event"] == "succeeded")
+    rebuilt = spatial_trajectory_plan(
+        recording.last("/clew_planner/trajectory"), succeeded, succeeded["message"], plan.world
+    )
+    assert [(s.kind, s.grasp) for s in rebuilt.segments] == [(s.kind, s.grasp) for s in plan.segments]
+    for mine, theirs in zip(rebuilt.segments, plan.segments, strict=True):
+        # the track holds the plan's waypoints and the timed samples between them
+        np.testing.assert_allclose(mine.waypoints[[0, -1]], theirs.waypoints[[0, -1]], atol=1e-9)
+    assert plan.final_object_pose is not None
+    assert rebuilt.final_object_pose is not None
+    # the track's object pose is the tool's forward kinematics times the grasp (as the node's): within 1e-6
+    np.testing.assert_allclose(rebuilt.final_object_pose, plan.final_object_pose, atol=1e-6)
+    grasps = [e["grasp"] for e in events if e["event"] == "grasp"]
+    assert grasps == [s.grasp for s in plan.segments if s.kind == "transfer"]
+
+    # every movable joint of the URDF (the fingers too) on ~/joint_states; the world's files named absolute
+    names = set(recording.last("/clew_planner/joint_states").name)
+    assert {f"panda_joint{i}" for i in range(1, 8)} <= names
+    world_yaml = recording.last("/clew_planner/world_yaml").data
+    assert str((CONFIG / "robots" / "panda" / "panda.urdf").resolve()) in world_yaml
+
+    run = spatial_recording(folder)
+    assert run is not None
+    assert "succeeded" in run.frames.title
+    np.testing.assert_allclose(run.frames.joints[-1], plan.segments[-1].waypoints[-1], atol=1e-9)
+
+
+def test_record_a_spatial_motion_only_query(tmp_path: Path) -> None:
+    """A motion-only query's recording has no object: no ``~/goal_pose`` or ``~/object_pose``; its trajectory
+    and the ``succeeded`` event give back the plan, ending at ``world.robot.goal``."""
+    from clew_ros.recording import spatial_trajectory_plan
+
+    out = tmp_path / "motion"
+    world_file = CONFIG / "spatial" / "panda_scene_motion.yaml"
+    done = run_batch_cli(world_file, "--seeds", 1, "--out", out, "--jobs", 1, "--time-limit", 20, "--quiet", "--record")
+    assert done.returncode == 0, done.stderr
+    (record,) = index_lines(out)
+    assert record["success"] is True, record
+    recording = Recording(out / str(record["recording"]))
+    assert not {"/clew_planner/goal_pose", "/clew_planner/object_pose"} & set(recording.topics)
+    plan = Plan.read(out / str(record["plan"]))
+    succeeded = next(
+        e
+        for e in map(json.loads, (m.data for m in recording.decoded("/clew_planner/events")))
+        if e["event"] == "succeeded"
+    )
+    rebuilt = spatial_trajectory_plan(recording.last("/clew_planner/trajectory"), succeeded, "", plan.world)
+    assert rebuilt.final_object_pose is None
+    assert [s.kind for s in rebuilt.segments] == [s.kind for s in plan.segments] == ["transit"]
+    np.testing.assert_allclose(rebuilt.segments[-1].waypoints[-1], plan.segments[-1].waypoints[-1], atol=1e-9)

@@ -1,7 +1,7 @@
 """A spatial run recorded as the node records it, without a node: the shipped Panda table-to-table world and
 its witness plan, written through :class:`~clew_ros.recording.RunRecorder` with the node's own builders
 (:mod:`clew_ros.ros.spatial`, :func:`~clew_ros.motion.spatial.spatial_track`,
-:func:`~clew_ros.node.worker.spatial_plan_fields`): ``~/world_yaml``, ``~/world_markers``,
+:func:`~clew_ros.ros.events.spatial_plan_fields`): ``~/world_yaml``, ``~/world_markers``,
 ``~/robot_description``, ``/tf_static``, ``~/landmarks``, ``~/trajectory``, the ``accepted`` and
 ``succeeded`` events, and the playback's ``~/joint_states``, ``~/object_pose``, ``/tf``, ``~/scene`` and grasp
 events. A few seconds, no planning (the witness is a checked plan); the node's own recording is tested in
@@ -17,11 +17,11 @@ from clew_ros.core.plan import Plan
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.motion.player import scheduled_samples
 from clew_ros.motion.spatial import spatial_track
-from clew_ros.node.worker import spatial_plan_fields
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.recording import RunRecorder
 from clew_ros.recording.cdr import tf_message
 from clew_ros.ros import messages, spatial
+from clew_ros.ros.events import spatial_plan_fields
 from clew_ros.ros.parameters import NodeSettings
 from clew_ros.ros.topics import TF_TOPICS, TOPICS
 
@@ -73,7 +73,7 @@ def record_witness(
         if not succeeded:
             event("aborted", now, code="TIME_LIMIT", message="no plan within the time limit")
             return recorder.close()
-        write("landmarks", spatial.landmark_markers(world, plan.landmarks, now), now)  # type: ignore[arg-type]
+        write("landmarks", spatial.landmark_markers(world, plan.landmarks, now), now)
         write("trajectory", messages.joint_trajectory(track, now), now)
         event("succeeded", now, code="SUCCEEDED", message="witness", **spatial_plan_fields(track, has_object=True))
         for t_s, state, events in scheduled_samples(track, 10.0):

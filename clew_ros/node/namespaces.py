@@ -25,7 +25,7 @@ from typing import Any
 
 from clew_ros.core.errors import ClewError
 from clew_ros.core.parameters import NODE_PARAMETERS
-from clew_ros.planar.world import read_parameter_file
+from clew_ros.ros.spatial import resolved_parameters
 
 __all__ = [
     "DEMO_WORLDS",
@@ -109,13 +109,15 @@ def demo_pairs(config_directory: Path) -> list[str]:
 
 
 def world_parameters(spec: PlannerSpec) -> dict[str, Any]:
-    """The parameter tree of ``spec``'s world file (its ``ros__parameters``, as ``clew_plan`` reads them).
+    """The parameter tree of ``spec``'s world file (its ``ros__parameters``, as ``clew_plan`` reads them: the
+    files a spatial world names, ``world.robot.urdf``, ``world.robot.srdf`` and ``world.scene_file``, made
+    absolute relative to the world file's folder, not the process's working directory).
 
     Raises :class:`PlannerArgumentError` naming the argument when the file
     cannot be read; the values themselves are checked by the node.
     """
     try:
-        return read_parameter_file(spec.world_file)
+        return resolved_parameters(spec.world_file)
     except ClewError as error:
         raise PlannerArgumentError(f"{spec.namespace.lstrip('/')}{PAIR_SEPARATOR}{spec.world_file}: {error}") from None
 

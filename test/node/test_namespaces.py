@@ -106,3 +106,13 @@ def test_launch_parameters_put_the_recordings_in_the_namespace(tmp_path: Path) -
     spec = PlannerSpec("/arm_a", own)
     assert launch_parameters(spec)["record"] == {"directory": "/own/arm_a", "enabled": False}
     assert launch_parameters(spec, "runs")["record"] == {"directory": "runs/arm_a", "enabled": False}
+
+
+def test_a_spatial_world_names_its_files_relative_to_the_world_file() -> None:
+    """The URDF, SRDF and scene file a spatial world names are read relative to its file, wherever the planners
+    start (the node reads the parameters it is given from its working directory)."""
+    spec = PlannerSpec("/arm", CONFIG / "spatial" / "panda_table_to_table.yaml")
+    robot = world_parameters(spec)["world"]["robot"]
+    assert read_parameter_file(spec.world_file)["world"]["robot"]["urdf"] == "../robots/panda/panda.urdf"
+    assert Path(robot["urdf"]) == (CONFIG / "robots" / "panda" / "panda.urdf").resolve()
+    assert Path(robot["urdf"]).is_file()

@@ -2,7 +2,8 @@
 
 Each command runs one module's ``main(ARGS)`` (``python -m benchmarks COMMAND --help`` for its options);
 ``python -m benchmarks compare --baseline REV COMMAND [ARGS]`` runs any of them on revision REV and on this
-checkout and prints the ratios (:mod:`benchmarks.compare`). Run from the repository root.
+checkout and prints the ratios (:mod:`benchmarks.compare`): the one way to compare two revisions. Run from
+the repository root.
 """
 
 from __future__ import annotations
@@ -32,11 +33,9 @@ COMMANDS: dict[str, Command] = {
     "profile": Command("profile", "cProfile of one planner run: top functions by own and cumulative time"),
     "cold_start": Command("cold_start", "compiling and loading the kernel, import, first plan against second"),
     "generated_families": Command("families_run", "the planner on clew_world's generated families, figure1 beside"),
-    "compare": Command("compare", "any command on a git revision and on this checkout, ratios after / before"),
-    "generated_families_ab": Command(
-        "families_ab", "the generated families planned by clew_plan of a revision and of this checkout, run by run"
+    "compare": Command(
+        "compare", "any command on a git revision and on this checkout (suite, generated_families: run by run)"
     ),
-    "kernel_ab": Command("kernel_ab", "a revision's compiled kernel against this one, taking turns in one process"),
     "setting_variants": Command("variants", "planner settings compared on the same worlds: time to the first plan"),
     "improvement_gain": Command("improvement", "what the anytime improvement gains: first and improved plans' travel"),
     "improvement_stages": Command("improvement_stages", "wall time and work charged per stage of the improvement"),

@@ -8,20 +8,24 @@ that tree and in this checkout, each with its own package first on ``PYTHONPATH`
 working directory, before then after, ``--rounds`` times (the runs of a round follow each other, so both see
 the same load), the compiled kernel on ``--threads`` threads (default 1: the two never compete for the cores).
 Each run's output is printed; when both print a JSON object (its last line starting with ``{``: ``planner_runs``,
-``collision_throughput``, ``ompl_peer``, ``profile``, ``cold_start``, ``kernel_ab``), every number found at the
+``ompl_peer``, ``profile``, ``cold_start`` among others), every number found at the
 same place in both is listed with its median before, after, and after / before. A path ``ARGS`` names relative
 to the repository root is read from each tree's own copy; give an absolute path to use one file for both.
 
-Comparisons that need the two revisions run by run rather than command by command stay inside their
-commands: ``suite --baseline REV`` (each benchmark world planned by both in turn, a before/after table in the
-report), ``generated_families_ab --baseline REV`` (every (world, seed) of the generated families by both
-``clew_plan``s in turn) and ``kernel_ab --baseline REV`` (both kernels in one process); all export REV with
-:func:`export`.
+Three commands are compared run by run instead, by their module's own ``--baseline`` mode
+(:data:`RUN_BY_RUN`), as the same line: ``compare --baseline REV suite [ARGS]`` (each benchmark world
+planned by both in turn, a before/after table in the report), ``compare --baseline REV generated_families
+[ARGS]`` (every (world, seed) of the generated families by both ``clew_plan``'s in turn, and whether they
+made the same plan file) and ``compare --baseline REV collision_throughput [ARGS]`` (both compiled kernels
+in one process, taking turns, and whether they give the same numbers bit for bit); ``ARGS`` are then that
+mode's options (``compare --baseline REV COMMAND --help``), and ``--rounds``, ``--threads`` and
+``--keep-output`` do not apply.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import math
 import os
@@ -34,10 +38,13 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ROOT", "export", "main", "numbers", "ratios"]
+__all__ = ["ROOT", "RUN_BY_RUN", "export", "main", "numbers", "ratios"]
 
 #: The repository root (this checkout).
 ROOT = Path(__file__).resolve().parents[1]
+
+#: Commands compared run by run: command -> the module whose ``main(["--baseline", REV, *ARGS])`` does it.
+RUN_BY_RUN = {"suite": "run", "generated_families": "families_ab", "collision_throughput": "kernel_ab"}
 
 
 def export(revision: str, root: Path = ROOT) -> Path:
@@ -130,6 +137,11 @@ def _rounds(args: argparse.Namespace, module: str, baseline: Path) -> tuple[dict
     return results, failed
 
 
+def _whole_run_options(args: argparse.Namespace) -> list[tuple[str, Any, Any]]:
+    """The options of whole-run comparisons: flag, value given, default."""
+    return [("--rounds", args.rounds, 1), ("--threads", args.threads, 1), ("--keep-output", args.keep_output, None)]
+
+
 def main(argv: list[str] | None = None) -> int:
     from benchmarks.__main__ import COMMANDS
 
@@ -141,6 +153,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("command", choices=[name for name in COMMANDS if name != "compare"], metavar="COMMAND")
     parser.add_argument("args", nargs=argparse.REMAINDER, help="the command's own arguments")
     args = parser.parse_args(argv)
+    if args.command in RUN_BY_RUN:
+        given = [flag for flag, value, default in _whole_run_options(args) if value != default]
+        if given:
+            parser.error(f"{', '.join(given)}: not used by {args.command!r}, which is compared run by run")
+        paired = importlib.import_module(f"benchmarks.{RUN_BY_RUN[args.command]}")
+        return int(paired.main(["--baseline", args.baseline, *args.args]) or 0)
     if args.rounds < 1:
         parser.error(f"--rounds: expected at least 1, got {args.rounds}")
     if args.threads < 1:

@@ -1,6 +1,6 @@
-"""Before and after on the generated families, in one run: ``python -m benchmarks.families_ab --baseline REV
-[--families A,B] [--config-worlds figure1,...] [--worlds 3] [--first-world 0] [--seeds 2] [--time-limit 10]
-[--jobs 2] [--out DIR]``.
+"""Before and after on the generated families, in one run: ``python -m benchmarks compare --baseline REV
+generated_families [--families A,B] [--config-worlds figure1,...] [--worlds 3] [--first-world 0] [--seeds 2]
+[--time-limit 10] [--jobs 2] [--out DIR]``.
 
 The worlds of ``config/`` named (default figure1), each a row of its own, and the generated families' worlds,
 generated once by this checkout (:mod:`benchmarks.generated`, as ``clew_world`` writes
@@ -95,7 +95,9 @@ def markdown(before: list[dict], after: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.families_ab", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks compare --baseline REV generated_families", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("--baseline", required=True, help="git revision to compare with")
     parser.add_argument("--families", default=",".join(FAMILIES), help="comma-separated (default: all)")
     parser.add_argument(

@@ -1,6 +1,6 @@
 """The compiled kernel at a git revision against this one, interleaved in one process.
 
-``python -m benchmarks.kernel_ab --baseline REV [--worlds figure1,obstacles_32] [--configs N]``
+``python -m benchmarks compare --baseline REV collision_throughput [--worlds figure1,obstacles_32] [--configs N]``
 prints one line per world and mode, then one JSON object.
 
 On this machine the same loop runs up to 1.9x faster or slower from one
@@ -158,7 +158,9 @@ def compare(world: World, base: ModuleType, configs: int, repeats: int, seed: in
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.kernel_ab", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks compare --baseline REV collision_throughput", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("--baseline", required=True, help="git revision whose kernel is compared with this one")
     parser.add_argument("--worlds", default="figure1,obstacles_32,joints_10", help="comma-separated benchmark worlds")
     parser.add_argument("--configs", type=int, default=8000, help="random configurations drawn per world")

@@ -87,3 +87,14 @@ def test_docs_list_every_command_in_the_command_table():
     table = text[text.index("### Every benchmark command") : text.index("### Comparing two revisions")]
     rows = re.findall(r"^\| `(\w+)[^`]*` \(`(\w+)`\) \|", table, flags=re.MULTILINE)
     assert rows == [(name, command.module) for name, command in COMMANDS.items()]
+
+
+@pytest.mark.skipif(not _in_a_repository(), reason="needs git and a git checkout (compare exports a revision)")
+def test_compare_hands_a_run_by_run_command_to_its_paired_mode():
+    done = _benchmarks("compare", "--baseline", "HEAD", "generated_families", "--help")
+    assert done.returncode == 0, done.stderr
+    assert "usage: python -m benchmarks compare --baseline REV generated_families" in done.stdout
+    assert "--config-worlds" in done.stdout  # the paired mode's own options
+    refused = _benchmarks("compare", "--baseline", "HEAD", "--rounds", "3", "suite", "--only", "figure1")
+    assert refused.returncode == 2
+    assert "--rounds: not used by 'suite'" in refused.stderr

@@ -106,6 +106,22 @@ class SearchSettings:
     #: SEARCH runs again from it, at most this many times in a row (a regrasp where the carried object got
     #: stuck; 4 or 8 planned no more worlds than 2 and cost time: docs/benchmarks.md)
     search_chain: int = 2
+    #: SEARCH refines an end point by damped least squares once its objective is within this share of the arm's
+    #: reach (m / m): the GA's Manhattan paths land within centimetres, the last millimetres need the Jacobian
+    refine_radius: float = 0.15
+    #: the greedy probe and the GA rounds stop once the objective is within this share of that radius
+    #: (dimensionless): close enough for refinement to finish the job, so further generations are wasted
+    ga_target_share: float = 0.2
+    #: a probe or a GA round counts as progress only when it lowers the objective by more than this (m, the
+    #: objective's unit): smaller gains are rounding, and a round that makes none ends SEARCH's loop
+    min_progress: float = 1e-4
+    #: refinement's damped least-squares steps (count) at most: each costs a finite-difference Jacobian and a
+    #: decoded single-joint path; it converges in a few where it can, and stops early when clamped
+    refine_iterations: int = 30
+    #: damping of refinement's least squares (objective units squared): keeps a step finite near singular postures
+    refine_damping: float = 1e-4
+    #: largest joint move (rad) of one refinement step: the linearisation holds only near the current posture
+    refine_step_rad: float = 0.3
 
 
 class Outcome(enum.Enum):

@@ -122,6 +122,10 @@ class SearchSettings:
     refine_damping: float = 1e-4
     #: largest joint move (rad) of one refinement step: the linearisation holds only near the current posture
     refine_step_rad: float = 0.3
+    #: standard deviation (rad) of the random genes a GA population (SEARCH's and EXPLORE's, planar and
+    #: spatial) starts from: a first generation's moves span a typical free interval (bouncing folds larger
+    #: genes back into it)
+    initial_gene_rad: float = 1.2
 
 
 class Outcome(enum.Enum):

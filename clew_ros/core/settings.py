@@ -51,6 +51,10 @@ class ManyJoints:
     #: check of the straight probes' moves, the time limit and cancel asked between them: a whole long move of
     #: 39 joints near a contact, checked at once, took over a second and ended a 20 s run at 21 s
     check_sweep_m: float = 1.0
+    #: the straight probes first screen each move by checking configurations this far apart (rad, the largest
+    #: joint's step): cheap, and the continuous check, which can take seconds on a long move near a contact,
+    #: then runs only on moves that look clear
+    screen_step_rad: float = 0.05
     #: whether SEARCH_TRANSIT runs its GA rounds on such arms after the straight probe failed: measured on
     #: the snake family, the GA took 90 % of a run (a 40-joint generation decodes 24 paths of 80 moves at
     #: about 5 ms each) and never reached a grasp the straight probe missed; without it EXPLORE moves on to

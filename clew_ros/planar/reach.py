@@ -95,6 +95,10 @@ class ReachSettings:
     #: :attr:`goal_core_percentile` th percentile of the cells counting any (the largest counts are noisy)
     goal_core_fraction: float = 0.5
     goal_core_percentile: float = 90.0
+    #: points (count) on each of the two rings around the grasp point that :func:`two_link_grasps` solves (a
+    #: quarter and half the grasp tolerance out): 2-joint arms hold a grasp in at most two ways, the rings
+    #: give a transit targets that still count as holding it
+    two_link_probes: int = 12
 
 
 #: The defaults, which the functions below take unless given other settings.
@@ -175,7 +179,9 @@ def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     return excess
 
 
-def two_link_grasps(world: World, object_pose: np.ndarray, grasp: int, probes: int = 12) -> np.ndarray:
+def two_link_grasps(
+    world: World, object_pose: np.ndarray, grasp: int, probes: int = REACH.two_link_probes
+) -> np.ndarray:
     """Two-joint arms: the configurations ``(m, 2)`` that hold grasp ``grasp`` of the object resting
     at ``object_pose``, valid and within the joint limits.
 

@@ -80,7 +80,9 @@ def straight_probe(
         pose = job.pose if "object_poses" in job.mode else None
         rel = job.pose if "grasp_rel" in job.mode else None
         starts = np.broadcast_to(q[i], targets.shape)
-        clear = _sampled_clear(world, starts, targets, object_pose=pose, grasp_rel=rel)
+        clear = _sampled_clear(
+            world, starts, targets, object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
+        )
         if clear.any():
             clear[clear] = _moves_clear_stopping(
                 ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
@@ -96,7 +98,9 @@ def straight_probe(
                 if approach is None:
                     continue
                 path = np.array([q[i], *retreat, *approach[::-1], target])
-                if not _sampled_clear(world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel).all():
+                if not _sampled_clear(
+                    world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
+                ).all():
                     continue
                 if _moves_clear_stopping(ctx, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, until=False).all():
                     way = path[1:]
@@ -410,11 +414,11 @@ def _sampled_clear(
     *,
     object_pose: np.ndarray | None = None,
     grasp_rel: np.ndarray | None = None,
-    step_rad: float = 0.05,
+    step_rad: float,
 ) -> np.ndarray:
     """Whether each straight move ``starts[k] -> ends[k]`` is valid at configurations ``step_rad`` apart (a
     quick screen, so that the continuous check, which can take seconds on a long move of many joints
-    near a contact, runs only on moves that look clear)."""
+    near a contact, runs only on moves that look clear; ``ManyJoints.screen_step_rad``)."""
     counts = np.maximum(1, np.ceil(np.abs(ends - starts).max(axis=1) / step_rad).astype(int))
     piece = np.repeat(np.arange(len(starts)), counts + 1)
     offsets = np.cumsum(counts + 1) - (counts + 1)
@@ -481,7 +485,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
             turned[0] = line[-1][0]
             ways.append(np.array([job.q0, turned, *line[::-1], target]))
         for way in ways:
-            if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel).all():
+            if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, step_rad=many.screen_step_rad).all():
                 continue
             if _moves_clear_stopping(ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
                 pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]

@@ -47,6 +47,9 @@ class ManyJoints:
     #: link, as a gripper puts an object into a slot)
     approach_radii: float = 2.0
     approach_steps: int = 8
+    #: ...and at most this far apart (m of tip travel) on a long line: the inverse kinematics that follows the
+    #: line from one step's configuration to the next converges only over short steps
+    approach_step_m: float = 0.02
     #: largest sweep (m: ``sum_j |dq_j| R_j``, the bound of :mod:`clew_ros.planar.continuous`) of one compiled
     #: check of the straight probes' moves, the time limit and cancel asked between them: a whole long move of
     #: 39 joints near a contact, checked at once, took over a second and ended a 20 s run at 21 s

@@ -90,11 +90,15 @@ def straight_probe(
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
         if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
             back = ctx.many.approach_radii * world.object.radius / 2
-            retreat = _backed_line(world, q[i], back, ctx.many.approach_steps // 2) or []
+            retreat = (
+                _backed_line(world, q[i], back, ctx.many.approach_steps // 2, step_m=ctx.many.approach_step_m) or []
+            )
             for target in targets if retreat else []:
                 if ctx.termination():
                     break
-                approach = _backed_line(world, target, back, ctx.many.approach_steps // 2)
+                approach = _backed_line(
+                    world, target, back, ctx.many.approach_steps // 2, step_m=ctx.many.approach_step_m
+                )
                 if approach is None:
                     continue
                 path = np.array([q[i], *retreat, *approach[::-1], target])
@@ -435,10 +439,11 @@ def _sampled_clear(
 
 
 def _backed_line(
-    world: World, q: np.ndarray, back: float, steps: int, toward: np.ndarray | None = None
+    world: World, q: np.ndarray, back: float, steps: int, *, step_m: float, toward: np.ndarray | None = None
 ) -> list[np.ndarray] | None:
-    """Configurations from ``q`` (excluded) with the tip backed by ``back`` (m) in ``steps`` equal steps
-    against its own heading (or, with ``toward``, straight away from the point ``toward``),
+    """Configurations from ``q`` (excluded) with the tip backed by ``back`` (m) in ``steps`` equal steps (more
+    when needed to keep each at most ``step_m``, m) against its own heading (or, with ``toward``, straight away
+    from the point ``toward``),
     its angle kept (inverse kinematics from the previous one); ``None`` when the arm cannot follow that line."""
     robot = world.robot
     tip = tip_poses(robot, q[None])[0]
@@ -446,7 +451,7 @@ def _backed_line(
     if toward is not None and np.linalg.norm(tip[:2] - toward) > 1e-9:
         heading = (toward - tip[:2]) / np.linalg.norm(toward - tip[:2])  # backed away from ``toward``
     line = [q]
-    steps = max(steps, int(np.ceil(back / 0.02)))  # 2 cm at most a step, for the solver to follow
+    steps = max(steps, int(np.ceil(back / step_m)))
     for step in range(1, steps + 1):
         point = tip[:2] - back * step / steps * heading
         solved = solve_point(
@@ -478,7 +483,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
         ways = [np.array([job.q0, target])]
         # the object backed out along the line from its origin to the grasp, as a gripper pulls it
         origin = compose(tip_poses(world.robot, target[None]), grasp_rel[None])[0, :2]
-        line = _backed_line(world, target, back, many.approach_steps, toward=origin)
+        line = _backed_line(world, target, back, many.approach_steps, step_m=many.approach_step_m, toward=origin)
         if line is not None:
             ways.append(np.array([job.q0, *line[::-1], target]))
             turned = job.q0.copy()  # the whole arm turned by joint 1 first (rigidly), then straight

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.settings import SearchSettings
+from clew_ros.core.space import PlanningContext
 from clew_ros.planar.collision import is_valid, packed_world
 from clew_ros.planar.inverse import solve_point
 from clew_ros.planar.kernel import clearly_valid
@@ -35,6 +36,7 @@ __all__ = [
     "holding_configurations_aimed",
     "holding_configurations_near",
     "nearest_grasp_distance",
+    "reach_of",
     "two_link_grasps",
     "within_reach",
 ]
@@ -103,6 +105,17 @@ class ReachSettings:
 
 #: The defaults, which the functions below take unless given other settings.
 REACH = ReachSettings()
+
+
+def reach_of(ctx: PlanningContext) -> ReachSettings:
+    """The reach tuning of a planning run's planar space (``PlanarSpace.reach_settings``, a
+    ``PlanarTuning.reach`` copy when a benchmark varies it)."""
+    settings = getattr(ctx.space, "reach_settings", None)
+    if not isinstance(settings, ReachSettings):
+        raise TypeError(f"expected a planning context over a planar space, got {type(ctx.space).__name__}")
+    return settings
+
+
 #: Random starts of the holding configurations' solver unless told otherwise (the run's are
 #: ``PlanningContext.hold_samples``).
 _HOLD_SAMPLES = SearchSettings().hold_samples

@@ -34,12 +34,15 @@ from clew_ros.planar.inverse import solve_point
 from clew_ros.planar.kernel import clearly_valid
 from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.planar.reach import (
+    REACH,
+    ReachSettings,
     approach_cell,
     approach_excess,
     goal_within_reach,
     holding_configurations,
     holding_configurations_aimed,
     holding_configurations_near,
+    reach_of,
     two_link_grasps,
     within_reach,
 )
@@ -189,6 +192,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             join_radius=ctx.search.join_radius,
             straight=ctx.many.straight_probes if many else 0,
             many=ctx.many if many else None,
+            reach=reach_of(ctx),
         )
         if isinstance(job, PathResult):
             results.append(job)
@@ -218,11 +222,12 @@ def _transit_job(
     join_radius: float,
     straight: int = 0,
     many: ManyJoints | None = None,
+    reach: ReachSettings = REACH,
 ) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless. Arms of ``many``
     joints also get holds solved from ``q0`` itself (:func:`holding_configurations_near`)."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
-    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0)
+    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0, reach=reach)
     if many is not None:
         near = holding_configurations_near(
             world, q0, object_pose, grasp, approach, starts=many.near_holds, spread_rad=many.near_spread_rad
@@ -273,14 +278,15 @@ def _holding_configurations(
     samples: int,
     *,
     aimed: bool = False,
+    reach: ReachSettings = REACH,
 ) -> np.ndarray:
     """The valid configurations holding ``grasp`` (with an allowed approach), which a transit can
     only end near: all of them for two-joint arms (:func:`two_link_grasps`), a sample for others
     (:func:`holding_configurations`). Empty: the transit is given up as hopeless."""
     if world.robot.dof == 2:
-        holds = two_link_grasps(world, object_pose, grasp)
+        holds = two_link_grasps(world, object_pose, grasp, probes=reach.two_link_probes)
     else:
-        holds = holding_configurations(world, object_pose, grasp, samples)
+        holds = holding_configurations(world, object_pose, grasp, samples, iterations=reach.hold_iterations)
     if approach is None or (not len(holds) and not aimed):
         return holds
     psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]

@@ -15,9 +15,6 @@ import numpy as np
 
 __all__ = ["GeneticResult", "GeneticSettings", "minimize"]
 
-#: Blend (BLX-alpha) crossover: a child gene is drawn from the parents' interval widened by alpha each way.
-_BLEND_ALPHA = 0.3
-
 
 @dataclass(frozen=True)
 class GeneticSettings:
@@ -31,6 +28,9 @@ class GeneticSettings:
     mutation_rate: float = 0.25  # per gene
     mutation_scale: float = 0.6  # standard deviation of a mutation, in gene units (rad)
     stall_generations: int = 5  # stop after this many generations without improvement
+    #: blend (BLX-alpha) crossover: a child gene is drawn from its parents' interval widened by this share of
+    #: its width each way (dimensionless), so children can leave the parents' box and the population keeps spreading
+    blend_alpha: float = 0.3
 
 
 @dataclass
@@ -154,7 +154,7 @@ def _children(
     parents = _tournament(scores, rng, 2 * children_count, settings.tournament)
     mothers = pool[rows, parents[:, :children_count]]
     fathers = pool[rows, parents[:, children_count:]]
-    u = rng.uniform(-_BLEND_ALPHA, 1 + _BLEND_ALPHA, size=(count, children_count, dims))
+    u = rng.uniform(-settings.blend_alpha, 1 + settings.blend_alpha, size=(count, children_count, dims))
     children: np.ndarray = mothers + u * (fathers - mothers)
     keep = rng.random((count, children_count)) >= settings.crossover_rate
     children[keep] = mothers[keep]

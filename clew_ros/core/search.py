@@ -74,15 +74,16 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     best = np.array(
         [float(job.objective(q[i][None], object_at(ctx, q[i][None], job.mode))[0]) for i, job in enumerate(jobs)]
     )
-    refine_radius = 0.15 * ctx.space.reach
+    refine_radius = ctx.search.refine_radius * ctx.space.reach
+    ga_target = refine_radius * ctx.search.ga_target_share
     ctx.space.straight_probe(ctx, jobs, q, best, waypoints)
     if ctx.search.greedy_probe:
-        _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=refine_radius * 0.2)
+        _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=ga_target)
     searching = np.arange(len(jobs))
     if not ctx.many.transit_ga:  # arms of many joints: a transit is the straight probe's, or none
         searching = np.array([i for i, job in enumerate(jobs) if job.straight is None], dtype=int)
     for _ in range(ctx.settings.search_rounds):
-        searching = searching[best[searching] > refine_radius * 0.2]
+        searching = searching[best[searching] > ga_target]
         if not len(searching) or ctx.termination():
             break
         starts = q[searching]
@@ -111,11 +112,12 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
             initial,
             ctx.rng,
             ctx.settings.genetic,
-            targets=np.full(len(searching), refine_radius * 0.2),
+            targets=np.full(len(searching), ga_target),
             should_stop=ctx.termination,
         )
         moved = np.array(
-            [result.fitness < best[i] - 1e-4 for i, result in zip(searching, results, strict=True)], dtype=bool
+            [result.fitness < best[i] - ctx.search.min_progress for i, result in zip(searching, results, strict=True)],
+            dtype=bool,
         )  # else a local minimum: the end point did not move closer
         if not moved.any():
             break
@@ -165,7 +167,7 @@ def _greedy_probe(
     ctx.counters.evaluations += len(probe)
     for a, i in enumerate(probe):
         value = float(jobs[i].objective(paths.final[a][None], paths.object_poses[a][None])[0])
-        if value < best[i] - 1e-4:
+        if value < best[i] - ctx.search.min_progress:
             waypoints[i].append(paths.waypoints[a, 1:])
             q[i] = paths.final[a]
             best[i] = value
@@ -192,25 +194,24 @@ def _refine(
     error: Callable[[np.ndarray], np.ndarray],
     accept: float,
     mode: dict[str, np.ndarray],
-    *,
-    iterations: int = 30,
 ) -> np.ndarray:
-    """Damped least squares on ``error``, moved one joint at a time within free intervals."""
+    """Damped least squares on ``error``, moved one joint at a time within free intervals (the tuning:
+    ``SearchSettings.refine_iterations``, ``refine_damping``, ``refine_step_rad``)."""
     n = len(q)
     waypoints = [q.copy()]
-    h = 1e-6
-    for _ in range(iterations):
+    h = 1e-6  # finite-difference step (rad): far above rounding, far below any move
+    tuning = ctx.search
+    for _ in range(tuning.refine_iterations):
         if ctx.termination():
             break
         e = error(q[None])[0]
         if np.linalg.norm(e) <= accept:
             break
         jacobian = (error(q[None] + h * np.eye(n)) - e[None]).T / h  # (m, n)
-        damping = 1e-4
-        step = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping * np.eye(len(e)), e)
+        step = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + tuning.refine_damping * np.eye(len(e)), e)
         largest = np.max(np.abs(step))
-        if largest > 0.3:
-            step *= 0.3 / largest
+        if largest > tuning.refine_step_rad:
+            step *= tuning.refine_step_rad / largest
         moved = ctx.space.single_moves(q, step, margin_m=ctx.settings.clearance, counters=ctx.counters, **mode)
         if len(moved) < 2 or np.max(np.abs(moved[-1] - q)) < 1e-10:
             break

@@ -47,10 +47,17 @@ class ManyJoints:
     #: link, as a gripper puts an object into a slot)
     approach_radii: float = 2.0
     approach_steps: int = 8
+    #: ...and at most this far apart (m of tip travel) on a long line: the inverse kinematics that follows the
+    #: line from one step's configuration to the next converges only over short steps
+    approach_step_m: float = 0.02
     #: largest sweep (m: ``sum_j |dq_j| R_j``, the bound of :mod:`clew_ros.planar.continuous`) of one compiled
     #: check of the straight probes' moves, the time limit and cancel asked between them: a whole long move of
     #: 39 joints near a contact, checked at once, took over a second and ended a 20 s run at 21 s
     check_sweep_m: float = 1.0
+    #: the straight probes first screen each move by checking configurations this far apart (rad, the largest
+    #: joint's step): cheap, and the continuous check, which can take seconds on a long move near a contact,
+    #: then runs only on moves that look clear
+    screen_step_rad: float = 0.05
     #: whether SEARCH_TRANSIT runs its GA rounds on such arms after the straight probe failed: measured on
     #: the snake family, the GA took 90 % of a run (a 40-joint generation decodes 24 paths of 80 moves at
     #: about 5 ms each) and never reached a grasp the straight probe missed; without it EXPLORE moves on to
@@ -106,6 +113,26 @@ class SearchSettings:
     #: SEARCH runs again from it, at most this many times in a row (a regrasp where the carried object got
     #: stuck; 4 or 8 planned no more worlds than 2 and cost time: docs/benchmarks.md)
     search_chain: int = 2
+    #: SEARCH refines an end point by damped least squares once its objective is within this share of the arm's
+    #: reach (m / m): the GA's Manhattan paths land within centimetres, the last millimetres need the Jacobian
+    refine_radius: float = 0.15
+    #: the greedy probe and the GA rounds stop once the objective is within this share of that radius
+    #: (dimensionless): close enough for refinement to finish the job, so further generations are wasted
+    ga_target_share: float = 0.2
+    #: a probe or a GA round counts as progress only when it lowers the objective by more than this (m, the
+    #: objective's unit): smaller gains are rounding, and a round that makes none ends SEARCH's loop
+    min_progress: float = 1e-4
+    #: refinement's damped least-squares steps (count) at most: each costs a finite-difference Jacobian and a
+    #: decoded single-joint path; it converges in a few where it can, and stops early when clamped
+    refine_iterations: int = 30
+    #: damping of refinement's least squares (objective units squared): keeps a step finite near singular postures
+    refine_damping: float = 1e-4
+    #: largest joint move (rad) of one refinement step: the linearisation holds only near the current posture
+    refine_step_rad: float = 0.3
+    #: standard deviation (rad) of the random genes a GA population (SEARCH's and EXPLORE's, planar and
+    #: spatial) starts from: a first generation's moves span a typical free interval (bouncing folds larger
+    #: genes back into it)
+    initial_gene_rad: float = 1.2
 
 
 class Outcome(enum.Enum):

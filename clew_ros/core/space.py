@@ -213,11 +213,11 @@ class PlanningContext:
         )
 
     def initial_genes(self, count: int, islands: int | None = None) -> np.ndarray:
-        """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``); the first individual
-        (of each island) stays put."""
+        """Random Manhattan genes ``(count, k, n)`` (``(islands, count, k, n)``, standard deviation
+        ``SearchSettings.initial_gene_rad``); the first individual (of each island) stays put."""
         n = self.space.dof
         shape = (count, self.settings.manhattan_order, n)
-        genes = self.rng.normal(0.0, 1.2, size=shape if islands is None else (islands, *shape))
+        genes = self.rng.normal(0.0, self.search.initial_gene_rad, size=shape if islands is None else (islands, *shape))
         genes[..., 0, :, :] = 0.0
         return genes
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clew_ros.core.settings import SearchSettings
+from clew_ros.core.space import PlanningContext
 from clew_ros.planar.collision import is_valid, packed_world
 from clew_ros.planar.inverse import solve_point
 from clew_ros.planar.kernel import clearly_valid
@@ -35,6 +36,7 @@ __all__ = [
     "holding_configurations_aimed",
     "holding_configurations_near",
     "nearest_grasp_distance",
+    "reach_of",
     "two_link_grasps",
     "within_reach",
 ]
@@ -95,10 +97,25 @@ class ReachSettings:
     #: :attr:`goal_core_percentile` th percentile of the cells counting any (the largest counts are noisy)
     goal_core_fraction: float = 0.5
     goal_core_percentile: float = 90.0
+    #: points (count) on each of the two rings around the grasp point that :func:`two_link_grasps` solves (a
+    #: quarter and half the grasp tolerance out): 2-joint arms hold a grasp in at most two ways, the rings
+    #: give a transit targets that still count as holding it
+    two_link_probes: int = 12
 
 
 #: The defaults, which the functions below take unless given other settings.
 REACH = ReachSettings()
+
+
+def reach_of(ctx: PlanningContext) -> ReachSettings:
+    """The reach tuning of a planning run's planar space (``PlanarSpace.reach_settings``, a
+    ``PlanarTuning.reach`` copy when a benchmark varies it)."""
+    settings = getattr(ctx.space, "reach_settings", None)
+    if not isinstance(settings, ReachSettings):
+        raise TypeError(f"expected a planning context over a planar space, got {type(ctx.space).__name__}")
+    return settings
+
+
 #: Random starts of the holding configurations' solver unless told otherwise (the run's are
 #: ``PlanningContext.hold_samples``).
 _HOLD_SAMPLES = SearchSettings().hold_samples
@@ -175,7 +192,9 @@ def approach_excess(cells: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     return excess
 
 
-def two_link_grasps(world: World, object_pose: np.ndarray, grasp: int, probes: int = 12) -> np.ndarray:
+def two_link_grasps(
+    world: World, object_pose: np.ndarray, grasp: int, probes: int = REACH.two_link_probes
+) -> np.ndarray:
     """Two-joint arms: the configurations ``(m, 2)`` that hold grasp ``grasp`` of the object resting
     at ``object_pose``, valid and within the joint limits.
 

@@ -34,12 +34,15 @@ from clew_ros.planar.inverse import solve_point
 from clew_ros.planar.kernel import clearly_valid
 from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points, wrap_angle
 from clew_ros.planar.reach import (
+    REACH,
+    ReachSettings,
     approach_cell,
     approach_excess,
     goal_within_reach,
     holding_configurations,
     holding_configurations_aimed,
     holding_configurations_near,
+    reach_of,
     two_link_grasps,
     within_reach,
 )
@@ -80,7 +83,9 @@ def straight_probe(
         pose = job.pose if "object_poses" in job.mode else None
         rel = job.pose if "grasp_rel" in job.mode else None
         starts = np.broadcast_to(q[i], targets.shape)
-        clear = _sampled_clear(world, starts, targets, object_pose=pose, grasp_rel=rel)
+        clear = _sampled_clear(
+            world, starts, targets, object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
+        )
         if clear.any():
             clear[clear] = _moves_clear_stopping(
                 ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
@@ -88,15 +93,21 @@ def straight_probe(
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
         if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
             back = ctx.many.approach_radii * world.object.radius / 2
-            retreat = _backed_line(world, q[i], back, ctx.many.approach_steps // 2) or []
+            retreat = (
+                _backed_line(world, q[i], back, ctx.many.approach_steps // 2, step_m=ctx.many.approach_step_m) or []
+            )
             for target in targets if retreat else []:
                 if ctx.termination():
                     break
-                approach = _backed_line(world, target, back, ctx.many.approach_steps // 2)
+                approach = _backed_line(
+                    world, target, back, ctx.many.approach_steps // 2, step_m=ctx.many.approach_step_m
+                )
                 if approach is None:
                     continue
                 path = np.array([q[i], *retreat, *approach[::-1], target])
-                if not _sampled_clear(world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel).all():
+                if not _sampled_clear(
+                    world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
+                ).all():
                     continue
                 if _moves_clear_stopping(ctx, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, until=False).all():
                     way = path[1:]
@@ -181,6 +192,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             join_radius=ctx.search.join_radius,
             straight=ctx.many.straight_probes if many else 0,
             many=ctx.many if many else None,
+            reach=reach_of(ctx),
         )
         if isinstance(job, PathResult):
             results.append(job)
@@ -210,11 +222,12 @@ def _transit_job(
     join_radius: float,
     straight: int = 0,
     many: ManyJoints | None = None,
+    reach: ReachSettings = REACH,
 ) -> SearchJob | PathResult:
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless. Arms of ``many``
     joints also get holds solved from ``q0`` itself (:func:`holding_configurations_near`)."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
-    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0)
+    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0, reach=reach)
     if many is not None:
         near = holding_configurations_near(
             world, q0, object_pose, grasp, approach, starts=many.near_holds, spread_rad=many.near_spread_rad
@@ -265,14 +278,15 @@ def _holding_configurations(
     samples: int,
     *,
     aimed: bool = False,
+    reach: ReachSettings = REACH,
 ) -> np.ndarray:
     """The valid configurations holding ``grasp`` (with an allowed approach), which a transit can
     only end near: all of them for two-joint arms (:func:`two_link_grasps`), a sample for others
     (:func:`holding_configurations`). Empty: the transit is given up as hopeless."""
     if world.robot.dof == 2:
-        holds = two_link_grasps(world, object_pose, grasp)
+        holds = two_link_grasps(world, object_pose, grasp, probes=reach.two_link_probes)
     else:
-        holds = holding_configurations(world, object_pose, grasp, samples)
+        holds = holding_configurations(world, object_pose, grasp, samples, iterations=reach.hold_iterations)
     if approach is None or (not len(holds) and not aimed):
         return holds
     psi = tip_poses(world.robot, holds)[:, 2] - object_pose[2]
@@ -410,11 +424,11 @@ def _sampled_clear(
     *,
     object_pose: np.ndarray | None = None,
     grasp_rel: np.ndarray | None = None,
-    step_rad: float = 0.05,
+    step_rad: float,
 ) -> np.ndarray:
     """Whether each straight move ``starts[k] -> ends[k]`` is valid at configurations ``step_rad`` apart (a
     quick screen, so that the continuous check, which can take seconds on a long move of many joints
-    near a contact, runs only on moves that look clear)."""
+    near a contact, runs only on moves that look clear; ``ManyJoints.screen_step_rad``)."""
     counts = np.maximum(1, np.ceil(np.abs(ends - starts).max(axis=1) / step_rad).astype(int))
     piece = np.repeat(np.arange(len(starts)), counts + 1)
     offsets = np.cumsum(counts + 1) - (counts + 1)
@@ -431,10 +445,11 @@ def _sampled_clear(
 
 
 def _backed_line(
-    world: World, q: np.ndarray, back: float, steps: int, toward: np.ndarray | None = None
+    world: World, q: np.ndarray, back: float, steps: int, *, step_m: float, toward: np.ndarray | None = None
 ) -> list[np.ndarray] | None:
-    """Configurations from ``q`` (excluded) with the tip backed by ``back`` (m) in ``steps`` equal steps
-    against its own heading (or, with ``toward``, straight away from the point ``toward``),
+    """Configurations from ``q`` (excluded) with the tip backed by ``back`` (m) in ``steps`` equal steps (more
+    when needed to keep each at most ``step_m``, m) against its own heading (or, with ``toward``, straight away
+    from the point ``toward``),
     its angle kept (inverse kinematics from the previous one); ``None`` when the arm cannot follow that line."""
     robot = world.robot
     tip = tip_poses(robot, q[None])[0]
@@ -442,7 +457,7 @@ def _backed_line(
     if toward is not None and np.linalg.norm(tip[:2] - toward) > 1e-9:
         heading = (toward - tip[:2]) / np.linalg.norm(toward - tip[:2])  # backed away from ``toward``
     line = [q]
-    steps = max(steps, int(np.ceil(back / 0.02)))  # 2 cm at most a step, for the solver to follow
+    steps = max(steps, int(np.ceil(back / step_m)))
     for step in range(1, steps + 1):
         point = tip[:2] - back * step / steps * heading
         solved = solve_point(
@@ -474,14 +489,14 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
         ways = [np.array([job.q0, target])]
         # the object backed out along the line from its origin to the grasp, as a gripper pulls it
         origin = compose(tip_poses(world.robot, target[None]), grasp_rel[None])[0, :2]
-        line = _backed_line(world, target, back, many.approach_steps, toward=origin)
+        line = _backed_line(world, target, back, many.approach_steps, step_m=many.approach_step_m, toward=origin)
         if line is not None:
             ways.append(np.array([job.q0, *line[::-1], target]))
             turned = job.q0.copy()  # the whole arm turned by joint 1 first (rigidly), then straight
             turned[0] = line[-1][0]
             ways.append(np.array([job.q0, turned, *line[::-1], target]))
         for way in ways:
-            if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel).all():
+            if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, step_rad=many.screen_step_rad).all():
                 continue
             if _moves_clear_stopping(ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
                 pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]

@@ -88,16 +88,17 @@ def test_time_limit_and_cancel_end_the_run_with_their_outcome() -> None:
 
 
 def test_explore_retries_draw_more_holding_configurations_before_refusing():
-    # arm7_5 (generated): 24 random starts of the holding configurations find none for any grasp at the
-    # start, and the same request draws the same sample; the retries must draw larger ones, not refuse
+    # arm7_5 (generated): the run's first sample of holding configurations (SearchSettings.hold_samples random
+    # starts) finds none for any grasp at the start, and the same request draws the same sample; the retries
+    # must draw larger ones, not refuse
     from clew_ros.core.settings import SearchSettings
     from clew_ros.planar.reach import holding_configurations
     from clew_ros.worlds import generate
 
     world = generate("arm7", 5).world()
     pose = np.asarray(world.object.initial, float)
-    assert all(not len(holding_configurations(world, pose, g)) for g in range(len(world.object.grasps)))
-    assert SearchSettings().hold_samples == 24
+    first_sample = SearchSettings().hold_samples
+    assert all(not len(holding_configurations(world, pose, g, first_sample)) for g in range(len(world.object.grasps)))
     result = plan(world, PlannerSettings(seed=0, time_limit=60))
     assert result.outcome is Outcome.SUCCEEDED, result.message
     assert validate_plan(world, Plan.from_result(world, result)) == []

@@ -6,7 +6,9 @@ import threading
 import time
 
 import numpy as np
+import pytest
 
+from clew_ros.motion import player
 from clew_ros.motion.playback import GripperEvent, TrackState
 from clew_ros.motion.player import play, scheduled_samples
 
@@ -90,10 +92,16 @@ def test_a_stop_before_the_start_sends_nothing() -> None:
     assert not events
 
 
-def test_scheduled_samples_are_plays_ticks_at_once() -> None:
-    start = time.monotonic()
-    schedule = list(scheduled_samples(Line(5.0), 20.0))  # 5 s of track, no waiting
-    assert time.monotonic() - start < 5.0  # not paced: in real time it would take the track's 5 s
+class _NoClock:
+    """Stands in for the player's ``time`` module: any use of the clock fails the test."""
+
+    def __getattr__(self, name: str) -> object:
+        raise AssertionError(f"the schedule used time.{name}: it must not wait for the clock")
+
+
+def test_scheduled_samples_are_plays_ticks_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(player, "time", _NoClock())  # not paced: it never reads the clock, let alone waits
+    schedule = list(scheduled_samples(Line(5.0), 20.0))  # 5 s of track
     times = [t for t, _, _ in schedule]
     assert times[0] == 0.0
     assert times[-1] == 5.0  # the last sample is the last point

@@ -240,3 +240,34 @@ def test_goal_approach_core_windows_wrap_around_and_zero_is_no_smoothing():
     turned = goal.copy()
     turned[0] = -0.0  # the same goal: the same sample
     np.testing.assert_array_equal(reach.goal_approach_core(world, turned, 0, settings=unsmoothed), narrow)
+
+
+def test_a_planar_tunings_reach_settings_reach_the_transits_holding_configurations(monkeypatch):
+    """PlanarTuning.reach is what SEARCH_TRANSIT's holds are solved with (a benchmark varies a copy, not the
+    module's defaults): the 2-joint rings' points and the solver's iterations of arms of more joints."""
+    import dataclasses
+
+    from clew_ros.core.settings import PlannerSettings
+    from clew_ros.planar import search
+    from clew_ros.planar.reach import ReachSettings, holding_configurations, two_link_grasps
+    from clew_ros.planar.space import PlanarTuning, plan
+
+    asked: list[tuple[str, int]] = []
+
+    def rings(*args, probes, **kwargs):
+        asked.append(("probes", probes))
+        return two_link_grasps(*args, probes=probes, **kwargs)
+
+    def sampled(*args, iterations, **kwargs):
+        asked.append(("iterations", iterations))
+        return holding_configurations(*args, iterations=iterations, **kwargs)
+
+    monkeypatch.setattr(search, "two_link_grasps", rings)
+    monkeypatch.setattr(search, "holding_configurations", sampled)
+    tuning = PlanarTuning(reach=dataclasses.replace(ReachSettings(), two_link_probes=5, hold_iterations=31))
+    for name in ("figure1", "arm3_regrasp"):  # 2 joints, then 3
+        result = plan(load_world(CONFIG / f"{name}.yaml"), PlannerSettings(seed=0, improve_time=0.0), tuning=tuning)
+        assert result.success, result.message
+    assert ("probes", 5) in asked
+    assert ("iterations", 31) in asked
+    assert set(asked) == {("probes", 5), ("iterations", 31)}  # never the module's defaults

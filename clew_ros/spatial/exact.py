@@ -27,6 +27,7 @@ come with the ``spatial-ref`` extra (``pip install 'clew_ros[spatial-ref]'``) an
 from __future__ import annotations
 
 import importlib
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -153,7 +154,10 @@ class ExactChecker:
         )
         self.gripper = {i for i, link in enumerate(robot.links) if link.name in robot.gripper_links}
         self.self_pairs = [
-            (i, j) for i in range(len(robot.links)) for j in range(i + 1, len(robot.links)) if (i, j) not in robot.exempt
+            (i, j)
+            for i in range(len(robot.links))
+            for j in range(i + 1, len(robot.links))
+            if (i, j) not in robot.exempt
         ]
 
     # -- kinematics -------------------------------------------------------------------------------------
@@ -291,7 +295,8 @@ class ExactChecker:
         """What the object at ``pose`` (4x4, ``world``) touches: an obstacle, a support from below its top face
         (less ``world.placement_tolerance``), the bounds; "" for nothing."""
         world = self.world
-        assert world.object is not None and self.object_shape is not None
+        assert world.object is not None
+        assert self.object_shape is not None
         supports = {s.name: s for s in world.supports}
         tolerance = world.tolerances["placement_tolerance"]
         low = lowest_point(world.object.shape, pose)
@@ -307,7 +312,9 @@ class ExactChecker:
                 return f"the object crosses {name}"
         return ""
 
-    def _support_problem(self, supports: Sequence[tuple[Support, Obstacle, Any]], q: Sequence[float], held: Matrix) -> str:
+    def _support_problem(
+        self, supports: Sequence[tuple[Support, Obstacle, Any]], q: Sequence[float], held: Matrix
+    ) -> str:
         """The held object (its pose ``held`` in the tcp's frame) at ``q`` against the supports, touched only
         from above (see :meth:`object_problem`)."""
         world = self.world
@@ -342,7 +349,9 @@ class ExactChecker:
         if held is not None:
             by_name = {o.name: (o, shape) for o, shape in self.obstacle_shapes}
             supports = [(s, *by_name[s.name]) for s in self.world.supports if s.name in by_name]
-        pieces = [path[:1]] if len(path) == 1 else [validation_samples(a, b, steps) for a, b in zip(path, path[1:])]
+        pieces = (
+            [path[:1]] if len(path) == 1 else [validation_samples(a, b, steps) for a, b in itertools.pairwise(path)]
+        )
         problems = []
         for i, samples in enumerate(pieces):
             for k, q in enumerate(samples):

@@ -131,18 +131,18 @@ class ExactChecker:
         robot = world.robot
         self.model = pin.buildModelFromXML(robot.urdf)
         self.data = self.model.createData()
-        self.neutral = pin.neutral(self.model)
+        self.neutral: NDArray[np.float64] = np.asarray(pin.neutral(self.model), dtype=np.float64)
         for name, value in robot.fixed_positions.items():
             self._set(self.neutral, name, value)
         pin.forwardKinematics(self.model, self.data, self.neutral)
         pin.updateFramePlacements(self.model, self.data)
         base_in_universe = self.data.oMf[self._frame(robot.base_link)].homogeneous
         #: ``world`` <- pinocchio's universe (the URDF's root link): the base's pose over its pose in the root.
-        self.universe = robot.base @ np.linalg.inv(base_in_universe)
-        self.to_universe = np.linalg.inv(self.universe)
+        self.universe: Matrix = robot.base @ np.linalg.inv(np.asarray(base_in_universe, dtype=np.float64))
+        self.to_universe: Matrix = np.asarray(np.linalg.inv(self.universe), dtype=np.float64)
         self.tip = self._frame(robot.tip_link)
-        q0 = np.clip(np.zeros(robot.dof), robot.lower, robot.upper)
-        self.tcp_in_tip = np.linalg.inv(self.universe @ self._tip(q0)) @ robot.tcp_pose(q0)
+        q0 = np.clip(np.zeros(robot.dof), robot.lower, robot.upper).tolist()
+        self.tcp_in_tip: Matrix = np.linalg.inv(self.universe @ self._tip(q0)) @ robot.tcp_pose(q0)
         self._check_kinematics()
         self.link_geometries = [
             [(_coal_shape(coal, g.kind, g.size, g), g.origin) for g in link.geometries] for link in robot.links
@@ -175,20 +175,19 @@ class ExactChecker:
         else:
             q[jmodel.idx_q] = value
 
-    def full(self, q: Sequence[float]) -> NDArray[np.float64]:
+    def full(self, q: Any) -> NDArray[np.float64]:
         """pinocchio's configuration of the planned joints at ``q``, the others at their fixed positions."""
         out = self.neutral.copy()
         for name, value in zip(self.world.robot.joint_names, q, strict=True):
             self._set(out, name, float(value))
         return out
 
-    def _tip(self, q: Sequence[float]) -> Matrix:
+    def _tip(self, q: Any) -> Matrix:
         """``tip_link``'s pose in pinocchio's universe at ``q``."""
         self.pin.framesForwardKinematics(self.model, self.data, self.full(q))
-        pose: Matrix = self.data.oMf[self.tip].homogeneous
-        return pose
+        return np.asarray(self.data.oMf[self.tip].homogeneous, dtype=np.float64)
 
-    def tcp_pose(self, q: Sequence[float]) -> Matrix:
+    def tcp_pose(self, q: Any) -> Matrix:
         """The tcp's pose in ``world`` at ``q``, by pinocchio's kinematics."""
         pose: Matrix = self.universe @ self._tip(q) @ self.tcp_in_tip
         return pose
@@ -196,7 +195,7 @@ class ExactChecker:
     def _check_kinematics(self) -> None:
         """pinocchio and the project's kinematics put every link (and the tcp) at one pose (a fixed draw)."""
         robot = self.world.robot
-        q = np.random.default_rng(0).uniform(robot.lower, robot.upper)
+        q = np.random.default_rng(0).uniform(robot.lower, robot.upper).tolist()
         ours = robot.link_poses(q)
         self.pin.framesForwardKinematics(self.model, self.data, self.full(q))
         worst = float(np.max(np.abs(self.tcp_pose(q) - robot.tcp_pose(q))))

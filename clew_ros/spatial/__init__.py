@@ -18,6 +18,10 @@
 - :mod:`~clew_ros.spatial.plan`: the spatial plan file (``world_kind: spatial``, 6-number poses), its
   replay and :func:`~clew_ros.spatial.plan.validate_plan` (transit and transfer segments, grasps, stable
   placements, the goal).
+- :mod:`~clew_ros.spatial.exact`: a plan's collisions on the exact geometry (pinocchio + coal on the URDF's
+  collision meshes, the obstacles and the object; the ``spatial-ref`` extra, imported when used).
+- :mod:`~clew_ros.spatial.enclosure`: the proof that the goal placement is closed off by obstacles (a quick
+  answer of the planner).
 - :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
 - :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
 - :mod:`~clew_ros.spatial.space`: the world as the Ariadne's Clew Algorithm's space

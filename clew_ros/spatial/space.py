@@ -43,6 +43,7 @@ from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
 from clew_ros.core.tree import Landmark, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
+from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.motion_plan import plan_motion
@@ -698,7 +699,8 @@ class SpatialSpace:
 
     def quick_refusal(self, goal: np.ndarray) -> tuple[Outcome, str] | None:
         """A goal that is no stable placement or that collides, a start in collision, a goal no grasp can
-        reach (the tcp's distance from the first joint beyond the arm's reach: a proof)."""
+        reach (the tcp's distance from the first joint beyond the arm's reach: a proof), a goal the object
+        cannot get to (closed off by obstacles: :func:`~clew_ros.spatial.enclosure.enclosure_refusal`)."""
         world = self.world
         thing = world.object
         assert thing is not None
@@ -730,7 +732,8 @@ class SpatialSpace:
                     f"the arm reaches at most {self._reach:.3f} m"
                 ),
             )
-        return None
+        closed = enclosure_refusal(world, goal, self.initial_object_pose)
+        return (Outcome.NO_PATH_AT_RESOLUTION, f"no plan exists: {closed}") if closed else None
 
     def _object_collides(self, object_pose: Array) -> str:
         """The obstacles (names) the object at ``object_pose`` touches, its support but from above allowed,

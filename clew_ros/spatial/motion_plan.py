@@ -28,12 +28,12 @@ from numpy.typing import NDArray
 
 from clew_ros.core import clew
 from clew_ros.core.genetic import minimize
+from clew_ros.core.improve import shortcut_path
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext, Space
 from clew_ros.core.tree import LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.shortcut import shortcut_path
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.world import SpatialWorld
 

@@ -23,7 +23,7 @@ unchanged; this module gives it the spatial world (docs/spatial.md, "Planning"):
   as ``toward`` (the greedy Manhattan probe) and ``straight`` (straight joint-space moves, checked at the
   validator's 0.002 rad) targets, and try those straight moves again from where the search ended.
 - *improvement*: shortcuts between waypoints of a segment, each straight move checked at 0.002 rad,
-  taken only when shorter (:mod:`clew_ros.spatial.shortcut`).
+  taken only when shorter (:func:`clew_ros.core.improve.shortcut_path`).
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core import clew
+from clew_ros.core.improve import joint_travel, shortcut_path
 from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
@@ -49,7 +50,6 @@ from clew_ros.spatial.motion_plan import plan_motion
 from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
 from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
-from clew_ros.spatial.shortcut import path_travel, shortcut_path
 from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
@@ -876,7 +876,7 @@ class SpatialSpace:
                     Segment("transit", None, [start, *reach]),
                     Segment("transfer", grasp, [holds[i], *carry]),
                 ]
-                travel = sum(path_travel(np.array(s.waypoints)) for s in segments)
+                travel = joint_travel(segments)
                 if best is None or travel < best[0]:
                     best = (travel, segments, self.held_object_poses(goals[j][None], rel)[0])
                 break
@@ -927,7 +927,7 @@ def _shortcut_segments(
     space: SpatialSpace, ctx: PlanningContext, segments: list[Segment], object_pose: Array
 ) -> Improvement:
     """The plan's segments shortcut (the module's docstring); ``object_pose``: where the object ends."""
-    first_travel = sum(path_travel(np.array(s.waypoints)) for s in segments)
+    first_travel = joint_travel(segments)
     transfers = sum(s.kind == "transfer" for s in segments)
     if ctx.settings.improve_time <= 0:
         return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, 0, False)
@@ -957,7 +957,7 @@ def _shortcut_segments(
         out.append(Segment(segment.kind, segment.grasp, list(path)))
         if rel is not None:
             resting = space.held_object_poses(path[-1:], rel)[0]
-    travel = sum(path_travel(np.array(s.waypoints)) for s in out)
+    travel = joint_travel(out)
     if travel > first_travel:  # (never: each shortcut is shorter than what it replaces)
         return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, work, stopped)
     return Improvement(out, object_pose, first_travel, transfers, travel, transfers, shortcuts, work, stopped)

@@ -13,6 +13,9 @@ what the ACA asks of a world; a run's shared state          ``space``          `
 1.2, 1.3.4 EXPLORE                                          ``explore``        ``Explorer``
 1.2 the landmark tree, the history of a landmark            ``tree``           ``LandmarkTree``, ``Segment``
 1.2 ARIADNE'S CLEW                                          ``clew``           ``plan``, ``PlanResult``
+(addition) the improvement's generic parts                  ``improve``        ``better``, ``WorkBudget``,
+                                                                               ``pruned_path``, ``joined_regrasps``,
+                                                                               ``shortcut_path``
 settings, outcomes (when each is given), termination        ``settings``       ``PlannerSettings``, ``Outcome``
 the parameters of the contract (world, planner, node)       ``parameters``     their specification and limits
 ==========================================================  =================  ==================================

@@ -27,7 +27,8 @@
 - :mod:`~clew_ros.spatial.space`: the world as the Ariadne's Clew Algorithm's space
   (:class:`~clew_ros.spatial.space.SpatialSpace`) and :func:`~clew_ros.spatial.space.plan`, the spatial
   planner's entry point; :mod:`~clew_ros.spatial.motion_plan` (motion-only queries: the ACA's transit
-  search), :mod:`~clew_ros.spatial.shortcut` (the improvement's shortcuts), :mod:`~clew_ros.spatial.tuning`.
+  search), :mod:`~clew_ros.spatial.tuning`; the improvement's shortcuts and pruning are the generic ones of
+  :mod:`clew_ros.core.improve`.
 
 - :mod:`~clew_ros.spatial.offline`: a parameter tree to a checked spatial plan (what ``clew_plan``,
   ``clew_batch`` and the node share).

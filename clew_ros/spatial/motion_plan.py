@@ -9,7 +9,7 @@ each new landmark, SEARCH_TRANSIT (:func:`clew_ros.core.search.local_search`) mi
 the goal: a straight move to the goal checked at the validator's 0.002 rad, the greedy Manhattan probe,
 the GA's rounds, and from where it ends a straight move to the goal again. The first search that reaches the
 goal ends the run; its path (the landmarks' paths from the start, then the search's) is shortcut
-(:mod:`clew_ros.spatial.shortcut`). Paths have ``planner.manhattan_order`` and the GA ``planner.generations``
+(:func:`clew_ros.core.improve.shortcut_path`). Paths have ``planner.manhattan_order`` and the GA ``planner.generations``
 as set: unlike manipulation, they are not lowered for 7-joint arms (:attr:`SpatialTuning.many`), since with
 order 1 SEARCH from the start stopped reaching the goal on ``benchmarks/spatial_plan.py``'s motion_post
 and the run took twice as long.
@@ -28,12 +28,12 @@ from numpy.typing import NDArray
 
 from clew_ros.core import clew
 from clew_ros.core.genetic import minimize
+from clew_ros.core.improve import shortcut_path
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext, Space
 from clew_ros.core.tree import LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.shortcut import shortcut_path
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.world import SpatialWorld
 

@@ -22,14 +22,17 @@ unchanged; this module gives it the spatial world (docs/spatial.md, "Planning"):
   their target from inverse kinematics (holds of the grasp; configurations holding the object at the goal)
   as ``toward`` (the greedy Manhattan probe) and ``straight`` (straight joint-space moves, checked at the
   validator's 0.002 rad) targets, and try those straight moves again from where the search ended.
-- *improvement*: shortcuts between waypoints of a segment, each straight move checked at 0.002 rad,
-  taken only when shorter (:mod:`clew_ros.spatial.shortcut`).
+- *improvement*: first the pruning that needs no checking (:func:`clew_ros.core.improve.pruned_path`: repeats,
+  loops and collinear waypoints; :func:`clew_ros.core.improve.joined_regrasps`: a transfer put down and taken
+  again by the same grasp without the arm moving made one), then shortcuts between waypoints of a segment, each
+  straight move checked at 0.002 rad, taken only when shorter (:func:`clew_ros.core.improve.shortcut_path`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
@@ -37,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core import clew
+from clew_ros.core.improve import WorkBudget, WorkCosts, joined_regrasps, joint_travel, pruned_path, shortcut_path
 from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
@@ -50,7 +54,6 @@ from clew_ros.spatial.motion_plan import plan_motion
 from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
 from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
-from clew_ros.spatial.shortcut import path_travel, shortcut_path
 from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
@@ -879,7 +882,7 @@ class SpatialSpace:
                     Segment("transit", None, [start, *reach]),
                     Segment("transfer", grasp, [holds[i], *carry]),
                 ]
-                travel = sum(path_travel(np.array(s.waypoints)) for s in segments)
+                travel = joint_travel(segments)
                 if best is None or travel < best[0]:
                     best = (travel, segments, self.held_object_poses(goals[j][None], rel)[0])
                 break
@@ -926,20 +929,46 @@ def _same_waypoints(a: Sequence[Segment], b: Sequence[Segment]) -> bool:
     )
 
 
+@dataclass
+class _Piece:
+    """A segment as the pruning sees it (:class:`clew_ros.core.improve.JoinablePiece`): a spatial transfer's held
+    pose is its grasp's nominal one, so kind, grasp and waypoints are all there is."""
+
+    kind: str
+    grasp: int | None
+    waypoints: Array
+
+    def with_waypoints(self, waypoints: Array) -> _Piece:
+        return _Piece(self.kind, self.grasp, waypoints)
+
+
+def _pruned(segments: list[Segment], same_rad: float) -> list[_Piece]:
+    """The plan's segments pruned without checking (the module's docstring): each path's repeats, loops and
+    collinear waypoints dropped, then each transfer put down and taken again in place joined to the one before."""
+    pieces = [_Piece(s.kind, s.grasp, pruned_path(np.array(s.waypoints, dtype=float))) for s in segments]
+    return joined_regrasps(pieces, same_rad)
+
+
 def _shortcut_segments(
     space: SpatialSpace, ctx: PlanningContext, segments: list[Segment], object_pose: Array
 ) -> Improvement:
-    """The plan's segments shortcut (the module's docstring); ``object_pose``: where the object ends."""
-    first_travel = sum(path_travel(np.array(s.waypoints)) for s in segments)
-    transfers = sum(s.kind == "transfer" for s in segments)
+    """The plan's segments pruned and shortcut (the module's docstring); ``object_pose``: where the object
+    ends. The work is the shortcuts' tries (a fixed number per segment), counted by a
+    :class:`~clew_ros.core.improve.WorkBudget` without a total: only the clock stops it early."""
+    first_travel = joint_travel(segments)
+    first_transfers = sum(s.kind == "transfer" for s in segments)
     if ctx.settings.improve_time <= 0:
-        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, 0, False)
+        return Improvement(
+            segments, object_pose, first_travel, first_transfers, first_travel, first_transfers, 0, 0, False
+        )
+    budget = WorkBudget(math.inf, WorkCosts(), ctx.termination)
+    pieces = _pruned(segments, space.tuning.same_rad)
+    transfers = sum(p.kind == "transfer" for p in pieces)
     resting = space.initial_object_pose
     out: list[Segment] = []
-    shortcuts = work = 0
-    stopped = False
-    for segment in segments:
-        path = np.array(segment.waypoints)
+    shortcuts = 0
+    for segment in pieces:
+        path = segment.waypoints
         if segment.kind == "transfer":
             assert segment.grasp is not None
             rel = space.grasp_rel(segment.grasp)
@@ -947,20 +976,32 @@ def _shortcut_segments(
         else:
             rel = None
             checker = space.transit_checker(resting)
-        if not stopped:
-            path, taken, spent, stopped = shortcut_path(
+        if not budget.stopped:
+            path, taken, spent, _ = shortcut_path(
                 partial(space.clear, checker),
                 path,
                 tries=space.tuning.shortcut_tries,
                 rng=ctx.rng,
-                stop=ctx.termination,
+                stop=budget.stop,
             )
             shortcuts += taken
-            work += spent
+            budget.spend(spent)
         out.append(Segment(segment.kind, segment.grasp, list(path)))
         if rel is not None:
             resting = space.held_object_poses(path[-1:], rel)[0]
-    travel = sum(path_travel(np.array(s.waypoints)) for s in out)
-    if travel > first_travel:  # (never: each shortcut is shorter than what it replaces)
-        return Improvement(segments, object_pose, first_travel, transfers, first_travel, transfers, 0, work, stopped)
-    return Improvement(out, object_pose, first_travel, transfers, travel, transfers, shortcuts, work, stopped)
+    travel = joint_travel(out)
+    if travel > first_travel:  # (never: pruning and shortcuts only shorten)
+        return Improvement(
+            segments,
+            object_pose,
+            first_travel,
+            first_transfers,
+            first_travel,
+            first_transfers,
+            0,
+            budget.spent,
+            budget.stopped,
+        )
+    return Improvement(
+        out, object_pose, first_travel, first_transfers, travel, transfers, shortcuts, budget.spent, budget.stopped
+    )

@@ -69,6 +69,9 @@ class SpatialTuning:
     #: straight move checked at 0.002 rad (0.1-1 ms on the Panda); 48 left the Manhattan detours about twice
     #: as long as 200 did on benchmarks/spatial_plan.py
     shortcut_tries: int = 200
+    #: configurations this close (rad, largest joint difference) count as the same where the improvement joins
+    #: a transfer put down and taken again by the same grasp (the arm did not move: nothing to check)
+    same_rad: float = 1e-12
     #: motion-only queries: weight (m/rad) of the joint distance to the goal in SEARCH_TRANSIT's objective
     motion_weight: float = 0.1
     #: motion-only queries: landmarks (count) EXPLORE places at most (each followed by a SEARCH_TRANSIT

@@ -10,18 +10,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers.open_reach import open_reach
+from helpers.paths import random_path
 from helpers.random_boxes import random_box_world
 
 from clew_ros.core.clew import IMPROVE_STREAM
+from clew_ros.core.improve import joined_regrasps, joint_travel, pruned_path
 from clew_ros.core.plan import Plan, PlanSegment
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Segment
 from clew_ros.planar.collision import is_valid
 from clew_ros.planar.continuous import straight_move_clear, straight_moves_clear
-from clew_ros.planar.improve import ImproveSettings, _Improver, _joined_regrasps, _Piece, _pieces, improve, joint_travel
+from clew_ros.planar.improve import ImproveSettings, _Improver, _Piece, _pieces, improve
 from clew_ros.planar.inverse import solve_point
-from clew_ros.planar.kernel import pruned_path
 from clew_ros.planar.kinematics import compose, relative, tip_poses
 from clew_ros.planar.manhattan import run_manhattan
 from clew_ros.planar.plan import replay, validate_plan
@@ -186,76 +187,6 @@ def test_the_time_limit_stops_improvement_and_keeps_the_plan() -> None:
     assert validate_plan(world, Plan.from_result(world, result)) == []
 
 
-def _pruned_in_python(waypoints: np.ndarray) -> np.ndarray:
-    """The pruning as it was written in Python before it was compiled (kernel.pruned_path): the reference."""
-    points = np.empty_like(waypoints)
-    size = 0
-    for w in waypoints:
-        back = np.flatnonzero(np.max(np.abs(points[:size] - w), axis=1) <= 1e-12)
-        if len(back):
-            size = int(back[0]) + 1
-        else:
-            points[size] = w
-            size += 1
-        while size >= 3:
-            u, v = points[size - 2] - points[size - 3], points[size - 1] - points[size - 2]
-            scale = max(float(np.max(np.abs(u))), float(np.max(np.abs(v))))
-            if scale > 0 and float(np.max(np.abs(u * np.linalg.norm(v) ** 2 - v * (u @ v)))) > 1e-12 * scale**3:
-                break
-            points[size - 2] = points[size - 1]
-            size -= 1
-    return points[:size].copy()
-
-
-def _random_path(rng: np.random.Generator, joints: int) -> np.ndarray:
-    """Manhattan-like moves, often undone, loops back to earlier waypoints (some off by less than 1e-12),
-    repeats, and free moves."""
-    points = [rng.uniform(-3.0, 3.0, joints)]
-    for _ in range(int(rng.integers(1, 40))):
-        point = points[-1].copy()
-        draw = rng.random()
-        if draw < 0.2 and len(points) > 2:
-            point = points[int(rng.integers(0, len(points)))] + rng.choice([0.0, 5e-13, 3e-12])  # a loop, or nearly
-        elif draw < 0.7:
-            point[rng.integers(0, joints)] += rng.choice([-1.0, -0.5, 0.5, 1.0])
-        elif draw < 0.9:
-            point += rng.normal(0.0, 0.3, joints)
-        points.append(point)  # else repeated
-    return np.array(points)
-
-
-@pytest.mark.parametrize("joints", [2, 3, 7])
-def test_the_compiled_pruning_gives_the_paths_the_python_one_gave(joints: int) -> None:
-    rng = np.random.default_rng(100 + joints)
-    for _ in range(300):
-        w = _random_path(rng, joints)
-        assert np.array_equal(pruned_path(w), _pruned_in_python(w))
-
-
-@pytest.mark.parametrize("joints", [2, 3, 7])
-def test_pruned_paths_keep_their_ends_visit_only_old_waypoints_and_turn_at_every_waypoint(joints: int) -> None:
-    rng = np.random.default_rng(joints)
-    for _ in range(200):
-        w = _random_path(rng, joints)
-        pruned = pruned_path(w)
-        assert np.array_equal(pruned[0], w[0])
-        assert np.max(np.abs(pruned[-1] - w[-1])) <= 1e-12  # a loop back ends on the earlier waypoint
-        assert all(np.any(np.all(w == p, axis=1)) for p in pruned)  # a waypoint of the old path, not near one
-        assert joint_travel([pruned]) <= joint_travel([w]) + 1e-12
-        steps = np.diff(pruned, axis=0)
-        assert np.all(np.max(np.abs(steps), axis=1) > 1e-12)
-        for u, v in itertools.pairwise(steps):  # no two pieces in a row along one line
-            assert np.max(np.abs(u * (v @ v) - v * (u @ v))) > 1e-12 * max(np.max(np.abs(u)), np.max(np.abs(v))) ** 3
-
-
-def test_pruning_drops_back_and_forth_and_loops_only() -> None:
-    w = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.5, 2.0], [0.5, 1.5], [1.0, 1.5], [0.5, 1.5]])
-    pruned = pruned_path(w)
-    # 0->1->0.5 along joint 1 is one move to 0.5; 1.0->2.0->1.5 along joint 2 is one move; the loop closes
-    assert pruned.tolist() == [[0.0, 0.0], [0.5, 0.0], [0.5, 1.5]]
-    assert joint_travel([pruned]) < joint_travel([w])
-
-
 # -- random worlds: the straight-move check and improvement of random Manhattan paths ----------------------
 
 
@@ -414,7 +345,7 @@ def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter(monkeypatch) ->
     rebuilding finds it (the pruning's joining of regrasps in place, which would too, is turned off here)."""
     from clew_ros.planar.improve import base as improving
 
-    monkeypatch.setattr(improving, "_joined_regrasps", lambda pieces, same_rad: pieces)
+    monkeypatch.setattr(improving, "joined_regrasps", lambda pieces, same_rad: pieces)
     world = world_from_parameters(OPEN_WORLD)
     segments, start, hold, end = _regrasped_in_place(world)
     first = _plan_of(world, segments)
@@ -439,19 +370,14 @@ def test_a_transfer_put_down_and_taken_again_in_place_becomes_one_transfer() -> 
     world = world_from_parameters(OPEN_WORLD)
     segments, _, _, _ = _regrasped_in_place(world)
     pieces = _pieces(world, segments)
-    joined = _joined_regrasps(pieces, ImproveSettings().same_rad)
+    joined = joined_regrasps(pieces, ImproveSettings().same_rad)
     assert [p.kind for p in joined] == ["transit", "transfer"]
     assert np.array_equal(joined[1].waypoints, np.vstack([pieces[1].waypoints, pieces[3].waypoints[1:]]))
     assert np.array_equal(joined[1].grasp_rel, pieces[1].grasp_rel)
     assert np.abs(joined[1].end_pose(world) - pieces[3].end_pose(world)).max() <= 1e-9
     assert joint_travel([p.waypoints for p in joined]) == pytest.approx(joint_travel([p.waypoints for p in pieces]))
     assert validate_plan(world, _plan_of(world, [p.segment() for p in joined])) == []
-    # not when the arm moves between them, another grasp is taken, or the second starts elsewhere
-    moved = dataclasses.replace(pieces[2], waypoints=np.vstack([pieces[2].waypoints, pieces[2].waypoints + 0.01]))
-    other = dataclasses.replace(pieces[3], grasp=1)
-    elsewhere = dataclasses.replace(pieces[3], waypoints=pieces[3].waypoints + 0.01)
-    for changed in ([*pieces[:2], moved, pieces[3]], [*pieces[:3], other], [*pieces[:3], elsewhere]):
-        assert len(_joined_regrasps(changed, ImproveSettings().same_rad)) == 4
+    # when not (the arm moves between them, another grasp, elsewhere): test/core/test_improve_prune.py
 
 
 def _improver_on_first_plan(name: str, seed: int = 0):
@@ -700,7 +626,7 @@ def test_the_compiled_shortcuts_are_the_numpy_ones(joints: int) -> None:
     rng = np.random.default_rng(10 + joints)
     compared = 0
     for _ in range(40):
-        w = pruned_path(_random_path(rng, joints))
+        w = pruned_path(random_path(rng, joints))
         if len(w) < 2:
             continue
         draws = rng.random((32, 6))
@@ -734,7 +660,7 @@ def test_drawn_shortcuts_join_two_points_of_the_path_and_save_what_they_say(join
     rng = np.random.default_rng(joints)
     kinds = {"waypoints": 0, "straight": 0, "partial": 0}
     for _ in range(30):
-        w = pruned_path(_random_path(rng, joints))
+        w = pruned_path(random_path(rng, joints))
         if len(w) < 3:
             continue
         cumulative = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(w, axis=0)).sum(axis=1))])

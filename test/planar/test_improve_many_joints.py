@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 
 from clew_ros.core.clew import IMPROVE_STREAM, PlanResult
+from clew_ros.core.improve import joint_travel, plan_score
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext
-from clew_ros.planar.improve import Improvement, _Improver, _pieces, _score, improve, joint_travel
+from clew_ros.planar.improve import Improvement, _Improver, _pieces, improve
 from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.space import PlanarSpace, plan
 from clew_ros.planar.world import World
@@ -66,9 +67,9 @@ def test_postures_solved_again_along_the_tip_path_shorten_a_wandering_plan() -> 
         PlanarSpace(world), PlannerSettings(seed=1), np.random.default_rng([1, IMPROVE_STREAM]), Termination(120.0)
     )
     improver = _Improver(ctx, _pieces(world, first.segments), world.object.goal)
-    before = _score(improver.pieces)
+    before = plan_score(improver.pieces)
     assert improver.resolve_postures()
-    after = _score(improver.pieces)
+    after = plan_score(improver.pieces)
     assert after[0] == before[0]  # the same transfers, the same grasps, the object moved along the same path
     assert after[1] < 0.9 * before[1]  # before any shortcut (76.6 -> 65.9 rad when written)
     for old, new in zip(_pieces(world, first.segments), improver.pieces, strict=True):

@@ -453,10 +453,10 @@ def test_one_pose_shared_by_a_batch_gives_the_intervals_of_the_pose_repeated(mod
 
 def test_warm_up_compiles_every_kernel_the_python_entry_points_call() -> None:
     """In a fresh process (the kernels compiled or loaded from the cache), after :func:`kernel.warm_up` every
-    compiled function an entry point calls has a compiled version, and planning with the improvement (moves
-    checked, RRT-Connect's rounds, both modes; on 3 joints the lattice's searches) compiles no other: no plan
-    waits for the compiler (a read-only array is another type to numba: the lattice's lower limits once were,
-    and a 3-joint world's first improvement waited about 2 s for them)."""
+    compiled function an entry point calls has a compiled version (the core's pruning too), and planning with
+    the improvement (moves checked, RRT-Connect's rounds, both modes; on 3 joints the lattice's searches)
+    compiles no other: no plan waits for the compiler (a read-only array is another type to numba: the
+    lattice's lower limits once were, and a 3-joint world's first improvement waited about 2 s for them)."""
     code = textwrap.dedent("""
         import importlib
         import clew_ros.planar.kernel as k
@@ -466,11 +466,12 @@ def test_warm_up_compiles_every_kernel_the_python_entry_points_call() -> None:
         k.warm_up()
         entry = ["decoding._decode", "free_intervals._intervals", "validity._clearly_valid", "moves._moves_clear",
                  "rrt_connect._connect_rounds", "kinematics._solve_point", "kinematics._chain",
-                 "path_shortcuts._pruned", "free_intervals._bounce_all", "moves._screen", "path_shortcuts._shortcuts",
+                 "prune._pruned", "free_intervals._bounce_all", "moves._screen", "path_shortcuts._shortcuts",
                  "lattice.lattice_search", "lattice.lattice_costs", "lattice.lattice_repair", "lattice.release_totals"]
         def compiled(name):
             module, function = name.split(".")
-            return getattr(importlib.import_module("clew_ros.planar.kernel." + module), function)
+            package = "clew_ros.core.improve." if module == "prune" else "clew_ros.planar.kernel."
+            return getattr(importlib.import_module(package + module), function)
         counts = {name: len(compiled(name).signatures) for name in entry}
         print(" ".join(name for name in entry if not counts[name]))
         plan(load_world("config/single_transfer.yaml"), PlannerSettings(seed=0, improve_time=0.4))

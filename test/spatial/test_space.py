@@ -162,6 +162,40 @@ def test_same_seed_same_plan(table: SpatialWorld) -> None:
     assert np.array_equal(first.final_object_pose, second.final_object_pose)
 
 
+def test_the_improvement_joins_a_transfer_carried_back_and_forth_and_taken_again_in_place(table: SpatialWorld) -> None:
+    """A valid plan of two transfers: the object carried to the goal, put down, taken again by the same grasp
+    without the arm moving, carried back to the start and to the goal again. The pruning (no checking: a loop,
+    then a regrasp in place) makes it a plan of one transfer before the shortcuts, valid at the validator's
+    step."""
+    from clew_ros.core.settings import Termination
+    from clew_ros.core.space import PlanningContext
+    from clew_ros.core.tree import Segment
+    from clew_ros.spatial.plan import make_plan, path_problems
+    from clew_ros.spatial.space import _shortcut_segments
+
+    found = plan(table, PlannerSettings(seed=0, time_limit=60.0, improve_time=0.0))
+    assert found.outcome is Outcome.SUCCEEDED, found.message
+    assert found.final_object_pose is not None
+    carried = found.segments[-1]
+    assert carried.kind == "transfer"
+    there = np.array(carried.waypoints)
+    segments = [
+        *found.segments,
+        Segment("transit", None, [there[-1]]),
+        Segment("transfer", carried.grasp, [*there[::-1], *there[1:]]),
+    ]
+    built = [(s.kind, s.grasp, np.asarray(s.waypoints, dtype=float)) for s in segments]
+    assert path_problems(table, make_plan(table, built)) == []  # the premise: a valid plan
+    space = SpatialSpace(table)
+    ctx = PlanningContext(space, PlannerSettings(seed=0, improve_time=0.5), np.random.default_rng(0), Termination(60))
+    better = _shortcut_segments(space, ctx, segments, found.final_object_pose)
+    assert (better.first_transfers, better.transfers) == (found.stats["transfers"] + 1, found.stats["transfers"])
+    assert better.travel <= found.stats["joint_travel_rad"] + 1e-9 < better.first_travel
+    check_plan(table, better.segments, found.final_object_pose)
+    built = [(s.kind, s.grasp, np.asarray(s.waypoints, dtype=float)) for s in better.segments]
+    assert path_problems(table, make_plan(table, built)) == []
+
+
 def test_a_goal_that_is_no_stable_placement_is_refused_at_once(table: SpatialWorld) -> None:
     floating = np.array([0.5, -0.3, 0.3, 0.0, 0.0, 0.0])  # 12 cm above the table
     result = plan(table, SETTINGS, goal=floating)

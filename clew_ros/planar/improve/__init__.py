@@ -8,7 +8,7 @@ or put down far from where a regrasp was needed. Once a plan is found,
 
 1. **Back-and-forth pruning** (free): a transfer put down and taken again by
    the same grasp where the arm stopped becomes one transfer
-   (:func:`clew_ros.planar.improve.prune._joined_regrasps`); a waypoint between two collinear
+   (:func:`clew_ros.core.improve.joined_regrasps`); a waypoint between two collinear
    pieces (a joint moving one way, then back) is dropped, and so is a loop
    that comes back to an earlier waypoint. The configurations left were
    already on the plan, so nothing needs checking.
@@ -127,14 +127,18 @@ calls of the checks and between rounds of routing calls, well within 100 ms),
 and then the best plan so far is returned.
 
 Every tuning number is a field of :class:`ImproveSettings` (:mod:`clew_ros.planar.improve.settings`), passed to
-:func:`improve`. The package's modules:
+:func:`improve`. What is generic over a space comes from :mod:`clew_ros.core.improve`: joint travel and which plan
+is better (``compare``), the work budget (``budget``: :class:`~clew_ros.core.improve.WorkBudget`,
+:class:`~clew_ros.core.improve.RoutingShare`), the pruning of step 1 (``prune``: ``pruned_path``,
+``joined_regrasps``). The random shortcuts of step 5 are the planar specialisation of
+:func:`clew_ros.core.improve.shortcut_path`: drawn in batches, scored and checked in one compiled call each. The
+package's modules:
 
 ============== ==========================================================================================
 ``settings``   :class:`ImproveSettings`: the tuning numbers, with units and why (the proposals' in ``regrasp``)
-``pieces``     the plan as pieces, joint travel, the score and which plan is better
+``pieces``     the plan as pieces (a segment, the object's pose at its start, the grasp's relative pose)
 ``many``       arms of many joints: the postures solved again along the tip's path
-``budget``     the work budget, a routing's share of it, :func:`check_work`
-``prune``      joining a transfer put down and taken again in place (step 1)
+``budget``     the planar cost model of the work budget: :func:`check_work`, :func:`work_costs`
 ``base``       the improver's state: continuous checks charged to the budget, the final check's reserve, pruning
 ``shortcuts``  greedy, random (batched, partial) and goal shortcuts (step 5)
 ``lattice``    moves, regrasps and first grasps on the joint-space lattice (steps 3 and 6)
@@ -151,13 +155,13 @@ import itertools
 
 import numpy as np
 
+from clew_ros.core.improve import better, joint_travel, plan_score
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Segment
-from clew_ros.planar.improve.budget import check_work
+from clew_ros.planar.improve.budget import check_work, work_costs
 from clew_ros.planar.improve.final import _refusal
 from clew_ros.planar.improve.many import _ManyJointMoves
-from clew_ros.planar.improve.pieces import Improvement, _better, _Piece, _pieces, _score, joint_travel
-from clew_ros.planar.improve.prune import _joined_regrasps
+from clew_ros.planar.improve.pieces import Improvement, _Piece, _pieces
 from clew_ros.planar.improve.rebuild import _Rebuilding
 from clew_ros.planar.improve.settings import ImproveSettings
 from clew_ros.planar.improve.shortcuts import _draw_shortcuts
@@ -169,11 +173,11 @@ __all__ = [
     "_Improver",
     "_Piece",
     "_draw_shortcuts",
-    "_joined_regrasps",
     "_pieces",
     "check_work",
     "improve",
     "joint_travel",
+    "work_costs",
 ]
 
 
@@ -190,14 +194,14 @@ class _Improver(_Rebuilding, _ManyJointMoves):
         if many and self.resolve_postures():
             self.prune()
         while True:
-            score = _score(self.pieces)
+            score = plan_score(self.pieces)
             self.rebuild()
             self.lattice_regrasps()
             self.fewer_transfers()
             self.shorten()
             if self.lattice_first_grasps():
                 self.shorten()
-            if not self.budget.left() or not self.better(score, _score(self.pieces)):
+            if not self.budget.left() or not self.better(score, plan_score(self.pieces)):
                 return self.pieces
             self.rebuild_share = 1.0
 
@@ -217,7 +221,7 @@ def improve(
     """
     world = world_of(ctx)
     first = _pieces(world, segments)
-    first_score = _score(first)
+    first_score = plan_score(first)
     if ctx.settings.improve_time <= 0 or ctx.termination():
         return Improvement(
             segments, final_object_pose, first_score[1], first_score[0], first_score[1], first_score[0], 0, 0, False
@@ -231,11 +235,11 @@ def improve(
         if q is None or p is None or not np.array_equal(p.waypoints, q.waypoints)
     ]
     final = pieces[-1].end_pose(world) if pieces else final_object_pose
-    better = _better(first_score, _score(pieces), settings.travel_eps)
-    refused = _refusal(world, changed, final, goal) if better else ""
-    if refused or not better:
+    gained = better(first_score, plan_score(pieces), settings.travel_eps)
+    refused = _refusal(world, changed, final, goal) if gained else ""
+    if refused or not gained:
         pieces, final = first, final_object_pose
-    score = _score(pieces)
+    score = plan_score(pieces)
     return Improvement(
         [p.segment() for p in pieces],
         final,

@@ -7,14 +7,13 @@ import math
 
 import numpy as np
 
+from clew_ros.core.improve import Score, WorkBudget, better, joined_regrasps, joint_travel, pruned_path
 from clew_ros.core.space import PlanningContext
 from clew_ros.planar.continuous import straight_moves_clear
-from clew_ros.planar.improve.budget import _Budget
+from clew_ros.planar.improve.budget import work_costs
 from clew_ros.planar.improve.final import _dense_count
-from clew_ros.planar.improve.pieces import _better, _Piece, joint_travel
-from clew_ros.planar.improve.prune import _joined_regrasps
+from clew_ros.planar.improve.pieces import _Piece
 from clew_ros.planar.improve.settings import ImproveSettings
-from clew_ros.planar.kernel import pruned_path
 from clew_ros.planar.lattice import KnownNodes
 from clew_ros.planar.world import world_of
 
@@ -34,7 +33,8 @@ class _ImproverBase:
         self.goal = goal
         joints = world_of(ctx).robot.dof
         scale = joints / self.settings.many_budget_joints if joints >= ctx.many.straight_probe_joints else 1.0
-        self.budget = _Budget(ctx, ctx.settings.improve_time * self.settings.work_per_second * scale, self.settings)
+        total = ctx.settings.improve_time * self.settings.work_per_second * scale
+        self.budget = WorkBudget(total, work_costs(self.world, self.settings), ctx.termination)
         self.min_margin = self.settings.moves.min_margin_factor * ctx.settings.clearance
         self.shortcuts = 0
         self.rebuilt = 0
@@ -51,9 +51,9 @@ class _ImproverBase:
         # the spans lattice_regrasps searched (their ends, their length), the first grasps lattice_first_grasps tried
         self.regrasps_tried: set[bytes] = set()
 
-    def better(self, old: tuple[int, float, int], new: tuple[int, float, int]) -> bool:
-        """Whether score ``new`` is better than ``old`` (:func:`clew_ros.planar.improve.pieces._better`)."""
-        return _better(old, new, self.settings.travel_eps)
+    def better(self, old: Score, new: Score) -> bool:
+        """Whether score ``new`` is better than ``old`` (:func:`clew_ros.core.improve.better`)."""
+        return better(old, new, self.settings.travel_eps)
 
     def clear(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:
         """Whether the straight move ``a -> b`` is clear in ``piece``'s mode."""
@@ -92,7 +92,7 @@ class _ImproverBase:
 
     def prune(self) -> None:
         """Back-and-forth pruning (free): regrasps in place joined, collinear waypoints and loops dropped."""
-        self.pieces = _joined_regrasps(self.pieces, self.settings.same_rad)
+        self.pieces = joined_regrasps(self.pieces, self.settings.same_rad)
         for piece in self.pieces:
             pruned = pruned_path(piece.waypoints)
             if self.better(

@@ -1,77 +1,27 @@
-"""The improvement's budget, counted in work units, not seconds (the same seed gives the same plan on any
-machine): :class:`_Budget` (work spent and left, the clock's stop test), :class:`_RoutingShare` (a routing's part
-of it) and :func:`check_work` (what a configuration check costs in a world)."""
+"""The planar cost model of the improvement's work budget (:class:`clew_ros.core.improve.WorkBudget`, counted
+in work units, not seconds, so the same seed gives the same plan on any machine): :func:`check_work` (what a
+configuration check costs in a world) and :func:`work_costs` (what each kind of check is charged)."""
 
 from __future__ import annotations
 
-import math
-
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.improve import WorkCosts
 from clew_ros.planar.improve.settings import ImproveSettings
-from clew_ros.planar.world import World, world_of
+from clew_ros.planar.world import World
 
-__all__ = ["check_work"]
-
-
-class _Budget:
-    """Work units left, and the clock's stop test (time limit, cancel)."""
-
-    def __init__(self, ctx: PlanningContext, total: float, settings: ImproveSettings) -> None:
-        self.ctx = ctx
-        self.settings = settings
-        self.total = total
-        self.spent = 0
-        self.evaluations_at_start = ctx.counters.evaluations
-        self.stopped = False
-        self.check_work = settings.batch_check_share * check_work(world_of(ctx), settings)
-        self.reserve = 0  # work the final check of the segments changed so far will take
-
-    def spend(self, units: int) -> None:
-        self.spent += units
-
-    def spend_checks(self, configurations: int, calls: int = 1) -> None:
-        """Charge ``configurations`` checked in ``calls`` calls of the compiled check."""
-        self.spent += math.ceil(configurations * self.check_work) + calls * self.settings.call_work
-
-    def spend_move_checks(self, configurations: int) -> None:
-        """Charge one call of the compiled straight-move check that checked ``configurations``."""
-        self.spent += math.ceil(configurations * self.check_work) + self.settings.move_call_work
-
-    def units_left(self) -> float:
-        """Work units left of the budget, the final check's reserve kept out."""
-        return self.total - self.reserve - self.spent
-
-    def left(self, share: float = 1.0) -> bool:
-        """Whether work is left (within ``share`` of the budget) and the clock allows more."""
-        if self.stop():
-            return False
-        return self.spent + self.reserve < share * self.total
-
-    def stop(self) -> bool:
-        if not self.stopped and self.ctx.termination():
-            self.stopped = True
-        return self.stopped
+__all__ = ["check_work", "work_costs"]
 
 
-class _RoutingShare:
-    """A routing's part of the budget (:class:`clew_ros.planar.connect.RoutingBudget`): what is left of the
-    budget, and at most until ``limit`` units are spent; each compiled call of its rounds costs
-    :attr:`ImproveSettings.move_call_work` more."""
-
-    def __init__(self, budget: _Budget, limit: float) -> None:
-        self.budget = budget
-        self.round_work = budget.settings.round_work
-        self.limit = limit
-        self.check_work = budget.check_work
-
-    def allowance(self) -> float:
-        return min(self.limit - self.budget.spent, self.budget.units_left())
-
-    def spend(self, units: float) -> None:
-        self.budget.spend(math.ceil(units) + self.budget.settings.move_call_work)
-
-    def stop(self) -> bool:
-        return self.budget.stop()
+def work_costs(world: World, settings: ImproveSettings) -> WorkCosts:
+    """The planar cost model of the improvement's checks in ``world``: a configuration checked costs
+    :attr:`ImproveSettings.batch_check_share` x :func:`check_work` units, a call of the configuration check
+    :attr:`ImproveSettings.call_work`, of the straight-move check :attr:`ImproveSettings.move_call_work`, a round of
+    RRT-Connect :attr:`ImproveSettings.round_work`."""
+    return WorkCosts(
+        check=settings.batch_check_share * check_work(world, settings),
+        call=settings.call_work,
+        move_call=settings.move_call_work,
+        round=settings.round_work,
+    )
 
 
 def check_work(world: World, settings: ImproveSettings | None = None) -> float:

@@ -9,9 +9,9 @@ from dataclasses import replace
 
 import numpy as np
 
+from clew_ros.core.improve import joint_travel, plan_score, pruned_path
 from clew_ros.planar.improve.base import _ImproverBase
-from clew_ros.planar.improve.pieces import _Piece, _score, _span_key, joint_travel
-from clew_ros.planar.kernel import pruned_path
+from clew_ros.planar.improve.pieces import _Piece, _span_key
 from clew_ros.planar.lattice import KnownNodes, grasp_configurations, lattice_regrasp, lattice_route, lattice_step
 
 
@@ -173,7 +173,7 @@ class _LatticeUse(_ImproverBase):
     def take(self, candidate: list[_Piece], regrasped: tuple[_Piece, _Piece, _Piece]) -> bool:
         """Make ``candidate``, a plan holding the pieces ``regrasped`` placed on the lattice, the plan if it is
         better; their span is then marked searched (a search from the same ends would find them again)."""
-        if not self.better(_score(self.pieces), _score(candidate)):
+        if not self.better(plan_score(self.pieces), plan_score(candidate)):
             return False
         self.pieces = candidate
         self.regrasps_tried.add(_span_key(regrasped[0], regrasped[2], 2))

@@ -21,10 +21,10 @@ import math
 
 import numpy as np
 
-from clew_ros.planar.improve.pieces import _Piece, _score, _without_repeats
+from clew_ros.core.improve import plan_score, pruned_path, without_repeats
+from clew_ros.planar.improve.pieces import _Piece
 from clew_ros.planar.improve.shortcuts import _Shortcutting
 from clew_ros.planar.inverse import solve_point
-from clew_ros.planar.kernel import pruned_path
 from clew_ros.planar.kinematics import tip_poses
 
 
@@ -79,7 +79,7 @@ class _ManyJointMoves(_Shortcutting):
             new.append(_Piece(piece.kind, piece.grasp, waypoints, piece.start_pose, piece.grasp_rel))
             previous = waypoints[-1]
         candidate = [*self.pieces[:first], *new, *self.pieces[stop:]]
-        if not self.better(_score(self.pieces), _score(candidate)):
+        if not self.better(plan_score(self.pieces), plan_score(candidate)):
             return False, None
         self.pieces = candidate
         self.reserve()
@@ -128,7 +128,7 @@ class _ManyJointMoves(_Shortcutting):
             floor = max(floor, pulled[1])
             done += 1
             chain = chain[:0]
-        return pruned_path(_without_repeats(path))
+        return pruned_path(without_repeats(path))
 
     def farthest_clear(self, piece: _Piece, q: np.ndarray, chain: np.ndarray) -> int:
         """How many points of ``chain`` the straight move from ``q`` to its farthest clear one passes: the last

@@ -1,5 +1,5 @@
-"""The plan as the improvement sees it: pieces (a segment, the object's pose at its start, the grasp's relative
-pose), their joint travel and score, and the order that says which plan is better."""
+"""The plan as the planar improvement sees it: pieces (a segment, the object's pose at its start, the grasp's
+relative pose). Their joint travel, score and the order that says which plan is better: :mod:`clew_ros.core.improve`."""
 
 from __future__ import annotations
 
@@ -12,17 +12,7 @@ from clew_ros.core.tree import Segment
 from clew_ros.planar.kinematics import compose, relative, tip_poses
 from clew_ros.planar.world import World
 
-__all__ = ["Improvement", "joint_travel"]
-
-
-def joint_travel(segments: list[Segment] | list[np.ndarray]) -> float:
-    """Sum over joints of the absolute motion (rad) along segments (or waypoint arrays)."""
-    total = 0.0
-    for segment in segments:
-        waypoints = np.asarray(segment.waypoints if isinstance(segment, Segment) else segment, dtype=float)
-        if len(waypoints) > 1:
-            total += float(np.abs(np.diff(waypoints, axis=0)).sum())
-    return total
+__all__ = ["Improvement"]
 
 
 @dataclass
@@ -40,6 +30,10 @@ class _Piece:
             return self.start_pose
         end: np.ndarray = compose(tip_poses(world.robot, self.waypoints[-1:]), self.grasp_rel)[0]
         return end
+
+    def with_waypoints(self, waypoints: np.ndarray) -> _Piece:
+        """This piece through other waypoints (the object's pose at its start and the grasp kept)."""
+        return _Piece(self.kind, self.grasp, waypoints, self.start_pose, self.grasp_rel)
 
     def segment(self) -> Segment:
         return Segment(self.kind, self.grasp, [w.copy() for w in self.waypoints])
@@ -60,33 +54,8 @@ def _pieces(world: World, segments: list[Segment]) -> list[_Piece]:
     return pieces
 
 
-def _without_repeats(waypoints: list[np.ndarray]) -> np.ndarray:
-    """``waypoints`` without those within 1e-12 rad (each joint) of the one before."""
-    points = np.array(waypoints, dtype=float)
-    moved = np.max(np.abs(np.diff(points, axis=0)), axis=1) > 1e-12
-    kept: np.ndarray = points[np.concatenate([[True], moved])]
-    return kept
-
-
-def _better(old: tuple[int, float, int], new: tuple[int, float, int], travel_eps: float) -> bool:
-    """Lexicographic (transfers, travel, waypoints); travel within ``travel_eps`` (rad) counts as equal."""
-    if new[0] != old[0]:
-        return new[0] < old[0]
-    if abs(new[1] - old[1]) > travel_eps:
-        return new[1] < old[1]
-    return new[2] < old[2]
-
-
 def _span_key(one: _Piece, two: _Piece, length: int) -> bytes:
     """What :meth:`_Improver.lattice_regrasps` knows a span by: where its first transfer starts, where its last
     ends, and how many pieces from one to the other."""
     key: bytes = one.waypoints[0].tobytes() + two.waypoints[-1].tobytes() + length.to_bytes(8, "little")
     return key
-
-
-def _score(pieces: list[_Piece]) -> tuple[int, float, int]:
-    return (
-        sum(p.kind == "transfer" for p in pieces),
-        joint_travel([p.waypoints for p in pieces]),
-        sum(len(p.waypoints) for p in pieces),
-    )

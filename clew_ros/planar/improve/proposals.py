@@ -8,10 +8,10 @@ import math
 
 import numpy as np
 
+from clew_ros.core.improve import RoutingShare, joint_travel, plan_score
 from clew_ros.planar.connect import rrt_connect, shortened
-from clew_ros.planar.improve.budget import _RoutingShare
 from clew_ros.planar.improve.lattice import _LatticeUse
-from clew_ros.planar.improve.pieces import _Piece, _score, joint_travel
+from clew_ros.planar.improve.pieces import _Piece
 from clew_ros.planar.improve.shortcuts import _Shortcutting
 from clew_ros.planar.kinematics import relative, tip_poses
 from clew_ros.planar.lattice import lattice_step
@@ -43,7 +43,7 @@ class _Proposals(_Shortcutting, _LatticeUse):
         for proposal in proposals:
             if (proposal.blocked > 0) != routed:
                 continue  # those that looked clear first, those with a blocked move to route in a call of their own
-            score = _score(self.pieces)
+            score = plan_score(self.pieces)
             if not self.better(score, (transfers + len(proposal.grasps), travel_before + proposal.travel, 0)):
                 continue
             if any(_alike(proposal, other, self.settings.alike_rad) for other in failed) or self.known_blocked(
@@ -63,7 +63,7 @@ class _Proposals(_Shortcutting, _LatticeUse):
             tail = self.checked_tail(proposal, placement, slack)
             # compared where it could end on the goal, as the plan's last transfer
             ended_sooner = tail is not None and self.goal_shortcut(tail[-1])
-            accepted = tail is not None and self.better(score, _score(before + tail))
+            accepted = tail is not None and self.better(score, plan_score(before + tail))
             if self.routings:
                 self.connected[accepted] += 1
             if tail is not None and accepted:
@@ -154,7 +154,7 @@ class _Proposals(_Shortcutting, _LatticeUse):
             grasp_rel=piece.grasp_rel,
             min_margin=self.min_margin,
             rounds=self.settings.connect_steps,
-            budget=_RoutingShare(self.budget, limit),
+            budget=RoutingShare(self.budget, limit),
             settings=self.settings.connect,
             moves=self.settings.moves,
         )

@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 
-from clew_ros.planar.improve.pieces import _Piece, _score
+from clew_ros.core.improve import plan_score, pruned_path
+from clew_ros.planar.improve.pieces import _Piece
 from clew_ros.planar.improve.proposals import _Proposals
-from clew_ros.planar.kernel import pruned_path
 from clew_ros.planar.regrasp import Proposal, propose
 from clew_ros.planar.search import search_transfer
 
@@ -53,7 +53,7 @@ class _Rebuilding(_Proposals):
             position = kept + 1
             before = self.pieces[:kept]
             transfers = sum(p.kind == "transfer" for p in before)
-            score = _score(self.pieces)
+            score = plan_score(self.pieces)
             if transfers + 1 > score[0]:
                 break
             after = self.pieces[kept:]
@@ -128,7 +128,7 @@ class _Rebuilding(_Proposals):
                 continue
             carried = _Piece("transfer", piece.grasp, pruned_path(result.waypoints), piece.start_pose, piece.grasp_rel)
             candidate = [*self.pieces[:index], carried]
-            if self.better(_score(self.pieces), _score(candidate)):
+            if self.better(plan_score(self.pieces), plan_score(candidate)):
                 self.pieces = candidate
                 self.reserve()
                 return

@@ -9,9 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clew_ros.core.improve import joint_travel, pruned_path, without_repeats
 from clew_ros.planar.improve.base import _ImproverBase
-from clew_ros.planar.improve.pieces import _Piece, _without_repeats, joint_travel
-from clew_ros.planar.kernel import pruned_path, shortcuts
+from clew_ros.planar.improve.pieces import _Piece
+from clew_ros.planar.kernel import shortcuts
 from clew_ros.planar.regrasp import goal_holds_near
 
 
@@ -54,7 +55,7 @@ class _Shortcutting(_ImproverBase):
         w = piece.waypoints
         self.budget.spend(math.ceil(self.settings.shortcut_try_work + self.settings.waypoint_work * len(w)))
         joined = [*w[:first], a, b, *w[last + 1 :]]
-        new = pruned_path(_without_repeats(joined))
+        new = pruned_path(without_repeats(joined))
         old_score = (0, joint_travel([w]), len(w))
         if not self.better(old_score, (0, joint_travel([new]), len(new))):
             return False
@@ -136,7 +137,7 @@ class _Shortcutting(_ImproverBase):
         for k in sorted(taken, key=lambda t: -drawn.first[rows[t]]):  # from the path's end: indices stay true
             first, last = int(drawn.first[rows[k]]), int(drawn.last[rows[k]])
             w[first + 1 : last + 1] = list(paths[k])
-        new = pruned_path(_without_repeats(w))
+        new = pruned_path(without_repeats(w))
         if not self.better(
             (0, joint_travel([piece.waypoints]), len(piece.waypoints)), (0, joint_travel([new]), len(new))
         ):
@@ -182,7 +183,7 @@ class _Shortcutting(_ImproverBase):
         if self.budget.stopped or not clear.any():
             return False
         best = rows[clear][np.argmin(travel[rows[clear]])]
-        piece.waypoints = _without_repeats([*w[: best + 1], held[best]])  # a waypoint on the goal already: itself
+        piece.waypoints = without_repeats([*w[: best + 1], held[best]])  # a waypoint on the goal already: itself
         return True
 
     def shorten(self) -> None:

@@ -17,7 +17,7 @@ module                                         what it holds
 :mod:`~clew_ros.planar.kernel.validity`        the validity test's first pass (:func:`clearly_valid`)
 :mod:`~clew_ros.planar.kernel.moves`           straight moves (:func:`moves_clear`), :func:`screen_routes`
 :mod:`~clew_ros.planar.kernel.rrt_connect`     RRT-Connect's rounds (:func:`connect_rounds`)
-:mod:`~clew_ros.planar.kernel.path_shortcuts`  :func:`pruned_path` and :func:`shortcuts`
+:mod:`~clew_ros.planar.kernel.path_shortcuts`  :func:`shortcuts`: random shortcuts scored in batches
 :mod:`~clew_ros.planar.kernel.lattice`         the lattice's A*, Dijkstra costs and repair, regrasp totals
 :mod:`~clew_ros.planar.kernel.warmup`          :func:`warm_up`: every kernel compiled before the first plan
 =============================================  =======================================================================
@@ -42,7 +42,7 @@ from clew_ros.planar.kernel.lattice import (
 )
 from clew_ros.planar.kernel.moves import moves_clear, screen_routes
 from clew_ros.planar.kernel.packed import PackedWorld
-from clew_ros.planar.kernel.path_shortcuts import pruned_path, shortcuts
+from clew_ros.planar.kernel.path_shortcuts import shortcuts
 from clew_ros.planar.kernel.rrt_connect import connect_rounds
 from clew_ros.planar.kernel.validity import clearly_valid
 from clew_ros.planar.kernel.warmup import warm_up
@@ -67,7 +67,6 @@ __all__ = [
     "lattice_repair",
     "lattice_search",
     "moves_clear",
-    "pruned_path",
     "release_totals",
     "screen_routes",
     "shortcuts",

@@ -1,5 +1,7 @@
-"""The improvement's path kernels: pruning a path (repeats, loops, collinear waypoints) and scoring batches
-of random shortcuts (straight between two waypoints or points, or one joint evened out)."""
+"""The improvement's path kernel: scoring batches of random shortcuts (straight between two waypoints or points,
+or one joint evened out), the planar improvement's batched specialisation of
+:func:`clew_ros.core.improve.shortcut_path` (the pruning of a path is generic:
+:func:`clew_ros.core.improve.pruned_path`)."""
 
 from __future__ import annotations
 
@@ -7,49 +9,6 @@ import numpy as np
 
 from clew_ros.planar.kernel.jit import _leaf
 from clew_ros.planar.kernel.packed import _arg
-
-
-@_leaf
-def _pruned(waypoints: np.ndarray, points: np.ndarray) -> int:
-    """:func:`pruned_path` into ``points`` (as large as ``waypoints``); returns how many it kept."""
-    n = waypoints.shape[1]
-    size = 0
-    for k in range(waypoints.shape[0]):
-        back = -1  # the first point kept so far that this one is back at (a loop)
-        for i in range(size):
-            largest = 0.0
-            for j in range(n):
-                largest = max(largest, abs(points[i, j] - waypoints[k, j]))
-            if largest <= 1e-12:
-                back = i
-                break
-        if back >= 0:
-            size = back + 1
-        else:
-            for j in range(n):
-                points[size, j] = waypoints[k, j]
-            size += 1
-        while size >= 3:  # the last three collinear (a move undone or continued): drop the middle one
-            scale = 0.0
-            uv = 0.0
-            vv = 0.0
-            for j in range(n):
-                u = points[size - 2, j] - points[size - 3, j]
-                v = points[size - 1, j] - points[size - 2, j]
-                scale = max(scale, abs(u), abs(v))
-                uv += u * v
-                vv += v * v
-            off = 0.0
-            for j in range(n):
-                u = points[size - 2, j] - points[size - 3, j]
-                v = points[size - 1, j] - points[size - 2, j]
-                off = max(off, abs(u * vv - v * uv))
-            if scale > 0 and off > 1e-12 * scale**3:
-                break
-            for j in range(n):
-                points[size - 2, j] = points[size - 1, j]
-            size -= 1
-    return size
 
 
 @_leaf
@@ -181,13 +140,3 @@ def shortcuts(
     paths, gain, fewer = np.empty((count, int(pieces) + 2, n)), np.empty(count), np.empty(count, dtype=np.bool_)
     _shortcuts(w, draws, np.empty(m), first, last, paths, gain, fewer)
     return first, last, paths, gain, fewer
-
-
-def pruned_path(waypoints: np.ndarray) -> np.ndarray:
-    """``waypoints`` ``(m, n)`` without repeated waypoints, loops back to an earlier waypoint (within 1e-12
-    rad), and waypoints between collinear pieces (a move undone or continued along the same line): the path
-    left only visits configurations the old one visited. Compiled: the improvement prunes every shortcut it
-    tries, and plans of many joints have hundreds of waypoints."""
-    waypoints = _arg(waypoints)
-    points = np.empty_like(waypoints)
-    return points[: _pruned(waypoints, points)].copy()

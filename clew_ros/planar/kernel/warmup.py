@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from clew_ros.core.improve import pruned_path
 from clew_ros.planar.kernel.decoding import decode
 from clew_ros.planar.kernel.free_intervals import bounce_array, intervals
 from clew_ros.planar.kernel.kinematics import chain, solve_point
 from clew_ros.planar.kernel.lattice import lattice_costs, lattice_repair, lattice_search, release_totals
 from clew_ros.planar.kernel.moves import moves_clear, screen_routes
 from clew_ros.planar.kernel.packed import PackedWorld
-from clew_ros.planar.kernel.path_shortcuts import pruned_path, shortcuts
+from clew_ros.planar.kernel.path_shortcuts import shortcuts
 from clew_ros.planar.kernel.rrt_connect import connect_rounds
 from clew_ros.planar.kernel.validity import clearly_valid
 

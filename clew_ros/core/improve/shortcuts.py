@@ -1,13 +1,11 @@
-"""The spatial plans' improvement: shortcuts between points of a segment, each checked at the validator's
-resolution, taken only when shorter.
+"""Random shortcuts of one segment's path, each a straight joint-space move that a ``clear`` callable
+accepts (the space checks it: the planar continuous check, the spatial validator's 0.002 rad).
 
-Within each segment (a transit with the object at rest where it lies then, a transfer holding it), points
-are drawn along the path (by joint travel, from the run's improvement generator) and joined by a straight
-joint-space move when every configuration the validator would check on it is valid under that segment's
-checker; the segment's ends never move (the grasp, the placement). Joint travel (the sum over joints of
-the absolute motion) only shrinks: a straight move is never longer than the path it replaces. The work is
-a fixed number of tries per segment (:attr:`~clew_ros.spatial.space.SpatialTuning.shortcut_tries`), so the
-same seed gives the same plan; the time limit or a cancel stops it early.
+Points are drawn along the path (by joint travel, from the generator given) and joined straight when that is
+shorter and clear; the path's ends never move (a segment's grasp and placement stay where they were), and its
+joint travel only shrinks. The work is a fixed number of tries, so the same generator gives the same path; the
+clock's stop test ends it early. The planar improvement draws its shortcuts in batches scored and checked by
+compiled kernels instead (:mod:`clew_ros.planar.improve.shortcuts`): the same idea, specialised for speed.
 """
 
 from __future__ import annotations
@@ -17,16 +15,15 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["path_travel", "shortcut_path"]
+from clew_ros.core.improve.compare import joint_travel
+
+__all__ = ["shortcut_path"]
 
 Array = NDArray[np.float64]
 
 
-def path_travel(path: Array) -> float:
-    return float(np.abs(np.diff(path, axis=0)).sum()) if len(path) > 1 else 0.0
-
-
 def _dedupe(path: Array) -> Array:
+    """``path`` without waypoints within 1e-12 rad of the one before, its last waypoint always kept."""
     keep = np.r_[True, np.max(np.abs(np.diff(path, axis=0)), axis=1) > 1e-12] if len(path) > 1 else np.ones(1, bool)
     keep[-1] = True
     return path[keep]
@@ -70,7 +67,7 @@ def shortcut_path(
         j, r = _point(path, cumulative, b)
         if j <= i:
             continue  # both on one straight piece: nothing to gain
-        before = path_travel(np.vstack([p, path[i + 1 : j + 1], r]))
+        before = joint_travel([np.vstack([p, path[i + 1 : j + 1], r])])
         if np.abs(r - p).sum() >= before - 1e-9:
             continue
         if not clear(p[None], r[None])[0]:

@@ -17,6 +17,7 @@ and the run took twice as long.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import traceback
 from collections.abc import Callable
@@ -96,7 +97,7 @@ def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray
 
 
 class _MotionRun:
-    """One motion-only run: its space, context, landmark tree."""
+    """One motion-only run: its space, contexts, and two landmark trees (from the start, from the goal)."""
 
     def __init__(self, space: MotionSpace, settings: PlannerSettings, termination: Termination) -> None:
         self.world = space.world
@@ -106,13 +107,33 @@ class _MotionRun:
         self.space = space
         rng = np.random.default_rng(settings.seed)
         self.ctx = PlanningContext(self.space, settings, rng, termination, search=tuning.search, many=tuning.many)
+        # SEARCH's and EXPLORE's own sizes (SpatialTuning's motion block), on the run's generator and counters
+        self.search_ctx = dataclasses.replace(
+            self.ctx,
+            settings=dataclasses.replace(
+                settings,
+                search_rounds=tuning.motion_search_rounds,
+                population=tuning.motion_search_population,
+                generations=tuning.motion_search_generations,
+            ),
+        )
+        self.explore_ctx = dataclasses.replace(
+            self.ctx,
+            settings=dataclasses.replace(
+                settings,
+                population=tuning.motion_explore_population,
+                generations=tuning.motion_explore_generations,
+            ),
+        )
         self.none = np.zeros(6)
         self.tree = LandmarkTree(self.world.initial, self.none)
+        self.goal_tree: LandmarkTree | None = None
 
     def finish(self, outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
         stats: dict[str, Any] = {
             "time_s": round(self.termination.elapsed, 4),
             "landmarks": len(self.tree),
+            "goal_landmarks": 0 if self.goal_tree is None else len(self.goal_tree),
             "collision_checks": self.ctx.counters.clearance_checks,
             "evaluations": self.ctx.counters.evaluations,
             "seed": self.settings.seed,
@@ -120,33 +141,46 @@ class _MotionRun:
         segments = [Segment("transit", None, list(waypoints))] if waypoints is not None else []
         return clew.PlanResult(outcome, message, segments, None, self.tree, stats)
 
-    def search(self, q0: np.ndarray, target: np.ndarray) -> np.ndarray:
-        """SEARCH_TRANSIT from ``q0`` to ``target``: its waypoints (ending there when it got there)."""
+    def search(self, q0: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, int]:
+        """SEARCH_TRANSIT from ``q0`` to the nearest of ``targets`` (m, n) it reaches: its waypoints and the
+        target's index (-1 when it reached none; the waypoints then end where it stopped)."""
         weight = self.tuning.motion_weight
+        order = np.argsort(np.abs(targets - q0).sum(axis=1), kind="stable")[: self.tuning.motion_connect_targets]
+        near = targets[order]
 
         def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
-            out: np.ndarray = weight * np.linalg.norm(q - target, axis=1)
+            out: np.ndarray = weight * np.min(np.linalg.norm(q[:, None] - near[None], axis=2), axis=1)
             return out
 
         def error(q: np.ndarray) -> np.ndarray:
-            out: np.ndarray = weight * (q - target)
+            nearest = near[np.argmin(np.linalg.norm(q[:, None] - near[None], axis=2), axis=1)]
+            out: np.ndarray = weight * (q - nearest)
             return out
 
-        job = SearchJob(
-            q0, objective, error, 1e-9, {"object_poses": self.none[None]}, toward=target, straight=target[None]
-        )
-        waypoints, _ = local_search(self.ctx, [job])[0]
-        end = waypoints[-1:]
-        if np.max(np.abs(end - target)) > 1e-9 and self.space.clear(self.world.checker, end, target[None])[0]:
-            waypoints = np.vstack([waypoints, target[None]])
-        return waypoints
+        job = SearchJob(q0, objective, error, 1e-9, {"object_poses": self.none[None]}, toward=near[0], straight=near)
+        waypoints, _ = local_search(self.search_ctx, [job])[0]
+        end = waypoints[-1]
+        gaps = np.max(np.abs(near - end), axis=1)
+        if np.min(gaps) <= 1e-9:
+            return waypoints, int(order[int(np.argmin(gaps))])
+        ranked = np.argsort(np.abs(near - end).sum(axis=1), kind="stable")
+        for k in ranked:
+            if self.termination():
+                break
+            if self.space.clear(self.world.checker, end[None], near[k][None])[0]:
+                return np.vstack([waypoints, near[k][None]]), int(order[k])
+        return waypoints, -1
 
     def search_all(self, target: np.ndarray, progress: Callable[[clew.Progress], None] | None) -> clew.PlanResult:
-        """SEARCH from the start, then EXPLORE and SEARCH from each new landmark, until one reaches ``target``."""
+        """SEARCH from the start to the goal; then, in turn from each end (a tree of landmarks rooted at
+        the start, one at the goal), EXPLORE places a landmark and SEARCH goes from it to the other tree's
+        landmarks, until one reaches them."""
         best = math.inf
-        landmark = self.tree[0]
         tree = self.tree
+        goal_tree = self.goal_tree = LandmarkTree(target, self.none)
+        trees = (tree, goal_tree)
         weight = self.tuning.motion_weight * math.sqrt(2.0 / self.world.robot.dof)
+        side, landmark = 0, tree[0]
         while True:
             reason = self.termination.reason()
             if reason is not None:
@@ -155,26 +189,32 @@ class _MotionRun:
                 )
                 return self.finish(
                     reason,
-                    f"{stopped} after {len(tree)} landmarks; no motion found; the nearest search ended {best:.4g} rad "
-                    "(largest joint difference) from the goal",
+                    f"{stopped} after {len(tree) + len(goal_tree)} landmarks; no motion found; the nearest search "
+                    f"ended {best:.4g} rad (largest joint difference) from the other tree",
                 )
-            found = self.search(landmark.joints, target)
-            gap = float(np.max(np.abs(found[-1] - target)))
+            other = trees[1 - side]
+            found, reached = self.search(landmark.joints, other.joints())
+            gap = 0.0 if reached >= 0 else float(np.min(np.max(np.abs(other.joints() - found[-1]), axis=1)))
             best = min(best, gap)
             if progress is not None:
                 progress(clew.Progress(len(tree), best, self.termination.elapsed, tree))
-            if gap <= 1e-9:
-                return self.success(landmark.id, found, target)
-            if len(tree) >= self.tuning.motion_landmarks:
+            if reached >= 0:
+                if side == 0:
+                    return self.success(landmark.id, found, reached, target)
+                return self.success(reached, found[::-1], landmark.id, target)
+            if len(tree) + len(goal_tree) >= self.tuning.motion_landmarks:
                 return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
-                    f"no motion found after {len(tree)} landmarks; best {best:.4g} rad from the goal",
+                    f"no motion found after {len(tree) + len(goal_tree)} landmarks; best {best:.4g} rad from the "
+                    "other tree",
                 )
-            explored = _explore(self.ctx, self.space, tree, weight)
+            if self.tuning.motion_bidirectional:
+                side = 1 - side
+            explored = _explore(self.explore_ctx, self.space, trees[side], weight)
             if explored is None:
                 continue
             parent, path, distance = explored
-            landmark = tree.add(
+            landmark = trees[side].add(
                 parent=parent,
                 joints=path[-1].copy(),
                 object_pose=self.none,
@@ -187,13 +227,20 @@ class _MotionRun:
                 return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
                     f"no path at resolution {self.settings.resolution}: the new landmark lies {distance:.4g} from "
-                    f"the others after {len(tree)} landmarks",
+                    f"the others after {len(tree) + len(goal_tree)} landmarks",
                 )
 
-    def success(self, landmark_id: int, found: np.ndarray, target: np.ndarray) -> clew.PlanResult:
-        """The path from the start to the landmark, then SEARCH's to the goal, shortcut."""
-        pieces = [lm.transit for lm in self.tree.lineage(landmark_id)[1:] if lm.transit is not None]
-        path = np.vstack([self.world.initial[None], *(p[1:] for p in pieces), found[1:]])
+    def _branch(self, tree: LandmarkTree, landmark_id: int) -> np.ndarray:
+        """The path from ``tree``'s root to its landmark, through the landmarks' transit paths."""
+        pieces = [lm.transit for lm in tree.lineage(landmark_id)[1:] if lm.transit is not None]
+        return np.vstack([tree[0].joints[None], *(p[1:] for p in pieces)])
+
+    def success(self, start_id: int, found: np.ndarray, goal_id: int, target: np.ndarray) -> clew.PlanResult:
+        """The start tree's path to its landmark, SEARCH's path between the trees, the goal tree's path from
+        its landmark back to the goal; shortcut."""
+        assert self.goal_tree is not None
+        back = self._branch(self.goal_tree, goal_id)[::-1]
+        path = np.vstack([self._branch(self.tree, start_id), found[1:], back[1:]])
         path[-1] = target
         first = float(np.abs(np.diff(path, axis=0)).sum())
         shortcuts = 0
@@ -209,7 +256,8 @@ class _MotionRun:
         travel = float(np.abs(np.diff(path, axis=0)).sum())
         result = self.finish(
             Outcome.SUCCEEDED,
-            f"motion found with {len(self.tree)} landmarks, joint travel {travel:.2f} rad (first: {first:.2f} rad)",
+            f"motion found with {len(self.tree)} + {len(self.goal_tree)} landmarks, joint travel {travel:.2f} rad "
+            f"(first: {first:.2f} rad)",
             path,
         )
         result.stats.update(

@@ -74,3 +74,16 @@ class SpatialTuning:
     #: motion-only queries: landmarks (count) EXPLORE places at most (each followed by a SEARCH_TRANSIT
     #: to the goal) before the run gives up with NO_PATH_AT_RESOLUTION's epsilon test
     motion_landmarks: int = 200
+    #: motion-only queries: whether EXPLORE grows a tree from the goal as well as one from the start, in turn,
+    #: each new landmark's SEARCH going to the other tree (RRT-Connect's two trees; False: the start's only)
+    motion_bidirectional: bool = True
+    #: motion-only queries: EXPLORE's GA (population, generations) per landmark, instead of planner.*
+    motion_explore_population: int = 8
+    motion_explore_generations: int = 3
+    #: motion-only queries: SEARCH_TRANSIT's do-while rounds and GA (population, generations), instead of
+    #: planner.*
+    motion_search_rounds: int = 1
+    motion_search_population: int = 8
+    motion_search_generations: int = 3
+    #: motion-only queries: landmarks (count, nearest first) of the other tree SEARCH aims at
+    motion_connect_targets: int = 4

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from clew_ros.core.manhattan import bounce
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.spatial.space import SpatialSpace, matrices, plan
 from clew_ros.spatial.spheres import SphereSettings
@@ -253,6 +254,31 @@ def test_free_intervals_searched_only_as_far_as_asked(boxes: SpatialWorld) -> No
         # the same steps from the start, stopped at the reach: the whole interval clipped to it
         assert np.allclose(near_hi, np.minimum(hi, qs[:, joint] + reach), atol=1e-12)
         assert np.allclose(near_lo, np.maximum(lo, qs[:, joint] - reach), atol=1e-12)
+
+
+def test_a_folded_move_bounces_as_over_the_whole_interval(boxes: SpatialWorld) -> None:
+    """``move=``: the side the move heads for searched as far as it, the other only as far as its fold goes;
+    the bounced value is the one over the whole interval, and the far side is searched no further than
+    needed (often not at all)."""
+    rng = np.random.default_rng(3)
+    qs = rng.uniform(boxes.robot.lower, boxes.robot.upper, size=(600, boxes.robot.dof))
+    qs = qs[boxes.checker.valid(qs)][:60]
+    moves = rng.normal(0.0, 1.5, size=len(qs))
+    moves[:5] = 0.0
+    spared = 0
+    for joint in range(boxes.robot.dof):
+        lo, hi, ok = boxes.checker.free_intervals(qs, joint)
+        f_lo, f_hi, f_ok = boxes.checker.free_intervals(qs, joint, move=moves)
+        assert np.array_equal(ok, f_ok)
+        start = qs[:, joint]
+        whole = bounce(start + moves, lo, hi)
+        folded = bounce(start + moves, f_lo, f_hi)
+        assert np.allclose(np.where(ok, folded, start), np.where(ok, whole, start), atol=1e-9)
+        far = np.where(moves >= 0.0, start - f_lo, f_hi - start)
+        spared += int(np.sum(ok & (far == 0.0) & (np.where(moves >= 0.0, start - lo, hi - start) > 0.0)))
+    assert spared > 0
+    with pytest.raises(ValueError, match="reach or move"):
+        boxes.checker.free_intervals(qs, 0, reach=1.0, move=moves)
 
 
 def test_a_motion_stopped_by_its_time_limit_says_so(boxes: SpatialWorld) -> None:

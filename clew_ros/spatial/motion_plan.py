@@ -249,7 +249,7 @@ class _MotionRun:
             path, shortcuts, _, _ = shortcut_path(
                 partial(self.space.clear, self.world.checker),
                 path,
-                tries=self.tuning.shortcut_tries,
+                tries=self.tuning.motion_shortcut_tries,
                 rng=improve_rng,
                 stop=self.termination,
             )

@@ -87,3 +87,5 @@ class SpatialTuning:
     motion_search_generations: int = 3
     #: motion-only queries: landmarks (count, nearest first) of the other tree SEARCH aims at
     motion_connect_targets: int = 4
+    #: motion-only queries: shortcuts tried on the found path (as shortcut_tries for a plan's segments)
+    motion_shortcut_tries: int = 80

@@ -235,6 +235,22 @@ class _MotionRun:
         pieces = [lm.transit for lm in tree.lineage(landmark_id)[1:] if lm.transit is not None]
         return np.vstack([tree[0].joints[None], *(p[1:] for p in pieces)])
 
+    def shortcut(self, path: np.ndarray) -> tuple[np.ndarray, int]:
+        """``path`` shortcut (:func:`~clew_ros.spatial.shortcut.shortcut_path`) in rounds of
+        :attr:`SpatialTuning.motion_shortcut_round` tries, until a round takes none or
+        :attr:`SpatialTuning.motion_shortcut_tries` are spent; the path and the shortcuts taken."""
+        rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
+        clear = partial(self.space.clear, self.world.checker)
+        left, shortcuts = self.tuning.motion_shortcut_tries, 0
+        while left > 0:
+            tries = min(left, self.tuning.motion_shortcut_round)
+            path, taken, _, stopped = shortcut_path(clear, path, tries=tries, rng=rng, stop=self.termination)
+            shortcuts += taken
+            left -= tries
+            if stopped or taken == 0 or len(path) <= 2:
+                break
+        return path, shortcuts
+
     def success(self, start_id: int, found: np.ndarray, goal_id: int, target: np.ndarray) -> clew.PlanResult:
         """The start tree's path to its landmark, SEARCH's path between the trees, the goal tree's path from
         its landmark back to the goal; shortcut."""
@@ -245,14 +261,7 @@ class _MotionRun:
         first = float(np.abs(np.diff(path, axis=0)).sum())
         shortcuts = 0
         if self.settings.improve_time > 0:
-            improve_rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
-            path, shortcuts, _, _ = shortcut_path(
-                partial(self.space.clear, self.world.checker),
-                path,
-                tries=self.tuning.motion_shortcut_tries,
-                rng=improve_rng,
-                stop=self.termination,
-            )
+            path, shortcuts = self.shortcut(path)
         travel = float(np.abs(np.diff(path, axis=0)).sum())
         result = self.finish(
             Outcome.SUCCEEDED,

@@ -87,5 +87,7 @@ class SpatialTuning:
     motion_search_generations: int = 3
     #: motion-only queries: landmarks (count, nearest first) of the other tree SEARCH aims at
     motion_connect_targets: int = 4
-    #: motion-only queries: shortcuts tried on the found path (as shortcut_tries for a plan's segments)
-    motion_shortcut_tries: int = 80
+    #: motion-only queries: shortcuts tried on the found path at most (as shortcut_tries for a plan's
+    #: segments), in rounds of motion_shortcut_round tries: the shortcuts stop after a round that took none
+    motion_shortcut_tries: int = 400
+    motion_shortcut_round: int = 20

@@ -13,7 +13,9 @@ import numpy as np
 import pytest
 
 from clew_ros.core.manhattan import bounce
-from clew_ros.core.settings import Outcome, PlannerSettings
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.tree import LandmarkTree
+from clew_ros.spatial.motion_plan import _MotionRun
 from clew_ros.spatial.space import SpatialSpace, matrices, plan
 from clew_ros.spatial.spheres import SphereSettings
 from clew_ros.spatial.validate import ValidationSettings, validate_transit, validation_samples
@@ -134,6 +136,41 @@ def test_a_motion_among_boxes_is_valid_at_the_validators_step(boxes: SpatialWorl
     # the straight move is blocked (the post): the planner went round it, and its shortcuts never lengthen
     assert validate_transit(boxes.checker, np.array([boxes.initial, boxes.goal])) != []
     assert result.stats["joint_travel_rad"] <= result.stats["first_joint_travel_rad"]
+
+
+def test_same_seed_same_motion(boxes: SpatialWorld) -> None:
+    first, again = plan(boxes, SETTINGS), plan(boxes, SETTINGS)
+    assert first.outcome is Outcome.SUCCEEDED, first.message
+    assert np.array_equal(np.array(first.segments[0].waypoints), np.array(again.segments[0].waypoints))
+    assert first.stats["goal_landmarks"] == again.stats["goal_landmarks"] >= 1
+
+
+def test_a_motion_joined_at_a_goal_tree_landmark_runs_from_start_to_goal(boxes: SpatialWorld) -> None:
+    """The path through a landmark of the goal's tree: the start's branch, SEARCH's path, then the goal
+    tree's branch walked back to the goal (each landmark's path runs from its parent, the goal's side)."""
+    assert boxes.goal is not None
+    space = SpatialSpace(boxes)
+    run = _MotionRun(space, PlannerSettings(seed=0, time_limit=30.0, improve_time=0.0), Termination(30.0))
+    none = np.zeros(6)
+    run.goal_tree = LandmarkTree(boxes.goal, none)
+    rng = np.random.default_rng(0)
+    ends = {}
+    for tree, root, name in ((run.tree, boxes.initial, "start"), (run.goal_tree, boxes.goal, "goal")):
+        decoded = space.manhattan(
+            root[None], rng.normal(0.0, 0.5, size=(1, 1, 7)), margin_m=1e-3, counters=None, should_stop=None,
+            threads=1, object_poses=none[None],
+        )  # fmt: skip
+        way = decoded.waypoints[0]
+        tree.add(parent=0, joints=way[-1], object_pose=none, grasp=None, grasp_rel=None, transit=way, transfer=None)
+        ends[name] = way
+    between = np.linspace(ends["start"][-1], ends["goal"][-1], 5)
+    result = run.success(1, between, 1, boxes.goal)
+    path = np.array(result.segments[0].waypoints)
+    assert np.array_equal(path[0], boxes.initial)
+    assert np.array_equal(path[-1], boxes.goal)
+    expected = np.vstack([ends["start"], between[1:], ends["goal"][::-1][1:]])
+    assert np.allclose(path, expected)
+    assert result.stats["joint_travel_rad"] == pytest.approx(np.abs(np.diff(expected, axis=0)).sum(), abs=1e-5)
 
 
 def test_a_pick_and_place_on_a_table(table: SpatialWorld) -> None:

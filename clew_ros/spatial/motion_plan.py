@@ -40,7 +40,7 @@ from clew_ros.core.genetic import minimize
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext, Space
-from clew_ros.core.tree import LandmarkTree, Segment
+from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.shortcut import shortcut_path
 from clew_ros.spatial.tuning import SpatialTuning
@@ -62,6 +62,8 @@ class MotionSpace(Space, Protocol):
     def tuning(self) -> SpatialTuning: ...
 
     def clear(self, checker: SpatialChecker, starts: np.ndarray, ends: np.ndarray) -> NDArray[np.bool_]: ...
+
+    def tcp(self, q: np.ndarray) -> np.ndarray: ...
 
 
 def plan_motion(
@@ -210,6 +212,7 @@ class _MotionRun:
                 if side == 0:
                     return self.success(landmark.id, found, reached, target)
                 return self.success(reached, found[::-1], landmark.id, target)
+            self.keep_end(trees[side], landmark, found, other.joints())
             if len(tree) + len(goal_tree) >= self.tuning.motion_landmarks:
                 return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
@@ -237,6 +240,26 @@ class _MotionRun:
                     f"no path at resolution {self.settings.resolution}: the new landmark lies {distance:.4g} from "
                     f"the others after {len(tree) + len(goal_tree)} landmarks",
                 )
+
+    def keep_end(self, tree: LandmarkTree, landmark: Landmark, found: np.ndarray, others: np.ndarray) -> None:
+        """A failed SEARCH's end becomes a landmark of ``tree`` (``landmark``'s child, reached by SEARCH's path)
+        when it ended nearer the other tree's landmarks ``others`` than ``landmark`` is, by more than
+        :attr:`SpatialTuning.motion_keep_gain_rad` (joint distance): the next SEARCH from the other tree aims at
+        it, as RRT-Connect's trees grow towards each other."""
+        if self.tuning.motion_keep_gain_rad < 0:
+            return
+        before = float(np.min(np.linalg.norm(others - landmark.joints, axis=1)))
+        after = float(np.min(np.linalg.norm(others - found[-1], axis=1)))
+        if after < before - self.tuning.motion_keep_gain_rad:
+            tree.add(
+                parent=landmark.id,
+                joints=found[-1].copy(),
+                object_pose=self.none,
+                grasp=None,
+                grasp_rel=None,
+                transit=found,
+                transfer=None,
+            )
 
     def _branch(self, tree: LandmarkTree, landmark_id: int) -> np.ndarray:
         """The path from ``tree``'s root to its landmark, through the landmarks' transit paths."""
@@ -292,10 +315,13 @@ def _explore(
     ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float
 ) -> tuple[int, np.ndarray, float] | None:
     """EXPLORE for transit: the landmark (a category gene) and Manhattan genes whose decoded end lies
-    farthest (joint distance times ``weight``) from every landmark; its parent, path and that distance."""
+    farthest from every landmark of ``tree``: the distance between the joints times ``weight`` and the tcp's
+    positions times :attr:`SpatialTuning.motion_tcp_weight`, together (:func:`_features`); its parent, path
+    and that distance."""
     n = space.dof
     k = ctx.settings.manhattan_order
     joints = tree.joints()
+    landmarks = _features(space, joints, weight)
     none = np.zeros((1, 6))
 
     def decode(population: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -307,9 +333,9 @@ def _explore(
     def evaluate(population: np.ndarray) -> np.ndarray:
         _, waypoints = decode(population)
         ctx.counters.evaluations += len(population)
-        ends = waypoints[:, -1]
-        nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - joints[None], axis=2), axis=1)
-        return -weight * nearest
+        ends = _features(space, waypoints[:, -1], weight)
+        nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - landmarks[None], axis=2), axis=1)
+        return -nearest
 
     size = ctx.settings.population
     initial = np.empty((size, 1 + k * n))
@@ -321,3 +347,12 @@ def _explore(
         return None
     index, waypoints = decode(result.genes[None])
     return int(index[0]), waypoints[0], -result.fitness
+
+
+def _features(space: MotionSpace, joints: np.ndarray, weight: float) -> np.ndarray:
+    """Points (B, n + 3) whose distances are EXPLORE's landmark distances: the joints (B, n) times ``weight``
+    (m/rad), then the tcp's position (m) times :attr:`SpatialTuning.motion_tcp_weight`."""
+    scale = space.tuning.motion_tcp_weight
+    tcp = space.tcp(joints)[:, :3, 3] if scale > 0 else np.zeros((len(joints), 3))
+    out: np.ndarray = np.concatenate([weight * joints, scale * tcp], axis=1)
+    return out

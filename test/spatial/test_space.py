@@ -173,6 +173,23 @@ def test_a_motion_joined_at_a_goal_tree_landmark_runs_from_start_to_goal(boxes: 
     assert result.stats["joint_travel_rad"] == pytest.approx(np.abs(np.diff(expected, axis=0)).sum(), abs=1e-5)
 
 
+def test_a_failed_search_that_got_nearer_the_other_tree_leaves_a_landmark(boxes: SpatialWorld) -> None:
+    assert boxes.goal is not None
+    run = _MotionRun(SpatialSpace(boxes), PlannerSettings(seed=0), Termination(30.0))
+    others = boxes.goal[None]
+    toward = np.linspace(boxes.initial, boxes.goal, 4)[:2]  # a third of the way: nearer by far more than 0.1 rad
+    run.keep_end(run.tree, run.tree[0], toward, others)
+    assert len(run.tree) == 2
+    kept = run.tree[1]
+    assert kept.parent == 0
+    assert np.array_equal(kept.joints, toward[-1])
+    assert kept.transit is not None
+    assert np.array_equal(kept.transit, toward)
+    away = np.array([boxes.initial, boxes.initial + (boxes.initial - boxes.goal) * 0.1])
+    run.keep_end(run.tree, run.tree[0], away, others)  # farther: no landmark
+    assert len(run.tree) == 2
+
+
 def test_a_pick_and_place_on_a_table(table: SpatialWorld) -> None:
     result = plan(table, SETTINGS)
     assert result.outcome is Outcome.SUCCEEDED, result.message

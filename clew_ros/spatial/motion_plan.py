@@ -4,7 +4,8 @@ As the paper's closing section suggests, EXPLORE runs for transit paths too: lan
 configurations, each reached from an earlier one by a Manhattan path (bounced into the free intervals,
 :meth:`~clew_ros.spatial.space.SpatialSpace.manhattan`) that the genetic algorithm
 (:func:`clew_ros.core.genetic.minimize`, the landmark a category gene) places as far as possible from every
-landmark of its tree (joint-space distance, weighted as the manipulation landmarks' joints are).
+landmark of its tree (the joints, weighted as the manipulation landmarks' joints are, and the tcp's
+position, :attr:`SpatialTuning.motion_tcp_weight`).
 
 Two trees of landmarks grow, one rooted at the start and one at the goal (RRT-Connect's two trees; a
 departure from the paper, whose landmarks all grow from the start): SEARCH_TRANSIT
@@ -13,9 +14,11 @@ places a landmark in one tree and SEARCH_TRANSIT goes from it to the other tree,
 distance to the nearest of that tree's landmarks (:attr:`SpatialTuning.motion_connect_targets`, nearest
 first): straight moves to them checked at the validator's 0.002 rad (directly or by way of the approaches),
 the greedy Manhattan probe, a small GA, and from where it ends straight moves again. The first search that
-reaches the other tree ends the run; the path (the start tree's landmarks' paths, the search's, the goal
-tree's walked back to the goal) is shortcut (:mod:`clew_ros.spatial.shortcut`) in rounds until a round
-takes none. EXPLORE's and SEARCH's GAs are small (SpatialTuning's motion block, instead of
+reaches the other tree ends the run; a search that fails but ends nearer the other tree leaves its end as
+a landmark of its own tree (:attr:`SpatialTuning.motion_keep_gain_rad`, as RRT-Connect keeps its
+extensions), which the other tree's next SEARCH aims at. The path (the start tree's landmarks' paths, the
+search's, the goal tree's walked back to the goal) is shortcut (:mod:`clew_ros.spatial.shortcut`) in rounds
+until a round takes none. EXPLORE's and SEARCH's GAs are small (SpatialTuning's motion block, instead of
 ``planner.population``, ``planner.generations`` and ``planner.search_rounds``): a landmark is worth more
 as a place to search from than as the farthest one a long GA finds. Paths have ``planner.manhattan_order``
 as set: unlike manipulation, it is not lowered for 7-joint arms (:attr:`SpatialTuning.many`); with order 1

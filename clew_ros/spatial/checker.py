@@ -212,21 +212,36 @@ class SpatialChecker:
         return out
 
     def free_intervals(
-        self, qs: Any, joint: int, settings: IntervalSettings | None = None, *, reach: Any = None
+        self,
+        qs: Any,
+        joint: int,
+        settings: IntervalSettings | None = None,
+        *,
+        reach: Any = None,
+        move: Any = None,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
         """For each row of ``qs``: ``(lo, hi, valid)``, the values of ``joint`` (0-based, chain order) around
         the row's own over which the row, the other joints fixed, stays valid for the sphere model
         (within the joint's limits, and within ``reach`` (rad, m; one per row or one for all; default: no
         bound) of the row's own: a caller that needs no more spares the steps beyond); ``valid`` false where
-        the row itself is not (then ``lo = hi``)."""
+        the row itself is not (then ``lo = hi``).
+
+        ``move`` (rad, m; signed, one per row or one for all; instead of ``reach``): the move the caller
+        folds into the interval (:func:`clew_ros.core.manhattan.bounce`); the side it heads for is searched as
+        far as the move, the other only as far as the fold can reach past the start (often not at all), so
+        ``bounce(q + move, lo, hi)`` is what it is with both sides searched as far as ``|move|``."""
         settings = settings or IntervalSettings()
         batch = self._batch(qs)
         if not 0 <= joint < self.robot.dof:
             raise ValueError(f"joint: expected 0..{self.robot.dof - 1}, got {joint}")
+        if reach is not None and move is not None:
+            raise ValueError("free_intervals: give reach or move, not both")
         lo = np.empty(len(batch))
         hi = np.empty(len(batch))
         ok = np.empty(len(batch), dtype=np.bool_)
-        bound = np.ascontiguousarray(np.broadcast_to(np.inf if reach is None else reach, len(batch)), dtype=np.float64)
+        fold = move is not None
+        given = move if fold else (np.inf if reach is None else reach)
+        bound = np.ascontiguousarray(np.broadcast_to(given, len(batch)), dtype=np.float64)
         if self.static_collision:
             lo[:] = hi[:] = batch[:, joint]
             ok[:] = False
@@ -238,7 +253,7 @@ class SpatialChecker:
             a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"],
             a["pairs"], a["bounds"], a["has_bounds"], a["held_link"], a["held_points"], a["held_disc"],
             a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"], settings.margin_m, settings.min_step,
-            settings.max_steps, bound, lo, hi, ok,
+            settings.max_steps, bound, fold, lo, hi, ok,
         )  # fmt: skip
         return lo, hi, ok
 

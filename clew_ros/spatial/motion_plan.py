@@ -4,19 +4,31 @@ As the paper's closing section suggests, EXPLORE runs for transit paths too: lan
 configurations, each reached from an earlier one by a Manhattan path (bounced into the free intervals,
 :meth:`~clew_ros.spatial.space.SpatialSpace.manhattan`) that the genetic algorithm
 (:func:`clew_ros.core.genetic.minimize`, the landmark a category gene) places as far as possible from every
-landmark (joint-space distance, weighted as the manipulation landmarks' joints are). From the start and from
-each new landmark, SEARCH_TRANSIT (:func:`clew_ros.core.search.local_search`) minimises the joint distance to
-the goal: a straight move to the goal checked at the validator's 0.002 rad, the greedy Manhattan probe,
-the GA's rounds, and from where it ends a straight move to the goal again. The first search that reaches the
-goal ends the run; its path (the landmarks' paths from the start, then the search's) is shortcut
-(:func:`clew_ros.core.improve.shortcut_path`). Paths have ``planner.manhattan_order`` and the GA ``planner.generations``
-as set: unlike manipulation, they are not lowered for 7-joint arms (:attr:`SpatialTuning.many`), since with
-order 1 SEARCH from the start stopped reaching the goal on ``benchmarks/spatial_plan.py``'s motion_post
-and the run took twice as long.
+landmark of its tree (the joints, weighted as the manipulation landmarks' joints are, and the tcp's
+position, :attr:`SpatialTuning.motion_tcp_weight`).
+
+Two trees of landmarks grow, one rooted at the start and one at the goal (RRT-Connect's two trees; a
+departure from the paper, whose landmarks all grow from the start): SEARCH_TRANSIT
+(:func:`clew_ros.core.search.local_search`) runs first from the start to the goal, then, in turn, EXPLORE
+places a landmark in one tree and SEARCH_TRANSIT goes from it to the other tree, minimising the joint
+distance to the nearest of that tree's landmarks (:attr:`SpatialTuning.motion_connect_targets`, nearest
+first): straight moves to them checked at the validator's 0.002 rad (directly or by way of the approaches),
+the greedy Manhattan probe, a small GA, and from where it ends straight moves again. The first search that
+reaches the other tree ends the run; a search that fails but ends nearer the other tree leaves its end as
+a landmark of its own tree (:attr:`SpatialTuning.motion_keep_gain_rad`, as RRT-Connect keeps its
+extensions), which the other tree's next SEARCH aims at. The path (the start tree's landmarks' paths, the
+search's, the goal tree's walked back to the goal) is shortcut (:func:`clew_ros.core.improve.shortcut_path`) in rounds
+until a round takes none. EXPLORE's and SEARCH's GAs are small (SpatialTuning's motion block, instead of
+``planner.population``, ``planner.generations`` and ``planner.search_rounds``): a landmark is worth more
+as a place to search from than as the farthest one a long GA finds. Paths have ``planner.manhattan_order``
+as set: unlike manipulation, it is not lowered for 7-joint arms (:attr:`SpatialTuning.many`); with order 1
+or 3 for EXPLORE the benchmark's development problems (scene seeds 10-15) took longer on average (mean CPU
+0.15-0.16 s against 0.12 s).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import traceback
 from collections.abc import Callable
@@ -32,7 +44,7 @@ from clew_ros.core.improve import shortcut_path
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext, Space
-from clew_ros.core.tree import LandmarkTree, Segment
+from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.world import SpatialWorld
@@ -53,6 +65,8 @@ class MotionSpace(Space, Protocol):
     def tuning(self) -> SpatialTuning: ...
 
     def clear(self, checker: SpatialChecker, starts: np.ndarray, ends: np.ndarray) -> NDArray[np.bool_]: ...
+
+    def tcp(self, q: np.ndarray) -> np.ndarray: ...
 
 
 def plan_motion(
@@ -96,7 +110,7 @@ def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray
 
 
 class _MotionRun:
-    """One motion-only run: its space, context, landmark tree."""
+    """One motion-only run: its space, contexts, and two landmark trees (from the start, from the goal)."""
 
     def __init__(self, space: MotionSpace, settings: PlannerSettings, termination: Termination) -> None:
         self.world = space.world
@@ -106,13 +120,33 @@ class _MotionRun:
         self.space = space
         rng = np.random.default_rng(settings.seed)
         self.ctx = PlanningContext(self.space, settings, rng, termination, search=tuning.search, many=tuning.many)
+        # SEARCH's and EXPLORE's own sizes (SpatialTuning's motion block), on the run's generator and counters
+        self.search_ctx = dataclasses.replace(
+            self.ctx,
+            settings=dataclasses.replace(
+                settings,
+                search_rounds=tuning.motion_search_rounds,
+                population=tuning.motion_search_population,
+                generations=tuning.motion_search_generations,
+            ),
+        )
+        self.explore_ctx = dataclasses.replace(
+            self.ctx,
+            settings=dataclasses.replace(
+                settings,
+                population=tuning.motion_explore_population,
+                generations=tuning.motion_explore_generations,
+            ),
+        )
         self.none = np.zeros(6)
         self.tree = LandmarkTree(self.world.initial, self.none)
+        self.goal_tree: LandmarkTree | None = None
 
     def finish(self, outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
         stats: dict[str, Any] = {
             "time_s": round(self.termination.elapsed, 4),
             "landmarks": len(self.tree),
+            "goal_landmarks": 0 if self.goal_tree is None else len(self.goal_tree),
             "collision_checks": self.ctx.counters.clearance_checks,
             "evaluations": self.ctx.counters.evaluations,
             "seed": self.settings.seed,
@@ -120,33 +154,46 @@ class _MotionRun:
         segments = [Segment("transit", None, list(waypoints))] if waypoints is not None else []
         return clew.PlanResult(outcome, message, segments, None, self.tree, stats)
 
-    def search(self, q0: np.ndarray, target: np.ndarray) -> np.ndarray:
-        """SEARCH_TRANSIT from ``q0`` to ``target``: its waypoints (ending there when it got there)."""
+    def search(self, q0: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, int]:
+        """SEARCH_TRANSIT from ``q0`` to the nearest of ``targets`` (m, n) it reaches: its waypoints and the
+        target's index (-1 when it reached none; the waypoints then end where it stopped)."""
         weight = self.tuning.motion_weight
+        order = np.argsort(np.abs(targets - q0).sum(axis=1), kind="stable")[: self.tuning.motion_connect_targets]
+        near = targets[order]
 
         def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
-            out: np.ndarray = weight * np.linalg.norm(q - target, axis=1)
+            out: np.ndarray = weight * np.min(np.linalg.norm(q[:, None] - near[None], axis=2), axis=1)
             return out
 
         def error(q: np.ndarray) -> np.ndarray:
-            out: np.ndarray = weight * (q - target)
+            nearest = near[np.argmin(np.linalg.norm(q[:, None] - near[None], axis=2), axis=1)]
+            out: np.ndarray = weight * (q - nearest)
             return out
 
-        job = SearchJob(
-            q0, objective, error, 1e-9, {"object_poses": self.none[None]}, toward=target, straight=target[None]
-        )
-        waypoints, _ = local_search(self.ctx, [job])[0]
-        end = waypoints[-1:]
-        if np.max(np.abs(end - target)) > 1e-9 and self.space.clear(self.world.checker, end, target[None])[0]:
-            waypoints = np.vstack([waypoints, target[None]])
-        return waypoints
+        job = SearchJob(q0, objective, error, 1e-9, {"object_poses": self.none[None]}, toward=near[0], straight=near)
+        waypoints, _ = local_search(self.search_ctx, [job])[0]
+        end = waypoints[-1]
+        gaps = np.max(np.abs(near - end), axis=1)
+        if np.min(gaps) <= 1e-9:
+            return waypoints, int(order[int(np.argmin(gaps))])
+        ranked = np.argsort(np.abs(near - end).sum(axis=1), kind="stable")
+        for k in ranked:
+            if self.termination():
+                break
+            if self.space.clear(self.world.checker, end[None], near[k][None])[0]:
+                return np.vstack([waypoints, near[k][None]]), int(order[k])
+        return waypoints, -1
 
     def search_all(self, target: np.ndarray, progress: Callable[[clew.Progress], None] | None) -> clew.PlanResult:
-        """SEARCH from the start, then EXPLORE and SEARCH from each new landmark, until one reaches ``target``."""
+        """SEARCH from the start to the goal; then, in turn from each end (a tree of landmarks rooted at
+        the start, one at the goal), EXPLORE places a landmark and SEARCH goes from it to the other tree's
+        landmarks, until one reaches them."""
         best = math.inf
-        landmark = self.tree[0]
         tree = self.tree
+        goal_tree = self.goal_tree = LandmarkTree(target, self.none)
+        trees = (tree, goal_tree)
         weight = self.tuning.motion_weight * math.sqrt(2.0 / self.world.robot.dof)
+        side, landmark = 0, tree[0]
         while True:
             reason = self.termination.reason()
             if reason is not None:
@@ -155,26 +202,33 @@ class _MotionRun:
                 )
                 return self.finish(
                     reason,
-                    f"{stopped} after {len(tree)} landmarks; no motion found; the nearest search ended {best:.4g} rad "
-                    "(largest joint difference) from the goal",
+                    f"{stopped} after {len(tree) + len(goal_tree)} landmarks; no motion found; the nearest search "
+                    f"ended {best:.4g} rad (largest joint difference) from the other tree",
                 )
-            found = self.search(landmark.joints, target)
-            gap = float(np.max(np.abs(found[-1] - target)))
+            other = trees[1 - side]
+            found, reached = self.search(landmark.joints, other.joints())
+            gap = 0.0 if reached >= 0 else float(np.min(np.max(np.abs(other.joints() - found[-1]), axis=1)))
             best = min(best, gap)
             if progress is not None:
                 progress(clew.Progress(len(tree), best, self.termination.elapsed, tree))
-            if gap <= 1e-9:
-                return self.success(landmark.id, found, target)
-            if len(tree) >= self.tuning.motion_landmarks:
+            if reached >= 0:
+                if side == 0:
+                    return self.success(landmark.id, found, reached, target)
+                return self.success(reached, found[::-1], landmark.id, target)
+            self.keep_end(trees[side], landmark, found, other.joints())
+            if len(tree) + len(goal_tree) >= self.tuning.motion_landmarks:
                 return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
-                    f"no motion found after {len(tree)} landmarks; best {best:.4g} rad from the goal",
+                    f"no motion found after {len(tree) + len(goal_tree)} landmarks; best {best:.4g} rad from the "
+                    "other tree",
                 )
-            explored = _explore(self.ctx, self.space, tree, weight)
+            if self.tuning.motion_bidirectional:
+                side = 1 - side
+            explored = _explore(self.explore_ctx, self.space, trees[side], weight)
             if explored is None:
                 continue
             parent, path, distance = explored
-            landmark = tree.add(
+            landmark = trees[side].add(
                 parent=parent,
                 joints=path[-1].copy(),
                 object_pose=self.none,
@@ -187,29 +241,66 @@ class _MotionRun:
                 return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
                     f"no path at resolution {self.settings.resolution}: the new landmark lies {distance:.4g} from "
-                    f"the others after {len(tree)} landmarks",
+                    f"the others after {len(tree) + len(goal_tree)} landmarks",
                 )
 
-    def success(self, landmark_id: int, found: np.ndarray, target: np.ndarray) -> clew.PlanResult:
-        """The path from the start to the landmark, then SEARCH's to the goal, shortcut."""
-        pieces = [lm.transit for lm in self.tree.lineage(landmark_id)[1:] if lm.transit is not None]
-        path = np.vstack([self.world.initial[None], *(p[1:] for p in pieces), found[1:]])
+    def keep_end(self, tree: LandmarkTree, landmark: Landmark, found: np.ndarray, others: np.ndarray) -> None:
+        """A failed SEARCH's end becomes a landmark of ``tree`` (``landmark``'s child, reached by SEARCH's path)
+        when it ended nearer the other tree's landmarks ``others`` than ``landmark`` is, by more than
+        :attr:`SpatialTuning.motion_keep_gain_rad` (joint distance): the next SEARCH from the other tree aims at
+        it, as RRT-Connect's trees grow towards each other."""
+        if self.tuning.motion_keep_gain_rad < 0:
+            return
+        before = float(np.min(np.linalg.norm(others - landmark.joints, axis=1)))
+        after = float(np.min(np.linalg.norm(others - found[-1], axis=1)))
+        if after < before - self.tuning.motion_keep_gain_rad:
+            tree.add(
+                parent=landmark.id,
+                joints=found[-1].copy(),
+                object_pose=self.none,
+                grasp=None,
+                grasp_rel=None,
+                transit=found,
+                transfer=None,
+            )
+
+    def _branch(self, tree: LandmarkTree, landmark_id: int) -> np.ndarray:
+        """The path from ``tree``'s root to its landmark, through the landmarks' transit paths."""
+        pieces = [lm.transit for lm in tree.lineage(landmark_id)[1:] if lm.transit is not None]
+        return np.vstack([tree[0].joints[None], *(p[1:] for p in pieces)])
+
+    def shortcut(self, path: np.ndarray) -> tuple[np.ndarray, int]:
+        """``path`` shortcut (:func:`~clew_ros.spatial.shortcut.shortcut_path`) in rounds of
+        :attr:`SpatialTuning.motion_shortcut_round` tries, until a round takes none or
+        :attr:`SpatialTuning.motion_shortcut_tries` are spent; the path and the shortcuts taken."""
+        rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
+        clear = partial(self.space.clear, self.world.checker)
+        left, shortcuts = self.tuning.motion_shortcut_tries, 0
+        while left > 0:
+            tries = min(left, self.tuning.motion_shortcut_round)
+            path, taken, _, stopped = shortcut_path(clear, path, tries=tries, rng=rng, stop=self.termination)
+            shortcuts += taken
+            left -= tries
+            if stopped or taken == 0 or len(path) <= 2:
+                break
+        return path, shortcuts
+
+    def success(self, start_id: int, found: np.ndarray, goal_id: int, target: np.ndarray) -> clew.PlanResult:
+        """The start tree's path to its landmark, SEARCH's path between the trees, the goal tree's path from
+        its landmark back to the goal; shortcut."""
+        assert self.goal_tree is not None
+        back = self._branch(self.goal_tree, goal_id)[::-1]
+        path = np.vstack([self._branch(self.tree, start_id), found[1:], back[1:]])
         path[-1] = target
         first = float(np.abs(np.diff(path, axis=0)).sum())
         shortcuts = 0
         if self.settings.improve_time > 0:
-            improve_rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
-            path, shortcuts, _, _ = shortcut_path(
-                partial(self.space.clear, self.world.checker),
-                path,
-                tries=self.tuning.shortcut_tries,
-                rng=improve_rng,
-                stop=self.termination,
-            )
+            path, shortcuts = self.shortcut(path)
         travel = float(np.abs(np.diff(path, axis=0)).sum())
         result = self.finish(
             Outcome.SUCCEEDED,
-            f"motion found with {len(self.tree)} landmarks, joint travel {travel:.2f} rad (first: {first:.2f} rad)",
+            f"motion found with {len(self.tree)} + {len(self.goal_tree)} landmarks, joint travel {travel:.2f} rad "
+            f"(first: {first:.2f} rad)",
             path,
         )
         result.stats.update(
@@ -227,10 +318,13 @@ def _explore(
     ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float
 ) -> tuple[int, np.ndarray, float] | None:
     """EXPLORE for transit: the landmark (a category gene) and Manhattan genes whose decoded end lies
-    farthest (joint distance times ``weight``) from every landmark; its parent, path and that distance."""
+    farthest from every landmark of ``tree``: the distance between the joints times ``weight`` and the tcp's
+    positions times :attr:`SpatialTuning.motion_tcp_weight`, together (:func:`_features`); its parent, path
+    and that distance."""
     n = space.dof
     k = ctx.settings.manhattan_order
     joints = tree.joints()
+    landmarks = _features(space, joints, weight)
     none = np.zeros((1, 6))
 
     def decode(population: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -242,9 +336,9 @@ def _explore(
     def evaluate(population: np.ndarray) -> np.ndarray:
         _, waypoints = decode(population)
         ctx.counters.evaluations += len(population)
-        ends = waypoints[:, -1]
-        nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - joints[None], axis=2), axis=1)
-        return -weight * nearest
+        ends = _features(space, waypoints[:, -1], weight)
+        nearest: np.ndarray = np.min(np.linalg.norm(ends[:, None] - landmarks[None], axis=2), axis=1)
+        return -nearest
 
     size = ctx.settings.population
     initial = np.empty((size, 1 + k * n))
@@ -256,3 +350,12 @@ def _explore(
         return None
     index, waypoints = decode(result.genes[None])
     return int(index[0]), waypoints[0], -result.fitness
+
+
+def _features(space: MotionSpace, joints: np.ndarray, weight: float) -> np.ndarray:
+    """Points (B, n + 3) whose distances are EXPLORE's landmark distances: the joints (B, n) times ``weight``
+    (m/rad), then the tcp's position (m) times :attr:`SpatialTuning.motion_tcp_weight`."""
+    scale = space.tuning.motion_tcp_weight
+    tcp = space.tcp(joints)[:, :3, 3] if scale > 0 else np.zeros((len(joints), 3))
+    out: np.ndarray = np.concatenate([weight * joints, scale * tcp], axis=1)
+    return out

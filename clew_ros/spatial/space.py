@@ -330,9 +330,11 @@ class SpatialSpace:
                 break
             for checker, idx in groups:
                 move = genes[idx, r, j]
-                # searched only as far as the move reaches: the same fold as over the whole interval, unless a
-                # path folds twice (then it folds inside the reach, as free)
-                lo, hi, ok = checker.free_intervals(q[idx], j, self.tuning.intervals, reach=np.abs(move) + 1e-9)
+                # searched only as far as the move and its fold reach: the same fold as over the whole interval,
+                # unless a path folds twice (then it folds inside the reach, as free)
+                lo, hi, ok = checker.free_intervals(
+                    q[idx], j, self.tuning.intervals, move=move + np.copysign(1e-9, move)
+                )
                 moved = bounce(q[idx, j] + move, lo, hi)
                 q[idx, j] = np.where(ok, moved, q[idx, j])
             if counters is not None:

@@ -77,3 +77,34 @@ class SpatialTuning:
     #: motion-only queries: landmarks (count) EXPLORE places at most (each followed by a SEARCH_TRANSIT
     #: to the goal) before the run gives up with NO_PATH_AT_RESOLUTION's epsilon test
     motion_landmarks: int = 200
+    # -- motion-only queries (clew_ros.spatial.motion_plan); measured on the motion benchmark's scene seeds
+    # -- 10-15 (python -m benchmarks spatial_motion --seed 10 ...), not on the reported seeds 0-2
+    #: whether EXPLORE grows a tree from the goal as well as one from the start, in turn, each new landmark's
+    #: SEARCH going to the other tree (RRT-Connect's two trees; False: the start's only): a goal in a shelf or
+    #: a cage is hard to thread into from outside, easy to explore out of
+    motion_bidirectional: bool = True
+    #: EXPLORE's GA per landmark (population, generations), instead of planner.population and
+    #: planner.generations: with theirs (24, 12) a landmark cost about 0.3 s on the cages and shelves
+    motion_explore_population: int = 8
+    motion_explore_generations: int = 3
+    #: SEARCH_TRANSIT's do-while rounds and GA (population, generations), instead of planner.*: its straight
+    #: moves and greedy probe do most of the joining; without the GA the development problems took as long
+    motion_search_rounds: int = 1
+    motion_search_population: int = 8
+    motion_search_generations: int = 3
+    #: weight (m/m) of the tcp's position beside the weighted joints in EXPLORE's landmark distance: on the
+    #: UR5 (joints of +-2 pi) the joints alone spread landmarks over wrist turns that lead nowhere; with the
+    #: tcp (and motion_keep_gain_rad) the mean CPU time of seeds 10-15 fell from 0.13 to 0.10 s, the median
+    #: unchanged (weight 2: about as good)
+    motion_tcp_weight: float = 1.0
+    #: landmarks (count, nearest first) of the other tree SEARCH aims at (2 and 8 measured the same)
+    motion_connect_targets: int = 4
+    #: a failed SEARCH's end becomes a landmark of its tree when it got nearer the other tree by more than this
+    #: (rad, joint distance; negative: never), as RRT-Connect keeps its extensions: with the tcp weight, one
+    #: failure (bookshelf_ur5_18) of seeds 16-19 without it, none with
+    motion_keep_gain_rad: float = 0.1
+    #: shortcuts tried on the found path at most (as shortcut_tries for a plan's segments), in rounds of
+    #: motion_shortcut_round tries, stopping after a round that took none: a path with long detours gets
+    #: more tries, a simple one fewer (200 fixed tries took about a third of a run)
+    motion_shortcut_tries: int = 400
+    motion_shortcut_round: int = 20

@@ -12,7 +12,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from clew_ros.core.settings import Outcome, PlannerSettings
+from clew_ros.core.manhattan import bounce
+from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.tree import LandmarkTree
+from clew_ros.spatial.motion_plan import _MotionRun
 from clew_ros.spatial.space import SpatialSpace, matrices, plan
 from clew_ros.spatial.spheres import SphereSettings
 from clew_ros.spatial.validate import ValidationSettings, validate_transit, validation_samples
@@ -133,6 +136,58 @@ def test_a_motion_among_boxes_is_valid_at_the_validators_step(boxes: SpatialWorl
     # the straight move is blocked (the post): the planner went round it, and its shortcuts never lengthen
     assert validate_transit(boxes.checker, np.array([boxes.initial, boxes.goal])) != []
     assert result.stats["joint_travel_rad"] <= result.stats["first_joint_travel_rad"]
+
+
+def test_same_seed_same_motion(boxes: SpatialWorld) -> None:
+    first, again = plan(boxes, SETTINGS), plan(boxes, SETTINGS)
+    assert first.outcome is Outcome.SUCCEEDED, first.message
+    assert np.array_equal(np.array(first.segments[0].waypoints), np.array(again.segments[0].waypoints))
+    assert first.stats["goal_landmarks"] == again.stats["goal_landmarks"] >= 1
+
+
+def test_a_motion_joined_at_a_goal_tree_landmark_runs_from_start_to_goal(boxes: SpatialWorld) -> None:
+    """The path through a landmark of the goal's tree: the start's branch, SEARCH's path, then the goal
+    tree's branch walked back to the goal (each landmark's path runs from its parent, the goal's side)."""
+    assert boxes.goal is not None
+    space = SpatialSpace(boxes)
+    run = _MotionRun(space, PlannerSettings(seed=0, time_limit=30.0, improve_time=0.0), Termination(30.0))
+    none = np.zeros(6)
+    run.goal_tree = LandmarkTree(boxes.goal, none)
+    rng = np.random.default_rng(0)
+    ends = {}
+    for tree, root, name in ((run.tree, boxes.initial, "start"), (run.goal_tree, boxes.goal, "goal")):
+        decoded = space.manhattan(
+            root[None], rng.normal(0.0, 0.5, size=(1, 1, 7)), margin_m=1e-3, counters=None, should_stop=None,
+            threads=1, object_poses=none[None],
+        )  # fmt: skip
+        way = decoded.waypoints[0]
+        tree.add(parent=0, joints=way[-1], object_pose=none, grasp=None, grasp_rel=None, transit=way, transfer=None)
+        ends[name] = way
+    between = np.linspace(ends["start"][-1], ends["goal"][-1], 5)
+    result = run.success(1, between, 1, boxes.goal)
+    path = np.array(result.segments[0].waypoints)
+    assert np.array_equal(path[0], boxes.initial)
+    assert np.array_equal(path[-1], boxes.goal)
+    expected = np.vstack([ends["start"], between[1:], ends["goal"][::-1][1:]])
+    assert np.allclose(path, expected)
+    assert result.stats["joint_travel_rad"] == pytest.approx(np.abs(np.diff(expected, axis=0)).sum(), abs=1e-5)
+
+
+def test_a_failed_search_that_got_nearer_the_other_tree_leaves_a_landmark(boxes: SpatialWorld) -> None:
+    assert boxes.goal is not None
+    run = _MotionRun(SpatialSpace(boxes), PlannerSettings(seed=0), Termination(30.0))
+    others = boxes.goal[None]
+    toward = np.linspace(boxes.initial, boxes.goal, 4)[:2]  # a third of the way: nearer by far more than 0.1 rad
+    run.keep_end(run.tree, run.tree[0], toward, others)
+    assert len(run.tree) == 2
+    kept = run.tree[1]
+    assert kept.parent == 0
+    assert np.array_equal(kept.joints, toward[-1])
+    assert kept.transit is not None
+    assert np.array_equal(kept.transit, toward)
+    away = np.array([boxes.initial, boxes.initial + (boxes.initial - boxes.goal) * 0.1])
+    run.keep_end(run.tree, run.tree[0], away, others)  # farther: no landmark
+    assert len(run.tree) == 2
 
 
 def test_a_pick_and_place_on_a_table(table: SpatialWorld) -> None:
@@ -287,6 +342,31 @@ def test_free_intervals_searched_only_as_far_as_asked(boxes: SpatialWorld) -> No
         # the same steps from the start, stopped at the reach: the whole interval clipped to it
         assert np.allclose(near_hi, np.minimum(hi, qs[:, joint] + reach), atol=1e-12)
         assert np.allclose(near_lo, np.maximum(lo, qs[:, joint] - reach), atol=1e-12)
+
+
+def test_a_folded_move_bounces_as_over_the_whole_interval(boxes: SpatialWorld) -> None:
+    """``move=``: the side the move heads for searched as far as it, the other only as far as its fold goes;
+    the bounced value is the one over the whole interval, and the far side is searched no further than
+    needed (often not at all)."""
+    rng = np.random.default_rng(3)
+    qs = rng.uniform(boxes.robot.lower, boxes.robot.upper, size=(600, boxes.robot.dof))
+    qs = qs[boxes.checker.valid(qs)][:60]
+    moves = rng.normal(0.0, 1.5, size=len(qs))
+    moves[:5] = 0.0
+    spared = 0
+    for joint in range(boxes.robot.dof):
+        lo, hi, ok = boxes.checker.free_intervals(qs, joint)
+        f_lo, f_hi, f_ok = boxes.checker.free_intervals(qs, joint, move=moves)
+        assert np.array_equal(ok, f_ok)
+        start = qs[:, joint]
+        whole = bounce(start + moves, lo, hi)
+        folded = bounce(start + moves, f_lo, f_hi)
+        assert np.allclose(np.where(ok, folded, start), np.where(ok, whole, start), atol=1e-9)
+        far = np.where(moves >= 0.0, start - f_lo, f_hi - start)
+        spared += int(np.sum(ok & (far == 0.0) & (np.where(moves >= 0.0, start - lo, hi - start) > 0.0)))
+    assert spared > 0
+    with pytest.raises(ValueError, match="reach or move"):
+        boxes.checker.free_intervals(qs, 0, reach=1.0, move=moves)
 
 
 def test_a_motion_stopped_by_its_time_limit_says_so(boxes: SpatialWorld) -> None:

@@ -136,23 +136,6 @@ def _bounds_clearance(p: Array, radius: float, bounds: Array) -> float:
 
 
 @_leaf
-def _place_all(  # noqa: PLR0917
-    frame_r: Array,
-    frame_t: Array,
-    sph_c: Array,
-    sph_frame: Array,
-    link_c: Array,
-    link_frame: Array,
-    sph_w: Array,
-    link_w: Array,
-) -> None:
-    for k in range(sph_c.shape[0]):
-        _place(frame_r, frame_t, sph_frame[k], sph_c[k], sph_w[k])
-    for i in range(link_c.shape[0]):
-        _place(frame_r, frame_t, link_frame[i], link_c[i], link_w[i])
-
-
-@_leaf
 def _distance(a: Array, b: Array) -> float:
     dx = a[0] - b[0]
     dy = a[1] - b[1]
@@ -612,15 +595,22 @@ def _link_step(  # noqa: PLR0917
     margin: float,
     rel_obs: Array,
     rel_bounds: Array,
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    link_frame: Array,
+    placed: Array,
 ) -> float:
     """``best`` lowered to what moving link ``i``'s clearances to the obstacles and bounds allow (those
-    ``rel_obs[i]`` / ``rel_bounds[i]`` leave in: :func:`_relevance`)."""
+    ``rel_obs[i]`` / ``rel_bounds[i]`` leave in: :func:`_relevance`); its spheres are placed only when its
+    bounding sphere cannot settle it (:func:`_place_link`)."""
     link_speed = _speed(link_w[i], axis_p, axis_d, is_prismatic) + (0.0 if is_prismatic else link_r[i])
     if link_speed <= 0.0:
         return best
     if has_bounds and rel_bounds[i]:
         coarse = _bounds_clearance(link_w[i], link_r[i], bounds)
         if coarse <= margin or (coarse - margin) / link_speed < best:
+            _place_link(i, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
             for k in range(link_start[i], link_start[i + 1]):
                 speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
                 if speed > 0.0:
@@ -635,6 +625,7 @@ def _link_step(  # noqa: PLR0917
         coarse = clearance_of_sphere(link_w[i], link_r[i], obs_kind[o], obs_r[o], obs_t[o], obs_dims[o])
         if coarse > margin and (coarse - margin) / link_speed >= best:
             continue
+        _place_link(i, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
         for k in range(link_start[i], link_start[i + 1]):
             speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
             if speed > 0.0:
@@ -657,12 +648,19 @@ def _pair_step(  # noqa: PLR0917
     link_w: Array,
     link_r: Array,
     margin: float,
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    link_frame: Array,
+    placed: Array,
 ) -> float:
     """``best`` lowered to what moving link ``a``'s clearance to static link ``b`` allows."""
     link_speed = _speed(link_w[a], axis_p, axis_d, is_prismatic) + (0.0 if is_prismatic else link_r[a])
     coarse = _distance(link_w[a], link_w[b]) - link_r[a] - link_r[b]
     if link_speed <= 0.0 or (coarse > margin and (coarse - margin) / link_speed >= best):
         return best
+    _place_link(a, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
+    _place_link(b, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
     for k in range(link_start[a], link_start[a + 1]):
         speed = _speed(sph_w[k], axis_p, axis_d, is_prismatic)
         if speed <= 0.0:
@@ -767,6 +765,10 @@ def _step_bound(  # noqa: PLR0917
     rel_obs: Array,
     rel_bounds: Array,
     rel_pair: Array,
+    frame_r: Array,
+    frame_t: Array,
+    sph_c: Array,
+    placed: Array,
 ) -> float:
     """The largest move (rad or m) of joint ``joint`` either way within which no moving sphere can touch:
     the least (clearance - margin) / speed over the moving spheres (a sphere's centre moves at most its
@@ -796,6 +798,11 @@ def _step_bound(  # noqa: PLR0917
                 margin,
                 rel_obs,
                 rel_bounds,
+                frame_r,
+                frame_t,
+                sph_c,
+                link_frame,
+                placed,
             )
             if best <= 0.0:
                 return 0.0
@@ -806,10 +813,95 @@ def _step_bound(  # noqa: PLR0917
         b = pairs[p, 1]
         if link_frame[a] <= joint:
             a, b = b, a
-        best = _pair_step(a, b, best, axis_p, axis_d, is_prismatic, sph_w, sph_r, link_start, link_w, link_r, margin)
+        best = _pair_step(
+            a, b, best, axis_p, axis_d, is_prismatic, sph_w, sph_r, link_start, link_w, link_r, margin, frame_r,
+            frame_t, sph_c, link_frame, placed,
+        )  # fmt: skip
         if best <= 0.0:
             return 0.0
     return best
+
+
+@_leaf
+def _advance(  # noqa: PLR0917
+    q: Array,
+    joint: int,
+    start: float,
+    limit: float,
+    direction: float,
+    min_step: float,
+    max_steps: int,
+    base_r: Array,
+    base_t: Array,
+    org_r: Array,
+    org_t: Array,
+    axes: Array,
+    prismatic: Array,
+    sph_c: Array,
+    sph_r: Array,
+    link_start: Array,
+    link_c: Array,
+    link_r: Array,
+    link_frame: Array,
+    obs_kind: Array,
+    obs_r: Array,
+    obs_t: Array,
+    obs_dims: Array,
+    obs_bound: Array,
+    pairs: Array,
+    bounds: Array,
+    has_bounds: bool,
+    held_link: int,
+    held_points: Array,
+    held_disc: float,
+    held_axis: Array,
+    sup_index: Array,
+    sup_top: Array,
+    sup_tol: float,
+    margin: float,
+    frame_r: Array,
+    frame_t: Array,
+    sph_w: Array,
+    link_w: Array,
+    axis_d: Array,
+    scratch: Array,
+    placed: Array,
+    rel_obs: Array,
+    rel_bounds: Array,
+    rel_pair: Array,
+) -> float:
+    """How far joint ``joint`` of ``q`` goes from ``start`` towards ``limit`` (``direction``: +1 or -1) in
+    certified steps (:func:`_step_bound`): ``limit`` if it gets there; else where a step falls under
+    ``min_step`` or after ``max_steps`` steps. Each step places the links' bounding spheres, and a link's
+    spheres only when its bounding sphere cannot settle it. ``q[joint]`` is left changed."""
+    value = start
+    for _ in range(max_steps):
+        q[joint] = value
+        forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
+        for i in range(link_c.shape[0]):
+            _place(frame_r, frame_t, link_frame[i], link_c[i], link_w[i])
+        placed[:] = False
+        if held_link >= 0:
+            _place_link(held_link, frame_r, frame_t, sph_c, link_start, link_frame, sph_w, placed)
+        rot = frame_r[joint + 1]
+        for a in range(3):
+            axis_d[a] = rot[a, 0] * axes[joint, 0] + rot[a, 1] * axes[joint, 1] + rot[a, 2] * axes[joint, 2]
+        step = _step_bound(
+            joint, frame_t[joint + 1], axis_d, prismatic[joint], sph_w, sph_r, link_start, link_w, link_r, link_frame,
+            obs_kind, obs_r, obs_t, obs_dims, obs_bound, pairs, bounds, has_bounds, margin, rel_obs, rel_bounds,
+            rel_pair, frame_r, frame_t, sph_c, placed,
+        )  # fmt: skip
+        step = _held_support_step(
+            frame_r, frame_t, link_frame, link_start, sph_w, sph_r, obs_kind, obs_r, obs_t, obs_dims, held_link,
+            held_points, held_disc, held_axis, sup_index, sup_top, sup_tol, frame_t[joint + 1], axis_d,
+            prismatic[joint], margin, step, scratch,
+        )  # fmt: skip
+        if abs(limit - value) <= step:
+            return limit
+        if step < min_step:
+            return value
+        value += direction * step
+    return value
 
 
 @_jit
@@ -851,6 +943,7 @@ def free_intervals(  # noqa: PLR0917
     min_step: float,
     max_steps: int,
     reach: Array,
+    fold: bool,
     out_lo: Array,
     out_hi: Array,
     out_valid: Array,
@@ -859,6 +952,12 @@ def free_intervals(  # noqa: PLR0917
     around ``qs[b, joint]`` (within its limits, and within ``reach[b]`` of it: ``inf`` for no bound) over
     which, the other joints fixed, no sphere touches anything (``out_valid[b]``: the configuration itself is
     valid; else the interval is the point).
+
+    With ``fold``, ``reach[b]`` is the signed move the caller folds into the interval
+    (:func:`clew_ros.core.manhattan.bounce`): the side it heads for is searched as far as ``|reach[b]|``,
+    the other only as far as the move, bounced off the first side's end, can go past the start
+    (``|reach[b]|`` less twice the first side's extent; nothing when the move fits): the fold comes out
+    the same as with both sides searched to ``|reach[b]|``.
 
     Conservative: from the current value it steps, each way, by the largest move no moving sphere can
     collide within (:func:`_step_bound`), and stops at a limit, where a step falls under ``min_step``, or
@@ -921,51 +1020,23 @@ def free_intervals(  # noqa: PLR0917
             ignore, pairs,
             bounds, has_bounds, margin, rel_obs, rel_bounds, rel_pair,
         )  # fmt: skip
-        for direction in (1.0, -1.0):
-            limit = min(upper[joint], start + reach[b]) if direction > 0.0 else max(lower[joint], start - reach[b])
+        first = -1.0 if fold and reach[b] < 0.0 else 1.0
+        near = start  # the first side's end
+        for direction in (first, -first):
+            extent = abs(reach[b])
+            if fold and direction != first:
+                extent = max(extent - 2.0 * abs(near - start), 0.0)
+            limit = min(upper[joint], start + extent) if direction > 0.0 else max(lower[joint], start - extent)
             value = start
-            for _ in range(max_steps):
-                q[joint] = value
-                forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
-                _place_all(frame_r, frame_t, sph_c, sph_frame, link_c, link_frame, sph_w, link_w)
-                rot = frame_r[joint + 1]
-                for a in range(3):
-                    axis_d[a] = rot[a, 0] * axes[joint, 0] + rot[a, 1] * axes[joint, 1] + rot[a, 2] * axes[joint, 2]
-                step = _step_bound(
-                    joint,
-                    frame_t[joint + 1],
-                    axis_d,
-                    prismatic[joint],
-                    sph_w,
-                    sph_r,
-                    link_start,
-                    link_w,
-                    link_r,
-                    link_frame,
-                    obs_kind,
-                    obs_r,
-                    obs_t,
-                    obs_dims,
-                    obs_bound,
-                    pairs,
-                    bounds,
-                    has_bounds,
-                    margin,
-                    rel_obs,
-                    rel_bounds,
-                    rel_pair,
-                )
-                step = _held_support_step(
-                    frame_r, frame_t, link_frame, link_start, sph_w, sph_r, obs_kind, obs_r, obs_t, obs_dims, held_link,
-                    held_points, held_disc, held_axis, sup_index, sup_top, sup_tol, frame_t[joint + 1], axis_d,
-                    prismatic[joint], margin, step, scratch,
+            if limit != start:
+                value = _advance(
+                    q, joint, start, limit, direction, min_step, max_steps, base_r, base_t, org_r, org_t, axes,
+                    prismatic, sph_c, sph_r, link_start, link_c, link_r, link_frame, obs_kind, obs_r, obs_t, obs_dims,
+                    obs_bound, pairs, bounds, has_bounds, held_link, held_points, held_disc, held_axis, sup_index,
+                    sup_top, sup_tol, margin, frame_r, frame_t, sph_w, link_w, axis_d, scratch, placed, rel_obs,
+                    rel_bounds, rel_pair,
                 )  # fmt: skip
-                if abs(limit - value) <= step:
-                    value = limit
-                    break
-                if step < min_step:
-                    break
-                value += direction * step
+            near = value
             if direction > 0.0:
                 out_hi[b] = value
             else:

@@ -75,11 +75,18 @@ class IKSettings:
     #: Solutions closer than this joint distance (rad, m; max over joints) are one solution: well above the
     #: scatter of converged runs, below any gap worth a different plan.
     distinct_rad: float = 1e-2
+    #: Whether a joint at a limit that the step would push past it is left out of the step (an active set):
+    #: a target reachable only with joints at their limits is then solved (clamping the step instead leaves
+    #: the error's share of those joints unmet, and the seed stalls); False: the step is only clamped.
+    active_set: bool = True
 
     def __post_init__(self) -> None:
         for item in fields(self):
             value = getattr(self, item.name)
-            if item.name in ("seeds", "max_iterations", "stall_steps"):
+            if item.name == "active_set":
+                if not isinstance(value, bool):
+                    raise ValueError(f"IKSettings.active_set: expected true or false, got {value!r}")
+            elif item.name in ("seeds", "max_iterations", "stall_steps"):
                 if not isinstance(value, int) or value < 0:
                     raise ValueError(f"IKSettings.{item.name}: expected an integer >= 0, got {value!r}")
             elif not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
@@ -220,7 +227,7 @@ class InverseKinematics:
                 a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
                 a["prismatic"], a["tcp_frame"], a["tcp_r"], a["tcp_t"], s.max_iterations, s.damping,
                 s.damping_min, s.damping_max, s.position_tolerance_m, s.angle_tolerance_rad, s.max_step_rad,
-                s.stall_ratio, s.stall_steps, out_q, out_ok,
+                s.stall_ratio, s.stall_steps, s.active_set, out_q, out_ok,
             )  # fmt: skip
         out = []
         for t in range(len(matrices)):

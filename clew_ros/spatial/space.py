@@ -203,8 +203,9 @@ class SpatialSpace:
         self._reach = float(origin_steps + np.linalg.norm(robot.tcp[:3, 3]) + travel)
         first = robot.base @ robot.origins[0]
         self._shoulder = first[:3, 3].copy()
-        #: whether a decoded transfer that cannot set the object down keeps its end, the object in the air
-        #: (inside SEARCH_TRANSFER: :attr:`SpatialTuning.search_in_air`), else it stays at its start
+        #: whether decoded transfers end where their moves take them, the object in the air, unsettled
+        #: (inside SEARCH_TRANSFER: :attr:`SpatialTuning.search_in_air`); else each sets it down or stays at
+        #: its start
         self._in_air = False
 
     # -- the protocol's properties --------------------------------------------------------------------
@@ -346,10 +347,11 @@ class SpatialSpace:
         way[:, -1] = way[:, -2]
         if transfer:
             for checker, idx in groups:
+                if self._in_air:
+                    break  # SEARCH_TRANSFER's ends stay in the air: search_transfer sets its last one down
                 settled, ok = self.settle(checker, modes[idx[0]], way[idx, -2])
                 way[idx[ok], -1] = settled[ok]
-                if not self._in_air:
-                    way[idx[~ok]] = way[idx[~ok], :1]  # no stable end: the path stays where the object rests
+                way[idx[~ok]] = way[idx[~ok], :1]  # no stable end: the path stays where the object rests
             held = self.held_object_poses(way[:, -1], modes)
             return ManhattanPaths(way, held)
         return ManhattanPaths(way, np.array(modes, dtype=float))
@@ -626,6 +628,11 @@ class SpatialSpace:
             self._in_air = False
         waypoints = self._finish(ctx, job, waypoints, found)
         held = self.held_object_poses(waypoints, rel)
+        if not self.at_goal(held[-1], goal) and not self.rests(held[-1]):
+            settled, ok = self.settle(self.transfer_checker(rel), rel, waypoints[-1:])
+            if ok[0]:  # the search's end set down where it got to (the closest attempt, for SEARCH's chain)
+                waypoints = np.vstack([waypoints, settled])
+                held = self.held_object_poses(waypoints, rel)
         if not self.at_goal(held[-1], goal):
             resting = [i for i in range(len(waypoints)) if self.rests(held[i])]
             last = resting[-1] if resting else 0  # (the start rests)

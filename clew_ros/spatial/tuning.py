@@ -87,8 +87,10 @@ class SpatialTuning:
     #: a carried object's approach where lifting it ``approach_m`` is out of reach: lifted this far (m) and
     #: backed off ``approach_m`` along the tcp's -z (a side grasp slides it out of a shelf); 0: no such approach
     slide_lift_m: float = 0.015
-    #: whether SEARCH_TRANSFER's Manhattan paths may end with the object in the air (scored by its distance
-    #: to the goal; the do-while loop goes on from there; a search that does not reach the goal is cut back
-    #: to its last resting point): the GA then has a slope to follow to a goal placement it cannot see from
-    #: ends that set the object down (False: such an end is no move, as in EXPLORE)
+    #: whether SEARCH_TRANSFER's Manhattan paths end with the object in the air, where their moves take it
+    #: (scored by its distance to the goal; the do-while loop goes on from there; refinement and the straight
+    #: moves to the goal configurations set it down at the goal; a search that does not reach the goal sets
+    #: its end down where it is, else is cut back to its last resting point): the GA then has a slope to
+    #: follow to a goal it cannot see from ends that set the object down, and no settling to pay for each
+    #: (False: every end is set down or is no move, as in EXPLORE)
     search_in_air: bool = True

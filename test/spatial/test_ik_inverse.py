@@ -231,5 +231,5 @@ def test_rows_are_named() -> None:
     assert pose_rows(("x", "rz")).tolist() == [True, False, False, False, False, True]
     with pytest.raises(ValueError, match="rows: expected names among x, y, z, rx, ry, rz"):
         pose_rows(("x", "yaw"))
-    with pytest.raises(ValueError, match="IKSettings.active_set: expected true or false"):
+    with pytest.raises(ValueError, match=r"IKSettings\.active_set: expected true or false"):
         IKSettings(active_set=1)  # type: ignore[arg-type]

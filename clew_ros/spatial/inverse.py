@@ -14,6 +14,10 @@ valid (collision-free) are kept. Same generator state, same answers.
 Grasping and placing: :func:`grasp_targets` turns an object pose and its grasps (tcp poses in the
 object's frame, ``world.object.grasps``) into the tcp targets in ``world``; :meth:`InverseKinematics.solve_grasps`
 solves them all at once.
+
+Arms of fewer than 6 joints reach a full tcp pose only on a thin set: :meth:`InverseKinematics.solve_rows`
+meets only some rows of the pose error (a level face at a height, a position), the others left where the
+seed's neighbourhood puts them.
 """
 
 from __future__ import annotations
@@ -31,7 +35,11 @@ from clew_ros.spatial.kernels import ik
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.transforms import pose_matrix
 
-__all__ = ["IKSettings", "InverseKinematics", "distinct", "grasp_targets"]
+__all__ = ["POSE_ROWS", "IKSettings", "InverseKinematics", "distinct", "grasp_targets", "pose_rows"]
+
+#: The rows of a pose error, in order: position x, y, z (m in ``world``), then the rotation vector's x, y, z
+#: (rad in ``world``; its x and y are 0 exactly when the two frames differ by a turn about world z alone).
+POSE_ROWS = ("x", "y", "z", "rx", "ry", "rz")
 
 
 @dataclass(frozen=True)
@@ -67,11 +75,18 @@ class IKSettings:
     #: Solutions closer than this joint distance (rad, m; max over joints) are one solution: well above the
     #: scatter of converged runs, below any gap worth a different plan.
     distinct_rad: float = 1e-2
+    #: Whether a joint at a limit that the step would push past it is left out of the step (an active set):
+    #: a target reachable only with joints at their limits is then solved (clamping the step instead leaves
+    #: the error's share of those joints unmet, and the seed stalls); False: the step is only clamped.
+    active_set: bool = True
 
     def __post_init__(self) -> None:
         for item in fields(self):
             value = getattr(self, item.name)
-            if item.name in ("seeds", "max_iterations", "stall_steps"):
+            if item.name == "active_set":
+                if not isinstance(value, bool):
+                    raise ValueError(f"IKSettings.active_set: expected true or false, got {value!r}")
+            elif item.name in ("seeds", "max_iterations", "stall_steps"):
                 if not isinstance(value, int) or value < 0:
                     raise ValueError(f"IKSettings.{item.name}: expected an integer >= 0, got {value!r}")
             elif not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
@@ -81,6 +96,32 @@ class IKSettings:
                 "IKSettings.damping: expected damping_min <= damping <= damping_max, got "
                 f"{self.damping_min} <= {self.damping} <= {self.damping_max}"
             )
+
+
+def pose_rows(names: Sequence[str]) -> NDArray[np.bool_]:
+    """The mask (6,) of the pose error's rows named (:data:`POSE_ROWS`)."""
+    unknown = [name for name in names if name not in POSE_ROWS]
+    if unknown or not names:
+        raise ValueError(f"rows: expected names among {', '.join(POSE_ROWS)}, got {list(names)!r}")
+    return np.array([row in names for row in POSE_ROWS], dtype=bool)
+
+
+def _rotation_vectors(rotations: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Rotation vectors (B, 3) (axis times angle, rad) of rotations (B, 3, 3) (up to a half turn)."""
+    vec = 0.5 * np.stack(
+        [
+            rotations[:, 2, 1] - rotations[:, 1, 2],
+            rotations[:, 0, 2] - rotations[:, 2, 0],
+            rotations[:, 1, 0] - rotations[:, 0, 1],
+        ],
+        axis=1,
+    )
+    sine = np.linalg.norm(vec, axis=1)
+    cosine = np.clip((np.trace(rotations, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arctan2(sine, cosine)
+    scale = np.where(sine > 1e-12, angle / np.maximum(sine, 1e-300), 1.0)
+    out: NDArray[np.float64] = vec * scale[:, None]
+    return out
 
 
 def distinct(solutions: NDArray[np.float64], distance: float) -> NDArray[np.float64]:
@@ -186,7 +227,7 @@ class InverseKinematics:
                 a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
                 a["prismatic"], a["tcp_frame"], a["tcp_r"], a["tcp_t"], s.max_iterations, s.damping,
                 s.damping_min, s.damping_max, s.position_tolerance_m, s.angle_tolerance_rad, s.max_step_rad,
-                s.stall_ratio, s.stall_steps, out_q, out_ok,
+                s.stall_ratio, s.stall_steps, s.active_set, out_q, out_ok,
             )  # fmt: skip
         out = []
         for t in range(len(matrices)):
@@ -195,6 +236,73 @@ class InverseKinematics:
                 found = found[checker.valid(found)]
             out.append(distinct(found, s.distinct_rad))
         return out
+
+    def solve_rows(
+        self,
+        targets: Any,
+        seeds: Any,
+        rows: NDArray[np.bool_],
+        *,
+        frame: Any = None,
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """From each seed (B, n), a configuration whose ``frame`` (a 4x4 pose in the tcp's frame, default the
+        tcp) meets its target (B, 4, 4) on the pose error's ``rows`` (a mask (6,), :func:`pose_rows`) within
+        the tolerances, the other rows free: damped least squares (Levenberg-Marquardt, a finite-difference
+        Jacobian, :attr:`IKSettings.max_iterations` steps at most) within the joint limits, so the free rows
+        stay near the seed's. Returns the configurations reached and whether each met its rows (an arm of
+        4-5 joints holds a level face at a height, or a position, where the whole pose is out of reach).
+        Deterministic: no random seeds."""
+        s = self.settings
+        goal = np.asarray(targets, dtype=np.float64).reshape(-1, 4, 4)
+        start = np.array(seeds, dtype=np.float64).reshape(len(goal), self.robot.dof)
+        q = np.clip(start, self.robot.lower, self.robot.upper)
+        mask = np.asarray(rows, dtype=bool).reshape(6)
+        tool = np.eye(4) if frame is None else np.asarray(frame, dtype=np.float64).reshape(4, 4)
+        n, h = self.robot.dof, 1e-7
+        positions = int(mask[:3].sum())  # the position rows come first
+
+        def errors(qs: NDArray[np.float64], index: NDArray[np.int64]) -> NDArray[np.float64]:
+            poses = self.tcp_poses(qs) @ tool
+            target = goal[index]
+            rotation = _rotation_vectors(np.einsum("bij,bkj->bik", target[:, :3, :3], poses[:, :3, :3]))
+            full = np.concatenate([target[:, :3, 3] - poses[:, :3, 3], rotation], axis=1)
+            out: NDArray[np.float64] = full[:, mask]
+            return out
+
+        def within(e: NDArray[np.float64]) -> NDArray[np.bool_]:
+            position, angle = e[:, :positions], e[:, positions:]
+            return np.asarray(
+                (np.linalg.norm(position, axis=1) <= s.position_tolerance_m)
+                & (np.linalg.norm(angle, axis=1) <= s.angle_tolerance_rad)
+            )
+
+        everyone = np.arange(len(goal))
+        e = errors(q, everyone)
+        cost = (e**2).sum(axis=1)
+        damping = np.full(len(goal), s.damping)
+        active = ~within(e)
+        for _ in range(s.max_iterations):
+            index = np.flatnonzero(active)
+            if not len(index):
+                break
+            here = q[index]
+            shifted = (here[:, None, :] + h * np.eye(n)[None]).reshape(-1, n)
+            moved = errors(shifted, np.repeat(index, n)).reshape(len(index), n, -1)
+            jacobian = ((moved - e[index][:, None, :]) / h).transpose(0, 2, 1)  # (b, k, n): d e / d q
+            system = jacobian @ jacobian.transpose(0, 2, 1) + damping[index, None, None] * np.eye(jacobian.shape[1])
+            step = -np.einsum("bkn,bk->bn", jacobian, np.linalg.solve(system, e[index][..., None])[..., 0])
+            biggest = np.max(np.abs(step), axis=1, keepdims=True)
+            step *= np.minimum(1.0, s.max_step_rad / np.maximum(biggest, 1e-300))
+            trial = np.clip(here + step, self.robot.lower, self.robot.upper)
+            e_trial = errors(trial, index)
+            cost_trial = (e_trial**2).sum(axis=1)
+            better = cost_trial < cost[index]
+            taken = index[better]
+            q[taken], e[taken], cost[taken] = trial[better], e_trial[better], cost_trial[better]
+            damping[taken] = np.maximum(damping[taken] * 0.1, s.damping_min)
+            damping[index[~better]] *= 10.0
+            active[index] = ~within(e[index]) & (damping[index] <= s.damping_max)
+        return q, within(e)
 
     def solve_grasps(
         self, object_pose: Any, grasps: Any, rng: np.random.Generator, *, checker: SpatialChecker | None = None

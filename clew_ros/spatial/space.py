@@ -48,7 +48,7 @@ from clew_ros.core.space import Improvement, PathResult, PlanningContext, Transi
 from clew_ros.core.tree import Landmark, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
-from clew_ros.spatial.inverse import IKSettings, InverseKinematics
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.motion_plan import plan_motion
 from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
@@ -77,6 +77,12 @@ HOLD_STREAM = 21
 #: The goal configurations' inverse kinematics: its own stream too.
 GOAL_STREAM = 22
 #: The improvement's shortcuts draw from the run's improvement generator (core's IMPROVE_STREAM).
+
+#: a level face at a height: the pose error's z and its rotation's x and y (the object's x, y and yaw free)
+_LEVEL_ROWS = pose_rows(("z", "rx", "ry"))
+
+#: a position: the pose error's x, y and z (the orientation free)
+_POSITION_ROWS = pose_rows(("x", "y", "z"))
 
 _FACE_NORMALS = {"-z": (2, -1.0), "+z": (2, 1.0), "+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
 
@@ -201,6 +207,10 @@ class SpatialSpace:
         self._reach = float(origin_steps + np.linalg.norm(robot.tcp[:3, 3]) + travel)
         first = robot.base @ robot.origins[0]
         self._shoulder = first[:3, 3].copy()
+        #: whether decoded transfers end where their moves take them, the object in the air, unsettled
+        #: (inside SEARCH_TRANSFER: :attr:`SpatialTuning.search_in_air`); else each sets it down or stays at
+        #: its start
+        self._in_air = False
 
     # -- the protocol's properties --------------------------------------------------------------------
     @property
@@ -343,6 +353,8 @@ class SpatialSpace:
         way[:, -1] = way[:, -2]
         if transfer:
             for checker, idx in groups:
+                if self._in_air:
+                    break  # SEARCH_TRANSFER's ends stay in the air: search_transfer sets its last one down
                 settled, ok = self.settle(checker, modes[idx[0]], way[idx, -2])
                 way[idx[ok], -1] = settled[ok]
                 way[idx[~ok]] = way[idx[~ok], :1]  # no stable end: the path stays where the object rests
@@ -392,11 +404,16 @@ class SpatialSpace:
         found = self._settle_ik.solve_many(
             targets, np.random.default_rng(0), seeds=[ends[b][None] for b in rows]
         )  # no random seeds: the generator is never drawn from
+        reach = self.tuning.settle_max_rad
         moves = [
             (b, solutions[0])
             for b, solutions in zip(rows, found, strict=True)
-            if len(solutions) and np.max(np.abs(solutions[0] - ends[b])) <= self.tuning.settle_max_rad
+            if len(solutions) and np.max(np.abs(solutions[0] - ends[b])) <= reach
         ]
+        if self.tuning.level_settle:
+            missed = [k for k, b in enumerate(rows) if b not in {m for m, _ in moves}]
+            moves += self._level_settle(rel, ends, [rows[k] for k in missed], [targets[k] for k in missed])
+            moves.sort(key=lambda move: move[0])
         if not moves:
             return out, ok
         index = np.array([b for b, _ in moves])
@@ -405,6 +422,29 @@ class SpatialSpace:
         out[index[clear]] = goals[clear]
         ok[index[clear]] = True
         return out, ok
+
+    def _level_settle(self, rel: Array, ends: Array, rows: list[int], targets: list[Array]) -> list[tuple[int, Array]]:
+        """Where the whole placement's pose is out of reach (an arm of 4-5 joints, joint limits): the object
+        set down level at the support's height, its x, y and yaw left free (:meth:`InverseKinematics.solve_rows`
+        seeded at the decoded end), kept where it then rests inside a support's top within
+        :attr:`SpatialTuning.settle_max_rad` of that end. ``(row, configuration)`` pairs."""
+        if not rows:
+            return []
+        object_targets = np.array([target @ rel for target in targets])
+        reached, ok = self._settle_ik.solve_rows(object_targets, ends[rows], _LEVEL_ROWS, frame=rel)
+        thing = self.world.object
+        assert thing is not None
+        tolerance = self.world.tolerances["placement_tolerance"]
+        out = []
+        for k in np.flatnonzero(ok):
+            b = rows[int(k)]
+            if np.max(np.abs(reached[k] - ends[b])) > self.tuning.settle_max_rad:
+                continue
+            pose = self.tcp(reached[k][None])[0] @ rel
+            found = resting_on(thing.shape, pose, self.world.supports, tolerance)
+            if found is not None and _footprint_inside(self.world, found[0], found[1], pose):
+                out.append((b, reached[k]))
+        return out
 
     def single_moves(
         self, q: np.ndarray, moves: np.ndarray, *, margin_m: float, counters: Counters | None, **mode: np.ndarray
@@ -587,9 +627,18 @@ class SpatialSpace:
             toward=found[0] if len(found) else None,
             straight=found[: self.tuning.straight_probes] if len(found) else None,
         )
-        waypoints, _ = local_search(ctx, [job])[0]
+        self._in_air = self.tuning.search_in_air
+        try:
+            waypoints, _ = local_search(ctx, [job])[0]
+        finally:
+            self._in_air = False
         waypoints = self._finish(ctx, job, waypoints, found)
         held = self.held_object_poses(waypoints, rel)
+        if not self.at_goal(held[-1], goal) and not self.rests(held[-1]):
+            settled, ok = self.settle(self.transfer_checker(rel), rel, waypoints[-1:])
+            if ok[0]:  # the search's end set down where it got to (the closest attempt, for SEARCH's chain)
+                waypoints = np.vstack([waypoints, settled])
+                held = self.held_object_poses(waypoints, rel)
         if not self.at_goal(held[-1], goal):
             resting = [i for i in range(len(waypoints)) if self.rests(held[i])]
             last = resting[-1] if resting else 0  # (the start rests)
@@ -651,19 +700,40 @@ class SpatialSpace:
 
     def offsets(self, mode: dict[str, np.ndarray], qs: Array) -> Array:
         """Configurations (m, n) near ``qs`` (m, n) with the tcp moved :attr:`SpatialTuning.approach_m` away
-        along its own -z (transit: backed off a grasp's approach) or up (transfer: the object lifted); a row
-        is NaN where inverse kinematics seeded at it found none within its joint limits."""
-        poses_ = self.tcp(qs)
-        shift = self.tuning.approach_m
-        if mode.get("grasp_rel") is not None:
-            poses_[:, 2, 3] += shift
+        along its own -z (transit: backed off a grasp's approach) or up (transfer: the object lifted; where
+        that is out of reach, lifted :attr:`SpatialTuning.slide_lift_m` and backed off along the tcp's -z, as
+        a gripper slides an object out of a shelf); where no configuration near holds that whole pose, one
+        with the tcp at its position (:attr:`SpatialTuning.position_approach`); a row is NaN where inverse
+        kinematics seeded at it found none within its joint limits."""
+        here = self.tcp(qs)
+        tuning = self.tuning
+        shift = tuning.approach_m
+        backed = here.copy()
+        backed[:, :3, 3] -= shift * here[:, :3, 2]
+        if mode.get("grasp_rel") is None:
+            moves = [backed]
         else:
-            poses_[:, :3, 3] -= shift * poses_[:, :3, 2]
-        found = self._settle_ik.solve_many(list(poses_), np.random.default_rng(0), seeds=[q[None] for q in qs])
+            lifted = here.copy()
+            lifted[:, 2, 3] += shift
+            moves = [lifted]
+            if tuning.slide_lift_m > 0:
+                backed[:, 2, 3] += tuning.slide_lift_m
+                moves.append(backed)
         out = np.full(qs.shape, np.nan)
-        for k, solutions in enumerate(found):
-            if len(solutions):
-                out[k] = solutions[0]
+        for targets in moves:
+            missed = np.flatnonzero(np.isnan(out).any(axis=1))
+            if not len(missed):
+                break
+            found = self._settle_ik.solve_many(
+                list(targets[missed]), np.random.default_rng(0), seeds=[q[None] for q in qs[missed]]
+            )
+            for k, solutions in zip(missed, found, strict=True):
+                if len(solutions):
+                    out[k] = solutions[0]
+            missed = np.flatnonzero(np.isnan(out).any(axis=1))
+            if len(missed) and tuning.position_approach:
+                reached, ok = self._settle_ik.solve_rows(targets[missed], qs[missed], _POSITION_ROWS)
+                out[missed[ok]] = reached[ok]
         return out
 
     def way(self, mode: dict[str, np.ndarray], q: Array, targets: Array) -> Array | None:

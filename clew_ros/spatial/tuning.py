@@ -108,3 +108,23 @@ class SpatialTuning:
     #: more tries, a simple one fewer (200 fixed tries took about a third of a run)
     motion_shortcut_tries: int = 400
     motion_shortcut_round: int = 20
+
+    # -- pick-and-place where the whole pose is out of reach (arms of 4-5 joints, joint limits) and the
+    # -- goal out of sight of the placements (spatial_shelf, spatial_narrow)
+    #: whether a decoded end whose placement's whole pose no configuration near it holds (an arm of 4-5
+    #: joints reaches a full pose only on a thin set; joint limits) sets the object down level at the
+    #: support's height instead, its x, y and yaw where the arm can put them (False: such an end is no move)
+    level_settle: bool = True
+    #: whether an approach no configuration near holds in its whole pose (an arm of 4-5 joints) is taken
+    #: with the tcp at its position alone, turned as the arm turns it there (False: no approach then)
+    position_approach: bool = True
+    #: a carried object's approach where lifting it ``approach_m`` is out of reach: lifted this far (m) and
+    #: backed off ``approach_m`` along the tcp's -z (a side grasp slides it out of a shelf); 0: no such approach
+    slide_lift_m: float = 0.015
+    #: whether SEARCH_TRANSFER's Manhattan paths end with the object in the air, where their moves take it
+    #: (scored by its distance to the goal; the do-while loop goes on from there; refinement and the straight
+    #: moves to the goal configurations set it down at the goal; a search that does not reach the goal sets
+    #: its end down where it is, else is cut back to its last resting point): the GA then has a slope to
+    #: follow to a goal it cannot see from ends that set the object down, and no settling to pay for each
+    #: (False: every end is set down or is no move, as in EXPLORE)
+    search_in_air: bool = True

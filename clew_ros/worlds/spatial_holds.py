@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from clew_ros.core.plan import Plan
 from clew_ros.spatial.checker import Held, SpatialChecker
-from clew_ros.spatial.inverse import InverseKinematics
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.placements import FACE_RPY, MovableObject
 from clew_ros.spatial.plan import replay
@@ -215,7 +215,8 @@ class Solver:
 
     def __init__(self, arm: Arm, settings: SpatialGeneration) -> None:
         self.robot = arm.robot
-        self.kinematics = InverseKinematics(arm.robot)
+        # the step only clamped at the joint limits: the worlds stay the ones generated before the active set
+        self.kinematics = InverseKinematics(arm.robot, IKSettings(active_set=False))
         self.settings = settings
         #: the arm alone (limits, self-collision)
         self.alone = SpatialChecker(arm.robot, arm.spheres)

@@ -378,13 +378,13 @@ def test_a_motion_stopped_by_its_time_limit_says_so(boxes: SpatialWorld) -> None
 
 
 def test_an_improvement_the_validator_refuses_is_not_returned() -> None:
-    """spatial_reorient 0 (Panda), seed 0: the improvement's shorter plan has a transfer move whose held box
-    grazes its support where the planner's samples missed it; the validator's checks refuse it, so the run
-    returns its first plan (valid), saying what was refused."""
+    """spatial_shelf 2 (a random arm of 5 joints), seed 0: the improvement's shorter plan has a transfer move
+    whose held box grazes its support where the planner's samples missed it; the validator's checks refuse
+    it, so the run returns its first plan (valid), saying what was refused."""
     from clew_ros.spatial.offline import checked_plan
     from clew_ros.worlds.spatial import generate_spatial
 
-    world = generate_spatial("spatial_reorient", 0, "panda").world()
+    world = generate_spatial("spatial_shelf", 2, "random").world()
     result = plan(world, PlannerSettings(seed=0, time_limit=30.0))
     assert result.outcome is Outcome.SUCCEEDED, result.message
     assert "support" in result.stats["improve_refused"]

@@ -4,7 +4,8 @@ Damped least squares with Levenberg-Marquardt damping, projected onto the joint 
 ``dq = J^T (J J^T + lambda I)^-1 e`` where ``e`` (6) is the pose error in ``world`` (position, then the
 rotation vector of ``R_target R^T``) and ``J`` (6, n) the geometric Jacobian of the tcp; a step that
 lowers ``|e|^2`` is taken (clamped to the limits) and ``lambda`` shrinks, one that does not is refused
-and ``lambda`` grows; past ``damping_max`` the seed is given up (a local minimum: the target is out of
+and ``lambda`` grows (with ``active_set``, joints at a limit that the step would push past it are left out
+of ``J``); past ``damping_max`` the seed is given up (a local minimum: the target is out of
 reach from there), as it is after ``stall_steps`` steps in a row that each lower ``|e|^2`` by less than
 the fraction ``stall_ratio`` (creeping towards such a minimum). Frames as in
 :mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is ``tcp_r``, ``tcp_t`` in frame
@@ -188,6 +189,30 @@ def _clamped_step(q: Array, dq: Array, max_step: float, lower: Array, upper: Arr
 
 
 @_jit
+def _free_limits(  # noqa: PLR0917
+    active_set: bool,
+    jac: Array,
+    e: Array,
+    damping: float,
+    q: Array,
+    lower: Array,
+    upper: Array,
+    scratch: Array,
+    dq: Array,
+) -> None:
+    """Zero the Jacobian's columns of the joints at a limit that the damped step would push past it: the
+    step is then taken by the other joints (an active set), where clamping it would leave the error's share
+    of those joints unmet and stall (a target reachable only with joints at their limits, as a generated
+    world's hold may be); nothing without ``active_set``. ``dq`` is scratch."""
+    if not active_set or not _damped_step(jac, e, damping, scratch, dq):
+        return
+    for j in range(q.shape[0]):
+        if (q[j] <= lower[j] and dq[j] < 0.0) or (q[j] >= upper[j] and dq[j] > 0.0):
+            for a in range(6):
+                jac[a, j] = 0.0
+
+
+@_jit
 def solve_batch(  # noqa: PLR0917, C901
     targets_r: Array,
     targets_t: Array,
@@ -212,6 +237,7 @@ def solve_batch(  # noqa: PLR0917, C901
     max_step: float,
     stall_ratio: float,
     stall_steps: int,
+    active_set: bool,
     out_q: Array,
     out_ok: Array,
 ) -> None:
@@ -248,6 +274,7 @@ def solve_batch(  # noqa: PLR0917, C901
                 if _within(e, tol_p2, tol_r2):
                     break
                 _jacobian(frame_r, frame_t, axes, prismatic, tcp_frame, pt, jac)
+                _free_limits(active_set, jac, e, lam, q, lower, upper, scratch, dq)
                 improved = False
                 while lam <= damping_max:
                     if not _damped_step(jac, e, lam, scratch, dq):

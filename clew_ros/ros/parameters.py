@@ -369,17 +369,23 @@ def configuration_from_values(
 
 def _spatial_world(tree: dict[str, Any], previous: Configuration | None) -> tuple[SpatialWorld, SpatialSetup]:
     """The spatial world of a ``world`` tree, relative paths read from the working directory; the previous
-    configuration's world when its tree is the same (loading the robot and its sphere model takes seconds)."""
+    configuration's world when its tree is the same (loading the robot and its sphere model takes seconds).
+    A new world's kernels are compiled (or loaded from numba's cache) here, as ``clew_plan`` does before its
+    clock starts, so that a run's ``planner.time_limit`` never pays for them."""
     if previous is not None and previous.spatial is not None and previous.spatial.tree == tree:
         return previous.world, previous.spatial  # type: ignore[return-value]  # a spatial setup: a spatial world
     from clew_ros.ros.spatial import load_spatial
 
     try:
-        return load_spatial(tree, Path.cwd())
+        world, setup = load_spatial(tree, Path.cwd())
     except ImportError as error:
         raise WorldError(
             "world.kind", f"spatial worlds need the spatial extra (pip install 'clew_ros[spatial]'): {error}"
         ) from None
+    from clew_ros.spatial.offline import warm_up
+
+    warm_up(world)
+    return world, setup
 
 
 def node_settings(values: Mapping[str, Any], dof: int) -> NodeSettings:

@@ -43,6 +43,7 @@ from clew_ros.core.settings import PlannerSettings
 from clew_ros.spatial.exact import ExactChecker, exact_available
 from clew_ros.spatial.offline import checked_plan, warm_up
 from clew_ros.spatial.space import plan
+from clew_ros.worlds.errors import GenerationError
 from clew_ros.worlds.spatial import SPATIAL_FAMILIES, SPATIAL_ROBOTS, generate_spatial
 
 __all__ = ["FamilyRun", "main", "rows", "run_world"]
@@ -165,6 +166,36 @@ def rows(runs: Sequence[FamilyRun], time_limit_s: float) -> list[str]:
     return lines
 
 
+def _plan_all(args: argparse.Namespace) -> tuple[list[FamilyRun], list[str]]:
+    """Every (family, robot, world, seed) of ``args`` planned, a line printed for each; the worlds the generator
+    could not make are skipped and named."""
+    runs: list[FamilyRun] = []
+    skipped: list[str] = []
+    for family in args.families:
+        for robot in args.robots:
+            for world_seed in range(args.first_world, args.first_world + args.worlds):
+                try:
+                    world_runs = run_world(
+                        family, robot, world_seed, range(args.seeds), args.time_limit, exact=args.exact
+                    )
+                except GenerationError as error:  # the generator found no such world: nothing to plan
+                    skipped.append(f"{family} {robot} world {world_seed}")
+                    print(f"{family} {robot} world {world_seed}: not generated ({error})", flush=True)
+                    continue
+                for r in world_runs:
+                    runs.append(r)
+                    said = "" if r.transfers is None else f" transfers {r.transfers} (witness {r.witness_transfers})"
+                    invalid = (" INVALID" if r.valid is False else "") + (
+                        " EXACT-COLLIDES" if r.exact_valid is False else ""
+                    )
+                    print(
+                        f"{family} {robot} world {world_seed} ({r.dof} joints) seed {r.seed}: {r.outcome} "
+                        f"{r.time_s:.3f} s{said}{invalid}  {r.message[:100]}",
+                        flush=True,
+                    )
+    return runs, skipped
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks spatial_families", description=__doc__.split("\n\n")[0])
     parser.add_argument("--families", nargs="+", default=list(SPATIAL_FAMILIES), choices=list(SPATIAL_FAMILIES))
@@ -185,23 +216,11 @@ def main(argv: list[str] | None = None) -> int:
             "--time-limit: expected a positive number"
         )
     started = time.perf_counter()
-    runs: list[FamilyRun] = []
-    for family in args.families:
-        for robot in args.robots:
-            for world_seed in range(args.first_world, args.first_world + args.worlds):
-                for r in run_world(family, robot, world_seed, range(args.seeds), args.time_limit, exact=args.exact):
-                    runs.append(r)
-                    said = "" if r.transfers is None else f" transfers {r.transfers} (witness {r.witness_transfers})"
-                    invalid = (" INVALID" if r.valid is False else "") + (
-                        " EXACT-COLLIDES" if r.exact_valid is False else ""
-                    )
-                    print(
-                        f"{family} {robot} world {world_seed} ({r.dof} joints) seed {r.seed}: {r.outcome} "
-                        f"{r.time_s:.3f} s{said}{invalid}  {r.message[:100]}",
-                        flush=True,
-                    )
+    runs, skipped = _plan_all(args)
     print()
     print(f"time limit {args.time_limit:g} s a run; whole run {time.perf_counter() - started:.0f} s")
+    if skipped:
+        print(f"not generated (no such world in the generator's attempts): {', '.join(skipped)}")
     print("\n".join(rows(runs, args.time_limit)))
     for r in runs:
         if r.valid is False:

@@ -193,7 +193,9 @@ class SpatialSpace:
         self.tuning = tuning or SpatialTuning()
         self.validation = ValidationSettings()
         self._ik: dict[int, InverseKinematics] = {}
-        self._settle_ik = InverseKinematics(world.robot, IKSettings(seeds=0, max_iterations=40))
+        self._settle_ik = InverseKinematics(
+            world.robot, IKSettings(seeds=0, max_iterations=self.tuning.settle_iterations)
+        )
         self._transit_checkers: dict[bytes, SpatialChecker] = {}
         self._transfer_checkers: dict[bytes, SpatialChecker] = {}
         thing = world.object

@@ -62,6 +62,9 @@ class SpatialTuning:
     coarse_every: int = 16
     #: weight (m/rad) of the tcp's and the object's angles against their positions in SEARCH's objectives
     angle_weight_m: float = 0.1
+    #: iterations of the inverse kinematics that sets a decoded end down on its support, from that end alone
+    #: (no other seeds): the end is already near the placement, and each settle is paid per GA evaluation
+    settle_iterations: int = 40
     #: the improvement's straight plan tries this many (hold, goal configuration) pairs per grasp, least
     #: straight-line joint travel first (each costs up to a few straight moves checked at 0.002 rad)
     straight_pairs: int = 16

@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.spatial.plan import validate_plan
 from clew_ros.spatial.world import spatial_world_from_parameters
@@ -45,11 +47,23 @@ def test_clew_plan_writes_a_valid_spatial_plan_and_clew_batch_the_same_one(tmp_p
     assert _without_clock(tmp_path / "plan.json") == _without_clock(planned)
 
 
-def test_clew_batch_refuses_to_record_a_spatial_world_naming_it(tmp_path: Path) -> None:
-    result = _run("clew_ros.cli.batch", WORLD, "--seeds", 1, "--record", "--out", "out", cwd=tmp_path)
-    assert result.returncode == 2
-    assert WORLD.name in result.stderr
-    assert "spatial" in result.stderr
+def test_clew_batch_record_checks_a_spatial_worlds_node_parameters_first(tmp_path: Path) -> None:
+    """``--record`` on a spatial world times its playback from the world file's node parameters: a bad one is
+    refused before any job runs, naming the file and the parameter (the recordings themselves:
+    test/batch/test_record.py)."""
+    pytest.importorskip("rclpy", reason="--record needs rclpy (the ros extra)")
+    robots = (ROOT / "config" / "robots").resolve()
+    text = (
+        WORLD.read_text()
+        .replace("../robots/", f"{robots}/")
+        .replace("ros__parameters:\n", "ros__parameters:\n    playback: {rate: -2.0}\n", 1)
+    )
+    world = tmp_path / "bad_rate.yaml"
+    world.write_text(text)
+    result = _run("clew_ros.cli.batch", world, "--seeds", 1, "--record", "--out", "out", cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    assert world.name in result.stderr
+    assert "playback.rate" in result.stderr
     assert not (tmp_path / "out" / "plans").exists()
 
 

@@ -31,7 +31,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any, Protocol
 
@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 from clew_ros.core import clew
 from clew_ros.core.genetic import minimize
 from clew_ros.core.improve import shortcut_path
+from clew_ros.core.manhattan import Counters
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext, Space
@@ -49,7 +50,7 @@ from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.world import SpatialWorld
 
-__all__ = ["plan_motion"]
+__all__ = ["connect", "plan_motion"]
 
 #: The improvement draws from its own generator seeded with (planner.seed, this), as core's.
 IMPROVE_STREAM = clew.IMPROVE_STREAM
@@ -92,6 +93,52 @@ def plan_motion(
         return run.finish(Outcome.INTERNAL_ERROR, f"internal error: {problem!r}\n{traceback.format_exc(limit=4)}")
 
 
+def connect(
+    space: MotionSpace,
+    ctx: PlanningContext,
+    start: np.ndarray,
+    goal: np.ndarray,
+    *,
+    mode: dict[str, np.ndarray],
+    checker: SpatialChecker,
+    landmarks: int,
+    rng: np.random.Generator,
+    goal_tree: LandmarkTree | None = None,
+    start_ways: Sequence[np.ndarray] = (),
+) -> np.ndarray | None:
+    """A path (m, n) from ``start`` to ``goal`` (joints) in ``mode`` (``{"grasp_rel": (1, 6)}``: the object
+    carried), each piece checked by ``checker``: the motion-only search's two trees (rooted at ``start`` and at
+    ``goal``, or ``goal_tree``'s root: a goal tree an earlier call grew, grown further in place) given at most
+    ``landmarks`` EXPLORE steps and new landmarks, on ``ctx``'s settings, stop test and counters and on ``rng``;
+    ``start_ways``: paths from ``start`` whose ends are landmarks of the start's tree from the outset; a
+    landmark nearer the others than ``planner.resolution`` is dropped (no claim is made); the path is not
+    shortcut (a plan's improvement does that). ``None`` when the trees did not meet within that budget, which
+    proves nothing."""
+    run = _MotionRun(
+        space,
+        ctx.settings,
+        ctx.termination,
+        start=start,
+        mode=mode,
+        checker=checker,
+        rng=rng,
+        counters=ctx.counters,
+        landmarks=landmarks,
+        shortcuts=False,
+        resolution_stop=False,
+    )
+    for way in start_ways:
+        run.tree.add(
+            parent=0, joints=way[-1].copy(), object_pose=run.none, grasp=None, grasp_rel=None, transit=way,
+            transfer=None,
+        )  # fmt: skip
+    target = goal if goal_tree is None else goal_tree[0].joints
+    result = run.search_all(target, None, goal_tree)
+    if result.outcome is not Outcome.SUCCEEDED:
+        return None
+    return np.asarray(result.segments[0].waypoints, dtype=float)
+
+
 def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray:
     """The goal joints, or the outcome and reason of a query answered at once."""
     robot = world.robot
@@ -112,14 +159,43 @@ def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray
 class _MotionRun:
     """One motion-only run: its space, contexts, and two landmark trees (from the start, from the goal)."""
 
-    def __init__(self, space: MotionSpace, settings: PlannerSettings, termination: Termination) -> None:
+    def __init__(
+        self,
+        space: MotionSpace,
+        settings: PlannerSettings,
+        termination: Termination,
+        *,
+        start: np.ndarray | None = None,
+        mode: dict[str, np.ndarray] | None = None,
+        checker: SpatialChecker | None = None,
+        rng: np.random.Generator | None = None,
+        counters: Counters | None = None,
+        landmarks: int | None = None,
+        shortcuts: bool = True,
+        resolution_stop: bool = True,
+    ) -> None:
         self.world = space.world
         self.settings = settings
         tuning = self.tuning = space.tuning
         self.termination = termination
         self.space = space
-        rng = np.random.default_rng(settings.seed)
-        self.ctx = PlanningContext(self.space, settings, rng, termination, search=tuning.search, many=tuning.many)
+        rng = np.random.default_rng(settings.seed) if rng is None else rng
+        self.ctx = PlanningContext(
+            self.space,
+            settings,
+            rng,
+            termination,
+            counters=Counters() if counters is None else counters,
+            search=tuning.search,
+            many=tuning.many,
+        )
+        #: both trees' landmarks (count) after which the run stops
+        self.landmarks = tuning.motion_landmarks if landmarks is None else landmarks
+        #: whether the path found is shortcut (else left to the plan's improvement)
+        self.shortcuts = shortcuts
+        #: whether a new landmark nearer the others than ``planner.resolution`` ends the run with
+        #: NO_PATH_AT_RESOLUTION (the paper's criterion), else is dropped and the run goes on
+        self.resolution_stop = resolution_stop
         # SEARCH's and EXPLORE's own sizes (SpatialTuning's motion block), on the run's generator and counters
         self.search_ctx = dataclasses.replace(
             self.ctx,
@@ -139,7 +215,10 @@ class _MotionRun:
             ),
         )
         self.none = np.zeros(6)
-        self.tree = LandmarkTree(self.world.initial, self.none)
+        #: the Manhattan decoding's mode (the arm alone, or carrying the object) and its checker
+        self.mode = {"object_poses": self.none[None]} if mode is None else mode
+        self.checker = self.world.checker if checker is None else checker
+        self.tree = LandmarkTree(self.world.initial if start is None else start, self.none)
         self.goal_tree: LandmarkTree | None = None
 
     def finish(self, outcome: Outcome, message: str, waypoints: np.ndarray | None = None) -> clew.PlanResult:
@@ -170,7 +249,7 @@ class _MotionRun:
             out: np.ndarray = weight * (q - nearest)
             return out
 
-        job = SearchJob(q0, objective, error, 1e-9, {"object_poses": self.none[None]}, toward=near[0], straight=near)
+        job = SearchJob(q0, objective, error, 1e-9, self.mode, toward=near[0], straight=near)
         waypoints, _ = local_search(self.search_ctx, [job])[0]
         end = waypoints[-1]
         gaps = np.max(np.abs(near - end), axis=1)
@@ -180,20 +259,29 @@ class _MotionRun:
         for k in ranked:
             if self.termination():
                 break
-            if self.space.clear(self.world.checker, end[None], near[k][None])[0]:
+            if self.space.clear(self.checker, end[None], near[k][None])[0]:
                 return np.vstack([waypoints, near[k][None]]), int(order[k])
         return waypoints, -1
 
-    def search_all(self, target: np.ndarray, progress: Callable[[clew.Progress], None] | None) -> clew.PlanResult:
+    def search_all(
+        self,
+        target: np.ndarray,
+        progress: Callable[[clew.Progress], None] | None,
+        goal_tree: LandmarkTree | None = None,
+    ) -> clew.PlanResult:
         """SEARCH from the start to the goal; then, in turn from each end (a tree of landmarks rooted at
         the start, one at the goal), EXPLORE places a landmark and SEARCH goes from it to the other tree's
-        landmarks, until one reaches them."""
+        landmarks, until one reaches them. ``goal_tree``: a goal tree grown by an earlier run (rooted at
+        ``target``), grown further; its landmarks do not count against this run's."""
         best = math.inf
         tree = self.tree
-        goal_tree = self.goal_tree = LandmarkTree(target, self.none)
+        if goal_tree is None:
+            goal_tree = LandmarkTree(target, self.none)
+        self.goal_tree = goal_tree
+        earlier = len(goal_tree) - 1
         trees = (tree, goal_tree)
         weight = self.tuning.motion_weight * math.sqrt(2.0 / self.world.robot.dof)
-        side, landmark = 0, tree[0]
+        side, landmark, steps = 0, tree[0], 0
         while True:
             reason = self.termination.reason()
             if reason is not None:
@@ -216,7 +304,10 @@ class _MotionRun:
                     return self.success(landmark.id, found, reached, target)
                 return self.success(reached, found[::-1], landmark.id, target)
             self.keep_end(trees[side], landmark, found, other.joints())
-            if len(tree) + len(goal_tree) >= self.tuning.motion_landmarks:
+            steps += 1
+            if len(tree) + len(goal_tree) - earlier >= self.landmarks or (
+                not self.resolution_stop and steps >= self.landmarks
+            ):
                 return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
                     f"no motion found after {len(tree) + len(goal_tree)} landmarks; best {best:.4g} rad from the "
@@ -224,8 +315,9 @@ class _MotionRun:
                 )
             if self.tuning.motion_bidirectional:
                 side = 1 - side
-            explored = _explore(self.explore_ctx, self.space, trees[side], weight)
-            if explored is None:
+            explored = _explore(self.explore_ctx, self.space, trees[side], weight, self.mode)
+            if explored is None or (explored[2] < self.settings.resolution and not self.resolution_stop):
+                landmark = trees[side][-1]  # no new place: SEARCH again from this tree's newest landmark
                 continue
             parent, path, distance = explored
             landmark = trees[side].add(
@@ -274,7 +366,7 @@ class _MotionRun:
         :attr:`SpatialTuning.motion_shortcut_round` tries, until a round takes none or
         :attr:`SpatialTuning.motion_shortcut_tries` are spent; the path and the shortcuts taken."""
         rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
-        clear = partial(self.space.clear, self.world.checker)
+        clear = partial(self.space.clear, self.checker)
         left, shortcuts = self.tuning.motion_shortcut_tries, 0
         while left > 0:
             tries = min(left, self.tuning.motion_shortcut_round)
@@ -294,7 +386,7 @@ class _MotionRun:
         path[-1] = target
         first = float(np.abs(np.diff(path, axis=0)).sum())
         shortcuts = 0
-        if self.settings.improve_time > 0:
+        if self.shortcuts and self.settings.improve_time > 0:
             path, shortcuts = self.shortcut(path)
         travel = float(np.abs(np.diff(path, axis=0)).sum())
         result = self.finish(
@@ -315,7 +407,7 @@ class _MotionRun:
 
 
 def _explore(
-    ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float
+    ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float, mode: dict[str, np.ndarray]
 ) -> tuple[int, np.ndarray, float] | None:
     """EXPLORE for transit: the landmark (a category gene) and Manhattan genes whose decoded end lies
     farthest from every landmark of ``tree``: the distance between the joints times ``weight`` and the tcp's
@@ -325,12 +417,12 @@ def _explore(
     k = ctx.settings.manhattan_order
     joints = tree.joints()
     landmarks = _features(space, joints, weight)
-    none = np.zeros((1, 6))
+    ((key, pose),) = mode.items()
 
     def decode(population: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         index = np.clip(population[:, 0].astype(int), 0, len(joints) - 1)
         genes = population[:, 1:].reshape(-1, k, n)
-        paths = ctx.manhattan(joints[index], genes, object_poses=np.repeat(none, len(population), axis=0))
+        paths = ctx.manhattan(joints[index], genes, **{key: np.repeat(pose, len(population), axis=0)})
         return index, paths.waypoints
 
     def evaluate(population: np.ndarray) -> np.ndarray:

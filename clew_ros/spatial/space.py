@@ -45,12 +45,12 @@ from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
-from clew_ros.core.tree import Landmark, Segment
+from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
-from clew_ros.spatial.motion_plan import plan_motion
+from clew_ros.spatial.motion_plan import connect, plan_motion
 from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
 from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
@@ -76,6 +76,8 @@ Array = NDArray[np.float64]
 HOLD_STREAM = 21
 #: The goal configurations' inverse kinematics: its own stream too.
 GOAL_STREAM = 22
+#: A failed SEARCH_TRANSFER's two trees (:meth:`SpatialSpace.transfer_trees`): their own stream too.
+TRANSFER_TREES_STREAM = 23
 #: The improvement's shortcuts draw from the run's improvement generator (core's IMPROVE_STREAM).
 
 #: a level face at a height: the pose error's z and its rotation's x and y (the object's x, y and yaw free)
@@ -198,6 +200,9 @@ class SpatialSpace:
         )
         self._transit_checkers: dict[bytes, SpatialChecker] = {}
         self._transfer_checkers: dict[bytes, SpatialChecker] = {}
+        #: the goal trees of the failed SEARCH_TRANSFERs (:meth:`transfer_trees`), by held pose and goal: each
+        #: grows over the run, as the ACA's landmarks do
+        self._goal_trees: dict[bytes, LandmarkTree] = {}
         thing = world.object
         self._grasps = matrices(thing.grasps) if thing is not None else np.zeros((0, 4, 4))
         #: the object's size scale (m): its half diagonal, the radius of the orientation's chord
@@ -636,6 +641,10 @@ class SpatialSpace:
             self._in_air = False
         waypoints = self._finish(ctx, job, waypoints, found)
         held = self.held_object_poses(waypoints, rel)
+        if not self.at_goal(held[-1], goal):
+            joined = self.transfer_trees(ctx, q0, rel, goal, found, searched=waypoints)
+            if joined is not None:
+                waypoints, held = joined, self.held_object_poses(joined, rel)
         if not self.at_goal(held[-1], goal) and not self.rests(held[-1]):
             settled, ok = self.settle(self.transfer_checker(rel), rel, waypoints[-1:])
             if ok[0]:  # the search's end set down where it got to (the closest attempt, for SEARCH's chain)
@@ -648,6 +657,75 @@ class SpatialSpace:
         success = self.at_goal(held[-1], goal)
         distance = float(self.goal_distance(held[-1:], goal)[0])
         return PathResult(success, waypoints, 0.0 if success else distance, object_pose=held[-1])
+
+    def transfer_trees(
+        self,
+        ctx: PlanningContext,
+        q0: Array,
+        grasp_rel: Array,
+        goal: Array,
+        found: Array,
+        *,
+        searched: Array | None = None,
+    ) -> Array | None:
+        """When SEARCH_TRANSFER's GA did not reach the goal: the motion-only search's two trees of landmarks
+        (:func:`clew_ros.spatial.motion_plan.connect`: EXPLORE for transfer paths, the object carried as
+        ``grasp_rel``) given :attr:`SpatialTuning.transfer_tree_landmarks` steps; the path from ``q0`` to the
+        goal, or ``None``. One tree is rooted at ``q0``, with the GA's path ``searched`` (from ``q0``, the
+        object in the air) and the object's lift from there (:meth:`offsets`) as landmarks; the other at the
+        goal configuration nearest ``q0`` (``found``: :meth:`goal_configurations`), with its approach as a
+        landmark, and kept for the later SEARCH_TRANSFERs of the same grasp and goal, which grow it further:
+        where the object rests in a shelf, single-joint moves from the root barely move it."""
+        budget = self.tuning.transfer_tree_landmarks
+        if budget <= 0 or not len(found) or ctx.termination():
+            return None
+        rel = np.asarray(grasp_rel, dtype=float)
+        rng = own_generator(ctx, TRANSFER_TREES_STREAM, q0, np.r_[rel, goal])
+        mode = {"grasp_rel": rel[None]}
+        checker = self.transfer_checker(rel)
+        tree = self.goal_tree(rel, goal)
+        if tree is None:
+            tree = self._goal_trees[_tree_key(rel, goal)] = LandmarkTree(found[0], np.zeros(6))
+            self._add_branch(tree, self._lifted(checker, mode, found[0]))
+        ways = [self._lifted(checker, mode, q0)]
+        if searched is not None and len(searched) > 1 and np.max(np.abs(searched[-1] - q0)) > 0:
+            ways.append(searched)
+        return connect(
+            self,
+            ctx,
+            q0,
+            found[0],
+            mode=mode,
+            checker=checker,
+            landmarks=budget,
+            rng=rng,
+            goal_tree=tree,
+            start_ways=[w for w in ways if w is not None],
+        )
+
+    def goal_tree(self, grasp_rel: Array, goal: Array) -> LandmarkTree | None:
+        """The goal tree :meth:`transfer_trees` keeps for the object held as ``grasp_rel`` and set down at
+        ``goal`` (``None``: none grown yet)."""
+        return self._goal_trees.get(_tree_key(np.asarray(grasp_rel, dtype=float), np.asarray(goal, dtype=float)))
+
+    def _lifted(self, checker: SpatialChecker, mode: dict[str, Array], q: Array) -> Array | None:
+        """The straight move ``[q, lifted]`` (2, n) to the first of ``q``'s approaches (:meth:`offsets`: the
+        carried object lifted, or slid out) that is clear, else ``None``."""
+        for targets in self._approach_poses(mode, q[None]):
+            lifted = self._approach_joints(targets, q[None])
+            if not np.isnan(lifted).any() and self.clear(checker, q[None], lifted)[0]:
+                out: Array = np.vstack([q[None], lifted])
+                return out
+        return None
+
+    @staticmethod
+    def _add_branch(tree: LandmarkTree, way: Array | None) -> None:
+        """``way`` (a path from ``tree``'s root) added as a landmark at its end, the root its parent."""
+        if way is not None:
+            tree.add(
+                parent=0, joints=way[-1].copy(), object_pose=np.zeros(6), grasp=None, grasp_rel=None,
+                transit=way, transfer=None,
+            )  # fmt: skip
 
     def goal_configurations(self, ctx: PlanningContext, q0: Array, grasp_rel: Array, goal: Array) -> Array:
         """Valid configurations (m, n) holding the object (as ``grasp_rel``) at the goal (:meth:`goal_poses`),
@@ -707,35 +785,44 @@ class SpatialSpace:
         a gripper slides an object out of a shelf); where no configuration near holds that whole pose, one
         with the tcp at its position (:attr:`SpatialTuning.position_approach`); a row is NaN where inverse
         kinematics seeded at it found none within its joint limits."""
+        out = np.full(qs.shape, np.nan)
+        for targets in self._approach_poses(mode, qs):
+            missed = np.flatnonzero(np.isnan(out).any(axis=1))
+            if not len(missed):
+                break
+            out[missed] = self._approach_joints(targets[missed], qs[missed])
+        return out
+
+    def _approach_poses(self, mode: dict[str, np.ndarray], qs: Array) -> list[Array]:
+        """The tcp's approach poses (m, 4, 4) for configurations ``qs`` (m, n), first choice first (:meth:`offsets`):
+        backed off along its -z (transit); the object lifted, then lifted a little and slid out (transfer)."""
         here = self.tcp(qs)
         tuning = self.tuning
         shift = tuning.approach_m
         backed = here.copy()
         backed[:, :3, 3] -= shift * here[:, :3, 2]
         if mode.get("grasp_rel") is None:
-            moves = [backed]
-        else:
-            lifted = here.copy()
-            lifted[:, 2, 3] += shift
-            moves = [lifted]
-            if tuning.slide_lift_m > 0:
-                backed[:, 2, 3] += tuning.slide_lift_m
-                moves.append(backed)
+            return [backed]
+        lifted = here.copy()
+        lifted[:, 2, 3] += shift
+        moves = [lifted]
+        if tuning.slide_lift_m > 0:
+            backed[:, 2, 3] += tuning.slide_lift_m
+            moves.append(backed)
+        return moves
+
+    def _approach_joints(self, targets: Array, qs: Array) -> Array:
+        """Configurations (m, n) near ``qs`` (m, n) with the tcp at ``targets`` (m, 4, 4) (:meth:`offsets`), NaN
+        rows where none is found."""
         out = np.full(qs.shape, np.nan)
-        for targets in moves:
-            missed = np.flatnonzero(np.isnan(out).any(axis=1))
-            if not len(missed):
-                break
-            found = self._settle_ik.solve_many(
-                list(targets[missed]), np.random.default_rng(0), seeds=[q[None] for q in qs[missed]]
-            )
-            for k, solutions in zip(missed, found, strict=True):
-                if len(solutions):
-                    out[k] = solutions[0]
-            missed = np.flatnonzero(np.isnan(out).any(axis=1))
-            if len(missed) and tuning.position_approach:
-                reached, ok = self._settle_ik.solve_rows(targets[missed], qs[missed], _POSITION_ROWS)
-                out[missed[ok]] = reached[ok]
+        found = self._settle_ik.solve_many(list(targets), np.random.default_rng(0), seeds=[q[None] for q in qs])
+        for k, solutions in enumerate(found):
+            if len(solutions):
+                out[k] = solutions[0]
+        missed = np.flatnonzero(np.isnan(out).any(axis=1))
+        if len(missed) and self.tuning.position_approach:
+            reached, ok = self._settle_ik.solve_rows(targets[missed], qs[missed], _POSITION_ROWS)
+            out[missed[ok]] = reached[ok]
         return out
 
     def way(self, mode: dict[str, np.ndarray], q: Array, targets: Array) -> Array | None:
@@ -961,6 +1048,11 @@ class SpatialSpace:
                     best = (travel, segments, self.held_object_poses(goals[j][None], rel)[0])
                 break
         return None if best is None else (best[1], best[2])
+
+
+def _tree_key(grasp_rel: Array, goal: Array) -> bytes:
+    """A goal tree's key: the held pose and the goal."""
+    return np.round(np.r_[grasp_rel, goal], 9).tobytes()
 
 
 class _AllowAll:

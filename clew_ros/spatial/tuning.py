@@ -131,3 +131,7 @@ class SpatialTuning:
     #: follow to a goal it cannot see from ends that set the object down, and no settling to pay for each
     #: (False: every end is set down or is no move, as in EXPLORE)
     search_in_air: bool = True
+    #: landmarks (count, both trees together) of the two trees a SEARCH_TRANSFER grows when its GA did not
+    #: reach the goal (EXPLORE for transfer paths: the motion-only search, the object carried, from the
+    #: landmark and from the nearest goal configuration); 0: none
+    transfer_tree_landmarks: int = 8

@@ -4,12 +4,16 @@ planned and valid at the validator's 0.002 rad."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
-from clew_ros.core.settings import PlannerSettings
+from clew_ros.core.settings import PlannerSettings, Termination
+from clew_ros.core.space import PlanningContext
 from clew_ros.spatial.offline import checked_plan
 from clew_ros.spatial.space import SpatialSpace, SpatialTuning, plan
+from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.worlds.spatial import generate_spatial
 
 
@@ -44,3 +48,46 @@ def test_a_pick_and_place_by_an_arm_of_four_joints_is_planned_and_valid() -> Non
     checked = checked_plan(world, result)
     assert checked.success, checked.message
     assert sum(s.kind == "transfer" for s in result.segments) == 1
+
+
+def test_a_failed_transfers_two_trees_carry_the_object_out_of_one_shelf_into_another() -> None:
+    """EXPLORE for transfer paths (``SpatialSpace.transfer_trees``): from the witness's grasp in one narrow
+    shelf, the two trees (rooted there and at a goal configuration) find a path whose every piece is valid
+    at the validator's 0.002 rad with the object held, and which sets it down at the goal; the goal tree is
+    kept for the next SEARCH_TRANSFER of the same grasp and goal, which grows it further; with no
+    landmarks to spend there is no such search."""
+    world = generate_spatial("spatial_narrow", 12, "panda").world()
+    assert world.object is not None
+    generated = generate_spatial("spatial_narrow", 12, "panda")
+    transfer = next(s for s in generated.witness.segments if s.kind == "transfer")
+    assert transfer.grasp is not None
+    q0 = np.array(transfer.waypoints[0])
+    goal = np.array(world.object.goal)
+    settings = PlannerSettings(seed=0, time_limit=60.0)
+    space = SpatialSpace(world)
+    rel = space.grasp_rel(transfer.grasp)
+    ctx = PlanningContext(space, settings, np.random.default_rng(0), Termination(60.0), many=space.tuning.many)
+    found = space.goal_configurations(ctx, q0, rel, goal)
+    assert len(found)
+    for _ in range(10):  # SEARCH_TRANSFERs from the same landmark: the goal tree grows from one to the next
+        path = space.transfer_trees(ctx, q0, rel, goal, found)
+        if path is not None:
+            break
+    assert path is not None
+    assert np.array_equal(path[0], q0)
+    assert space.at_goal(space.held_object_poses(path[-1:], rel)[0], goal)
+    checker = space.transfer_checker(rel)
+    steps = np.full(space.dof, ValidationSettings().step_rad)
+    assert all(checker.valid(validation_samples(a, b, steps)).all() for a, b in itertools.pairwise(path))
+
+    grown = SpatialSpace(world, SpatialTuning(transfer_tree_landmarks=2))
+    before = 0
+    for _ in range(3):
+        grown.transfer_trees(ctx, q0 + 0.0, rel, goal, found)
+        tree = grown.goal_tree(rel, goal)
+        assert tree is not None
+        assert len(tree) >= before
+        before = len(tree)
+    assert before > 1
+    none = SpatialSpace(world, SpatialTuning(transfer_tree_landmarks=0))
+    assert none.transfer_trees(ctx, q0, rel, goal, found) is None

@@ -72,8 +72,7 @@ def plan(
     settings = settings or PlannerSettings()
     search = search or SearchSettings()
     many = many or ManyJoints()
-    if space.dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
-        settings = dataclasses.replace(settings, manhattan_order=many.manhattan_order)  # (ManyJoints)
+    settings = _adapted(settings, space.dof, many)
     goal = np.asarray(space.goal if goal is None else goal, dtype=float)
     termination = termination or Termination(settings.time_limit)
     rng = np.random.default_rng(settings.seed)
@@ -92,52 +91,53 @@ def plan(
         }
         return PlanResult(outcome, message, segments or [], final_pose, tree, stats)
 
+    def succeed(landmark: Landmark, found: _Found, searched_s: float) -> PlanResult:
+        """The plan through ``landmark`` and SEARCH's path from it, improved; ``searched_s``: when SEARCH
+        found it (the first plan's time)."""
+        segments = tree.history_of(landmark.id)
+        append_step(segments, found.grasp, found.transit, found.transfer)
+        assert found.object_pose is not None  # a successful SEARCH_TRANSFER says where the object ends
+        better = _improved(ctx, segments, found.object_pose, goal)
+        result = finish(
+            Outcome.SUCCEEDED,
+            _found_message(len(tree), better, settings.improve_time),
+            better.segments,
+            better.final_object_pose,
+        )
+        result.stats.update(_quality(better))
+        result.first_plan_s = round(searched_s, 4)
+        return result
+
     quick = space.quick_refusal(goal)
     if quick is not None:
         return finish(*quick)
+    report = progress or _no_report
     best = np.inf
     try:
         explorer = Explorer(ctx, tree)
         aims = space.regrasp_aims(goal)
         tried = _Tried()
+        if search.search_from_start:
+            landmark, found, closest = _search_start(ctx, explorer, tree, goal, aims=aims)
+            best = min(best, closest)
+            if found.success:
+                return succeed(landmark, found, termination.elapsed)
         while True:
             reason = termination.reason()
             if reason is not None:
                 return finish(reason, _stopped_message(reason, settings, len(tree), tried.summary(explorer, best)))
             exploration = explorer.explore()
             if exploration is None:
-                # No transit from any landmark: no proof of anything (the transit search is local and
-                # stochastic, and the holding configurations a sample), so never NO_PATH_AT_RESOLUTION:
-                # the failed pairs are tried again, with twice the holding configurations (their inverse
-                # kinematics is not interruptible: at most SearchSettings.hold_sample_joints samples x joints,
-                # a few tens of milliseconds) and stalled transits joined to them, until the time limit.
-                tried.idle_rounds += 1
-                explorer.forget_failures()
-                most = search.hold_sample_joints // space.dof
-                ctx.hold_samples = max(ctx.hold_samples, min(2 * ctx.hold_samples, most))
-                ctx.transit_joins = True
+                _retry_harder(ctx, explorer, tried)
                 continue
             ctx.transit_joins = False  # transits found: joins only while EXPLORE finds none (elsewhere they cost more)
             new = tree.add(**exploration.fields)
             landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims)
             searched_s = termination.elapsed  # when SEARCH ended: the first plan's time if it found one
             best = min(best, closest)
-            if progress is not None:
-                progress(Progress(len(tree), best, termination.elapsed, tree))
+            report(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
-                segments = tree.history_of(landmark.id)
-                append_step(segments, found.grasp, found.transit, found.transfer)
-                assert found.object_pose is not None  # a successful SEARCH_TRANSFER says where the object ends
-                better = _improved(ctx, segments, found.object_pose, goal)
-                result = finish(
-                    Outcome.SUCCEEDED,
-                    _found_message(len(tree), better, settings.improve_time),
-                    better.segments,
-                    better.final_object_pose,
-                )
-                result.stats.update(_quality(better))
-                result.first_plan_s = round(searched_s, 4)
-                return result
+                return succeed(landmark, found, searched_s)
             if exploration.distance < settings.resolution and exploration.covered:
                 # the paper's criterion, once EXPLORE has searched every (landmark, grasp) pair's transit:
                 # its farthest new landmark lies within the resolution of the others
@@ -149,6 +149,30 @@ def plan(
                 )
     except Exception as error:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
         return finish(Outcome.INTERNAL_ERROR, f"internal error: {error!r}\n{traceback.format_exc(limit=4)}")
+
+
+def _adapted(settings: PlannerSettings, dof: int, many: ManyJoints) -> PlannerSettings:
+    """``settings`` with Manhattan paths of ``many.manhattan_order`` on arms of many joints (:class:`ManyJoints`)."""
+    if dof >= many.straight_probe_joints and settings.manhattan_order > many.manhattan_order:
+        return dataclasses.replace(settings, manhattan_order=many.manhattan_order)
+    return settings
+
+
+def _no_report(_progress: Progress) -> None:
+    """No progress callback."""
+
+
+def _retry_harder(ctx: PlanningContext, explorer: Explorer, tried: _Tried) -> None:
+    """After an EXPLORE round with no transit from any landmark. That proves nothing (the transit search is
+    local and stochastic, and the holding configurations a sample), so never NO_PATH_AT_RESOLUTION: the
+    failed pairs are tried again, with twice the holding configurations (their inverse kinematics is not
+    interruptible: at most ``SearchSettings.hold_sample_joints`` samples x joints, a few tens of milliseconds)
+    and stalled transits joined to them, until the time limit."""
+    tried.idle_rounds += 1
+    explorer.forget_failures()
+    most = ctx.search.hold_sample_joints // ctx.space.dof
+    ctx.hold_samples = max(ctx.hold_samples, min(2 * ctx.hold_samples, most))
+    ctx.transit_joins = True
 
 
 @dataclass
@@ -196,6 +220,55 @@ def _search_chain(
         found = _search(ctx, explorer, landmark, goal, aims=aims)
         closest = min(closest, found.distance)
     return landmark, found, closest
+
+
+def _search_start(
+    ctx: PlanningContext,
+    explorer: Explorer,
+    tree: LandmarkTree,
+    goal: np.ndarray,
+    *,
+    aims: RegraspAims,
+) -> tuple[Landmark, _Found, float]:
+    """SEARCH from the start (``SearchSettings.search_from_start``): SEARCH_TRANSFER from each grasp a transit
+    reaches at the object's initial placement (:meth:`Explorer.start_candidates`), by grasp, until one reaches
+    the goal; where none does and the closest attempt got nearer the goal, that attempt becomes a landmark and
+    SEARCH goes on from it, as :func:`_search_chain` does.
+
+    Returns the landmark the answer starts from (the root, or that attempt's), the answer and the closest
+    goal distance reached (m)."""
+    root = tree[0]
+    found = _Found(False, np.inf)
+    for candidate in explorer.start_candidates():
+        if ctx.termination():
+            break
+        result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
+        if result.success or result.distance < found.distance:
+            found = _Found(
+                result.success,
+                result.distance,
+                candidate.grasp,
+                candidate.transit,
+                result.waypoints,
+                result.object_pose,
+                candidate.grasp_rel,
+            )
+        if result.success:
+            break
+    if found.success or not _worth_chaining(ctx, root, found, goal) or ctx.termination():
+        return root, found, found.distance
+    assert found.transfer is not None  # worth chaining: the closest attempt moved the object
+    new = tree.add(
+        parent=root.id,
+        joints=found.transfer[-1].copy(),
+        object_pose=found.object_pose,
+        grasp=found.grasp,
+        grasp_rel=found.grasp_rel,
+        transit=found.transit,
+        transfer=found.transfer,
+    )
+    landmark, chained, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims)
+    return landmark, chained, min(found.distance, closest)
 
 
 def _search(

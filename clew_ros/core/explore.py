@@ -102,6 +102,13 @@ class Explorer:
             self._aimed[key] = self._transit(landmark, grasp, approach)
         return self._aimed[key]
 
+    def start_candidates(self) -> list[_Candidate]:
+        """The transits from the start (the root landmark) to every grasp at the object's initial placement,
+        searched together and cached for EXPLORE; those found, by grasp."""
+        pairs = [(0, g) for g in range(self.ctx.space.grasp_count)]
+        self._search_transits([p for p in pairs if p not in self._transits])
+        return [c for c in (self._transits.get(p) for p in pairs) if c is not None]
+
     def forget_failures(self) -> None:
         """Drop the failed transits from the cache, so that EXPLORE tries those pairs again (the GA is
         stochastic: a transit that failed once may succeed with other draws)."""

@@ -113,6 +113,11 @@ class SearchSettings:
     #: SEARCH runs again from it, at most this many times in a row (a regrasp where the carried object got
     #: stuck; 4 or 8 planned no more worlds than 2 and cost time: docs/benchmarks.md)
     search_chain: int = 2
+    #: whether SEARCH runs from the start before the first EXPLORE: SEARCH_TRANSFER from each grasp that a
+    #: transit reaches at the object's initial placement (a departure: the paper's first SEARCH is from
+    #: EXPLORE's first landmark, which lies as far from the start as EXPLORE can put it, here perhaps deeper
+    #: into the shelf the object starts in); the planar planner keeps the paper's order
+    search_from_start: bool = False
     #: SEARCH refines an end point by damped least squares once its objective is within this share of the arm's
     #: reach (m / m): the GA's Manhattan paths land within centimetres, the last millimetres need the Jacobian
     refine_radius: float = 0.15

@@ -15,7 +15,8 @@ __all__ = ["SpatialTuning"]
 class SpatialTuning:
     """Every tuning value of a spatial run beyond ``planner.*``; a benchmark or a test plans with a copy."""
 
-    search: SearchSettings = field(default_factory=SearchSettings)
+    #: SEARCH's tuning: core's, but SEARCH runs from the start before the first EXPLORE
+    search: SearchSettings = field(default_factory=lambda: SearchSettings(search_from_start=True))
     #: how core adapts the search to arms of many joints, from 6 joints here (a UR5, a Panda): Manhattan
     #: paths of order 1 (``planner.manhattan_order`` lowered to it) and at most 4 generations of EXPLORE's GA:
     #: a free interval costs 0.13-0.25 ms on the Panda, and with them the pick-and-place problems of

@@ -4,6 +4,7 @@ import json
 from pathlib import Path
 
 from benchmarks.families_run import HEADER, main
+from benchmarks.generated import reference_world
 
 
 def test_a_tiny_family_run_writes_every_row(tmp_path: Path) -> None:
@@ -46,3 +47,8 @@ def test_held_out_worlds_start_at_the_first_world_seed(tmp_path: Path) -> None:
     report = json.loads((out / "families.json").read_text())
     assert report["first_world"] == 40
     assert sorted(w["seed"] for w in report["worlds"]) == [40, 41]
+
+
+def test_a_config_world_without_a_plan_is_no_solvable_reference() -> None:
+    assert reference_world("figure1").solvable
+    assert not reference_world("unreachable").solvable

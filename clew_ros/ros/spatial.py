@@ -215,13 +215,13 @@ def _quaternion_matrix(x: float, y: float, z: float, w: float) -> Matrix:
 def _unstable_reason(world: SpatialWorld, pose: Matrix) -> str:
     """Why ``pose`` is no stable placement: the face most nearly down, its tilt, how far it lies off the
     top face of the support under the object's centre (or that none is under it)."""
-    from clew_ros.spatial.placements import _NORMALS
+    from clew_ros.spatial.placements import FACE_NORMALS
 
     assert world.object is not None
     thing = world.object.shape
     tolerance = world.tolerances["placement_tolerance"]
     rot, center = pose[:3, :3], pose[:3, 3]
-    normals = {face: rot[:, _NORMALS[face][0]] * _NORMALS[face][1] for face in thing.faces}
+    normals = {face: rot[:, FACE_NORMALS[face][0]] * FACE_NORMALS[face][1] for face in thing.faces}
     face = min(normals, key=lambda f: float(normals[f][2]))
     tilt = math.acos(max(-1.0, min(1.0, -float(normals[face][2]))))
     points = thing.face_points(face) @ rot.T + center

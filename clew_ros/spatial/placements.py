@@ -27,10 +27,12 @@ from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.transforms import pose_matrix, rpy_matrix
 
 __all__ = [
+    "FACE_NORMALS",
     "FACE_RPY",
     "MovableObject",
     "Support",
     "check_placement",
+    "face_down",
     "object_from_parameters",
     "placement_pose",
     "project",
@@ -51,7 +53,15 @@ FACE_RPY: dict[str, tuple[float, float, float]] = {
     "+y": (-math.pi / 2, 0.0, 0.0),
     "-y": (math.pi / 2, 0.0, 0.0),
 }
-_NORMALS = {"-z": (2, -1.0), "+z": (2, 1.0), "+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
+#: Each face's outward normal in the object's frame: (axis, sign).
+FACE_NORMALS: dict[str, tuple[int, float]] = {
+    "-z": (2, -1.0),
+    "+z": (2, 1.0),
+    "+x": (0, 1.0),
+    "-x": (0, -1.0),
+    "+y": (1, 1.0),
+    "-y": (1, -1.0),
+}
 
 
 @dataclass(frozen=True)
@@ -68,7 +78,7 @@ class MovableObject:
 
     def height(self, face: str) -> float:
         """How high the centre rests above the support's top (m) on ``face``."""
-        axis, _ = _NORMALS[face]
+        axis, _ = FACE_NORMALS[face]
         return self.size[axis] / 2 if self.shape == "box" else self.size[0] / 2
 
     def geometry(self) -> Geometry:
@@ -76,7 +86,7 @@ class MovableObject:
 
     def face_points(self, face: str) -> NDArray[np.float64]:
         """A box face's 4 corners in the object's frame (a cylinder cap: its centre)."""
-        axis, sign = _NORMALS[face]
+        axis, sign = FACE_NORMALS[face]
         if self.shape == "cylinder":
             return np.array([[0.0, 0.0, sign * self.size[0] / 2]])
         half = np.asarray(self.size) / 2
@@ -185,7 +195,7 @@ def resting_on(
     top face."""
     rot, center = pose[:3, :3], pose[:3, 3]
     for face in thing.faces:
-        axis, sign = _NORMALS[face]
+        axis, sign = FACE_NORMALS[face]
         normal = rot[:, axis] * sign  # the face's outward normal in world
         if normal[2] >= 0.0:
             continue
@@ -257,14 +267,20 @@ def sample_placements(
     return np.array(out).reshape(-1, 4, 4)
 
 
+def face_down(thing: MovableObject, rot: Matrix) -> tuple[str, float]:
+    """The face of ``thing`` whose outward normal points most nearly down with the object turned by ``rot``
+    (3x3), and the yaw (rad) about world z that turning leaves once that face is turned exactly down."""
+    face = min(thing.faces, key=lambda f: float(rot[2, FACE_NORMALS[f][0]] * FACE_NORMALS[f][1]))
+    turned = rot @ rpy_matrix(*FACE_RPY[face]).T  # Rz(yaw) when the face is exactly down
+    return face, math.atan2(float(turned[1, 0]), float(turned[0, 0]))
+
+
 def project(thing: MovableObject, pose: Matrix, supports: Sequence[Support]) -> Matrix | None:
     """The stable placement nearest ``pose``: the face whose normal points most nearly down, rested on the
     support under the centre whose top is nearest that face's height (its yaw and x, y kept); ``None`` when no
     support lies under the centre."""
-    rot, center = pose[:3, :3], pose[:3, 3]
-    face = min(thing.faces, key=lambda f: float(rot[:, _NORMALS[f][0]][2] * _NORMALS[f][1]))
-    turned = rot @ rpy_matrix(*FACE_RPY[face]).T  # Rz(yaw) when the face is exactly down
-    yaw = math.atan2(float(turned[1, 0]), float(turned[0, 0]))
+    center = pose[:3, 3]
+    face, yaw = face_down(thing, pose[:3, :3])
     under = [s for s in supports if s.contains(center[None, :2])[0]]
     if not under:
         return None

@@ -51,7 +51,7 @@ from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.motion_plan import connect, plan_motion
-from clew_ros.spatial.placements import FACE_RPY, Support, placement_pose, resting_on
+from clew_ros.spatial.placements import Support, face_down, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
 from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
 from clew_ros.spatial.spheres import SphereSettings, cover
@@ -85,8 +85,6 @@ _LEVEL_ROWS = pose_rows(("z", "rx", "ry"))
 
 #: a position: the pose error's x, y and z (the orientation free)
 _POSITION_ROWS = pose_rows(("x", "y", "z"))
-
-_FACE_NORMALS = {"-z": (2, -1.0), "+z": (2, 1.0), "+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
 
 
 def matrices(poses: Array) -> Array:
@@ -375,10 +373,8 @@ class SpatialSpace:
         that face, at the same x, y and yaw, its footprint inside the support's top; ``None`` if none."""
         thing = self.world.object
         assert thing is not None
-        rot, center = object_pose[:3, :3], object_pose[:3, 3]
-        face = min(thing.shape.faces, key=lambda f: float(rot[2, _FACE_NORMALS[f][0]] * _FACE_NORMALS[f][1]))
-        turned = rot @ rpy_matrix(*FACE_RPY[face]).T
-        yaw = math.atan2(float(turned[1, 0]), float(turned[0, 0]))
+        center = object_pose[:3, 3]
+        face, yaw = face_down(thing.shape, object_pose[:3, :3])
         bottom = float(center[2]) - thing.shape.height(face)
         tuning = self.tuning
         under = [

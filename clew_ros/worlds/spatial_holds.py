@@ -25,7 +25,7 @@ from clew_ros.core.plan import Plan
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
-from clew_ros.spatial.placements import FACE_RPY, MovableObject
+from clew_ros.spatial.placements import FACE_NORMALS, FACE_RPY, MovableObject
 from clew_ros.spatial.plan import replay
 from clew_ros.spatial.random_robot import BASE_LINK, TIP_LINK, random_robot_urdf
 from clew_ros.spatial.robot import RobotModel, load_robot, robot_from_parameters
@@ -36,7 +36,6 @@ from clew_ros.spatial.world import SpatialWorld
 
 __all__ = [
     "APPROACH_STEPS",
-    "FACE_NORMAL",
     "Arm",
     "Hold",
     "Solver",
@@ -203,9 +202,6 @@ def grasps_of(thing: MovableObject, depth: float) -> list[tuple[str, list[float]
     return out
 
 
-FACE_NORMAL = {"-z": (2, -1.0), "+z": (2, 1.0), "+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
-
-
 # ---------------------------------------------------------------------------------- holds by least squares
 
 
@@ -252,7 +248,7 @@ def level_residual(
     """Residuals of holding the object (by ``grasp``) with ``face`` straight down, its centre near ``target``
     (``None``: that coordinate free), position errors weighted ``weight``."""
     inverse = np.linalg.inv(grasp)
-    axis, sign = FACE_NORMAL[face]
+    axis, sign = FACE_NORMALS[face]
     chosen = [i for i, t in enumerate(target) if t is not None]
     goal = np.array([target[i] for i in chosen], dtype=np.float64)
 
@@ -353,7 +349,7 @@ def find_hold(
         return None
     tcp = solver.kinematics.tcp_poses(q[None])[0]
     pose = tcp @ np.linalg.inv(grasp)
-    axis, sign = FACE_NORMAL[face]
+    axis, sign = FACE_NORMALS[face]
     if pose[2, axis] * sign > -0.5:
         return None
     pose[:3, :3] = rpy_matrix(0.0, 0.0, math.atan2(*yaw_vector(pose, face))) @ rpy_matrix(*FACE_RPY[face])

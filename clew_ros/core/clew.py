@@ -138,9 +138,10 @@ def plan(
             report(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
                 return succeed(landmark, found, searched_s)
-            if exploration.distance < settings.resolution and exploration.covered:
+            if exploration.distance < settings.resolution and exploration.covered and exploration.moved:
                 # the paper's criterion, once EXPLORE has searched every (landmark, grasp) pair's transit:
-                # its farthest new landmark lies within the resolution of the others
+                # its farthest new landmark lies within the resolution of the others (and it moved the
+                # object: a step that could not move it at all has explored nothing)
                 return finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
                     f"no path at resolution {settings.resolution}: the new landmark lies "

@@ -27,6 +27,7 @@ def test_explore_beats_random_single_manipulation_paths():
     world, settings = world_of(ctx), ctx.settings
     exploration = explorer.explore()
     assert exploration is not None
+    assert exploration.moved  # the farthest landmark carried the object away from its start
     landmark = tree.add(**exploration.fields)
     features = ctx.space.landmark_features(tree.joints(), tree.object_poses(), settings.joint_weight)[:1]
 

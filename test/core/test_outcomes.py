@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from clew_ros.core.explore import Exploration, Explorer
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.planar.space import plan
 from clew_ros.planar.world import load_world, world_from_parameters
@@ -86,3 +87,29 @@ def test_unsolvable_worlds_still_get_their_proof_before_any_search(source: str, 
     assert result.outcome is outcome, result.message
     assert len(result.tree) == 1  # answered by the proof, before EXPLORE placed a landmark
     assert result.stats["evaluations"] == 0
+
+
+@pytest.mark.parametrize("moved", [True, False])
+def test_the_resolution_criterion_needs_an_explore_step_that_moved_the_object(
+    moved: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """EXPLORE's every step lands on the landmark it started from (the paper's epsilon_n of 0), every pair
+    searched: NO_PATH_AT_RESOLUTION when its path moved the object, but when it could not move it at all (a
+    spatial transfer that found no placement to set the object down on) the run goes on to its time limit."""
+    world = load_world(ROOT / "config/figure1.yaml")
+    original = Explorer.explore
+
+    def explore_in_place(self: Explorer) -> Exploration | None:
+        found = original(self)
+        if found is None:
+            return None
+        parent = self.tree[found.fields["parent"]]
+        fields = {**found.fields, "joints": parent.joints.copy(), "object_pose": parent.object_pose.copy()}
+        return Exploration(fields, 0.0, covered=True, moved=moved)
+
+    monkeypatch.setattr(Explorer, "explore", explore_in_place)
+    result = plan(world, PlannerSettings(seed=0, time_limit=1.0, improve_time=0.0))
+    if moved:
+        assert result.outcome is Outcome.NO_PATH_AT_RESOLUTION, result.message
+    else:
+        assert result.outcome in {Outcome.TIME_LIMIT, Outcome.SUCCEEDED}, result.message

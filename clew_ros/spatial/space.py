@@ -705,12 +705,28 @@ class SpatialSpace:
         return self._goal_trees.get(_tree_key(np.asarray(grasp_rel, dtype=float), np.asarray(goal, dtype=float)))
 
     def _lifted(self, checker: SpatialChecker, mode: dict[str, Array], q: Array) -> Array | None:
-        """The straight move ``[q, lifted]`` (2, n) to the first of ``q``'s approaches (:meth:`offsets`: the
-        carried object lifted, or slid out) that is clear, else ``None``."""
-        for targets in self._approach_poses(mode, q[None]):
-            lifted = self._approach_joints(targets, q[None])
-            if not np.isnan(lifted).any() and self.clear(checker, q[None], lifted)[0]:
-                out: Array = np.vstack([q[None], lifted])
+        """The carried object's way out from ``q`` (k + 1, n), along the first of its approaches (:meth:`offsets`:
+        lifted, or lifted a little and slid back along the tcp's -z) whose first step is clear, repeated step by
+        step (each ``approach_m`` further, inverse kinematics seeded at the step before, each straight move
+        clear) up to :attr:`SpatialTuning.transfer_way_out_m` while they stay clear: out of a shelf deeper than
+        one approach; ``None`` if no first step is clear."""
+        here = self.tcp(q[None])[0]
+        steps = max(1, math.ceil(self.tuning.transfer_way_out_m / self.tuning.approach_m - 1e-9))
+        lift = np.array([0.0, 0.0, self.tuning.approach_m])
+        back = -self.tuning.approach_m * here[:3, 2]
+        for first in self._approach_poses(mode, q[None]):
+            shift = first[0, :3, 3] - here[:3, 3]
+            along = lift if np.allclose(shift, lift) else back  # lifted again, or slid on (lifted once)
+            way = [q]
+            for k in range(steps):
+                target = first[0].copy()
+                target[:3, 3] += k * along
+                step = self._approach_joints(target[None], way[-1][None])
+                if np.isnan(step).any() or not self.clear(checker, way[-1][None], step)[0]:
+                    break
+                way.append(step[0])
+            if len(way) > 1:
+                out: Array = np.array(way)
                 return out
         return None
 

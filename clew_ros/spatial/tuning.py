@@ -136,3 +136,7 @@ class SpatialTuning:
     #: reach the goal (EXPLORE for transfer paths: the motion-only search, the object carried, from the
     #: landmark and from the nearest goal configuration); 0: none
     transfer_tree_landmarks: int = 8
+    #: how far (m) those trees' first landmarks carry the object out from the landmark and from the goal
+    #: along its approach, in steps of ``approach_m`` while they are clear: out of a shelf deeper than one
+    #: approach
+    transfer_way_out_m: float = 0.3

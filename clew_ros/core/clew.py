@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from clew_ros.core.explore import Explorer
+from clew_ros.core.explore import Candidate, Explorer
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, SearchSettings, Termination
 from clew_ros.core.space import Improvement, PlanningContext, RegraspAims, Space
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
@@ -208,16 +208,7 @@ def _search_chain(
     for _ in range(ctx.search.search_chain):
         if found.success or not _worth_chaining(ctx, landmark, found, goal) or ctx.termination():
             break
-        assert found.transfer is not None  # worth chaining: SEARCH's closest attempt moved the object
-        landmark = tree.add(
-            parent=landmark.id,
-            joints=found.transfer[-1].copy(),
-            object_pose=found.object_pose,
-            grasp=found.grasp,
-            grasp_rel=found.grasp_rel,
-            transit=found.transit,
-            transfer=found.transfer,
-        )
+        landmark = _chained(tree, landmark, found)
         found = _search(ctx, explorer, landmark, goal, aims=aims)
         closest = min(closest, found.distance)
     return landmark, found, closest
@@ -243,31 +234,12 @@ def _search_start(
     for candidate in explorer.start_candidates():
         if ctx.termination():
             break
-        result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
-        if result.success or result.distance < found.distance:
-            found = _Found(
-                result.success,
-                result.distance,
-                candidate.grasp,
-                candidate.transit,
-                result.waypoints,
-                result.object_pose,
-                candidate.grasp_rel,
-            )
-        if result.success:
+        found = _closer(ctx, candidate, goal, found)
+        if found.success:
             break
     if found.success or not _worth_chaining(ctx, root, found, goal) or ctx.termination():
         return root, found, found.distance
-    assert found.transfer is not None  # worth chaining: the closest attempt moved the object
-    new = tree.add(
-        parent=root.id,
-        joints=found.transfer[-1].copy(),
-        object_pose=found.object_pose,
-        grasp=found.grasp,
-        grasp_rel=found.grasp_rel,
-        transit=found.transit,
-        transfer=found.transfer,
-    )
+    new = _chained(tree, root, found)
     landmark, chained, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims)
     return landmark, chained, min(found.distance, closest)
 
@@ -310,20 +282,41 @@ def _search(
         candidate = explorer.candidate(landmark.id, grasp, approach)
         if candidate is None:
             continue
-        result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
-        if result.success or result.distance < closest.distance:
-            closest = _Found(
-                result.success,
-                result.distance,
-                grasp,
-                candidate.transit,
-                result.waypoints,
-                result.object_pose,
-                candidate.grasp_rel,
-            )
-        if result.success:
+        closest = _closer(ctx, candidate, goal, closest)
+        if closest.success:
             break
     return closest
+
+
+def _closer(ctx: PlanningContext, candidate: Candidate, goal: np.ndarray, closest: _Found) -> _Found:
+    """SEARCH_TRANSFER from ``candidate`` (a transit's end, holding its grasp): its answer where it reached the
+    goal or came closer than ``closest``, else ``closest``."""
+    result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, goal)
+    if not result.success and result.distance >= closest.distance:
+        return closest
+    return _Found(
+        result.success,
+        result.distance,
+        candidate.grasp,
+        candidate.transit,
+        result.waypoints,
+        result.object_pose,
+        candidate.grasp_rel,
+    )
+
+
+def _chained(tree: LandmarkTree, parent: Landmark, found: _Found) -> Landmark:
+    """SEARCH's closest attempt from ``parent`` (one that moved the object) as a new landmark: SEARCH's chain."""
+    assert found.transfer is not None  # worth chaining: the closest attempt moved the object
+    return tree.add(
+        parent=parent.id,
+        joints=found.transfer[-1].copy(),
+        object_pose=found.object_pose,
+        grasp=found.grasp,
+        grasp_rel=found.grasp_rel,
+        transit=found.transit,
+        transfer=found.transfer,
+    )
 
 
 def _worth_chaining(ctx: PlanningContext, landmark: Landmark, found: _Found, goal: np.ndarray) -> bool:

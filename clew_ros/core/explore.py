@@ -25,11 +25,14 @@ from clew_ros.core.manhattan import ManhattanPaths
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Landmark, LandmarkTree
 
-__all__ = ["Exploration", "Explorer"]
+__all__ = ["Candidate", "Exploration", "Explorer"]
 
 
 @dataclass
-class _Candidate:
+class Candidate:
+    """A transit's end: the configuration ``start`` holding ``grasp`` at landmark ``parent``'s placement, where
+    a transfer (EXPLORE's or SEARCH's) starts."""
+
     parent: int
     grasp: int
     start: np.ndarray  # (n,) joints holding the grasp
@@ -59,17 +62,17 @@ class Explorer:
     def __init__(self, ctx: PlanningContext, tree: LandmarkTree) -> None:
         self.ctx = ctx
         self.tree = tree
-        self._transits: dict[tuple[int, int], _Candidate | None] = {}
-        self._aimed: dict[tuple[int, int, bytes], _Candidate | None] = {}  # SEARCH's transits aimed at cells
+        self._transits: dict[tuple[int, int], Candidate | None] = {}
+        self._aimed: dict[tuple[int, int, bytes], Candidate | None] = {}  # SEARCH's transits aimed at cells
         #: transit searches run so far (retries of failed pairs included)
         self.transit_searches = 0
 
     @property
-    def transits(self) -> Mapping[tuple[int, int], _Candidate | None]:
+    def transits(self) -> Mapping[tuple[int, int], Candidate | None]:
         """The transits searched so far, by ``(landmark id, grasp)`` (``None``: none found), read only."""
         return MappingProxyType(self._transits)
 
-    def candidate(self, landmark_id: int, grasp: int, approach: Any | None = None) -> _Candidate | None:
+    def candidate(self, landmark_id: int, grasp: int, approach: Any | None = None) -> Candidate | None:
         """The single manipulation path's transit part from a landmark to a grasp (cached).
 
         With ``approach`` (the space's aim of SEARCH's regrasp towards the
@@ -83,7 +86,7 @@ class Explorer:
         landmark = self.tree[landmark_id]
         if landmark.grasp == grasp and landmark.grasp_rel is not None:  # (every landmark but the root holds one)
             own = self._transits.setdefault(
-                key, _Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
+                key, Candidate(landmark_id, grasp, landmark.joints, landmark.grasp_rel, None)
             )
             if approach is None or self.ctx.space.approach_allows(approach, landmark.grasp_rel):
                 return own
@@ -100,14 +103,14 @@ class Explorer:
             self._transits[key] = found
         return found
 
-    def _aimed_transit(self, landmark: Landmark, grasp: int, approach: Any) -> _Candidate | None:
+    def _aimed_transit(self, landmark: Landmark, grasp: int, approach: Any) -> Candidate | None:
         """The transit from ``landmark`` to ``grasp`` aimed at ``approach``, searched once per approach."""
         key = (landmark.id, grasp, np.packbits(np.asarray(approach)).tobytes())
         if key not in self._aimed:
             self._aimed[key] = self._transit(landmark, grasp, approach)
         return self._aimed[key]
 
-    def start_candidates(self) -> list[_Candidate]:
+    def start_candidates(self) -> list[Candidate]:
         """The transits from the start (the root landmark) to every grasp at the object's initial placement,
         searched together and cached for EXPLORE; those found, by grasp."""
         pairs = [(0, g) for g in range(self.ctx.space.grasp_count)]
@@ -119,7 +122,7 @@ class Explorer:
         stochastic: a transit that failed once may succeed with other draws)."""
         self._transits = {key: found for key, found in self._transits.items() if found is not None}
 
-    def _transit(self, landmark: Landmark, grasp: int, approach: Any | None) -> _Candidate | None:
+    def _transit(self, landmark: Landmark, grasp: int, approach: Any | None) -> Candidate | None:
         return self._transits_to([(landmark, grasp)], approach)[0]
 
     def _search_transits(self, pairs: list[tuple[int, int]]) -> None:
@@ -129,14 +132,14 @@ class Explorer:
         found = self._transits_to([(self.tree[i], g) for i, g in pairs], None)
         self._transits.update(zip(pairs, found, strict=True))
 
-    def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: Any | None) -> list[_Candidate | None]:
+    def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: Any | None) -> list[Candidate | None]:
         """SEARCH_TRANSIT from each landmark to its grasp, all at once: the candidates, None where it failed."""
         self.transit_searches += len(pairs)
         results = self.ctx.space.search_transits(
             self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach) for landmark, grasp in pairs]
         )
         return [
-            _Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
+            Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
             if result.success and result.grasp_rel is not None
             else None
             for (landmark, grasp), result in zip(pairs, results, strict=True)

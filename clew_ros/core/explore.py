@@ -49,7 +49,7 @@ class Exploration:
     #: whether every (landmark, grasp) pair's transit had been searched when this step chose: EXPLORE's
     #: search covered the landmark space, so ``distance`` is the paper's epsilon_n
     covered: bool = True
-    #: whether the new landmark's transfer moved the object (by ``planner.resolution`` at least, as
+    #: whether the new landmark's transfer moved the object (by ``SearchSettings.moved_m`` at least, as
     #: :meth:`~clew_ros.core.space.Space.goal_distance` measures it): a step whose best path could not
     #: (a spatial transfer that found no stable placement to end at stays where it started) has found
     #: nothing of the reachable space, so its ``distance`` proves nothing
@@ -206,4 +206,4 @@ class Explorer:
         covered = len(fresh) <= wanted  # every pair not searched before was searched in this step
         start = self.tree[chosen_candidate.parent].object_pose
         shift = float(space.goal_distance(paths.object_poses[:1], start)[0])
-        return Exploration(fields, -result.fitness, covered, moved=shift >= ctx.settings.resolution)
+        return Exploration(fields, -result.fitness, covered, moved=shift >= ctx.search.moved_m)

@@ -118,6 +118,11 @@ class SearchSettings:
     #: EXPLORE's first landmark, which lies as far from the start as EXPLORE can put it, here perhaps deeper
     #: into the shelf the object starts in); the planar planner keeps the paper's order
     search_from_start: bool = False
+    #: an EXPLORE step whose transfer moved the object less than this (m, as the space's goal distance
+    #: measures it) did not move it, and its landmark's distance to the others proves nothing (the resolution
+    #: criterion, :attr:`Exploration.moved`): well above the few micrometres by which a grasp held within its
+    #: tolerance shifts the object, well below any move
+    moved_m: float = 1e-3
     #: SEARCH refines an end point by damped least squares once its objective is within this share of the arm's
     #: reach (m / m): the GA's Manhattan paths land within centimetres, the last millimetres need the Jacobian
     refine_radius: float = 0.15

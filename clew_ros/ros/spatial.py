@@ -215,15 +215,15 @@ def _quaternion_matrix(x: float, y: float, z: float, w: float) -> Matrix:
 def _unstable_reason(world: SpatialWorld, pose: Matrix) -> str:
     """Why ``pose`` is no stable placement: the face most nearly down, its tilt, how far it lies off the
     top face of the support under the object's centre (or that none is under it)."""
-    from clew_ros.spatial.placements import FACE_NORMALS
+    from clew_ros.spatial.placements import FACE_NORMALS, face_down
 
     assert world.object is not None
     thing = world.object.shape
     tolerance = world.tolerances["placement_tolerance"]
     rot, center = pose[:3, :3], pose[:3, 3]
-    normals = {face: rot[:, FACE_NORMALS[face][0]] * FACE_NORMALS[face][1] for face in thing.faces}
-    face = min(normals, key=lambda f: float(normals[f][2]))
-    tilt = math.acos(max(-1.0, min(1.0, -float(normals[face][2]))))
+    face, _ = face_down(thing, rot)
+    axis, sign = FACE_NORMALS[face]
+    tilt = math.acos(max(-1.0, min(1.0, -float(rot[2, axis] * sign))))
     points = thing.face_points(face) @ rot.T + center
     spread = thing.size[1] * math.sin(tilt) if thing.shape == "cylinder" else 0.0
     low, high = float(points[:, 2].min()) - spread, float(points[:, 2].max()) + spread

@@ -50,10 +50,12 @@ from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.world import SpatialWorld
 
-__all__ = ["connect", "plan_motion"]
+__all__ = ["add_branch", "connect", "plan_motion"]
 
 #: The improvement draws from its own generator seeded with (planner.seed, this), as core's.
 IMPROVE_STREAM = clew.IMPROVE_STREAM
+#: a configuration landmark's object pose: none (the trees of configurations carry no object pose)
+_NO_POSE = np.zeros(6)
 
 
 class MotionSpace(Space, Protocol):
@@ -128,15 +130,21 @@ def connect(
         resolution_stop=False,
     )
     for way in start_ways:
-        run.tree.add(
-            parent=0, joints=way[-1].copy(), object_pose=run.none, grasp=None, grasp_rel=None, transit=way,
-            transfer=None,
-        )  # fmt: skip
+        add_branch(run.tree, 0, way)
     target = goal if goal_tree is None else goal_tree[0].joints
     result = run.search_all(target, None, goal_tree)
     if result.outcome is not Outcome.SUCCEEDED:
         return None
     return np.asarray(result.segments[0].waypoints, dtype=float)
+
+
+def add_branch(tree: LandmarkTree, parent: int, way: np.ndarray) -> Landmark:
+    """A configuration landmark (no object pose, no grasp) at the end of ``way``, a path from landmark
+    ``parent`` of ``tree``, added to it."""
+    return tree.add(
+        parent=parent, joints=way[-1].copy(), object_pose=_NO_POSE, grasp=None, grasp_rel=None, transit=way,
+        transfer=None,
+    )  # fmt: skip
 
 
 def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray:
@@ -320,15 +328,7 @@ class _MotionRun:
                 landmark = trees[side][-1]  # no new place: SEARCH again from this tree's newest landmark
                 continue
             parent, path, distance = explored
-            landmark = trees[side].add(
-                parent=parent,
-                joints=path[-1].copy(),
-                object_pose=self.none,
-                grasp=None,
-                grasp_rel=None,
-                transit=path,
-                transfer=None,
-            )
+            landmark = add_branch(trees[side], parent, path)
             if distance < self.settings.resolution:
                 return self.finish(
                     Outcome.NO_PATH_AT_RESOLUTION,
@@ -346,15 +346,7 @@ class _MotionRun:
         before = float(np.min(np.linalg.norm(others - landmark.joints, axis=1)))
         after = float(np.min(np.linalg.norm(others - found[-1], axis=1)))
         if after < before - self.tuning.motion_keep_gain_rad:
-            tree.add(
-                parent=landmark.id,
-                joints=found[-1].copy(),
-                object_pose=self.none,
-                grasp=None,
-                grasp_rel=None,
-                transit=found,
-                transfer=None,
-            )
+            add_branch(tree, landmark.id, found)
 
     def _branch(self, tree: LandmarkTree, landmark_id: int) -> np.ndarray:
         """The path from ``tree``'s root to its landmark, through the landmarks' transit paths."""

@@ -33,6 +33,7 @@ __all__ = [
     "Support",
     "check_placement",
     "face_down",
+    "face_yaw",
     "object_from_parameters",
     "placement_pose",
     "project",
@@ -271,8 +272,13 @@ def face_down(thing: MovableObject, rot: Matrix) -> tuple[str, float]:
     """The face of ``thing`` whose outward normal points most nearly down with the object turned by ``rot``
     (3x3), and the yaw (rad) about world z that turning leaves once that face is turned exactly down."""
     face = min(thing.faces, key=lambda f: float(rot[2, FACE_NORMALS[f][0]] * FACE_NORMALS[f][1]))
+    return face, face_yaw(rot, face)
+
+
+def face_yaw(rot: Matrix, face: str) -> float:
+    """The yaw (rad) about world z of an object turned by ``rot`` (3x3) once ``face`` is turned exactly down."""
     turned = rot @ rpy_matrix(*FACE_RPY[face]).T  # Rz(yaw) when the face is exactly down
-    return face, math.atan2(float(turned[1, 0]), float(turned[0, 0]))
+    return math.atan2(float(turned[1, 0]), float(turned[0, 0]))
 
 
 def project(thing: MovableObject, pose: Matrix, supports: Sequence[Support]) -> Matrix | None:

@@ -50,7 +50,7 @@ from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
-from clew_ros.spatial.motion_plan import connect, plan_motion
+from clew_ros.spatial.motion_plan import add_branch, connect, plan_motion
 from clew_ros.spatial.placements import Support, face_down, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
 from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
@@ -250,7 +250,7 @@ class SpatialSpace:
         thing = self.world.object
         if thing is None:
             return self.world.checker
-        key = np.round(np.asarray(object_pose, dtype=float), 9).tobytes()
+        key = _key(object_pose)
         checker = self._transit_checkers.get(key)
         if checker is None:
             resting = make_obstacle(
@@ -265,7 +265,7 @@ class SpatialSpace:
         """The checker with the object held as ``grasp_rel`` (its pose in the tcp's frame, 6 numbers)."""
         thing = self.world.object
         assert thing is not None  # transfers carry the object
-        key = np.round(np.asarray(grasp_rel, dtype=float), 9).tobytes()
+        key = _key(grasp_rel)
         checker = self._transfer_checkers.get(key)
         if checker is None:
             world = self.world
@@ -668,8 +668,8 @@ class SpatialSpace:
         (:func:`clew_ros.spatial.motion_plan.connect`: EXPLORE for transfer paths, the object carried as
         ``grasp_rel``) given :attr:`SpatialTuning.transfer_tree_landmarks` steps; the path from ``q0`` to the
         goal, or ``None``. One tree is rooted at ``q0``, with the GA's path ``searched`` (from ``q0``, the
-        object in the air) and the object's lift from there (:meth:`offsets`) as landmarks; the other at the
-        goal configuration nearest ``q0`` (``found``: :meth:`goal_configurations`), with its approach as a
+        object in the air) and the object's way out from there (:meth:`_way_out`) as landmarks; the other at the
+        goal configuration nearest ``q0`` (``found``: :meth:`goal_configurations`), with its way out as a
         landmark, and kept for the later SEARCH_TRANSFERs of the same grasp and goal, which grow it further:
         where the object rests in a shelf, single-joint moves from the root barely move it."""
         budget = self.tuning.transfer_tree_landmarks
@@ -681,9 +681,11 @@ class SpatialSpace:
         checker = self.transfer_checker(rel)
         tree = self.goal_tree(rel, goal)
         if tree is None:
-            tree = self._goal_trees[_tree_key(rel, goal)] = LandmarkTree(found[0], np.zeros(6))
-            self._add_branch(tree, self._lifted(checker, mode, found[0]))
-        ways = [self._lifted(checker, mode, q0)]
+            tree = self._goal_trees[_key(rel, goal)] = LandmarkTree(found[0], np.zeros(6))
+            out_of_goal = self._way_out(checker, mode, found[0])
+            if out_of_goal is not None:
+                add_branch(tree, 0, out_of_goal)
+        ways = [self._way_out(checker, mode, q0)]
         if searched is not None and len(searched) > 1 and np.max(np.abs(searched[-1] - q0)) > 0:
             ways.append(searched)
         return connect(
@@ -702,25 +704,20 @@ class SpatialSpace:
     def goal_tree(self, grasp_rel: Array, goal: Array) -> LandmarkTree | None:
         """The goal tree :meth:`transfer_trees` keeps for the object held as ``grasp_rel`` and set down at
         ``goal`` (``None``: none grown yet)."""
-        return self._goal_trees.get(_tree_key(np.asarray(grasp_rel, dtype=float), np.asarray(goal, dtype=float)))
+        return self._goal_trees.get(_key(np.asarray(grasp_rel, dtype=float), np.asarray(goal, dtype=float)))
 
-    def _lifted(self, checker: SpatialChecker, mode: dict[str, Array], q: Array) -> Array | None:
+    def _way_out(self, checker: SpatialChecker, mode: dict[str, Array], q: Array) -> Array | None:
         """The carried object's way out from ``q`` (k + 1, n), along the first of its approaches (:meth:`offsets`:
         lifted, or lifted a little and slid back along the tcp's -z) whose first step is clear, repeated step by
         step (each ``approach_m`` further, inverse kinematics seeded at the step before, each straight move
         clear) up to :attr:`SpatialTuning.transfer_way_out_m` while they stay clear: out of a shelf deeper than
         one approach; ``None`` if no first step is clear."""
-        here = self.tcp(q[None])[0]
         steps = max(1, math.ceil(self.tuning.transfer_way_out_m / self.tuning.approach_m - 1e-9))
-        lift = np.array([0.0, 0.0, self.tuning.approach_m])
-        back = -self.tuning.approach_m * here[:3, 2]
-        for first in self._approach_poses(mode, q[None]):
-            shift = first[0, :3, 3] - here[:3, 3]
-            along = lift if np.allclose(shift, lift) else back  # lifted again, or slid on (lifted once)
+        for first, along in self._approach_poses(mode, q[None]):
             way = [q]
             for k in range(steps):
                 target = first[0].copy()
-                target[:3, 3] += k * along
+                target[:3, 3] += k * along[0]
                 step = self._approach_joints(target[None], way[-1][None])
                 if np.isnan(step).any() or not self.clear(checker, way[-1][None], step)[0]:
                     break
@@ -729,15 +726,6 @@ class SpatialSpace:
                 out: Array = np.array(way)
                 return out
         return None
-
-    @staticmethod
-    def _add_branch(tree: LandmarkTree, way: Array | None) -> None:
-        """``way`` (a path from ``tree``'s root) added as a landmark at its end, the root its parent."""
-        if way is not None:
-            tree.add(
-                parent=0, joints=way[-1].copy(), object_pose=np.zeros(6), grasp=None, grasp_rel=None,
-                transit=way, transfer=None,
-            )  # fmt: skip
 
     def goal_configurations(self, ctx: PlanningContext, q0: Array, grasp_rel: Array, goal: Array) -> Array:
         """Valid configurations (m, n) holding the object (as ``grasp_rel``) at the goal (:meth:`goal_poses`),
@@ -798,29 +786,32 @@ class SpatialSpace:
         with the tcp at its position (:attr:`SpatialTuning.position_approach`); a row is NaN where inverse
         kinematics seeded at it found none within its joint limits."""
         out = np.full(qs.shape, np.nan)
-        for targets in self._approach_poses(mode, qs):
+        for targets, _ in self._approach_poses(mode, qs):
             missed = np.flatnonzero(np.isnan(out).any(axis=1))
             if not len(missed):
                 break
             out[missed] = self._approach_joints(targets[missed], qs[missed])
         return out
 
-    def _approach_poses(self, mode: dict[str, np.ndarray], qs: Array) -> list[Array]:
+    def _approach_poses(self, mode: dict[str, np.ndarray], qs: Array) -> list[tuple[Array, Array]]:
         """The tcp's approach poses (m, 4, 4) for configurations ``qs`` (m, n), first choice first (:meth:`offsets`):
-        backed off along its -z (transit); the object lifted, then lifted a little and slid out (transfer)."""
+        backed off along its -z (transit); the object lifted, then lifted a little and slid out (transfer). Each
+        with the move (m, 3) that takes it one approach further the same way (:meth:`_way_out`)."""
         here = self.tcp(qs)
         tuning = self.tuning
         shift = tuning.approach_m
+        back = -shift * here[:, :3, 2]
         backed = here.copy()
-        backed[:, :3, 3] -= shift * here[:, :3, 2]
+        backed[:, :3, 3] += back
         if mode.get("grasp_rel") is None:
-            return [backed]
+            return [(backed, back)]
+        up = np.broadcast_to([0.0, 0.0, shift], back.shape)
         lifted = here.copy()
-        lifted[:, 2, 3] += shift
-        moves = [lifted]
+        lifted[:, :3, 3] += up
+        moves = [(lifted, up)]
         if tuning.slide_lift_m > 0:
             backed[:, 2, 3] += tuning.slide_lift_m
-            moves.append(backed)
+            moves.append((backed, back))
         return moves
 
     def _approach_joints(self, targets: Array, qs: Array) -> Array:
@@ -1062,9 +1053,9 @@ class SpatialSpace:
         return None if best is None else (best[1], best[2])
 
 
-def _tree_key(grasp_rel: Array, goal: Array) -> bytes:
-    """A goal tree's key: the held pose and the goal."""
-    return np.round(np.r_[grasp_rel, goal], 9).tobytes()
+def _key(*parts: Array) -> bytes:
+    """A cache key of poses (a checker's, a goal tree's): their numbers rounded to 1e-9."""
+    return np.round(np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in parts]), 9).tobytes()
 
 
 class _AllowAll:

@@ -25,7 +25,7 @@ from clew_ros.core.plan import Plan
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
-from clew_ros.spatial.placements import FACE_NORMALS, FACE_RPY, MovableObject
+from clew_ros.spatial.placements import FACE_NORMALS, FACE_RPY, MovableObject, face_yaw
 from clew_ros.spatial.plan import replay
 from clew_ros.spatial.random_robot import BASE_LINK, TIP_LINK, random_robot_urdf
 from clew_ros.spatial.robot import RobotModel, load_robot, robot_from_parameters
@@ -48,7 +48,6 @@ __all__ = [
     "grasps_of",
     "inflated",
     "load_arm",
-    "yaw_vector",
 ]
 
 Matrix = NDArray[np.float64]
@@ -352,7 +351,7 @@ def find_hold(
     axis, sign = FACE_NORMALS[face]
     if pose[2, axis] * sign > -0.5:
         return None
-    pose[:3, :3] = rpy_matrix(0.0, 0.0, math.atan2(*yaw_vector(pose, face))) @ rpy_matrix(*FACE_RPY[face])
+    pose[:3, :3] = rpy_matrix(0.0, 0.0, face_yaw(pose[:3, :3], face)) @ rpy_matrix(*FACE_RPY[face])
     distance = solver.settings.approach_m  # in short steps: nearly straight for the tcp
     back = [tcp @ pose_matrix([0.0, 0.0, -f * distance, 0.0, 0.0, 0.0]) for f in APPROACH_STEPS]
     raised = [pose_matrix([0.0, 0.0, f * solver.settings.lift_m, 0.0, 0.0, 0.0]) @ tcp for f in (0.5, 1.0)]
@@ -361,11 +360,6 @@ def find_hold(
     if path is None or lift is None:
         return None
     return Hold(q, path, lift, pose, face)
-
-
-def yaw_vector(pose: Matrix, face: str) -> tuple[float, float]:
-    turned = pose[:3, :3] @ rpy_matrix(*FACE_RPY[face]).T
-    return float(turned[1, 0]), float(turned[0, 0])
 
 
 # -------------------------------------------------------------------------------------- the witness sweep

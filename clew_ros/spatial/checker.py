@@ -17,11 +17,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from clew_ros.spatial.kernels import collide
+from clew_ros.spatial.kernels import band, collide
 from clew_ros.spatial.placements import MovableObject, Support
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import Obstacle, obstacle_arrays
-from clew_ros.spatial.spheres import SphereModel, SphereSettings, cover
+from clew_ros.spatial.spheres import SphereModel, SphereSettings, cover, inner_cover
+from clew_ros.spatial.tier import ExactTier
 
 __all__ = ["Held", "IntervalSettings", "SpatialChecker"]
 
@@ -37,6 +38,13 @@ class IntervalSettings:
     min_step: float = 1e-3
     #: At most this many steps each way (each one costs a forward kinematics and a clearance pass).
     max_steps: int = 64
+    #: Where the sphere model cannot clear a row (the band, near contact), the interval is sampled at this
+    #: step (rad, or m for a prismatic joint): each sample checked on the exact geometry with the clearance
+    #: that proves the configurations between two samples free too.
+    band_step: float = 0.002
+    #: At most this many such samples each way (past them, or where the spheres clear the row again, the
+    #: conservative steps take over).
+    band_samples: int = 24
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,13 +109,15 @@ class SpatialChecker:
         self_collision: bool = True,
         resting_object: Obstacle | None = None,
         held: Held | None = None,
+        exact: bool = True,
     ) -> None:
         """``bounds``: ``[xmin, ymin, zmin, xmax, ymax, zmax]`` (m) or ``None`` (unbounded);
         ``self_collision`` false leaves every pair of links unchecked. ``resting_object``: the object where it
         rests (in transit), an obstacle to every link but the robot's ``gripper_links``. ``held``: the object
         in the hand (in transfer), its conservative spheres riding on the tcp's frame, checked against the
         obstacles (its supports only from below their top), the bounds and every link but the
-        ``gripper_links``."""
+        ``gripper_links``. ``exact`` (default): where the spheres cannot settle a contact, the exact geometry
+        decides (:mod:`clew_ros.spatial.tier`); false: the spheres alone (conservative, never exact)."""
         if resting_object is not None and held is not None:
             raise ValueError("resting_object and held: the object either rests or is held, not both")
         self.robot = robot
@@ -125,16 +135,33 @@ class SpatialChecker:
         frames, owners = spheres.frames, spheres.links
         link_frame = [link.frame for link in robot.links]
         held_arrays = _held_arrays(robot, held, self.obstacles, n_links)
+        radii = radii + robot.padding  # the links grown by world.robot.padding (not the held object)
+        inner = spheres.inner
+        in_c = np.zeros((0, 3)) if inner is None else inner.centers
+        in_r = np.zeros(0) if inner is None else inner.radii
+        in_owner = np.zeros(0, dtype=np.int64) if inner is None else inner.links
+        placed = robot.tcp @ np.linalg.inv(held.grasp) if held is not None else np.eye(4)
         if held is not None:  # the object: one more piece, riding on the tcp's frame
             local_c, local_r = cover(held.shape.geometry(), SphereSettings())
-            placed = robot.tcp @ np.linalg.inv(held.grasp)
             centers = np.concatenate([centers, local_c @ placed[:3, :3].T + placed[:3, 3]])
             radii = np.concatenate([radii, local_r])
             frames = np.concatenate([frames, np.full(len(local_r), robot.tcp_frame)])
             owners = np.concatenate([owners, np.full(len(local_r), n_links)])
             link_frame.append(robot.tcp_frame)
+            local_c, local_r = inner_cover(held.shape.geometry(), SphereSettings())
+            in_c = np.concatenate([in_c, local_c @ placed[:3, :3].T + placed[:3, 3]])
+            in_r = np.concatenate([in_r, local_r])
+            in_owner = np.concatenate([in_owner, np.full(len(local_r), n_links)])
         pieces = len(link_frame)
         starts = np.searchsorted(owners, np.arange(pieces + 1))
+        self.exact = exact
+        self._tier: ExactTier | None = None
+        self._held_pose = None if held is None else (held.shape, placed)
+        self._inner = (
+            np.ascontiguousarray(in_c, dtype=np.float64),
+            np.ascontiguousarray(in_r, dtype=np.float64),
+            np.searchsorted(in_owner, np.arange(pieces + 1)).astype(np.int64),
+        )
         ignore = np.zeros((pieces, len(self.obstacles)), dtype=np.bool_)
         if resting_object is not None:
             ignore[:n_links, -1] = gripper
@@ -179,14 +206,33 @@ class SpatialChecker:
         }
 
         a = self._arrays
+        self._band = (
+            (a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"], a["prismatic"]),
+            (a["sph_c"], a["sph_r"], a["link_start"], a["link_c"], a["link_r"], a["link_frame"]),
+            self._inner,
+            (
+                a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"], a["pairs"],
+                a["bounds"], a["has_bounds"],
+            ),
+            (a["held_link"], a["held_points"], a["held_disc"], a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"]),
+        )  # fmt: skip
+        #: The sphere model's reach (m) from frame ``j``'s origin, per joint: how far a point it moves can be from
+        #: that joint's axis (a chain of origins, then the farthest sphere), the lever of a band step.
+        reach = np.linalg.norm(centers, axis=1) + radii
+        far = np.array([float(reach[frames >= j + 1].max(initial=0.0)) for j in range(robot.dof)])
+        chain = np.linalg.norm(robot.origins[:, :3, 3], axis=1)
+        self._lever = np.array([chain[j + 1 :].sum() + far[j] for j in range(robot.dof)])
         #: Whether a link that no joint moves (on ``base_link``'s frame) touches an obstacle or leaves the
-        #: bounds: then no configuration is valid. Checked once here, never per configuration.
+        #: bounds: then no configuration is valid. Checked once here, never per configuration (on the exact
+        #: geometry where the spheres touch).
         self.static_collision = bool(
             collide.static_collides(
                 a["base_r"], a["base_t"], a["sph_c"], a["sph_r"], a["sph_frame"], a["sph_link"], a["obs_kind"],
                 a["obs_r"], a["obs_t"], a["obs_dims"], a["ignore"], a["bounds"], a["has_bounds"],
             )
         )  # fmt: skip
+        if self.static_collision and exact:
+            self.static_collision = self._static_exact()
 
     def _batch(self, qs: Any) -> NDArray[np.float64]:
         batch = np.ascontiguousarray(qs, dtype=np.float64)
@@ -194,8 +240,70 @@ class SpatialChecker:
             raise ValueError(f"qs: expected an (N, {self.robot.dof}) array of joint values, got shape {batch.shape}")
         return batch
 
+    # -- the exact tier ----------------------------------------------------------------------------------
+
+    @property
+    def tier(self) -> ExactTier:
+        """The exact geometry of this checker's scene (built when first needed)."""
+        if self._tier is None:
+            bounds = None if self.bounds is None else self.bounds.tolist()
+            self._tier = ExactTier(self.robot, self.obstacles, bounds, self._held_pose)
+        return self._tier
+
+    def _static_exact(self) -> bool:
+        """Whether a link no joint moves touches an obstacle (but those it ignores) or the bounds, exactly."""
+        tier = self.tier
+        a = self._arrays
+        frame_r = np.broadcast_to(a["base_r"], (self.robot.dof + 1, 3, 3))
+        frame_t = np.broadcast_to(a["base_t"], (self.robot.dof + 1, 3))
+        for i, link in enumerate(self.robot.links):
+            if link.frame != 0:
+                continue
+            rows = [(band.OBSTACLE, i, o) for o in range(len(self.obstacles)) if not a["ignore"][i, o]]
+            rows += [(band.BOUNDS, i, -1)] if self.bounds is not None else []
+            if not tier.free(np.array(rows, dtype=np.int64).reshape(-1, 3), frame_r, frame_t):
+                return True
+        return False
+
+    def classify(self, qs: Any, margin: float = 0.0) -> NDArray[np.bool_]:
+        """For each row: valid on the two tiers (spheres, then the exact geometry for the contacts the spheres
+        leave open), every contact kept at least ``margin`` (m) clear (twice that between two links)."""
+        batch = self._batch(qs)
+        n = len(batch)
+        out = np.zeros(n, dtype=np.bool_)
+        if self.static_collision or not n:
+            return out
+        cap = 32
+        status = np.empty(n, dtype=np.int64)
+        contacts = np.empty((n, cap, 3), dtype=np.int64)
+        counts = np.empty(n, dtype=np.int64)
+        frames_r = np.empty((n, self.robot.dof + 1, 3, 3))
+        frames_t = np.empty((n, self.robot.dof + 1, 3))
+        band.contacts_batch(batch, *self._band, status, contacts, counts, frames_r, frames_t, margin)
+        out[status == band.FREE] = True
+        overflow = np.flatnonzero(status == band.OVERFLOW)
+        if len(overflow):  # more open contacts than the list holds: again, with room for every one
+            a = self._arrays
+            room = len(a["link_r"]) * (len(self.obstacles) + 1) + len(a["pairs"]) + len(a["sup_index"])
+            k = len(overflow)
+            again = np.empty((k, room, 3), dtype=np.int64)
+            sub, sub_counts = np.empty(k, dtype=np.int64), np.empty(k, dtype=np.int64)
+            sub_r, sub_t = np.empty((k, self.robot.dof + 1, 3, 3)), np.empty((k, self.robot.dof + 1, 3))
+            band.contacts_batch(batch[overflow], *self._band, sub, again, sub_counts, sub_r, sub_t, margin)
+            for m, row in enumerate(overflow):
+                out[row] = sub[m] == band.FREE or (
+                    self.exact
+                    and sub[m] == band.BAND
+                    and self.tier.free(again[m, : sub_counts[m]], sub_r[m], sub_t[m], margin)
+                )
+        if self.exact:
+            for b in np.flatnonzero(status == band.BAND):
+                out[b] = self.tier.free(contacts[b, : counts[b]], frames_r[b], frames_t[b], margin)
+        return out
+
     def valid(self, qs: Any) -> NDArray[np.bool_]:
-        """For each row of ``qs`` (N, n): inside the joint limits and colliding with nothing."""
+        """For each row of ``qs`` (N, n): inside the joint limits and colliding with nothing (the spheres
+        first; where they touch, the exact geometry decides unless the checker was made with ``exact=False``)."""
         batch = self._batch(qs)
         out = np.empty(len(batch), dtype=np.bool_)
         if self.static_collision:
@@ -209,6 +317,10 @@ class SpatialChecker:
             a["pairs"], a["bounds"], a["has_bounds"], a["held_link"], a["held_points"], a["held_disc"],
             a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"], out,
         )  # fmt: skip
+        if self.exact:
+            open_rows = np.flatnonzero(~out)
+            if len(open_rows):
+                out[open_rows] = self.classify(batch[open_rows])
         return out
 
     def free_intervals(
@@ -246,6 +358,21 @@ class SpatialChecker:
             lo[:] = hi[:] = batch[:, joint]
             ok[:] = False
             return lo, hi, ok
+        self._sphere_intervals(batch, joint, settings, bound, fold, (lo, hi, ok))
+        if self.exact:
+            self._band_intervals(batch, joint, settings, move if fold else None, bound, lo, hi, ok)
+        return lo, hi, ok
+
+    def _sphere_intervals(  # noqa: PLR0917
+        self,
+        batch: NDArray[np.float64],
+        joint: int,
+        settings: IntervalSettings,
+        bound: NDArray[np.float64],
+        fold: bool,
+        out: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]],
+    ) -> None:
+        """The sphere model's free intervals (the compiled conservative steps) into ``out`` (lo, hi, ok)."""
         a = self._arrays
         collide.free_intervals(
             batch, joint, a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
@@ -253,9 +380,73 @@ class SpatialChecker:
             a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"],
             a["pairs"], a["bounds"], a["has_bounds"], a["held_link"], a["held_points"], a["held_disc"],
             a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"], settings.margin_m, settings.min_step,
-            settings.max_steps, bound, fold, lo, hi, ok,
+            settings.max_steps, bound, fold, *out,
         )  # fmt: skip
-        return lo, hi, ok
+
+    def _band_intervals(  # noqa: PLR0917
+        self,
+        batch: NDArray[np.float64],
+        joint: int,
+        settings: IntervalSettings,
+        move: Any,
+        bound: NDArray[np.float64],
+        lo: NDArray[np.float64],
+        hi: NDArray[np.float64],
+        ok: NDArray[np.bool_],
+    ) -> None:
+        """The rows the spheres refused but the exact geometry accepts (near a contact): their intervals by
+        samples ``settings.band_step`` apart, each the middle of a cell it proves free (checked with the
+        clearance no point of the robot can lose within half a step, :attr:`_lever`); past
+        ``settings.band_samples`` of them, where the spheres clear the row again, the conservative steps go on."""
+        robot = self.robot
+        rows = np.flatnonzero(~ok & (batch >= robot.lower).all(axis=1) & (batch <= robot.upper).all(axis=1))
+        if not len(rows):
+            return
+        rows = rows[self.classify(batch[rows])]
+        if not len(rows):
+            return
+        ok[rows] = True
+        step = settings.band_step
+        margin = step / 2 * (1.0 if robot.prismatic[joint] else float(self._lever[joint]))
+        sides = (-1.0, 1.0)
+        for side in sides:
+            if move is not None:
+                heads = np.sign(np.broadcast_to(move, len(batch))[rows])
+                mine = rows[heads == side]
+            else:
+                mine = rows
+            if not len(mine):
+                continue
+            start = batch[mine, joint]
+            room = np.minimum(bound[mine], (robot.upper[joint] - start) if side > 0 else (start - robot.lower[joint]))
+            proven = np.zeros(len(mine))
+            alive = np.ones(len(mine), dtype=bool)
+            for k in range(settings.band_samples):
+                alive &= proven < room
+                live = np.flatnonzero(alive)
+                if not len(live):
+                    break
+                probe = batch[mine[live]].copy()
+                probe[:, joint] = start[live] + side * (k + 0.5) * step
+                fine = self.classify(probe, margin)
+                proven[live[fine]] = (k + 1) * step
+                alive[live[~fine]] = False
+            reach = np.minimum(proven, room)
+            ends = start + side * reach
+            onward = np.flatnonzero(alive & (reach < room))  # every sample clear: the conservative steps go on
+            if len(onward):
+                rest = batch[mine[onward]].copy()
+                rest[:, joint] = ends[onward]
+                more = (np.empty(len(onward)), np.empty(len(onward)), np.empty(len(onward), dtype=np.bool_))
+                left = np.ascontiguousarray(room[onward] - reach[onward])
+                self._sphere_intervals(rest, joint, settings, left, False, more)
+                more_lo, more_hi, more_ok = more
+                far = more_hi if side > 0 else more_lo
+                ends[onward] = np.where(more_ok, far, ends[onward])
+            if side > 0:
+                hi[mine] = np.maximum(hi[mine], ends)
+            else:
+                lo[mine] = np.minimum(lo[mine], ends)
 
     def sphere_positions(self, q: Sequence[float]) -> NDArray[np.float64]:
         """Every sphere's centre in ``world`` (S, 3) at ``q`` (compiled forward kinematics)."""

@@ -15,7 +15,7 @@ import math
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -106,6 +106,8 @@ class RobotModel:
     exempt: frozenset[tuple[int, int]]
     gripper_links: tuple[str, ...]
     fixed_positions: Mapping[str, float]
+    #: How far (m) every link's collision geometry is grown (``world.robot.padding``; MoveIt's link padding).
+    padding: float = 0.0
 
     @property
     def dof(self) -> int:
@@ -558,7 +560,7 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
     srdf = None
     if "srdf" in robot:
         srdf = read_text(resolve_uri(str(robot["srdf"]), folder, "world.robot.srdf"), "world.robot.srdf")
-    return load_robot(
+    model = load_robot(
         text,
         folder=urdf_folder,
         base_link=robot["base_link"],
@@ -573,3 +575,12 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
         gripper_links=_strings(robot, "gripper_links"),
         source=source,
     )
+    return replace(model, padding=_padding(robot))
+
+
+def _padding(robot: Mapping[str, Any]) -> float:
+    """``world.robot.padding``: metres every link's collision geometry is grown by (default 0)."""
+    value = robot.get("padding", 0.0)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or not 0 <= value <= 1:
+        raise WorldError("world.robot.padding", f"expected a distance in metres from 0 to 1, got {short_repr(value)}")
+    return float(value)

@@ -25,14 +25,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.spatial.robot import Geometry, RobotModel
 
-__all__ = ["SphereModel", "SphereSettings", "cover", "over_approximation", "sphere_model", "surface_points"]
+__all__ = ["SphereModel", "SphereSettings", "cover", "inner_cover", "over_approximation", "sphere_model", "surface_points"]
 
 Array = NDArray[np.float64]
 Matrix = NDArray[np.float64]
@@ -54,6 +54,9 @@ class SphereSettings:
     primitive_cell_m: float = 0.02
     #: A box or cylinder is never cut into more cells than this (coarser cells past it).
     max_primitive_cells: int = 64
+    #: At most this many spheres of the inner model (spheres inside the geometry: touching them proves a
+    #: collision) per mesh, the largest first.
+    inner_per_mesh: int = 24
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,6 +70,8 @@ class SphereModel:
     frames: NDArray[np.int64]
     links: NDArray[np.int64]
     starts: NDArray[np.int64]
+    #: The inner model: spheres inside the geometry (same conventions; a link may have none), or ``None``.
+    inner: SphereModel | None = None
 
     @property
     def count(self) -> int:
@@ -117,8 +122,11 @@ def _cover_cylinder(height: float, radius: float, settings: SphereSettings) -> t
 # ----------------------------------------------------------------------------------------- meshes
 
 
-def _voxels(vertices: Array, faces: NDArray[np.int64], cell: float) -> tuple[Array, NDArray[np.bool_]]:
-    """The grid's origin (m) and its kept cells: those the surface meets and those it encloses."""
+def _voxels(
+    vertices: Array, faces: NDArray[np.int64], cell: float
+) -> tuple[Array, NDArray[np.bool_], NDArray[np.bool_]]:
+    """The grid's origin (m), its kept cells (those the surface meets and those it encloses) and the cells
+    the surface meets."""
     import trimesh
 
     small_v, small_f = trimesh.remesh.subdivide_to_size(  # type: ignore[no-untyped-call]
@@ -149,7 +157,7 @@ def _voxels(vertices: Array, faces: NDArray[np.int64], cell: float) -> tuple[Arr
         if np.array_equal(grown, outside):
             break
         outside = grown
-    return origin, ~outside
+    return origin, ~outside, surface
 
 
 def _depths(points: Array, vertices: Array, faces: NDArray[np.int64], cell: float) -> Array:
@@ -173,9 +181,55 @@ def _nearest(points: Array, samples: Array) -> Array:
     return out
 
 
+def _erode(cells: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """The cells whose 26 neighbours and themselves are all in ``cells`` (a 3x3x3 erosion, one axis at a time)."""
+    out = cells.copy()
+    for axis in range(3):
+        moved = np.moveaxis(out, axis, 0)
+        eroded = moved.copy()
+        eroded[1:] &= moved[:-1]
+        eroded[:-1] &= moved[1:]
+        eroded[0] = eroded[-1] = False
+        out = np.moveaxis(eroded, 0, axis)
+    return out
+
+
+def _inner_mesh(origin: Array, interior: NDArray[np.bool_], cell: float, limit: int) -> tuple[Array, Array]:
+    """Spheres inside a mesh's solid: the cells no triangle meets that the surface encloses lie inside it, and
+    so does the cube of such cells around one whose Chebyshev distance to the others is ``d`` (its inscribed
+    sphere: radius ``(d - 0.5)`` cells). The largest first, each not inside one already kept, at most ``limit``."""
+    depth = np.zeros(interior.shape, dtype=np.int64)
+    level = interior
+    while level.any():
+        depth += level
+        level = _erode(level)
+    index = np.argwhere(depth > 0)
+    if not len(index):
+        return np.zeros((0, 3)), np.zeros(0)
+    radius = (depth[tuple(index.T)] - 0.5) * cell
+    centres = origin + (index + 0.5) * cell
+    order = np.argsort(-radius, kind="stable")
+    centres, radius = centres[order], radius[order]
+    alive = np.ones(len(radius), dtype=bool)
+    kept: list[int] = []
+    while alive.any() and len(kept) < limit:
+        best = int(np.argmax(alive))
+        kept.append(best)
+        alive &= np.linalg.norm(centres - centres[best], axis=1) + radius > radius[best] + 1e-12
+    return centres[kept], radius[kept]
+
+
 def _cover_mesh(vertices: Array, faces: NDArray[np.int64], settings: SphereSettings) -> tuple[Array, Array]:
+    return _mesh_spheres(vertices, faces, settings)[:2]
+
+
+def _mesh_spheres(
+    vertices: Array, faces: NDArray[np.int64], settings: SphereSettings
+) -> tuple[Array, Array, Array, Array]:
+    """A mesh's outer cover (centres, radii) and inner spheres (centres, radii)."""
     cell = settings.cell_m
-    origin, kept = _voxels(vertices, faces, cell)
+    origin, kept, surface = _voxels(vertices, faces, cell)
+    inner_c, inner_r = _inner_mesh(origin, kept & ~surface, cell, settings.inner_per_mesh)
     index = np.argwhere(kept)
     centers = origin + (index + 0.5) * cell
     half_diagonal = cell * math.sqrt(3) / 2
@@ -199,7 +253,7 @@ def _cover_mesh(vertices: Array, faces: NDArray[np.int64], settings: SphereSetti
     rest = np.flatnonzero(uncovered)  # cells no candidate covers: each its own sphere
     out_c.extend(centers[rest])
     out_r.extend(np.full(len(rest), half_diagonal))
-    return np.array(out_c), np.array(out_r)
+    return np.array(out_c), np.array(out_r), inner_c, inner_r
 
 
 def cover(geometry: Geometry, settings: SphereSettings) -> tuple[Array, Array]:
@@ -213,27 +267,67 @@ def cover(geometry: Geometry, settings: SphereSettings) -> tuple[Array, Array]:
     return _cover_mesh(geometry.vertices, geometry.faces, settings)
 
 
-def sphere_model(robot: RobotModel, settings: SphereSettings | None = None) -> SphereModel:
-    """The conservative sphere model of every link of ``robot``."""
-    settings = settings or SphereSettings()
-    centers, radii, frames, links = [], [], [], []
-    for i, link in enumerate(robot.links):
-        for geometry in link.geometries:
-            local_c, local_r = cover(geometry, settings)
+def inner_cover(geometry: Geometry, settings: SphereSettings) -> tuple[Array, Array]:
+    """Spheres inside one geometry (touching one of them proves touching the geometry), centres in the
+    geometry's own frame: a sphere itself; a box's cells' inscribed spheres; a cylinder's inscribed spheres
+    along its axis (a flat one: its middle and a ring); a mesh's (see :func:`_inner_mesh`)."""
+    if geometry.kind == "sphere":
+        return np.zeros((1, 3)), np.array([geometry.size[0]])
+    if geometry.kind == "box":
+        sizes = np.asarray(geometry.size, dtype=np.float64)
+        counts = _cell_counts(sizes, float(sizes.min()), settings.max_primitive_cells)
+        return _grid_centers(sizes, counts), np.full(int(np.prod(counts)), float((sizes / counts).min()) / 2)
+    if geometry.kind == "cylinder":
+        height, radius = geometry.size
+        if height >= 2 * radius:
+            k = math.ceil(height / (2 * radius) - 1e-9)
+            z = (np.arange(k) + 0.5) / k * height - height / 2
+            return np.stack([np.zeros(k), np.zeros(k), z], axis=1), np.full(k, min(radius, height / (2 * k)))
+        small = height / 2
+        ring = radius - small
+        m = min(max(int(2 * math.pi * ring / max(small, 1e-9)), 1), settings.max_primitive_cells - 1)
+        angle = 2 * math.pi * np.arange(m) / m
+        centres = np.concatenate([np.zeros((1, 3)), np.stack([ring * np.cos(angle), ring * np.sin(angle), np.zeros(m)], 1)])
+        return centres, np.full(m + 1, small)
+    return _mesh_spheres(geometry.vertices, geometry.faces, settings)[2:]
+
+
+def _gather(robot: RobotModel, per_link: list[list[tuple[Array, Array]]]) -> SphereModel:
+    """One :class:`SphereModel` of every link's spheres (local centres per geometry)."""
+    centers, radii, frames, links = [np.zeros((0, 3))], [np.zeros(0)], [np.zeros(0)], [np.zeros(0)]
+    for i, (link, covers) in enumerate(zip(robot.links, per_link, strict=True)):
+        for geometry, (local_c, local_r) in zip(link.geometries, covers, strict=True):
             to_frame = link.offset @ geometry.origin
             centers.append(local_c @ to_frame[:3, :3].T + to_frame[:3, 3])
             radii.append(local_r)
             frames.append(np.full(len(local_r), link.frame))
             links.append(np.full(len(local_r), i))
-    links_all = np.concatenate(links)
-    starts_all = np.searchsorted(links_all, np.arange(len(robot.links) + 1))
+    links_all = np.concatenate(links).astype(np.int64)
     return SphereModel(
         centers=np.concatenate(centers),
         radii=np.concatenate(radii),
         frames=np.concatenate(frames).astype(np.int64),
-        links=links_all.astype(np.int64),
-        starts=starts_all.astype(np.int64),
+        links=links_all,
+        starts=np.searchsorted(links_all, np.arange(len(robot.links) + 1)).astype(np.int64),
     )
+
+
+def sphere_model(robot: RobotModel, settings: SphereSettings | None = None) -> SphereModel:
+    """The conservative sphere model of every link of ``robot``, with its inner model."""
+    settings = settings or SphereSettings()
+    outer: list[list[tuple[Array, Array]]] = []
+    inner: list[list[tuple[Array, Array]]] = []
+    for link in robot.links:
+        outer.append([])
+        inner.append([])
+        for geometry in link.geometries:
+            if geometry.kind == "mesh":
+                out_c, out_r, in_c, in_r = _mesh_spheres(geometry.vertices, geometry.faces, settings)
+            else:
+                (out_c, out_r), (in_c, in_r) = cover(geometry, settings), inner_cover(geometry, settings)
+            outer[-1].append((out_c, out_r))
+            inner[-1].append((in_c, in_r))
+    return replace(_gather(robot, outer), inner=_gather(robot, inner))
 
 
 # ----------------------------------------------------------------------------------------- measuring

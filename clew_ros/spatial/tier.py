@@ -1,0 +1,171 @@
+"""The exact side of the two-tier collision check: coal on the URDF's own collision geometry.
+
+:class:`~clew_ros.spatial.checker.SpatialChecker` asks its sphere models first (outer spheres touching
+nothing: free; inner spheres touching something: a collision). The contacts they leave open, in the thin
+band between the two models (:mod:`clew_ros.spatial.kernels.band`), are decided here, one contact at a time,
+on the geometry the contract names (interface.md section 1b, "Collision geometry"): every ``<collision>`` of
+every link (boxes, cylinders and spheres as such, meshes as coal triangle BVHs), grown by
+``world.robot.padding``; the obstacles, the object (box or cylinder) and the bounds (a slab outside each face)
+exactly. A gripper works millimetres from what it grasps: there the exact geometry answers.
+
+The link poses are the planner's own kinematics (the band kernel's frames), so the two tiers test one pose.
+``margin`` (m) asks for that much clearance on top (a free interval's sampled steps use it to prove the
+configurations between two samples free, :meth:`SpatialChecker.free_intervals`).
+"""
+
+from __future__ import annotations
+
+import importlib
+import weakref
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from clew_ros.spatial.kernels.band import BOUNDS, OBSTACLE, PAIR, SUPPORT
+from clew_ros.spatial.placements import MovableObject
+from clew_ros.spatial.robot import Geometry, RobotModel
+from clew_ros.spatial.scene import Obstacle
+
+__all__ = ["ExactTier", "coal_module", "coal_shape", "slab_poses"]
+
+Matrix = NDArray[np.float64]
+
+#: Each robot's link shapes, built once (meshes become BVHs: the costly part).
+_LINK_SHAPES: weakref.WeakKeyDictionary[RobotModel, list[list[tuple[Any, Matrix]]]] = weakref.WeakKeyDictionary()
+
+
+def coal_module() -> Any:
+    """The coal module (a runtime dependency of spatial planning)."""
+    try:
+        return importlib.import_module("coal")
+    except ImportError as error:  # pragma: no cover - installed with the package
+        raise ImportError(
+            f"spatial planning decides contacts on the exact geometry with coal ({error}): pip install coal"
+        ) from None
+
+
+def coal_shape(coal: Any, kind: str, size: Sequence[float], item: Geometry | None = None) -> Any:
+    """A coal shape of a primitive (``shape_msgs/SolidPrimitive`` sizes) or of a mesh ``item``."""
+    if kind == "box":
+        return coal.Box(*size)
+    if kind == "cylinder":
+        return coal.Cylinder(size[1], size[0])
+    if kind == "sphere":
+        return coal.Sphere(size[0])
+    assert item is not None
+    mesh = coal.BVHModelOBBRSS()
+    vertices, triangles = coal.StdVec_Vec3s(), coal.StdVec_Triangle()
+    for v in item.vertices:
+        vertices.append(np.asarray(v, dtype=np.float64))
+    for f in item.faces:
+        triangles.append(coal.Triangle(int(f[0]), int(f[1]), int(f[2])))
+    mesh.beginModel(len(triangles), len(vertices))
+    mesh.addSubModel(vertices, triangles)
+    mesh.endModel()
+    return mesh
+
+
+def slab_poses(bounds: Sequence[float], thick: float) -> list[tuple[str, tuple[float, float, float], Matrix]]:
+    """The outside of ``bounds`` as six boxes ``thick`` m deep: (name, full size, 4x4 pose) each."""
+    low, high = np.asarray(bounds[:3], dtype=np.float64), np.asarray(bounds[3:], dtype=np.float64)
+    span = high - low + 2 * thick
+    middle = (low + high) / 2
+    out = []
+    for axis in range(3):
+        size = span.copy()
+        size[axis] = thick
+        for side, face in ((-1.0, low[axis]), (1.0, high[axis])):
+            pose = np.eye(4)
+            pose[:3, 3] = middle
+            pose[axis, 3] = face + side * thick / 2
+            name = f"the bounds ({'min' if side < 0 else 'max'} {'xyz'[axis]})"
+            out.append((name, (float(size[0]), float(size[1]), float(size[2])), pose))
+    return out
+
+
+def link_shapes(robot: RobotModel) -> list[list[tuple[Any, Matrix]]]:
+    """Per link: its geometries as coal shapes, each with its 4x4 pose in the frame the link rides on."""
+    shapes = _LINK_SHAPES.get(robot)
+    if shapes is None:
+        coal = coal_module()
+        shapes = [
+            [(coal_shape(coal, g.kind, g.size, g), link.offset @ g.origin) for g in link.geometries]
+            for link in robot.links
+        ]
+        _LINK_SHAPES[robot] = shapes
+    return shapes
+
+
+class ExactTier:
+    """Exact contact tests of one checker's scene: the robot's links, ``obstacles`` (the resting object among
+    them), ``bounds``, and the ``held`` object (its shape and its 4x4 pose in frame ``robot.tcp_frame``)."""
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        obstacles: Sequence[Obstacle],
+        bounds: Sequence[float] | None,
+        held: tuple[MovableObject, Matrix] | None = None,
+        *,
+        bounds_slab_m: float = 1.0,
+    ) -> None:
+        self.coal = coal = coal_module()
+        self.robot = robot
+        self.pieces: list[list[tuple[Any, Matrix]]] = list(link_shapes(robot))
+        self.frames = [link.frame for link in robot.links]
+        self.padding = [robot.padding] * len(robot.links)
+        if held is not None:
+            shape, placed = held
+            self.pieces.append([(coal_shape(coal, shape.shape, shape.size), placed)])
+            self.frames.append(robot.tcp_frame)
+            self.padding.append(0.0)
+        self.obstacles = [(coal_shape(coal, o.shape, o.size), self._transform(o.pose)) for o in obstacles]
+        self.slabs = (
+            []
+            if bounds is None
+            else [(coal.Box(*size), self._transform(pose)) for _, size, pose in slab_poses(bounds, bounds_slab_m)]
+        )
+        self._request = coal.CollisionRequest()
+        self._result = coal.CollisionResult()
+
+    def _transform(self, pose: Matrix) -> Any:
+        return self.coal.Transform3s(np.ascontiguousarray(pose[:3, :3]), np.ascontiguousarray(pose[:3, 3]))
+
+    def _placed(self, piece: int, frame_r: Matrix, frame_t: Matrix) -> list[tuple[Any, Any]]:
+        """Piece ``piece``'s shapes with their transforms in ``world`` at the given frames."""
+        f = self.frames[piece]
+        out = []
+        for shape, local in self.pieces[piece]:
+            rot = frame_r[f] @ local[:3, :3]
+            pos = frame_r[f] @ local[:3, 3] + frame_t[f]
+            out.append((shape, self.coal.Transform3s(rot, pos)))
+        return out
+
+    def _hits(self, mine: list[tuple[Any, Any]], other: Any, where: Any, margin: float) -> bool:
+        request, result = self._request, self._result
+        request.security_margin = margin
+        for shape, transform in mine:
+            result.clear()
+            if self.coal.collide(shape, transform, other, where, request, result) > 0:
+                return True
+        return False
+
+    def contact(self, row: NDArray[np.int64], frame_r: Matrix, frame_t: Matrix, margin: float = 0.0) -> bool:
+        """Whether the band contact ``row`` (``(kind, a, b)``, :mod:`clew_ros.spatial.kernels.band`) touches on
+        the exact geometry (with ``margin`` m of clearance asked on top of the padding)."""
+        kind, a, b = int(row[0]), int(row[1]), int(row[2])
+        mine = self._placed(a, frame_r, frame_t)
+        if kind in (OBSTACLE, SUPPORT):
+            shape, where = self.obstacles[b]
+            return self._hits(mine, shape, where, self.padding[a] + margin)
+        if kind == BOUNDS:
+            return any(self._hits(mine, shape, where, self.padding[a] + margin) for shape, where in self.slabs)
+        assert kind == PAIR
+        grown = self.padding[a] + self.padding[b] + 2 * margin
+        return any(self._hits(mine, shape, where, grown) for shape, where in self._placed(b, frame_r, frame_t))
+
+    def free(self, contacts: NDArray[np.int64], frame_r: Matrix, frame_t: Matrix, margin: float = 0.0) -> bool:
+        """Whether none of ``contacts`` (rows ``(kind, a, b)``) touches on the exact geometry."""
+        return not any(self.contact(row, frame_r, frame_t, margin) for row in contacts)

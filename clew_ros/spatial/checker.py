@@ -360,7 +360,7 @@ class SpatialChecker:
             return lo, hi, ok
         self._sphere_intervals(batch, joint, settings, bound, fold, (lo, hi, ok))
         if self.exact:
-            self._band_intervals(batch, joint, settings, move if fold else None, bound, lo, hi, ok)
+            self._band_intervals(batch, joint, settings, bound, lo, hi, ok)
         return lo, hi, ok
 
     def _sphere_intervals(  # noqa: PLR0917
@@ -388,7 +388,6 @@ class SpatialChecker:
         batch: NDArray[np.float64],
         joint: int,
         settings: IntervalSettings,
-        move: Any,
         bound: NDArray[np.float64],
         lo: NDArray[np.float64],
         hi: NDArray[np.float64],
@@ -408,17 +407,11 @@ class SpatialChecker:
         ok[rows] = True
         step = settings.band_step
         margin = step / 2 * (1.0 if robot.prismatic[joint] else float(self._lever[joint]))
-        sides = (-1.0, 1.0)
-        for side in sides:
-            if move is not None:
-                heads = np.sign(np.broadcast_to(move, len(batch))[rows])
-                mine = rows[heads == side]
-            else:
-                mine = rows
-            if not len(mine):
-                continue
+        for side in (-1.0, 1.0):  # both sides, as far as the move (a fold may come back past the start)
+            mine = rows
             start = batch[mine, joint]
-            room = np.minimum(bound[mine], (robot.upper[joint] - start) if side > 0 else (start - robot.lower[joint]))
+            limit = np.abs(bound[mine])
+            room = np.minimum(limit, (robot.upper[joint] - start) if side > 0 else (start - robot.lower[joint]))
             proven = np.zeros(len(mine))
             alive = np.ones(len(mine), dtype=bool)
             for k in range(settings.band_samples):

@@ -71,6 +71,8 @@ class MotionSpace(Space, Protocol):
 
     def tcp(self, q: np.ndarray) -> np.ndarray: ...
 
+    def backed_off(self, checker: SpatialChecker, q: np.ndarray) -> np.ndarray | None: ...
+
 
 def plan_motion(
     space: MotionSpace,
@@ -90,7 +92,12 @@ def plan_motion(
     if isinstance(refusal, tuple):
         return run.finish(*refusal)
     try:
-        return run.search_all(refusal, progress)
+        goal_tree = LandmarkTree(refusal, run.none)
+        for tree in (run.tree, goal_tree):  # out of a tight spot: the tcp backed off along its approach
+            way = space.backed_off(run.checker, tree[0].joints)
+            if way is not None:
+                add_branch(tree, 0, way)
+        return run.search_all(refusal, progress, goal_tree)
     except Exception as problem:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
         return run.finish(Outcome.INTERNAL_ERROR, f"internal error: {problem!r}\n{traceback.format_exc(limit=4)}")
 

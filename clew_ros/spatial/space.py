@@ -257,7 +257,10 @@ class SpatialSpace:
                 "object", thing.shape.shape, thing.shape.size, matrices(object_pose)[0], "world.object"
             )
             world = self.world
-            checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, resting_object=resting)
+            checker = SpatialChecker(
+                world.robot, world.spheres, world.obstacles, world.bounds, resting_object=resting,
+                exact=world.checker.exact,
+            )  # fmt: skip
             self._transit_checkers[key] = checker
         return checker
 
@@ -275,7 +278,9 @@ class SpatialSpace:
                 world.supports,
                 world.tolerances["placement_tolerance"],
             )
-            checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, held=held)
+            checker = SpatialChecker(
+                world.robot, world.spheres, world.obstacles, world.bounds, held=held, exact=world.checker.exact
+            )
             self._transfer_checkers[key] = checker
         return checker
 
@@ -726,6 +731,25 @@ class SpatialSpace:
                 out: Array = np.array(way)
                 return out
         return None
+
+    def backed_off(self, checker: SpatialChecker, q: Array) -> Array | None:
+        """The tcp's way back from ``q`` along its own -z (k + 1, n): steps of
+        :attr:`SpatialTuning.motion_way_out_step_m` up to :attr:`SpatialTuning.motion_way_out_m`, inverse
+        kinematics seeded at the step before, while each straight move is clear (``checker``); ``None`` if
+        the first step is not."""
+        tuning = self.tuning
+        if tuning.motion_way_out_m <= 0 or tuning.motion_way_out_step_m <= 0:
+            return None
+        pose = self.tcp(q[None])[0]
+        way = [q]
+        for k in range(1, math.ceil(tuning.motion_way_out_m / tuning.motion_way_out_step_m - 1e-9) + 1):
+            target = pose.copy()
+            target[:3, 3] -= k * tuning.motion_way_out_step_m * pose[:3, 2]
+            step = self._approach_joints(target[None], way[-1][None])
+            if np.isnan(step).any() or not self.clear(checker, way[-1][None], step)[0]:
+                break
+            way.append(step[0])
+        return np.array(way) if len(way) > 1 else None
 
     def goal_configurations(self, ctx: PlanningContext, q0: Array, grasp_rel: Array, goal: Array) -> Array:
         """Valid configurations (m, n) holding the object (as ``grasp_rel``) at the goal (:meth:`goal_poses`),

@@ -140,3 +140,9 @@ class SpatialTuning:
     #: along its approach, in steps of ``approach_m`` while they are clear: out of a shelf deeper than one
     #: approach
     transfer_way_out_m: float = 0.3
+    #: a motion-only query's way out of a tight spot: the tcp backed off along its own -z from the start and
+    #: from the goal this far (m), in straight steps of ``motion_way_out_step_m`` (inverse kinematics seeded
+    #: at the step before, each step clear), as a gripper leaves a bin or a grasp; both trees' first landmark
+    #: (0: none)
+    motion_way_out_m: float = 0.1
+    motion_way_out_step_m: float = 0.01

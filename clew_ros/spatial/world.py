@@ -157,11 +157,14 @@ def spatial_world_from_parameters(
     settings: SphereSettings | None = None,
     *,
     prepared: tuple[RobotModel, SphereModel] | None = None,
+    exact: bool = True,
 ) -> SpatialWorld:
     """The spatial world of a ``ros__parameters`` tree (its ``world`` key, ``world.kind: spatial``); paths are
     read relative to ``folder`` (the parameter file's). ``settings`` tune the sphere model. ``prepared``: the
     robot of ``world.robot`` and its sphere model, already loaded (a generator building many worlds around one
-    arm); ``world.robot`` is then read only for ``initial`` and ``goal``."""
+    arm); ``world.robot`` is then read only for ``initial`` and ``goal``. ``exact`` false: the planner's checkers
+    decide on the sphere model alone (conservative: a benchmark's "before"; the contract asks for the exact
+    geometry)."""
     tree = parameters.get("world") if isinstance(parameters, Mapping) else None
     if not isinstance(tree, Mapping):
         raise WorldError("world", f"expected a mapping of world parameters, got {short_repr(tree)}")
@@ -207,5 +210,5 @@ def spatial_world_from_parameters(
         goal=goal,
         object=thing,
         tolerances=tolerances,
-        checker=SpatialChecker(robot, spheres, obstacles, bounds),
+        checker=SpatialChecker(robot, spheres, obstacles, bounds, exact=exact),
     )

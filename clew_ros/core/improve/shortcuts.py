@@ -70,7 +70,9 @@ def shortcut_path(
         before = joint_travel([np.vstack([p, path[i + 1 : j + 1], r])])
         if np.abs(r - p).sum() >= before - 1e-9:
             continue
-        if not clear(p[None], r[None])[0]:
+        # the shortcut, and the two pieces it cuts in part: a piece's validity is checked at its own samples
+        # (interface.md's 0.002 rad), and a part of a piece is sampled elsewhere than the whole was
+        if not clear(np.stack([p, path[i], r]), np.stack([r, p, path[j + 1]])).all():
             continue
         path = _dedupe(np.vstack([path[: i + 1], p, r, path[j + 1 :]]))
         taken += 1

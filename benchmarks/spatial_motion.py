@@ -53,7 +53,9 @@ from numpy.typing import NDArray
 from benchmarks.spatial_checker import CONFIG, ROBOTS
 from benchmarks.spatial_scenes import FAMILIES, MotionProblem, ProblemContext, problems
 from benchmarks.spatial_scenes import context as problem_context
+from benchmarks.spatial_tight import tighten
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.offline import warm_up
 from clew_ros.spatial.scene import Obstacle
 from clew_ros.spatial.space import plan as spatial_plan
@@ -364,13 +366,26 @@ def aca_world(problem: MotionProblem) -> SpatialWorld:
     return dataclasses.replace(built, checker=loaded.checker)
 
 
+@register("aca_spheres")
+def aca_spheres(problem: MotionProblem, seed: int, time_limit_s: float) -> PlannerResult:
+    """:func:`aca` deciding on the sphere model alone (``SpatialChecker(exact=False)``): the planner before
+    validity was decided on the exact geometry, for a before/after in one run."""
+    world = aca_world(problem)
+    loaded = cached_context(problem)
+    alone = SpatialChecker(loaded.robot, loaded.spheres, loaded.obstacles, exact=False)
+    return _aca_on(dataclasses.replace(world, checker=alone), seed, time_limit_s)
+
+
 @register("aca")
 def aca(problem: MotionProblem, seed: int, time_limit_s: float) -> PlannerResult:
     """The project's planner: :func:`clew_ros.spatial.space.plan` on the problem's motion-only world
     (EXPLORE and SEARCH_TRANSIT, then its shortcuts), default ``planner.*`` but ``seed`` and ``time_limit``,
     on the sphere checker the peers use; the kernels warmed (:func:`clew_ros.spatial.offline.warm_up`)
     before the clock, as ``clew_plan`` does."""
-    world = aca_world(problem)
+    return _aca_on(aca_world(problem), seed, time_limit_s)
+
+
+def _aca_on(world: SpatialWorld, seed: int, time_limit_s: float) -> PlannerResult:
     warm_up(world)
     started, cpu_started = time.perf_counter(), time.process_time()
     result = spatial_plan(world, PlannerSettings(seed=seed, time_limit=time_limit_s))
@@ -531,6 +546,11 @@ def _arguments(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--exact", action="store_true", help="check every path on the exact geometry (roboplan)")
     parser.add_argument("--json", type=Path, help="write every run (and its path) to this file")
     parser.add_argument("--write-scenes", type=Path, help="write each problem's scene and parameter file here")
+    parser.add_argument(
+        "--tight",
+        action="store_true",
+        help="goals millimetres from an object and a wall (benchmarks.spatial_tight), as MotionBenchMaker's grasps",
+    )
     args = parser.parse_args(argv)
     if args.problems < 1 or args.seeds < 1 or not args.time_limit > 0:
         parser.error("--problems and --seeds: expected at least 1; --time-limit: expected a positive number")
@@ -558,11 +578,37 @@ def _available(names: Sequence[str], exact: bool) -> tuple[list[str], bool]:
     return [name for name in names if missing.get(name) is None], exact and missing.get("--exact") is None
 
 
+def _tightened(queries: Sequence[MotionProblem]) -> list[MotionProblem]:
+    """The problems made tight (:func:`benchmarks.spatial_tight.tighten`; one that cannot be is named and left
+    out), and how many of their starts and goals, all valid on the exact geometry, each checker refuses."""
+    out = []
+    for query in queries:
+        tight = tighten(query)
+        if tight is None:
+            print(f"{query.name}: no tight goal kept its start valid and a straight way out; left out")
+        else:
+            out.append(tight)
+    ends = 0
+    refused = {"spheres alone": 0, "spheres + exact": 0}
+    for query in out:
+        loaded = cached_context(query)
+        rows = np.stack([query.start, query.goal])
+        ends += len(rows)
+        alone = SpatialChecker(loaded.robot, loaded.spheres, loaded.obstacles, exact=False)
+        refused["spheres alone"] += int((~alone.valid(rows)).sum())
+        refused["spheres + exact"] += int((~loaded.checker.valid(rows)).sum())
+    figures = ", ".join(f"{name} {count}" for name, count in refused.items())
+    print(f"tight problems: {len(out)}; of their {ends} starts and goals (valid on the meshes) refused by: {figures}")
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _arguments(argv)
     planners, exact = _available(list(args.chosen), args.exact)
     started = time.perf_counter()
     queries = problems(args.families, args.robots, args.problems, args.seed)
+    if args.tight:
+        queries = _tightened(queries)
     print(
         f"{len(queries)} problems ({', '.join(args.families)}; {', '.join(args.robots)}; seeds {args.seed}-"
         f"{args.seed + args.problems - 1}) generated in {time.perf_counter() - started:.1f} s; "

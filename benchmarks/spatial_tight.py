@@ -32,12 +32,11 @@ from numpy.typing import NDArray
 from benchmarks.spatial_scenes import MotionProblem, _pose_message, robot_and_spheres
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
-from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import scene_obstacles
-from clew_ros.spatial.tier import coal_module, link_shapes
+from clew_ros.spatial.tier import coal_module, robot_distance
 from clew_ros.spatial.validate import validation_samples
 
-__all__ = ["TightSettings", "robot_distance", "tighten", "witness"]
+__all__ = ["TightSettings", "tighten", "witness"]
 
 Matrix = NDArray[np.float64]
 
@@ -63,25 +62,7 @@ class TightSettings:
     tolerance_m: float = 2e-4
 
 
-def robot_distance(robot: RobotModel, q: Matrix, shape: Any, pose: Matrix) -> float:
-    """The least distance (m) on the exact geometry between the robot at ``q`` (every link) and a coal shape."""
-    coal = coal_module()
-    frames = robot.frames(q)
-    request, result = coal.DistanceRequest(), coal.DistanceResult()
-    other = coal.Transform3s(pose[:3, :3], pose[:3, 3])
-    best = math.inf
-    for link, shapes in zip(robot.links, link_shapes(robot), strict=True):
-        for item, local in shapes:
-            placed = frames[link.frame] @ local
-            result.clear()
-            coal.distance(item, coal.Transform3s(placed[:3, :3], placed[:3, 3]), shape, other, request, result)
-            best = min(best, float(result.min_distance))
-    return best
-
-
-def _grown(
-    distance: Callable[[float], float], low: float, high: float, gap: float, tolerance: float
-) -> float | None:
+def _grown(distance: Callable[[float], float], low: float, high: float, gap: float, tolerance: float) -> float | None:
     """The parameter in ``[low, high]`` where ``distance(t)`` (falling with t) meets ``gap``, by bisection;
     ``None`` when it is below ``gap`` already at ``low`` or above it at ``high``."""
     if distance(low) < gap or distance(high) > gap:
@@ -151,10 +132,15 @@ def tighten(problem: MotionProblem, settings: TightSettings | None = None) -> Mo
         wall_size[axis] = settings.wall_m[0]
         wall_pose = tcp.copy()
 
-        def wall_gap(offset: float, wall_pose: Matrix = wall_pose, normal: NDArray[np.float64] = normal) -> float:
+        def wall_gap(
+            offset: float,
+            wall_pose: Matrix = wall_pose,
+            normal: NDArray[np.float64] = normal,
+            size: list[float] = wall_size,
+        ) -> float:
             moved = wall_pose.copy()
             moved[:3, 3] = tcp[:3, 3] + (0.4 - offset) * normal
-            return robot_distance(robot, problem.goal, coal.Box(*wall_size), moved)
+            return robot_distance(robot, problem.goal, coal.Box(*size), moved)
 
         offset = _grown(wall_gap, 0.0, 0.4, gap_wall, settings.tolerance_m)
         if offset is None:

@@ -96,6 +96,40 @@ def _held_arrays(robot: RobotModel, held: Held | None, obstacles: Sequence[Obsta
     }
 
 
+def _inner_arrays(
+    spheres: SphereModel, held: Held | None, placed: NDArray[np.float64], tcp_frame: int, n_links: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """The inner spheres packed for :mod:`~clew_ros.spatial.kernels.band` (centres, radii, each piece's first
+    sphere): the links' (:attr:`SphereModel.inner`), then the held object's (``placed`` in frame ``tcp_frame``)."""
+    inner = spheres.inner
+    centres = np.zeros((0, 3)) if inner is None else inner.centers
+    radii = np.zeros(0) if inner is None else inner.radii
+    owners = np.zeros(0, dtype=np.int64) if inner is None else inner.links
+    if held is not None:
+        local_c, local_r = inner_cover(held.shape.geometry(), SphereSettings())
+        centres = np.concatenate([centres, local_c @ placed[:3, :3].T + placed[:3, 3]])
+        radii = np.concatenate([radii, local_r])
+        owners = np.concatenate([owners, np.full(len(local_r), n_links)])
+    pieces = n_links + (held is not None)
+    return (
+        np.ascontiguousarray(centres, dtype=np.float64),
+        np.ascontiguousarray(radii, dtype=np.float64),
+        np.searchsorted(owners, np.arange(pieces + 1)).astype(np.int64),
+    )
+
+
+def _levers(
+    robot: RobotModel, centres: NDArray[np.float64], radii: NDArray[np.float64], frames: NDArray[np.int64]
+) -> NDArray[np.float64]:
+    """Per joint, a bound (m) on how far from its axis a point it moves can be: the origins down the chain from
+    the frame it turns (prismatic joints at their longest), then the farthest sphere of the frames it moves."""
+    reach = np.linalg.norm(centres, axis=1) + radii
+    far = np.array([float(reach[frames >= j + 1].max(initial=0.0)) for j in range(robot.dof)])
+    chain = np.linalg.norm(robot.origins[:, :3, 3], axis=1)
+    chain = chain + np.where(robot.prismatic, np.maximum(np.abs(robot.lower), np.abs(robot.upper)), 0.0)
+    return np.array([chain[j + 1 :].sum() + far[j] for j in range(robot.dof)])
+
+
 class SpatialChecker:
     """Validity and free intervals of one robot (its sphere model) among obstacles, inside bounds."""
 
@@ -136,10 +170,6 @@ class SpatialChecker:
         link_frame = [link.frame for link in robot.links]
         held_arrays = _held_arrays(robot, held, self.obstacles, n_links)
         radii = radii + robot.padding  # the links grown by world.robot.padding (not the held object)
-        inner = spheres.inner
-        in_c = np.zeros((0, 3)) if inner is None else inner.centers
-        in_r = np.zeros(0) if inner is None else inner.radii
-        in_owner = np.zeros(0, dtype=np.int64) if inner is None else inner.links
         placed = robot.tcp @ np.linalg.inv(held.grasp) if held is not None else np.eye(4)
         if held is not None:  # the object: one more piece, riding on the tcp's frame
             local_c, local_r = cover(held.shape.geometry(), SphereSettings())
@@ -148,20 +178,12 @@ class SpatialChecker:
             frames = np.concatenate([frames, np.full(len(local_r), robot.tcp_frame)])
             owners = np.concatenate([owners, np.full(len(local_r), n_links)])
             link_frame.append(robot.tcp_frame)
-            local_c, local_r = inner_cover(held.shape.geometry(), SphereSettings())
-            in_c = np.concatenate([in_c, local_c @ placed[:3, :3].T + placed[:3, 3]])
-            in_r = np.concatenate([in_r, local_r])
-            in_owner = np.concatenate([in_owner, np.full(len(local_r), n_links)])
         pieces = len(link_frame)
         starts = np.searchsorted(owners, np.arange(pieces + 1))
         self.exact = exact
         self._tier: ExactTier | None = None
         self._held_pose = None if held is None else (held.shape, placed)
-        self._inner = (
-            np.ascontiguousarray(in_c, dtype=np.float64),
-            np.ascontiguousarray(in_r, dtype=np.float64),
-            np.searchsorted(in_owner, np.arange(pieces + 1)).astype(np.int64),
-        )
+        self._inner = _inner_arrays(spheres, held, placed, robot.tcp_frame, n_links)
         ignore = np.zeros((pieces, len(self.obstacles)), dtype=np.bool_)
         if resting_object is not None:
             ignore[:n_links, -1] = gripper
@@ -214,14 +236,13 @@ class SpatialChecker:
                 a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"], a["pairs"],
                 a["bounds"], a["has_bounds"],
             ),
-            (a["held_link"], a["held_points"], a["held_disc"], a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"]),
+            (
+                a["held_link"], a["held_points"], a["held_disc"], a["held_axis"], a["sup_index"], a["sup_top"],
+                a["sup_tol"],
+            ),
         )  # fmt: skip
-        #: The sphere model's reach (m) from frame ``j``'s origin, per joint: how far a point it moves can be from
-        #: that joint's axis (a chain of origins, then the farthest sphere), the lever of a band step.
-        reach = np.linalg.norm(centers, axis=1) + radii
-        far = np.array([float(reach[frames >= j + 1].max(initial=0.0)) for j in range(robot.dof)])
-        chain = np.linalg.norm(robot.origins[:, :3, 3], axis=1)
-        self._lever = np.array([chain[j + 1 :].sum() + far[j] for j in range(robot.dof)])
+        #: per joint, how far (m) a point it moves can be from its axis: the lever of a band step
+        self._lever = _levers(robot, centers, radii, frames)
         #: Whether a link that no joint moves (on ``base_link``'s frame) touches an obstacle or leaves the
         #: bounds: then no configuration is valid. Checked once here, never per configuration (on the exact
         #: geometry where the spheres touch).
@@ -301,9 +322,9 @@ class SpatialChecker:
                 out[b] = self.tier.free(contacts[b, : counts[b]], frames_r[b], frames_t[b], margin)
         return out
 
-    def valid(self, qs: Any) -> NDArray[np.bool_]:
-        """For each row of ``qs`` (N, n): inside the joint limits and colliding with nothing (the spheres
-        first; where they touch, the exact geometry decides unless the checker was made with ``exact=False``)."""
+    def valid_on_spheres(self, qs: Any) -> NDArray[np.bool_]:
+        """For each row of ``qs``: inside the joint limits and its (outer) spheres touch nothing: free for
+        certain, far enough from every contact for the exact geometry to have nothing to say."""
         batch = self._batch(qs)
         out = np.empty(len(batch), dtype=np.bool_)
         if self.static_collision:
@@ -317,7 +338,14 @@ class SpatialChecker:
             a["pairs"], a["bounds"], a["has_bounds"], a["held_link"], a["held_points"], a["held_disc"],
             a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"], out,
         )  # fmt: skip
-        if self.exact:
+        return out
+
+    def valid(self, qs: Any) -> NDArray[np.bool_]:
+        """For each row of ``qs`` (N, n): inside the joint limits and colliding with nothing (the spheres
+        first; where they touch, the exact geometry decides unless the checker was made with ``exact=False``)."""
+        batch = self._batch(qs)
+        out = self.valid_on_spheres(batch)
+        if self.exact and not self.static_collision:
             open_rows = np.flatnonzero(~out)
             if len(open_rows):
                 out[open_rows] = self.classify(batch[open_rows])

@@ -152,11 +152,20 @@ def _pose_errors(transforms: Array, target: Array, weight: float) -> Array:
 
 
 def straight_samples_clear(
-    checker: SpatialChecker, starts: Array, ends: Array, *, coarse_every: int, settings: ValidationSettings
+    checker: SpatialChecker,
+    starts: Array,
+    ends: Array,
+    *,
+    coarse_every: int,
+    settings: ValidationSettings,
+    refine: int = 4,
 ) -> NDArray[np.bool_]:
     """Whether each straight joint-space move ``starts[i] -> ends[i]`` is valid at every configuration the
     validator checks (steps of at most 0.002 rad per revolute joint, 0.001 m per prismatic one): first at
-    every ``coarse_every``-th of those samples (cheap refusals), then at all of them."""
+    every ``coarse_every``-th of those samples (cheap refusals), then at all of them; where two neighbouring
+    samples lie near a contact (the sphere model does not clear both), ``refine - 1`` more between them, so
+    that a move the validator accepts does not graze between its samples either (another planner's samples,
+    or a part of the move, fall elsewhere)."""
     robot = checker.robot
     steps = np.where(robot.prismatic, settings.step_m, settings.step_rad)
     samples = [validation_samples(a, b, steps) for a, b in zip(starts, ends, strict=True)]
@@ -172,6 +181,18 @@ def straight_samples_clear(
         bounds = np.cumsum([0, *(len(p) for p in parts)])
         for a, i in enumerate(pick):
             clear[i] = bool(valid[bounds[a] : bounds[a + 1]].all())
+    pick = np.flatnonzero(clear)
+    if refine > 1 and checker.exact and len(pick):
+        whole = np.vstack([samples[i] for i in pick])
+        owner = np.repeat(pick, [len(samples[i]) for i in pick])
+        near = ~checker.valid_on_spheres(whole)
+        pair = (near[:-1] | near[1:]) & (owner[:-1] == owner[1:])
+        first = np.flatnonzero(pair)
+        if len(first):
+            share = (np.arange(1, refine) / refine)[None, :, None]
+            between = whole[first, None, :] + share * (whole[first + 1] - whole[first])[:, None, :]
+            fine = checker.valid(between.reshape(-1, robot.dof)).reshape(len(first), refine - 1).all(axis=1)
+            clear[np.unique(owner[first[~fine]])] = False
     return clear
 
 

@@ -32,7 +32,15 @@ from numpy.typing import NDArray
 
 from clew_ros.spatial.robot import Geometry, RobotModel
 
-__all__ = ["SphereModel", "SphereSettings", "cover", "inner_cover", "over_approximation", "sphere_model", "surface_points"]
+__all__ = [
+    "SphereModel",
+    "SphereSettings",
+    "cover",
+    "inner_cover",
+    "over_approximation",
+    "sphere_model",
+    "surface_points",
+]
 
 Array = NDArray[np.float64]
 Matrix = NDArray[np.float64]
@@ -287,7 +295,9 @@ def inner_cover(geometry: Geometry, settings: SphereSettings) -> tuple[Array, Ar
         ring = radius - small
         m = min(max(int(2 * math.pi * ring / max(small, 1e-9)), 1), settings.max_primitive_cells - 1)
         angle = 2 * math.pi * np.arange(m) / m
-        centres = np.concatenate([np.zeros((1, 3)), np.stack([ring * np.cos(angle), ring * np.sin(angle), np.zeros(m)], 1)])
+        centres = np.concatenate(
+            [np.zeros((1, 3)), np.stack([ring * np.cos(angle), ring * np.sin(angle), np.zeros(m)], 1)]
+        )
         return centres, np.full(m + 1, small)
     return _mesh_spheres(geometry.vertices, geometry.faces, settings)[2:]
 

@@ -16,6 +16,7 @@ configurations between two samples free, :meth:`SpatialChecker.free_intervals`).
 from __future__ import annotations
 
 import importlib
+import math
 import weakref
 from collections.abc import Sequence
 from typing import Any
@@ -28,7 +29,7 @@ from clew_ros.spatial.placements import MovableObject
 from clew_ros.spatial.robot import Geometry, RobotModel
 from clew_ros.spatial.scene import Obstacle
 
-__all__ = ["ExactTier", "coal_module", "coal_shape", "slab_poses"]
+__all__ = ["ExactTier", "coal_module", "coal_shape", "link_shapes", "robot_distance", "slab_poses"]
 
 Matrix = NDArray[np.float64]
 
@@ -96,6 +97,22 @@ def link_shapes(robot: RobotModel) -> list[list[tuple[Any, Matrix]]]:
         ]
         _LINK_SHAPES[robot] = shapes
     return shapes
+
+
+def robot_distance(robot: RobotModel, q: Sequence[float], shape: Any, pose: Matrix) -> float:
+    """The least distance (m) on the exact geometry between the robot at ``q`` (every link) and a coal shape."""
+    coal = coal_module()
+    frames = robot.frames(q)
+    other = coal.Transform3s(np.ascontiguousarray(pose[:3, :3]), np.ascontiguousarray(pose[:3, 3]))
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    best = math.inf
+    for link, shapes in zip(robot.links, link_shapes(robot), strict=True):
+        for item, local in shapes:
+            placed = frames[link.frame] @ local
+            result.clear()
+            coal.distance(item, coal.Transform3s(placed[:3, :3], placed[:3, 3]), shape, other, request, result)
+            best = min(best, float(result.min_distance))
+    return best
 
 
 class ExactTier:

@@ -54,6 +54,12 @@ setup(
         "zstandard>=0.22",
         "lz4>=4.0",
         "pillow>=10.0",
+        # spatial worlds: the URDF parser, collision meshes (STL, OBJ; DAE through pycollada) and coal, the
+        # collision library that decides validity on the URDF's exact geometry (clew_ros/spatial/tier.py)
+        "urdf-parser-py>=0.0.4",
+        "trimesh>=4.0",
+        "pycollada>=0.8",
+        "coal>=3.0",
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI wheels; a native install uses the distro's instead.
@@ -62,8 +68,9 @@ setup(
             "ros-jazzy-common-interfaces>=5.3",
             "ros-jazzy-std-srvs>=5.3",
         ],
-        # test: lxml (test/security/test_deploy_policy.py validates the SROS2 policy as sros2 does: XSD, XSLT) and
-        # the spatial extra's packages (test/spatial loads the shipped robots' URDFs and meshes)
+        # test: lxml (test/security/test_deploy_policy.py validates the SROS2 policy as sros2 does: XSD, XSLT),
+        # the spatial packages (test/spatial loads the shipped robots' URDFs and meshes) and pinocchio (the
+        # exact reference the two-tier checker is tested against)
         "test": [
             "pytest>=8.0",
             "hypothesis>=6.100",
@@ -71,6 +78,7 @@ setup(
             "lxml>=5.0",
             "trimesh>=4.0",
             "pycollada>=0.8",
+            "pin>=3.0",
         ],
         # python -m benchmarks.run (docs/benchmarks.md); the profile uses the standard library's cProfile.
         # roboplan-rrt: the exact-geometry C++ RRT-Connect peer of `python -m benchmarks spatial_motion` (it
@@ -82,9 +90,10 @@ setup(
         "live": ["foxglove-sdk>=0.30.3", "websockets>=15.0", "protobuf>=5.29"],
         # clew_batch --ray (clew_ros/batch/executors.py): jobs as Ray tasks, on a local Ray or a cluster.
         "batch": ["ray>=2.9"],
-        # clew_ros.spatial (spatial worlds): URDF parsing, collision meshes (STL, OBJ; DAE through pycollada).
-        "spatial": ["urdf-parser-py>=0.0.4", "trimesh>=4.0", "pycollada>=0.8"],
-        # benchmarks/spatial_checker.py: pinocchio + coal as the exact reference collision checker (large wheels).
+        # clew_ros.spatial (spatial worlds): what install_requires brings; kept so that `.[spatial]` still works.
+        "spatial": ["urdf-parser-py>=0.0.4", "trimesh>=4.0", "pycollada>=0.8", "coal>=3.0"],
+        # clew_ros.spatial.exact (spatial_families --exact, the tests' reference): pinocchio's own kinematics
+        # with coal, independent of the planner's.
         "spatial-ref": ["pin>=3.0", "coal>=3.0"],
         # make lint (and .ci/run): the checks configured in pyproject.toml. ruff's minor is capped: a new
         # minor release turns on new rules of the selected families, which would fail CI with no code change.

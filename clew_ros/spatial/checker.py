@@ -264,6 +264,11 @@ class SpatialChecker:
     # -- the exact tier ----------------------------------------------------------------------------------
 
     @property
+    def exact_checks(self) -> int:
+        """How many contacts the exact geometry has decided for this checker so far."""
+        return 0 if self._tier is None else self._tier.checks
+
+    @property
     def tier(self) -> ExactTier:
         """The exact geometry of this checker's scene (built when first needed)."""
         if self._tier is None:
@@ -282,7 +287,8 @@ class SpatialChecker:
                 continue
             rows = [(band.OBSTACLE, i, o) for o in range(len(self.obstacles)) if not a["ignore"][i, o]]
             rows += [(band.BOUNDS, i, -1)] if self.bounds is not None else []
-            if not tier.free(np.array(rows, dtype=np.int64).reshape(-1, 3), frame_r, frame_t):
+            rot, pos = tier.placements(frame_r[None], frame_t[None])
+            if not tier.free(np.array(rows, dtype=np.int64).reshape(-1, 3), (rot[0], pos[0])):
                 return True
         return False
 
@@ -311,15 +317,19 @@ class SpatialChecker:
             sub, sub_counts = np.empty(k, dtype=np.int64), np.empty(k, dtype=np.int64)
             sub_r, sub_t = np.empty((k, self.robot.dof + 1, 3, 3)), np.empty((k, self.robot.dof + 1, 3))
             band.contacts_batch(batch[overflow], *self._band, sub, again, sub_counts, sub_r, sub_t, margin)
+            if self.exact:
+                rot, pos = self.tier.placements(sub_r, sub_t)
             for m, row in enumerate(overflow):
                 out[row] = sub[m] == band.FREE or (
                     self.exact
                     and sub[m] == band.BAND
-                    and self.tier.free(again[m, : sub_counts[m]], sub_r[m], sub_t[m], margin)
+                    and self.tier.free(again[m, : sub_counts[m]], (rot[m], pos[m]), margin)
                 )
-        if self.exact:
-            for b in np.flatnonzero(status == band.BAND):
-                out[b] = self.tier.free(contacts[b, : counts[b]], frames_r[b], frames_t[b], margin)
+        rows = np.flatnonzero(status == band.BAND)
+        if self.exact and len(rows):
+            rot, pos = self.tier.placements(frames_r[rows], frames_t[rows])
+            for k, b in enumerate(rows):
+                out[b] = self.tier.free(contacts[b, : counts[b]], (rot[k], pos[k]), margin)
         return out
 
     def valid_on_spheres(self, qs: Any) -> NDArray[np.bool_]:
@@ -343,13 +353,18 @@ class SpatialChecker:
     def valid(self, qs: Any) -> NDArray[np.bool_]:
         """For each row of ``qs`` (N, n): inside the joint limits and colliding with nothing (the spheres
         first; where they touch, the exact geometry decides unless the checker was made with ``exact=False``)."""
+        return self.valid_and_on_spheres(qs)[0]
+
+    def valid_and_on_spheres(self, qs: Any) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """:meth:`valid` and :meth:`valid_on_spheres` of the rows of ``qs``, for the price of one."""
         batch = self._batch(qs)
-        out = self.valid_on_spheres(batch)
+        spheres = self.valid_on_spheres(batch)
+        out = spheres.copy()
         if self.exact and not self.static_collision:
             open_rows = np.flatnonzero(~out)
             if len(open_rows):
                 out[open_rows] = self.classify(batch[open_rows])
-        return out
+        return out, spheres
 
     def free_intervals(
         self,

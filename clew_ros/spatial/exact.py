@@ -159,6 +159,7 @@ class ExactChecker:
             for j in range(i + 1, len(robot.links))
             if (i, j) not in robot.exempt
         ]
+        self._alone: _Scene | None = None
 
     # -- kinematics -------------------------------------------------------------------------------------
 
@@ -282,6 +283,13 @@ class ExactChecker:
                 pair = scene.model.collisionPairs[k]
                 return f"{scene.names[pair.first]} touches {scene.names[pair.second]}"
         return "a collision"  # pragma: no cover - computeCollisions said so
+
+    def configuration_problem(self, q: Sequence[float]) -> str:
+        """What the robot at ``q`` touches (an obstacle, the bounds, itself; the object left out), "" for
+        nothing: the reference answer for one configuration."""
+        if self._alone is None:
+            self._alone = self._scene()
+        return self._collides(self._alone, q)
 
     def _touches(self, shape: Any, pose: Matrix, other: Any, other_pose: Matrix) -> bool:
         coal = self.coal

@@ -138,6 +138,12 @@ class ExactTier:
             self.pieces.append([(coal_shape(coal, shape.shape, shape.size), placed)])
             self.frames.append(robot.tcp_frame)
             self.padding.append(0.0)
+        #: every piece's geometries, flat: shape, frame, pose in that frame; piece p owns ``first[p]:first[p + 1]``
+        self.shapes = [shape for piece in self.pieces for shape, _ in piece]
+        self.first = np.cumsum([0, *(len(piece) for piece in self.pieces)])
+        self._frame_of = np.repeat(self.frames, [len(piece) for piece in self.pieces]).astype(np.int64)
+        local = np.array([pose for piece in self.pieces for _, pose in piece]).reshape(-1, 4, 4)
+        self._local_r, self._local_t = local[:, :3, :3], local[:, :3, 3]
         self.obstacles = [(coal_shape(coal, o.shape, o.size), self._transform(o.pose)) for o in obstacles]
         self.slabs = (
             []
@@ -146,19 +152,24 @@ class ExactTier:
         )
         self._request = coal.CollisionRequest()
         self._result = coal.CollisionResult()
+        #: contacts decided so far (a count of work that does not depend on the machine)
+        self.checks = 0
 
     def _transform(self, pose: Matrix) -> Any:
         return self.coal.Transform3s(np.ascontiguousarray(pose[:3, :3]), np.ascontiguousarray(pose[:3, 3]))
 
-    def _placed(self, piece: int, frame_r: Matrix, frame_t: Matrix) -> list[tuple[Any, Any]]:
-        """Piece ``piece``'s shapes with their transforms in ``world`` at the given frames."""
-        f = self.frames[piece]
-        out = []
-        for shape, local in self.pieces[piece]:
-            rot = frame_r[f] @ local[:3, :3]
-            pos = frame_r[f] @ local[:3, 3] + frame_t[f]
-            out.append((shape, self.coal.Transform3s(rot, pos)))
-        return out
+    def placements(self, frames_r: Matrix, frames_t: Matrix) -> tuple[Matrix, Matrix]:
+        """Every geometry's rotation (k, G, 3, 3) and position (k, G, 3) in ``world`` for each of ``k`` rows of
+        frames (``frames_r`` (k, n+1, 3, 3), ``frames_t`` (k, n+1, 3)), in one batched product."""
+        on = frames_r[:, self._frame_of]
+        rot = np.einsum("kgij,gjl->kgil", on, self._local_r)
+        pos = np.einsum("kgij,gj->kgi", on, self._local_t) + frames_t[:, self._frame_of]
+        return rot, pos
+
+    def _placed(self, piece: int, rot: Matrix, pos: Matrix) -> list[tuple[Any, Any]]:
+        """Piece ``piece``'s shapes with their transforms in ``world`` (one row of :meth:`placements`)."""
+        transform = self.coal.Transform3s
+        return [(self.shapes[g], transform(rot[g], pos[g])) for g in range(self.first[piece], self.first[piece + 1])]
 
     def _hits(self, mine: list[tuple[Any, Any]], other: Any, where: Any, margin: float) -> bool:
         request, result = self._request, self._result
@@ -169,20 +180,34 @@ class ExactTier:
                 return True
         return False
 
-    def contact(self, row: NDArray[np.int64], frame_r: Matrix, frame_t: Matrix, margin: float = 0.0) -> bool:
+    def contact(
+        self,
+        row: NDArray[np.int64],
+        placement: tuple[Matrix, Matrix],
+        margin: float = 0.0,
+        placed: dict[int, list[tuple[Any, Any]]] | None = None,
+    ) -> bool:
         """Whether the band contact ``row`` (``(kind, a, b)``, :mod:`clew_ros.spatial.kernels.band`) touches on
-        the exact geometry (with ``margin`` m of clearance asked on top of the padding)."""
+        the exact geometry at ``placement`` (one row of :meth:`placements`), with ``margin`` m of clearance asked
+        on top of the padding; ``placed``: the pieces already placed there (filled in as they are placed)."""
+        placed = {} if placed is None else placed
         kind, a, b = int(row[0]), int(row[1]), int(row[2])
-        mine = self._placed(a, frame_r, frame_t)
+        self.checks += 1
+        if a not in placed:
+            placed[a] = self._placed(a, *placement)
+        mine = placed[a]
         if kind in (OBSTACLE, SUPPORT):
             shape, where = self.obstacles[b]
             return self._hits(mine, shape, where, self.padding[a] + margin)
         if kind == BOUNDS:
             return any(self._hits(mine, shape, where, self.padding[a] + margin) for shape, where in self.slabs)
         assert kind == PAIR
+        if b not in placed:
+            placed[b] = self._placed(b, *placement)
         grown = self.padding[a] + self.padding[b] + 2 * margin
-        return any(self._hits(mine, shape, where, grown) for shape, where in self._placed(b, frame_r, frame_t))
+        return any(self._hits(mine, shape, where, grown) for shape, where in placed[b])
 
-    def free(self, contacts: NDArray[np.int64], frame_r: Matrix, frame_t: Matrix, margin: float = 0.0) -> bool:
-        """Whether none of ``contacts`` (rows ``(kind, a, b)``) touches on the exact geometry."""
-        return not any(self.contact(row, frame_r, frame_t, margin) for row in contacts)
+    def free(self, contacts: NDArray[np.int64], placement: tuple[Matrix, Matrix], margin: float = 0.0) -> bool:
+        """Whether none of ``contacts`` (rows ``(kind, a, b)``) touches on the exact geometry at ``placement``."""
+        placed: dict[int, list[tuple[Any, Any]]] = {}
+        return not any(self.contact(row, placement, margin, placed) for row in contacts)

@@ -265,7 +265,9 @@ class _Builder:
             middle += self.rng.uniform(-0.03, 0.03) * np.array([-math.sin(yaw), math.cos(yaw)])
         for _ in range(2):  # as drawn, else as small as the object's footprint allows
             entry = _box(name, [length, width, thickness], [*middle, top - thickness / 2, 0, 0, yaw])
-            table = SpatialChecker(self.arm.robot, self.arm.spheres, [_obstacle(name, entry)], self_collision=False)
+            table = SpatialChecker(
+                self.arm.robot, self.arm.spheres, [_obstacle(name, entry)], self_collision=False, exact=False
+            )
             configurations = np.array([q for h in (hold, *extra) for q in (*h.leaving, *h.lift)])
             if table.valid(configurations).all():
                 break
@@ -317,7 +319,7 @@ class _Builder:
         """The arm's start: its home (or a random configuration) from which the straight move to the approach
         is free, else the approach itself."""
         resting = SpatialChecker(
-            world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose)
+            world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose), exact=False
         )
         if self.family.start_at_approach:
             return start.up
@@ -333,7 +335,7 @@ class _Builder:
     def carry(self, world: SpatialWorld, grasp_rel: Matrix, start: Hold, goal: Hold) -> list[NDArray[np.float64]]:
         """The transfer's waypoints: straight from approach to approach, else through a via configuration."""
         held = Held(self.thing, grasp_rel, world.supports, world.tolerances["placement_tolerance"])
-        checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, held=held)
+        checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, held=held, exact=False)
         direct = [*start.raising, *goal.lowering]
         if not validate_transit(checker, direct):
             return direct
@@ -576,7 +578,7 @@ def _unsolvable(builder: _Builder) -> SpatialGenerated:
     final = {**tree, "obstacle_names": list(builder.obstacles), "obstacles": dict(builder.obstacles)}
     world = builder.world(final)
     checker = SpatialChecker(
-        world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose)
+        world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose), exact=False
     )
     if not checker.valid(world.initial[None])[0] or resting_problems(world, start.pose, "start"):
         raise _RejectedError("the start is not free")

@@ -214,7 +214,7 @@ class Solver:
         self.kinematics = InverseKinematics(arm.robot, IKSettings(active_set=False))
         self.settings = settings
         #: the arm alone (limits, self-collision)
-        self.alone = SpatialChecker(arm.robot, arm.spheres)
+        self.alone = SpatialChecker(arm.robot, arm.spheres, exact=False)
 
     def solve(self, q0: NDArray[np.float64], residual: Callable[[Matrix], Matrix]) -> tuple[NDArray[np.float64], float]:
         robot, h = self.robot, 1e-7
@@ -385,10 +385,10 @@ class Sweep:
     def clear(self, obstacle: Obstacle, *, inflate: bool = True) -> bool:
         grown = inflated(obstacle, self.margin) if inflate else obstacle
         robot, spheres = self.world.robot, self.world.spheres
-        if not SpatialChecker(robot, spheres, [grown], self_collision=False).valid(self.all).all():
+        if not SpatialChecker(robot, spheres, [grown], self_collision=False, exact=False).valid(self.all).all():
             return False
         held = Held(self.shape, self.grasp_rel, ())
-        if not SpatialChecker(robot, spheres, [grown], self_collision=False, held=held).valid(self.held).all():
+        if not SpatialChecker(robot, spheres, [grown], self_collision=False, held=held, exact=False).valid(self.held).all():
             return False
         return all(object_clear(self.cover, pose, grown) for pose in self.rests)
 

@@ -8,8 +8,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-coal = pytest.importorskip("coal")
+pytest.importorskip("coal")
 pytest.importorskip("pinocchio")
+
+import coal
 
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.exact import ExactChecker
@@ -95,7 +97,8 @@ def test_a_move_that_grazes_at_mid_step_is_refused(panda: RobotModel, panda_sphe
     settings = ValidationSettings()
     assert not straight_samples_clear(checker, start[None], end[None], coarse_every=8, settings=settings)[0]
     problems = validate_transit(checker, np.stack([start, end]))
-    assert len(problems) == 1 and problems[0].startswith("piece 0")
+    assert len(problems) == 1
+    assert problems[0].startswith("piece 0")
 
 
 def test_the_spheres_never_call_a_collision_free_and_the_tiers_agree_with_pinocchio() -> None:
@@ -105,10 +108,9 @@ def test_the_spheres_never_call_a_collision_free_and_the_tiers_agree_with_pinocc
     for robot_kind, seed in (("panda", 3), ("ur5", 4), ("random", 5)):
         world: SpatialWorld = generate_spatial("spatial_shelf", seed, robot_kind).world()
         reference = ExactChecker(world)
-        scene = reference._scene()
         rng = np.random.default_rng(seed)
         qs = rng.uniform(world.robot.lower, world.robot.upper, size=(300, world.robot.dof))
-        truth = np.array([not reference._collides(scene, q) for q in qs])
+        truth = np.array([not reference.configuration_problem(q) for q in qs])
         alone = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, exact=False).valid(qs)
         tiers = world.checker.valid(qs)
         checked += len(qs)
@@ -122,7 +124,8 @@ def test_the_spheres_never_call_a_collision_free_and_the_tiers_agree_with_pinocc
 
 def test_inner_spheres_lie_inside_the_geometry(panda: RobotModel, panda_spheres: SphereModel) -> None:
     inner = panda_spheres.inner
-    assert inner is not None and inner.count > 0
+    assert inner is not None
+    assert inner.count > 0
     request, result = coal.DistanceRequest(), coal.DistanceResult()
     for i, (link, shapes) in enumerate(zip(panda.links, link_shapes(panda), strict=True)):
         for k in range(inner.starts[i], inner.starts[i + 1]):
@@ -154,7 +157,6 @@ def test_free_intervals_near_a_contact_are_free_on_the_exact_geometry() -> None:
     clearance that covers what lies between): every configuration drawn inside them is free on pinocchio's."""
     world = generate_spatial("spatial_shelf", 3, "panda").world()
     reference = ExactChecker(world)
-    scene = reference._scene()
     rng = np.random.default_rng(11)
     qs = rng.uniform(world.robot.lower, world.robot.upper, size=(1500, world.robot.dof))
     alone = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, exact=False)
@@ -169,5 +171,5 @@ def test_free_intervals_near_a_contact_are_free_on_the_exact_geometry() -> None:
             for value in np.linspace(a, b, 25):
                 row = q.copy()
                 row[joint] = value
-                assert not reference._collides(scene, row), (joint, value)
+                assert not reference.configuration_problem(row), (joint, value)
     assert np.median(widths) > 0.01

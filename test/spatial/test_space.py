@@ -377,16 +377,29 @@ def test_a_motion_stopped_by_its_time_limit_says_so(boxes: SpatialWorld) -> None
     assert result.segments == []
 
 
-def test_an_improvement_the_validator_refuses_is_not_returned() -> None:
-    """spatial_shelf 2 (a random arm of 5 joints), seed 0: the improvement's shorter plan has a transfer move
-    whose held box grazes its support where the planner's samples missed it; the validator's checks refuse
-    it, so the run returns its first plan (valid), saying what was refused."""
+def test_an_improvement_the_validator_refuses_is_not_returned(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An improvement whose plan the validator's checks refuse (here: made to put a transit waypoint past a joint
+    limit) is not returned: the run returns its first plan (valid), saying what was refused."""
+    from dataclasses import replace as replaced
+
     from clew_ros.spatial.offline import checked_plan
+    from clew_ros.spatial.space import SpatialSpace
     from clew_ros.worlds.spatial import generate_spatial
 
-    world = generate_spatial("spatial_shelf", 2, "random").world()
+    world = generate_spatial("spatial_table", 0, "panda").world()
+    improved = SpatialSpace.improved
+
+    def faulty(self: SpatialSpace, *args: Any, **kwargs: Any) -> Any:
+        better = improved(self, *args, **kwargs)
+        first = better.segments[0]
+        past = np.array(first.waypoints[0], dtype=float)
+        past[0] = world.robot.upper[0] + 0.1
+        broken = replaced(first, waypoints=[first.waypoints[0], past, *first.waypoints])
+        return replaced(better, segments=[broken, *better.segments[1:]])
+
+    monkeypatch.setattr(SpatialSpace, "improved", faulty)
     result = plan(world, PlannerSettings(seed=0, time_limit=30.0))
     assert result.outcome is Outcome.SUCCEEDED, result.message
-    assert "support" in result.stats["improve_refused"]
+    assert "outside its limits" in result.stats["improve_refused"]
     assert result.stats["joint_travel_rad"] == result.stats["first_joint_travel_rad"]
     assert checked_plan(world, result).code == "SUCCEEDED"

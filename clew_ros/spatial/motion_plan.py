@@ -364,12 +364,12 @@ class _MotionRun:
         """``path`` shortcut (:func:`~clew_ros.spatial.shortcut.shortcut_path`) in rounds of
         :attr:`SpatialTuning.motion_shortcut_round` tries, until a round takes none,
         :attr:`SpatialTuning.motion_shortcut_tries` are spent or the exact geometry has decided
-        :attr:`SpatialTuning.motion_shortcut_exact_rate` x ``planner.improve_time`` contacts; the path and the
+        :attr:`SpatialTuning.shortcut_exact_rate` x ``planner.improve_time`` contacts; the path and the
         shortcuts taken."""
         rng = np.random.default_rng([self.settings.seed, IMPROVE_STREAM])
         clear = partial(self.space.clear, self.checker)
         left, shortcuts = self.tuning.motion_shortcut_tries, 0
-        exact = self.checker.exact_checks + self.tuning.motion_shortcut_exact_rate * self.settings.improve_time
+        exact = self.checker.exact_checks + self.tuning.shortcut_exact_rate * self.settings.improve_time
         while left > 0 and self.checker.exact_checks < exact:
             tries = min(left, self.tuning.motion_shortcut_round)
             path, taken, _, stopped = shortcut_path(clear, path, tries=tries, rng=rng, stop=self.termination)

@@ -24,6 +24,7 @@ from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.robot import Geometry
 from clew_ros.spatial.scene import Obstacle, obstacle_arrays
 from clew_ros.spatial.spheres import SphereSettings, cover
+from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import pose_matrix, rpy_matrix
 
 __all__ = [
@@ -234,8 +235,9 @@ def sample_placements(
     settings: SphereSettings | None = None,
 ) -> NDArray[np.float64]:
     """Up to ``count`` poses (k, 4, 4) of ``thing`` resting on ``face`` on ``support`` with its footprint
-    inside the top face and touching no obstacle but the support (tested on the object's conservative
-    sphere cover), drawn uniformly in position and yaw; at most ``tries`` x ``count`` draws."""
+    inside the top face and touching no obstacle but the support (its conservative sphere cover first, its
+    exact box or cylinder where the spheres touch), drawn uniformly in position and yaw; at most ``tries`` x
+    ``count`` draws."""
     centers, radii = cover(thing.geometry(), settings or SphereSettings())
     others = [o for o in obstacles if o.name != support.name]
     packed = obstacle_arrays(others)
@@ -262,8 +264,8 @@ def sample_placements(
             <= 0.0
             for o in range(len(others))
             for p, r in zip(placed, radii, strict=True)
-        ):
-            continue
+        ) and object_touches(thing, pose, others):
+            continue  # the spheres touch an obstacle, and so does the exact box or cylinder
         out.append(pose)
     return np.array(out).reshape(-1, 4, 4)
 

@@ -29,10 +29,9 @@ from clew_ros.core.errors import PlanFileError
 from clew_ros.core.plan import Plan, PlanLandmark, PlanSegment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import InverseKinematics
-from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.placements import resting_on
-from clew_ros.spatial.scene import Obstacle, make_obstacle, obstacle_arrays
-from clew_ros.spatial.spheres import SphereSettings, cover
+from clew_ros.spatial.scene import Obstacle, make_obstacle
+from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import matrix_pose, pose_matrix
 from clew_ros.spatial.validate import ValidationSettings, validate_transit, validation_samples
 from clew_ros.spatial.world import SpatialWorld
@@ -173,8 +172,8 @@ def _frozen(values: Any) -> NDArray[np.float64]:
 
 def resting_problems(world: SpatialWorld, pose: Matrix, where: str) -> list[str]:
     """What is wrong with the object resting at ``pose`` (4x4): not a stable placement, inside the bounds
-    no more (its exact corners or rim), or its conservative sphere cover touching an obstacle other than
-    the support it rests on. ``where`` starts each problem."""
+    no more (its exact corners or rim), or its box or cylinder (exactly) touching an obstacle other than the
+    support it rests on. ``where`` starts each problem."""
     assert world.object is not None
     shape = world.object.shape
     found = resting_on(shape, pose, world.supports, world.tolerances["placement_tolerance"])
@@ -201,20 +200,7 @@ def resting_problems(world: SpatialWorld, pose: Matrix, where: str) -> list[str]
         if np.any(low < world.bounds[:3]) or np.any(high > world.bounds[3:]):
             problems.append(f"{where}: the object leaves the bounds")
     others = [o for o in world.obstacles if o.name != found[0].name]
-    if others:
-        centers, radii = cover(shape.geometry(), SphereSettings())
-        placed = centers @ pose[:3, :3].T + pose[:3, 3]
-        packed = obstacle_arrays(others)
-        for o, obstacle in enumerate(others):
-            touching = any(
-                clearance_of_sphere(
-                    p, r, packed["obs_kind"][o], packed["obs_r"][o], packed["obs_t"][o], packed["obs_dims"][o]
-                )
-                <= 0.0
-                for p, r in zip(placed, radii, strict=True)
-            )
-            if touching:
-                problems.append(f"{where}: the object touches obstacle {obstacle.name!r}")
+    problems += [f"{where}: the object touches obstacle {name!r}" for name in object_touches(shape, pose, others)]
     return problems
 
 

@@ -49,12 +49,12 @@ from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
-from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.motion_plan import add_branch, connect, plan_motion
 from clew_ros.spatial.placements import Support, face_down, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
-from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
+from clew_ros.spatial.scene import make_obstacle
 from clew_ros.spatial.spheres import SphereSettings, cover
+from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
@@ -307,6 +307,12 @@ class SpatialSpace:
             )
             self._transfer_checkers[key] = checker
         return checker
+
+    @property
+    def exact_checks(self) -> int:
+        """Contacts the exact geometry has decided for this space's checkers so far (deterministic work)."""
+        checkers = [self.world.checker, *self._transit_checkers.values(), *self._transfer_checkers.values()]
+        return sum(c.exact_checks for c in checkers)
 
     def checker_of(self, mode: dict[str, np.ndarray]) -> SpatialChecker:
         """The checker of a mode ``{"object_poses": (1, 6)}`` or ``{"grasp_rel": (1, 6)}``."""
@@ -952,29 +958,18 @@ class SpatialSpace:
 
     def _object_collides(self, object_pose: Array) -> str:
         """The obstacles (names) the object at ``object_pose`` touches, its support but from above allowed,
-        or the bounds it leaves; "" if none (tested on its conservative sphere cover)."""
+        or the bounds it leaves; "" if none (the obstacles on its exact box or cylinder, the bounds on its
+        conservative sphere cover)."""
         world = self.world
         thing = world.object
         assert thing is not None
         pose = matrices(object_pose)[0]
         found = resting_on(thing.shape, pose, world.supports, world.tolerances["placement_tolerance"])
         support = found[0].name if found is not None else ""
-        centers, radii = cover(thing.shape.geometry(), SphereSettings())
-        placed = centers @ pose[:3, :3].T + pose[:3, 3]
-        others = [o for o in world.obstacles if o.name != support]
-        packed = obstacle_arrays(others)
-        hits = [
-            o.name
-            for k, o in enumerate(others)
-            if any(
-                clearance_of_sphere(
-                    p, r, packed["obs_kind"][k], packed["obs_r"][k], packed["obs_t"][k], packed["obs_dims"][k]
-                )
-                <= 0.0
-                for p, r in zip(placed, radii, strict=True)
-            )
-        ]
+        hits = object_touches(thing.shape, pose, [o for o in world.obstacles if o.name != support])
         if world.bounds is not None:
+            centers, radii = cover(thing.shape.geometry(), SphereSettings())
+            placed = centers @ pose[:3, :3].T + pose[:3, 3]
             low, high = world.bounds[:3], world.bounds[3:]
             if np.any(placed - radii[:, None] < low) or np.any(placed + radii[:, None] > high):
                 hits.append("the world's bounds")
@@ -1171,7 +1166,8 @@ def _shortcut_segments(
 ) -> Improvement:
     """The plan's segments pruned and shortcut (the module's docstring); ``object_pose``: where the object
     ends. The work is the shortcuts' tries (a fixed number per segment), counted by a
-    :class:`~clew_ros.core.improve.WorkBudget` without a total: only the clock stops it early."""
+    :class:`~clew_ros.core.improve.WorkBudget` without a total: only the clock, and the exact contacts they cost
+    (:attr:`SpatialTuning.shortcut_exact_rate`), stop it early."""
     first_travel = joint_travel(segments)
     first_transfers = sum(s.kind == "transfer" for s in segments)
     if ctx.settings.improve_time <= 0:
@@ -1179,6 +1175,11 @@ def _shortcut_segments(
             segments, object_pose, first_travel, first_transfers, first_travel, first_transfers, 0, 0, False
         )
     budget = WorkBudget(math.inf, WorkCosts(), ctx.termination)
+    exact_limit = space.exact_checks + space.tuning.shortcut_exact_rate * ctx.settings.improve_time
+
+    def stop() -> bool:
+        return budget.stop() or space.exact_checks >= exact_limit
+
     pieces = _pruned(segments, space.tuning.same_rad)
     transfers = sum(p.kind == "transfer" for p in pieces)
     resting = space.initial_object_pose
@@ -1199,7 +1200,7 @@ def _shortcut_segments(
                 path,
                 tries=space.tuning.shortcut_tries,
                 rng=ctx.rng,
-                stop=budget.stop,
+                stop=stop,
             )
             shortcuts += taken
             budget.spend(spent)

@@ -19,17 +19,27 @@ import importlib
 import math
 import weakref
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.spatial.kernels.band import BOUNDS, OBSTACLE, PAIR, SUPPORT
-from clew_ros.spatial.placements import MovableObject
 from clew_ros.spatial.robot import Geometry, RobotModel
 from clew_ros.spatial.scene import Obstacle
 
-__all__ = ["ExactTier", "coal_module", "coal_shape", "link_shapes", "robot_distance", "slab_poses"]
+if TYPE_CHECKING:  # placements uses this module (an object resting among obstacles)
+    from clew_ros.spatial.placements import MovableObject
+
+__all__ = [
+    "ExactTier",
+    "coal_module",
+    "coal_shape",
+    "link_shapes",
+    "object_touches",
+    "robot_distance",
+    "slab_poses",
+]
 
 Matrix = NDArray[np.float64]
 
@@ -113,6 +123,23 @@ def robot_distance(robot: RobotModel, q: Sequence[float], shape: Any, pose: Matr
             coal.distance(item, coal.Transform3s(placed[:3, :3], placed[:3, 3]), shape, other, request, result)
             best = min(best, float(result.min_distance))
     return best
+
+
+def object_touches(thing: MovableObject, pose: Matrix, obstacles: Sequence[Obstacle]) -> list[str]:
+    """The names of ``obstacles`` the object (its box or cylinder, exactly) at ``pose`` (4x4) touches."""
+    coal = coal_module()
+    mine = coal_shape(coal, thing.shape, thing.size)
+    where = coal.Transform3s(np.ascontiguousarray(pose[:3, :3]), np.ascontiguousarray(pose[:3, 3]))
+    request = coal.CollisionRequest()
+    out = []
+    for obstacle in obstacles:
+        result = coal.CollisionResult()
+        other = coal.Transform3s(
+            np.ascontiguousarray(obstacle.pose[:3, :3]), np.ascontiguousarray(obstacle.pose[:3, 3])
+        )
+        if coal.collide(mine, where, coal_shape(coal, obstacle.shape, obstacle.size), other, request, result) > 0:
+            out.append(obstacle.name)
+    return out
 
 
 class ExactTier:

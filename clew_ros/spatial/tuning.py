@@ -112,9 +112,10 @@ class SpatialTuning:
     #: more tries, a simple one fewer (200 fixed tries took about a third of a run)
     motion_shortcut_tries: int = 400
     motion_shortcut_round: int = 20
-    #: and at most this many contacts decided on the exact geometry per second of ``planner.improve_time``
-    #: (near contact every shortcut costs such checks; a count, so the plan does not depend on the machine)
-    motion_shortcut_exact_rate: float = 10_000.0
+    #: shortcuts (of a motion-only path, of a plan's segments) stop once the exact geometry has decided this
+    #: many contacts per second of ``planner.improve_time`` (near contact every shortcut costs such checks; a
+    #: count, so the plan does not depend on the machine)
+    shortcut_exact_rate: float = 10_000.0
 
     # -- pick-and-place where the whole pose is out of reach (arms of 4-5 joints, joint limits) and the
     # -- goal out of sight of the placements (spatial_shelf, spatial_narrow)

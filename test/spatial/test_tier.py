@@ -4,6 +4,7 @@ settle what they can, coal decides the rest (clew_ros.spatial.tier, clew_ros.spa
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -173,3 +174,51 @@ def test_free_intervals_near_a_contact_are_free_on_the_exact_geometry() -> None:
                 row[joint] = value
                 assert not reference.configuration_problem(row), (joint, value)
     assert np.median(widths) > 0.01
+
+
+def test_a_box_in_a_bin_a_centimetre_from_its_walls_is_taken_out(tmp_path: Path) -> None:
+    """The Panda's table-to-table world with a bin around the box, its walls 1 cm from it: the spheres alone
+    reach no grasp there; on the exact geometry the box is grasped, lifted out straight and set down at the
+    goal, a plan the validator and pinocchio's exact check both accept."""
+    import yaml
+
+    from clew_ros.core.settings import PlannerSettings
+    from clew_ros.planar.world import read_parameter_file
+    from clew_ros.spatial.exact import exact_problems
+    from clew_ros.spatial.offline import checked_plan
+    from clew_ros.spatial.space import SpatialSpace, plan
+    from clew_ros.spatial.world import spatial_world_from_parameters
+
+    tree = read_parameter_file(CONFIG / "spatial" / "panda_table_to_table.yaml")
+    world_tree = tree["world"]
+    for key in ("urdf", "srdf"):
+        world_tree["robot"][key] = str((CONFIG / "spatial" / world_tree["robot"][key]).resolve())
+    x, y, half, gap, wall, top, height = 0.5, 0.3, 0.02, 0.01, 0.01, 0.12, 0.07
+    out = half + gap + wall / 2
+    walls = {
+        "bin_n": ([2 * (half + gap + wall), wall, height], [x, y + out]),
+        "bin_s": ([2 * (half + gap + wall), wall, height], [x, y - out]),
+        "bin_e": ([wall, 2 * (half + gap), height], [x + out, y]),
+        "bin_w": ([wall, 2 * (half + gap), height], [x - out, y]),
+    }
+    world_tree["obstacle_names"] = [*world_tree["obstacle_names"], *walls]
+    for name, (size, (cx, cy)) in walls.items():
+        world_tree["obstacles"][name] = {"shape": "box", "size": size, "pose": [cx, cy, top + height / 2, 0, 0, 0]}
+    path = tmp_path / "bin.yaml"
+    path.write_text(yaml.safe_dump({"clew_planner": {"ros__parameters": tree}}))
+    world = spatial_world_from_parameters(read_parameter_file(path), tmp_path)
+    result = plan(world, PlannerSettings(seed=0, time_limit=30.0))
+    assert result.success, result.message
+    assert checked_plan(world, result).code == "SUCCEEDED"
+    assert exact_problems(world, result) == []
+    transfer = result.segments[1]
+    assert transfer.kind == "transfer"
+    assert transfer.grasp is not None
+    alone = SpatialSpace(replace(world, checker=replace_checker(world)))
+    held = alone.transfer_checker(alone.grasp_rel(transfer.grasp))
+    assert not held.valid(np.asarray(transfer.waypoints)).all(), "the spheres alone would refuse the lift"
+
+
+def replace_checker(world: SpatialWorld) -> SpatialChecker:
+    """``world``'s checker deciding on the spheres alone."""
+    return SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, exact=False)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -38,6 +39,7 @@ from numpy.typing import NDArray
 from benchmarks.spatial_checker import CONFIG, ROBOTS
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
+from clew_ros.spatial.random_robot import BASE_LINK, TIP_LINK, random_robot_urdf
 from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle, scene_obstacles
 from clew_ros.spatial.spheres import SphereModel, sphere_model
@@ -53,6 +55,7 @@ __all__ = [
     "generate",
     "problems",
     "robot_and_spheres",
+    "robot_tree",
 ]
 
 Matrix = NDArray[np.float64]
@@ -152,8 +155,7 @@ class MotionProblem:
         """The ``world.kind: spatial`` parameter tree of this query: the scene read from ``scene_file``, or
         (``None``) its obstacles inline as ``world.obstacle_names`` / ``world.obstacles`` (a planner called
         in-process needs no file)."""
-        tree = ROBOTS[self.robot]
-        robot = {key: str((CONFIG / tree[key]).resolve()) if key in ("urdf", "srdf") else tree[key] for key in tree}
+        robot = robot_tree(self.robot)
         world: dict[str, Any] = {
             "kind": "spatial",
             "name": self.name,
@@ -197,10 +199,24 @@ class ProblemContext:
     checker: SpatialChecker
 
 
+def robot_tree(name: str) -> dict[str, Any]:
+    """The ``world.robot`` parameters of a robot by name: a shipped one (``spatial_checker.ROBOTS``, its paths
+    absolute), or ``random-K``: the random arm drawn from seed K (:func:`clew_ros.spatial.random_robot`), its
+    URDF inline. ``ValueError`` for another name."""
+    if name in ROBOTS:
+        tree = ROBOTS[name]
+        return {key: str((CONFIG / tree[key]).resolve()) if key in ("urdf", "srdf") else tree[key] for key in tree}
+    found = re.fullmatch(r"random-(\d+)", name)
+    if found is None:
+        raise ValueError(f"robot: expected one of {', '.join(ROBOTS)} or random-K (K a seed), got {name!r}")
+    text = random_robot_urdf(np.random.default_rng(int(found[1])), name=name)
+    return {"description": text, "base_link": BASE_LINK, "tip_link": TIP_LINK}
+
+
 @functools.cache
 def robot_and_spheres(name: str) -> tuple[RobotModel, SphereModel]:
-    """A shipped robot (``spatial_checker.ROBOTS``) and its sphere model, built once per process."""
-    robot = robot_from_parameters(ROBOTS[name], CONFIG)
+    """A robot by name (:func:`robot_tree`) and its sphere model, built once per process."""
+    robot = robot_from_parameters(robot_tree(name), CONFIG)
     return robot, sphere_model(robot)
 
 
@@ -517,8 +533,7 @@ def generate(family: str, robot: str, seed: int, settings: SceneSettings | None 
     ``SceneSettings.scene_tries`` scenes give no problem (ranges the robot cannot reach)."""
     if family not in FAMILIES:
         raise ValueError(f"family: expected one of {', '.join(FAMILIES)}, got {family!r}")
-    if robot not in ROBOTS:
-        raise ValueError(f"robot: expected one of {', '.join(ROBOTS)}, got {robot!r}")
+    robot_tree(robot)  # a known name, else ValueError
     settings = settings or SceneSettings()
     model, spheres = robot_and_spheres(robot)
     solver = InverseKinematics(model, settings.ik)

@@ -81,7 +81,7 @@ def witness(checker: SpatialChecker, goal: Matrix, settings: TightSettings) -> b
     robot = checker.robot
     solver = InverseKinematics(robot, IKSettings(seeds=0))
     q = goal
-    pose = robot.tcp_pose(goal)
+    pose = robot.tcp_pose(goal.tolist())
     steps = np.where(robot.prismatic, 0.001, 0.002)
     for k in range(1, math.ceil(settings.witness_m / settings.witness_step_m) + 1):
         target = pose.copy()
@@ -112,7 +112,8 @@ def tighten(problem: MotionProblem, settings: TightSettings | None = None) -> Mo
     coal = coal_module()
     robot, spheres = robot_and_spheres(problem.robot)
     rng = np.random.default_rng([problem.seed, zlib.crc32(problem.name.encode()), 7])
-    tcp = robot.tcp_pose(problem.goal)
+    goal = problem.goal.tolist()
+    tcp = robot.tcp_pose(goal)
     shape = np.asarray(settings.object_shape)
     for _ in range(settings.tries):
         gap_object, gap_wall = rng.uniform(*settings.gaps_m, size=2)
@@ -120,7 +121,7 @@ def tighten(problem: MotionProblem, settings: TightSettings | None = None) -> Mo
         centre[:3, 3] += rng.uniform(*settings.object_offset_m) * tcp[:3, 2]
 
         def object_gap(scale: float, centre: Matrix = centre) -> float:
-            return robot_distance(robot, problem.goal, coal.Box(*(scale * shape)), centre)
+            return robot_distance(robot, goal, coal.Box(*(scale * shape)), centre)
 
         scale = _grown(object_gap, 0.005, 0.3, gap_object, settings.tolerance_m)
         if scale is None:
@@ -140,7 +141,7 @@ def tighten(problem: MotionProblem, settings: TightSettings | None = None) -> Mo
         ) -> float:
             moved = wall_pose.copy()
             moved[:3, 3] = tcp[:3, 3] + (0.4 - offset) * normal
-            return robot_distance(robot, problem.goal, coal.Box(*size), moved)
+            return robot_distance(robot, goal, coal.Box(*size), moved)
 
         offset = _grown(wall_gap, 0.0, 0.4, gap_wall, settings.tolerance_m)
         if offset is None:

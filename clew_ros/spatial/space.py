@@ -190,11 +190,11 @@ def straight_samples_clear(
         firsts = [np.flatnonzero(near[i][:-1] | near[i][1:]) for i in pick]
         owner = np.repeat(pick, [len(f) for f in firsts])
         if len(owner):
-            a = np.vstack([samples[i][f] for i, f in zip(pick, firsts, strict=True)])
-            b = np.vstack([samples[i][f + 1] for i, f in zip(pick, firsts, strict=True)])
+            lows = np.vstack([samples[i][f] for i, f in zip(pick, firsts, strict=True)])
+            highs = np.vstack([samples[i][f + 1] for i, f in zip(pick, firsts, strict=True)])
             share = (np.arange(1, refine) / refine)[None, :, None]
-            between = (a[:, None, :] + share * (b - a)[:, None, :]).reshape(-1, robot.dof)
-            fine = checker.valid(between).reshape(len(a), refine - 1).all(axis=1)
+            between = (lows[:, None, :] + share * (highs - lows)[:, None, :]).reshape(-1, robot.dof)
+            fine = checker.valid(between).reshape(len(lows), refine - 1).all(axis=1)
             clear[np.unique(owner[~fine])] = False
     return clear
 

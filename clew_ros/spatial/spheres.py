@@ -224,7 +224,7 @@ def _inner_mesh(origin: Array, interior: NDArray[np.bool_], cell: float, limit: 
         best = int(np.argmax(alive))
         kept.append(best)
         alive &= np.linalg.norm(centres - centres[best], axis=1) + radius > radius[best] + 1e-12
-    return centres[kept], radius[kept]
+    return np.asarray(centres[kept], dtype=np.float64), np.asarray(radius[kept], dtype=np.float64)
 
 
 def _cover_mesh(vertices: Array, faces: NDArray[np.int64], settings: SphereSettings) -> tuple[Array, Array]:

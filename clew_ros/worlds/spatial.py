@@ -319,7 +319,12 @@ class _Builder:
         """The arm's start: its home (or a random configuration) from which the straight move to the approach
         is free, else the approach itself."""
         resting = SpatialChecker(
-            world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose), exact=False
+            world.robot,
+            world.spheres,
+            world.obstacles,
+            world.bounds,
+            resting_object=object_obstacle(world, start.pose),
+            exact=False,
         )
         if self.family.start_at_approach:
             return start.up
@@ -578,7 +583,12 @@ def _unsolvable(builder: _Builder) -> SpatialGenerated:
     final = {**tree, "obstacle_names": list(builder.obstacles), "obstacles": dict(builder.obstacles)}
     world = builder.world(final)
     checker = SpatialChecker(
-        world.robot, world.spheres, world.obstacles, world.bounds, resting_object=object_obstacle(world, start.pose), exact=False
+        world.robot,
+        world.spheres,
+        world.obstacles,
+        world.bounds,
+        resting_object=object_obstacle(world, start.pose),
+        exact=False,
     )
     if not checker.valid(world.initial[None])[0] or resting_problems(world, start.pose, "start"):
         raise _RejectedError("the start is not free")

@@ -388,7 +388,11 @@ class Sweep:
         if not SpatialChecker(robot, spheres, [grown], self_collision=False, exact=False).valid(self.all).all():
             return False
         held = Held(self.shape, self.grasp_rel, ())
-        if not SpatialChecker(robot, spheres, [grown], self_collision=False, held=held, exact=False).valid(self.held).all():
+        if (
+            not SpatialChecker(robot, spheres, [grown], self_collision=False, held=held, exact=False)
+            .valid(self.held)
+            .all()
+        ):
             return False
         return all(object_clear(self.cover, pose, grown) for pose in self.rests)
 

@@ -457,16 +457,19 @@ class SpatialChecker:
             room = np.minimum(limit, (robot.upper[joint] - start) if side > 0 else (start - robot.lower[joint]))
             proven = np.zeros(len(mine))
             alive = np.ones(len(mine), dtype=bool)
-            for k in range(settings.band_samples):
+            chunk = 4  # samples a row probes per call (a few past its first refusal are wasted)
+            for k0 in range(0, settings.band_samples, chunk):
                 alive &= proven < room
                 live = np.flatnonzero(alive)
                 if not len(live):
                     break
-                probe = batch[mine[live]].copy()
-                probe[:, joint] = start[live] + side * (k + 0.5) * step
-                fine = self.classify(probe, margin)
-                proven[live[fine]] = (k + 1) * step
-                alive[live[~fine]] = False
+                ks = np.arange(k0, min(k0 + chunk, settings.band_samples))
+                probe = np.repeat(batch[mine[live]], len(ks), axis=0)
+                probe[:, joint] = (start[live][:, None] + side * (ks[None, :] + 0.5) * step).reshape(-1)
+                fine = self.classify(probe, margin).reshape(len(live), len(ks))
+                run = np.where(fine.all(axis=1), len(ks), np.argmin(fine, axis=1))  # samples clear in a row
+                proven[live] = (k0 + run) * step
+                alive[live[run < len(ks)]] = False
             reach = np.minimum(proven, room)
             ends = start + side * reach
             onward = np.flatnonzero(alive & (reach < room))  # every sample clear: the conservative steps go on

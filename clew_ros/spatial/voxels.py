@@ -33,7 +33,7 @@ _BOX, _CYLINDER, _SPHERE = 0, 1, 2
 
 
 @_jit
-def _in_solid(x: float, y: float, z: float, rot: Any, pos: Any, kind: int, dims: Any, grow: float) -> bool:  # noqa: PLR0917
+def _in_solid(x: float, y: float, z: float, rot: Any, pos: Any, kind: int, dims: Any, grow: float) -> Any:  # noqa: PLR0917
     """Whether a point lies in a solid (its rotation, position, kind, SolidPrimitive dims) grown by ``grow``."""
     dx, dy, dz = x - pos[0], y - pos[1], z - pos[2]
     lx = rot[0, 0] * dx + rot[1, 0] * dy + rot[2, 0] * dz

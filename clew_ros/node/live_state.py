@@ -99,7 +99,6 @@ class LiveState:
         self._obstacles: dict[str, AddedObstacle] = {}
         self._cubes: np.ndarray | None = None
         self._dirty = False
-        self._warned_cap = False
         settings = config.node
         self.enabled = _enabled(settings)  # only in a spatial world (ros.parameters checks it)
         if settings.state_joint_states:
@@ -148,10 +147,8 @@ class LiveState:
         settings = self._config.node
         try:
             points = cloud_xyz(msg, settings.state_max_points)
-        except StateInputError as error:
-            if not self._warned_cap or "state.max_points" not in str(error):
-                self._logger.warning(f"{error}; the previous cloud stays")
-            self._warned_cap = self._warned_cap or "state.max_points" in str(error)
+        except StateInputError as error:  # one line a refused message (at most one every 5 s)
+            self._logger.warning(f"{error}; the previous cloud stays", throttle_duration_sec=5.0)
             return
         world = self._world
         with self._lock:

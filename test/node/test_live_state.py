@@ -52,6 +52,7 @@ STATE = {
     "state.obstacles": True,
     "state.points": True,
     "state.advance": True,
+    "state.max_points": 1500,
     "trajectory.max_velocity": 3.0,
     "trajectory.max_acceleration": 50.0,
     "playback.rate": 50.0,
@@ -296,11 +297,16 @@ def test_a_start_in_collision_names_the_marker_it_touches(live: Live) -> None:
     live.send_joints(world.initial)
     hand = world.checker.sphere_positions(world.initial.tolist())[-1]
     live.send_marker("block", 7, Marker.ADD, hand.tolist(), size=0.05)
+    live.send_cloud(np.zeros((1501, 3)))  # over state.max_points: refused, the block's cubes stay
+    wait_until(lambda: "1501 points exceed state.max_points 1500" in live.node.output(), 10.0, "the warning")
     response = live.session.plan()
     assert not response.success
     event = _outcome(live, run_id_of(response.message))
     assert event["code"] == "START_IN_COLLISION"
     assert "block/7" in event["message"], event["message"]
+    tree = next(iter(live.run_world().values()))["ros__parameters"]
+    cubes = [n for n in tree["world"]["obstacle_names"] if n.startswith("points/")]
+    assert len(cubes) == len({tuple(c) for c in np.floor(BLOCK / STATE_VOXEL_M).astype(int).tolist()})
 
 
 def test_world_markers_show_a_deleted_marker_gone_within_half_a_second(live: Live) -> None:
@@ -311,3 +317,29 @@ def test_world_markers_show_a_deleted_marker_gone_within_half_a_second(live: Liv
     since = time.time_ns()
     live.send_marker("", 0, Marker.DELETEALL)
     assert 0.0 < live.wait_marker_count(count - 2, since) < 0.5
+
+
+def test_a_client_sends_a_goal_with_its_start_state_and_object_pose(live: Live) -> None:
+    from clew_ros.client import PlannerClient
+
+    world = live.world
+    assert world.object is not None
+    client = PlannerClient(live.session.client.node, live.node.name)
+    try:
+        client.wait_for_planner(timeout_s=20.0)
+        q = world.initial - 0.5 * OFFSET
+        moved = [*world.object.initial]
+        moved[0] += 0.02  # 2 cm along its table
+        result = client.plan(
+            tuple(world.object.goal),
+            start=dict(zip(world.robot.joint_names, q.tolist(), strict=True)),
+            object_pose=moved,
+            timeout_s=90.0,
+        )
+        assert result.succeeded, result.message
+        assert result.trajectory is not None
+        assert np.max(np.abs(np.array(result.trajectory.points[0].positions) - q)) <= 1e-6
+        tree = next(iter(live.run_world().values()))["ros__parameters"]
+        assert tree["world"]["object"]["initial"] == pytest.approx(moved, abs=1e-9)
+    finally:
+        client.destroy()

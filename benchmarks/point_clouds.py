@@ -105,9 +105,11 @@ def main(argv: list[str] | None = None) -> int:
     parameters = resolved_parameters(WORLD)
     world, _ = load_spatial({"world": parameters["world"]}, WORLD.parent)
     rng = np.random.default_rng(args.seed)
+    bounds = world.bounds
+    assert bounds is not None  # the shipped world has bounds
     clouds = {
         "scene": _scene(world, args.points, rng),
-        "uniform": rng.uniform(world.bounds[:3], world.bounds[3:], size=(args.points, 3)).astype(np.float32),
+        "uniform": rng.uniform(bounds[:3], bounds[3:], size=(args.points, 3)).astype(np.float32),
     }
     report = {name: _measure(world, points, args.repeats) for name, points in clouds.items()}
     json.dump(report, sys.stdout, indent=1)

@@ -55,7 +55,9 @@ if TYPE_CHECKING:
     from clew_ros.node.publishing import Publishing
     from clew_ros.node.run import Run
     from clew_ros.ros.parameters import Configuration, NodeSettings
+    from clew_ros.spatial.robot import RobotModel
     from clew_ros.spatial.scene import Obstacle
+    from clew_ros.spatial.spheres import SphereModel
     from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["LiveState", "StateRefusalError"]
@@ -87,6 +89,9 @@ class LiveState:
 
     #: How often (s) a change is looked for and ``~/world_markers`` republished (interface.md: within 0.5 s).
     markers_period_s = 0.2
+    #: How far (rad, or m) a fixed joint's state may lie from the world's value and the world's arm model be kept
+    #: (another value reloads the arm's model, which takes seconds; a gripper's jitter must not).
+    fixed_tolerance = 1e-4
 
     def __init__(self, node: Node, config: Configuration, out: Publishing, group: CallbackGroup) -> None:
         self._node = node
@@ -98,6 +103,7 @@ class LiveState:
         self._object: tuple[np.ndarray, float] | None = None  # (4x4 pose, received at time.monotonic())
         self._obstacles: dict[str, AddedObstacle] = {}
         self._cubes: np.ndarray | None = None
+        self._models: dict[tuple[tuple[str, int], ...], tuple[RobotModel, SphereModel]] = {}  # by fixed joints
         self._dirty = False
         settings = config.node
         self.enabled = _enabled(settings)  # only in a spatial world (ros.parameters checks it)
@@ -253,9 +259,12 @@ class LiveState:
         return f"{namespace}/joint_states"
 
     def _fixed_joints(self) -> dict[str, float]:
-        """The fixed joints' positions joint_states gives that differ from the world's (under the lock)."""
-        fixed = self._world.robot.fixed_positions
-        return {n: p for n, (p, _) in self._joints.items() if n in fixed and abs(p - fixed[n]) > 1e-9}
+        """The fixed joints' positions joint_states gives that differ from the world's by more than
+        :attr:`fixed_tolerance`, rounded to a multiple of it (under the lock)."""
+        fixed, step = self._world.robot.fixed_positions, self.fixed_tolerance
+        # on a grid of fixed_tolerance: the arm's model kept for a value is the model of the value written
+        changed = {n: p for n, (p, _) in self._joints.items() if n in fixed and abs(p - fixed[n]) > step}
+        return {n: round(p / step) * step for n, p in changed.items()}
 
     def _object_pose_now(self, previous: Run | None) -> np.ndarray | None:
         """The object's pose (4x4) at the start, ``None``: the parameters' (under the lock): ~/object, unless
@@ -293,11 +302,14 @@ class LiveState:
                 f"limits [{robot.lower[j]:.6g}, {robot.upper[j]:.6g}]",
             )
         tree = snapshot_tree(setup.tree, state)
-        prepared = None if state.fixed else (robot, world.spheres)
+        key = tuple(sorted((n, round(v / self.fixed_tolerance)) for n, v in state.fixed.items()))
+        prepared = (robot, world.spheres) if not key else self._models.get(key)
         try:
             snapshot = spatial_world_from_parameters(tree, setup.folder, prepared=prepared)
         except WorldError as error:
             raise StateRefusalError(Outcome.INVALID_WORLD, f"the world as it is now is not valid: {error}") from None
+        if key and prepared is None:  # the arm with these fixed joints: kept for the next runs (the last one only)
+            self._models = {key: (snapshot.robot, snapshot.spheres)}
         return dataclasses.replace(config, world=snapshot, spatial=dataclasses.replace(setup, tree=tree))
 
 

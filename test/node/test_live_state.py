@@ -61,6 +61,8 @@ STATE = {
 STATE_VOXEL_M = 0.02
 #: The start the joint state gives: the world's initial configuration, moved a little.
 OFFSET = np.array([0.05, -0.05, 0.05, 0.05, 0.0, -0.05, 0.1])
+#: A finger joint (not planned) and the state the joint states give it (the world's: closed).
+FINGER, FINGER_OPEN = "panda_finger_joint1", 0.03
 #: A block of points behind the arm (a 0.1 m cube of points 1 cm apart).
 BLOCK = np.stack(
     np.meshgrid(*(np.arange(10) * 0.01 + c for c in (-0.445, 0.405, 0.305)), indexing="ij"), axis=-1
@@ -98,9 +100,10 @@ class Live:
         publisher.publish(msg)
         assert publisher.wait_for_all_acked(Duration(seconds=5.0))
 
-    def send_joints(self, q: np.ndarray, age_s: float = 0.0) -> None:
-        names = list(self.world.robot.joint_names)
-        self.send(self.joints, JointState(header=Header(stamp=self.now(age_s)), name=names, position=list(q)))
+    def send_joints(self, q: np.ndarray, age_s: float = 0.0, fixed: dict[str, float] | None = None) -> None:
+        names = [*self.world.robot.joint_names, *(fixed or {})]
+        values = [*q, *(fixed or {}).values()]
+        self.send(self.joints, JointState(header=Header(stamp=self.now(age_s)), name=names, position=values))
 
     def send_object(self, pose: list[float]) -> None:
         x, y, z, w = matrix_quaternion(rpy_matrix(*pose[3:]))
@@ -186,7 +189,7 @@ def test_plans_from_the_joint_state_among_markers_and_cubes_and_clew_plan_replan
 ) -> None:
     world = live.world
     q = world.initial + OFFSET
-    live.send_joints(q)
+    live.send_joints(q, fixed={FINGER: FINGER_OPEN})
     assert world.object is not None
     off = [*world.object.initial]
     off[2] += 0.004  # 4 mm above its table, tilted 0.02 rad: snapped
@@ -213,6 +216,8 @@ def test_plans_from_the_joint_state_among_markers_and_cubes_and_clew_plan_replan
     snapshot = live.run_world()
     tree = next(iter(snapshot.values()))["ros__parameters"]
     assert np.allclose(tree["world"]["robot"]["initial"], q, atol=0.0, rtol=0.0)
+    robot = tree["world"]["robot"]
+    assert robot["fixed_joint_positions"][robot["fixed_joint_names"].index(FINGER)] == pytest.approx(FINGER_OPEN)
     start = tree["world"]["object"]["initial"]
     assert start[2] == pytest.approx(world.object.initial[2], abs=1e-9), "snapped onto the table"
     assert abs(start[3]) < 1e-9, "snapped level"

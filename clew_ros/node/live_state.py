@@ -60,7 +60,7 @@ if TYPE_CHECKING:
     from clew_ros.spatial.spheres import SphereModel
     from clew_ros.spatial.world import SpatialWorld
 
-__all__ = ["LiveState", "StateRefusalError"]
+__all__ = ["LiveState", "StateRefusalError", "describe_inputs"]
 
 
 class StateRefusalError(Exception):

@@ -6,7 +6,8 @@ request during a playback stops the playback. A run's state lives on its
 handle (:mod:`~clew_ros.node.run`), its life in :mod:`~clew_ros.node.worker`
 (playback: :mod:`~clew_ros.motion.player`); messages go out, and into the run's
 recording (:mod:`~clew_ros.node.run_recording`), through
-:mod:`~clew_ros.node.publishing`.
+:mod:`~clew_ros.node.publishing`. A run plans in the world as it is now when the ``state.*`` inputs are on
+(:mod:`~clew_ros.node.live_state`: one snapshot per run, taken as it is accepted).
 
 Entry points for callbacks and in-process callers (tests):
 :meth:`PlannerNode.request_plan` (a :class:`~clew_ros.node.run.Run` to wait
@@ -37,7 +38,7 @@ from std_srvs.srv import Trigger
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.parameters import LOCKED_PREFIXES, RETIRED_PARAMETERS, RUNTIME_CHANGES, retired_message
 from clew_ros.core.settings import Outcome
-from clew_ros.node.live_state import LiveState, StateRefusalError
+from clew_ros.node.live_state import LiveState, StateRefusalError, describe_inputs
 from clew_ros.node.live_view import start_live_view
 from clew_ros.node.namespaces import namespaced_directory
 from clew_ros.node.publishing import Publishing
@@ -133,6 +134,7 @@ class PlannerNode(Node):
         self.get_logger().info(
             f"serving world '{world.name}' ({world.robot.dof} joints, {len(world.obstacles)} obstacles); "
             f"recording {'to ' + str(self._config.node.record_path) if self._config.node.record_enabled else 'off'}"
+            f"{describe_inputs(self._config.node)}"
         )
         if self._config.node.allow_runtime_changes:
             self.get_logger().warning(

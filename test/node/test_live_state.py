@@ -6,10 +6,12 @@ joints; with a joint state, a perceived object pose a few millimetres off its ta
 a point cloud (part of it on the arm), the run plans from the joint state (the trajectory's first point
 equals it within 1e-6 rad), among the marker's obstacle and the cloud's cubes (none on the arm), with the
 object snapped onto its table; its ``~/world_yaml`` is that snapshot, and ``clew_plan`` on it plans the same
-plan with the same seed, valid. A stale joint state is refused ``START_STATE_UNKNOWN`` saying how old; a
-tilted object ``INVALID_WORLD`` naming the face, its tilt and the table; a marker around the hand
-``START_IN_COLLISION`` naming the marker; ``~/world_markers`` shows a marker added or deleted within 0.5 s;
-with ``state.advance`` the next run starts with the object where the last plan left it.
+plan with the same seed, valid (on the exact geometry too, where pinocchio and coal are installed). With
+``state.advance`` the next run starts with the object where the last plan left it. A stale joint state is
+refused ``START_STATE_UNKNOWN`` saying how old; a tilted object ``INVALID_WORLD`` naming the face, its tilt
+and the table; a marker around the hand ``START_IN_COLLISION`` naming the marker (a cloud over
+``state.max_points`` refused, the previous cubes kept); ``~/world_markers`` shows a marker deleted within
+0.5 s; a ``PlannerClient`` goal carries its start state and object pose.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from clew_ros.cli.plan import main as clew_plan
 from clew_ros.core.plan import Plan
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.ros.qos import CLOUD_QOS, LATCHED_QOS, STATE_QOS
+from clew_ros.spatial.exact import exact_available, exact_problems
 from clew_ros.spatial.plan import validate_plan
 from clew_ros.spatial.transforms import matrix_quaternion, rpy_matrix
 from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters
@@ -240,6 +243,8 @@ def test_plans_from_the_joint_state_among_markers_and_cubes_and_clew_plan_replan
     assert np.array_equal(replanned, played), "same seed, same plan"
     snapshot_world = spatial_world_from_parameters(tree, tmp_path)
     assert validate_plan(snapshot_world, offline) == []
+    if exact_available():  # and on the exact geometry: the links' own, the marker, the cubes
+        assert exact_problems(snapshot_world, offline) == []
     live.session.wait_playback(run_id, timeout_s=60.0)
     live.final_pose = list(offline.final_object_pose)  # type: ignore[attr-defined]
     live.last_waypoint = replanned[-1]  # type: ignore[attr-defined]

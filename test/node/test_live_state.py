@@ -353,3 +353,15 @@ def test_a_client_sends_a_goal_with_its_start_state_and_object_pose(live: Live) 
         assert tree["world"]["object"]["initial"] == pytest.approx(moved, abs=1e-9)
     finally:
         client.destroy()
+
+
+def test_the_state_parameters_are_fixed_while_the_node_runs(live: Live) -> None:
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    request = SetParameters.Request(
+        parameters=[Parameter(name="state.points", value=ParameterValue(type=ParameterType.PARAMETER_BOOL))]
+    )
+    response = live.session.client.call(live.session.srv("set_parameters"), SetParameters, request)
+    assert not response.results[0].successful
+    assert "state.points" in response.results[0].reason, response.results[0].reason

@@ -142,9 +142,12 @@ class Live:
         )
         self.send(self.points, msg)
 
-    def obstacle_markers(self) -> list[Marker]:
+    def obstacle_markers(self) -> list[Any]:
+        """The obstacles the latest ``~/world_markers`` draws: each marker of ``obstacles`` and ``supports``, and
+        each cube of the ``points`` CUBE_LIST."""
         latest = self.session.world_markers.messages[-1]
-        return [m for m in latest.markers if m.ns in ("obstacles", "supports")]
+        cubes = [p for m in latest.markers if m.ns == "points" and m.type == Marker.CUBE_LIST for p in m.points]
+        return [m for m in latest.markers if m.ns in ("obstacles", "supports")] + cubes
 
     def wait_marker_count(self, count: int, since_ns: int) -> float:
         """Wait until the latest ``~/world_markers`` holds ``count`` obstacles; how long after ``since_ns`` (wall

@@ -156,5 +156,22 @@ def start_contacts(world: Any) -> str:
     if thing is not None:
         pose = pose_matrix(list(thing.initial))
         resting = make_obstacle("object", thing.shape.shape, thing.shape.size, pose, "world.object")
-    checker = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, resting_object=resting)
-    return explain_invalid(checker, np.asarray(world.initial, dtype=float))
+    q = np.asarray(world.initial, dtype=float)
+    near = _near_the_arm(world.obstacles, world.checker.sphere_positions(q.tolist()), world.spheres.radii)
+    checker = SpatialChecker(world.robot, world.spheres, near, world.bounds, resting_object=resting)
+    return explain_invalid(checker, q)
+
+
+def _near_the_arm(obstacles: Sequence[Any], spheres: NDArray[np.float64], radii: NDArray[np.float64]) -> list[Any]:
+    """The obstacles whose bounding sphere reaches one of the arm's spheres (the others cannot touch it: each
+    is tried alone when a start is explained, and a cloud's cubes are thousands)."""
+    if not obstacles:
+        return []
+    centres = np.array([o.pose[:3, 3] for o in obstacles])
+    reach = np.array([float(np.linalg.norm(o.size)) if o.shape != "sphere" else o.size[0] for o in obstacles])
+    out = np.zeros(len(obstacles), dtype=np.bool_)
+    for start in range(0, len(obstacles), 4096):  # a table of at most 4096 x spheres distances at once
+        part = slice(start, start + 4096)
+        gap = np.linalg.norm(centres[part, None, :] - spheres[None, :, :], axis=2) - radii[None, :]
+        out[part] = np.any(gap <= reach[part, None], axis=1)
+    return [o for o, keep in zip(obstacles, out, strict=True) if keep]

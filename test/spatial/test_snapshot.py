@@ -100,6 +100,21 @@ def test_a_start_in_collision_names_the_obstacle_it_touches(loaded) -> None:  # 
     world, setup = loaded
     hand = world.checker.sphere_positions(world.initial.tolist())[-1]
     block = AddedObstacle("camera/2", "box", (0.05, 0.05, 0.05), (*hand.tolist(), 0.0, 0.0, 0.0))
-    tree = snapshot_tree(setup.tree, WorldState(obstacles=(block,)))
+    far = np.stack(np.meshgrid(np.arange(20) * 0.02 - 0.9, np.arange(20) * 0.02 - 0.9, [0.05]), axis=-1)
+    state = WorldState(obstacles=(block,), cubes=far.reshape(-1, 3), cube_m=0.02)  # 400 cubes on the floor, far
+    tree = snapshot_tree(setup.tree, state)
     snapshot = spatial_world_from_parameters(tree, setup.folder, prepared=(world.robot, world.spheres))
-    assert "'camera/2'" in start_contacts(snapshot)
+    said = start_contacts(snapshot)
+    assert "'camera/2'" in said
+    assert "points/" not in said
+
+
+def test_a_start_in_a_sensed_cube_names_the_cube(loaded) -> None:  # type: ignore[no-untyped-def]
+    world, setup = loaded
+    hand = world.checker.sphere_positions(world.initial.tolist())[-1]
+    cubes = np.array([[-0.9, -0.9, 0.05], hand])  # points/0 far, points/1 at the hand
+    tree = snapshot_tree(setup.tree, WorldState(cubes=cubes, cube_m=0.02))
+    snapshot = spatial_world_from_parameters(tree, setup.folder, prepared=(world.robot, world.spheres))
+    said = start_contacts(snapshot)
+    assert "'points/1'" in said
+    assert "'points/0'" not in said

@@ -22,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import threading
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -93,8 +94,16 @@ class LiveState:
     #: (another value reloads the arm's model, which takes seconds; a gripper's jitter must not).
     fixed_tolerance = 1e-4
 
-    def __init__(self, node: Node, config: Configuration, out: Publishing, group: CallbackGroup) -> None:
+    def __init__(
+        self,
+        node: Node,
+        config: Configuration,
+        out: Publishing,
+        group: CallbackGroup,
+        current_run: Callable[[], Run | None] = lambda: None,
+    ) -> None:
         self._node = node
+        self._current_run = current_run  # the node's last accepted run: where state.advance left the arm
         self._config = config
         self._out = out
         self._logger = node.get_logger()
@@ -156,10 +165,10 @@ class LiveState:
         except StateInputError as error:  # one line a refused message (at most one every 5 s)
             self._logger.warning(f"{error}; the previous cloud stays", throttle_duration_sec=5.0)
             return
-        world = self._world
+        world, previous = self._world, self._current_run()
         with self._lock:
-            joints = self._start_joints(None)
-            thing = self._object_obstacle(self._object_pose_now(None))
+            joints = self._start_joints(previous)
+            thing = self._object_obstacle(self._object_pose_now(previous))
             added = [_as_obstacle(o) for o in self._obstacles.values()]
         cubes = occupied_cubes(
             points,
@@ -180,7 +189,7 @@ class LiveState:
         if not dirty:
             return
         try:
-            config = self._build(self._config, self._state(None, strict=False))
+            config = self._build(self._config, self._state(self._current_run(), strict=False))
         except (StateRefusalError, WorldError) as error:
             self._logger.warning(f"~/world_markers: the current state cannot be shown: {error}")
             return

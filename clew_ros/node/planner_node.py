@@ -110,7 +110,7 @@ class PlannerNode(Node):
         self.create_service(Trigger, "~/cancel", self._on_cancel, callback_group=MutuallyExclusiveCallbackGroup())
         # ~/goal_pose in a group of its own with the state inputs (created first): one at a time, in order.
         inputs = MutuallyExclusiveCallbackGroup()
-        self._state = LiveState(self, self._config, self._out, inputs)
+        self._state = LiveState(self, self._config, self._out, inputs, lambda: self.current_run)
         goal_sub = self.create_subscription(
             PoseStamped, "~/goal_pose", self._on_goal_pose, GOAL_QOS, callback_group=inputs
         )

@@ -76,7 +76,9 @@ fi
 RECORDINGS="$OUT/recordings"
 mkdir -p "$RECORDINGS"
 node_pid=""
+arm_pid=""
 stop_node() {
+    if [[ -n "$arm_pid" ]]; then kill -INT "$arm_pid" 2>/dev/null || true; fi
     if [[ -n "$node_pid" ]] && kill -0 "$node_pid" 2>/dev/null; then
         kill -INT "$node_pid" 2>/dev/null || true
         for _ in $(seq 100); do kill -0 "$node_pid" 2>/dev/null || break; sleep 0.1; done
@@ -180,6 +182,85 @@ if [[ -f "$SPATIAL_WORLD" ]]; then
         fi
     else
         not_built+=("recording of the spatial run")
+    fi
+fi
+
+# Step 4: the closed loop (docs/interface.md section 3c): the Panda's planner plans from the world as it is now
+# (state.joint_states, state.points, state.advance), a simulated arm follows each ~/trajectory and publishes
+# /joint_states at 50 Hz, and a client asks three pick-and-place goals in a row, each from where the last
+# ended, publishing a point cloud of a cube standing on table_a before the second. Each run is drawn, and the
+# three pictures side by side are the sequence: $OUT/closed_loop.png.
+LOOP_WORLD=config/spatial/panda_table_to_table.yaml
+if [[ -f "$LOOP_WORLD" ]]; then
+    LOOP="$OUT/closed_loop"
+    mkdir -p "$LOOP"
+    arm_joints=$("$PY" - "$LOOP_WORLD" "$LOOP/world.yaml" <<'PYEOF'
+import sys
+from pathlib import Path
+
+import yaml
+
+from clew_ros.ros.spatial import resolved_parameters
+from clew_ros.spatial.world import spatial_world_from_parameters
+
+source, target = Path(sys.argv[1]), Path(sys.argv[2])
+parameters = resolved_parameters(source)  # the URDF's and SRDF's paths made absolute
+parameters["state"] = {"joint_states": True, "points": True, "advance": True}
+target.write_text(yaml.safe_dump({"clew_planner": {"ros__parameters": parameters}}))
+world = spatial_world_from_parameters(parameters, source.parent)
+print(",".join(f"{n}={v!r}" for n, v in zip(world.robot.joint_names, world.initial.tolist(), strict=True)))
+PYEOF
+)
+    echo "demo: closed loop: clew_planner --params-file $LOOP/world.yaml (state.joint_states, state.points," \
+         "state.advance), python -m clew_ros.examples.simulated_arm, python -m clew_ros.examples.pick_and_place_loop"
+    "$BIN/clew_planner" --ros-args --params-file "$LOOP/world.yaml" -p "record.directory:=$(pwd)/$LOOP/recordings" \
+        -p trajectory.max_velocity:=3.0 -p trajectory.max_acceleration:=12.0 >"$LOOP/clew_planner.log" 2>&1 &
+    node_pid=$!
+    "$PY" -m clew_ros.examples.simulated_arm --joints "$arm_joints" >"$LOOP/simulated_arm.log" 2>&1 &
+    arm_pid=$!
+    set +e
+    "$PY" -m clew_ros.examples.pick_and_place_loop --summary "$LOOP/runs.json" --obstacle 0.61,0.19,0.12,0.06 \
+        0.5,-0.3,0.17,0,0,0.5 0.5,0.3,0.17,0,0,0 0.5,-0.3,0.17,0,0,0 | tee "$LOOP/loop.txt"
+    rc=${PIPESTATUS[0]}
+    set -e
+    set +e
+    kill -INT "$arm_pid" 2>/dev/null
+    wait "$arm_pid"
+    kill -INT "$node_pid" 2>/dev/null
+    wait "$node_pid"
+    node_rc=$?
+    set -e
+    node_pid=""
+    arm_pid=""
+    if [[ $rc -ne 0 || $node_rc -ne 0 ]]; then
+        echo "demo: the closed loop failed (client exit $rc, node exit $node_rc); the node's log:" >&2
+        cat "$LOOP/clew_planner.log" >&2
+        [[ $status -eq 0 ]] && status=1
+    else
+        pictures=()
+        for run in $("$PY" -c 'import json, sys; print(" ".join(r["recording"] for r in json.load(open(sys.argv[1]))))' \
+                     "$LOOP/runs.json"); do
+            "$BIN/clew_render" "$run" -o "$LOOP/$(basename "$run").png" && pictures+=("$LOOP/$(basename "$run").png")
+        done
+        if "$PY" - "$OUT/closed_loop.png" "${pictures[@]}" <<'PYEOF'
+import sys
+
+from PIL import Image
+
+frames = [Image.open(path).convert("RGB") for path in sys.argv[2:]]
+strip = Image.new("RGB", (sum(f.width for f in frames), max(f.height for f in frames)), "white")
+x = 0
+for frame in frames:
+    strip.paste(frame, (x, 0))
+    x += frame.width
+strip.save(sys.argv[1])
+PYEOF
+        then
+            echo "demo: the closed loop's three runs, in order, in $OUT/closed_loop.png"
+        else
+            echo "demo: drawing the closed loop failed" >&2
+            [[ $status -eq 0 ]] && status=1
+        fi
     fi
 fi
 

@@ -56,6 +56,7 @@ from clew_ros.client.run import (
     RunStatus,
     RunTimeoutError,
 )
+from clew_ros.client.world_now import StartState, StateSender
 from clew_ros.core.errors import ClewError
 from clew_ros.core.settings import Outcome
 from clew_ros.planar.world import World, world_from_parameters
@@ -88,9 +89,12 @@ class PlannerClient:
             print(result.outcome.name, result.message)   # BUSY, TIME_LIMIT, GOAL_IN_COLLISION, ...
     """
 
-    def __init__(self, node: Node, planner: str = "/clew_planner") -> None:
+    def __init__(self, node: Node, planner: str = "/clew_planner", *, joint_states_topic: str | None = None) -> None:
         self._node = node
         self.planner = planner.rstrip("/") or "/clew_planner"
+        # the start states a goal may carry go to the planner's joint_states (relative: its namespace's)
+        namespace = self.planner.rsplit("/", 1)[0]
+        self._world_now = StateSender(node, self.planner, joint_states_topic or f"{namespace}/joint_states")
         self._group = ReentrantCallbackGroup()
         self._changed = threading.Condition()
         self._lock = threading.Lock()
@@ -165,6 +169,8 @@ class PlannerClient:
         goal: Sequence[float] | PoseStamped | None = None,
         *,
         on_feedback: Callable[[RunHandle, Feedback], None] | None = None,
+        start: StartState | None = None,
+        object_pose: Sequence[float] | PoseStamped | None = None,
     ) -> RunHandle:
         """Send a goal; returns its handle at once.
 
@@ -176,6 +182,13 @@ class PlannerClient:
         the parameter service). ``on_feedback(handle, feedback)`` is called on
         each ``~/feedback`` of the run. Raises :class:`PlannerNotFoundError`
         when :meth:`planner_ready` is false (call :meth:`wait_for_planner` first).
+
+        ``start`` (a ``JointState``, or joint name -> position) and ``object_pose`` (``x, y, z, roll, pitch,
+        yaw`` or a ``PoseStamped``) are the world as it is now (interface.md section 3c): published on the
+        planner's ``joint_states`` (the constructor's ``joint_states_topic``) and ``~/object`` before the
+        goal, each waiting (at most 5 s) until the planner has acknowledged it, so that the run plans from
+        them; the planner must have ``state.joint_states`` / ``state.object_pose`` on (else
+        :class:`PlannerNotFoundError` says so).
         """
         if not self.planner_ready():
             raise PlannerNotFoundError(f"no planner at {self.planner} yet: call wait_for_planner() first")
@@ -184,6 +197,10 @@ class PlannerClient:
         with self._lock:  # wall-clock ns (a sim clock may be at 0 in every client): unique goal stamps
             stamp_ns = max(time.time_ns(), self._last_stamp_ns + 1)
             self._last_stamp_ns = stamp_ns
+        if start is not None:
+            self._world_now.send_start(start, stamp_ns)
+        if object_pose is not None:
+            self._world_now.send_object(object_pose, stamp_ns)
         target: tuple[float, ...]
         if isinstance(goal, PoseStamped):
             msg = goal
@@ -211,9 +228,16 @@ class PlannerClient:
         self._goal_pub.publish(msg)
         return handle
 
-    def plan(self, goal: Sequence[float] | PoseStamped | None = None, *, timeout_s: float | None = None) -> RunResult:
+    def plan(
+        self,
+        goal: Sequence[float] | PoseStamped | None = None,
+        *,
+        timeout_s: float | None = None,
+        start: StartState | None = None,
+        object_pose: Sequence[float] | PoseStamped | None = None,
+    ) -> RunResult:
         """:meth:`send_goal` then :meth:`RunHandle.wait` (scripts)."""
-        return self.send_goal(goal).wait(timeout_s)
+        return self.send_goal(goal, start=start, object_pose=object_pose).wait(timeout_s)
 
     def destroy(self) -> None:
         """Remove the client's publisher, subscriptions and service clients from the node; runs still followed
@@ -232,6 +256,7 @@ class PlannerClient:
             node.destroy_subscription(subscription)
         node.destroy_client(self._cancel)
         node.destroy_client(self._parameters)
+        self._world_now.destroy()
 
     # -- waiting -------------------------------------------------------------------------------------
 

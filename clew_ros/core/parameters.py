@@ -403,6 +403,113 @@ PLANNER_PARAMETERS = ParameterTable(
     ],
 )
 
+#: The world as it is now (interface.md section 3c; spatial worlds): inputs the node reads while it runs. Each is
+#: off unless turned on; all read only (taken when the node starts).
+STATE_PARAMETERS = [
+    ParameterSpec(
+        "state.joint_states",
+        _B,
+        False,
+        "Plan each run from the latest joint_states (sensor_msgs/JointState, a relative name: /joint_states "
+        "unless remapped): the planned joints by name (the fixed joints too when the message has them). "
+        "Read only.",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.max_age",
+        _D,
+        1.0,
+        "With state.joint_states: a run asked while a planned joint has no state, or its latest is older than "
+        "this by the node's clock (header stamp; the receive time when the stamp is zero), is refused "
+        "START_STATE_UNKNOWN (10). Read only.",
+        "s",
+        (0.001, 3600.0),
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.object_pose",
+        _B,
+        False,
+        "Start each run with the object at the latest ~/object (geometry_msgs/PoseStamped, frame world), "
+        "snapped onto the nearest stable placement within state.snap_m and state.snap_rad, else refused "
+        "INVALID_WORLD saying why. Read only.",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.snap_m",
+        _D,
+        0.01,
+        "How far (m) an ~/object pose's resting face may lie from a support's top face and still be snapped "
+        "onto it. Read only.",
+        "m",
+        (0.0, 1.0),
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.snap_rad",
+        _D,
+        0.05,
+        "How far (rad) an ~/object pose's resting face may be tilted from level and still be snapped level. Read only.",
+        "rad",
+        (0.0, 1.0),
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.obstacles",
+        _B,
+        False,
+        "Obstacles added at run time from ~/obstacles (visualization_msgs/MarkerArray: CUBE, SPHERE, "
+        "CYLINDER; ADD/MODIFY, DELETE, DELETEALL), named <ns>/<id>. Read only.",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.points",
+        _B,
+        False,
+        "Sensed obstacles from ~/points (sensor_msgs/PointCloud2, float32 x y z, frame world): each message "
+        "replaces the previous cloud; points on the arm or the object are dropped, the rest occupy cubes of "
+        "edge state.voxel_m, each a box obstacle points/<i>. Read only.",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.voxel_m",
+        _D,
+        0.02,
+        "Edge (m) of the cubes a point cloud occupies. Read only.",
+        "m",
+        (0.001, 1.0),
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.self_filter_m",
+        _D,
+        0.02,
+        "Points within this distance (m) of the arm's links (their sphere cover) or of the object are dropped "
+        "from a cloud. Read only.",
+        "m",
+        (0.0, 1.0),
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.max_points",
+        _I,
+        1_000_000,
+        "Most points one ~/points message may hold; a larger one is refused with one warning and the previous "
+        "cloud stays. Read only.",
+        "points",
+        (1, 100_000_000),
+        read_only=True,
+    ),
+    ParameterSpec(
+        "state.advance",
+        _B,
+        False,
+        "After a run that succeeds, the next starts where its plan ended (the arm at its last waypoint, the "
+        "object at its final pose) unless joint_states or ~/object say otherwise. Read only.",
+        read_only=True,
+    ),
+]
+
 NODE_PARAMETERS = ParameterTable(
     "",
     [
@@ -509,6 +616,7 @@ NODE_PARAMETERS = ParameterTable(
             (0.001, 60.0),
             locked=True,
         ),
+        *STATE_PARAMETERS,
     ],
 )
 

@@ -158,6 +158,7 @@ class Outcome(enum.Enum):
     CANCELED = 7
     BUSY = 8
     INTERNAL_ERROR = 9
+    START_STATE_UNKNOWN = 10
 
     @property
     def succeeded(self) -> bool:

@@ -6,7 +6,8 @@ request during a playback stops the playback. A run's state lives on its
 handle (:mod:`~clew_ros.node.run`), its life in :mod:`~clew_ros.node.worker`
 (playback: :mod:`~clew_ros.motion.player`); messages go out, and into the run's
 recording (:mod:`~clew_ros.node.run_recording`), through
-:mod:`~clew_ros.node.publishing`.
+:mod:`~clew_ros.node.publishing`. A run plans in the world as it is now when the ``state.*`` inputs are on
+(:mod:`~clew_ros.node.live_state`: one snapshot per run, taken as it is accepted).
 
 Entry points for callbacks and in-process callers (tests):
 :meth:`PlannerNode.request_plan` (a :class:`~clew_ros.node.run.Run` to wait
@@ -24,7 +25,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped
@@ -37,15 +38,19 @@ from std_srvs.srv import Trigger
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.parameters import LOCKED_PREFIXES, RETIRED_PARAMETERS, RUNTIME_CHANGES, retired_message
 from clew_ros.core.settings import Outcome
+from clew_ros.node.live_state import LiveState, StateRefusalError, describe_inputs
+from clew_ros.node.live_view import start_live_view
 from clew_ros.node.namespaces import namespaced_directory
 from clew_ros.node.publishing import Publishing
+from clew_ros.node.run import CancelKind, Run, Source
+from clew_ros.node.run_recording import NO_RECORDING, Recordings
+from clew_ros.node.worker import RunWorker
 from clew_ros.planar.kernel import warm_up
 from clew_ros.planar.world import World
 from clew_ros.ros import messages
 from clew_ros.ros.parameters import (
     OWN_PREFIXES,
     Configuration,
-    NodeSettings,
     check_parameter_names,
     configuration_from_values,
     descriptor_for,
@@ -54,12 +59,6 @@ from clew_ros.ros.parameters import (
     runtime_changes_allowed,
 )
 from clew_ros.ros.qos import GOAL_QOS
-
-if TYPE_CHECKING:
-    from clew_ros.live import LiveView
-from clew_ros.node.run import CancelKind, Run, Source
-from clew_ros.node.run_recording import NO_RECORDING, Recordings
-from clew_ros.node.worker import RunWorker
 from clew_ros.ros.spatial import goal_from_pose_stamped as spatial_goal_from_pose_stamped
 
 __all__ = ["NODE_NAME", "PlannerNode", "StartupError"]
@@ -102,16 +101,18 @@ class PlannerNode(Node):
         if warm_up_s > 1.0:
             self.get_logger().info(f"planning kernel compiled in {warm_up_s:.1f} s (cached for the next start)")
         self._out = Publishing(self, self._closing)
-        self._out.live = self._start_live_view(self._config.node)
+        self._out.live = start_live_view(self, self._config)
 
         # ~/plan blocks until its run's outcome is out, and a second call must still be
         # answered (refused) at once, on another executor thread: a reentrant group.
         self.create_service(Trigger, "~/plan", self._on_plan, callback_group=ReentrantCallbackGroup())
         # ~/cancel in a group of its own: never queued behind ~/plan or ~/goal_pose callbacks.
         self.create_service(Trigger, "~/cancel", self._on_cancel, callback_group=MutuallyExclusiveCallbackGroup())
-        # ~/goal_pose in a group of its own: one goal at a time, in order (it only starts a run).
+        # ~/goal_pose in a group of its own with the state inputs (created first): one at a time, in order.
+        inputs = MutuallyExclusiveCallbackGroup()
+        self._state = LiveState(self, self._config, self._out, inputs, lambda: self.current_run)
         goal_sub = self.create_subscription(
-            PoseStamped, "~/goal_pose", self._on_goal_pose, GOAL_QOS, callback_group=MutuallyExclusiveCallbackGroup()
+            PoseStamped, "~/goal_pose", self._on_goal_pose, GOAL_QOS, callback_group=inputs
         )
         # the status / feedback timer in a group of its own; parameter services stay in the default group.
         self.create_timer(1.0 / STATUS_RATE_HZ, self._on_timer, callback_group=MutuallyExclusiveCallbackGroup())
@@ -133,6 +134,7 @@ class PlannerNode(Node):
         self.get_logger().info(
             f"serving world '{world.name}' ({world.robot.dof} joints, {len(world.obstacles)} obstacles); "
             f"recording {'to ' + str(self._config.node.record_path) if self._config.node.record_enabled else 'off'}"
+            f"{describe_inputs(self._config.node)}"
         )
         if self._config.node.allow_runtime_changes:
             self.get_logger().warning(
@@ -168,7 +170,8 @@ class PlannerNode(Node):
         if concluding is not None and concluding.outcome is not None:
             # its outcome is being published: whoever saw it may send the next goal at once, never refused BUSY
             concluding.wait_outcome(START_WAIT_S)
-        with self._lock:  # the policy: one run at a time; never queued
+        code = Outcome.BUSY
+        with self._lock:  # the policy: one run at a time; never queued; planned in the state of the moment
             previous = self._run
             if self._closing.is_set():
                 refusal = "the node is shutting down"
@@ -179,12 +182,16 @@ class PlannerNode(Node):
                     "requests are not queued; cancel it with ~/cancel or wait"
                 )
             else:
-                refusal = None
-                run = self._run = Run(source, goal, self._config, self._out.now_ns(), goal_stamp_ns)
-                if previous is not None:
-                    previous.stop_playback()
+                try:
+                    config, refusal = self._state.snapshot(self._config, previous), None
+                except StateRefusalError as error:
+                    code, refusal = error.code, f"refused: {error.message}"
+                else:
+                    run = self._run = Run(source, goal, config, self._out.now_ns(), goal_stamp_ns)
+                    if previous is not None:
+                        previous.stop_playback()
         if refusal is not None:
-            return None, self._refuse(Outcome.BUSY, refusal, source, goal_stamp_ns)
+            return None, self._refuse(code, refusal, source, goal_stamp_ns)
         self._worker.start(run, previous)
         return run, ""
 
@@ -236,30 +243,6 @@ class PlannerNode(Node):
         run.stop()
         if not run.wait_finished(timeout_s):
             self.get_logger().error(f"run {run.hex}: the worker did not stop within {timeout_s} s")
-
-    def _start_live_view(self, settings: NodeSettings) -> LiveView | None:
-        """The Foxglove live view on ``live.foxglove_port`` (0: none); a failure is logged, the node serves on."""
-        if settings.foxglove_port == 0:
-            return None
-        from clew_ros.live import LiveView, LiveViewError
-
-        live = LiveView(
-            port=settings.foxglove_port,
-            namespace=self.get_fully_qualified_name(),
-            name=self.get_name(),
-            rate_hz=settings.playback_rate_hz,
-            max_velocity_rad_s=settings.velocity_limit_rad_s,
-            max_acceleration_rad_s2=settings.max_acceleration_rad_s2,
-            grasp_dwell_s=settings.grasp_dwell_s,
-            spatial=self._config.spatial is not None,
-        )
-        try:
-            live.start()
-        except LiveViewError as error:
-            self.get_logger().error(f"live.foxglove_port: {error}; runs are not served live")
-            return None
-        self.get_logger().info(f"serving runs live to Foxglove at {live.url}")
-        return live
 
     def _refuse(self, code: Outcome, message: str, source: Source, goal_stamp_ns: int | None = None) -> str:
         """Publish a refused request (a UUID of its own, status aborted, an aborted event); its text."""

@@ -140,6 +140,9 @@ class Run:
         self.message = ""
         self.elapsed_s = 0.0  # planning time, from the planner's stats
         self.track: Track | None = None  # the timed plan, after a success
+        #: Where a successful spatial plan leaves the arm (its last waypoint) and the object (its final pose,
+        #: ``None`` in a motion-only query): where ``state.advance`` starts the next run.
+        self.end_state: tuple[np.ndarray, tuple[float, ...] | None] | None = None
         self._lock = threading.Lock()
         self._phase = Phase.ACCEPTED
         self._cancel = threading.Event()

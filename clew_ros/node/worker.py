@@ -175,6 +175,10 @@ class RunWorker:
         if outcome is Outcome.CANCELED and self._closing.is_set():
             message += " (the node is shutting down)"
         track = None
+        if outcome is Outcome.START_IN_COLLISION and not isinstance(world, World):
+            from clew_ros.spatial.snapshot import start_contacts
+
+            message = f"{message}: {start_contacts(world)}"
         if outcome is Outcome.SUCCEEDED:
             outcome, message, track = timed_plan(run, result)
         run.conclude(outcome, message, float(result.stats.get("time_s", time.monotonic() - run.start_s)), track)
@@ -273,6 +277,8 @@ def _timed_spatial_plan(run: Run, world: SpatialWorld, result: PlanResult) -> tu
     planned = checked_spatial_plan(world, result)
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
+    final = planned.final_object_pose
+    run.end_state = (np.array(planned.segments[-1].waypoints[-1], dtype=float), None if final is None else tuple(final))
     return result.outcome, result.message, spatial_track(world, planned, setup.joints, run.config.node)
 
 

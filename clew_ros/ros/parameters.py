@@ -95,7 +95,7 @@ __all__ = [
 DEFAULT_WORLD_FILE = "figure1.yaml"
 
 #: The parameter prefixes the node owns and checks (others, e.g. use_sim_time, are rclpy's).
-OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.", "live.", "parameters.")
+OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.", "live.", "parameters.", "state.")
 
 
 @dataclass(frozen=True)
@@ -115,6 +115,18 @@ class NodeSettings:
     grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell")
     foxglove_port: int = NODE_PARAMETERS.default("live.foxglove_port")
     allow_runtime_changes: bool = NODE_PARAMETERS.default(RUNTIME_CHANGES)
+    #: The world as it is now (interface.md section 3c): which inputs are on, and their tuning.
+    state_joint_states: bool = NODE_PARAMETERS.default("state.joint_states")
+    state_max_age_s: float = NODE_PARAMETERS.default("state.max_age")
+    state_object_pose: bool = NODE_PARAMETERS.default("state.object_pose")
+    state_snap_m: float = NODE_PARAMETERS.default("state.snap_m")
+    state_snap_rad: float = NODE_PARAMETERS.default("state.snap_rad")
+    state_obstacles: bool = NODE_PARAMETERS.default("state.obstacles")
+    state_points: bool = NODE_PARAMETERS.default("state.points")
+    state_voxel_m: float = NODE_PARAMETERS.default("state.voxel_m")
+    state_self_filter_m: float = NODE_PARAMETERS.default("state.self_filter_m")
+    state_max_points: int = NODE_PARAMETERS.default("state.max_points")
+    state_advance: bool = NODE_PARAMETERS.default("state.advance")
     #: ``record_directory`` resolved when these settings are made (at start): absolute, ``~`` expanded,
     #: symbolic links and ``..`` resolved; every run folder is made inside it.
     record_path: Path = dataclasses.field(init=False, repr=False, compare=False)
@@ -170,6 +182,17 @@ SETTINGS_FIELDS = {
     "grasp_dwell_s": "trajectory.grasp_dwell",
     "foxglove_port": "live.foxglove_port",
     "allow_runtime_changes": RUNTIME_CHANGES,
+    "state_joint_states": "state.joint_states",
+    "state_max_age_s": "state.max_age",
+    "state_object_pose": "state.object_pose",
+    "state_snap_m": "state.snap_m",
+    "state_snap_rad": "state.snap_rad",
+    "state_obstacles": "state.obstacles",
+    "state_points": "state.points",
+    "state_voxel_m": "state.voxel_m",
+    "state_self_filter_m": "state.self_filter_m",
+    "state_max_points": "state.max_points",
+    "state_advance": "state.advance",
 }
 assert [f.name for f in fields(NodeSettings) if f.init] == list(SETTINGS_FIELDS)
 assert sorted(SETTINGS_FIELDS.values()) == sorted(NODE_PARAMETERS)
@@ -358,6 +381,9 @@ def configuration_from_values(
         world, setup = _spatial_world(world_tree, previous)
     else:
         world = check_start_and_goal(world_from_parameters(world_tree))
+        for name in ("state.joint_states", "state.object_pose", "state.obstacles", "state.points", "state.advance"):
+            if values.get(name) is True:
+                raise ParameterError(name, "expected false: the world as it is now needs a spatial world (world.kind)")
     planner_tree = {
         k[len("planner.") :]: v
         for k, v in values.items()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["EVENTS_QOS", "GOAL_QOS", "LATCHED_QOS", "STREAM_QOS", "TF_QOS", "TF_STATIC_QOS"]
+__all__ = ["CLOUD_QOS", "EVENTS_QOS", "GOAL_QOS", "LATCHED_QOS", "STATE_QOS", "STREAM_QOS", "TF_QOS", "TF_STATIC_QOS"]
 
 #: Latched topics (~/status, ~/trajectory, ~/landmarks, ~/world_markers, ~/world_yaml, ~/robot_description):
 #: a late subscriber gets the last message.
@@ -48,4 +48,20 @@ TF_STATIC_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+#: The inputs of the world as it is now (joint_states, ~/object, ~/obstacles; interface.md section 3c): reliable,
+#: as robot_state_publisher and RViz offer them, deep enough that a burst of obstacles is not dropped.
+STATE_QOS = QoSProfile(
+    depth=100,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+#: ~/points: reliable, the latest only (a sensor that offers best effort only reaches it through a relay such as
+#: topic_tools' relay with a reliable publisher: a cloud that a run plans among is never half lost).
+CLOUD_QOS = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
 )

@@ -46,6 +46,7 @@ from clew_ros.core.settings import PlannerSettings
 from clew_ros.motion.spatial import UrdfTree
 from clew_ros.ros.messages import FRAME_ID, QUATERNION_TOLERANCE, GoalPoseError, quoted_text, time_msg
 from clew_ros.scene.palette import colour
+from clew_ros.spatial.snapshot import POINTS_PREFIX
 from clew_ros.spatial.transforms import matrix_quaternion
 
 if TYPE_CHECKING:
@@ -468,7 +469,8 @@ def link_markers(
 def world_markers(
     world: SpatialWorld, time_ns: int, settings: LinkMarkerSettings | None = None, simplify: Simplify | None = None
 ) -> MarkerArray:
-    """``~/world_markers`` in 3-D: DELETEALL, then ``bounds`` (LINE_LIST), ``obstacles`` and ``supports``
+    """``~/world_markers`` in 3-D: DELETEALL, then ``bounds`` (LINE_LIST), ``points`` (a point cloud's occupied
+    cubes ``points/<i>``, one CUBE_LIST), ``obstacles`` and ``supports``
     (CUBE / CYLINDER / SPHERE, id = index in the world's obstacles), ``object_start`` and ``object_goal``
     (the object at its initial and goal placements), and the arm's links (:func:`link_markers`)."""
     markers = [Marker(header=_header(time_ns), action=Marker.DELETEALL)]
@@ -484,7 +486,14 @@ def world_markers(
             )
         )
     supports = {s.name for s in world.supports}
+    cubes = [o for o in world.obstacles if o.name.startswith(POINTS_PREFIX)]  # a point cloud's: one CUBE_LIST
+    if cubes:
+        centres, edge = [o.pose[:3, 3] for o in cubes], cubes[0].size[0]
+        color = _color("obstacle", 0.9)
+        markers.append(_points("points", Marker.CUBE_LIST, centres, time_ns=time_ns, color=color, scale=edge))
     for index, obstacle in enumerate(world.obstacles):
+        if obstacle.name.startswith(POINTS_PREFIX):
+            continue
         support = obstacle.name in supports
         ns, key = ("supports", "obstacle_edge") if support else ("obstacles", "obstacle")
         markers.append(

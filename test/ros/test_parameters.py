@@ -256,3 +256,17 @@ def test_record_directory_is_resolved_once(monkeypatch: pytest.MonkeyPatch, tmp_
     assert NodeSettings(record_directory="a/../b").record_path == tmp_path.resolve() / "b"
     with pytest.raises(ParameterError, match=r"^record\.directory: expected a path without '\$'"):
         NodeSettings(record_directory="$HOME/runs")
+
+
+@pytest.mark.parametrize("name", ["state.joint_states", "state.object_pose", "state.obstacles", "state.points"])
+def test_the_world_as_it_is_now_needs_a_spatial_world_and_is_fixed_at_start(name: str) -> None:
+    values = initial_values(file_values("node_quick.yaml"))
+    values[name] = True
+    with pytest.raises(ParameterError, match=f"^{name}: expected false: .*spatial world"):
+        configuration_from_values(values)
+    assert descriptor_for(name).read_only
+    assert descriptor_for(name, allow_runtime_changes=True).read_only
+    values[name] = False
+    values["state.max_age"] = 0.0
+    with pytest.raises(ParameterError, match=r"^state\.max_age: expected a value in \[0\.001, 3600\.0\]"):
+        configuration_from_values(values)

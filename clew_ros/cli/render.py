@@ -74,6 +74,15 @@ def _view_joined(argv: list[str]) -> list[str]:
     return out
 
 
+def _os_reason(error: OSError, output: Path) -> str:
+    """What an ``OSError`` means to the user: the output it could not write, or the file it could not read,
+    with the system's reason (never ``None``)."""
+    reason = error.strerror or str(error) or type(error).__name__
+    if error.filename is not None and Path(str(error.filename)) != output:
+        return f"cannot read {error.filename}: {reason}"
+    return f"cannot write {output}: {reason}"
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(_view_joined(list(sys.argv[1:] if argv is None else argv)))
     from clew_ros.render import RenderError, render_gif, render_png, render_svg
@@ -123,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         print(one_line(f"clew_render: {error}"), file=sys.stderr)
         return EXIT_INVALID
     except OSError as error:
-        print(f"clew_render: cannot write {output}: {error.strerror}", file=sys.stderr)
+        print(one_line(f"clew_render: {_os_reason(error, output)}"), file=sys.stderr)
         return EXIT_INVALID
     print(f"clew_render: wrote {output}")
     return EXIT_OK

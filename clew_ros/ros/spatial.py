@@ -111,13 +111,15 @@ class SpatialSetup:
 def load_spatial(tree: Mapping[str, Any], folder: Path) -> tuple[SpatialWorld, SpatialSetup]:
     """The spatial world of a ``world`` parameter tree (``{"world": {...}}``) and its setup; a
     :class:`~clew_ros.core.errors.WorldError` names the parameter at fault."""
+    from clew_ros.spatial.packages import package_paths_from_parameters
     from clew_ros.spatial.robot import read_text, resolve_uri
     from clew_ros.spatial.world import spatial_world_from_parameters
 
     world = spatial_world_from_parameters(tree, folder)
     robot_tree = tree["world"]["robot"]
     if "urdf" in robot_tree:
-        path = resolve_uri(str(robot_tree["urdf"]), folder, "world.robot.urdf")
+        packages = package_paths_from_parameters(robot_tree, folder)
+        path = resolve_uri(str(robot_tree["urdf"]), folder, "world.robot.urdf", packages)
         text, urdf_folder = read_text(path, "world.robot.urdf"), path.parent
     else:
         text, urdf_folder = str(robot_tree["description"]), folder
@@ -154,8 +156,9 @@ def resolved_parameters(world_file: Path) -> dict[str, Any]:
 
 
 def absolute_paths(world: dict[str, Any], folder: Path) -> None:
-    """Make the files a ``world`` tree names (:data:`FILE_PARAMETERS`) absolute, relative to ``folder``
-    (``package://`` and ``file://`` URIs kept); in place."""
+    """Make the files a ``world`` tree names (:data:`FILE_PARAMETERS`) and the folders of
+    ``world.robot.package_paths`` absolute, relative to ``folder`` (``package://`` and ``file://`` URIs
+    kept); in place."""
     for keys in FILE_PARAMETERS:
         tree = world
         for key in keys[:-1]:
@@ -163,6 +166,10 @@ def absolute_paths(world: dict[str, Any], folder: Path) -> None:
         value = tree.get(keys[-1]) if isinstance(tree, dict) else None
         if isinstance(value, str) and not value.startswith(("package://", "file://")) and value:
             tree[keys[-1]] = str((folder / value).resolve()) if not Path(value).is_absolute() else value
+    robot = world.get("robot")
+    paths = robot.get("package_paths") if isinstance(robot, dict) else None
+    if isinstance(paths, list) and all(isinstance(p, str) and p for p in paths):
+        robot["package_paths"] = [p if Path(p).is_absolute() else str((folder / p).resolve()) for p in paths]  # type: ignore[index]
 
 
 # ----------------------------------------------------------------------------------------- the URDF

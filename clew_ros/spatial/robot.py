@@ -107,6 +107,9 @@ class RobotModel:
     exempt: frozenset[tuple[int, int]]
     gripper_links: tuple[str, ...]
     fixed_positions: Mapping[str, float]
+    #: ``continuous[j]``: planned joint j is a URDF ``continuous`` joint whose limits still span a full turn
+    #: (equal modulo 2 pi, a move takes the short way round: :mod:`clew_ros.spatial.turns`); empty: none.
+    continuous: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     @property
     def dof(self) -> int:
@@ -494,7 +497,14 @@ def load_robot(
         exempt=_exempt(links, parents, srdf_text, names),
         gripper_links=tuple(gripper_links),
         fixed_positions=dict(fixed),
+        continuous=_wrapping(planned, lower, upper),
     )
+
+
+def _wrapping(planned: Sequence[Any], lower: NDArray[np.float64], upper: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Which planned joints are ``continuous`` with limits still a full turn wide (not narrowed below it)."""
+    kinds = np.array([joint.type == "continuous" for joint in planned], dtype=bool)
+    return kinds & (upper - lower >= 2.0 * math.pi - 1e-9)
 
 
 def _collision_parent(name: str, parent_joint: Mapping[str, Any], index: Mapping[str, int]) -> int:

@@ -57,6 +57,7 @@ from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
 from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
+from clew_ros.spatial.turns import nearest_turns, split_turns
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.spatial.world import SpatialWorld
 
@@ -529,7 +530,7 @@ class SpatialSpace:
         rng = own_generator(ctx, HOLD_STREAM, q0, np.r_[object_pose, grasp])
         found = self.ik(ctx.hold_samples).solve(target, rng, seeds=q0[None], checker=self.transit_checker(object_pose))
         if len(found):
-            found = found[self.transfer_checker(self.grasp_rel(grasp)).valid(found)]
+            found = self._nearest_turns(q0, found[self.transfer_checker(self.grasp_rel(grasp)).valid(found)])
         return found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
 
     def grasp_rel(self, grasp: int) -> Array:
@@ -737,9 +738,14 @@ class SpatialSpace:
         solutions = self.ik(ctx.search.goal_seeds).solve_many(
             tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=self.transfer_checker(grasp_rel)
         )
-        found = np.vstack(solutions)
+        found = self._nearest_turns(q0, np.vstack(solutions))
         ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
         return ordered
+
+    def _nearest_turns(self, q0: Array, found: Array) -> Array:
+        """IK solutions with their continuous joints the short way from ``q0`` (within the limits)."""
+        robot = self.world.robot
+        return nearest_turns(q0, found, robot.lower, robot.upper, robot.continuous)
 
     def goal_poses(self, goal: Array) -> list[Array]:
         """The goal placement (4x4) turned about world z through its centre by each of
@@ -1083,11 +1089,33 @@ def plan(
     ``world.robot.goal``)."""
     tuning = tuning or SpatialTuning()
     if world.object is None:
-        return plan_motion(SpatialSpace(world, tuning), settings, goal=goal, termination=termination, progress=progress)
-    space = SpatialSpace(world, tuning)
-    return clew.plan(
-        space, settings, goal=goal, termination=termination, progress=progress, search=tuning.search, many=tuning.many
-    )
+        result = plan_motion(
+            SpatialSpace(world, tuning), settings, goal=goal, termination=termination, progress=progress
+        )
+    else:
+        space = SpatialSpace(world, tuning)
+        result = clew.plan(
+            space,
+            settings,
+            goal=goal,
+            termination=termination,
+            progress=progress,
+            search=tuning.search,
+            many=tuning.many,
+        )
+    return _short_turns(result, world.robot.continuous)
+
+
+def _short_turns(result: clew.PlanResult, continuous: NDArray[np.bool_]) -> clew.PlanResult:
+    """``result`` with every piece that turns a continuous joint by pi or more cut into equal straight parts
+    (:func:`clew_ros.spatial.turns.split_turns`: the same motion, read the same the short way round)."""
+    if not continuous.any():
+        return result
+    result.segments = [
+        Segment(s.kind, s.grasp, list(split_turns(np.asarray(s.waypoints, dtype=float), continuous)))
+        for s in result.segments
+    ]
+    return result
 
 
 def _same_waypoints(a: Sequence[Segment], b: Sequence[Segment]) -> bool:

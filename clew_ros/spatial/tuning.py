@@ -112,6 +112,12 @@ class SpatialTuning:
     #: more tries, a simple one fewer (200 fixed tries took about a third of a run)
     motion_shortcut_tries: int = 400
     motion_shortcut_round: int = 20
+    #: a motion-only query's ``world.robot.goal_pose``: random IK seeds (count, after the start
+    #: configuration) whose distinct valid solutions are the goal tree's roots, each a goal the search may
+    #: reach (a 6-joint arm has up to 8 for one pose, a 7-joint one a continuum)
+    goal_pose_ik_seeds: int = 64
+    #: ... of which at most this many (count, nearest the start first, joint travel) become roots
+    goal_pose_roots: int = 16
 
     # -- pick-and-place where the whole pose is out of reach (arms of 4-5 joints, joint limits) and the
     # -- goal out of sight of the placements (spatial_shelf, spatial_narrow)

@@ -105,3 +105,24 @@ def write_world(path: Path, document: dict[str, Any]) -> Path:
 def angle_gap(a: float, b: float) -> float:
     """|a - b| modulo 2 pi, in [0, pi]."""
     return abs(math.remainder(a - b, 2.0 * math.pi))
+
+
+def pose_goal_world(root: Path, seed: int) -> Path:
+    """``root/world.yaml``: a motion-only world for the arm of ``seed`` (written under ``root/src``) from a
+    valid configuration to ``world.robot.goal_pose``, the tcp's pose at another valid one (reachable by
+    construction); its path."""
+    from clew_ros.spatial.transforms import matrix_pose
+    from clew_ros.spatial.world import spatial_world_from_parameters
+
+    urdf = write_description_package(root / "src", seed)
+    document = motion_world(root, urdf, initial=[0.0] * 6, goal=[0.0] * 6)
+    parameters = document["/**"]["ros__parameters"]
+    world = spatial_world_from_parameters(parameters, root)
+    robot = world.robot
+    qs = np.random.default_rng(seed).uniform(robot.lower, robot.upper, (400, robot.dof))
+    start, goal = qs[world.checker.valid(qs)][:2]
+    tree = parameters["world"]["robot"]
+    del tree["goal"]
+    tree["initial"] = [round(float(v), 6) for v in start]
+    tree["goal_pose"] = [round(float(v), 6) for v in matrix_pose(robot.tcp_pose(goal))]
+    return write_world(root / "world.yaml", document)

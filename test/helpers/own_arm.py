@@ -1,6 +1,6 @@
 """An arm the package does not ship, as a newcomer brings it: a random serial arm written as a ROS description
 package in a temporary folder, its links as STL meshes named by ``package://`` URIs, its first and last
-joints ``continuous``, and a motion-only world for it."""
+joints ``continuous``, beside a MoveIt config package with its SRDF; and a motion-only world for it."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from clew_ros.spatial.random_robot import BASE_LINK, TIP_LINK, RandomRobotSettin
 from clew_ros.spatial.transforms import pose_matrix
 
 PACKAGE = "my_arm_description"
+MOVEIT_PACKAGE = "my_arm_moveit_config"
 
 
 def _numbers(text: str | None) -> list[float]:
@@ -73,7 +74,29 @@ def write_description_package(root: Path, seed: int, joints: int = 6) -> Path:
             limit.attrib.pop("upper", None)
     urdf = package / "urdf" / "arm.urdf"
     urdf.write_text(ET.tostring(robot, encoding="unicode"))
+    _write_moveit_config(root, robot)
     return urdf
+
+
+def _write_moveit_config(root: Path, robot: ET.Element) -> None:
+    """``root/<MOVEIT_PACKAGE>/config/my_arm.srdf``: the planning group base_link -> tool and each joint's two
+    links as a disable_collisions pair (as MoveIt Setup Assistant writes adjacent links)."""
+    config = root / MOVEIT_PACKAGE / "config"
+    config.mkdir(parents=True)
+    (root / MOVEIT_PACKAGE / "package.xml").write_text(
+        f'<?xml version="1.0"?>\n<package format="3"><name>{MOVEIT_PACKAGE}</name><version>0.0.1</version>'
+        "<description>test arm</description><maintainer email='a@b.c'>a</maintainer><license>MIT</license>"
+        "</package>\n"
+    )
+    pairs = [
+        (joint.find("parent").get("link"), joint.find("child").get("link"))  # type: ignore[union-attr]
+        for joint in robot.iter("joint")
+    ]
+    disabled = "".join(f'  <disable_collisions link1="{a}" link2="{b}" reason="Adjacent"/>\n' for a, b in pairs)
+    (config / "my_arm.srdf").write_text(
+        f'<?xml version="1.0"?>\n<robot name="my_arm">\n  <group name="arm"><chain base_link="{BASE_LINK}" '
+        f'tip_link="{TIP_LINK}"/></group>\n{disabled}</robot>\n'
+    )
 
 
 def motion_world(folder: Path, urdf: Path, **robot: Any) -> dict[str, Any]:
@@ -86,6 +109,7 @@ def motion_world(folder: Path, urdf: Path, **robot: Any) -> dict[str, Any]:
         "name": "own_arm",
         "robot": {
             "urdf": f"package://{PACKAGE}/urdf/arm.urdf",
+            "srdf": f"package://{MOVEIT_PACKAGE}/config/my_arm.srdf",
             "package_paths": [str(packages.relative_to(folder))],
             "base_link": BASE_LINK,
             "tip_link": TIP_LINK,

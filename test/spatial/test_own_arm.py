@@ -85,3 +85,22 @@ def test_an_unreachable_pose_goal_is_an_outcome_not_a_crash(tmp_path: Path) -> N
     done = _plan_cli(world_file, "-o", "plan.json", "-q")
     assert done.returncode == 1, done.stderr
     assert json.loads((tmp_path / "plan.json").read_text())["code"] == "GOAL_OUT_OF_REACH"
+
+
+def test_the_guides_parameter_file_plans_as_written(tmp_path: Path) -> None:
+    """docs/own_arm.md's parameter file, its start and goal pose set for the random arm (the guide's numbers
+    are for its reader's arm), next to the packages it names under ``src``."""
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "own_arm.md").read_text()
+    block = guide.split("```yaml\n", 1)[1].split("```", 1)[0]
+    document = yaml.safe_load(block)
+    reference = read_parameter_file(pose_goal_world(tmp_path, SEED))["world"]["robot"]
+    robot = document["/**"]["ros__parameters"]["world"]["robot"]
+    assert robot["package_paths"] == ["src"]
+    assert robot["srdf"].startswith("package://my_arm_moveit_config/")
+    robot["initial"], robot["goal_pose"] = reference["initial"], reference["goal_pose"]
+    world_file = tmp_path / "my_cell.yaml"
+    world_file.write_text(yaml.safe_dump(document))
+    done = _plan_cli(world_file, "-o", "plan.json", "-q")
+    assert done.returncode == 0, done.stderr
+    world = spatial_world_from_parameters(read_parameter_file(world_file), tmp_path)
+    assert validate_plan(world, json.loads((tmp_path / "plan.json").read_text())) == []

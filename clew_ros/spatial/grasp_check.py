@@ -14,6 +14,8 @@ hand comes through the face the object rests on, or when the fingers close on th
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,27 +58,42 @@ class GraspReport:
     warnings: list[str] = field(default_factory=list)
 
 
+def _finger_joints(
+    urdf: str, gripper_links: Sequence[str], planned: Sequence[str]
+) -> list[tuple[str, str, Vector, float]]:
+    """The prismatic joints that move a link of ``gripper_links`` and are not planned: name, child link, unit
+    axis (in the child's frame) and travel (m)."""
+    out = []
+    for joint in ET.fromstring(urdf).iter("joint"):
+        child = joint.find("child")
+        name, link = joint.get("name", ""), "" if child is None else child.get("link", "")
+        if joint.get("type") != "prismatic" or link not in gripper_links or name in planned:
+            continue
+        axis_element, limit = joint.find("axis"), joint.find("limit")
+        axis = np.array(
+            [float(v) for v in (axis_element.get("xyz", "1 0 0") if axis_element is not None else "1 0 0").split()]
+        )
+        travel = float(limit.get("upper", "0")) - float(limit.get("lower", "0")) if limit is not None else math.inf
+        if axis.shape == (3,) and np.linalg.norm(axis) > 1e-9:
+            out.append((name, link, axis / np.linalg.norm(axis), travel))
+    return out
+
+
 def finger_axis(world: SpatialWorld) -> FingerAxis:
     """The fingers' closing axis in the tcp's frame (the module docstring)."""
-    from clew_ros.motion.spatial import UrdfTree
-
     robot = world.robot
-    tree = UrdfTree(robot.urdf)
-    fingers = [
-        joint
-        for joint in tree.joints
-        if joint.type == "prismatic" and joint.child in robot.gripper_links and joint.name not in robot.joint_names
-    ]
+    links = {link.name for link in robot.links}
+    fingers = [f for f in _finger_joints(robot.urdf, robot.gripper_links, robot.joint_names) if f[1] in links]
     if not fingers:
         return FingerAxis(np.array([0.0, 1.0, 0.0]), "the tcp's y (no prismatic finger joint in gripper_links)")
-    values = tree.joint_values(robot.joint_names, world.initial.tolist(), robot.fixed_positions)
-    links = tree.link_poses(tree.root_pose(robot.base_link, robot.base, values), values)
-    tcp = robot.tcp_pose(world.initial.tolist())
-    first = fingers[0]
-    axis = tcp[:3, :3].T @ links[first.child][:3, :3] @ (np.asarray(first.axis) / np.linalg.norm(first.axis))
-    opening = sum(joint.upper - joint.lower for joint in fingers)
-    names = ", ".join(joint.name for joint in fingers)
-    return FingerAxis(axis / np.linalg.norm(axis), f"finger joint {names}", opening)
+    q = world.initial.tolist()
+    _, child, axis, _ = fingers[0]
+    link = robot.links[robot.link_index(child)]
+    rotation = robot.frames(q)[link.frame][:3, :3] @ link.offset[:3, :3]
+    along = robot.tcp_pose(q)[:3, :3].T @ rotation @ axis
+    opening = sum(f[3] for f in fingers)
+    names = ", ".join(f[0] for f in fingers)
+    return FingerAxis(along / np.linalg.norm(along), f"finger joint {names}", opening)
 
 
 def _direction(v: Vector) -> str:

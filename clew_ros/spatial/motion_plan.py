@@ -47,7 +47,7 @@ from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext, Space
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.inverse import IKSettings, InverseKinematics
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics, distinct
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.turns import goal_turns, joint_gaps
 from clew_ros.spatial.world import SpatialWorld
@@ -58,6 +58,8 @@ __all__ = ["add_branch", "connect", "plan_motion"]
 IMPROVE_STREAM = clew.IMPROVE_STREAM
 #: The IK of ``world.robot.goal_pose`` draws its seeds from its own generator seeded with (planner.seed, this).
 GOAL_POSE_STREAM = 0x60A1
+#: Goal configurations this close (rad, largest joint difference) are one goal tree root.
+SAME_GOAL_RAD = 1e-9
 #: a configuration landmark's object pose: none (the trees of configurations carry no object pose)
 _NO_POSE = np.zeros(6)
 
@@ -170,7 +172,8 @@ def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray
     target = target[world.checker.valid(target)]
     if not len(target):
         return Outcome.GOAL_IN_COLLISION, "the goal configuration is not valid"
-    return np.concatenate([goal_turns(q, robot.lower, robot.upper, robot.continuous) for q in target])
+    turns = np.concatenate([goal_turns(q, robot.lower, robot.upper, robot.continuous) for q in target])
+    return distinct(turns, SAME_GOAL_RAD)  # an IK solution and another's turn may be one configuration
 
 
 def _pose_goals(space: MotionSpace, settings: PlannerSettings) -> tuple[Outcome, str] | np.ndarray:

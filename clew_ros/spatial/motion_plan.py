@@ -49,7 +49,7 @@ from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, distinct
 from clew_ros.spatial.tuning import SpatialTuning
-from clew_ros.spatial.turns import goal_turns, joint_gaps
+from clew_ros.spatial.turns import goal_turns, joint_features, joint_gaps
 from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["add_branch", "connect", "plan_motion"]
@@ -483,9 +483,11 @@ def _explore(
 
 
 def _features(space: MotionSpace, joints: np.ndarray, weight: float) -> np.ndarray:
-    """Points (B, n + 3) whose distances are EXPLORE's landmark distances: the joints (B, n) times ``weight``
-    (m/rad), then the tcp's position (m) times :attr:`SpatialTuning.motion_tcp_weight`."""
+    """Points (B, n + c + 3) whose distances are EXPLORE's landmark distances: the joints (B, n; each of the c
+    continuous ones as a point on the unit circle) times ``weight`` (m/rad), then the tcp's position (m)
+    times :attr:`SpatialTuning.motion_tcp_weight`."""
     scale = space.tuning.motion_tcp_weight
     tcp = space.tcp(joints)[:, :3, 3] if scale > 0 else np.zeros((len(joints), 3))
-    out: np.ndarray = np.concatenate([weight * joints, scale * tcp], axis=1)
+    turned = joint_features(joints, space.world.robot.continuous)  # continuous joints modulo 2 pi
+    out: np.ndarray = np.concatenate([weight * turned, scale * tcp], axis=1)
     return out

@@ -57,7 +57,7 @@ from clew_ros.spatial.scene import make_obstacle, obstacle_arrays
 from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
-from clew_ros.spatial.turns import nearest_turns, split_turns
+from clew_ros.spatial.turns import joint_features, nearest_turns, split_turns
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.spatial.world import SpatialWorld
 
@@ -475,11 +475,13 @@ class SpatialSpace:
     def landmark_features(self, joints: np.ndarray, object_poses: np.ndarray, joint_weight: float) -> np.ndarray:
         """Object position (m); orientation as its rotation matrix times the object's radius over sqrt 2
         (distances are then chords, m, of a circle of that radius: the face down and the yaw both count);
-        joints times ``joint_weight`` (m/rad) times ``sqrt(2 / n)``, as the planar space weighs them."""
+        joints times ``joint_weight`` (m/rad) times ``sqrt(2 / n)``, as the planar space weighs them (a
+        continuous joint on the unit circle: :func:`~clew_ros.spatial.turns.joint_features`)."""
         rot = matrices(object_poses)[:, :3, :3].reshape(len(object_poses), 9)
         weight = joint_weight * float(np.sqrt(2.0 / joints.shape[1]))
+        turned = joint_features(joints, self.world.robot.continuous)  # continuous joints modulo 2 pi
         return np.concatenate(
-            [np.asarray(object_poses)[:, :3], self.object_radius / math.sqrt(2.0) * rot, weight * joints], axis=1
+            [np.asarray(object_poses)[:, :3], self.object_radius / math.sqrt(2.0) * rot, weight * turned], axis=1
         )
 
     def goal_parts(self, object_poses: Array, goal: Array) -> tuple[Array, Array, Array]:

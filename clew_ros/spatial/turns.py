@@ -9,7 +9,8 @@ and a plan reads the same to the validator and to a controller. :func:`unwrapped
 consecutive points differ by less than pi on the continuous joints (what a ``joint_trajectory_controller``,
 which interpolates the values it is given, needs); :func:`joint_gaps` is the distance modulo 2 pi;
 :func:`goal_turns` lists a goal's values modulo 2 pi that lie within the joint limits (each a goal the
-search may reach).
+search may reach); :func:`joint_features` turns joints into points whose distances are taken modulo 2 pi
+(EXPLORE's landmark distances).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from numpy.typing import NDArray
 __all__ = [
     "LARGEST_TURN_RAD",
     "goal_turns",
+    "joint_features",
     "joint_gaps",
     "nearest_turns",
     "short_way",
@@ -118,6 +120,18 @@ def nearest_turns(q0: Array, qs: Array, lower: Array, upper: Array, continuous: 
     near = short_way(q0, qs, continuous)
     inside = (near >= lower) & (near <= upper)
     return np.where(inside, near, qs)
+
+
+def joint_features(joints: Array, continuous: NDArray[np.bool_] | None) -> Array:
+    """Points (B, n + c) whose distances are joint distances modulo 2 pi: the other joints as they are, each
+    of the c continuous joints as its (cos, sin) on the unit circle (the chord, 2 sin(d / 2): the angle d for
+    small d, the same for values a turn apart). ``joints`` itself when there is no continuous joint."""
+    joints = np.asarray(joints, dtype=np.float64)
+    mask = _mask(continuous, joints.shape[-1])
+    if not mask.any():
+        return joints
+    out: Array = np.concatenate([joints[..., ~mask], np.cos(joints[..., mask]), np.sin(joints[..., mask])], axis=-1)
+    return out
 
 
 def goal_turns(goal: Array, lower: Array, upper: Array, continuous: NDArray[np.bool_] | None) -> Array:

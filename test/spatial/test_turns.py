@@ -14,7 +14,16 @@ from clew_ros.core.plan import Plan
 from clew_ros.motion.spatial import UrdfTree, spatial_track
 from clew_ros.spatial.plan import make_plan, validate_plan
 from clew_ros.spatial.space import plan
-from clew_ros.spatial.turns import goal_turns, joint_gaps, nearest_turns, short_way, split_turns, unwrapped, wrapped
+from clew_ros.spatial.turns import (
+    goal_turns,
+    joint_features,
+    joint_gaps,
+    nearest_turns,
+    short_way,
+    split_turns,
+    unwrapped,
+    wrapped,
+)
 from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters
 
 #: A turntable (joint_1, continuous about z) carrying an arm 0.5 m long along its x, and an elbow
@@ -76,6 +85,11 @@ def test_the_helpers_turn_the_short_way() -> None:
     assert goal_turns(np.array([1.0, 0.5]), lower, upper, mask).tolist() == [[1.0, 0.5], [1.0 - 2 * math.pi, 0.5]]
     near = nearest_turns(np.array([6.0, 0.0]), np.array([[-0.5, 0.2], [0.5, 0.2]]), lower, upper, mask)
     assert near[:, 0] == pytest.approx([2 * math.pi - 0.5, 0.5])  # 2 pi + 0.5 would leave the limits
+    a, b, c = joint_features(np.array([[3.0, 0.5], [3.0 - 2 * math.pi, 0.5], [-3.0, 0.5]]), mask)
+    assert np.linalg.norm(a - b) < 1e-12  # a turn apart: the same point
+    assert np.linalg.norm(a - c) == pytest.approx(2 * math.sin((2 * math.pi - 6.0) / 2))  # the short way's chord
+    plain = np.array([[0.1, 0.2]])
+    assert np.array_equal(joint_features(plain, np.array([False, False])), plain)  # no continuous joint: as is
 
 
 def test_a_robot_knows_its_continuous_joints(tmp_path: Path) -> None:

@@ -30,6 +30,7 @@ from clew_ros.cli.oneline import one_line
 
 if TYPE_CHECKING:
     from clew_ros.render.spatial import View3D
+    from clew_ros.spatial.world import SpatialWorld
 
 EXIT_OK = 0
 EXIT_INVALID = 2
@@ -72,6 +73,15 @@ def _view_joined(argv: list[str]) -> list[str]:
         else:
             out.append(arg)
     return out
+
+
+def _os_reason(error: OSError, output: Path) -> str:
+    """What an ``OSError`` means to the user: the output it could not write, or the file it could not read,
+    with the system's reason (never ``None``)."""
+    reason = error.strerror or str(error) or type(error).__name__
+    if error.filename is not None and Path(str(error.filename)) != output:
+        return f"cannot read {error.filename}: {reason}"
+    return f"cannot write {output}: {reason}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -123,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
         print(one_line(f"clew_render: {error}"), file=sys.stderr)
         return EXIT_INVALID
     except OSError as error:
-        print(f"clew_render: cannot write {output}: {error.strerror}", file=sys.stderr)
+        print(one_line(f"clew_render: {_os_reason(error, output)}"), file=sys.stderr)
         return EXIT_INVALID
     print(f"clew_render: wrote {output}")
     return EXIT_OK
@@ -159,14 +169,23 @@ def _recorded_spatial(source: Path) -> bool:
     return is_spatial_recording(source)
 
 
-def _view(args: argparse.Namespace, output: Path, size: int) -> View3D:
-    from clew_ros.render import RenderError
+def _view(args: argparse.Namespace, size: int, world: SpatialWorld | None) -> View3D:
+    """``--view`` over the default; without it, the default turned to the side from which the robot and its
+    goal are seen in ``world`` (:func:`~clew_ros.render.spatial.open_side.open_side_view`)."""
     from clew_ros.render.spatial import View3D, parse_view
+    from clew_ros.render.spatial.open_side import open_side_view
+
+    base = View3D(width=size, height=round(size * 0.75))
+    if args.view is not None:
+        return parse_view(args.view, base)
+    return base if world is None else open_side_view(world, base)
+
+
+def _spatial_output(output: Path) -> None:
+    from clew_ros.render import RenderError
 
     if output.suffix.lower() == ".svg":
         raise RenderError("--output: a spatial world is drawn as .png or .gif, not .svg")
-    base = View3D(width=size, height=round(size * 0.75))
-    return parse_view(args.view, base) if args.view is not None else base
 
 
 def _render_spatial_recording(
@@ -184,7 +203,8 @@ def _render_spatial_recording(
         return False
     if args.frames is not None:
         raise RenderError("--frames: a recording holds its plan; give either a recording or --frames")
-    view, frames = _view(args, output, size), run.frames
+    _spatial_output(output)
+    view, frames = _view(args, size, run.world), run.frames
     if output.suffix.lower() == ".gif":
         write_spatial_gif(
             output, run.world, frames.joints, frames.object_poses, view, held=frames.held, title=frames.title
@@ -203,13 +223,15 @@ def _render_spatial(world_file: Path, source: Path, args: argparse.Namespace, ou
     from clew_ros.render.spatial import draw_spatial_frames, draw_spatial_world, write_spatial_gif
     from clew_ros.render.spatial.frames import load_spatial_world, read_frames
 
-    view = _view(args, output, size)
+    _spatial_output(output)
+    _view(args, size, None)  # a bad --view is refused before the world is read
     frames_file = Path(args.frames) if args.frames else source if source != world_file else None
     if args.frames and source != world_file:
         raise RenderError("--frames: give the frames either as INPUT (with --world) or with --frames, not both")
     if frames_file is not None and not frames_file.is_file():
         raise RenderError(f"--frames: {frames_file} does not exist")
     world = load_spatial_world(world_file)
+    view = _view(args, size, world)
     if frames_file is None:
         if output.suffix.lower() == ".gif":
             write_spatial_gif(output, world, world.initial, None, view, title=f"{world.name}: the start")

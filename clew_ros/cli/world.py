@@ -1,5 +1,6 @@
 """``clew_world FAMILY --seed N -o WORLD.yaml [--robot panda|ur5|random] [--no-witness]``: generate a world of
-a family, solvable by construction; ``clew_world --list`` lists the families. The ``spatial_*`` families
+a family, solvable by construction; ``clew_world --list`` lists the families; ``clew_world check WORLD.yaml``
+checks a spatial world's grasps (:mod:`clew_ros.spatial.grasp_check`). The ``spatial_*`` families
 (:mod:`clew_ros.worlds.spatial`) build spatial worlds on the robot ``--robot`` names (default panda); the
 others are planar and take no ``--robot``.
 
@@ -8,6 +9,10 @@ unless ``--no-witness``, the witness plan WORLD.witness.json next to it (``clew-
 manipulation the world was built around; for the ``unsolvable`` family a failed plan saying why no
 plan exists). Same family and seed, same bytes. Exit 0: written; 1: no world could be built for this
 seed; 2: invalid arguments (an unknown family, a negative seed, an output that cannot be written).
+
+``check`` prints one line per grasp (the face approached, the faces the fingers close on) and a warning per
+doubt (fingers that close on no pair of faces, faces wider apart than the fingers open, a hand that comes
+through or closes on the face the object rests on). Exit 0: no warning; 1: warnings; 2: an invalid world.
 """
 
 from __future__ import annotations
@@ -26,7 +31,8 @@ EXIT_INVALID = 2
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="clew_world", description=__doc__.split("\n\n")[0])
-    parser.add_argument("family", nargs="?", help="the family of worlds (--list shows them)")
+    parser.add_argument("family", nargs="?", help="the family of worlds (--list shows them), or check")
+    parser.add_argument("world", nargs="?", type=Path, help="with check: the spatial world file to check")
     parser.add_argument("--seed", type=int, default=0, help="the world's seed, an integer >= 0 (default 0)")
     parser.add_argument("--output", "-o", type=Path, help="parameter file to write (WORLD.yaml)")
     parser.add_argument("--robot", help=f"the arm of a spatial_* family: {', '.join(SPATIAL_ROBOTS)} (default panda)")
@@ -57,6 +63,8 @@ def _argument_problem(args: argparse.Namespace) -> str | None:
 
 
 def _robot_problem(args: argparse.Namespace) -> str | None:
+    if args.world is not None:
+        return f"{args.world}: unexpected argument (only check takes a world file)"
     if args.robot is not None and args.family not in SPATIAL_FAMILIES:
         return f"--robot: only the spatial_* families take a robot, not {args.family}"
     if args.robot is not None and args.robot not in SPATIAL_ROBOTS:
@@ -88,8 +96,39 @@ def _spatial(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _check(world_file: Path | None) -> int:
+    """``clew_world check WORLD.yaml``: each grasp in words, and the warnings (the module docstring)."""
+    from clew_ros.core.errors import ClewError
+    from clew_ros.planar.world import read_parameter_file
+    from clew_ros.spatial.grasp_check import check_grasps
+    from clew_ros.spatial.world import spatial_world_from_parameters
+
+    if world_file is None:
+        return _invalid("WORLD: expected the world file to check (clew_world check WORLD.yaml)")
+    try:
+        parameters = read_parameter_file(world_file)
+        world = spatial_world_from_parameters(parameters, world_file.resolve().parent)
+    except ClewError as error:
+        print(f"clew_world: invalid world {world_file}: {error}", file=sys.stderr)
+        return EXIT_INVALID
+    if world.object is None:
+        print(f"clew_world: {world_file}: a motion-only query (no world.object): no grasps to check")
+        return EXIT_OK
+    reports = check_grasps(world)
+    for report in reports:
+        print(report.summary)
+    warnings = [warning for report in reports for warning in report.warnings]
+    for warning in warnings:
+        print(f"clew_world: warning: {warning}", file=sys.stderr)
+    return EXIT_FAILED if warnings else EXIT_OK
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    return _check(args.world) if args.family == "check" else _generate(args)
+
+
+def _generate(args: argparse.Namespace) -> int:
     problem = None if args.list else _argument_problem(args)
     if args.list or problem:
         return _list() if args.list else _invalid(str(problem))

@@ -2,10 +2,11 @@
 
     python -m clew_ros.client.call_plan [--node /clew_planner] [--goal X,Y,YAW] [--timeout S] [--wait-playback]
 
-Plans to the planner's own goal (its ``world.object.goal`` parameter), or to
-``--goal`` (``X,Y,YAW``; a spatial planner's ``X,Y,Z,ROLL,PITCH,YAW``), the way ``ros2 service call /clew_planner/plan
-std_srvs/srv/Trigger`` does, usable without the ``ros2`` CLI (pip installs
-have none). With ``--wait-playback`` it returns only after the node has
+Plans to the planner's own goal (its ``world.object.goal`` parameter, a motion-only query's
+``world.robot.goal_pose`` or, through ``~/plan``, its ``world.robot.goal``), or to ``--goal`` (``X,Y,YAW``; a
+spatial planner's ``X,Y,Z,ROLL,PITCH,YAW``: the object's goal placement, or a motion-only query's tcp pose), the
+way ``ros2 service call /clew_planner/plan std_srvs/srv/Trigger`` does, usable without the ``ros2`` CLI (pip
+installs have none). With ``--wait-playback`` it returns only after the node has
 played the plan back, so that the run's recording is complete.
 
 Prints ``success: True|False``, ``outcome: <CODE>``, ``message: run <id>:
@@ -21,6 +22,8 @@ import sys
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from std_srvs.srv import Trigger
 
 from clew_ros.client import PlannerClient, PlannerNotFoundError, RunTimeoutError, goal_argument
 
@@ -49,7 +52,15 @@ def main(argv: list[str] | None = None) -> int:
     client = PlannerClient(node, args.node)
     try:
         client.wait_for_planner(timeout_s=args.timeout)
-        result = client.send_goal(args.goal).wait(args.timeout, playback=args.wait_playback)
+        goal = args.goal
+        if goal is None:
+            try:
+                goal = client.default_goal()
+            except PlannerNotFoundError as error:
+                if "~/plan" not in str(error):
+                    raise
+                return _plan_service(node, client, args.node, args.timeout)  # a joint goal: the node's own
+        result = client.send_goal(goal).wait(args.timeout, playback=args.wait_playback)
     except (PlannerNotFoundError, RunTimeoutError) as error:
         print(f"call_plan: {error}", file=sys.stderr)
         return EXIT_NO_ANSWER
@@ -66,6 +77,31 @@ def main(argv: list[str] | None = None) -> int:
     if result.plan is not None:
         print(f"plan: {len(result.plan.segments)} segments, {result.plan.grasp_count} grasps, {result.time_s:.2f} s")
     return EXIT_SUCCESS if result.succeeded else EXIT_NO_PLAN
+
+
+def _plan_service(node: Node, client: PlannerClient, planner: str, timeout_s: float) -> int:
+    """Call the planner's ``~/plan`` (a motion-only query to joint values, which no ``~/goal_pose`` carries) and
+    print its answer as :func:`main` prints a run's; the code is the answer's ``run <id>: <CODE>: ...``."""
+    service = node.create_client(Trigger, f"{planner.rstrip('/')}/plan")
+    try:
+        if not service.wait_for_service(timeout_sec=timeout_s):
+            print(f"call_plan: {planner}/plan did not answer within {timeout_s} s", file=sys.stderr)
+            return EXIT_NO_ANSWER
+        future = service.call_async(Trigger.Request())
+        if not client.wait_until(future.done, timeout_s) or future.result() is None:
+            print(f"call_plan: {planner}/plan did not answer within {timeout_s} s", file=sys.stderr)
+            return EXIT_NO_ANSWER
+        response = future.result()
+    finally:
+        node.destroy_client(service)
+    head, _, recording = response.message.partition("; recording ")
+    parts = head.split(": ", 2)
+    code = parts[1] if len(parts) > 1 and parts[0].startswith("run ") else ("SUCCEEDED" if response.success else "?")
+    print(f"success: {response.success}")
+    print(f"outcome: {code}")
+    print(f"message: {response.message}")
+    print(f"recording: {recording or 'not recorded'}")
+    return EXIT_SUCCESS if response.success else EXIT_NO_PLAN
 
 
 if __name__ == "__main__":

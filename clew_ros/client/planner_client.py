@@ -150,17 +150,28 @@ class PlannerClient:
 
     def default_goal(self, timeout_s: float | None = 10.0) -> tuple[float, ...]:
         """The planner's ``world.object.goal`` parameter (through its standard ``get_parameters`` service):
-        ``(x, y, yaw)``, or a spatial world's ``(x, y, z, roll, pitch, yaw)``."""
+        ``(x, y, yaw)``, or a spatial world's ``(x, y, z, roll, pitch, yaw)``; a spatial motion-only query's
+        ``world.robot.goal_pose`` (the tcp's goal pose). A motion-only query to joint values
+        (``world.robot.goal``) has no goal pose: :class:`PlannerNotFoundError` says to call ``~/plan``."""
         if not self._parameters.wait_for_service(timeout_sec=timeout_s):
             raise PlannerNotFoundError(f"{self.planner}/get_parameters did not answer within {timeout_s} s")
-        future = self._parameters.call_async(GetParameters.Request(names=["world.object.goal"]))
+        names = ["world.object.goal", "world.robot.goal_pose", "world.robot.goal"]
+        future = self._parameters.call_async(GetParameters.Request(names=names))
         if not self._wait_until(future.done, timeout_s):
             raise RunTimeoutError(f"{self.planner}/get_parameters did not answer within {timeout_s} s")
         values = future.result().values
-        goal = [float(v) for v in (values[0].double_array_value or values[0].integer_array_value)] if values else []
-        if len(goal) not in (3, 6):
-            raise PlannerNotFoundError(f"{self.planner} has no world.object.goal parameter of three or six numbers")
-        return tuple(goal)
+        found = [[float(v) for v in (value.double_array_value or value.integer_array_value)] for value in values]
+        for goal in found[:2]:
+            if len(goal) in (3, 6):
+                return tuple(goal)
+        if len(found) > 2 and found[2]:
+            raise PlannerNotFoundError(
+                f"{self.planner} plans a motion-only query to joint values (world.robot.goal), which a "
+                "~/goal_pose cannot carry: call its ~/plan service (python -m clew_ros.client.call_plan does)"
+            )
+        raise PlannerNotFoundError(
+            f"{self.planner} has no world.object.goal parameter of three or six numbers (nor world.robot.goal_pose)"
+        )
 
     # -- goals ---------------------------------------------------------------------------------------
 
@@ -177,8 +188,9 @@ class PlannerClient:
         ``goal``: the object's goal placement ``(x, y, yaw)`` in frame ``world``,
         for a spatial planner ``(x, y, z, roll, pitch, yaw)`` (URDF's ``rpy``; it
         must be a stable placement, else the run is refused saying why), or a
-        ``PoseStamped`` in that frame (any orientation); ``None``: the planner's own
-        ``world.object.goal`` (asked with :meth:`default_goal`, which waits for
+        ``PoseStamped`` in that frame (any orientation); on a spatial motion-only query (no object) the tcp's
+        goal pose, reached by the planner's own inverse kinematics; ``None``: the planner's own
+        ``world.object.goal`` or ``world.robot.goal_pose`` (asked with :meth:`default_goal`, which waits for
         the parameter service). ``on_feedback(handle, feedback)`` is called on
         each ``~/feedback`` of the run. Raises :class:`PlannerNotFoundError`
         when :meth:`planner_ready` is false (call :meth:`wait_for_planner` first).

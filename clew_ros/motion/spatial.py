@@ -205,6 +205,7 @@ def velocity_limits(tree: UrdfTree, joint_names: Sequence[str], limit: float | S
 def spatial_track(world: SpatialWorld, plan: Plan, tree: UrdfTree, settings: TrackTiming) -> Track:
     """A successful spatial plan timed for a controller (the module docstring); object poses of 6 numbers."""
     from clew_ros.spatial.plan import replay  # the spatial extra
+    from clew_ros.spatial.turns import unwrapped
 
     if not plan.segments:
         raise ValueError("a plan without segments has no trajectory")
@@ -228,7 +229,8 @@ def spatial_track(world: SpatialWorld, plan: Plan, tree: UrdfTree, settings: Tra
         segment_of.extend([motion.index] * count)
         object_poses = motion.object_poses
         poses.extend(np.zeros((count, 6)) if object_poses is None else object_poses)
-    positions_a = np.array(positions)
+    # a continuous joint's points within pi of the one before: the controller's straight line is the short way
+    positions_a = unwrapped(np.array(positions), robot.continuous)
     gripper_a = np.array(gripper)
     times = np.zeros(len(positions_a), dtype=np.int64)
     for k in range(1, len(positions_a)):

@@ -23,6 +23,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable
 
 import rclpy
@@ -40,6 +41,10 @@ EXECUTOR_THREADS = 6
 #: Longest wait between two looks at the stop flag (the shutdown latency).
 SPIN_PERIOD_S = 0.05
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: Longest wait (s) at shutdown for the callbacks still running to answer (a ~/plan call returns within
+#: 0.5 s of its run's cancel), and how often to look.
+DRAIN_TIMEOUT_S = 3.0
+DRAIN_POLL_S = 0.01
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -93,6 +98,7 @@ def serve(args: list[str], make_nodes: Callable[[], list[PlannerNode]]) -> int:
         finally:
             for node in nodes:
                 node.shutdown_runs()
+            drain(executor)
             executor.shutdown(timeout_sec=5.0)
             for node in nodes:
                 node.destroy_node()
@@ -101,6 +107,23 @@ def serve(args: list[str], make_nodes: Callable[[], list[PlannerNode]]) -> int:
         rclpy.try_shutdown()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def drain(executor: MultiThreadedExecutor, timeout_s: float = DRAIN_TIMEOUT_S) -> bool:
+    """Wait until the callbacks still running have returned and sent their answers, while the nodes and
+    their services still exist (a ~/plan call answers that its run was canceled); ``False`` when some are
+    still running after ``timeout_s``. rclpy's ``MultiThreadedExecutor.shutdown`` (Jazzy) does not wait
+    for them: a node destroyed under a callback made its answer fail, printed at exit as "The following
+    exception was never retrieved: cannot use Destroyable because destruction was requested". Each
+    finished callback's exception is retrieved here, so none is printed so."""
+    tasks = list(getattr(executor, "_futures", ()))  # the callbacks handed to its thread pool
+    deadline = time.monotonic() + timeout_s
+    while any(not task.done() for task in tasks) and time.monotonic() < deadline:
+        time.sleep(DRAIN_POLL_S)
+    for task in tasks:
+        if task.done():
+            task.exception()
+    return all(task.done() for task in tasks)
 
 
 if __name__ == "__main__":

@@ -68,12 +68,12 @@ Source = Literal["plan", "goal_pose"]
 
 def default_goal(world: World | SpatialWorld) -> np.ndarray:
     """What ``~/plan`` plans to: the object's goal (planar ``(x, y, theta)``, spatial 6 numbers), or a
-    spatial motion-only query's ``world.robot.goal`` (joints)."""
+    spatial motion-only query's ``world.robot.goal`` (joints) or ``world.robot.goal_pose`` (the tcp's pose)."""
     if isinstance(world, World):
         return np.asarray(world.object.goal, dtype=float)
     if world.object is not None:
         return np.asarray(world.object.goal, dtype=float)
-    return np.asarray(world.goal, dtype=float)
+    return np.asarray(world.goal if world.goal is not None else world.goal_pose, dtype=float)
 
 
 class Phase(enum.Enum):

@@ -95,7 +95,7 @@ class RunWorker:
         now = out.now_ns()
         if config.spatial is None:
             run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)
-        elif len(run.goal) == 6:  # a spatial object goal (a motion-only query's goal is joints: no pose)
+        elif run.world.object is not None or getattr(run.world, "goal", None) is None:  # a pose, not joints
             run.recording.write(self._goal_topic, spatial_messages.pose_stamped(run.goal, now), now, GOAL_QOS)
         out.publish_status(run.recording)
         request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}

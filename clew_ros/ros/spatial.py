@@ -112,13 +112,15 @@ class SpatialSetup:
 def load_spatial(tree: Mapping[str, Any], folder: Path) -> tuple[SpatialWorld, SpatialSetup]:
     """The spatial world of a ``world`` parameter tree (``{"world": {...}}``) and its setup; a
     :class:`~clew_ros.core.errors.WorldError` names the parameter at fault."""
+    from clew_ros.spatial.packages import package_paths_from_parameters
     from clew_ros.spatial.robot import read_text, resolve_uri
     from clew_ros.spatial.world import spatial_world_from_parameters
 
     world = spatial_world_from_parameters(tree, folder)
     robot_tree = tree["world"]["robot"]
     if "urdf" in robot_tree:
-        path = resolve_uri(str(robot_tree["urdf"]), folder, "world.robot.urdf")
+        packages = package_paths_from_parameters(robot_tree, folder)
+        path = resolve_uri(str(robot_tree["urdf"]), folder, "world.robot.urdf", packages)
         text, urdf_folder = read_text(path, "world.robot.urdf"), path.parent
     else:
         text, urdf_folder = str(robot_tree["description"]), folder
@@ -155,8 +157,9 @@ def resolved_parameters(world_file: Path) -> dict[str, Any]:
 
 
 def absolute_paths(world: dict[str, Any], folder: Path) -> None:
-    """Make the files a ``world`` tree names (:data:`FILE_PARAMETERS`) absolute, relative to ``folder``
-    (``package://`` and ``file://`` URIs kept); in place."""
+    """Make the files a ``world`` tree names (:data:`FILE_PARAMETERS`) and the folders of
+    ``world.robot.package_paths`` absolute, relative to ``folder`` (``package://`` and ``file://`` URIs
+    kept); in place."""
     for keys in FILE_PARAMETERS:
         tree = world
         for key in keys[:-1]:
@@ -164,6 +167,10 @@ def absolute_paths(world: dict[str, Any], folder: Path) -> None:
         value = tree.get(keys[-1]) if isinstance(tree, dict) else None
         if isinstance(value, str) and not value.startswith(("package://", "file://")) and value:
             tree[keys[-1]] = str((folder / value).resolve()) if not Path(value).is_absolute() else value
+    robot = world.get("robot")
+    paths = robot.get("package_paths") if isinstance(robot, dict) else None
+    if isinstance(paths, list) and all(isinstance(p, str) and p for p in paths):
+        robot["package_paths"] = [p if Path(p).is_absolute() else str((folder / p).resolve()) for p in paths]  # type: ignore[index]
 
 
 # ----------------------------------------------------------------------------------------- the URDF
@@ -250,15 +257,11 @@ SAME_GOAL = 1e-9
 def goal_from_pose_stamped(msg: PoseStamped, world: SpatialWorld) -> np.ndarray:
     """The object's goal placement ``[x, y, z, roll, pitch, yaw]`` of a ``~/goal_pose``, checked: frame
     ``world`` (or empty), finite, a unit quaternion (any orientation), a stable placement (else the
-    reason). Raises :class:`~clew_ros.ros.messages.GoalPoseError` saying why not."""
+    reason); in a motion-only query (no object) the tcp's goal pose, any orientation within the bounds.
+    Raises :class:`~clew_ros.ros.messages.GoalPoseError` saying why not."""
     from clew_ros.spatial.placements import resting_on
     from clew_ros.spatial.transforms import matrix_pose, pose_matrix
 
-    if world.object is None:
-        raise GoalPoseError(
-            "goal_pose: this world is a motion-only query (no world.object): there is no object to place; "
-            "use ~/plan for world.robot.goal"
-        )
     frame = msg.header.frame_id
     if frame not in ("", FRAME_ID):
         raise GoalPoseError(f"goal_pose: header.frame_id must be '{FRAME_ID}' (or empty), got '{quoted_text(frame)}'")
@@ -279,6 +282,8 @@ def goal_from_pose_stamped(msg: PoseStamped, world: SpatialWorld) -> np.ndarray:
                 f"goal_pose: position ({p.x:.6g}, {p.y:.6g}, {p.z:.6g}) lies outside world.bounds "
                 f"{np.asarray(world.bounds).tolist()}"
             )
+    if world.object is None:  # a motion-only query: the tcp's goal pose
+        return _tcp_goal(world, pose)
     tolerance = world.tolerances["placement_tolerance"]
     if resting_on(world.object.shape, pose, world.supports, tolerance) is None:
         raise GoalPoseError(f"goal_pose: not a stable placement: {_unstable_reason(world, pose)}")
@@ -288,12 +293,25 @@ def goal_from_pose_stamped(msg: PoseStamped, world: SpatialWorld) -> np.ndarray:
     return np.array(matrix_pose(pose), dtype=float)
 
 
+def _tcp_goal(world: SpatialWorld, pose: Matrix) -> np.ndarray:
+    """A motion-only query's ``~/goal_pose``: the tcp's goal pose ``[x, y, z, roll, pitch, yaw]`` (the
+    world's own ``world.robot.goal_pose`` when it is that one, so the plan is clew_plan's)."""
+    from clew_ros.spatial.transforms import matrix_pose, pose_matrix
+
+    if world.goal_pose is not None and np.max(np.abs(pose_matrix(list(world.goal_pose)) - pose)) <= SAME_GOAL:
+        return np.asarray(world.goal_pose, dtype=float)
+    return np.array(matrix_pose(pose), dtype=float)
+
+
 def with_goal(world: SpatialWorld, goal: Vector) -> SpatialWorld:
-    """``world`` with the object's goal placement ``goal`` (6 numbers, a stable placement)."""
+    """``world`` with the object's goal placement ``goal`` (6 numbers, a stable placement); a motion-only
+    query's with the tcp's goal pose ``goal`` (``world.robot.goal_pose``) instead of its own goal."""
     from clew_ros.spatial.placements import check_placement
 
     if world.object is None:
-        return world
+        if world.goal is not None and np.array_equal(np.asarray(goal, dtype=float), world.goal):
+            return world  # its own joint goal
+        return dataclasses.replace(world, goal=None, goal_pose=tuple(float(v) for v in goal))
     pose = tuple(float(v) for v in goal)
     support, face = check_placement(
         world.object.shape, pose, world.supports, world.tolerances["placement_tolerance"], "goal_pose"
@@ -582,6 +600,9 @@ def world_yaml_message(setup: SpatialSetup, world: SpatialWorld, settings: Plann
     absolute_paths(tree, setup.folder)
     if world.object is not None and "object" in tree:
         tree["object"]["goal"] = [float(v) for v in world.object.goal]
+    if world.object is None and world.goal_pose is not None and isinstance(tree.get("robot"), dict):
+        tree["robot"] = {k: v for k, v in tree["robot"].items() if k != "goal"}  # the run's tcp goal instead
+        tree["robot"]["goal_pose"] = [float(v) for v in world.goal_pose]
     parameters = {"world": tree, "planner": dataclasses.asdict(settings)}
     document = {node_name: {"ros__parameters": parameters}}
     return String(data=yaml.safe_dump(document, sort_keys=False, default_flow_style=None))

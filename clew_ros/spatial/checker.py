@@ -42,9 +42,12 @@ class IntervalSettings:
     #: step (rad, or m for a prismatic joint): each sample checked on the exact geometry with the clearance
     #: that proves the configurations between two samples free too.
     band_step: float = 0.002
-    #: At most this many such samples each way (past them, or where the spheres clear the row again, the
-    #: conservative steps take over).
-    band_samples: int = 24
+    #: At most this many such samples each way in each of ``band_stages`` stages, each stage's step
+    #: ``band_growth`` times the last's (checked with a clearance as much larger: far from any contact the
+    #: interval grows fast); past them, where the spheres clear the row again, the conservative steps go on.
+    band_samples: int = 12
+    band_stages: int = 3
+    band_growth: float = 4.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,16 +121,30 @@ def _inner_arrays(
     )
 
 
-def _levers(
-    robot: RobotModel, centres: NDArray[np.float64], radii: NDArray[np.float64], frames: NDArray[np.int64]
+def _levers(  # noqa: PLR0917
+    robot: RobotModel,
+    centres: NDArray[np.float64],
+    radii: NDArray[np.float64],
+    frames: NDArray[np.int64],
+    owners: NDArray[np.int64],
+    pieces: int,
 ) -> NDArray[np.float64]:
-    """Per joint, a bound (m) on how far from its axis a point it moves can be: the origins down the chain from
-    the frame it turns (prismatic joints at their longest), then the farthest sphere of the frames it moves."""
+    """Per joint and piece (n, pieces): a bound (m) on how far from the joint's axis a point of the piece can be,
+    0 where the joint does not move it: the origins down the chain from the frame the joint turns to the piece's
+    frame (prismatic joints at their longest), then the piece's farthest sphere in its frame."""
     reach = np.linalg.norm(centres, axis=1) + radii
-    far = np.array([float(reach[frames >= j + 1].max(initial=0.0)) for j in range(robot.dof)])
+    far = np.zeros(pieces)
+    frame_of = np.zeros(pieces, dtype=np.int64)
+    np.maximum.at(far, owners, reach)
+    frame_of[owners] = frames
     chain = np.linalg.norm(robot.origins[:, :3, 3], axis=1)
     chain = chain + np.where(robot.prismatic, np.maximum(np.abs(robot.lower), np.abs(robot.upper)), 0.0)
-    return np.array([chain[j + 1 :].sum() + far[j] for j in range(robot.dof)])
+    out = np.zeros((robot.dof, pieces))
+    for j in range(robot.dof):
+        for p in range(pieces):
+            if frame_of[p] >= j + 1:
+                out[j, p] = chain[j + 1 : frame_of[p]].sum() + far[p]
+    return out
 
 
 class SpatialChecker:
@@ -241,8 +258,9 @@ class SpatialChecker:
                 a["sup_tol"],
             ),
         )  # fmt: skip
-        #: per joint, how far (m) a point it moves can be from its axis: the lever of a band step
-        self._lever = _levers(robot, centers, radii, frames)
+        #: per joint and piece, how far (m) a point of the piece the joint moves can be from its axis (0: the
+        #: joint does not move the piece): the lever of a band step
+        self._lever = _levers(robot, centers, radii, frames, owners, pieces)
         #: Whether a link that no joint moves (on ``base_link``'s frame) touches an obstacle or leaves the
         #: bounds: then no configuration is valid. Checked once here, never per configuration (on the exact
         #: geometry where the spheres touch).
@@ -292,9 +310,12 @@ class SpatialChecker:
                 return True
         return False
 
-    def classify(self, qs: Any, margin: float = 0.0) -> NDArray[np.bool_]:
+    def classify(self, qs: Any, margin: float | NDArray[np.float64] = 0.0) -> NDArray[np.bool_]:
         """For each row: valid on the two tiers (spheres, then the exact geometry for the contacts the spheres
-        leave open), every contact kept at least ``margin`` (m) clear (twice that between two links)."""
+        leave open), every contact kept at least ``margin`` (m; one for every piece, or one per piece, as one
+        joint's move gives them: two pieces it both moves, or neither, keep none between them) clear."""
+        margins = np.broadcast_to(np.asarray(margin, dtype=np.float64), (len(self._arrays["link_r"]),))
+        margin = float(margins.max(initial=0.0))  # the kernel's: every contact within the largest is listed
         batch = self._batch(qs)
         n = len(batch)
         out = np.zeros(n, dtype=np.bool_)
@@ -323,13 +344,13 @@ class SpatialChecker:
                 out[row] = sub[m] == band.FREE or (
                     self.exact
                     and sub[m] == band.BAND
-                    and self.tier.free(again[m, : sub_counts[m]], (rot[m], pos[m]), margin)
+                    and self.tier.free(again[m, : sub_counts[m]], (rot[m], pos[m]), margins)
                 )
         rows = np.flatnonzero(status == band.BAND)
         if self.exact and len(rows):
             rot, pos = self.tier.placements(frames_r[rows], frames_t[rows])
             for k, b in enumerate(rows):
-                out[b] = self.tier.free(contacts[b, : counts[b]], (rot[k], pos[k]), margin)
+                out[b] = self.tier.free(contacts[b, : counts[b]], (rot[k], pos[k]), margins)
         return out
 
     def valid_on_spheres(self, qs: Any) -> NDArray[np.bool_]:
@@ -438,8 +459,9 @@ class SpatialChecker:
     ) -> None:
         """The rows the spheres refused but the exact geometry accepts (near a contact): their intervals by
         samples ``settings.band_step`` apart, each the middle of a cell it proves free (checked with the
-        clearance no point of the robot can lose within half a step, :attr:`_lever`); past
-        ``settings.band_samples`` of them, where the spheres clear the row again, the conservative steps go on."""
+        clearance no point of the robot can lose within half a step, :attr:`_lever`), in stages of steps
+        growing ``settings.band_growth`` times; past them, where the spheres clear the row again, the
+        conservative steps go on."""
         robot = self.robot
         rows = np.flatnonzero(~ok & (batch >= robot.lower).all(axis=1) & (batch <= robot.upper).all(axis=1))
         if not len(rows):
@@ -448,8 +470,7 @@ class SpatialChecker:
         if not len(rows):
             return
         ok[rows] = True
-        step = settings.band_step
-        margin = step / 2 * (1.0 if robot.prismatic[joint] else float(self._lever[joint]))
+        lever = np.where(self._lever[joint] > 0, 1.0, 0.0) if robot.prismatic[joint] else self._lever[joint]
         for side in (-1.0, 1.0):  # both sides, as far as the move (a fold may come back past the start)
             mine = rows
             start = batch[mine, joint]
@@ -457,19 +478,11 @@ class SpatialChecker:
             room = np.minimum(limit, (robot.upper[joint] - start) if side > 0 else (start - robot.lower[joint]))
             proven = np.zeros(len(mine))
             alive = np.ones(len(mine), dtype=bool)
-            chunk = 4  # samples a row probes per call (a few past its first refusal are wasted)
-            for k0 in range(0, settings.band_samples, chunk):
-                alive &= proven < room
-                live = np.flatnonzero(alive)
-                if not len(live):
-                    break
-                ks = np.arange(k0, min(k0 + chunk, settings.band_samples))
-                probe = np.repeat(batch[mine[live]], len(ks), axis=0)
-                probe[:, joint] = (start[live][:, None] + side * (ks[None, :] + 0.5) * step).reshape(-1)
-                fine = self.classify(probe, margin).reshape(len(live), len(ks))
-                run = np.where(fine.all(axis=1), len(ks), np.argmin(fine, axis=1))  # samples clear in a row
-                proven[live] = (k0 + run) * step
-                alive[live[run < len(ks)]] = False
+            for stage in range(settings.band_stages):  # each stage's steps band_growth times the last's
+                step = settings.band_step * settings.band_growth**stage
+                alive = self._band_stage(
+                    batch, mine, joint, side * step, lever * step / 2, settings, room, proven, alive
+                )
             reach = np.minimum(proven, room)
             ends = start + side * reach
             onward = np.flatnonzero(alive & (reach < room))  # every sample clear: the conservative steps go on
@@ -486,6 +499,38 @@ class SpatialChecker:
                 hi[mine] = np.maximum(hi[mine], ends)
             else:
                 lo[mine] = np.minimum(lo[mine], ends)
+
+    def _band_stage(  # noqa: PLR0917
+        self,
+        batch: NDArray[np.float64],
+        mine: NDArray[np.int64],
+        joint: int,
+        step: float,
+        margin: NDArray[np.float64],
+        settings: IntervalSettings,
+        room: NDArray[np.float64],
+        proven: NDArray[np.float64],
+        alive: NDArray[np.bool_],
+    ) -> NDArray[np.bool_]:
+        """One stage of :meth:`_band_intervals`: ``settings.band_samples`` samples ``step`` apart (signed) past
+        what each row has ``proven`` (updated in place), each checked with ``margin`` (m, per piece); the rows
+        still going."""
+        chunk = 4  # samples a row probes per call (a few past its first refusal are wasted)
+        base = proven.copy()
+        for k0 in range(0, settings.band_samples, chunk):
+            alive = alive & (proven < room)
+            live = np.flatnonzero(alive)
+            if not len(live):
+                break
+            ks = np.arange(k0, min(k0 + chunk, settings.band_samples))
+            probe = np.repeat(batch[mine[live]], len(ks), axis=0)
+            offsets = np.sign(step) * base[live][:, None] + (ks[None, :] + 0.5) * step
+            probe[:, joint] = (batch[mine[live], joint][:, None] + offsets).reshape(-1)
+            fine = self.classify(probe, margin).reshape(len(live), len(ks))
+            run = np.where(fine.all(axis=1), len(ks), np.argmin(fine, axis=1))  # samples clear in a row
+            proven[live] = base[live] + (k0 + run) * abs(step)
+            alive[live[run < len(ks)]] = False
+        return alive
 
     def sphere_positions(self, q: Sequence[float]) -> NDArray[np.float64]:
         """Every sphere's centre in ``world`` (S, 3) at ``q`` (compiled forward kinematics)."""

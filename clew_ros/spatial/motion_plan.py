@@ -47,13 +47,19 @@ from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext, Space
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics, distinct
 from clew_ros.spatial.tuning import SpatialTuning
+from clew_ros.spatial.turns import goal_turns, joint_features, joint_gaps
 from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["add_branch", "connect", "plan_motion"]
 
 #: The improvement draws from its own generator seeded with (planner.seed, this), as core's.
 IMPROVE_STREAM = clew.IMPROVE_STREAM
+#: The IK of ``world.robot.goal_pose`` draws its seeds from its own generator seeded with (planner.seed, this).
+GOAL_POSE_STREAM = 0x60A1
+#: Goal configurations this close (rad, largest joint difference) are one goal tree root.
+SAME_GOAL_RAD = 1e-9
 #: a configuration landmark's object pose: none (the trees of configurations carry no object pose)
 _NO_POSE = np.zeros(6)
 
@@ -89,14 +95,17 @@ def plan_motion(
     world = space.world
     run = _MotionRun(space, settings, termination)
     refusal = _refusal(world, world.goal if goal is None else goal)
+    if goal is None and world.goal is None and world.goal_pose is not None:
+        refusal = _pose_goals(space, settings)
     if isinstance(refusal, tuple):
         return run.finish(*refusal)
     try:
-        goal_tree = LandmarkTree(refusal, run.none)
+        goal_tree = run.rooted_at(refusal)
         for tree in (run.tree, goal_tree):  # out of a tight spot: the tcp backed off along its approach
-            way = space.backed_off(run.checker, tree[0].joints)
-            if way is not None:
-                add_branch(tree, 0, way)
+            for root in [k for k in range(len(tree)) if tree[k].parent is None]:
+                way = space.backed_off(run.checker, tree[root].joints)
+                if way is not None:
+                    add_branch(tree, root, way)
         return run.search_all(refusal, progress, goal_tree)
     except Exception as problem:  # noqa: BLE001 - a bug: reported as an outcome so a node keeps running
         return run.finish(Outcome.INTERNAL_ERROR, f"internal error: {problem!r}\n{traceback.format_exc(limit=4)}")
@@ -155,20 +164,50 @@ def add_branch(tree: LandmarkTree, parent: int, way: np.ndarray) -> Landmark:
 
 
 def _refusal(world: SpatialWorld, goal: Any) -> tuple[Outcome, str] | np.ndarray:
-    """The goal joints, or the outcome and reason of a query answered at once."""
+    """The goal configurations (m, n): ``goal`` (joints, or several rows: any of them), each with its values
+    modulo 2 pi on the continuous joints within the limits (:func:`~clew_ros.spatial.turns.goal_turns`), or
+    the outcome and reason of a query answered at once."""
     robot = world.robot
     if goal is None:
         return Outcome.INVALID_WORLD, "world.robot.goal: missing (a motion-only query needs the goal joints)"
-    target = np.asarray(goal, dtype=float)
-    if target.shape != (robot.dof,) or not np.all(np.isfinite(target)):
+    target = np.atleast_2d(np.asarray(goal, dtype=float))
+    if target.ndim != 2 or target.shape[1:] != (robot.dof,) or not len(target) or not np.all(np.isfinite(target)):
         return Outcome.INVALID_WORLD, f"world.robot.goal: expected {robot.dof} finite joint values"
     if np.any(target < robot.lower) or np.any(target > robot.upper):
         return Outcome.INVALID_WORLD, "world.robot.goal: outside the joint limits"
     if not world.checker.valid(world.initial[None])[0]:
         return Outcome.START_IN_COLLISION, "the start configuration is not valid"
-    if not world.checker.valid(target[None])[0]:
+    target = target[world.checker.valid(target)]
+    if not len(target):
         return Outcome.GOAL_IN_COLLISION, "the goal configuration is not valid"
-    return target
+    turns = np.concatenate([goal_turns(q, robot.lower, robot.upper, robot.continuous) for q in target])
+    return distinct(turns, SAME_GOAL_RAD)  # an IK solution and another's turn may be one configuration
+
+
+def _pose_goals(space: MotionSpace, settings: PlannerSettings) -> tuple[Outcome, str] | np.ndarray:
+    """The goal configurations of ``world.robot.goal_pose``: the distinct valid solutions of the planner's
+    own IK (the start configuration and :attr:`SpatialTuning.goal_pose_ik_seeds` random seeds drawn from
+    ``planner.seed``'s own stream), at most :attr:`SpatialTuning.goal_pose_roots`, nearest the start first;
+    or the outcome and reason when there is none."""
+    world, tuning = space.world, space.tuning
+    assert world.goal_pose is not None
+    if not world.checker.valid(world.initial[None])[0]:
+        return Outcome.START_IN_COLLISION, "the start configuration is not valid"
+    kinematics = InverseKinematics(world.robot, IKSettings(seeds=tuning.goal_pose_ik_seeds))
+    rng = np.random.default_rng([settings.seed, GOAL_POSE_STREAM])
+    found = kinematics.solve(list(world.goal_pose), rng, seeds=world.initial[None])
+    if not len(found):
+        seeds = 1 + tuning.goal_pose_ik_seeds
+        why = f"the inverse kinematics found no configuration that puts the tcp there ({seeds} seeds)"
+        return Outcome.GOAL_OUT_OF_REACH, f"world.robot.goal_pose: {why}"
+    valid = found[world.checker.valid(found)]
+    if not len(valid):
+        return (
+            Outcome.GOAL_IN_COLLISION,
+            f"world.robot.goal_pose: every configuration found that puts the tcp there ({len(found)}) is in collision",
+        )
+    travel = joint_gaps(valid, world.initial, world.robot.continuous).sum(axis=1)
+    return _refusal(world, valid[np.argsort(travel, kind="stable")[: tuning.goal_pose_roots]])
 
 
 class _MotionRun:
@@ -278,6 +317,18 @@ class _MotionRun:
                 return np.vstack([waypoints, near[k][None]]), int(order[k])
         return waypoints, -1
 
+    def rooted_at(self, target: np.ndarray) -> LandmarkTree:
+        """A goal tree whose roots are the goal configurations ``target`` ((n,) or (k, n)): the search may
+        reach any of them."""
+        roots = np.atleast_2d(target)
+        goal_tree = LandmarkTree(roots[0], self.none)
+        for root in roots[1:]:
+            goal_tree.add(
+                parent=None, joints=root.copy(), object_pose=self.none, grasp=None, grasp_rel=None, transit=None,
+                transfer=None,
+            )  # fmt: skip
+        return goal_tree
+
     def search_all(
         self,
         target: np.ndarray,
@@ -291,7 +342,7 @@ class _MotionRun:
         best = math.inf
         tree = self.tree
         if goal_tree is None:
-            goal_tree = LandmarkTree(target, self.none)
+            goal_tree = self.rooted_at(target)
         self.goal_tree = goal_tree
         earlier = len(goal_tree) - 1
         trees = (tree, goal_tree)
@@ -356,9 +407,11 @@ class _MotionRun:
             add_branch(tree, landmark.id, found)
 
     def _branch(self, tree: LandmarkTree, landmark_id: int) -> np.ndarray:
-        """The path from ``tree``'s root to its landmark, through the landmarks' transit paths."""
-        pieces = [lm.transit for lm in tree.lineage(landmark_id)[1:] if lm.transit is not None]
-        return np.vstack([tree[0].joints[None], *(p[1:] for p in pieces)])
+        """The path from the landmark's root (``tree``'s first, or another goal configuration) to it, through
+        the landmarks' transit paths."""
+        lineage = tree.lineage(landmark_id)
+        pieces = [lm.transit for lm in lineage[1:] if lm.transit is not None]
+        return np.vstack([lineage[0].joints[None], *(p[1:] for p in pieces)])
 
     def shortcut(self, path: np.ndarray) -> tuple[np.ndarray, int]:
         """``path`` shortcut (:func:`~clew_ros.spatial.shortcut.shortcut_path`) in rounds of
@@ -385,7 +438,7 @@ class _MotionRun:
         assert self.goal_tree is not None
         back = self._branch(self.goal_tree, goal_id)[::-1]
         path = np.vstack([self._branch(self.tree, start_id), found[1:], back[1:]])
-        path[-1] = target
+        path[-1] = self.goal_tree.lineage(goal_id)[0].joints  # the goal configuration reached, exactly
         first = float(np.abs(np.diff(path, axis=0)).sum())
         shortcuts = 0
         if self.shortcuts and self.settings.improve_time > 0:
@@ -447,9 +500,11 @@ def _explore(
 
 
 def _features(space: MotionSpace, joints: np.ndarray, weight: float) -> np.ndarray:
-    """Points (B, n + 3) whose distances are EXPLORE's landmark distances: the joints (B, n) times ``weight``
-    (m/rad), then the tcp's position (m) times :attr:`SpatialTuning.motion_tcp_weight`."""
+    """Points (B, n + c + 3) whose distances are EXPLORE's landmark distances: the joints (B, n; each of the c
+    continuous ones as a point on the unit circle) times ``weight`` (m/rad), then the tcp's position (m)
+    times :attr:`SpatialTuning.motion_tcp_weight`."""
     scale = space.tuning.motion_tcp_weight
     tcp = space.tcp(joints)[:, :3, 3] if scale > 0 else np.zeros((len(joints), 3))
-    out: np.ndarray = np.concatenate([weight * joints, scale * tcp], axis=1)
+    turned = joint_features(joints, space.world.robot.continuous)  # continuous joints modulo 2 pi
+    out: np.ndarray = np.concatenate([weight * turned, scale * tcp], axis=1)
     return out

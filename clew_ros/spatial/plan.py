@@ -30,9 +30,11 @@ from clew_ros.core.plan import Plan, PlanLandmark, PlanSegment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.placements import resting_on
+from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import Obstacle, make_obstacle
 from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import matrix_pose, pose_matrix
+from clew_ros.spatial.turns import joint_gaps
 from clew_ros.spatial.validate import ValidationSettings, validate_transit, validation_samples
 from clew_ros.spatial.world import SpatialWorld
 
@@ -96,11 +98,14 @@ def object_obstacle(world: SpatialWorld, pose: Matrix) -> Obstacle:
     return make_obstacle("object", shape.shape, shape.size, pose, "world.object")
 
 
-def _samples(waypoints: NDArray[np.float64], steps: NDArray[np.float64]) -> NDArray[np.float64]:
+def _samples(waypoints: NDArray[np.float64], steps: NDArray[np.float64], robot: RobotModel) -> NDArray[np.float64]:
     """Every configuration checked along the straight pieces through ``waypoints`` (no repeats at joins)."""
     if len(waypoints) == 1:
         return np.array(waypoints, dtype=np.float64)
-    pieces = [validation_samples(waypoints[i], waypoints[i + 1], steps)[1:] for i in range(len(waypoints) - 1)]
+    pieces = [
+        validation_samples(waypoints[i], waypoints[i + 1], steps, robot.continuous, robot.lower)[1:]
+        for i in range(len(waypoints) - 1)
+    ]
     return np.concatenate([waypoints[:1], *pieces])
 
 
@@ -117,7 +122,7 @@ def replay(
     pose = None if world.object is None else pose_matrix(world.object.initial)
     for index, segment in enumerate(plan.segments):
         waypoints = np.asarray(segment.waypoints, dtype=np.float64)
-        configurations = waypoints if waypoints_only else _samples(waypoints, steps)
+        configurations = waypoints if waypoints_only else _samples(waypoints, steps, robot)
         grasp_rel = None
         if pose is None:
             matrices = None
@@ -234,14 +239,25 @@ def _structure_problems(world: SpatialWorld, plan: Plan, settings: ValidationSet
 
 
 def _motion_only_problems(world: SpatialWorld, plan: Plan, settings: ValidationSettings) -> list[str]:
-    """A motion-only query's plan: one transit segment ending at ``world.robot.goal``, no final object pose."""
+    """A motion-only query's plan: one transit segment ending at ``world.robot.goal`` (modulo 2 pi on the
+    continuous joints) or with the tcp at ``world.robot.goal_pose``, no final object pose."""
     problems = []
     if len(plan.segments) != 1:
         problems.append(f"a motion-only query's plan is one transit segment, got {len(plan.segments)} segments")
-    assert world.goal is not None
-    miss = float(np.max(np.abs(plan.segments[-1].waypoints[-1] - world.goal)))
-    if miss > settings.match_rad:
-        problems.append(f"the plan ends {miss:.6g} from world.robot.goal (more than {settings.match_rad})")
+    end = plan.segments[-1].waypoints[-1]
+    if world.goal is not None:
+        miss = float(np.max(joint_gaps(end, world.goal, world.robot.continuous)))
+        if miss > settings.match_rad:
+            problems.append(f"the plan ends {miss:.6g} from world.robot.goal (more than {settings.match_rad})")
+    elif world.goal_pose is not None:
+        tcp = InverseKinematics(world.robot).tcp_poses(np.asarray(end, dtype=np.float64)[None])[0]
+        goal = pose_matrix(list(world.goal_pose))
+        distance, angle = float(np.linalg.norm(tcp[:3, 3] - goal[:3, 3])), rotation_angle(tcp, goal)
+        if distance > settings.goal_pose_m or angle > settings.goal_pose_rad:
+            problems.append(
+                f"the plan ends with the tcp {distance:.6g} m and {angle:.6g} rad from world.robot.goal_pose "
+                f"(more than {settings.goal_pose_m} m or {settings.goal_pose_rad} rad)"
+            )
     if plan.final_object_pose is not None:
         problems.append("final_object_pose: expected null in a world without an object")
     return problems
@@ -260,7 +276,7 @@ def _segment_problems(world: SpatialWorld, segments: Sequence[PlanSegment], sett
             continue
         if index and segment.kind == segments[index - 1].kind:
             problems.append(f"segment {index}: kinds must alternate (two {segment.kind} segments in a row)")
-        outside = (waypoints < robot.lower - 1e-9) | (waypoints > robot.upper + 1e-9)
+        outside = ((waypoints < robot.lower - 1e-9) | (waypoints > robot.upper + 1e-9)) & ~_continuous(robot)
         if np.any(outside):
             row, joint = (int(v[0]) for v in np.nonzero(outside))
             problems.append(
@@ -272,12 +288,17 @@ def _segment_problems(world: SpatialWorld, segments: Sequence[PlanSegment], sett
             problems.append(f"segment {index}: transfer with grasp {grasp}: {what}")
         if segment.kind == "transit" and grasp is not None:
             problems.append(f"segment {index}: a transit has grasp null, got {grasp}")
-        jump = float(np.max(np.abs(waypoints[0] - previous_end)))
+        jump = float(np.max(joint_gaps(waypoints[0], previous_end, robot.continuous)))
         if jump > settings.match_rad:
             what = "world.robot.initial" if index == 0 else "the end of the previous segment"
             problems.append(f"segment {index}: starts {jump:.6g} from {what} (more than {settings.match_rad})")
         previous_end = waypoints[-1]
     return problems
+
+
+def _continuous(robot: RobotModel) -> NDArray[np.bool_]:
+    """The joints any value of which is within limits (a plan may carry a continuous joint unwrapped)."""
+    return robot.continuous if len(robot.continuous) else np.zeros(robot.dof, dtype=bool)
 
 
 def _grasp_problem(world: SpatialWorld, index: int, grasp: int, tcp: Matrix, pose: Matrix) -> str | None:

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import WorldError, short_repr
+from clew_ros.spatial.packages import package_paths_from_parameters, resolve_package_uri
 from clew_ros.spatial.transforms import axis_motion, pose_matrix
 
 __all__ = [
@@ -108,6 +109,9 @@ class RobotModel:
     fixed_positions: Mapping[str, float]
     #: How far (m) every link's collision geometry is grown (``world.robot.padding``; MoveIt's link padding).
     padding: float = 0.0
+    #: ``continuous[j]``: planned joint j is a URDF ``continuous`` joint whose limits still span a full turn
+    #: (equal modulo 2 pi, a move takes the short way round: :mod:`clew_ros.spatial.turns`); empty: none.
+    continuous: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     @property
     def dof(self) -> int:
@@ -138,17 +142,12 @@ class RobotModel:
 # ----------------------------------------------------------------------------------------- files, URIs
 
 
-def resolve_uri(uri: str, folder: Path, parameter: str) -> Path:
-    """The file a URDF mesh ``filename`` or a parameter's path names: ``package://PKG/rest`` (through the
-    ament index), ``file://`` absolute, or a path relative to ``folder``."""
+def resolve_uri(uri: str, folder: Path, parameter: str, package_paths: Sequence[Path] = ()) -> Path:
+    """The file a URDF mesh ``filename`` or a parameter's path names: ``package://PKG/rest``
+    (:func:`~clew_ros.spatial.packages.resolve_package_uri`: ``package_paths``, the ament index,
+    ``ROS_PACKAGE_PATH``), ``file://`` absolute, or a path relative to ``folder``."""
     if uri.startswith("package://"):
-        package, _, rest = uri[len("package://") :].partition("/")
-        try:
-            from ament_index_python.packages import get_package_share_directory
-
-            return Path(get_package_share_directory(package)) / rest
-        except (ImportError, LookupError, ValueError) as error:
-            raise WorldError(parameter, f"cannot resolve {uri!r}: package {package!r} not found ({error})") from None
+        return resolve_package_uri(uri, package_paths)
     if uri.startswith("file://"):
         return Path(uri[len("file://") :])
     path = Path(uri)
@@ -231,7 +230,7 @@ def _load_mesh(path: Path, scale: Sequence[float] | None, where: str, parameter:
     return vertices, faces
 
 
-def _geometries(link: Any, folder: Path, parameter: str) -> tuple[Geometry, ...]:
+def _geometries(link: Any, folder: Path, parameter: str, package_paths: Sequence[Path] = ()) -> tuple[Geometry, ...]:
     from urdf_parser_py import urdf  # type: ignore[import-untyped]
 
     out = []
@@ -249,7 +248,7 @@ def _geometries(link: Any, folder: Path, parameter: str) -> tuple[Geometry, ...]
         elif isinstance(shape, urdf.Sphere):
             out.append(Geometry(link.name, "sphere", _positive([shape.radius], f"{where} <sphere>", parameter), origin))
         elif isinstance(shape, urdf.Mesh):
-            path = resolve_uri(shape.filename or "", folder, parameter)
+            path = resolve_uri(shape.filename or "", folder, parameter, package_paths)
             vertices, faces = _load_mesh(path, shape.scale, where, parameter)
             out.append(Geometry(link.name, "mesh", (), origin, vertices, faces, str(path)))
         else:
@@ -444,11 +443,14 @@ def load_robot(
     fixed_joint_positions: Sequence[float] = (),
     gripper_links: Sequence[str] = (),
     source: str = "world.robot.urdf",
+    package_paths: Sequence[Path] = (),
 ) -> RobotModel:
     """Parse a URDF (its text; ``folder`` resolves relative mesh paths) into a :class:`RobotModel`.
 
-    ``source`` names the parameter the URDF came from, for errors. Poses are ``[x, y, z, roll, pitch,
-    yaw]`` (m, rad): ``tcp`` in ``tip_link``'s frame, ``base_pose`` of ``base_link`` in ``world``.
+    ``source`` names the parameter the URDF came from, for errors; ``package_paths`` the folders that hold
+    the packages of ``package://`` mesh URIs (``world.robot.package_paths``, before the ament index). Poses
+    are ``[x, y, z, roll, pitch, yaw]`` (m, rad): ``tcp`` in ``tip_link``'s frame, ``base_pose`` of
+    ``base_link`` in ``world``.
     """
     robot = _parse_urdf(urdf_text, source)
     names = {link.name for link in robot.links}
@@ -473,7 +475,7 @@ def load_robot(
     links = tuple(
         LinkModel(link.name, frame_of[link.name], inverse[frame_of[link.name]] @ pose[link.name], geometries)
         for link in robot.links
-        if (geometries := _geometries(link, folder, source))
+        if (geometries := _geometries(link, folder, source, package_paths))
     )
     index = {link.name: i for i, link in enumerate(links)}
     parents = tuple(_collision_parent(link.name, parent_joint, index) for link in links)
@@ -497,7 +499,14 @@ def load_robot(
         exempt=_exempt(links, parents, srdf_text, names),
         gripper_links=tuple(gripper_links),
         fixed_positions=dict(fixed),
+        continuous=_wrapping(planned, lower, upper),
     )
+
+
+def _wrapping(planned: Sequence[Any], lower: NDArray[np.float64], upper: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Which planned joints are ``continuous`` with limits still a full turn wide (not narrowed below it)."""
+    kinds = np.array([joint.type == "continuous" for joint in planned], dtype=bool)
+    return kinds & (upper - lower >= 2.0 * math.pi - 1e-9)
 
 
 def _collision_parent(name: str, parent_joint: Mapping[str, Any], index: Mapping[str, int]) -> int:
@@ -548,10 +557,11 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
     for key in ("base_link", "tip_link"):
         if not isinstance(robot.get(key), str) or not robot[key]:
             raise WorldError(f"world.robot.{key}", f"expected a link name, got {short_repr(robot.get(key))}")
+    packages = package_paths_from_parameters(robot, folder)
     if has_file:
         if not isinstance(robot["urdf"], str):
             raise WorldError("world.robot.urdf", f"expected a path, got {short_repr(robot['urdf'])}")
-        path = resolve_uri(robot["urdf"], folder, "world.robot.urdf")
+        path = resolve_uri(robot["urdf"], folder, "world.robot.urdf", packages)
         text, urdf_folder, source = read_text(path, "world.robot.urdf"), path.parent, "world.robot.urdf"
     else:
         if not isinstance(robot["description"], str):
@@ -559,7 +569,7 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
         text, urdf_folder, source = robot["description"], folder, "world.robot.description"
     srdf = None
     if "srdf" in robot:
-        srdf = read_text(resolve_uri(str(robot["srdf"]), folder, "world.robot.srdf"), "world.robot.srdf")
+        srdf = read_text(resolve_uri(str(robot["srdf"]), folder, "world.robot.srdf", packages), "world.robot.srdf")
     model = load_robot(
         text,
         folder=urdf_folder,
@@ -574,6 +584,7 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
         fixed_joint_positions=_floats(robot, "fixed_joint_positions"),
         gripper_links=_strings(robot, "gripper_links"),
         source=source,
+        package_paths=packages,
     )
     return replace(model, padding=_padding(robot))
 

@@ -57,6 +57,7 @@ from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
+from clew_ros.spatial.turns import joint_features, nearest_turns, split_turns
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.spatial.world import SpatialWorld
 
@@ -509,11 +510,13 @@ class SpatialSpace:
     def landmark_features(self, joints: np.ndarray, object_poses: np.ndarray, joint_weight: float) -> np.ndarray:
         """Object position (m); orientation as its rotation matrix times the object's radius over sqrt 2
         (distances are then chords, m, of a circle of that radius: the face down and the yaw both count);
-        joints times ``joint_weight`` (m/rad) times ``sqrt(2 / n)``, as the planar space weighs them."""
+        joints times ``joint_weight`` (m/rad) times ``sqrt(2 / n)``, as the planar space weighs them (a
+        continuous joint on the unit circle: :func:`~clew_ros.spatial.turns.joint_features`)."""
         rot = matrices(object_poses)[:, :3, :3].reshape(len(object_poses), 9)
         weight = joint_weight * float(np.sqrt(2.0 / joints.shape[1]))
+        turned = joint_features(joints, self.world.robot.continuous)  # continuous joints modulo 2 pi
         return np.concatenate(
-            [np.asarray(object_poses)[:, :3], self.object_radius / math.sqrt(2.0) * rot, weight * joints], axis=1
+            [np.asarray(object_poses)[:, :3], self.object_radius / math.sqrt(2.0) * rot, weight * turned], axis=1
         )
 
     def goal_parts(self, object_poses: Array, goal: Array) -> tuple[Array, Array, Array]:
@@ -564,7 +567,7 @@ class SpatialSpace:
         rng = own_generator(ctx, HOLD_STREAM, q0, np.r_[object_pose, grasp])
         found = self.ik(ctx.hold_samples).solve(target, rng, seeds=q0[None], checker=self.transit_checker(object_pose))
         if len(found):
-            found = found[self.transfer_checker(self.grasp_rel(grasp)).valid(found)]
+            found = self._nearest_turns(q0, found[self.transfer_checker(self.grasp_rel(grasp)).valid(found)])
         return found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
 
     def grasp_rel(self, grasp: int) -> Array:
@@ -791,9 +794,14 @@ class SpatialSpace:
         solutions = self.ik(ctx.search.goal_seeds).solve_many(
             tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=self.transfer_checker(grasp_rel)
         )
-        found = np.vstack(solutions)
+        found = self._nearest_turns(q0, np.vstack(solutions))
         ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
         return ordered
+
+    def _nearest_turns(self, q0: Array, found: Array) -> Array:
+        """IK solutions with their continuous joints the short way from ``q0`` (within the limits)."""
+        robot = self.world.robot
+        return nearest_turns(q0, found, robot.lower, robot.upper, robot.continuous)
 
     def goal_poses(self, goal: Array) -> list[Array]:
         """The goal placement (4x4) turned about world z through its centre by each of
@@ -1126,11 +1134,33 @@ def plan(
     ``world.robot.goal``)."""
     tuning = tuning or SpatialTuning()
     if world.object is None:
-        return plan_motion(SpatialSpace(world, tuning), settings, goal=goal, termination=termination, progress=progress)
-    space = SpatialSpace(world, tuning)
-    return clew.plan(
-        space, settings, goal=goal, termination=termination, progress=progress, search=tuning.search, many=tuning.many
-    )
+        result = plan_motion(
+            SpatialSpace(world, tuning), settings, goal=goal, termination=termination, progress=progress
+        )
+    else:
+        space = SpatialSpace(world, tuning)
+        result = clew.plan(
+            space,
+            settings,
+            goal=goal,
+            termination=termination,
+            progress=progress,
+            search=tuning.search,
+            many=tuning.many,
+        )
+    return _short_turns(result, world.robot.continuous)
+
+
+def _short_turns(result: clew.PlanResult, continuous: NDArray[np.bool_]) -> clew.PlanResult:
+    """``result`` with every piece that turns a continuous joint by pi or more cut into equal straight parts
+    (:func:`clew_ros.spatial.turns.split_turns`: the same motion, read the same the short way round)."""
+    if not continuous.any():
+        return result
+    result.segments = [
+        Segment(s.kind, s.grasp, list(split_turns(np.asarray(s.waypoints, dtype=float), continuous)))
+        for s in result.segments
+    ]
+    return result
 
 
 def _same_waypoints(a: Sequence[Segment], b: Sequence[Segment]) -> bool:

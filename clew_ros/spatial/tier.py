@@ -211,13 +211,15 @@ class ExactTier:
         self,
         row: NDArray[np.int64],
         placement: tuple[Matrix, Matrix],
-        margin: float = 0.0,
+        margin: NDArray[np.float64] | None = None,
         placed: dict[int, list[tuple[Any, Any]]] | None = None,
     ) -> bool:
         """Whether the band contact ``row`` (``(kind, a, b)``, :mod:`clew_ros.spatial.kernels.band`) touches on
-        the exact geometry at ``placement`` (one row of :meth:`placements`), with ``margin`` m of clearance asked
+        the exact geometry at ``placement`` (one row of :meth:`placements`), with ``margin`` (m, per piece; the
+        margins of one joint's move: a pair of pieces it both moves, or neither, keeps none) of clearance asked
         on top of the padding; ``placed``: the pieces already placed there (filled in as they are placed)."""
         placed = {} if placed is None else placed
+        grow = np.zeros(len(self.pieces)) if margin is None else margin
         kind, a, b = int(row[0]), int(row[1]), int(row[2])
         self.checks += 1
         if a not in placed:
@@ -225,16 +227,19 @@ class ExactTier:
         mine = placed[a]
         if kind in (OBSTACLE, SUPPORT):
             shape, where = self.obstacles[b]
-            return self._hits(mine, shape, where, self.padding[a] + margin)
+            return self._hits(mine, shape, where, self.padding[a] + grow[a])
         if kind == BOUNDS:
-            return any(self._hits(mine, shape, where, self.padding[a] + margin) for shape, where in self.slabs)
+            return any(self._hits(mine, shape, where, self.padding[a] + grow[a]) for shape, where in self.slabs)
         assert kind == PAIR
         if b not in placed:
             placed[b] = self._placed(b, *placement)
-        grown = self.padding[a] + self.padding[b] + 2 * margin
+        # one joint moves: the pieces it moves turn together, so a pair keeps the margin of a piece moved alone
+        grown = self.padding[a] + self.padding[b] + (grow[a] + grow[b] if (grow[a] > 0) != (grow[b] > 0) else 0.0)
         return any(self._hits(mine, shape, where, grown) for shape, where in placed[b])
 
-    def free(self, contacts: NDArray[np.int64], placement: tuple[Matrix, Matrix], margin: float = 0.0) -> bool:
+    def free(
+        self, contacts: NDArray[np.int64], placement: tuple[Matrix, Matrix], margin: NDArray[np.float64] | None = None
+    ) -> bool:
         """Whether none of ``contacts`` (rows ``(kind, a, b)``) touches on the exact geometry at ``placement``."""
         placed: dict[int, list[tuple[Any, Any]]] = {}
         return not any(self.contact(row, placement, margin, placed) for row in contacts)

@@ -116,6 +116,12 @@ class SpatialTuning:
     #: many contacts per second of ``planner.improve_time`` (near contact every shortcut costs such checks; a
     #: count, so the plan does not depend on the machine)
     shortcut_exact_rate: float = 10_000.0
+    #: a motion-only query's ``world.robot.goal_pose``: random IK seeds (count, after the start
+    #: configuration) whose distinct valid solutions are the goal tree's roots, each a goal the search may
+    #: reach (a 6-joint arm has up to 8 for one pose, a 7-joint one a continuum)
+    goal_pose_ik_seeds: int = 64
+    #: ... of which at most this many (count, nearest the start first, joint travel) become roots
+    goal_pose_roots: int = 16
 
     # -- pick-and-place where the whole pose is out of reach (arms of 4-5 joints, joint limits) and the
     # -- goal out of sight of the placements (spatial_shelf, spatial_narrow)

@@ -1,9 +1,9 @@
 """The validator's check of a spatial path (interface.md section 1b, "A spatial configuration is valid").
 
 :func:`validate_transit` takes joint waypoints and checks every configuration along the straight
-joint-space pieces between consecutive ones, sampled so that no revolute joint moves more than
-:attr:`ValidationSettings.step_rad` (0.002 rad, the contract's step) and no prismatic joint more than
-:attr:`ValidationSettings.step_m` (0.001 m) between two checks, each against a
+joint-space pieces between consecutive ones (a continuous joint the short way round), sampled so that no
+revolute joint moves more than :attr:`ValidationSettings.step_rad` (0.002 rad, the contract's step) and no
+prismatic joint more than :attr:`ValidationSettings.step_m` (0.001 m) between two checks, each against a
 :class:`~clew_ros.spatial.checker.SpatialChecker` (joint limits, obstacles, bounds, self-collision, on
 the sphere model that covers the URDF's geometry). It returns the problems found, one per piece that has
 any (empty: the path is valid), each naming the piece, the first invalid configuration on it and why.
@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.scene import Obstacle
+from clew_ros.spatial.turns import short_way, wrapped
 
 __all__ = ["ValidationSettings", "explain_invalid", "validate_transit", "validation_samples"]
 
@@ -40,22 +41,35 @@ class ValidationSettings:
     match_rad: float = 1e-6
     #: How far ``final_object_pose`` may be from the replayed pose (m, and rad of rotation): the contract's 1e-4.
     pose_match: float = 1e-4
+    #: How far a motion-only plan's last tcp may be from ``world.robot.goal_pose`` (m, and rad of rotation):
+    #: the contract's 0.001 m and 0.01 rad.
+    goal_pose_m: float = 0.001
+    goal_pose_rad: float = 0.01
 
     def __post_init__(self) -> None:
-        for name in ("step_rad", "step_m", "match_rad", "pose_match"):
+        for name in ("step_rad", "step_m", "match_rad", "pose_match", "goal_pose_m", "goal_pose_rad"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
                 raise ValueError(f"ValidationSettings.{name}: expected a positive finite number, got {value!r}")
 
 
 def validation_samples(
-    a: NDArray[np.float64], b: NDArray[np.float64], steps: NDArray[np.float64]
+    a: NDArray[np.float64],
+    b: NDArray[np.float64],
+    steps: NDArray[np.float64],
+    continuous: NDArray[np.bool_] | None = None,
+    lower: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """The configurations from ``a`` to ``b`` (both included) on the straight piece between them, evenly
-    spaced so that no joint moves more than its ``steps`` entry between consecutive ones."""
-    count = max(1, math.ceil(float(np.max(np.abs(b - a) / steps))))
+    spaced so that no joint moves more than its ``steps`` entry between consecutive ones. ``continuous``
+    (a mask of the joints, :mod:`clew_ros.spatial.turns`): those joints take the short way round, every
+    sample of them written within ``[lower, lower + 2 pi)`` (the ends too: a plan may carry them unwrapped)."""
+    end = short_way(a, b, continuous)
+    count = max(1, math.ceil(float(np.max(np.abs(end - a) / steps))))
     t = np.arange(count + 1)[:, None] / count
-    out: NDArray[np.float64] = a + t * (b - a)
+    out: NDArray[np.float64] = a + t * (end - a)
+    if end is not b:
+        return wrapped(out, continuous, lower)
     out[-1] = b
     return out
 
@@ -128,10 +142,11 @@ def validate_transit(checker: SpatialChecker, waypoints: Any, settings: Validati
         )
     steps = np.where(robot.prismatic, settings.step_m, settings.step_rad)
     if len(path) == 1:
+        path = wrapped(path, robot.continuous, robot.lower)
         return [] if checker.valid(path)[0] else [f"waypoint 0 is invalid: {explain_invalid(checker, path[0])}"]
     problems = []
     for i in range(len(path) - 1):
-        samples = validation_samples(path[i], path[i + 1], steps)
+        samples = validation_samples(path[i], path[i + 1], steps, robot.continuous, robot.lower)
         valid = checker.valid(samples)
         if valid.all():
             continue

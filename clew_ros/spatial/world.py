@@ -72,6 +72,9 @@ class SpatialWorld:
     object: SpatialObject | None
     tolerances: Mapping[str, float]
     checker: SpatialChecker
+    #: A motion-only query's goal as the tcp's pose ``[x, y, z, roll, pitch, yaw]`` in ``world``
+    #: (``world.robot.goal_pose``, instead of ``goal``): any configuration that puts the tcp there.
+    goal_pose: tuple[float, ...] | None = None
 
 
 def _joints(value: Any, robot: RobotModel, parameter: str) -> NDArray[np.float64]:
@@ -193,11 +196,16 @@ def spatial_world_from_parameters(
         raise WorldError("world.robot.initial", "missing: the planned joints' values at the start")
     initial = _joints(tree["robot"]["initial"], robot, "world.robot.initial")
     goal = _joints(tree["robot"]["goal"], robot, "world.robot.goal") if "goal" in tree["robot"] else None
+    goal_pose = _goal_pose(tree["robot"], goal is not None, "object" in tree)
     thing = None
     if "object" in tree:
         thing = _object(tree, supports, tolerances["placement_tolerance"], tolerances["grasp_tolerance"])
-    if thing is None and goal is None:
-        raise WorldError("world.object", "expected an object to move, or world.robot.goal for a motion-only query")
+    if thing is None and goal is None and goal_pose is None:
+        raise WorldError(
+            "world.object",
+            "expected an object to move, or world.robot.goal (joints) or world.robot.goal_pose (the tcp's pose) "
+            "for a motion-only query",
+        )
     spheres = sphere_model(robot, settings) if prepared is None else prepared[1]
     return SpatialWorld(
         name=name,
@@ -211,4 +219,19 @@ def spatial_world_from_parameters(
         object=thing,
         tolerances=tolerances,
         checker=SpatialChecker(robot, spheres, obstacles, bounds, exact=exact),
+        goal_pose=goal_pose,
     )
+
+
+def _goal_pose(robot: Mapping[str, Any], has_goal: bool, has_object: bool) -> tuple[float, ...] | None:
+    """``world.robot.goal_pose`` (interface.md "Motion-only queries"), checked; ``None`` when absent."""
+    if "goal_pose" not in robot:
+        return None
+    if has_goal:
+        raise WorldError("world.robot.goal_pose", "expected either world.robot.goal or world.robot.goal_pose, not both")
+    if has_object:
+        raise WorldError(
+            "world.robot.goal_pose",
+            "a motion-only query's goal: expected no world.object with it (the object's goal is world.object.goal)",
+        )
+    return _pose(robot["goal_pose"], "world.robot.goal_pose")

@@ -165,9 +165,15 @@ def test_sigterm_during_a_run_exits_cleanly(tmp_path: Path) -> None:
     node = NodeProcess(tmp_path / "node.log", BEHIND_WALL, {"record.directory": str(tmp_path / "recordings")})
     session = Session(node)
     try:
-        _future, run_id = start_planning(session)
+        future, run_id = start_planning(session)
         code = node.stop(signal.SIGTERM, timeout_s=10.0)
         assert code == 0, node.output()
+        # the pending ~/plan call is answered before the node goes (rclpy prints no "exception was never
+        # retrieved: cannot use Destroyable" for an answer sent through a destroyed service)
+        assert "never retrieved" not in node.output()
+        answer = wait_future(future, 5.0, "~/plan's answer at shutdown")
+        assert not answer.success
+        assert "CANCELED" in answer.message
         if HAVE_RECORDER:
             # the run's recording was closed on the way out
             assert (tmp_path / "recordings" / run_id / "metadata.yaml").is_file(), node.output()

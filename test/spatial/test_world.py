@@ -89,7 +89,7 @@ def test_a_motion_only_query(tmp_path: Path) -> None:
         ("robot.initial", [0.0] * 6, "world.robot.initial", "expected 7 finite values"),
         ("robot.initial", [0.0] * 7, "world.robot.initial", "panda_joint4 = 0.0 is outside its limits"),
         ("robot.initial", None, "world.robot.initial", "missing"),
-        ("object", None, "world.object", "or world.robot.goal for a motion-only query"),
+        ("object", None, "world.object", "or world.robot.goal_pose (the tcp's pose) for a motion-only query"),
         ("object.initial", [0.5, 0.2, 0.2, 0.0, 0.0, 0.3], "world.object.initial", "is not a stable placement"),
         ("object.goal", [0.5, -0.2, 0.14, 0.3, 0.0, 0.0], "world.object.goal", "is not a stable placement"),
         ("object.grasps", [0.0, 0.0, 0.2, 0.0, 0.0, 0.0], "world.object.grasps", "grasp 0"),

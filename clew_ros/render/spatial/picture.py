@@ -70,6 +70,9 @@ class SpatialStyle:
     grid_line: float = 0.035  # a grid line's width as a fraction of a cell
     shadows: bool = True  # each solid thing's shadow straight down on the ground: where it stands
     path_width: float = 2.0  # the tool centre point's path
+    #: a world alone: each grasp at the object's start drawn as its approach (blue, this long along the tcp's
+    #: z, m, ending at the tcp) and its fingers' closing axis (orange, as long each way); 0: not drawn
+    grasp_axis_m: float = 0.08
     caption: bool = True  # a band under the picture: the world, what is shown, the view
     frame_ms: int = 80  # a GIF frame
     event_ms: int = 500  # a GIF frame where the gripper closes or opens
@@ -364,6 +367,19 @@ class _Painter:
         kinds = np.where(held[1:][keep][:, None], _rgb("transfer"), _rgb("transit"))
         return triangles, np.concatenate([kinds, kinds])
 
+    def grasp_axes(self, canvas: Canvas, object_pose: Array, grasps: Array, fingers: Array) -> None:
+        """Each grasp (tcp poses in the object's frame) at ``object_pose`` (4x4): its approach and its fingers'
+        closing axis (``fingers``, unit, in the tcp's frame), as :attr:`SpatialStyle.grasp_axis_m` long lines."""
+        length = self.style.grasp_axis_m
+        for grasp in np.asarray(grasps, dtype=np.float64).reshape(-1, 6):
+            tcp = object_pose @ pose_matrix(grasp.tolist())
+            at, approach, across = tcp[:3, 3], tcp[:3, 2], tcp[:3, :3] @ fingers
+            for line, held in (
+                (np.array([at - length * approach, at]), False),
+                (np.array([at - length * across, at + length * across]), True),
+            ):
+                canvas.draw(*self._ribbons(line, np.full(2, held)))
+
     def solid(self, canvas: Canvas, pose: _Pose | None, things: Sequence[_Thing]) -> None:
         parts = [_arm(self.world, pose.joints, pose.held, self.style.mesh)] if pose is not None else []
         parts += [_object(self.world, thing, self.style.mesh) for thing in things]
@@ -461,8 +477,9 @@ def draw_spatial_frames(
 def draw_spatial_world(
     world: SpatialWorld, view: View3D | None = None, *, style: SpatialStyle | None = None
 ) -> Image.Image:
-    """The world alone: the arm at its start; the object at its start (blue) and its goal placement ghosted
-    (green), or, for a motion-only query, the arm at its goal configuration ghosted."""
+    """The world alone: the arm at its start; the object at its start (blue) with its grasps' approach and
+    finger axes (:attr:`SpatialStyle.grasp_axis_m`) and its goal placement ghosted (green), or, for a
+    motion-only query, the arm at its goal configuration ghosted."""
     style = style or SpatialStyle()
     view = view or View3D()
     start = _Pose(world.initial, False)
@@ -477,6 +494,12 @@ def draw_spatial_world(
     painter = _Painter(world, view, style, sample=sample, things=things, path=None)
     canvas = painter.background(None, None)
     painter.solid(canvas, start, things[:1])
+    drawn = world.object is not None and style.grasp_axis_m > 0
+    if drawn:
+        from clew_ros.spatial.grasp_check import finger_axis
+
+        assert world.object is not None
+        painter.grasp_axes(canvas, pose_matrix(world.object.initial), world.object.grasps, finger_axis(world).axis)
     if goal_pose is not None:
         painter.ghost(canvas, goal_pose, [], style.goal_alpha)
     if len(things) > 1:
@@ -484,6 +507,8 @@ def draw_spatial_world(
     shown = "start solid, goal configuration faded" if goal_pose is not None else "start solid"
     if world.object is not None:
         shown += f"; object on {world.object.initial_on[0]}, goal on {world.object.goal_on[0]} (green)"
+    if drawn:
+        shown += "; grasp axes"
     return painter.finish(canvas, f"{world.name}: {shown}")
 
 

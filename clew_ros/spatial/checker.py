@@ -310,10 +310,14 @@ class SpatialChecker:
                 return True
         return False
 
-    def classify(self, qs: Any, margin: float | NDArray[np.float64] = 0.0) -> NDArray[np.bool_]:
+    def classify(
+        self, qs: Any, margin: float | NDArray[np.float64] = 0.0, *, moved_only: bool = False
+    ) -> NDArray[np.bool_]:
         """For each row: valid on the two tiers (spheres, then the exact geometry for the contacts the spheres
         leave open), every contact kept at least ``margin`` (m; one for every piece, or one per piece, as one
-        joint's move gives them: two pieces it both moves, or neither, keep none between them) clear."""
+        joint's move gives them: two pieces it both moves, or neither, keep none between them) clear.
+        ``moved_only``: each row is one joint's move from a free configuration, the pieces it moves those with a
+        margin (:meth:`ExactTier.contact`)."""
         margins = np.broadcast_to(np.asarray(margin, dtype=np.float64), (len(self._arrays["link_r"]),))
         margin = float(margins.max(initial=0.0))  # the kernel's: every contact within the largest is listed
         batch = self._batch(qs)
@@ -344,13 +348,13 @@ class SpatialChecker:
                 out[row] = sub[m] == band.FREE or (
                     self.exact
                     and sub[m] == band.BAND
-                    and self.tier.free(again[m, : sub_counts[m]], (rot[m], pos[m]), margins)
+                    and self.tier.free(again[m, : sub_counts[m]], (rot[m], pos[m]), margins, moved_only=moved_only)
                 )
         rows = np.flatnonzero(status == band.BAND)
         if self.exact and len(rows):
             rot, pos = self.tier.placements(frames_r[rows], frames_t[rows])
             for k, b in enumerate(rows):
-                out[b] = self.tier.free(contacts[b, : counts[b]], (rot[k], pos[k]), margins)
+                out[b] = self.tier.free(contacts[b, : counts[b]], (rot[k], pos[k]), margins, moved_only=moved_only)
         return out
 
     def valid_on_spheres(self, qs: Any) -> NDArray[np.bool_]:
@@ -478,11 +482,16 @@ class SpatialChecker:
             room = np.minimum(limit, (robot.upper[joint] - start) if side > 0 else (start - robot.lower[joint]))
             proven = np.zeros(len(mine))
             alive = np.ones(len(mine), dtype=bool)
-            for stage in range(settings.band_stages):  # each stage's steps band_growth times the last's
+            active = np.ones(len(mine), dtype=bool)
+            for stage in reversed(range(settings.band_stages)):  # the longest steps first (far from contact)
                 step = settings.band_step * settings.band_growth**stage
-                alive = self._band_stage(
-                    batch, mine, joint, side * step, lever * step / 2, settings, room, proven, alive
+                going = self._band_stage(
+                    batch, mine, joint, side * step, lever * step / 2, settings, room, proven, active
                 )
+                alive = going | (alive & ~active)  # rows that cleared every sample stop refining
+                active = active & ~going & (proven < room)  # a refusal: the next stage goes on in finer steps
+                if stage == 0:
+                    alive &= ~active
             reach = np.minimum(proven, room)
             ends = start + side * reach
             onward = np.flatnonzero(alive & (reach < room))  # every sample clear: the conservative steps go on
@@ -526,7 +535,7 @@ class SpatialChecker:
             probe = np.repeat(batch[mine[live]], len(ks), axis=0)
             offsets = np.sign(step) * base[live][:, None] + (ks[None, :] + 0.5) * step
             probe[:, joint] = (batch[mine[live], joint][:, None] + offsets).reshape(-1)
-            fine = self.classify(probe, margin).reshape(len(live), len(ks))
+            fine = self.classify(probe, margin, moved_only=True).reshape(len(live), len(ks))
             run = np.where(fine.all(axis=1), len(ks), np.argmin(fine, axis=1))  # samples clear in a row
             proven[live] = base[live] + (k0 + run) * abs(step)
             alive[live[run < len(ks)]] = False

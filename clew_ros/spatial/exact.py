@@ -7,7 +7,7 @@ loaded (boxes, cylinders and spheres as such, meshes as coal triangle BVHs), the
 primitives, and the object as the box or cylinder the world gives, checking every configuration along every
 straight piece at the validator's step (0.002 rad per revolute joint, 0.001 m per prismatic joint):
 
-- every link against every obstacle and against the bounds (each face of ``bounds`` stands for a slab
+- every link against every obstacle and against the bounds (each face of ``bounds`` stands for the half-space
   outside it);
 - every pair of links but those the sphere model exempts (``RobotModel.exempt``: a link and its parent,
   links on one frame, the SRDF's ``disable_collisions``);
@@ -39,6 +39,7 @@ from clew_ros.core.plan import Plan
 from clew_ros.spatial.placements import MovableObject, Support
 from clew_ros.spatial.robot import Geometry
 from clew_ros.spatial.scene import Obstacle
+from clew_ros.spatial.tier import outside_bounds
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.spatial.world import SpatialWorld
@@ -52,9 +53,6 @@ Matrix = NDArray[np.float64]
 class ExactSettings:
     """The exact checker's numbers."""
 
-    #: Thickness (m) of the slab standing for the outside of each face of ``bounds``: anything crossing a
-    #: face meets its slab; a metre is more than any link or object reaches past a face between two checks.
-    bounds_slab_m: float = 1.0
     #: How far (m) pinocchio's and the project's kinematics may put a link apart before the checker refuses
     #: to run (the two read one URDF; a gap means one of them folds it differently).
     kinematics_match_m: float = 1e-6
@@ -212,23 +210,12 @@ class ExactChecker:
     # -- scenes -----------------------------------------------------------------------------------------
 
     def _slabs(self) -> list[tuple[str, Any, Matrix]]:
+        """The outside of ``bounds``: a half-space beyond each face (in ``world``)."""
         bounds = self.world.bounds
         if bounds is None:
             return []
-        low, high = np.asarray(bounds[:3]), np.asarray(bounds[3:])
-        thick = self.settings.bounds_slab_m
-        span = high - low + 2 * thick
-        middle = (low + high) / 2
-        out = []
-        for axis in range(3):
-            size = span.copy()
-            size[axis] = thick
-            for side, face in ((-1.0, low[axis]), (1.0, high[axis])):
-                pose = np.eye(4)
-                pose[:3, 3] = middle
-                pose[axis, 3] = face + side * thick / 2
-                out.append((f"the bounds ({'min' if side < 0 else 'max'} {'xyz'[axis]})", self.coal.Box(*size), pose))
-        return out
+        names = [f"the bounds ({side} {'xyz'[axis]})" for axis in range(3) for side in ("min", "max")]
+        return [(name, shape, np.eye(4)) for name, shape in zip(names, outside_bounds(self.coal, bounds), strict=True)]
 
     def _scene(self, resting: Matrix | None = None, held: Matrix | None = None) -> _Scene:
         """The robot among the obstacles, the bounds' slabs and the object: ``resting`` at that pose in

@@ -65,6 +65,8 @@ def warm_up(world: SpatialWorld) -> float:
     started = time.monotonic()
     start = np.asarray(world.initial, dtype=float)[None]
     world.checker.valid(start)
+    world.checker.classify(start)  # the band kernel, whether or not the start lies near a contact
+    _ = world.checker.tier  # the exact geometry's shapes (the meshes as BVHs)
     world.checker.free_intervals(start, 0)
     ik = InverseKinematics(world.robot, IKSettings(seeds=1, max_iterations=2))
     ik.solve(ik.tcp_poses(start)[0], np.random.default_rng(0))

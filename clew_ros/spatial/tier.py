@@ -5,7 +5,7 @@ nothing: free; inner spheres touching something: a collision). The contacts they
 band between the two models (:mod:`clew_ros.spatial.kernels.band`), are decided here, one contact at a time,
 on the geometry the contract names (interface.md section 1b, "Collision geometry"): every ``<collision>`` of
 every link (boxes, cylinders and spheres as such, meshes as coal triangle BVHs), grown by
-``world.robot.padding``; the obstacles, the object (box or cylinder) and the bounds (a slab outside each face)
+``world.robot.padding``; the obstacles, the object (box or cylinder) and the bounds (a half-space outside each face)
 exactly. A gripper works millimetres from what it grasps: there the exact geometry answers.
 
 The link poses are the planner's own kinematics (the band kernel's frames), so the two tiers test one pose.
@@ -37,8 +37,8 @@ __all__ = [
     "coal_shape",
     "link_shapes",
     "object_touches",
+    "outside_bounds",
     "robot_distance",
-    "slab_poses",
 ]
 
 Matrix = NDArray[np.float64]
@@ -78,21 +78,15 @@ def coal_shape(coal: Any, kind: str, size: Sequence[float], item: Geometry | Non
     return mesh
 
 
-def slab_poses(bounds: Sequence[float], thick: float) -> list[tuple[str, tuple[float, float, float], Matrix]]:
-    """The outside of ``bounds`` as six boxes ``thick`` m deep: (name, full size, 4x4 pose) each."""
-    low, high = np.asarray(bounds[:3], dtype=np.float64), np.asarray(bounds[3:], dtype=np.float64)
-    span = high - low + 2 * thick
-    middle = (low + high) / 2
+def outside_bounds(coal: Any, bounds: Sequence[float]) -> list[Any]:
+    """The six half-spaces outside ``bounds`` (``[xmin, ymin, zmin, xmax, ymax, zmax]``); coal's half-space
+    ``(n, d)`` is the solid ``n . p <= d``."""
     out = []
     for axis in range(3):
-        size = span.copy()
-        size[axis] = thick
-        for side, face in ((-1.0, low[axis]), (1.0, high[axis])):
-            pose = np.eye(4)
-            pose[:3, 3] = middle
-            pose[axis, 3] = face + side * thick / 2
-            name = f"the bounds ({'min' if side < 0 else 'max'} {'xyz'[axis]})"
-            out.append((name, (float(size[0]), float(size[1]), float(size[2])), pose))
+        unit = np.zeros(3)
+        unit[axis] = 1.0
+        out.append(coal.Halfspace(unit, float(bounds[axis])))  # p[axis] <= min
+        out.append(coal.Halfspace(-unit, -float(bounds[axis + 3])))  # p[axis] >= max
     return out
 
 
@@ -152,8 +146,6 @@ class ExactTier:
         obstacles: Sequence[Obstacle],
         bounds: Sequence[float] | None,
         held: tuple[MovableObject, Matrix] | None = None,
-        *,
-        bounds_slab_m: float = 1.0,
     ) -> None:
         self.coal = coal = coal_module()
         self.robot = robot
@@ -172,10 +164,9 @@ class ExactTier:
         local = np.array([pose for piece in self.pieces for _, pose in piece]).reshape(-1, 4, 4)
         self._local_r, self._local_t = local[:, :3, :3], local[:, :3, 3]
         self.obstacles = [(coal_shape(coal, o.shape, o.size), self._transform(o.pose)) for o in obstacles]
+        #: the outside of ``bounds``: a half-space beyond each face (anything wholly past a face meets it too)
         self.slabs = (
-            []
-            if bounds is None
-            else [(coal.Box(*size), self._transform(pose)) for _, size, pose in slab_poses(bounds, bounds_slab_m)]
+            [] if bounds is None else [(shape, self._transform(np.eye(4))) for shape in outside_bounds(coal, bounds)]
         )
         self._request = coal.CollisionRequest()
         self._result = coal.CollisionResult()
@@ -213,14 +204,20 @@ class ExactTier:
         placement: tuple[Matrix, Matrix],
         margin: NDArray[np.float64] | None = None,
         placed: dict[int, list[tuple[Any, Any]]] | None = None,
+        *,
+        moved_only: bool = False,
     ) -> bool:
         """Whether the band contact ``row`` (``(kind, a, b)``, :mod:`clew_ros.spatial.kernels.band`) touches on
         the exact geometry at ``placement`` (one row of :meth:`placements`), with ``margin`` (m, per piece; the
         margins of one joint's move: a pair of pieces it both moves, or neither, keeps none) of clearance asked
+        on top of the padding. ``moved_only``: the configuration is one joint's move from a free one (the pieces
+        with a margin are those it moves), so a contact whose pieces keep their relative pose is free as there.
         on top of the padding; ``placed``: the pieces already placed there (filled in as they are placed)."""
         placed = {} if placed is None else placed
         grow = np.zeros(len(self.pieces)) if margin is None else margin
         kind, a, b = int(row[0]), int(row[1]), int(row[2])
+        if moved_only and (grow[a] > 0) == (kind == PAIR and grow[b] > 0):
+            return False  # as at the configuration the move starts from, which is free
         self.checks += 1
         if a not in placed:
             placed[a] = self._placed(a, *placement)
@@ -238,8 +235,14 @@ class ExactTier:
         return any(self._hits(mine, shape, where, grown) for shape, where in placed[b])
 
     def free(
-        self, contacts: NDArray[np.int64], placement: tuple[Matrix, Matrix], margin: NDArray[np.float64] | None = None
+        self,
+        contacts: NDArray[np.int64],
+        placement: tuple[Matrix, Matrix],
+        margin: NDArray[np.float64] | None = None,
+        *,
+        moved_only: bool = False,
     ) -> bool:
-        """Whether none of ``contacts`` (rows ``(kind, a, b)``) touches on the exact geometry at ``placement``."""
+        """Whether none of ``contacts`` (rows ``(kind, a, b)``) touches on the exact geometry at ``placement``
+        (see :meth:`contact`)."""
         placed: dict[int, list[tuple[Any, Any]]] = {}
-        return not any(self.contact(row, placement, margin, placed) for row in contacts)
+        return not any(self.contact(row, placement, margin, placed, moved_only=moved_only) for row in contacts)

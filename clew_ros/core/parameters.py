@@ -207,6 +207,40 @@ class Limits:
     #: Characters of a ``~/goal_pose`` ``header.frame_id`` quoted in a log line or an event (printable
     #: characters only; the rest is cut).
     max_quoted_chars: int = 64
+    #: Bytes of a parameter file (``--params-file``, ``clew_plan``'s world, ``clew_render --world``), read
+    #: before YAML parses it.
+    max_parameter_file_bytes: int = 64 * 2**20
+    # ------------------------------------------------------------------ spatial worlds (interface.md 1b)
+    #: Bytes of a URDF or SRDF (a file, or the ``world.robot.description`` text), checked before it is parsed.
+    max_urdf_bytes: int = 8 * 2**20
+    #: Bytes of one mesh file a URDF names, checked before it is read (parsing grows with the file).
+    max_mesh_file_bytes: int = 16 * 2**20
+    #: Triangles of one mesh (after reading it, before anything else is done with it).
+    max_mesh_triangles: int = 200_000
+    #: Triangles of all the robot's meshes together: each is kept in memory and drawn in the markers.
+    max_total_triangles: int = 1_000_000
+    #: Scale factor of a URDF ``<mesh scale>`` (each axis): the sphere model's work grows as its cube.
+    max_mesh_scale: float = 10.0
+    #: Links (and joints) of a URDF: the tree walk and the self-collision pairs grow with them.
+    max_urdf_links: int = 256
+    #: Cells of one mesh's voxel grid at the sphere model's cell size (``SphereSettings.cell_m``), from the
+    #: mesh's extent before voxelising: the grid and its flood fill grow with it (the shipped arms: 15,000).
+    max_mesh_cells: int = 500_000
+    #: Triangles of one mesh once split to the voxel size (estimated before splitting): the surface
+    #: sampling and the split itself grow with it (the shipped arms: at most 90,000).
+    max_split_triangles: int = 300_000
+    #: Cells of one mesh's solid (surface and inside) the sphere cover chooses among: its candidate matrix
+    #: grows as their square (the shipped arms: at most 7,200).
+    max_solid_cells: int = 30_000
+    #: Spheres of the robot's sphere model: every collision check visits each (the Panda: 213).
+    max_spheres: int = 10_000
+    #: Bytes of a planning scene file (``world.scene_file``), checked before it is parsed.
+    max_scene_file_bytes: int = 16 * 2**20
+    #: Collision objects and primitives of a planning scene, counted after YAML expands its aliases and
+    #: before any is read (``world.obstacle_names`` and the scene's together: ``max_obstacles``).
+    max_scene_objects: int = 5000
+    #: Points of one ``~/points`` cloud (section 3c): the highest ``state.max_points`` may be, and its default.
+    max_points: int = 1_000_000
 
 
 #: The caps in force (:class:`Limits`' defaults).
@@ -643,9 +677,10 @@ def _rows(specs: Iterable[ParameterSpec], *, ranges: bool) -> list[str]:
 
 def limits_table() -> str:
     """The caps of :data:`LIMITS` as a Markdown table: the field, its value, what it caps."""
-    rows = ["| limit | value | caps |", "|---|---|---|"]
+    rows = ["| limit | value | unit | caps |", "|---|---|---|---|"]
     rows.extend(
-        f"| `{field.name}` | `{getattr(LIMITS, field.name)}` | {_literal(_LIMIT_TEXT[field.name])} |"
+        f"| `{field.name}` | `{getattr(LIMITS, field.name)}` | {_LIMIT_UNIT[field.name]} | "
+        f"{_literal(_LIMIT_TEXT[field.name])} |"
         for field in dataclasses.fields(Limits)
     )
     return "\n".join(rows)
@@ -662,7 +697,48 @@ _LIMIT_TEXT = {
     "max_name_chars": "characters of a parameter name, an obstacle name or world.name",
     "max_string_chars": "characters of a string parameter (record.directory)",
     "max_quoted_chars": "characters of a ~/goal_pose frame_id quoted in logs and events (printable only)",
+    "max_parameter_file_bytes": "size of a parameter file, before it is parsed",
+    "max_urdf_bytes": "size of a URDF or SRDF (world.robot.urdf, .description, .srdf), before it is parsed",
+    "max_mesh_file_bytes": "size of one mesh file a URDF names, before it is read",
+    "max_mesh_triangles": "triangles of one mesh",
+    "max_total_triangles": "triangles of all the robot's meshes",
+    "max_mesh_scale": "each factor of a URDF <mesh scale>",
+    "max_urdf_links": "links, and joints, of a URDF",
+    "max_mesh_cells": "cells of one mesh's voxel grid for the sphere model (from its extent, before voxelising)",
+    "max_split_triangles": "triangles of one mesh split to the voxel size (estimated before splitting)",
+    "max_solid_cells": "cells of one mesh's voxelised solid the sphere cover chooses among",
+    "max_spheres": "spheres of the robot's sphere model",
+    "max_scene_file_bytes": "size of a planning scene file (world.scene_file), before it is parsed",
+    "max_scene_objects": "collision objects and primitives of a planning scene, after YAML aliases expand",
+    "max_points": "points of one ~/points cloud (the highest state.max_points)",
 }
+#: The unit of each cap.
+_LIMIT_UNIT = {
+    "max_links": "links",
+    "max_obstacles": "obstacles",
+    "max_polygon_vertices": "vertices",
+    "max_world_vertices": "vertices",
+    "max_grasps": "grasps",
+    "max_parameters": "parameters",
+    "max_name_chars": "characters",
+    "max_string_chars": "characters",
+    "max_quoted_chars": "characters",
+    "max_parameter_file_bytes": "bytes",
+    "max_urdf_bytes": "bytes",
+    "max_mesh_file_bytes": "bytes",
+    "max_mesh_triangles": "triangles",
+    "max_total_triangles": "triangles",
+    "max_mesh_scale": "factor",
+    "max_urdf_links": "links",
+    "max_mesh_cells": "cells",
+    "max_split_triangles": "triangles",
+    "max_solid_cells": "cells",
+    "max_spheres": "spheres",
+    "max_scene_file_bytes": "bytes",
+    "max_points": "points",
+    "max_scene_objects": "objects",
+}
+assert set(_LIMIT_UNIT) == set(_LIMIT_TEXT)
 assert list(_LIMIT_TEXT) == [field.name for field in dataclasses.fields(Limits)]
 
 

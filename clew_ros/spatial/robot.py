@@ -11,7 +11,9 @@ or URDF element at fault and what was expected.
 
 from __future__ import annotations
 
+import io
 import math
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -23,6 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import WorldError, short_repr
+from clew_ros.core.files import FileRefusedError, read_regular_file
+from clew_ros.core.parameters import LIMITS, Limits
 from clew_ros.spatial.transforms import axis_motion, pose_matrix
 
 __all__ = [
@@ -153,11 +157,9 @@ def resolve_uri(uri: str, folder: Path, parameter: str) -> Path:
     return path if path.is_absolute() else folder / path
 
 
-def read_text(path: Path, parameter: str) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise WorldError(parameter, f"cannot read {str(path)!r}: {error}") from None
+def read_text(path: Path, parameter: str, limits: Limits = LIMITS) -> str:
+    """A URDF or SRDF file's text: a regular file of at most ``Limits.max_urdf_bytes``, UTF-8."""
+    return _capped_text(path, parameter, limits.max_urdf_bytes, "Limits.max_urdf_bytes")
 
 
 @contextmanager
@@ -188,7 +190,7 @@ def _parse_urdf(text: str, parameter: str) -> Any:
     except ET.ParseError as error:
         raise WorldError(parameter, f"expected URDF XML, the text does not parse: {error}") from None
     except Exception as error:  # noqa: BLE001  # urdf_parser_py raises bare Exceptions for missing attributes
-        raise WorldError(parameter, f"expected a valid URDF <robot>: {error}") from None
+        raise WorldError(parameter, f"expected a valid URDF <robot>: {_unquoted(error)}") from None
 
 
 def _origin(element: Any) -> Matrix:
@@ -207,31 +209,42 @@ def _positive(values: Sequence[float], where: str, parameter: str) -> tuple[floa
     return out
 
 
-def _load_mesh(path: Path, scale: Sequence[float] | None, where: str, parameter: str) -> tuple[Matrix, Any]:
+def _load_mesh(
+    path: Path, scale: Sequence[float] | None, where: str, parameter: str, limits: Limits = LIMITS
+) -> tuple[Matrix, Any]:
     try:
         import trimesh
     except ImportError:
         raise WorldError(
             parameter, f"{where}: reading meshes needs trimesh (pip install 'clew_ros[spatial]')"
         ) from None
-    if not path.is_file():
-        raise WorldError(parameter, f"{where}: mesh file {str(path)!r} does not exist")
+    factors = None if scale is None else _mesh_scale(scale, where, parameter, limits)
+    data = _mesh_bytes(path, where, parameter, limits)
     try:
-        mesh = trimesh.load(str(path), force="mesh", process=True)
+        mesh = trimesh.load(io.BytesIO(data), file_type=path.suffix.lstrip(".").lower(), force="mesh", process=True)
     except Exception as error:  # noqa: BLE001  # trimesh and its loaders raise many kinds for a bad file
-        raise WorldError(parameter, f"{where}: cannot read mesh {str(path)!r}: {error}") from None
+        raise WorldError(
+            parameter, f"{where}: cannot read mesh {str(path)!r} ({type(error).__name__}; expected STL, OBJ or DAE)"
+        ) from None
     vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
     faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
     if len(faces) == 0 or not np.all(np.isfinite(vertices)):
         raise WorldError(parameter, f"{where}: mesh {str(path)!r} holds no triangles (expected STL, OBJ or DAE)")
-    if scale is not None:
-        vertices = vertices * np.asarray(_positive(scale, f"{where} scale", parameter))
+    if len(faces) > limits.max_mesh_triangles:
+        raise WorldError(
+            parameter,
+            f"{where}: mesh {str(path)!r} holds {len(faces)} triangles, more than Limits.max_mesh_triangles "
+            f"({limits.max_mesh_triangles})",
+        )
+    if factors is not None:
+        vertices = vertices * np.asarray(factors)
     return vertices, faces
 
 
-def _geometries(link: Any, folder: Path, parameter: str) -> tuple[Geometry, ...]:
+def _geometries(link: Any, folder: Path, parameter: str, budget: _MeshBudget | None = None) -> tuple[Geometry, ...]:
     from urdf_parser_py import urdf  # type: ignore[import-untyped]
 
+    budget = budget or _MeshBudget(LIMITS)
     out = []
     for k, collision in enumerate(link.collisions):
         where = f"<link name={link.name!r}> <collision> {k}"
@@ -248,7 +261,7 @@ def _geometries(link: Any, folder: Path, parameter: str) -> tuple[Geometry, ...]
             out.append(Geometry(link.name, "sphere", _positive([shape.radius], f"{where} <sphere>", parameter), origin))
         elif isinstance(shape, urdf.Mesh):
             path = resolve_uri(shape.filename or "", folder, parameter)
-            vertices, faces = _load_mesh(path, shape.scale, where, parameter)
+            vertices, faces = budget.load(path, shape.scale, where, parameter)
             out.append(Geometry(link.name, "mesh", (), origin, vertices, faces, str(path)))
         else:
             raise WorldError(parameter, f"{where}: expected box, cylinder, sphere or mesh geometry")
@@ -448,6 +461,7 @@ def load_robot(
     ``source`` names the parameter the URDF came from, for errors. Poses are ``[x, y, z, roll, pitch,
     yaw]`` (m, rad): ``tcp`` in ``tip_link``'s frame, ``base_pose`` of ``base_link`` in ``world``.
     """
+    _check_robot_text(urdf_text, srdf_text, source, LIMITS)
     robot = _parse_urdf(urdf_text, source)
     names = {link.name for link in robot.links}
     parent_joint, root = _tree(robot, base_link, tip_link, source)
@@ -468,10 +482,11 @@ def load_robot(
         if name not in names:
             raise WorldError("world.robot.gripper_links", f"link {name!r} is not in the URDF")
 
+    budget = _MeshBudget(LIMITS)
     links = tuple(
         LinkModel(link.name, frame_of[link.name], inverse[frame_of[link.name]] @ pose[link.name], geometries)
         for link in robot.links
-        if (geometries := _geometries(link, folder, source))
+        if (geometries := _geometries(link, folder, source, budget))
     )
     index = {link.name: i for i, link in enumerate(links)}
     parents = tuple(_collision_parent(link.name, parent_joint, index) for link in links)
@@ -573,3 +588,94 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
         gripper_links=_strings(robot, "gripper_links"),
         source=source,
     )
+
+
+# ----------------------------------------------------------------------------------------- caps
+
+
+def _capped_text(path: Path, parameter: str, limit: int, cap: str) -> str:
+    """A regular file's UTF-8 text, refused beyond ``limit`` bytes (``cap``) without quoting what it holds."""
+    try:
+        data = read_regular_file(path, limit, cap)
+    except FileRefusedError as error:
+        raise WorldError(parameter, f"cannot read {str(path)!r}: {error}") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise WorldError(
+            parameter, f"cannot read {str(path)!r}: expected UTF-8 text ({error.reason} at byte {error.start})"
+        ) from None
+
+
+def _check_robot_text(urdf_text: str, srdf_text: str | None, source: str, limits: Limits) -> None:
+    """The URDF and SRDF texts held to ``Limits.max_urdf_bytes``, and the URDF's links and joints to
+    ``Limits.max_urdf_links``, before the URDF parser (whose work grows with them) sees them."""
+    for text, parameter in ((urdf_text, source), (srdf_text, "world.robot.srdf")):
+        if text is not None and len(text.encode("utf-8", "surrogatepass")) > limits.max_urdf_bytes:
+            raise WorldError(
+                parameter,
+                f"the text holds {len(text.encode('utf-8', 'surrogatepass'))} bytes, more than "
+                f"Limits.max_urdf_bytes ({limits.max_urdf_bytes})",
+            )
+    try:
+        root = ET.fromstring(urdf_text)
+    except ET.ParseError as error:
+        raise WorldError(source, f"expected URDF XML, the text does not parse: {error}") from None
+    for tag in ("link", "joint"):
+        count = sum(1 for _ in root.iter(tag))
+        if count > limits.max_urdf_links:
+            raise WorldError(
+                source,
+                f"the URDF has {count} <{tag}> elements, more than Limits.max_urdf_links ({limits.max_urdf_links})",
+            )
+
+
+def _unquoted(error: BaseException) -> str:
+    """An error's message with every quoted value left out and cut to 160 characters: what the URDF parser
+    says about an element, without repeating what a file holds."""
+    text = re.sub(r"'[^']*'|\"[^\"]*\"", "'...'", " ".join(str(error).split()))
+    return text if len(text) <= 160 else text[:157] + "..."
+
+
+def _mesh_scale(scale: Sequence[float], where: str, parameter: str, limits: Limits) -> tuple[float, ...]:
+    """A ``<mesh scale>``: positive, finite, each factor at most ``Limits.max_mesh_scale``."""
+    factors = _positive(scale, f"{where} scale", parameter)
+    if max(factors) > limits.max_mesh_scale:
+        raise WorldError(
+            parameter,
+            f"{where} <mesh scale>: factor {max(factors):g} is more than Limits.max_mesh_scale "
+            f"({limits.max_mesh_scale:g})",
+        )
+    return factors
+
+
+def _mesh_bytes(path: Path, where: str, parameter: str, limits: Limits) -> bytes:
+    """A mesh file's bytes: a regular file of at most ``Limits.max_mesh_file_bytes``."""
+    try:
+        return read_regular_file(path, limits.max_mesh_file_bytes, "Limits.max_mesh_file_bytes")
+    except FileRefusedError as error:
+        raise WorldError(parameter, f"{where}: mesh file {str(path)!r}: {error}") from None
+
+
+class _MeshBudget:
+    """The meshes of one robot: each file read once (a file named by many links costs one read), and their
+    triangles held to ``Limits.max_total_triangles`` as they are read."""
+
+    def __init__(self, limits: Limits) -> None:
+        self.limits = limits
+        self.triangles = 0
+        self._read: dict[tuple[str, tuple[float, ...] | None], tuple[Matrix, Any]] = {}
+
+    def load(self, path: Path, scale: Sequence[float] | None, where: str, parameter: str) -> tuple[Matrix, Any]:
+        key = (str(path), None if scale is None else tuple(float(v) for v in scale))
+        if key not in self._read:
+            self._read[key] = _load_mesh(path, scale, where, parameter, self.limits)
+        vertices, faces = self._read[key]
+        self.triangles += len(faces)
+        if self.triangles > self.limits.max_total_triangles:
+            raise WorldError(
+                parameter,
+                f"{where}: the robot's meshes hold more than Limits.max_total_triangles "
+                f"({self.limits.max_total_triangles}) triangles",
+            )
+        return vertices, faces

@@ -30,9 +30,19 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from clew_ros.core.errors import WorldError
+from clew_ros.core.parameters import LIMITS, Limits
 from clew_ros.spatial.robot import Geometry, RobotModel
 
-__all__ = ["SphereModel", "SphereSettings", "cover", "over_approximation", "sphere_model", "surface_points"]
+__all__ = [
+    "SphereModel",
+    "SphereSettings",
+    "check_mesh_work",
+    "cover",
+    "over_approximation",
+    "sphere_model",
+    "surface_points",
+]
 
 Array = NDArray[np.float64]
 Matrix = NDArray[np.float64]
@@ -173,9 +183,13 @@ def _nearest(points: Array, samples: Array) -> Array:
     return out
 
 
-def _cover_mesh(vertices: Array, faces: NDArray[np.int64], settings: SphereSettings) -> tuple[Array, Array]:
+def _cover_mesh(
+    vertices: Array, faces: NDArray[np.int64], settings: SphereSettings, where: str = "a mesh", limits: Limits = LIMITS
+) -> tuple[Array, Array]:
     cell = settings.cell_m
+    check_mesh_work(vertices, faces, cell, where, limits)
     origin, kept = _voxels(vertices, faces, cell)
+    _check_cap(int(kept.sum()), limits.max_solid_cells, "max_solid_cells", f"{where}: its solid at {cell:g} m holds")
     index = np.argwhere(kept)
     centers = origin + (index + 0.5) * cell
     half_diagonal = cell * math.sqrt(3) / 2
@@ -210,16 +224,22 @@ def cover(geometry: Geometry, settings: SphereSettings) -> tuple[Array, Array]:
         return _cover_box(geometry.size, settings)
     if geometry.kind == "cylinder":
         return _cover_cylinder(geometry.size[0], geometry.size[1], settings)
-    return _cover_mesh(geometry.vertices, geometry.faces, settings)
+    where = f"<link name={geometry.link!r}> mesh {geometry.source!r}"
+    return _cover_mesh(geometry.vertices, geometry.faces, settings, where)
 
 
-def sphere_model(robot: RobotModel, settings: SphereSettings | None = None) -> SphereModel:
-    """The conservative sphere model of every link of ``robot``."""
+def sphere_model(robot: RobotModel, settings: SphereSettings | None = None, limits: Limits = LIMITS) -> SphereModel:
+    """The conservative sphere model of every link of ``robot``; a :class:`~clew_ros.core.errors.WorldError`
+    (``world.robot.urdf``) when a mesh or the model passes one of ``limits``' caps (checked before the work
+    that grows with it)."""
     settings = settings or SphereSettings()
     centers, radii, frames, links = [], [], [], []
+    count = 0
     for i, link in enumerate(robot.links):
         for geometry in link.geometries:
             local_c, local_r = cover(geometry, settings)
+            count += len(local_r)
+            _check_cap(count, limits.max_spheres, "max_spheres", f"<link name={link.name!r}>: the sphere model holds")
             to_frame = link.offset @ geometry.origin
             centers.append(local_c @ to_frame[:3, :3].T + to_frame[:3, 3])
             radii.append(local_r)
@@ -233,6 +253,37 @@ def sphere_model(robot: RobotModel, settings: SphereSettings | None = None) -> S
         frames=np.concatenate(frames).astype(np.int64),
         links=links_all.astype(np.int64),
         starts=starts_all.astype(np.int64),
+    )
+
+
+# ----------------------------------------------------------------------------------------- caps
+
+
+def _check_cap(count: int, limit: int, cap: str, what: str) -> None:
+    if count > limit:
+        raise WorldError("world.robot.urdf", f"{what} {count}, more than Limits.{cap} ({limit})")
+
+
+def check_mesh_work(
+    vertices: Array, faces: NDArray[np.int64], cell: float, where: str, limits: Limits = LIMITS
+) -> None:
+    """Refuse a mesh whose voxelising at ``cell`` (m) would pass ``Limits.max_mesh_cells`` (the grid, from the
+    mesh's extent) or ``Limits.max_split_triangles`` (its triangles split until no edge exceeds a cell: each
+    triangle whose longest edge is ``e`` becomes ``4 ** ceil(log2(e / cell))``), before any of that work."""
+    extent = vertices.max(axis=0) - vertices.min(axis=0) + 3.0 * cell
+    cells = float(np.prod(np.ceil(extent / cell)))
+    _check_cap(
+        int(min(cells, 2**62)), limits.max_mesh_cells, "max_mesh_cells", f"{where}: its voxel grid at {cell:g} m holds"
+    )
+    corners = vertices[faces]
+    longest = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
+    halvings = np.ceil(np.log2(np.maximum(longest / cell, 1.0)))
+    pieces = float(np.sum(np.power(4.0, np.minimum(halvings, 30.0))))
+    _check_cap(
+        int(min(pieces, 2**62)),
+        limits.max_split_triangles,
+        "max_split_triangles",
+        f"{where}: split to {cell:g} m it holds",
     )
 
 

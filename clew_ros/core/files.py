@@ -60,13 +60,13 @@ def read_regular_file(path: Path, limit: int, cap: str) -> bytes:
         if not stat.S_ISREG(status.st_mode):
             raise FileRefusedError("not a regular file (a device, a pipe or a folder)")
         if status.st_size > limit:
-            raise FileRefusedError(f"it holds {status.st_size} bytes, more than {cap} ({limit})")
+            raise FileRefusedError(f"it holds {status.st_size} bytes, larger than {limit} bytes ({cap})")
         try:
             data = read_at_most(stream, limit)
         except OSError as error:
             raise FileRefusedError(error.strerror or type(error).__name__) from None
     if len(data) > limit:  # grew since it was checked
-        raise FileRefusedError(f"it holds more than {cap} ({limit} bytes)")
+        raise FileRefusedError(f"it holds more bytes, larger than {limit} bytes ({cap})")
     return data
 
 

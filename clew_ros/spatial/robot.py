@@ -32,6 +32,7 @@ from clew_ros.spatial.transforms import axis_motion, pose_matrix
 __all__ = [
     "CONTINUOUS_LIMIT_RAD",
     "Geometry",
+    "GivenMeshes",
     "LinkModel",
     "RobotModel",
     "load_robot",
@@ -259,6 +260,9 @@ def _geometries(link: Any, folder: Path, parameter: str, budget: _MeshBudget | N
             out.append(Geometry(link.name, "cylinder", (height, radius), origin))
         elif isinstance(shape, urdf.Sphere):
             out.append(Geometry(link.name, "sphere", _positive([shape.radius], f"{where} <sphere>", parameter), origin))
+        elif isinstance(shape, urdf.Mesh) and budget.given is not None:  # named only, never opened
+            vertices, faces = budget.take_given(link.name, k, origin, where, parameter)
+            out.append(Geometry(link.name, "mesh", (), origin, vertices, faces, str(shape.filename or "")))
         elif isinstance(shape, urdf.Mesh):
             path = resolve_uri(shape.filename or "", folder, parameter)
             vertices, faces = budget.load(path, shape.scale, where, parameter)
@@ -455,11 +459,13 @@ def load_robot(
     fixed_joint_positions: Sequence[float] = (),
     gripper_links: Sequence[str] = (),
     source: str = "world.robot.urdf",
+    meshes: GivenMeshes | None = None,
 ) -> RobotModel:
     """Parse a URDF (its text; ``folder`` resolves relative mesh paths) into a :class:`RobotModel`.
 
     ``source`` names the parameter the URDF came from, for errors. Poses are ``[x, y, z, roll, pitch,
     yaw]`` (m, rad): ``tcp`` in ``tip_link``'s frame, ``base_pose`` of ``base_link`` in ``world``.
+    ``meshes``: the meshes themselves (a recording's), so that no file the URDF names is opened.
     """
     _check_robot_text(urdf_text, srdf_text, source, LIMITS)
     robot = _parse_urdf(urdf_text, source)
@@ -482,7 +488,7 @@ def load_robot(
         if name not in names:
             raise WorldError("world.robot.gripper_links", f"link {name!r} is not in the URDF")
 
-    budget = _MeshBudget(LIMITS)
+    budget = _MeshBudget(LIMITS, meshes)
     links = tuple(
         LinkModel(link.name, frame_of[link.name], inverse[frame_of[link.name]] @ pose[link.name], geometries)
         for link in robot.links
@@ -552,9 +558,9 @@ def _floats(tree: Mapping[str, Any], key: str) -> list[float]:
     return out
 
 
-def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
+def robot_from_parameters(robot: Mapping[str, Any], folder: Path, meshes: GivenMeshes | None = None) -> RobotModel:
     """The robot of a ``world.robot`` parameter tree (interface.md section 1b); relative paths are read from
-    ``folder`` (the parameter file's)."""
+    ``folder`` (the parameter file's). ``meshes``: the URDF's meshes given (:func:`load_robot`)."""
     has_file, has_text = "urdf" in robot, "description" in robot
     if has_file == has_text:
         raise WorldError("world.robot.urdf", "expected exactly one of world.robot.urdf and world.robot.description")
@@ -587,6 +593,7 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
         fixed_joint_positions=_floats(robot, "fixed_joint_positions"),
         gripper_links=_strings(robot, "gripper_links"),
         source=source,
+        meshes=meshes,
     )
 
 
@@ -657,25 +664,53 @@ def _mesh_bytes(path: Path, where: str, parameter: str, limits: Limits) -> bytes
         raise WorldError(parameter, f"{where}: mesh file {str(path)!r}: {error}") from None
 
 
-class _MeshBudget:
-    """The meshes of one robot: each file read once (a file named by many links costs one read), and their
-    triangles held to ``Limits.max_total_triangles`` as they are read."""
+#: A URDF's meshes given rather than read: link name -> its meshes' triangle corners (m, (3t, 3) each, in the
+#: link's frame, scaled and placed by the collision's origin), in the order of the link's mesh collisions (as
+#: ``~/world_markers`` draws them).
+GivenMeshes = Mapping[str, Sequence[NDArray[np.float64]]]
 
-    def __init__(self, limits: Limits) -> None:
+
+class _MeshBudget:
+    """The meshes of one robot: each file read once (a file named by many links costs one read), or taken
+    from ``given``; their triangles held to ``Limits.max_total_triangles`` as they come."""
+
+    def __init__(self, limits: Limits, given: GivenMeshes | None = None) -> None:
         self.limits = limits
+        self.given = given
         self.triangles = 0
         self._read: dict[tuple[str, tuple[float, ...] | None], tuple[Matrix, Any]] = {}
+        self._taken: dict[str, int] = {}
 
-    def load(self, path: Path, scale: Sequence[float] | None, where: str, parameter: str) -> tuple[Matrix, Any]:
-        key = (str(path), None if scale is None else tuple(float(v) for v in scale))
-        if key not in self._read:
-            self._read[key] = _load_mesh(path, scale, where, parameter, self.limits)
-        vertices, faces = self._read[key]
-        self.triangles += len(faces)
+    def take_given(self, link: str, k: int, origin: Matrix, where: str, parameter: str) -> tuple[Matrix, Any]:
+        """The next given mesh of ``link``, in its collision's own frame (``origin`` undone)."""
+        assert self.given is not None
+        index = self._taken.get(link, 0)
+        corners = self.given.get(link, ())
+        if index >= len(corners):
+            raise WorldError(parameter, f"{where}: the mesh is not among the meshes given (a recording's markers)")
+        self._taken[link] = index + 1
+        placed = np.asarray(corners[index], dtype=np.float64).reshape(-1, 3)
+        if len(placed) == 0 or len(placed) % 3 or not np.all(np.isfinite(placed)):
+            raise WorldError(parameter, f"{where}: the mesh given is not a list of triangles")
+        self._count(len(placed) // 3, where, parameter)
+        if len(placed) // 3 > self.limits.max_mesh_triangles:
+            raise WorldError(parameter, f"{where}: the mesh given holds more than Limits.max_mesh_triangles triangles")
+        vertices = (placed - origin[:3, 3]) @ origin[:3, :3]
+        return vertices, np.arange(len(placed), dtype=np.int64).reshape(-1, 3)
+
+    def _count(self, triangles: int, where: str, parameter: str) -> None:
+        self.triangles += triangles
         if self.triangles > self.limits.max_total_triangles:
             raise WorldError(
                 parameter,
                 f"{where}: the robot's meshes hold more than Limits.max_total_triangles "
                 f"({self.limits.max_total_triangles}) triangles",
             )
+
+    def load(self, path: Path, scale: Sequence[float] | None, where: str, parameter: str) -> tuple[Matrix, Any]:
+        key = (str(path), None if scale is None else tuple(float(v) for v in scale))
+        if key not in self._read:
+            self._read[key] = _load_mesh(path, scale, where, parameter, self.limits)
+        vertices, faces = self._read[key]
+        self._count(len(faces), where, parameter)
         return vertices, faces

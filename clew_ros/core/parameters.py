@@ -236,8 +236,8 @@ class Limits:
     max_spheres: int = 10_000
     #: Bytes of a planning scene file (``world.scene_file``), checked before it is parsed.
     max_scene_file_bytes: int = 16 * 2**20
-    #: Collision objects and primitives of a planning scene, counted after YAML expands its aliases and
-    #: before any is read (``world.obstacle_names`` and the scene's together: ``max_obstacles``).
+    #: Primitives of a planning scene's collision objects (an object without any counts one), counted after
+    #: YAML expands its aliases and before any is read (with ``world.obstacle_names``: ``max_obstacles``).
     max_scene_objects: int = 5000
     #: Points of one ``~/points`` cloud (section 3c): the highest ``state.max_points`` may be, and its default.
     max_points: int = 1_000_000
@@ -709,7 +709,7 @@ _LIMIT_TEXT = {
     "max_solid_cells": "cells of one mesh's voxelised solid the sphere cover chooses among",
     "max_spheres": "spheres of the robot's sphere model",
     "max_scene_file_bytes": "size of a planning scene file (world.scene_file), before it is parsed",
-    "max_scene_objects": "collision objects and primitives of a planning scene, after YAML aliases expand",
+    "max_scene_objects": "primitives of a planning scene's collision objects, counted after YAML aliases expand",
     "max_points": "points of one ~/points cloud (the highest state.max_points)",
 }
 #: The unit of each cap.

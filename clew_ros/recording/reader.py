@@ -84,7 +84,8 @@ def find_mcap(path: str | Path, *, limits: RecordingLimits | None = None) -> Pat
             raise RecordingError(f"{path} is not an .mcap file or a recording directory")
         return path
     if not path.is_dir():
-        raise RecordingError(f"recording {path} does not exist")
+        why = "is not a regular file (a device, a pipe)" if path.exists() else "does not exist"
+        raise RecordingError(f"recording {path} {why}")
     metadata = path / "metadata.yaml"
     if metadata.is_file():
         try:

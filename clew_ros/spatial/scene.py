@@ -246,19 +246,18 @@ def read_scene_file(name: Any, folder: Path, limits: Limits = LIMITS) -> Any:
 
 
 def _check_scene_size(objects: list[Any], parameter: str, limits: Limits) -> None:
-    """The collision objects and their primitives (as YAML aliases expanded them) counted against
-    ``Limits.max_scene_objects`` before any is read: a short file may name one list many times."""
-    count = len(objects)
+    """The primitives of the collision objects (an object without any counts one), as YAML aliases expanded
+    them, counted against ``Limits.max_scene_objects`` before any is read: a short file may name one list
+    many times."""
+    count = 0
     for item in objects:
-        if count > limits.max_scene_objects:
-            break
         primitives = item.get("primitives") if isinstance(item, Mapping) else None
-        count += len(primitives) if isinstance(primitives, list) else 0
-    if count > limits.max_scene_objects:
-        raise WorldError(
-            f"{parameter}: world.collision_objects",
-            f"more than Limits.max_scene_objects ({limits.max_scene_objects}) objects and primitives",
-        )
+        count += max(len(primitives), 1) if isinstance(primitives, list) else 1
+        if count > limits.max_scene_objects:
+            raise WorldError(
+                f"{parameter}: world.collision_objects",
+                f"more than Limits.max_scene_objects ({limits.max_scene_objects}) objects and primitives",
+            )
 
 
 def bounds_from_parameters(world: Mapping[str, Any]) -> NDArray[np.float64] | None:

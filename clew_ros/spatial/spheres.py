@@ -189,7 +189,9 @@ def _cover_mesh(
     cell = settings.cell_m
     check_mesh_work(vertices, faces, cell, where, limits)
     origin, kept = _voxels(vertices, faces, cell)
-    _check_cap(int(kept.sum()), limits.max_solid_cells, "max_solid_cells", f"{where}: its solid at {cell:g} m holds")
+    _check_cap(
+        int(kept.sum()), limits.max_solid_cells, "max_solid_cells", f"{where}: its solid at {cell:g} m holds", "cells"
+    )
     index = np.argwhere(kept)
     centers = origin + (index + 0.5) * cell
     half_diagonal = cell * math.sqrt(3) / 2
@@ -239,7 +241,13 @@ def sphere_model(robot: RobotModel, settings: SphereSettings | None = None, limi
         for geometry in link.geometries:
             local_c, local_r = cover(geometry, settings)
             count += len(local_r)
-            _check_cap(count, limits.max_spheres, "max_spheres", f"<link name={link.name!r}>: the sphere model holds")
+            _check_cap(
+                count,
+                limits.max_spheres,
+                "max_spheres",
+                f"<link name={link.name!r}>: the sphere model holds",
+                "spheres",
+            )
             to_frame = link.offset @ geometry.origin
             centers.append(local_c @ to_frame[:3, :3].T + to_frame[:3, 3])
             radii.append(local_r)
@@ -259,9 +267,9 @@ def sphere_model(robot: RobotModel, settings: SphereSettings | None = None, limi
 # ----------------------------------------------------------------------------------------- caps
 
 
-def _check_cap(count: int, limit: int, cap: str, what: str) -> None:
+def _check_cap(count: int, limit: int, cap: str, what: str, unit: str) -> None:
     if count > limit:
-        raise WorldError("world.robot.urdf", f"{what} {count}, more than Limits.{cap} ({limit})")
+        raise WorldError("world.robot.urdf", f"{what} {count} {unit}, more than Limits.{cap} ({limit})")
 
 
 def check_mesh_work(
@@ -273,7 +281,11 @@ def check_mesh_work(
     extent = vertices.max(axis=0) - vertices.min(axis=0) + 3.0 * cell
     cells = float(np.prod(np.ceil(extent / cell)))
     _check_cap(
-        int(min(cells, 2**62)), limits.max_mesh_cells, "max_mesh_cells", f"{where}: its voxel grid at {cell:g} m holds"
+        int(min(cells, 2**62)),
+        limits.max_mesh_cells,
+        "max_mesh_cells",
+        f"{where}: its voxel grid at {cell:g} m holds",
+        "cells",
     )
     corners = vertices[faces]
     longest = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
@@ -284,6 +296,7 @@ def check_mesh_work(
         limits.max_split_triangles,
         "max_split_triangles",
         f"{where}: split to {cell:g} m it holds",
+        "triangles",
     )
 
 

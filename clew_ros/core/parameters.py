@@ -44,10 +44,12 @@ __all__ = [
     "LOCKED_PREFIXES",
     "NODE_PARAMETERS",
     "OBSTACLE_PARAMETER",
+    "PLANNER_LOCK",
     "PLANNER_PARAMETERS",
     "REQUIRED",
     "RETIRED_PARAMETERS",
     "RUNTIME_CHANGES",
+    "SIM_TIME_CHANGES",
     "WORLD_PARAMETERS",
     "Limits",
     "ParameterSpec",
@@ -241,6 +243,9 @@ class Limits:
     max_scene_objects: int = 5000
     #: Points of one ``~/points`` cloud (section 3c): the highest ``state.max_points`` may be, and its default.
     max_points: int = 1_000_000
+    #: Refused requests (``~/plan``, ``~/goal_pose``) recorded in the current run's recording: past it they are
+    #: still published and logged, not recorded (a flood of bad goals would otherwise grow one recording).
+    max_recorded_refusals: int = 100
 
 
 #: The caps in force (:class:`Limits`' defaults).
@@ -250,6 +255,10 @@ LIMITS = Limits()
 #: The name of the development switch: ``true`` lets the :attr:`~ParameterSpec.locked` parameters change while
 #: the node runs.
 RUNTIME_CHANGES = "parameters.allow_runtime_changes"
+#: The switch that lets ``use_sim_time`` (rclpy's) change while the node runs (off: fixed at its start value).
+SIM_TIME_CHANGES = "parameters.allow_sim_time_changes"
+#: The switch that fixes every ``planner.*`` parameter at start.
+PLANNER_LOCK = "parameters.lock_planner"
 #: The namespaces whose parameters are :attr:`~ParameterSpec.locked` (fixed at start): the world (the robot,
 #: its limits, the obstacles), the trajectory limits a controller follows, where and whether runs are
 #: recorded, the live view. A parameter under them that was not declared at start cannot be added later.
@@ -458,6 +467,24 @@ NODE_PARAMETERS = ParameterTable(
             "Development switch: true lets ros2 param set change the world.*, record.*, trajectory.* and live.* "
             "parameters while the node runs (when no plan runs); false fixes them at start, and a change is "
             "refused naming the parameter. Read only: taken when the node starts.",
+            read_only=True,
+        ),
+        ParameterSpec(
+            SIM_TIME_CHANGES,
+            _B,
+            False,
+            "true lets ros2 param set change use_sim_time while the node runs; false fixes it at its start value "
+            "(a peer that switched it on would stamp ~/trajectory with its own /clock), and a change is refused "
+            "naming it. Read only: taken when the node starts.",
+            read_only=True,
+        ),
+        ParameterSpec(
+            PLANNER_LOCK,
+            _B,
+            False,
+            "true fixes every planner.* parameter at its start value (a change is refused naming it), so that no "
+            "peer can change how much CPU a run takes or which plan a seed gives; false: planner.* settable. "
+            "Read only: taken when the node starts.",
             read_only=True,
         ),
         ParameterSpec(
@@ -711,6 +738,7 @@ _LIMIT_TEXT = {
     "max_scene_file_bytes": "size of a planning scene file (world.scene_file), before it is parsed",
     "max_scene_objects": "primitives of a planning scene's collision objects, counted after YAML aliases expand",
     "max_points": "points of one ~/points cloud (the highest state.max_points)",
+    "max_recorded_refusals": "refused requests recorded in the current run's recording (the rest: published only)",
 }
 #: The unit of each cap.
 _LIMIT_UNIT = {
@@ -737,6 +765,7 @@ _LIMIT_UNIT = {
     "max_scene_file_bytes": "bytes",
     "max_points": "points",
     "max_scene_objects": "objects",
+    "max_recorded_refusals": "events",
 }
 assert set(_LIMIT_UNIT) == set(_LIMIT_TEXT)
 assert list(_LIMIT_TEXT) == [field.name for field in dataclasses.fields(Limits)]

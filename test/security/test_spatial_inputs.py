@@ -150,3 +150,43 @@ def test_the_shipped_arms_are_well_within_the_caps() -> None:
             continue
         loaded = spatial_world_from_parameters(read_parameter_file(world), world.parent)
         assert loaded.spheres.count < LIMITS.max_spheres // 10
+
+
+@pytest.mark.ros
+def test_the_node_refuses_a_crafted_world_at_start_and_keeps_running_where_it_runs(
+    worlds: list[tuple[str, Path, str]], tmp_path: Path
+) -> None:
+    """At start: the node does not start, logging the line clew_plan prints. Running (the development switch
+    on): a change to a crafted URDF is refused with that reason, and the node keeps planning its world."""
+    pytest.importorskip("rclpy")
+    from helpers.node_harness import NodeProcess, Session
+    from helpers.rel_node import set_parameters
+
+    _, scaled, _ = worlds[0]  # the URDF's mesh scaled x30
+    node = NodeProcess(tmp_path / "refused.log", scaled, {"record.enabled": False})
+    try:
+        code = node.proc.wait(timeout=60.0)
+    finally:
+        node.stop()
+    assert code != 0
+    assert "Limits.max_mesh_scale" in node.output(), node.output()
+    assert SECRET not in node.output()
+
+    crafted_urdf = str(scaled.parent / "robot.urdf")
+    served = scaled.parent / "served.yaml"
+    served.write_text(
+        scaled.read_text(encoding="utf-8").replace(crafted_urdf, str(ROOT / "config/robots/panda/panda.urdf")),
+        encoding="utf-8",
+    )
+    node = NodeProcess(
+        tmp_path / "served.log", served, {"record.enabled": False, "parameters.allow_runtime_changes": True}
+    )
+    session = Session(node)
+    try:
+        [result] = set_parameters(session, {"world.robot.urdf": crafted_urdf}, timeout_s=60.0)
+        assert not result.successful
+        assert "Limits.max_mesh_scale" in result.reason, result.reason
+        response = session.plan(timeout_s=60.0)
+        assert response.success, response.message
+    finally:
+        assert session.close() == 0, node.output()

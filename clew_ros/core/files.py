@@ -55,16 +55,18 @@ def read_regular_file(path: Path, limit: int, cap: str) -> bytes:
         descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except OSError as error:
         raise FileRefusedError(error.strerror or type(error).__name__) from None
-    with os.fdopen(descriptor, "rb") as stream:
+    try:
         status = os.fstat(descriptor)
         if not stat.S_ISREG(status.st_mode):
             raise FileRefusedError("not a regular file (a device, a pipe or a folder)")
         if status.st_size > limit:
             raise FileRefusedError(f"it holds {status.st_size} bytes, larger than {limit} bytes ({cap})")
-        try:
+        with os.fdopen(descriptor, "rb", closefd=False) as stream:
             data = read_at_most(stream, limit)
-        except OSError as error:
-            raise FileRefusedError(error.strerror or type(error).__name__) from None
+    except OSError as error:
+        raise FileRefusedError(error.strerror or type(error).__name__) from None
+    finally:
+        os.close(descriptor)
     if len(data) > limit:  # grew since it was checked
         raise FileRefusedError(f"it holds more bytes, larger than {limit} bytes ({cap})")
     return data

@@ -150,7 +150,7 @@ def resolve_uri(uri: str, folder: Path, parameter: str) -> Path:
             from ament_index_python.packages import get_package_share_directory
 
             return Path(get_package_share_directory(package)) / rest
-        except (ImportError, LookupError, ValueError) as error:
+        except (ImportError, LookupError, ValueError, OSError) as error:  # OSError: no AMENT_PREFIX_PATH
             raise WorldError(parameter, f"cannot resolve {uri!r}: package {package!r} not found ({error})") from None
     if uri.startswith("file://"):
         return Path(uri[len("file://") :])
@@ -469,6 +469,7 @@ def load_robot(
     """
     _check_robot_text(urdf_text, srdf_text, source, LIMITS)
     robot = _parse_urdf(urdf_text, source)
+    _check_origins(robot, source)
     names = {link.name for link in robot.links}
     parent_joint, root = _tree(robot, base_link, tip_link, source)
     planned = _planned(parent_joint, base_link, tip_link)
@@ -642,6 +643,24 @@ def _unquoted(error: BaseException) -> str:
     says about an element, without repeating what a file holds."""
     text = re.sub(r"'[^']*'|\"[^\"]*\"", "'...'", " ".join(str(error).split()))
     return text if len(text) <= 160 else text[:157] + "..."
+
+
+def _check_origins(robot: Any, source: str) -> None:
+    """Every ``<origin xyz rpy>`` of the URDF's joints and collisions: finite numbers (a NaN would reach every
+    frame and every collision check)."""
+    elements = [(f"<joint name={j.name!r}>", j) for j in robot.joints]
+    elements += [
+        (f"<link name={link.name!r}> <collision> {k}", c) for link in robot.links for k, c in enumerate(link.collisions)
+    ]
+    for where, element in elements:
+        origin = getattr(element, "origin", None)
+        values = [*(getattr(origin, "xyz", None) or ()), *(getattr(origin, "rpy", None) or ())]
+        try:
+            finite = all(math.isfinite(float(v)) for v in values)
+        except (TypeError, ValueError):
+            finite = False
+        if not finite:
+            raise WorldError(source, f"{where} <origin>: expected finite xyz and rpy")
 
 
 def _mesh_scale(scale: Sequence[float], where: str, parameter: str, limits: Limits) -> tuple[float, ...]:

@@ -9,6 +9,7 @@ cases hide in files that must never be quoted.
 from __future__ import annotations
 
 import copy
+import random
 import struct
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -262,3 +263,91 @@ def record_start(directory: Path, world_file: Path, names: dict[str, str], *, me
         now += 10**9
         write("events", messages.event_message(run_id, "aborted", now / 1e9, code="TIME_LIMIT", message="cut"))
     return recorder.path
+
+
+# --------------------------------------------------------------------------- fuzz corpus: spatial files
+
+
+def scene_cases(seed: int = 0) -> Iterator[tuple[str, bytes]]:
+    """Malformed planning scene files, from the shipped ``panda_scene.scene.yaml``."""
+    from helpers.security_files import bit_flips, insertions, truncations
+
+    rng = random.Random(seed)
+    data = (CONFIG / "spatial" / "panda_scene.scene.yaml").read_bytes()
+    yield from truncations(data, rng, 10)
+    yield from bit_flips(data, rng, 10)
+    yield from insertions(data, rng, 8)
+    yield "nested YAML", b"world: " + b"[" * 100_000 + b"]" * 100_000
+    yield "nested YAML", b"world: {collision_objects: [" + b"{a: " * 5_000 + b"1" + b"}" * 5_000 + b"]}"
+    yield (
+        "aliases",
+        b"a: &a [1, 2]\nb: &b [*a, *a, *a, *a, *a, *a, *a, *a]\nc: &c [*b, *b, *b, *b, *b, *b, *b, *b]\nworld: *c\n",
+    )
+    yield "NaN or Infinity", data.replace(b"0.55", b".nan", 1)
+    yield "NaN or Infinity", data.replace(b"0.04]", b".inf]", 1)
+    yield "NaN or Infinity", data.replace(b"0.6, 1.0", b"1e999, 1.0", 1)
+    for value in (b"'x'", b"true", b"null", b"{}", b"[[1]]", b"9" * 400):
+        yield "wrong types", data.replace(b"[0.6, 1.0, 0.04]", value, 1)
+        yield "wrong types", data.replace(b"frame_id: panda_link0", b"frame_id: " + value, 1)
+        yield "wrong types", data.replace(b"type: box", b"type: " + value, 1)
+        yield "wrong types", data.replace(b"id: table", b"id: " + value, 1)
+    yield "binary", rng.randbytes(512)
+    yield "binary", b"\xff\xfe" + data.decode().encode("utf-16-le")
+    yield "binary", b"\x00" * 300
+
+
+def urdf_cases(seed: int = 0) -> Iterator[tuple[str, bytes]]:
+    """Malformed URDFs, from the Panda's (its meshes named by absolute path)."""
+    from helpers.security_files import bit_flips, insertions, truncations
+
+    rng = random.Random(seed)
+    text = PANDA_URDF.read_text(encoding="utf-8").replace('filename="meshes/', f'filename="{MESHES}/')
+    data = text.encode()
+    yield from truncations(data, rng, 8)
+    yield from bit_flips(data, rng, 10)
+    yield from insertions(data, rng, 8)
+    yield (
+        "entities",
+        (
+            b'<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">'
+            b'<!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;"><!ENTITY d "&c;&c;&c;&c;&c;&c;&c;&c;&c;&c;">'
+            b'<!ENTITY e "&d;&d;&d;&d;&d;&d;&d;&d;&d;&d;"><!ENTITY f "&e;&e;&e;&e;&e;&e;&e;&e;&e;&e;">]>'
+            b'<robot name="&f;"><link name="&f;"/></robot>'
+        ),
+    )
+    yield "entities", b'<?xml version="1.0"?><!DOCTYPE r [<!ENTITY x SYSTEM "file:///etc/passwd">]><robot name="&x;"/>'
+    yield "nested XML", b"<robot>" + b"<a>" * 50_000 + b"</a>" * 50_000 + b"</robot>"
+    yield "many links", text.replace("</robot>", '<link name="x"/>' * 3_000 + "</robot>").encode()
+    for value in ("nan", "inf", "-1", "1e999", "x", ""):
+        yield "NaN or wrong values", text.replace('scale="', f'scale="{value} ', 1).encode()
+        yield "NaN or wrong values", text.replace('lower="', f'lower="{value}" x="', 1).encode()
+        yield "NaN or wrong values", text.replace('xyz="0 0 0.333"', f'xyz="{value} 0 0.333"', 1).encode()
+        yield (
+            "NaN or wrong values",
+            text.replace('<mesh filename="', f'<mesh scale="{value} 1 1" filename="', 1).encode(),
+        )
+    yield "files", text.replace(f"{MESHES}/link1.stl", "/dev/zero").encode()
+    yield "files", text.replace(f"{MESHES}/link1.stl", "/etc/hostname").encode()
+    yield "files", text.replace(f"{MESHES}/link1.stl", "package://no_such_package/x.stl").encode()
+    yield "files", text.replace(f"{MESHES}/link1.stl", str(ROOT)).encode()
+    yield "binary", rng.randbytes(512)
+    yield "binary", b"\xff\xfe" + text[:2000].encode("utf-16-le")
+
+
+def mesh_cases(seed: int = 0) -> Iterator[tuple[str, bytes]]:
+    """Malformed STL meshes, from the Panda's link 3 (binary STL), plus ASCII and crafted ones."""
+    from helpers.security_files import bit_flips, insertions, truncations
+
+    rng = random.Random(seed)
+    data = (MESHES / "link3.stl").read_bytes()
+    yield from truncations(data, rng, 6)
+    yield from bit_flips(data, rng, 6)
+    yield from insertions(data, rng, 4)
+    yield "huge triangle count", data[:80] + struct.pack("<I", 2**32 - 1) + data[84:]
+    yield "NaN or Infinity", data[:96] + struct.pack("<f", float("nan")) + data[100:]
+    yield "NaN or Infinity", data[:96] + struct.pack("<f", float("inf")) + data[100:]
+    yield "huge coordinates", data[:96] + struct.pack("<f", 3e38) + data[100:]
+    yield "ascii", b"solid x\n" + b"facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex nan 1 0\n" * 3
+    yield "ascii", b"solid x\nendsolid x\n"
+    yield "binary", rng.randbytes(600)
+    yield "binary", b""

@@ -149,3 +149,21 @@ def test_render_of_a_crafted_world_exits_2_without_its_contents(
     assert len(err.splitlines()) == 1, err
     assert "expected URDF XML" in err
     assert SECRET not in err
+
+
+def test_a_metadata_file_is_refused_without_its_contents(tmp_path: Path) -> None:
+    """A run directory whose metadata.yaml is not YAML: refused with where it fails, not what it holds."""
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "metadata.yaml").write_text(f"{SECRET}: [\n  {SECRET}\n", encoding="utf-8")
+    result = subprocess.run(
+        [sys.executable, "-m", "clew_ros.cli.render", str(run), "-o", str(tmp_path / "out.png")],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT_S,
+        check=False,
+        cwd=ROOT,
+    )
+    assert result.returncode == 2, result.stderr
+    assert "is not rosbag2 metadata" in result.stderr, result.stderr
+    assert SECRET not in result.stderr

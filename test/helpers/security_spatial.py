@@ -220,12 +220,15 @@ def crafted_worlds(folder: Path) -> Iterator[tuple[str, Path, str]]:
         yield name, write(case), expected
 
 
-def record_start(directory: Path, world_file: Path, names: dict[str, str], *, meshes: bool = True) -> Path:
+def record_start(
+    directory: Path, world_file: Path, names: dict[str, str], *, meshes: bool = True, extra_markers: int = 0
+) -> Path:
     """A spatial run's start recorded as the node records it (``~/world_yaml``, ``~/world_markers`` with the
     arm's meshes, ``~/robot_description``, ``/tf_static``, ``accepted`` then ``aborted``), its
     ``~/world_yaml`` naming other files: ``names`` maps ``urdf``, ``srdf``, ``scene_file`` to the path the
     recording names instead (a device, a secret); ``meshes=False``: the markers leave the meshes out (as a
-    node without the picture package's dependencies draws them). Returns the run directory."""
+    node without the picture package's dependencies draws them); ``extra_markers``: that many more obstacle
+    cubes in ``~/world_markers`` (a crafted recording). Returns the run directory."""
     import uuid
 
     from clew_ros.core.settings import PlannerSettings
@@ -254,7 +257,12 @@ def record_start(directory: Path, world_file: Path, names: dict[str, str], *, me
             (recorded["robot"] if key in ("urdf", "srdf") else recorded)[key] = path
         world_yaml.data = yaml.safe_dump(document)
         write("world_yaml", world_yaml)
-        write("world_markers", spatial.world_markers(world, now, simplify=simplify if meshes else None))
+        markers = spatial.world_markers(world, now, simplify=simplify if meshes else None)
+        for k in range(extra_markers):
+            cube = copy.deepcopy(next(m for m in markers.markers if m.ns in ("obstacles", "supports")))
+            cube.id = 1000 + k
+            markers.markers.append(cube)
+        write("world_markers", markers)
         write("robot_description", messages.String(data=setup.description))
         recorder.write(
             "/tf_static", tf_message(spatial.static_transforms(setup, world), now), now, qos=TF_TOPICS["/tf_static"]

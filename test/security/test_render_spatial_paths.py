@@ -167,3 +167,12 @@ def test_a_metadata_file_is_refused_without_its_contents(tmp_path: Path) -> None
     assert result.returncode == 2, result.stderr
     assert "is not rosbag2 metadata" in result.stderr, result.stderr
     assert SECRET not in result.stderr
+
+
+def test_a_recording_with_too_many_obstacle_markers_is_refused_before_reading_them(tmp_path: Path) -> None:
+    from clew_ros.core.parameters import LIMITS
+    from clew_ros.render import RenderError
+
+    recording = record_start(tmp_path, SCENE_WORLD, {"scene_file": "/dev/zero"}, extra_markers=LIMITS.max_obstacles + 1)
+    with pytest.raises(RenderError, match=r"Limits\.max_obstacles"):
+        spatial_recording(recording)

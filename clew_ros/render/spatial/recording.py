@@ -27,6 +27,7 @@ import numpy as np
 import yaml
 
 from clew_ros.core.errors import ClewError
+from clew_ros.core.parameters import LIMITS
 from clew_ros.render.errors import RenderError
 from clew_ros.render.spatial.frames import FrameSampling, SpatialFrames, frames_from_plan
 from clew_ros.spatial.transforms import matrix_pose, pose_matrix, quaternion_matrix
@@ -101,19 +102,26 @@ def _world(parameters: dict[str, Any], recording: Any, source: str) -> tuple[Spa
         _inline_scene(world_tree, markers, source)
     folder = Path(source).resolve().parent
     try:
-        model = robot_from_parameters(robot_tree, folder, meshes=_link_meshes(markers))
+        model = robot_from_parameters(robot_tree, folder, meshes=_link_meshes(markers, source))
         prepared = (model, sphere_model(model))
         return spatial_world_from_parameters({**parameters, "world": world_tree}, folder, prepared=prepared), origin
     except ClewError as error:
         raise RenderError(f"{source} (~/world_yaml): {error}; pass the world with --world WORLD.yaml") from None
 
 
-def _link_meshes(markers: list[Any]) -> dict[str, list[np.ndarray]]:
+def _link_meshes(markers: list[Any], source: str) -> dict[str, list[np.ndarray]]:
     """The arm's meshes ``~/world_markers`` draws (``robot_links`` TRIANGLE_LISTs in their link's frame), by
     link, in marker order (the order of the link's collisions)."""
     out: dict[str, list[np.ndarray]] = {}
+    total = 0
     for marker in sorted(markers, key=lambda m: int(getattr(m, "id", 0))):
         if getattr(marker, "ns", "") == "robot_links" and getattr(marker, "type", None) == _TRIANGLE_LIST:
+            total += len(marker.points)
+            if total > 3 * LIMITS.max_total_triangles:  # checked before the points are read
+                raise RenderError(
+                    f"{source}: the ~/world_markers meshes hold more than Limits.max_total_triangles "
+                    f"({LIMITS.max_total_triangles}) triangles"
+                )
             corners = np.array([(p.x, p.y, p.z) for p in marker.points], dtype=np.float64).reshape(-1, 3)
             out.setdefault(str(marker.header.frame_id), []).append(corners)
     return out
@@ -130,6 +138,10 @@ def _inline_scene(world_tree: dict[str, Any], markers: list[Any], source: str) -
         for m in markers
         if getattr(m, "ns", "") in ("obstacles", "supports") and getattr(m, "type", None) in _SHAPES
     }
+    if len(solids) > LIMITS.max_obstacles:  # checked before any is read
+        raise RenderError(
+            f"{source}: ~/world_markers hold more than Limits.max_obstacles ({LIMITS.max_obstacles}) obstacles"
+        )
     if not solids:
         raise RenderError(
             f"{source}: ~/world_yaml names a scene file and the recording's ~/world_markers hold no obstacles; "

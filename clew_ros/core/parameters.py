@@ -210,13 +210,14 @@ class Limits:
     #: characters only; the rest is cut).
     max_quoted_chars: int = 64
     #: Bytes of a parameter file (``--params-file``, ``clew_plan``'s world, ``clew_render --world``), read
-    #: before YAML parses it.
-    max_parameter_file_bytes: int = 64 * 2**20
+    #: before YAML parses it (YAML reads a dense file at a third of a megabyte a second; 5,000 spatial
+    #: obstacles written by ``yaml.safe_dump`` take about a megabyte).
+    max_parameter_file_bytes: int = 2 * 2**20
     # ------------------------------------------------------------------ spatial worlds (interface.md 1b)
     #: Bytes of a URDF or SRDF (a file, or the ``world.robot.description`` text), checked before it is parsed.
     max_urdf_bytes: int = 8 * 2**20
     #: Bytes of one mesh file a URDF names, checked before it is read (parsing grows with the file).
-    max_mesh_file_bytes: int = 16 * 2**20
+    max_mesh_file_bytes: int = 10 * 2**20
     #: Triangles of one mesh (after reading it, before anything else is done with it).
     max_mesh_triangles: int = 200_000
     #: Triangles of all the robot's meshes together: each is kept in memory and drawn in the markers.
@@ -236,8 +237,9 @@ class Limits:
     max_solid_cells: int = 30_000
     #: Spheres of the robot's sphere model: every collision check visits each (the Panda: 213).
     max_spheres: int = 10_000
-    #: Bytes of a planning scene file (``world.scene_file``), checked before it is parsed.
-    max_scene_file_bytes: int = 16 * 2**20
+    #: Bytes of a planning scene file (``world.scene_file``), checked before it is parsed (as the parameter
+    #: file's; a MotionBenchMaker scene takes a few kilobytes).
+    max_scene_file_bytes: int = 2**20
     #: Primitives of a planning scene's collision objects (an object without any counts one), counted after
     #: YAML expands its aliases and before any is read (with ``world.obstacle_names``: ``max_obstacles``).
     max_scene_objects: int = 5000

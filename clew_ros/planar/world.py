@@ -56,6 +56,9 @@ MAX_ABS_VALUE = 1e6
 MAX_LINKS = LIMITS.max_links
 #: Largest parameter file read (bytes); ``/dev/zero`` is not a world.
 MAX_PARAMETER_FILE_BYTES = LIMITS.max_parameter_file_bytes
+#: The safe YAML loader, libyaml's where PyYAML has it (four times faster on a large parameter file; the same
+#: values: the same resolver and constructor).
+_YAML_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 def _frozen(values: Any, dtype: type = float) -> np.ndarray:
@@ -144,7 +147,7 @@ def read_parameter_file(path: str | Path) -> dict[str, Any]:
     except UnicodeDecodeError as error:
         raise WorldError(str(path), f"expected UTF-8 text ({error.reason} at byte {error.start})") from None
     try:
-        document = yaml.safe_load(text)
+        document = yaml.load(text, Loader=_YAML_LOADER)  # a safe loader: plain data only
     except yaml.YAMLError as error:
         raise WorldError(str(path), f"expected valid YAML ({yaml_error_place(error)})") from None
     except (RecursionError, MemoryError, ValueError) as error:  # absurd nesting, or numbers YAML cannot hold

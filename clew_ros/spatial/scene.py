@@ -230,7 +230,7 @@ def read_scene_file(name: Any, folder: Path, limits: Limits = LIMITS) -> Any:
     path = path if path.is_absolute() else folder / path
     try:
         data = read_regular_file(path, limits.max_scene_file_bytes, "Limits.max_scene_file_bytes")
-        return yaml.safe_load(data.decode("utf-8"))
+        return yaml.load(data.decode("utf-8"), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except FileRefusedError as error:
         raise WorldError("world.scene_file", f"cannot read {str(path)!r}: {error}") from None
     except UnicodeDecodeError as error:

@@ -179,6 +179,53 @@ def _secret_scene_value(folder: Path) -> Path:
     return _with_world(folder, scene_file=str(folder / "notes.txt"))
 
 
+_SCENE_OBJECT = (
+    "  - {id: o%d, primitives: [{type: box, dimensions: [0.1, 0.1, 0.1]}], "
+    "primitive_poses: [{position: [2, 2, 2], orientation: [0, 0, 0, 1]}]}\n"
+)
+
+
+def _scene_of_size(folder: Path, size: int) -> Path:
+    """A scene file of one collision object after another up to ``size`` bytes."""
+    lines, total, k = ["world:\n collision_objects:\n"], 0, 0
+    while total < size - 200:
+        lines.append(_SCENE_OBJECT % k)
+        total += len(lines[-1])
+        k += 1
+    (folder / "scene.yaml").write_text("".join(lines), encoding="utf-8")
+    return _with_world(folder, scene_file=str(folder / "scene.yaml"))
+
+
+def _scene_at_cap(folder: Path) -> Path:
+    """A scene file just within its size cap: parsed (the largest parse the cap allows), then refused."""
+    from clew_ros.core.parameters import LIMITS
+
+    return _scene_of_size(folder, LIMITS.max_scene_file_bytes)
+
+
+def _scene_over_cap(folder: Path) -> Path:
+    from clew_ros.core.parameters import LIMITS
+
+    return _scene_of_size(folder, LIMITS.max_scene_file_bytes + 4096)
+
+
+def _parameter_file_at_cap(folder: Path) -> Path:
+    """A parameter file just within its size cap (obstacles far beyond their cap): parsed, then refused."""
+    from clew_ros.core.parameters import LIMITS
+
+    path = _many_obstacles(folder)
+    text = path.read_text(encoding="utf-8")
+    entry = "        z{k}: {{pose: [2, 2, 2, 0, 0, 0], shape: box, size: [0.01, 0.01, 0.01]}}\n"
+    marker = "      obstacles:\n"
+    assert marker in text
+    extra, k = [], 0
+    while len(text) + sum(map(len, extra)) < LIMITS.max_parameter_file_bytes - 200:
+        extra.append(entry.format(k=k))
+        k += 1
+    path.write_text(text.replace(marker, marker + "".join(extra), 1), encoding="utf-8")
+    return path
+
+
 def _many_obstacles(folder: Path) -> Path:
     parameters = world_tree()
     world = parameters["world"]
@@ -209,6 +256,9 @@ CASES: tuple[tuple[str, Callable[[Path], Path], str], ...] = (
     ("scene a text file", _secret_scene, "as YAML"),
     ("scene a text value", _secret_scene_value, "world.collision_objects[0]"),
     ("5,001 obstacles", _many_obstacles, "Limits.max_obstacles"),
+    ("scene file at its size cap", _scene_at_cap, "Limits.max_scene_objects"),
+    ("scene file over its size cap", _scene_over_cap, "Limits.max_scene_file_bytes"),
+    ("parameter file at its size cap", _parameter_file_at_cap, "Limits.max_obstacles"),
 )
 
 

@@ -226,6 +226,9 @@ class Limits:
     max_mesh_scale: float = 10.0
     #: Links (and joints) of a URDF: the tree walk and the self-collision pairs grow with them.
     max_urdf_links: int = 256
+    #: XML elements of a URDF (links, joints, collisions, visuals, ...), counted before the URDF parser, whose
+    #: work grows with them, reads it (the Panda's: about 300).
+    max_urdf_elements: int = 10_000
     #: Cells of one mesh's voxel grid at the sphere model's cell size (``SphereSettings.cell_m``), from the
     #: mesh's extent before voxelising: the grid and its flood fill grow with it (the shipped arms: 15,000).
     max_mesh_cells: int = 500_000
@@ -733,6 +736,7 @@ _LIMIT_TEXT = {
     "max_total_triangles": "triangles of all the robot's meshes",
     "max_mesh_scale": "each factor of a URDF <mesh scale>",
     "max_urdf_links": "links, and joints, of a URDF",
+    "max_urdf_elements": "XML elements of a URDF, counted before the URDF parser reads it",
     "max_mesh_cells": "cells of one mesh's voxel grid for the sphere model (from its extent, before voxelising)",
     "max_split_triangles": "triangles of one mesh split to the voxel size (estimated before splitting)",
     "max_solid_cells": "cells of one mesh's voxelised solid the sphere cover chooses among",
@@ -760,6 +764,7 @@ _LIMIT_UNIT = {
     "max_total_triangles": "triangles",
     "max_mesh_scale": "factor",
     "max_urdf_links": "links",
+    "max_urdf_elements": "elements",
     "max_mesh_cells": "cells",
     "max_split_triangles": "triangles",
     "max_solid_cells": "cells",

@@ -616,8 +616,9 @@ def _capped_text(path: Path, parameter: str, limit: int, cap: str) -> str:
 
 
 def _check_robot_text(urdf_text: str, srdf_text: str | None, source: str, limits: Limits) -> None:
-    """The URDF and SRDF texts held to ``Limits.max_urdf_bytes``, and the URDF's links and joints to
-    ``Limits.max_urdf_links``, before the URDF parser (whose work grows with them) sees them."""
+    """The URDF and SRDF texts held to ``Limits.max_urdf_bytes``, the URDF's elements to
+    ``Limits.max_urdf_elements`` and its links and joints to ``Limits.max_urdf_links``, before the URDF parser
+    (whose work grows with them) sees them."""
     for text, parameter in ((urdf_text, source), (srdf_text, "world.robot.srdf")):
         if text is not None and len(text.encode("utf-8", "surrogatepass")) > limits.max_urdf_bytes:
             raise WorldError(
@@ -629,6 +630,12 @@ def _check_robot_text(urdf_text: str, srdf_text: str | None, source: str, limits
         root = ET.fromstring(urdf_text)
     except ET.ParseError as error:
         raise WorldError(source, f"expected URDF XML, the text does not parse: {error}") from None
+    elements = sum(1 for _ in root.iter())
+    if elements > limits.max_urdf_elements:
+        raise WorldError(
+            source,
+            f"the URDF has {elements} XML elements, more than Limits.max_urdf_elements ({limits.max_urdf_elements})",
+        )
     for tag in ("link", "joint"):
         count = sum(1 for _ in root.iter(tag))
         if count > limits.max_urdf_links:

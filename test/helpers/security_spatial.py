@@ -139,6 +139,14 @@ def _many_links(folder: Path) -> Path:
     return _with_robot(folder, urdf=str(urdf))
 
 
+def _many_collisions(folder: Path) -> Path:
+    """A few megabytes of URDF: one link with 100,000 boxes (within the links' cap)."""
+    box = '<collision><geometry><box size="0.01 0.01 0.01"/></geometry></collision>'
+    link = '<link name="panda_link3">'
+    urdf = urdf_with_meshes(folder, lambda t: t.replace(link, link + box * 100_000, 1))
+    return _with_robot(folder, urdf=str(urdf))
+
+
 def _device_urdf(folder: Path) -> Path:
     return _with_robot(folder, urdf="/dev/zero")
 
@@ -249,6 +257,7 @@ CASES: tuple[tuple[str, Callable[[Path], Path], str], ...] = (
     ("mesh /dev/zero", _device_mesh, "not a regular file"),
     ("mesh a text file", _secret_mesh, "holds no triangles"),
     ("5,000 URDF links", _many_links, "Limits.max_urdf_links"),
+    ("100,000 collisions on a link", _many_collisions, "Limits.max_urdf_elements"),
     ("URDF /dev/zero", _device_urdf, "not a regular file"),
     ("URDF a text file", _secret_urdf, "expected URDF XML"),
     ("scene aliases: 22,500 obstacles", _alias_scene, "Limits.max_scene_objects"),

@@ -139,6 +139,7 @@ def test_the_spatial_caps_are_in_the_specification_with_units() -> None:
         ("max_total_triangles", "triangles"),
         ("max_mesh_scale", "factor"),
         ("max_urdf_links", "links"),
+        ("max_urdf_elements", "elements"),
         ("max_mesh_cells", "cells"),
         ("max_split_triangles", "triangles"),
         ("max_solid_cells", "cells"),

@@ -230,6 +230,16 @@ def _spatial_goal(world: SpatialWorld) -> np.ndarray:
     return np.asarray(world.goal if world.object is None else world.object.goal, dtype=float)
 
 
+def _mesh_simplifier() -> spatial.Simplify | None:
+    """The arm's meshes simplified as the node draws them in ``~/world_markers`` (so that ``clew_render`` draws
+    the arm from the recording alone); ``None`` without the picture package's dependencies."""
+    try:
+        from clew_ros.render.spatial.meshes import simplify
+    except ImportError:
+        return None
+    return simplify
+
+
 def _spatial_accepted(
     run: _Run, world: SpatialWorld, setup: SpatialSetup, planner: PlannerSettings, recording_text: str
 ) -> None:
@@ -237,7 +247,7 @@ def _spatial_accepted(
     now = run.start_ns
     run.status(GoalStatus.STATUS_ACCEPTED, now)
     run.write("world_yaml", spatial.world_yaml_message(setup, world, planner, run.node_name), now)
-    run.write("world_markers", spatial.world_markers(world, now), now)
+    run.write("world_markers", spatial.world_markers(world, now, simplify=_mesh_simplifier()), now)
     run.write("robot_description", String(data=setup.description), now)
     run.tf(spatial.static_transforms(setup, world), now, static=True)
     pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)

@@ -14,9 +14,11 @@ at its start with the goal ghosted; with a plan (INPUT) or ``--frames`` (a plan
 or a frames file), the arm along the frames. A recording of a spatial run is
 drawn the same way along its plan, rebuilt from ``~/trajectory`` and the
 ``succeeded`` event (the world: the recording's ``~/world_yaml``, the robot from
-``~/robot_description`` when the URDF file it names is not here; ``--world``
-replaces it: :mod:`clew_ros.render.spatial.recording`). Exit 0: written; 2:
-invalid input (message on stderr).
+``~/robot_description`` and the meshes of ``~/world_markers``; ``--world``
+replaces it: :mod:`clew_ros.render.spatial.recording`). No path named inside a
+recording is opened; the files named here are read only when they are regular
+files within their size caps. Exit 0: written; 2: invalid input (one line on
+stderr).
 """
 
 from __future__ import annotations
@@ -229,7 +231,8 @@ def _render_spatial(world_file: Path, source: Path, args: argparse.Namespace, ou
     if args.frames and source != world_file:
         raise RenderError("--frames: give the frames either as INPUT (with --world) or with --frames, not both")
     if frames_file is not None and not frames_file.is_file():
-        raise RenderError(f"--frames: {frames_file} does not exist")
+        why = "is not a regular file (a device, a pipe or a folder)" if frames_file.exists() else "does not exist"
+        raise RenderError(f"--frames: {frames_file} {why}")
     world = load_spatial_world(world_file)
     view = _view(args, size, world)
     if frames_file is None:

@@ -1,14 +1,23 @@
 """Files that may be anything or must stay private: reading at most a given number of bytes, in pieces;
-making folders of mode 0700."""
+reading a regular file a user named (never a device, a pipe or a folder) up to a cap; making folders of
+mode 0700."""
 
 from __future__ import annotations
 
 import errno
 import os
+import stat
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["PRIVATE_FOLDER_MODE", "private_folders", "read_at_most"]
+__all__ = [
+    "PRIVATE_FOLDER_MODE",
+    "FileRefusedError",
+    "private_folders",
+    "read_at_most",
+    "read_regular_file",
+    "yaml_error_place",
+]
 
 #: Mode of the folders :func:`private_folders` makes: the owner's alone (recordings, batch results).
 PRIVATE_FOLDER_MODE = 0o700
@@ -31,6 +40,44 @@ def read_at_most(stream: BinaryIO, limit: int) -> bytes:
         pieces.append(piece)
         total += len(piece)
     return b"".join(pieces)
+
+
+class FileRefusedError(ValueError):
+    """A file :func:`read_regular_file` refuses; the message says why (never the file's name or contents)."""
+
+
+def read_regular_file(path: Path, limit: int, cap: str) -> bytes:
+    """The bytes of the regular file ``path``, refused (:class:`FileRefusedError`) when it cannot be opened, is not
+    a regular file (a device such as ``/dev/zero``, a pipe, a folder) or holds more than ``limit`` bytes
+    (``cap`` names the limit, ``Limits.<field>``). The file is opened without blocking (a pipe would wait for a
+    writer) and checked after opening, so that what is read is what was checked."""
+    try:
+        descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except OSError as error:
+        raise FileRefusedError(error.strerror or type(error).__name__) from None
+    try:
+        status = os.fstat(descriptor)
+        if not stat.S_ISREG(status.st_mode):
+            raise FileRefusedError("not a regular file (a device, a pipe or a folder)")
+        if status.st_size > limit:
+            raise FileRefusedError(f"it holds {status.st_size} bytes, larger than {limit} bytes ({cap})")
+        with os.fdopen(descriptor, "rb", closefd=False) as stream:
+            data = read_at_most(stream, limit)
+    except OSError as error:
+        raise FileRefusedError(error.strerror or type(error).__name__) from None
+    finally:
+        os.close(descriptor)
+    if len(data) > limit:  # grew since it was checked
+        raise FileRefusedError(f"it holds more bytes, larger than {limit} bytes ({cap})")
+    return data
+
+
+def yaml_error_place(error: BaseException) -> str:
+    """Where a YAML error lies (``line L, column C``) and its kind, without the snippet of the file PyYAML's
+    message quotes: an error message never repeats what a file holds."""
+    mark = getattr(error, "problem_mark", None) or getattr(error, "context_mark", None)
+    place = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "in the text"
+    return f"{type(error).__name__} at {place}"
 
 
 def private_folders(path: Path) -> Path:

@@ -44,10 +44,12 @@ __all__ = [
     "LOCKED_PREFIXES",
     "NODE_PARAMETERS",
     "OBSTACLE_PARAMETER",
+    "PLANNER_LOCK",
     "PLANNER_PARAMETERS",
     "REQUIRED",
     "RETIRED_PARAMETERS",
     "RUNTIME_CHANGES",
+    "SIM_TIME_CHANGES",
     "WORLD_PARAMETERS",
     "Limits",
     "ParameterSpec",
@@ -207,6 +209,48 @@ class Limits:
     #: Characters of a ``~/goal_pose`` ``header.frame_id`` quoted in a log line or an event (printable
     #: characters only; the rest is cut).
     max_quoted_chars: int = 64
+    #: Bytes of a parameter file (``--params-file``, ``clew_plan``'s world, ``clew_render --world``), read
+    #: before YAML parses it (YAML reads a dense file at a third of a megabyte a second; 5,000 spatial
+    #: obstacles written by ``yaml.safe_dump`` take about a megabyte).
+    max_parameter_file_bytes: int = 2 * 2**20
+    # ------------------------------------------------------------------ spatial worlds (interface.md 1b)
+    #: Bytes of a URDF or SRDF (a file, or the ``world.robot.description`` text), checked before it is parsed.
+    max_urdf_bytes: int = 8 * 2**20
+    #: Bytes of one mesh file a URDF names, checked before it is read (parsing grows with the file).
+    max_mesh_file_bytes: int = 10 * 2**20
+    #: Triangles of one mesh (after reading it, before anything else is done with it).
+    max_mesh_triangles: int = 200_000
+    #: Triangles of all the robot's meshes together: each is kept in memory and drawn in the markers.
+    max_total_triangles: int = 1_000_000
+    #: Scale factor of a URDF ``<mesh scale>`` (each axis): the sphere model's work grows as its cube.
+    max_mesh_scale: float = 10.0
+    #: Links (and joints) of a URDF: the tree walk and the self-collision pairs grow with them.
+    max_urdf_links: int = 256
+    #: XML elements of a URDF (links, joints, collisions, visuals, ...), counted before the URDF parser, whose
+    #: work grows with them, reads it (the Panda's: about 300).
+    max_urdf_elements: int = 10_000
+    #: Cells of one mesh's voxel grid at the sphere model's cell size (``SphereSettings.cell_m``), from the
+    #: mesh's extent before voxelising: the grid and its flood fill grow with it (the shipped arms: 15,000).
+    max_mesh_cells: int = 500_000
+    #: Triangles of one mesh once split to the voxel size (estimated before splitting): the surface
+    #: sampling and the split itself grow with it (the shipped arms: at most 90,000).
+    max_split_triangles: int = 300_000
+    #: Cells of one mesh's solid (surface and inside) the sphere cover chooses among: its candidate matrix
+    #: grows as their square (the shipped arms: at most 7,200).
+    max_solid_cells: int = 30_000
+    #: Spheres of the robot's sphere model: every collision check visits each (the Panda: 213).
+    max_spheres: int = 10_000
+    #: Bytes of a planning scene file (``world.scene_file``), checked before it is parsed (as the parameter
+    #: file's; a MotionBenchMaker scene takes a few kilobytes).
+    max_scene_file_bytes: int = 2**20
+    #: Primitives of a planning scene's collision objects (an object without any counts one), counted after
+    #: YAML expands its aliases and before any is read (with ``world.obstacle_names``: ``max_obstacles``).
+    max_scene_objects: int = 5000
+    #: Points of one ``~/points`` cloud (section 3c): the highest ``state.max_points`` may be, and its default.
+    max_points: int = 1_000_000
+    #: Refused requests (``~/plan``, ``~/goal_pose``) recorded in the current run's recording: past it they are
+    #: still published and logged, not recorded (a flood of bad goals would otherwise grow one recording).
+    max_recorded_refusals: int = 100
 
 
 #: The caps in force (:class:`Limits`' defaults).
@@ -216,6 +260,10 @@ LIMITS = Limits()
 #: The name of the development switch: ``true`` lets the :attr:`~ParameterSpec.locked` parameters change while
 #: the node runs.
 RUNTIME_CHANGES = "parameters.allow_runtime_changes"
+#: The switch that lets ``use_sim_time`` (rclpy's) change while the node runs (off: fixed at its start value).
+SIM_TIME_CHANGES = "parameters.allow_sim_time_changes"
+#: The switch that fixes every ``planner.*`` parameter at start.
+PLANNER_LOCK = "parameters.lock_planner"
 #: The namespaces whose parameters are :attr:`~ParameterSpec.locked` (fixed at start): the world (the robot,
 #: its limits, the obstacles), the trajectory limits a controller follows, where and whether runs are
 #: recorded, the live view. A parameter under them that was not declared at start cannot be added later.
@@ -534,6 +582,24 @@ NODE_PARAMETERS = ParameterTable(
             read_only=True,
         ),
         ParameterSpec(
+            SIM_TIME_CHANGES,
+            _B,
+            False,
+            "true lets ros2 param set change use_sim_time while the node runs; false fixes it at its start value "
+            "(a peer that switched it on would stamp ~/trajectory with its own /clock), and a change is refused "
+            "naming it. Read only: taken when the node starts.",
+            read_only=True,
+        ),
+        ParameterSpec(
+            PLANNER_LOCK,
+            _B,
+            False,
+            "true fixes every planner.* parameter at its start value (a change is refused naming it), so that no "
+            "peer can change how much CPU a run takes or which plan a seed gives; false: planner.* settable. "
+            "Read only: taken when the node starts.",
+            read_only=True,
+        ),
+        ParameterSpec(
             "record.enabled",
             _B,
             True,
@@ -751,9 +817,10 @@ def _rows(specs: Iterable[ParameterSpec], *, ranges: bool) -> list[str]:
 
 def limits_table() -> str:
     """The caps of :data:`LIMITS` as a Markdown table: the field, its value, what it caps."""
-    rows = ["| limit | value | caps |", "|---|---|---|"]
+    rows = ["| limit | value | unit | caps |", "|---|---|---|---|"]
     rows.extend(
-        f"| `{field.name}` | `{getattr(LIMITS, field.name)}` | {_literal(_LIMIT_TEXT[field.name])} |"
+        f"| `{field.name}` | `{getattr(LIMITS, field.name)}` | {_LIMIT_UNIT[field.name]} | "
+        f"{_literal(_LIMIT_TEXT[field.name])} |"
         for field in dataclasses.fields(Limits)
     )
     return "\n".join(rows)
@@ -770,7 +837,52 @@ _LIMIT_TEXT = {
     "max_name_chars": "characters of a parameter name, an obstacle name or world.name",
     "max_string_chars": "characters of a string parameter (record.directory)",
     "max_quoted_chars": "characters of a ~/goal_pose frame_id quoted in logs and events (printable only)",
+    "max_parameter_file_bytes": "size of a parameter file, before it is parsed",
+    "max_urdf_bytes": "size of a URDF or SRDF (world.robot.urdf, .description, .srdf), before it is parsed",
+    "max_mesh_file_bytes": "size of one mesh file a URDF names, before it is read",
+    "max_mesh_triangles": "triangles of one mesh",
+    "max_total_triangles": "triangles of all the robot's meshes",
+    "max_mesh_scale": "each factor of a URDF <mesh scale>",
+    "max_urdf_links": "links, and joints, of a URDF",
+    "max_urdf_elements": "XML elements of a URDF, counted before the URDF parser reads it",
+    "max_mesh_cells": "cells of one mesh's voxel grid for the sphere model (from its extent, before voxelising)",
+    "max_split_triangles": "triangles of one mesh split to the voxel size (estimated before splitting)",
+    "max_solid_cells": "cells of one mesh's voxelised solid the sphere cover chooses among",
+    "max_spheres": "spheres of the robot's sphere model",
+    "max_scene_file_bytes": "size of a planning scene file (world.scene_file), before it is parsed",
+    "max_scene_objects": "primitives of a planning scene's collision objects, counted after YAML aliases expand",
+    "max_points": "points of one ~/points cloud (the highest state.max_points)",
+    "max_recorded_refusals": "refused requests recorded in the current run's recording (the rest: published only)",
 }
+#: The unit of each cap.
+_LIMIT_UNIT = {
+    "max_links": "links",
+    "max_obstacles": "obstacles",
+    "max_polygon_vertices": "vertices",
+    "max_world_vertices": "vertices",
+    "max_grasps": "grasps",
+    "max_parameters": "parameters",
+    "max_name_chars": "characters",
+    "max_string_chars": "characters",
+    "max_quoted_chars": "characters",
+    "max_parameter_file_bytes": "bytes",
+    "max_urdf_bytes": "bytes",
+    "max_mesh_file_bytes": "bytes",
+    "max_mesh_triangles": "triangles",
+    "max_total_triangles": "triangles",
+    "max_mesh_scale": "factor",
+    "max_urdf_links": "links",
+    "max_urdf_elements": "elements",
+    "max_mesh_cells": "cells",
+    "max_split_triangles": "triangles",
+    "max_solid_cells": "cells",
+    "max_spheres": "spheres",
+    "max_scene_file_bytes": "bytes",
+    "max_points": "points",
+    "max_scene_objects": "objects",
+    "max_recorded_refusals": "events",
+}
+assert set(_LIMIT_UNIT) == set(_LIMIT_TEXT)
 assert list(_LIMIT_TEXT) == [field.name for field in dataclasses.fields(Limits)]
 
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from clew_ros.core.clew import PlanResult
 from clew_ros.core.errors import PlanFileError, short_repr
-from clew_ros.core.files import read_at_most
+from clew_ros.core.files import FileRefusedError, read_regular_file
 from clew_ros.core.settings import Outcome
 
 __all__ = ["FORMAT", "KINDS", "POSE_WIDTH", "Plan", "PlanFileLimits", "PlanLandmark", "PlanSegment", "PlanWorld"]
@@ -322,12 +322,9 @@ class Plan:
         limits = limits or PlanFileLimits()
         path = Path(path)
         try:
-            with path.open("rb") as stream:
-                data = read_at_most(stream, limits.max_bytes)
-        except OSError as error:
-            raise PlanFileError(f"{path}: cannot read the plan ({error.strerror or error})") from None
-        if len(data) > limits.max_bytes:
-            raise PlanFileError(f"{path}: not a plan file: larger than {limits.max_bytes} bytes")
+            data = read_regular_file(path, limits.max_bytes, "PlanFileLimits.max_bytes")
+        except FileRefusedError as error:
+            raise PlanFileError(f"{path}: cannot read the plan ({error})") from None
         return cls.from_json(data, source=str(path))
 
 

@@ -36,14 +36,22 @@ from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.parameters import LOCKED_PREFIXES, RETIRED_PARAMETERS, RUNTIME_CHANGES, retired_message
+from clew_ros.core.parameters import (
+    LIMITS,
+    LOCKED_PREFIXES,
+    PLANNER_LOCK,
+    RETIRED_PARAMETERS,
+    RUNTIME_CHANGES,
+    SIM_TIME_CHANGES,
+    retired_message,
+)
 from clew_ros.core.settings import Outcome
 from clew_ros.node.live_state import LiveState, StateRefusalError, describe_inputs
 from clew_ros.node.live_view import start_live_view
 from clew_ros.node.namespaces import namespaced_directory
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.run import CancelKind, Run, Source
-from clew_ros.node.run_recording import NO_RECORDING, Recordings
+from clew_ros.node.run_recording import NO_RECORDING, Recordings, RunRecording
 from clew_ros.node.worker import RunWorker
 from clew_ros.planar.kernel import warm_up
 from clew_ros.planar.world import World
@@ -96,6 +104,7 @@ class PlannerNode(Node):
         self._closing = threading.Event()  # shutting down: no new run
         self._run: Run | None = None  # the current run: the last accepted
         self._pending_world_change = False  # set by on_set, republished by post_set
+        self._refusals = ("", 0)  # the current run's id and the refusals recorded in its recording
         self._config = self._declare_parameters(record_subdirectory)
         warm_up_s = warm_up()  # the planning kernel, before any plan (main() did it; another program may not)
         if warm_up_s > 1.0:
@@ -246,11 +255,27 @@ class PlannerNode(Node):
 
     def _refuse(self, code: Outcome, message: str, source: Source, goal_stamp_ns: int | None = None) -> str:
         """Publish a refused request (a UUID of its own, status aborted, an aborted event); its text."""
-        current = self.current_run  # recorded in the current run's recording, after that run's start
-        recording = current.recording if current is not None and current.wait_started(START_WAIT_S) else NO_RECORDING
-        text = self._out.refusal(code, message, source, recording, goal_stamp_ns)
+        text = self._out.refusal(code, message, source, self._refusal_recording(), goal_stamp_ns)
         self.get_logger().warning(text)
         return text
+
+    def _refusal_recording(self) -> RunRecording:
+        """Where a refusal is recorded: the current run's recording, after that run's start, for the first
+        ``Limits.max_recorded_refusals`` refusals while it is current; past them, nowhere (published only)."""
+        current = self.current_run
+        if current is None or not current.wait_started(START_WAIT_S):
+            return NO_RECORDING
+        with self._lock:
+            if self._refusals[0] != current.hex:
+                self._refusals = (current.hex, 0)
+            count = self._refusals[1] + 1
+            self._refusals = (current.hex, count)
+        if count == LIMITS.max_recorded_refusals + 1:
+            self.get_logger().warning(
+                f"run {current.hex}: {LIMITS.max_recorded_refusals} refused requests recorded "
+                "(Limits.max_recorded_refusals); further ones are published, not recorded"
+            )
+        return current.recording if count <= LIMITS.max_recorded_refusals else NO_RECORDING
 
     # ----------------------------------------------------------------- callbacks
 
@@ -324,7 +349,7 @@ class PlannerNode(Node):
             if name in RETIRED_PARAMETERS:
                 self.get_logger().warning(retired_message(name))
                 continue
-            descriptor = descriptor_for(name, allow_runtime_changes=allow)
+            descriptor = descriptor_for(name, allow_runtime_changes=allow, lock_planner=config.node.lock_planner)
             if name in overrides and plain_value(self.get_parameter(name).value) == value:
                 self.set_descriptor(name, descriptor)
             else:  # not given, or given and changed here (record.directory); an empty list has no parameter type
@@ -362,13 +387,20 @@ class PlannerNode(Node):
         A declared locked parameter is read-only, so rclpy refused it already; this refuses the others: a
         new name under a locked prefix (an obstacle, while the switch is off), and names beyond the caps.
         """
-        if not self._config.node.allow_runtime_changes:
-            for p in parameters:
-                if p.name.startswith(LOCKED_PREFIXES):
-                    return (
-                        f"{p.name}: fixed at start, like every {', '.join(x + '*' for x in LOCKED_PREFIXES)} "
-                        f"parameter (start the node with {RUNTIME_CHANGES}: true to change them at run time)"
-                    )
+        node = self._config.node
+        for p in parameters:
+            if not node.allow_runtime_changes and p.name.startswith(LOCKED_PREFIXES):
+                return (
+                    f"{p.name}: fixed at start, like every {', '.join(x + '*' for x in LOCKED_PREFIXES)} "
+                    f"parameter (start the node with {RUNTIME_CHANGES}: true to change them at run time)"
+                )
+            if node.lock_planner and p.name.startswith("planner."):
+                return f"{p.name}: fixed at start, like every planner.* parameter ({PLANNER_LOCK} is true)"
+            if p.name == "use_sim_time" and not node.allow_sim_time_changes:
+                return (
+                    f"use_sim_time: fixed at start (start the node with {SIM_TIME_CHANGES}: true to change it at "
+                    "run time)"
+                )
         names = set(self.get_parameters_by_prefix(""))
         names |= {p.name for p in parameters if p.type_ != Parameter.Type.NOT_SET}
         try:

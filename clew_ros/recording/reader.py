@@ -24,7 +24,7 @@ from typing import Any
 
 import yaml
 
-from clew_ros.core.files import read_at_most
+from clew_ros.core.files import FileRefusedError, read_regular_file, yaml_error_place
 from clew_ros.recording.errors import RecordingError
 from clew_ros.recording.recorder import bag_metadata, default_offered_qos, write_bag_metadata
 
@@ -84,19 +84,20 @@ def find_mcap(path: str | Path, *, limits: RecordingLimits | None = None) -> Pat
             raise RecordingError(f"{path} is not an .mcap file or a recording directory")
         return path
     if not path.is_dir():
-        raise RecordingError(f"recording {path} does not exist")
+        why = "is not a regular file (a device, a pipe)" if path.exists() else "does not exist"
+        raise RecordingError(f"recording {path} {why}")
     metadata = path / "metadata.yaml"
     if metadata.is_file():
         try:
-            with metadata.open("rb") as stream:
-                text = read_at_most(stream, limit)
-            if len(text) > limit:
-                raise ValueError(f"larger than {limit} bytes")
+            text = read_regular_file(metadata, limit, "RecordingLimits.max_metadata_bytes")
             info = yaml.safe_load(text.decode("utf-8"))["rosbag2_bagfile_information"]
             names: list[str] = [n for n in info.get("relative_file_paths", []) if str(n).endswith(".mcap")]
-        except (OSError, yaml.YAMLError, KeyError, TypeError, AttributeError, ValueError, RecursionError) as error:
-            reason = type(error).__name__ if isinstance(error, RecursionError) else str(error)[:200]
-            raise RecordingError(f"{metadata} is not rosbag2 metadata ({reason})") from None
+        except FileRefusedError as error:
+            raise RecordingError(f"{metadata} is not rosbag2 metadata ({error})") from None
+        except yaml.YAMLError as error:
+            raise RecordingError(f"{metadata} is not rosbag2 metadata ({yaml_error_place(error)})") from None
+        except (KeyError, TypeError, AttributeError, ValueError, RecursionError) as error:
+            raise RecordingError(f"{metadata} is not rosbag2 metadata ({type(error).__name__})") from None
         # only a file of this folder: a name with a folder in it (``../``, absolute) is not followed
         plain = len(names) == 1 and isinstance(names[0], str) and Path(names[0]).name == names[0]
         if plain and (path / names[0]).is_file():
@@ -186,12 +187,9 @@ class Recording:
         self._messages: list[RecordedMessage] = []
         self._decompressed = 0
         try:
-            with self.mcap_path.open("rb") as stream:
-                data = read_at_most(stream, self.limits.max_file_bytes)
-        except OSError as error:
-            raise RecordingError(f"cannot read {self.mcap_path}: {error.strerror}") from None
-        if len(data) > self.limits.max_file_bytes:
-            raise RecordingError(f"{self.mcap_path} is larger than {self.limits.max_file_bytes} bytes; not read")
+            data = read_regular_file(self.mcap_path, self.limits.max_file_bytes, "RecordingLimits.max_file_bytes")
+        except FileRefusedError as error:
+            raise RecordingError(f"cannot read {self.mcap_path}: {error}; not read") from None
         self._read(data)
         self._messages.sort(key=lambda m: m.log_time_ns)  # stable: file order within equal times
         self._decoders: dict[int, Callable[[bytes], Any]] = {}

@@ -52,9 +52,11 @@ from clew_ros.core.parameters import (
     LIMITS,
     NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
+    PLANNER_LOCK,
     PLANNER_PARAMETERS,
     RETIRED_PARAMETERS,
     RUNTIME_CHANGES,
+    SIM_TIME_CHANGES,
     WORLD_PARAMETERS,
     Limits,
     ParameterSpec,
@@ -127,6 +129,9 @@ class NodeSettings:
     state_self_filter_m: float = NODE_PARAMETERS.default("state.self_filter_m")
     state_max_points: int = NODE_PARAMETERS.default("state.max_points")
     state_advance: bool = NODE_PARAMETERS.default("state.advance")
+    #: ``use_sim_time`` may change while the node runs; ``planner.*`` is fixed at start.
+    allow_sim_time_changes: bool = NODE_PARAMETERS.default(SIM_TIME_CHANGES)
+    lock_planner: bool = NODE_PARAMETERS.default(PLANNER_LOCK)
     #: ``record_directory`` resolved when these settings are made (at start): absolute, ``~`` expanded,
     #: symbolic links and ``..`` resolved; every run folder is made inside it.
     record_path: Path = dataclasses.field(init=False, repr=False, compare=False)
@@ -193,6 +198,8 @@ SETTINGS_FIELDS = {
     "state_self_filter_m": "state.self_filter_m",
     "state_max_points": "state.max_points",
     "state_advance": "state.advance",
+    "allow_sim_time_changes": SIM_TIME_CHANGES,
+    "lock_planner": PLANNER_LOCK,
 }
 assert [f.name for f in fields(NodeSettings) if f.init] == list(SETTINGS_FIELDS)
 assert sorted(SETTINGS_FIELDS.values()) == sorted(NODE_PARAMETERS)
@@ -434,13 +441,16 @@ def _node_value(spec: ParameterSpec, value: Any) -> Any:
 # --------------------------------------------------------------------------- descriptors
 
 
-def descriptor_for(name: str, *, allow_runtime_changes: bool = False) -> ParameterDescriptor:
+def descriptor_for(
+    name: str, *, allow_runtime_changes: bool = False, lock_planner: bool = False
+) -> ParameterDescriptor:
     """The descriptor a parameter is declared with: its spec's description, type and default, and range.
 
     Every parameter is declared with ``dynamic_typing`` (a ``30`` is as good
     as ``30.0``: the value is checked by this module, not by rclpy). It is
     ``read_only`` when its spec is, and when it is locked (``world.*``,
-    ``record.*``, ``trajectory.*``, ``live.*``) unless ``allow_runtime_changes``.
+    ``record.*``, ``trajectory.*``, ``live.*``) unless ``allow_runtime_changes``; ``planner.*`` too with
+    ``lock_planner``.
     """
     spec = _spec_of(name)
     descriptor = ParameterDescriptor(
@@ -448,7 +458,8 @@ def descriptor_for(name: str, *, allow_runtime_changes: bool = False) -> Paramet
         dynamic_typing=True,
         description=spec.description,
         additional_constraints=_constraints(spec),
-        read_only=spec.fixed(allow_runtime_changes=allow_runtime_changes),
+        read_only=spec.fixed(allow_runtime_changes=allow_runtime_changes)
+        or (lock_planner and name.startswith("planner.")),
     )
     if spec.limits is not None:
         low, high = spec.limits

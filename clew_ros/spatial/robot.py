@@ -11,7 +11,9 @@ or URDF element at fault and what was expected.
 
 from __future__ import annotations
 
+import io
 import math
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -23,12 +25,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import WorldError, short_repr
+from clew_ros.core.files import FileRefusedError, read_regular_file
+from clew_ros.core.parameters import LIMITS, Limits
 from clew_ros.spatial.packages import package_paths_from_parameters, resolve_package_uri
 from clew_ros.spatial.transforms import axis_motion, pose_matrix
 
 __all__ = [
     "CONTINUOUS_LIMIT_RAD",
     "Geometry",
+    "GivenMeshes",
     "LinkModel",
     "RobotModel",
     "load_robot",
@@ -154,11 +159,9 @@ def resolve_uri(uri: str, folder: Path, parameter: str, package_paths: Sequence[
     return path if path.is_absolute() else folder / path
 
 
-def read_text(path: Path, parameter: str) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise WorldError(parameter, f"cannot read {str(path)!r}: {error}") from None
+def read_text(path: Path, parameter: str, limits: Limits = LIMITS) -> str:
+    """A URDF or SRDF file's text: a regular file of at most ``Limits.max_urdf_bytes``, UTF-8."""
+    return _capped_text(path, parameter, limits.max_urdf_bytes, "Limits.max_urdf_bytes")
 
 
 @contextmanager
@@ -189,7 +192,7 @@ def _parse_urdf(text: str, parameter: str) -> Any:
     except ET.ParseError as error:
         raise WorldError(parameter, f"expected URDF XML, the text does not parse: {error}") from None
     except Exception as error:  # noqa: BLE001  # urdf_parser_py raises bare Exceptions for missing attributes
-        raise WorldError(parameter, f"expected a valid URDF <robot>: {error}") from None
+        raise WorldError(parameter, f"expected a valid URDF <robot>: {_unquoted(error)}") from None
 
 
 def _origin(element: Any) -> Matrix:
@@ -208,31 +211,44 @@ def _positive(values: Sequence[float], where: str, parameter: str) -> tuple[floa
     return out
 
 
-def _load_mesh(path: Path, scale: Sequence[float] | None, where: str, parameter: str) -> tuple[Matrix, Any]:
+def _load_mesh(
+    path: Path, scale: Sequence[float] | None, where: str, parameter: str, limits: Limits = LIMITS
+) -> tuple[Matrix, Any]:
     try:
         import trimesh
     except ImportError:
         raise WorldError(
             parameter, f"{where}: reading meshes needs trimesh (pip install 'clew_ros[spatial]')"
         ) from None
-    if not path.is_file():
-        raise WorldError(parameter, f"{where}: mesh file {str(path)!r} does not exist")
+    factors = None if scale is None else _mesh_scale(scale, where, parameter, limits)
+    data = _mesh_bytes(path, where, parameter, limits)
     try:
-        mesh = trimesh.load(str(path), force="mesh", process=True)
+        mesh = trimesh.load(io.BytesIO(data), file_type=path.suffix.lstrip(".").lower(), force="mesh", process=True)
     except Exception as error:  # noqa: BLE001  # trimesh and its loaders raise many kinds for a bad file
-        raise WorldError(parameter, f"{where}: cannot read mesh {str(path)!r}: {error}") from None
+        raise WorldError(
+            parameter, f"{where}: cannot read mesh {str(path)!r} ({type(error).__name__}; expected STL, OBJ or DAE)"
+        ) from None
     vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
     faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
     if len(faces) == 0 or not np.all(np.isfinite(vertices)):
         raise WorldError(parameter, f"{where}: mesh {str(path)!r} holds no triangles (expected STL, OBJ or DAE)")
-    if scale is not None:
-        vertices = vertices * np.asarray(_positive(scale, f"{where} scale", parameter))
+    if len(faces) > limits.max_mesh_triangles:
+        raise WorldError(
+            parameter,
+            f"{where}: mesh {str(path)!r} holds {len(faces)} triangles, more than Limits.max_mesh_triangles "
+            f"({limits.max_mesh_triangles})",
+        )
+    if factors is not None:
+        vertices = vertices * np.asarray(factors)
     return vertices, faces
 
 
-def _geometries(link: Any, folder: Path, parameter: str, package_paths: Sequence[Path] = ()) -> tuple[Geometry, ...]:
+def _geometries(
+    link: Any, folder: Path, parameter: str, package_paths: Sequence[Path] = (), budget: _MeshBudget | None = None
+) -> tuple[Geometry, ...]:
     from urdf_parser_py import urdf  # type: ignore[import-untyped]
 
+    budget = budget or _MeshBudget(LIMITS)
     out = []
     for k, collision in enumerate(link.collisions):
         where = f"<link name={link.name!r}> <collision> {k}"
@@ -247,9 +263,12 @@ def _geometries(link: Any, folder: Path, parameter: str, package_paths: Sequence
             out.append(Geometry(link.name, "cylinder", (height, radius), origin))
         elif isinstance(shape, urdf.Sphere):
             out.append(Geometry(link.name, "sphere", _positive([shape.radius], f"{where} <sphere>", parameter), origin))
+        elif isinstance(shape, urdf.Mesh) and budget.given is not None:  # named only, never opened
+            vertices, faces = budget.take_given(link.name, k, origin, where, parameter)
+            out.append(Geometry(link.name, "mesh", (), origin, vertices, faces, str(shape.filename or "")))
         elif isinstance(shape, urdf.Mesh):
             path = resolve_uri(shape.filename or "", folder, parameter, package_paths)
-            vertices, faces = _load_mesh(path, shape.scale, where, parameter)
+            vertices, faces = budget.load(path, shape.scale, where, parameter)
             out.append(Geometry(link.name, "mesh", (), origin, vertices, faces, str(path)))
         else:
             raise WorldError(parameter, f"{where}: expected box, cylinder, sphere or mesh geometry")
@@ -444,15 +463,19 @@ def load_robot(
     gripper_links: Sequence[str] = (),
     source: str = "world.robot.urdf",
     package_paths: Sequence[Path] = (),
+    meshes: GivenMeshes | None = None,
 ) -> RobotModel:
     """Parse a URDF (its text; ``folder`` resolves relative mesh paths) into a :class:`RobotModel`.
 
     ``source`` names the parameter the URDF came from, for errors; ``package_paths`` the folders that hold
     the packages of ``package://`` mesh URIs (``world.robot.package_paths``, before the ament index). Poses
     are ``[x, y, z, roll, pitch, yaw]`` (m, rad): ``tcp`` in ``tip_link``'s frame, ``base_pose`` of
-    ``base_link`` in ``world``.
+    ``base_link`` in ``world``. ``meshes``: the meshes themselves (a recording's), so that no file the URDF
+    names is opened.
     """
+    _check_robot_text(urdf_text, srdf_text, source, LIMITS)
     robot = _parse_urdf(urdf_text, source)
+    _check_origins(robot, source)
     names = {link.name for link in robot.links}
     parent_joint, root = _tree(robot, base_link, tip_link, source)
     planned = _planned(parent_joint, base_link, tip_link)
@@ -472,10 +495,11 @@ def load_robot(
         if name not in names:
             raise WorldError("world.robot.gripper_links", f"link {name!r} is not in the URDF")
 
+    budget = _MeshBudget(LIMITS, meshes)
     links = tuple(
         LinkModel(link.name, frame_of[link.name], inverse[frame_of[link.name]] @ pose[link.name], geometries)
         for link in robot.links
-        if (geometries := _geometries(link, folder, source, package_paths))
+        if (geometries := _geometries(link, folder, source, package_paths, budget))
     )
     index = {link.name: i for i, link in enumerate(links)}
     parents = tuple(_collision_parent(link.name, parent_joint, index) for link in links)
@@ -548,9 +572,9 @@ def _floats(tree: Mapping[str, Any], key: str) -> list[float]:
     return out
 
 
-def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
+def robot_from_parameters(robot: Mapping[str, Any], folder: Path, meshes: GivenMeshes | None = None) -> RobotModel:
     """The robot of a ``world.robot`` parameter tree (interface.md section 1b); relative paths are read from
-    ``folder`` (the parameter file's)."""
+    ``folder`` (the parameter file's). ``meshes``: the URDF's meshes given (:func:`load_robot`)."""
     has_file, has_text = "urdf" in robot, "description" in robot
     if has_file == has_text:
         raise WorldError("world.robot.urdf", "expected exactly one of world.robot.urdf and world.robot.description")
@@ -585,6 +609,7 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path) -> RobotModel:
         gripper_links=_strings(robot, "gripper_links"),
         source=source,
         package_paths=packages,
+        meshes=meshes,
     )
     return replace(model, padding=_padding(robot))
 
@@ -595,3 +620,147 @@ def _padding(robot: Mapping[str, Any]) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or not 0 <= value <= 1:
         raise WorldError("world.robot.padding", f"expected a distance in metres from 0 to 1, got {short_repr(value)}")
     return float(value)
+
+
+# ----------------------------------------------------------------------------------------- caps
+
+
+def _capped_text(path: Path, parameter: str, limit: int, cap: str) -> str:
+    """A regular file's UTF-8 text, refused beyond ``limit`` bytes (``cap``) without quoting what it holds."""
+    try:
+        data = read_regular_file(path, limit, cap)
+    except FileRefusedError as error:
+        raise WorldError(parameter, f"cannot read {str(path)!r}: {error}") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise WorldError(
+            parameter, f"cannot read {str(path)!r}: expected UTF-8 text ({error.reason} at byte {error.start})"
+        ) from None
+
+
+def _check_robot_text(urdf_text: str, srdf_text: str | None, source: str, limits: Limits) -> None:
+    """The URDF and SRDF texts held to ``Limits.max_urdf_bytes``, the URDF's elements to
+    ``Limits.max_urdf_elements`` and its links and joints to ``Limits.max_urdf_links``, before the URDF parser
+    (whose work grows with them) sees them."""
+    for text, parameter in ((urdf_text, source), (srdf_text, "world.robot.srdf")):
+        if text is not None and len(text.encode("utf-8", "surrogatepass")) > limits.max_urdf_bytes:
+            raise WorldError(
+                parameter,
+                f"the text holds {len(text.encode('utf-8', 'surrogatepass'))} bytes, more than "
+                f"Limits.max_urdf_bytes ({limits.max_urdf_bytes})",
+            )
+    try:
+        root = ET.fromstring(urdf_text)
+    except ET.ParseError as error:
+        raise WorldError(source, f"expected URDF XML, the text does not parse: {error}") from None
+    elements = sum(1 for _ in root.iter())
+    if elements > limits.max_urdf_elements:
+        raise WorldError(
+            source,
+            f"the URDF has {elements} XML elements, more than Limits.max_urdf_elements ({limits.max_urdf_elements})",
+        )
+    for tag in ("link", "joint"):
+        count = sum(1 for _ in root.iter(tag))
+        if count > limits.max_urdf_links:
+            raise WorldError(
+                source,
+                f"the URDF has {count} <{tag}> elements, more than Limits.max_urdf_links ({limits.max_urdf_links})",
+            )
+
+
+def _unquoted(error: BaseException) -> str:
+    """An error's message with every quoted value left out and cut to 160 characters: what the URDF parser
+    says about an element, without repeating what a file holds."""
+    text = re.sub(r"'[^']*'|\"[^\"]*\"", "'...'", " ".join(str(error).split()))
+    return text if len(text) <= 160 else text[:157] + "..."
+
+
+def _check_origins(robot: Any, source: str) -> None:
+    """Every ``<origin xyz rpy>`` of the URDF's joints and collisions: finite numbers (a NaN would reach every
+    frame and every collision check)."""
+    elements = [(f"<joint name={j.name!r}>", j) for j in robot.joints]
+    elements += [
+        (f"<link name={link.name!r}> <collision> {k}", c) for link in robot.links for k, c in enumerate(link.collisions)
+    ]
+    for where, element in elements:
+        origin = getattr(element, "origin", None)
+        values = [*(getattr(origin, "xyz", None) or ()), *(getattr(origin, "rpy", None) or ())]
+        try:
+            finite = all(math.isfinite(float(v)) for v in values)
+        except (TypeError, ValueError):
+            finite = False
+        if not finite:
+            raise WorldError(source, f"{where} <origin>: expected finite xyz and rpy")
+
+
+def _mesh_scale(scale: Sequence[float], where: str, parameter: str, limits: Limits) -> tuple[float, ...]:
+    """A ``<mesh scale>``: positive, finite, each factor at most ``Limits.max_mesh_scale``."""
+    factors = _positive(scale, f"{where} scale", parameter)
+    if max(factors) > limits.max_mesh_scale:
+        raise WorldError(
+            parameter,
+            f"{where} <mesh scale>: factor {max(factors):g} is more than Limits.max_mesh_scale "
+            f"({limits.max_mesh_scale:g})",
+        )
+    return factors
+
+
+def _mesh_bytes(path: Path, where: str, parameter: str, limits: Limits) -> bytes:
+    """A mesh file's bytes: a regular file of at most ``Limits.max_mesh_file_bytes``."""
+    try:
+        return read_regular_file(path, limits.max_mesh_file_bytes, "Limits.max_mesh_file_bytes")
+    except FileRefusedError as error:
+        raise WorldError(parameter, f"{where}: mesh file {str(path)!r}: {error}") from None
+
+
+#: A URDF's meshes given rather than read: link name -> its meshes' triangle corners (m, (3t, 3) each, in the
+#: link's frame, scaled and placed by the collision's origin), in the order of the link's mesh collisions (as
+#: ``~/world_markers`` draws them).
+GivenMeshes = Mapping[str, Sequence[NDArray[np.float64]]]
+
+
+class _MeshBudget:
+    """The meshes of one robot: each file read once (a file named by many links costs one read), or taken
+    from ``given``; their triangles held to ``Limits.max_total_triangles`` as they come."""
+
+    def __init__(self, limits: Limits, given: GivenMeshes | None = None) -> None:
+        self.limits = limits
+        self.given = given
+        self.triangles = 0
+        self._read: dict[tuple[str, tuple[float, ...] | None], tuple[Matrix, Any]] = {}
+        self._taken: dict[str, int] = {}
+
+    def take_given(self, link: str, k: int, origin: Matrix, where: str, parameter: str) -> tuple[Matrix, Any]:
+        """The next given mesh of ``link``, in its collision's own frame (``origin`` undone)."""
+        assert self.given is not None
+        index = self._taken.get(link, 0)
+        corners = self.given.get(link, ())
+        if index >= len(corners):
+            raise WorldError(parameter, f"{where}: the mesh is not among the meshes given (a recording's markers)")
+        self._taken[link] = index + 1
+        placed = np.asarray(corners[index], dtype=np.float64).reshape(-1, 3)
+        if len(placed) == 0 or len(placed) % 3 or not np.all(np.isfinite(placed)):
+            raise WorldError(parameter, f"{where}: the mesh given is not a list of triangles")
+        self._count(len(placed) // 3, where, parameter)
+        if len(placed) // 3 > self.limits.max_mesh_triangles:
+            raise WorldError(parameter, f"{where}: the mesh given holds more than Limits.max_mesh_triangles triangles")
+        vertices = (placed - origin[:3, 3]) @ origin[:3, :3]
+        return vertices, np.arange(len(placed), dtype=np.int64).reshape(-1, 3)
+
+    def _count(self, triangles: int, where: str, parameter: str) -> None:
+        self.triangles += triangles
+        if self.triangles > self.limits.max_total_triangles:
+            raise WorldError(
+                parameter,
+                f"{where}: the robot's meshes hold more than Limits.max_total_triangles "
+                f"({self.limits.max_total_triangles}) triangles",
+            )
+
+    def load(self, path: Path, scale: Sequence[float] | None, where: str, parameter: str) -> tuple[Matrix, Any]:
+        key = (str(path), None if scale is None else tuple(float(v) for v in scale))
+        if key not in self._read:
+            self._read[key] = _load_mesh(path, scale, where, parameter, self.limits)
+        vertices, faces = self._read[key]
+        self._count(len(faces), where, parameter)
+        return vertices, faces

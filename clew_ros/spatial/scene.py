@@ -14,7 +14,8 @@ sphere or cylinder, by name or by SolidPrimitive's number; ``dimensions``) with 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,15 +24,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import WorldError, short_repr
+from clew_ros.core.files import FileRefusedError, read_regular_file, yaml_error_place
+from clew_ros.core.parameters import LIMITS, Limits
 from clew_ros.spatial.transforms import pose_matrix, quaternion_matrix
 
 __all__ = [
     "SHAPES",
     "Obstacle",
     "bounds_from_parameters",
+    "kind_of",
     "make_obstacle",
     "obstacle_arrays",
     "obstacles_from_parameters",
+    "read_scene_file",
     "scene_obstacles",
     "world_obstacles",
 ]
@@ -51,24 +56,42 @@ class Obstacle:
     pose: NDArray[np.float64]
 
 
-def _numbers(value: Any, parameter: str, count: int, what: str) -> list[float]:
+def kind_of(value: Any) -> str:
+    """What a value read from a file is, without quoting it (an error never repeats what a file holds)."""
+    if isinstance(value, list | tuple | Mapping | str):
+        return f"a {type(value).__name__} of {len(value)}"
+    return f"a {type(value).__name__}"
+
+
+def _numbers(
+    value: Any, parameter: str, count: int, what: str, quote: Callable[[Any], str] = short_repr
+) -> list[float]:
     try:
         out = [float(v) for v in value]
-    except (TypeError, ValueError):
-        raise WorldError(parameter, f"expected {what}, got {short_repr(value)}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise WorldError(parameter, f"expected {what}, got {quote(value)}") from None
     if len(out) != count or not all(math.isfinite(v) for v in out):
-        raise WorldError(parameter, f"expected {what} ({count} finite numbers), got {short_repr(value)}")
+        raise WorldError(parameter, f"expected {what} ({count} finite numbers), got {quote(value)}")
     return out
 
 
-def make_obstacle(name: str, shape: Any, size: Any, pose: NDArray[np.float64], parameter: str) -> Obstacle:
-    """An obstacle, checked; ``parameter`` (``world.obstacles.<name>``) names it in errors."""
+def make_obstacle(
+    name: str,
+    shape: Any,
+    size: Any,
+    pose: NDArray[np.float64],
+    parameter: str,
+    *,
+    quote: Callable[[Any], str] = short_repr,
+) -> Obstacle:
+    """An obstacle, checked; ``parameter`` (``world.obstacles.<name>``) names it in errors, which show a wrong
+    value as ``quote`` says (:func:`kind_of` for a value from a file)."""
     if shape not in SHAPES:
-        raise WorldError(f"{parameter}.shape", f"expected one of {', '.join(SHAPES)}, got {short_repr(shape)}")
+        raise WorldError(f"{parameter}.shape", f"expected one of {', '.join(SHAPES)}, got {quote(shape)}")
     dims = {"box": "[x, y, z] full extents", "cylinder": "[height, radius]", "sphere": "[radius]"}[shape]
-    values = _numbers(size, f"{parameter}.size", SHAPES[shape], f"a {shape} size {dims}")
+    values = _numbers(size, f"{parameter}.size", SHAPES[shape], f"a {shape} size {dims}", quote)
     if not all(v > 0.0 for v in values):
-        raise WorldError(f"{parameter}.size", f"expected positive sizes {dims}, got {values}")
+        raise WorldError(f"{parameter}.size", f"expected positive sizes {dims}, got {quote(values)}")
     return Obstacle(name, shape, tuple(values), pose)
 
 
@@ -78,6 +101,10 @@ def obstacles_from_parameters(world: Mapping[str, Any]) -> tuple[Obstacle, ...]:
     names = world.get("obstacle_names", [])
     if isinstance(names, str) or not all(isinstance(n, str) for n in names):
         raise WorldError("world.obstacle_names", f"expected a list of names, got {short_repr(names)}")
+    if len(names) > LIMITS.max_obstacles:
+        raise WorldError(
+            "world.obstacle_names", f"{len(names)} names, more than Limits.max_obstacles ({LIMITS.max_obstacles})"
+        )
     if len(set(names)) != len(names):
         raise WorldError("world.obstacle_names", "expected distinct names")
     table = world.get("obstacles", {}) or {}
@@ -105,13 +132,13 @@ def _scene_pose(value: Any, parameter: str) -> NDArray[np.float64]:
     """A ``geometry_msgs/Pose`` as MoveIt's YAML writes it: ``position`` [x, y, z] and ``orientation``
     [x, y, z, w] (lists, or mappings with those keys)."""
     if not isinstance(value, Mapping):
-        raise WorldError(parameter, f"expected a pose with position and orientation, got {short_repr(value)}")
+        raise WorldError(parameter, f"expected a pose with position and orientation, got {kind_of(value)}")
 
     def vector(key: str, names: str, default: list[float]) -> list[float]:
         item = value.get(key, default)
         if isinstance(item, Mapping):
             item = [item.get(name, 0.0) for name in names]
-        return _numbers(item, f"{parameter}.{key}", len(names), f"[{', '.join(names)}]")
+        return _numbers(item, f"{parameter}.{key}", len(names), f"[{', '.join(names)}]", kind_of)
 
     position = vector("position", "xyz", [0.0, 0.0, 0.0])
     orientation = vector("orientation", "xyzw", [0.0, 0.0, 0.0, 1.0])
@@ -123,9 +150,13 @@ def _scene_pose(value: Any, parameter: str) -> NDArray[np.float64]:
 def _collision_object(item: Any, parameter: str, frames: Mapping[str, NDArray[np.float64]]) -> list[Obstacle]:
     if not isinstance(item, Mapping) or not isinstance(item.get("id"), str) or not item["id"]:
         raise WorldError(parameter, "expected a collision object with an id")
-    frame_id = str((item.get("header") or {}).get("frame_id", "") or "world").lstrip("/")
+    header = item.get("header") or {}
+    frame_id = header.get("frame_id", "") if isinstance(header, Mapping) else None
+    frame_id = (frame_id or "world").lstrip("/") if isinstance(frame_id, str | None) else kind_of(frame_id)
     if frame_id not in frames:
-        raise WorldError(f"{parameter}.header.frame_id", f"unknown frame {frame_id!r}; known: {sorted(frames)}")
+        raise WorldError(
+            f"{parameter}.header.frame_id", f"unknown frame {short_repr(frame_id)}; known: {sorted(frames)}"
+        )
     base = frames[frame_id] @ (_scene_pose(item["pose"], f"{parameter}.pose") if "pose" in item else np.eye(4))
     primitives = item.get("primitives") or []
     poses = item.get("primitive_poses") or []
@@ -137,25 +168,29 @@ def _collision_object(item: Any, parameter: str, frames: Mapping[str, NDArray[np
         kind = primitive.get("type") if isinstance(primitive, Mapping) else None
         shape = _PRIMITIVE_TYPES.get(kind) if isinstance(kind, int) else str(kind).lower()
         if shape not in SHAPES:
-            raise WorldError(f"{where}.type", f"expected box, sphere or cylinder, got {short_repr(kind)}")
+            raise WorldError(f"{where}.type", f"expected box, sphere or cylinder, got {kind_of(kind)}")
         name = item["id"] if len(primitives) == 1 else f"{item['id']}_{k}"
         placed = base @ _scene_pose(pose, f"{parameter}.primitive_poses[{k}]")
-        out.append(make_obstacle(name, shape, primitive.get("dimensions"), placed, where))
+        out.append(make_obstacle(name, shape, primitive.get("dimensions"), placed, where, quote=kind_of))
     return out
 
 
-def scene_obstacles(scene: Any, frames: Mapping[str, NDArray[np.float64]], parameter: str) -> list[Obstacle]:
+def scene_obstacles(
+    scene: Any, frames: Mapping[str, NDArray[np.float64]], parameter: str, limits: Limits = LIMITS
+) -> list[Obstacle]:
     """The obstacles of a planning scene (the parsed YAML): each collision object's primitives, named
     ``<id>`` (``<id>_<k>`` for the k-th of several). ``frames`` maps the frame names a ``header.frame_id``
-    may give to their 4x4 poses in ``world``; ``parameter`` names the file in errors."""
+    may give to their 4x4 poses in ``world``; ``parameter`` names the file in errors, which never quote its
+    values. Its objects and primitives are counted against ``Limits.max_scene_objects`` before any is read."""
     if not isinstance(scene, Mapping):
         raise WorldError(parameter, "expected a moveit_msgs/PlanningScene as YAML (a mapping with world:)")
     part = scene.get("world") if scene.get("world") is not None else {}
     if not isinstance(part, Mapping):
-        raise WorldError(f"{parameter}: world", f"expected a mapping holding collision_objects, got {short_repr(part)}")
+        raise WorldError(f"{parameter}: world", f"expected a mapping holding collision_objects, got {kind_of(part)}")
     objects = part.get("collision_objects") or []
     if not isinstance(objects, list):
         raise WorldError(f"{parameter}: world.collision_objects", "expected a list of collision objects")
+    _check_scene_size(objects, parameter, limits)
     out = []
     for i, item in enumerate(objects):
         out.extend(_collision_object(item, f"{parameter}: world.collision_objects[{i}]", frames))
@@ -170,21 +205,59 @@ def world_obstacles(
     scene's ``frame_id`` may name besides ``world`` (the robot's ``base_link``)."""
     out = list(obstacles_from_parameters(world))
     if "scene_file" in world:
-        import yaml
-
-        path = Path(str(world["scene_file"]))
-        path = path if path.is_absolute() else folder / path
-        try:
-            scene = yaml.safe_load(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
-            raise WorldError("world.scene_file", f"cannot read {str(path)!r} as YAML: {error}") from None
         known = {"world": np.eye(4), **(frames or {})}
-        out.extend(scene_obstacles(scene, known, "world.scene_file"))
-    names = [o.name for o in out]
-    if len(set(names)) != len(names):
-        twice = sorted({n for n in names if names.count(n) > 1})
-        raise WorldError("world.scene_file", f"obstacle names must be distinct; given twice: {twice}")
+        out.extend(scene_obstacles(read_scene_file(world["scene_file"], folder), known, "world.scene_file"))
+    if len(out) > LIMITS.max_obstacles:
+        raise WorldError(
+            "world.scene_file",
+            f"{len(out)} obstacles (world.obstacle_names and the scene file's), more than Limits.max_obstacles "
+            f"({LIMITS.max_obstacles})",
+        )
+    twice = sorted(name for name, count in Counter(o.name for o in out).items() if count > 1)
+    if twice:
+        raise WorldError("world.scene_file", f"obstacle names must be distinct; given twice: {short_repr(twice)}")
     return tuple(out)
+
+
+def read_scene_file(name: Any, folder: Path, limits: Limits = LIMITS) -> Any:
+    """The parsed YAML of ``world.scene_file`` (relative to ``folder``): a regular file of at most
+    ``Limits.max_scene_file_bytes``; an error says where the YAML fails, never what the file holds."""
+    import yaml
+
+    if not isinstance(name, str) or not name:
+        raise WorldError("world.scene_file", f"expected a path, got {short_repr(name)}")
+    path = Path(name)
+    path = path if path.is_absolute() else folder / path
+    try:
+        data = read_regular_file(path, limits.max_scene_file_bytes, "Limits.max_scene_file_bytes")
+        return yaml.load(data.decode("utf-8"), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+    except FileRefusedError as error:
+        raise WorldError("world.scene_file", f"cannot read {str(path)!r}: {error}") from None
+    except UnicodeDecodeError as error:
+        raise WorldError(
+            "world.scene_file", f"{str(path)!r}: expected UTF-8 text ({error.reason} at byte {error.start})"
+        ) from None
+    except yaml.YAMLError as error:
+        raise WorldError("world.scene_file", f"cannot read {str(path)!r} as YAML ({yaml_error_place(error)})") from None
+    except (RecursionError, ValueError, OverflowError) as error:
+        raise WorldError(
+            "world.scene_file", f"{str(path)!r}: expected YAML it can read ({type(error).__name__})"
+        ) from None
+
+
+def _check_scene_size(objects: list[Any], parameter: str, limits: Limits) -> None:
+    """The primitives of the collision objects (an object without any counts one), as YAML aliases expanded
+    them, counted against ``Limits.max_scene_objects`` before any is read: a short file may name one list
+    many times."""
+    count = 0
+    for item in objects:
+        primitives = item.get("primitives") if isinstance(item, Mapping) else None
+        count += max(len(primitives), 1) if isinstance(primitives, list) else 1
+        if count > limits.max_scene_objects:
+            raise WorldError(
+                f"{parameter}: world.collision_objects",
+                f"more than Limits.max_scene_objects ({limits.max_scene_objects}) objects and primitives",
+            )
 
 
 def bounds_from_parameters(world: Mapping[str, Any]) -> NDArray[np.float64] | None:

@@ -30,11 +30,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from clew_ros.core.errors import WorldError
+from clew_ros.core.parameters import LIMITS, Limits
 from clew_ros.spatial.robot import Geometry, RobotModel
 
 __all__ = [
     "SphereModel",
     "SphereSettings",
+    "check_mesh_work",
     "cover",
     "inner_cover",
     "over_approximation",
@@ -227,16 +230,22 @@ def _inner_mesh(origin: Array, interior: NDArray[np.bool_], cell: float, limit: 
     return np.asarray(centres[kept], dtype=np.float64), np.asarray(radius[kept], dtype=np.float64)
 
 
-def _cover_mesh(vertices: Array, faces: NDArray[np.int64], settings: SphereSettings) -> tuple[Array, Array]:
-    return _mesh_spheres(vertices, faces, settings)[:2]
+def _cover_mesh(
+    vertices: Array, faces: NDArray[np.int64], settings: SphereSettings, where: str = "a mesh", limits: Limits = LIMITS
+) -> tuple[Array, Array]:
+    return _mesh_spheres(vertices, faces, settings, where, limits)[:2]
 
 
 def _mesh_spheres(
-    vertices: Array, faces: NDArray[np.int64], settings: SphereSettings
+    vertices: Array, faces: NDArray[np.int64], settings: SphereSettings, where: str = "a mesh", limits: Limits = LIMITS
 ) -> tuple[Array, Array, Array, Array]:
-    """A mesh's outer cover (centres, radii) and inner spheres (centres, radii)."""
+    """A mesh's outer cover (centres, radii) and inner spheres (centres, radii); its work capped by ``limits``."""
     cell = settings.cell_m
+    check_mesh_work(vertices, faces, cell, where, limits)
     origin, kept, surface = _voxels(vertices, faces, cell)
+    _check_cap(
+        int(kept.sum()), limits.max_solid_cells, "max_solid_cells", f"{where}: its solid at {cell:g} m holds", "cells"
+    )
     inner_c, inner_r = _inner_mesh(origin, kept & ~surface, cell, settings.inner_per_mesh)
     index = np.argwhere(kept)
     centers = origin + (index + 0.5) * cell
@@ -272,7 +281,8 @@ def cover(geometry: Geometry, settings: SphereSettings) -> tuple[Array, Array]:
         return _cover_box(geometry.size, settings)
     if geometry.kind == "cylinder":
         return _cover_cylinder(geometry.size[0], geometry.size[1], settings)
-    return _cover_mesh(geometry.vertices, geometry.faces, settings)
+    where = f"<link name={geometry.link!r}> mesh {geometry.source!r}"
+    return _cover_mesh(geometry.vertices, geometry.faces, settings, where)
 
 
 def inner_cover(geometry: Geometry, settings: SphereSettings) -> tuple[Array, Array]:
@@ -322,22 +332,70 @@ def _gather(robot: RobotModel, per_link: list[list[tuple[Array, Array]]]) -> Sph
     )
 
 
-def sphere_model(robot: RobotModel, settings: SphereSettings | None = None) -> SphereModel:
-    """The conservative sphere model of every link of ``robot``, with its inner model."""
+def sphere_model(robot: RobotModel, settings: SphereSettings | None = None, limits: Limits = LIMITS) -> SphereModel:
+    """The conservative sphere model of every link of ``robot``, with its inner model; a
+    :class:`~clew_ros.core.errors.WorldError` (``world.robot.urdf``) when a mesh or the model passes one of
+    ``limits``' caps (checked before the work that grows with it)."""
     settings = settings or SphereSettings()
     outer: list[list[tuple[Array, Array]]] = []
     inner: list[list[tuple[Array, Array]]] = []
+    count = 0
     for link in robot.links:
         outer.append([])
         inner.append([])
         for geometry in link.geometries:
             if geometry.kind == "mesh":
-                out_c, out_r, in_c, in_r = _mesh_spheres(geometry.vertices, geometry.faces, settings)
+                where = f"<link name={geometry.link!r}> mesh {geometry.source!r}"
+                out_c, out_r, in_c, in_r = _mesh_spheres(geometry.vertices, geometry.faces, settings, where, limits)
             else:
                 (out_c, out_r), (in_c, in_r) = cover(geometry, settings), inner_cover(geometry, settings)
+            count += len(out_r) + len(in_r)
+            _check_cap(
+                count,
+                limits.max_spheres,
+                "max_spheres",
+                f"<link name={link.name!r}>: the sphere model holds",
+                "spheres",
+            )
             outer[-1].append((out_c, out_r))
             inner[-1].append((in_c, in_r))
     return replace(_gather(robot, outer), inner=_gather(robot, inner))
+
+
+# ----------------------------------------------------------------------------------------- caps
+
+
+def _check_cap(count: int, limit: int, cap: str, what: str, unit: str) -> None:
+    if count > limit:
+        raise WorldError("world.robot.urdf", f"{what} {count} {unit}, more than Limits.{cap} ({limit})")
+
+
+def check_mesh_work(
+    vertices: Array, faces: NDArray[np.int64], cell: float, where: str, limits: Limits = LIMITS
+) -> None:
+    """Refuse a mesh whose voxelising at ``cell`` (m) would pass ``Limits.max_mesh_cells`` (the grid, from the
+    mesh's extent) or ``Limits.max_split_triangles`` (its triangles split until no edge exceeds a cell: each
+    triangle whose longest edge is ``e`` becomes ``4 ** ceil(log2(e / cell))``), before any of that work."""
+    extent = vertices.max(axis=0) - vertices.min(axis=0) + 3.0 * cell
+    cells = float(np.prod(np.ceil(extent / cell)))
+    _check_cap(
+        int(min(cells, 2**62)),
+        limits.max_mesh_cells,
+        "max_mesh_cells",
+        f"{where}: its voxel grid at {cell:g} m holds",
+        "cells",
+    )
+    corners = vertices[faces]
+    longest = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
+    halvings = np.ceil(np.log2(np.maximum(longest / cell, 1.0)))
+    pieces = float(np.sum(np.power(4.0, np.minimum(halvings, 30.0))))
+    _check_cap(
+        int(min(pieces, 2**62)),
+        limits.max_split_triangles,
+        "max_split_triangles",
+        f"{where}: split to {cell:g} m it holds",
+        "triangles",
+    )
 
 
 # ----------------------------------------------------------------------------------------- measuring

@@ -20,6 +20,7 @@ from clew_ros.motion.spatial import spatial_track
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.recording import RunRecorder
 from clew_ros.recording.cdr import tf_message
+from clew_ros.render.spatial.meshes import simplify
 from clew_ros.ros import messages, spatial
 from clew_ros.ros.events import spatial_plan_fields
 from clew_ros.ros.parameters import NodeSettings
@@ -64,7 +65,7 @@ def record_witness(
             world_yaml.data = world_yaml.data.replace(str((CONFIG.parent / "robots/panda/panda.urdf").resolve()), urdf)
             assert urdf in world_yaml.data
         write("world_yaml", world_yaml, now)
-        write("world_markers", spatial.world_markers(world, now), now)
+        write("world_markers", spatial.world_markers(world, now, simplify=simplify), now)
         write("robot_description", messages.String(data=setup.description), now)
         tf(spatial.static_transforms(setup, world), now, static=True)
         tf(spatial.state_transforms(setup, world, world.initial, world.object.initial), now)

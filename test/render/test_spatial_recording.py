@@ -1,5 +1,5 @@
-"""clew_render on a recorded spatial run: the world from the recording (``~/world_yaml``, its robot from
-``~/robot_description`` when the URDF file is gone), the plan rebuilt from ``~/trajectory`` and the
+"""clew_render on a recorded spatial run: the world from the recording alone (``~/world_yaml``, its robot from
+``~/robot_description`` and the meshes of ``~/world_markers``), the plan rebuilt from ``~/trajectory`` and the
 ``succeeded`` event's segments, drawn in 3-D. The recording is the Panda table-to-table witness recorded as
 the node records a run (test/helpers/spatial_recording.py); planar recordings: test_render.py."""
 
@@ -38,7 +38,7 @@ def carried(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_the_plan_is_rebuilt_from_the_recording(recorded: Path) -> None:
     run = spatial_recording(recorded)
     assert run is not None
-    assert run.world_source == "world_yaml"
+    assert run.world_source == "world_yaml + robot_description + world_markers"
     witness = Plan.read(WITNESS)
     frames = run.frames
     np.testing.assert_allclose(frames.joints[0], witness.segments[0].waypoints[0], atol=1e-9)
@@ -52,12 +52,13 @@ def test_the_plan_is_rebuilt_from_the_recording(recorded: Path) -> None:
     assert "succeeded" in frames.title
 
 
-def test_a_recording_carried_elsewhere_takes_its_robot_from_robot_description(recorded: Path, carried: Path) -> None:
+def test_a_recording_carried_elsewhere_draws_the_same(recorded: Path, carried: Path) -> None:
+    """The robot comes from ``~/robot_description`` and the markers' meshes wherever the URDF file is."""
     run, here = spatial_recording(carried), spatial_recording(recorded)
     assert run is not None
     assert here is not None
-    assert run.world_source == "world_yaml + robot_description"
     assert run.world.robot.joint_names == here.world.robot.joint_names
+    assert [link.name for link in run.world.robot.links] == [link.name for link in here.world.robot.links]
     np.testing.assert_allclose(run.frames.joints, here.frames.joints)
 
 

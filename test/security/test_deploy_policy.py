@@ -11,6 +11,9 @@ calls ``ros2 security generate_policy`` makes): the policy's names, and the
 DDS topics of the permissions, must equal that list, no more and no less.
 ``/tf`` and ``/tf_static`` are published where ``tf2_msgs`` is installed (a
 native install; not the PyPI wheels), so they count as published there.
+The other enclaves of the robot's graph (``config/sros2/clew_clients_policy.xml``: the operator, the
+controller, the live state's publishers) are restricted too: valid for sros2, deny by default, and none may
+publish what the planner publishes, serve its services or change its parameters.
 """
 
 from __future__ import annotations
@@ -240,3 +243,68 @@ def test_dds_permissions_name_exactly_the_node_topics(node_interface: Interface)
     subscribe = {t.text for t in grant.findall("allow_rule/subscribe/topics/topic")}
     assert publish == expected_publish
     assert subscribe == expected_subscribe
+
+
+# --------------------------------------------------------------------------- the other enclaves
+
+CLIENTS = ROOT / "config" / "sros2" / "clew_clients_policy.xml"
+#: What each client enclave may do to the planner beyond reading it: publish these of its topics.
+CLIENT_INPUTS = {
+    "/clew_operator": {"/clew_planner/goal_pose"},
+    "/clew_controller": set(),
+    "/clew_state": {"/clew_planner/object", "/clew_planner/obstacles", "/clew_planner/points", "/joint_states"},
+}
+#: The planner's services a client may call (never a parameter change).
+CLIENT_CALLS = {
+    "/clew_operator": {
+        "/clew_planner/plan",
+        "/clew_planner/cancel",
+        "/clew_planner/get_parameters",
+        "/clew_planner/list_parameters",
+        "/clew_planner/describe_parameters",
+        "/clew_planner/get_parameter_types",
+    },
+    "/clew_controller": set(),
+    "/clew_state": set(),
+}
+
+
+def load_clients() -> etree._ElementTree:
+    parser = etree.XMLParser(no_network=True, resolve_entities=False)
+    policy = etree.parse(str(CLIENTS), parser)
+    etree.XMLSchema(etree.parse(str(SROS2 / "policy.xsd"), parser)).assertValid(policy)
+    return policy
+
+
+def client_interfaces(policy: etree._ElementTree) -> dict[str, Interface]:
+    """Each enclave's allowed interface (its one profile's), by enclave path."""
+    out = {}
+    for enclave in policy.getroot().findall("enclaves/enclave"):
+        (profile,) = enclave.findall("profiles/profile")
+        out[enclave.get("path")] = policy_interface(profile)
+    return out
+
+
+def test_the_client_enclaves_are_valid_for_sros2_and_deny_by_default() -> None:
+    permissions = dds_permissions(load_clients())
+    grants = permissions.findall("permissions/grant")
+    assert {g.get("name") for g in grants} == set(CLIENT_INPUTS)
+    for grant in grants:
+        assert grant.findtext("default") == "DENY"
+        assert grant.findall("deny_rule") == []
+
+
+def test_no_other_enclave_speaks_for_the_planner() -> None:
+    """No client enclave may publish what the planner publishes (its trajectory, its frames), serve its
+    services, or call its parameter changes; each publishes of the planner's topics only its inputs."""
+    planner = policy_interface(the_profile(load_policy()))
+    own_services = {f"/{NODE_NAME}/{name}" for name in ("set_parameters", "set_parameters_atomically")}
+    shared = {"/rosout", "/parameter_events"}  # every node publishes its log and parameter changes there
+    for path, allowed in client_interfaces(load_clients()).items():
+        assert not (allowed["publish"] & (planner["publish"] - shared)), path
+        assert not (allowed["reply"] & planner["reply"]), path
+        assert not (allowed["request"] & own_services), path
+        assert allowed["request"] == CLIENT_CALLS[path], path
+        assert allowed["publish"] - shared == CLIENT_INPUTS[path], path
+        assert {name for name in allowed["subscribe"] if not name.startswith(("/clew_planner/", "/tf"))} == set()
+    assert set(client_interfaces(load_clients())).isdisjoint({ENCLAVE})

@@ -1,5 +1,6 @@
 """Fuzz of every file reader: a generated corpus of malformed plan files and recordings (mutated real ones and
-crafted ones, :mod:`helpers.security_files`), plus hypothesis' own mutations.
+crafted ones, :mod:`helpers.security_files`), plus hypothesis' own mutations; and of the spatial world's files
+(planning scenes, URDFs, meshes, :mod:`helpers.security_spatial`) and recorded spatial runs.
 
 Every case is either read or refused with the project's own error type (PlanFileError, RecordingError), and
 the command-line tools given it (clew_render, clew_replay --dry-run; in-process, and a few real processes) exit
@@ -12,9 +13,11 @@ import collections
 import contextlib
 import functools
 import io
+import random
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -28,6 +31,7 @@ from helpers.security_files import (
     world_path,
     write_recording,
 )
+from helpers.security_spatial import MESHES, SECRET, mesh_cases, scene_cases, urdf_cases, urdf_with_meshes
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -216,3 +220,94 @@ def test_hypothesis_mutations_of_a_plan_file(mutation: tuple[list[tuple[int, int
     data = _mutated(plan_bytes(SEEDS[1][1]), *mutation)
     with contextlib.suppress(PlanFileError):
         Plan.from_json(data, source="mutated")
+
+
+# --------------------------------------------------------------------------- spatial worlds and their files
+
+#: The issue's bound on a refusal (s): a malformed spatial file is read or refused within it.
+SPATIAL_CASE_S = 10.0
+
+
+def _read_or_refuse(load: Callable[[], object], counts: collections.Counter[tuple[str, str]], kind: str) -> None:
+    """``load()`` either reads or raises WorldError: one line, no file contents, within the bound."""
+    from clew_ros.core.errors import WorldError
+
+    start = time.monotonic()
+    try:
+        load()
+    except WorldError as error:
+        text = str(error)
+        assert "\n" not in text, text
+        assert SECRET not in text, text
+        counts[kind, "refused"] += 1
+    else:
+        counts[kind, "read"] += 1
+    assert time.monotonic() - start < SPATIAL_CASE_S, kind
+
+
+def test_every_malformed_spatial_file_is_read_or_refused(tmp_path: Path) -> None:
+    """Planning scenes, URDFs and meshes, each mutated: the world loader reads it or refuses it with a
+    WorldError (never another exception), in one line and within the bound."""
+    pytest.importorskip("trimesh")
+    pytest.importorskip("urdf_parser_py")
+    from clew_ros.spatial.robot import robot_from_parameters
+    from clew_ros.spatial.scene import world_obstacles
+    from clew_ros.spatial.spheres import sphere_model
+
+    panda = {"base_link": "panda_link0", "tip_link": "panda_hand_tcp"}
+    counts: collections.Counter[tuple[str, str]] = collections.Counter()
+    for number, (kind, data) in enumerate(scene_cases()):
+        path = tmp_path / f"scene_{number:03d}.yaml"
+        path.write_bytes(data)
+        _read_or_refuse(lambda path=path: world_obstacles({"scene_file": str(path)}, tmp_path), counts, f"scene {kind}")
+    for number, (kind, data) in enumerate(urdf_cases()):
+        path = tmp_path / f"robot_{number:03d}.urdf"
+        path.write_bytes(data)
+        _read_or_refuse(
+            lambda path=path: robot_from_parameters({**panda, "urdf": str(path)}, tmp_path), counts, f"URDF {kind}"
+        )
+    urdf = urdf_with_meshes(tmp_path, lambda text: text.replace(f"{MESHES}/link3.stl", str(tmp_path / "mesh.stl")))
+    for kind, data in mesh_cases():
+        (tmp_path / "mesh.stl").write_bytes(data)
+
+        def load() -> None:
+            sphere_model(robot_from_parameters({**panda, "urdf": str(urdf)}, tmp_path))
+
+        _read_or_refuse(load, counts, f"mesh {kind}")
+    _tally("spatial files", counts)
+    kinds = {kind for kind, _ in counts}
+    assert len(kinds) >= 15
+    for kind in ("scene aliases", "URDF entities", "URDF many links", "URDF files", "mesh huge triangle count"):
+        assert (kind, "refused") in counts, kind
+    assert sum(counts.values()) >= 140
+
+
+@pytest.fixture(scope="module")
+def spatial_recording_bytes(tmp_path_factory: pytest.TempPathFactory) -> bytes:
+    pytest.importorskip("trimesh")
+    from helpers.spatial_recording import record_witness
+
+    run = record_witness(tmp_path_factory.mktemp("spatial_seed"))
+    return next(run.glob("*.mcap")).read_bytes()
+
+
+def test_clew_render_reads_or_refuses_every_mutated_spatial_recording(
+    spatial_recording_bytes: bytes, tmp_path: Path
+) -> None:
+    """A recorded spatial run truncated, bit-flipped or with bytes inserted: clew_render draws it (from what
+    is left) or exits 2 with one line, within the bound."""
+    from helpers.security_files import bit_flips, insertions, truncations
+
+    rng = random.Random(0)
+    data = spatial_recording_bytes
+    cases = [("unchanged", data), *truncations(data, rng, 5), *bit_flips(data, rng, 6), *insertions(data, rng, 4)]
+    counts: collections.Counter[tuple[str, str]] = collections.Counter()
+    for number, (kind, mutated) in enumerate(cases):
+        path = tmp_path / f"run_{number:02d}.mcap"
+        path.write_bytes(mutated)
+        start = time.monotonic()
+        code, err = _run(clew_render, [str(path), "-o", str(tmp_path / "out.png"), "--size", "64"])
+        assert time.monotonic() - start < SPATIAL_CASE_S, kind
+        _check_cli("clew_render", code, err, counts, kind)
+    _tally("clew_render, spatial recordings", counts)
+    assert counts["unchanged", "exit 0"] == 1

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import ClewError
+from clew_ros.core.files import FileRefusedError, read_regular_file
 from clew_ros.core.plan import FORMAT, PlanFileLimits
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.render.errors import RenderError
@@ -89,12 +90,9 @@ def load_spatial_world(path: str | Path) -> SpatialWorld:
 def _read_json(path: Path) -> Any:
     limit = PlanFileLimits().max_bytes
     try:
-        with path.open("rb") as stream:
-            data = stream.read(limit + 1)
-    except OSError as error:
-        raise RenderError(f"{path}: cannot read ({error.strerror or error})") from None
-    if len(data) > limit:
-        raise RenderError(f"{path}: larger than {limit} bytes")
+        data = read_regular_file(path, limit, "PlanFileLimits.max_bytes")
+    except FileRefusedError as error:
+        raise RenderError(f"{path}: cannot read ({error})") from None
 
     def refuse(name: str) -> Any:
         raise RenderError(f"{path}: {name} is not a number a frame may hold")

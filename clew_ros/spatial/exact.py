@@ -215,7 +215,10 @@ class ExactChecker:
         if bounds is None:
             return []
         names = [f"the bounds ({side} {'xyz'[axis]})" for axis in range(3) for side in ("min", "max")]
-        return [(name, shape, np.eye(4)) for name, shape in zip(names, outside_bounds(self.coal, bounds.tolist()), strict=True)]
+        return [
+            (name, shape, np.eye(4))
+            for name, shape in zip(names, outside_bounds(self.coal, bounds.tolist()), strict=True)
+        ]
 
     def _scene(self, resting: Matrix | None = None, held: Matrix | None = None) -> _Scene:
         """The robot among the obstacles, the bounds' slabs and the object: ``resting`` at that pose in

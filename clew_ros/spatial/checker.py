@@ -161,6 +161,7 @@ class SpatialChecker:
         resting_object: Obstacle | None = None,
         held: Held | None = None,
         exact: bool = True,
+        band_intervals: bool = True,
     ) -> None:
         """``bounds``: ``[xmin, ymin, zmin, xmax, ymax, zmax]`` (m) or ``None`` (unbounded);
         ``self_collision`` false leaves every pair of links unchecked. ``resting_object``: the object where it
@@ -168,7 +169,9 @@ class SpatialChecker:
         in the hand (in transfer), its conservative spheres riding on the tcp's frame, checked against the
         obstacles (its supports only from below their top), the bounds and every link but the
         ``gripper_links``. ``exact`` (default): where the spheres cannot settle a contact, the exact geometry
-        decides (:mod:`clew_ros.spatial.tier`); false: the spheres alone (conservative, never exact)."""
+        decides (:mod:`clew_ros.spatial.tier`); false: the spheres alone (conservative, never exact).
+        ``band_intervals`` false: :meth:`free_intervals` are the spheres' alone (a row near a contact gets none)
+        while :meth:`valid` still decides on the exact geometry."""
         if resting_object is not None and held is not None:
             raise ValueError("resting_object and held: the object either rests or is held, not both")
         self.robot = robot
@@ -197,7 +200,7 @@ class SpatialChecker:
             link_frame.append(robot.tcp_frame)
         pieces = len(link_frame)
         starts = np.searchsorted(owners, np.arange(pieces + 1))
-        self.exact = exact
+        self.exact, self.band_intervals = exact, band_intervals
         self._tier: ExactTier | None = None
         self._held_pose = None if held is None else (held.shape, placed)
         self._inner = _inner_arrays(spheres, held, placed, robot.tcp_frame, n_links)
@@ -311,13 +314,20 @@ class SpatialChecker:
         return False
 
     def classify(
-        self, qs: Any, margin: float | NDArray[np.float64] = 0.0, *, moved_only: bool = False
+        self,
+        qs: Any,
+        margin: float | NDArray[np.float64] = 0.0,
+        *,
+        moved_only: bool = False,
+        groups: NDArray[np.int64] | None = None,
     ) -> NDArray[np.bool_]:
         """For each row: valid on the two tiers (spheres, then the exact geometry for the contacts the spheres
         leave open), every contact kept at least ``margin`` (m; one for every piece, or one per piece, as one
         joint's move gives them: two pieces it both moves, or neither, keep none between them) clear.
         ``moved_only``: each row is one joint's move from a free configuration, the pieces it moves those with a
-        margin (:meth:`ExactTier.contact`)."""
+        margin (:meth:`ExactTier.contact`). ``groups`` (one label per row): only whether every row of a group is
+        valid matters (the samples of one straight move), so once a row of a group is refused the group's other
+        rows are not decided on the exact geometry (reported refused)."""
         margins = np.broadcast_to(np.asarray(margin, dtype=np.float64), (len(self._arrays["link_r"]),))
         margin = float(margins.max(initial=0.0))  # the kernel's: every contact within the largest is listed
         batch = self._batch(qs)
@@ -351,10 +361,17 @@ class SpatialChecker:
                     and self.tier.free(again[m, : sub_counts[m]], (rot[m], pos[m]), margins, moved_only=moved_only)
                 )
         rows = np.flatnonzero(status == band.BAND)
+        refused = set() if groups is None else set(groups[(status == band.CERTAIN) | (status == band.OVERFLOW) & ~out])
+        if groups is not None:
+            rows = rows[~np.isin(groups[rows], list(refused))]
         if self.exact and len(rows):
             rot, pos = self.tier.placements(frames_r[rows], frames_t[rows])
             for k, b in enumerate(rows):
+                if groups is not None and groups[b] in refused:
+                    continue
                 out[b] = self.tier.free(contacts[b, : counts[b]], (rot[k], pos[k]), margins, moved_only=moved_only)
+                if groups is not None and not out[b]:
+                    refused.add(groups[b])
         return out
 
     def valid_on_spheres(self, qs: Any) -> NDArray[np.bool_]:
@@ -380,15 +397,18 @@ class SpatialChecker:
         first; where they touch, the exact geometry decides unless the checker was made with ``exact=False``)."""
         return self.valid_and_on_spheres(qs)[0]
 
-    def valid_and_on_spheres(self, qs: Any) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        """:meth:`valid` and :meth:`valid_on_spheres` of the rows of ``qs``, for the price of one."""
+    def valid_and_on_spheres(
+        self, qs: Any, groups: NDArray[np.int64] | None = None
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """:meth:`valid` and :meth:`valid_on_spheres` of the rows of ``qs``, for the price of one; ``groups``:
+        see :meth:`classify` (a row of a refused group may be reported refused)."""
         batch = self._batch(qs)
         spheres = self.valid_on_spheres(batch)
         out = spheres.copy()
         if self.exact and not self.static_collision:
             open_rows = np.flatnonzero(~out)
             if len(open_rows):
-                out[open_rows] = self.classify(batch[open_rows])
+                out[open_rows] = self.classify(batch[open_rows], groups=None if groups is None else groups[open_rows])
         return out, spheres
 
     def free_intervals(
@@ -427,7 +447,7 @@ class SpatialChecker:
             ok[:] = False
             return lo, hi, ok
         self._sphere_intervals(batch, joint, settings, bound, fold, (lo, hi, ok))
-        if self.exact:
+        if self.exact and self.band_intervals:
             self._band_intervals(batch, joint, settings, bound, lo, hi, ok)
         return lo, hi, ok
 

@@ -180,7 +180,8 @@ def straight_samples_clear(
         parts = [samples[i][::stride] if stride > 1 else samples[i] for i in pick]
         if stride > 1:
             parts = [np.vstack([p, samples[i][-1:]]) for p, i in zip(parts, pick, strict=True)]
-        valid, spheres = checker.valid_and_on_spheres(np.vstack(parts))
+        owners = np.repeat(pick, [len(p) for p in parts])
+        valid, spheres = checker.valid_and_on_spheres(np.vstack(parts), groups=owners)
         bounds = np.cumsum([0, *(len(p) for p in parts)])
         for a, i in enumerate(pick):
             clear[i] = bool(valid[bounds[a] : bounds[a + 1]].all())
@@ -195,7 +196,8 @@ def straight_samples_clear(
             highs = np.vstack([samples[i][f + 1] for i, f in zip(pick, firsts, strict=True)])
             share = (np.arange(1, refine) / refine)[None, :, None]
             between = (lows[:, None, :] + share * (highs - lows)[:, None, :]).reshape(-1, robot.dof)
-            fine = checker.valid(between).reshape(len(lows), refine - 1).all(axis=1)
+            fine, _ = checker.valid_and_on_spheres(between, groups=np.repeat(owner, refine - 1))
+            fine = fine.reshape(len(lows), refine - 1).all(axis=1)
             clear[np.unique(owner[~fine])] = False
     return clear
 
@@ -304,8 +306,9 @@ class SpatialSpace:
                 world.tolerances["placement_tolerance"],
             )
             checker = SpatialChecker(
-                world.robot, world.spheres, world.obstacles, world.bounds, held=held, exact=world.checker.exact
-            )
+                world.robot, world.spheres, world.obstacles, world.bounds, held=held, exact=world.checker.exact,
+                band_intervals=self.tuning.transfer_band_intervals,
+            )  # fmt: skip
             self._transfer_checkers[key] = checker
         return checker
 

@@ -150,6 +150,11 @@ class SpatialTuning:
     #: along its approach, in steps of ``approach_m`` while they are clear: out of a shelf deeper than one
     #: approach
     transfer_way_out_m: float = 0.3
+    #: whether a transfer's Manhattan moves may start near a contact (free intervals sampled on the exact
+    #: geometry where the spheres refuse the row); False: a carried object leaves a tight spot by its straight
+    #: way out and set-down moves only, and the GA's moves stay where the spheres clear them (a search of
+    #: transfers near a table crawled in millimetre steps)
+    transfer_band_intervals: bool = False
     #: a motion-only query's way out of a tight spot: the tcp backed off along its own -z from the start and
     #: from the goal this far (m), in straight steps of ``motion_way_out_step_m`` (inverse kinematics seeded
     #: at the step before, each step clear), as a gripper leaves a bin or a grasp; both trees' first landmark

@@ -11,9 +11,10 @@ one such: at the goal it adds
   moved in until the robot is another drawn gap from it: the side of a bin or a cell.
 
 Both are collision objects of the scene (ids ``object`` and ``wall``), so the query stays motion-only. A draw
-is kept when the start is still valid on the exact geometry and the goal's *witness* holds: the tcp backed
-out straight along its approach axis (``witness_m`` in ``witness_step_m`` steps, inverse kinematics seeded at
-the step before) is valid at every 0.002 rad on the exact geometry. So every tight problem is solvable, and
+is kept when the start and the goal are valid on the exact reference (:class:`clew_ros.spatial.exact.ExactChecker`:
+pinocchio's kinematics and coal, not the planner's checker) and the goal's *witness* holds there: the tcp
+backed out straight along its approach axis (``witness_m`` in ``witness_step_m`` steps, inverse kinematics
+seeded at the step before) is valid at every 0.002 rad. So every tight problem is solvable, and
 its goal is one the sphere model alone refuses (it reaches centimetres past the links).
 """
 
@@ -29,12 +30,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from benchmarks.spatial_checker import CONFIG
 from benchmarks.spatial_scenes import MotionProblem, _pose_message, robot_and_spheres
-from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.exact import ExactChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
-from clew_ros.spatial.scene import scene_obstacles
 from clew_ros.spatial.tier import coal_module, robot_distance
 from clew_ros.spatial.validate import validation_samples
+from clew_ros.spatial.world import spatial_world_from_parameters
 
 __all__ = ["TightSettings", "tighten", "witness"]
 
@@ -76,9 +78,10 @@ def _grown(distance: Callable[[float], float], low: float, high: float, gap: flo
     return low
 
 
-def witness(checker: SpatialChecker, goal: Matrix, settings: TightSettings) -> bool:
-    """Whether the tcp backed out straight along its approach axis from ``goal`` is valid all the way."""
-    robot = checker.robot
+def witness(reference: ExactChecker, goal: Matrix, settings: TightSettings) -> bool:
+    """Whether the tcp backed out straight along its approach axis from ``goal`` is valid all the way on the
+    exact reference (pinocchio + coal, independent of the planner's checker)."""
+    robot = reference.world.robot
     solver = InverseKinematics(robot, IKSettings(seeds=0))
     q = goal
     pose = robot.tcp_pose(goal.tolist())
@@ -90,7 +93,7 @@ def witness(checker: SpatialChecker, goal: Matrix, settings: TightSettings) -> b
         if not len(found):
             return False
         nxt = found[np.argmin(np.abs(found - q).sum(axis=1))]
-        if not checker.valid(validation_samples(q, nxt, steps)).all():
+        if any(reference.configuration_problem(row) for row in validation_samples(q, nxt, steps)):
             return False
         q = nxt
     return True
@@ -153,11 +156,12 @@ def tighten(problem: MotionProblem, settings: TightSettings | None = None) -> Mo
         objects.append({"id": "object", **_box_message(object_size, centre)})
         objects.append({"id": "wall", **_box_message(tuple(wall_size), wall_pose)})
         tight_scene = {**scene, "world": {"collision_objects": objects}}
-        obstacles = scene_obstacles(tight_scene, {"world": np.eye(4)}, problem.name)
-        checker = SpatialChecker(robot, spheres, obstacles)
-        if not checker.valid(np.stack([problem.start, problem.goal])).all():
+        tight = dataclasses.replace(problem, name=f"tight_{problem.name}", scene=tight_scene)
+        world = spatial_world_from_parameters(tight.world_parameters(), CONFIG, prepared=(robot, spheres))
+        reference = ExactChecker(world)  # pinocchio's kinematics, coal: not the planner's checker
+        if reference.configuration_problem(problem.start) or reference.configuration_problem(problem.goal):
             continue
-        if not witness(checker, problem.goal, settings):
+        if not witness(reference, problem.goal, settings):
             continue
-        return dataclasses.replace(problem, name=f"tight_{problem.name}", scene=tight_scene)
+        return tight
     return None

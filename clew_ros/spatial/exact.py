@@ -7,8 +7,8 @@ loaded (boxes, cylinders and spheres as such, meshes as coal triangle BVHs), the
 primitives, and the object as the box or cylinder the world gives, checking every configuration along every
 straight piece at the validator's step (0.002 rad per revolute joint, 0.001 m per prismatic joint):
 
-- every link against every obstacle and against the bounds (each face of ``bounds`` stands for the half-space
-  outside it);
+- every link (grown by ``world.robot.padding``: coal's security margin) against every obstacle and against
+  the bounds (each face of ``bounds`` stands for the half-space outside it);
 - every pair of links but those the sphere model exempts (``RobotModel.exempt``: a link and its parent,
   links on one frame, the SRDF's ``disable_collisions``);
 - every link but ``world.robot.gripper_links`` against the object, resting where the previous transfer left
@@ -261,7 +261,13 @@ class ExactChecker:
             pairs += [(object_id, s) for s in statics[len(self.obstacle_shapes) :]]
         for first, second in pairs:
             geometry.addCollisionPair(pin.CollisionPair(first, second))
-        return _Scene(geometry, pin.GeometryData(geometry), tuple(names), object_id)
+        data = pin.GeometryData(geometry)
+        links = {g for mine in owned for g in mine}
+        for k, (first, second) in enumerate(pairs):  # world.robot.padding: each link grown by it
+            grown = robot.padding * ((first in links) + (second in links))
+            if grown > 0:
+                data.collisionRequests[k].security_margin = grown
+        return _Scene(geometry, data, tuple(names), object_id)
 
     def _collides(self, scene: _Scene, q: Sequence[float]) -> str:
         """What collides at ``q`` in ``scene`` (the first pair pinocchio finds), "" for nothing."""

@@ -35,6 +35,7 @@ __all__ = [
     "check_placement",
     "face_down",
     "face_yaw",
+    "object_extent",
     "object_from_parameters",
     "placement_pose",
     "project",
@@ -268,6 +269,20 @@ def sample_placements(
             continue  # the spheres touch an obstacle, and so does the exact box or cylinder
         out.append(pose)
     return np.array(out).reshape(-1, 4, 4)
+
+
+def object_extent(thing: MovableObject, pose: Matrix) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The object's exact axis-aligned extent (lowest and highest x, y, z) at ``pose`` (4x4): a box's corners, a
+    cylinder's cap rims."""
+    if thing.shape == "box":
+        half = np.asarray(thing.size) / 2
+        local = np.array(np.meshgrid(*[[-h, h] for h in half], indexing="ij")).reshape(3, -1).T
+        points = local @ pose[:3, :3].T + pose[:3, 3]
+        return points.min(axis=0), points.max(axis=0)
+    axis = pose[:3, 2]
+    rim = thing.size[1] * np.sqrt(np.maximum(0.0, 1.0 - axis**2))  # a cap's reach along each world axis
+    caps = pose[:3, 3] + np.outer([-1.0, 1.0], axis * thing.size[0] / 2)
+    return caps.min(axis=0) - rim, caps.max(axis=0) + rim
 
 
 def face_down(thing: MovableObject, rot: Matrix) -> tuple[str, float]:

@@ -29,7 +29,7 @@ from clew_ros.core.errors import PlanFileError
 from clew_ros.core.plan import Plan, PlanLandmark, PlanSegment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import InverseKinematics
-from clew_ros.spatial.placements import resting_on
+from clew_ros.spatial.placements import object_extent, resting_on
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import Obstacle, make_obstacle
 from clew_ros.spatial.tier import object_touches
@@ -192,16 +192,7 @@ def resting_problems(world: SpatialWorld, pose: Matrix, where: str) -> list[str]
         return [message]
     problems = []
     if world.bounds is not None:
-        if shape.shape == "box":
-            half = np.asarray(shape.size) / 2
-            local = np.array(np.meshgrid(*[[-h, h] for h in half], indexing="ij")).reshape(3, -1).T
-            points = local @ pose[:3, :3].T + pose[:3, 3]
-            low, high = points.min(axis=0), points.max(axis=0)
-        else:
-            axis = pose[:3, 2]
-            rim = shape.size[1] * np.sqrt(np.maximum(0.0, 1.0 - axis**2))  # a cap's reach along each world axis
-            caps = pose[:3, 3] + np.outer([-1.0, 1.0], axis * shape.size[0] / 2)
-            low, high = caps.min(axis=0) - rim, caps.max(axis=0) + rim
+        low, high = object_extent(shape, pose)
         if np.any(low < world.bounds[:3]) or np.any(high > world.bounds[3:]):
             problems.append(f"{where}: the object leaves the bounds")
     others = [o for o in world.obstacles if o.name != found[0].name]

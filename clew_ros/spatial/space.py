@@ -50,10 +50,9 @@ from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
 from clew_ros.spatial.motion_plan import add_branch, connect, plan_motion
-from clew_ros.spatial.placements import Support, face_down, placement_pose, resting_on
+from clew_ros.spatial.placements import Support, face_down, object_extent, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
 from clew_ros.spatial.scene import make_obstacle
-from clew_ros.spatial.spheres import SphereSettings, cover
 from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
@@ -969,8 +968,7 @@ class SpatialSpace:
 
     def _object_collides(self, object_pose: Array) -> str:
         """The obstacles (names) the object at ``object_pose`` touches, its support but from above allowed,
-        or the bounds it leaves; "" if none (the obstacles on its exact box or cylinder, the bounds on its
-        conservative sphere cover)."""
+        or the bounds it leaves; "" if none (on its exact box or cylinder)."""
         world = self.world
         thing = world.object
         assert thing is not None
@@ -979,10 +977,8 @@ class SpatialSpace:
         support = found[0].name if found is not None else ""
         hits = object_touches(thing.shape, pose, [o for o in world.obstacles if o.name != support])
         if world.bounds is not None:
-            centers, radii = cover(thing.shape.geometry(), SphereSettings())
-            placed = centers @ pose[:3, :3].T + pose[:3, 3]
-            low, high = world.bounds[:3], world.bounds[3:]
-            if np.any(placed - radii[:, None] < low) or np.any(placed + radii[:, None] > high):
+            low, high = object_extent(thing.shape, pose)
+            if np.any(low < world.bounds[:3]) or np.any(high > world.bounds[3:]):
                 hits.append("the world's bounds")
         return ", ".join(hits)
 
@@ -1151,16 +1147,18 @@ def plan(
             search=tuning.search,
             many=tuning.many,
         )
-    return _short_turns(result, world.robot.continuous)
+    steps = np.where(world.robot.prismatic, ValidationSettings().step_m, ValidationSettings().step_rad)
+    return _short_turns(result, world.robot.continuous, steps)
 
 
-def _short_turns(result: clew.PlanResult, continuous: NDArray[np.bool_]) -> clew.PlanResult:
-    """``result`` with every piece that turns a continuous joint by pi or more cut into equal straight parts
-    (:func:`clew_ros.spatial.turns.split_turns`: the same motion, read the same the short way round)."""
+def _short_turns(result: clew.PlanResult, continuous: NDArray[np.bool_], steps: Array) -> clew.PlanResult:
+    """``result`` with every piece that turns a continuous joint by pi or more cut into straight parts at its
+    own validator samples (:func:`clew_ros.spatial.turns.split_turns`: the same motion, read the same the
+    short way round, checked at the same configurations)."""
     if not continuous.any():
         return result
     result.segments = [
-        Segment(s.kind, s.grasp, list(split_turns(np.asarray(s.waypoints, dtype=float), continuous)))
+        Segment(s.kind, s.grasp, list(split_turns(np.asarray(s.waypoints, dtype=float), continuous, steps=steps)))
         for s in result.segments
     ]
     return result

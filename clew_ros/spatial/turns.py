@@ -90,9 +90,13 @@ def unwrapped(path: Array, continuous: NDArray[np.bool_] | None) -> Array:
     return out
 
 
-def split_turns(path: Array, continuous: NDArray[np.bool_] | None, largest: float = LARGEST_TURN_RAD) -> Array:
+def split_turns(
+    path: Array, continuous: NDArray[np.bool_] | None, largest: float = LARGEST_TURN_RAD, steps: Array | None = None
+) -> Array:
     """``path`` (k, n) with equal straight parts inserted in each piece that turns a continuous joint by more
-    than ``largest`` (rad, below pi): the same motion, on which the short way is the straight line."""
+    than ``largest`` (rad, below pi): the same motion, on which the short way is the straight line. ``steps``
+    (rad or m per joint: the validator's): the cuts fall on the piece's own validator samples, so the parts
+    are checked at the very configurations the whole was (a part of a piece is otherwise sampled elsewhere)."""
     path = np.asarray(path, dtype=np.float64)
     mask = _mask(continuous, path.shape[-1] if path.ndim == 2 else 0)
     if not mask.any() or len(path) < 2:
@@ -104,6 +108,10 @@ def split_turns(path: Array, continuous: NDArray[np.bool_] | None, largest: floa
     for i, turn in enumerate(turns):
         parts = max(1, math.ceil(turn / largest))
         t = np.arange(1, parts + 1)[:, None] / parts
+        if steps is not None:  # on the piece's samples: count of them, evenly spaced (validation_samples)
+            count = max(1, math.ceil(float(np.max(np.abs(path[i + 1] - path[i]) / steps))))
+            t = np.unique(np.floor(t[:, 0] * count + 0.5))[:, None] / count
+            t = t[t[:, 0] > 0]
         piece = path[i] + t * (path[i + 1] - path[i])
         piece[-1] = path[i + 1]
         rows.append(piece)

@@ -222,3 +222,24 @@ def test_a_box_in_a_bin_a_centimetre_from_its_walls_is_taken_out(tmp_path: Path)
 def replace_checker(world: SpatialWorld) -> SpatialChecker:
     """``world``'s checker deciding on the spheres alone."""
     return SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, exact=False)
+
+
+def test_the_exact_reference_grows_the_links_by_the_padding(panda: RobotModel, panda_spheres: SphereModel) -> None:
+    """pinocchio + coal's reference (clew_ros.spatial.exact) reads world.robot.padding as the planner does."""
+    from clew_ros.spatial.transforms import matrix_pose
+    from clew_ros.spatial.world import spatial_world_from_parameters
+
+    near = wall_at(panda, REACH, 0.002, panda.tcp_pose(REACH)[:3, 1])
+    tree = {
+        "world": {
+            "kind": "spatial",
+            "robot": {**PANDA, "initial": REACH.tolist(), "goal": REACH.tolist()},
+            "obstacle_names": ["wall"],
+            "obstacles": {"wall": {"shape": "box", "size": list(near.size), "pose": matrix_pose(near.pose)}},
+        }
+    }
+    for padding, collides in ((0.001, False), (0.003, True)):
+        tree["world"]["robot"]["padding"] = padding
+        world = spatial_world_from_parameters(tree, CONFIG)
+        assert bool(ExactChecker(world).configuration_problem(REACH)) is collides
+        assert bool(world.checker.valid(REACH[None])[0]) is not collides

@@ -1,11 +1,13 @@
-"""The compiled validity checker of a spatial world, batched over configurations.
+"""The validity checker of a spatial world, batched over configurations, in two tiers.
 
-:class:`SpatialChecker` packs a robot's sphere model, the obstacles and the bounds once into arrays and
+:class:`SpatialChecker` packs a robot's sphere models, the obstacles and the bounds once into arrays and
 answers for whole batches (``(N, n)`` arrays of planned-joint values): :meth:`~SpatialChecker.valid`
-(joint limits, spheres vs obstacles and bounds, self-collision over the pairs not exempted) and
-:meth:`~SpatialChecker.free_intervals` (the interval of one joint, the others fixed, that is free for
-the sphere model, found by conservative steps). The sphere model covers the URDF's geometry, so what the
-checker calls free is free for the URDF's geometry. Touching counts as colliding.
+(joint limits, obstacles and bounds, self-collision over the pairs not exempted) and
+:meth:`~SpatialChecker.free_intervals` (the interval of one joint, the others fixed, that is free). The outer
+spheres cover the URDF's geometry, so what they call free is free; where they touch something, the inner
+spheres (inside the geometry) prove a collision, and the contacts left between the two are decided on the
+exact geometry (:mod:`clew_ros.spatial.kernels.band`, :mod:`clew_ros.spatial.tier`), grown by
+``world.robot.padding``. Touching counts as colliding.
 """
 
 from __future__ import annotations
@@ -148,7 +150,7 @@ def _levers(  # noqa: PLR0917
 
 
 class SpatialChecker:
-    """Validity and free intervals of one robot (its sphere model) among obstacles, inside bounds."""
+    """Validity and free intervals of one robot among obstacles, inside bounds (spheres, then the exact geometry)."""
 
     def __init__(
         self,

@@ -5,8 +5,9 @@ joint-space pieces between consecutive ones (a continuous joint the short way ro
 revolute joint moves more than :attr:`ValidationSettings.step_rad` (0.002 rad, the contract's step) and no
 prismatic joint more than :attr:`ValidationSettings.step_m` (0.001 m) between two checks, each against a
 :class:`~clew_ros.spatial.checker.SpatialChecker` (joint limits, obstacles, bounds, self-collision, on
-the URDF's exact geometry: the sphere models first, coal where they cannot settle it). It returns the problems found, one per piece that has
-any (empty: the path is valid), each naming the piece, the first invalid configuration on it and why.
+the URDF's exact geometry: the sphere models first, coal where they cannot settle it). It returns the
+problems found, one per piece that has any (empty: the path is valid), each naming the piece, the first
+invalid configuration on it and why.
 The checker says what the object does: resting where it lies (a transit) or held (a transfer, with
 :class:`~clew_ros.spatial.checker.Held`); :func:`explain_invalid` names the held object's collisions too.
 """

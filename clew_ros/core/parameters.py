@@ -636,6 +636,17 @@ NODE_PARAMETERS = ParameterTable(
             locked=True,
         ),
         ParameterSpec(
+            "markers.link_faces",
+            _I,
+            400,
+            "Triangles per link mesh that ~/world_markers draws of a spatial arm (namespace robot_links: its "
+            "collision geometry, in each link's frame): each mesh simplified to at most this many; 0: every "
+            "triangle, the exact collision geometry validity is decided on. Read only: taken when the node starts.",
+            "",
+            (0, 1_000_000),
+            read_only=True,
+        ),
+        ParameterSpec(
             "playback.rate",
             _D,
             20.0,

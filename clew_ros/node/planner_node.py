@@ -109,7 +109,7 @@ class PlannerNode(Node):
         warm_up_s = warm_up()  # the planning kernel, before any plan (main() did it; another program may not)
         if warm_up_s > 1.0:
             self.get_logger().info(f"planning kernel compiled in {warm_up_s:.1f} s (cached for the next start)")
-        self._out = Publishing(self, self._closing)
+        self._out = Publishing(self, self._closing, link_faces=self._config.node.marker_link_faces)
         self._out.live = start_live_view(self, self._config)
 
         # ~/plan blocks until its run's outcome is out, and a second call must still be

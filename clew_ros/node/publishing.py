@@ -79,8 +79,10 @@ class Publishing:
     (the context is gone) is not logged.
     """
 
-    def __init__(self, node: Node, closing: threading.Event) -> None:
+    def __init__(self, node: Node, closing: threading.Event, *, link_faces: int = 400) -> None:
         self._clock = node.get_clock()
+        #: ``markers.link_faces``: triangles per link mesh in ``~/world_markers`` (0: every one)
+        self._link_markers = spatial.LinkMarkerSettings(max_link_faces=link_faces)
         self._logger = node.get_logger()
         self._node_name = node.get_name()
         self._closing = closing
@@ -149,7 +151,8 @@ class Publishing:
     ) -> None:
         now = self.now_ns()
         self.publish("world_yaml", spatial.world_yaml_message(setup, world, planner, self._node_name), recording)
-        self.publish("world_markers", spatial.world_markers(world, now, simplify=_mesh_simplifier()), recording)
+        markers = spatial.world_markers(world, now, self._link_markers, simplify=_mesh_simplifier())
+        self.publish("world_markers", markers, recording)
         self.publish("robot_description", String(data=setup.description), recording)
         self.publish_tf(spatial.static_transforms(setup, world), now, recording, static=True)
         self.to_live("the world", lambda live: live.publish_world(world))

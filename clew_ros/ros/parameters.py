@@ -97,7 +97,17 @@ __all__ = [
 DEFAULT_WORLD_FILE = "figure1.yaml"
 
 #: The parameter prefixes the node owns and checks (others, e.g. use_sim_time, are rclpy's).
-OWN_PREFIXES = ("world.", "planner.", "record.", "playback.", "trajectory.", "live.", "parameters.", "state.")
+OWN_PREFIXES = (
+    "world.",
+    "planner.",
+    "record.",
+    "markers.",
+    "playback.",
+    "trajectory.",
+    "live.",
+    "parameters.",
+    "state.",
+)
 
 
 @dataclass(frozen=True)
@@ -110,6 +120,8 @@ class NodeSettings:
     record_max_runs: int = NODE_PARAMETERS.default("record.max_runs")
     record_max_bytes: int = NODE_PARAMETERS.default("record.max_bytes")
     playback_rate_hz: float = NODE_PARAMETERS.default("playback.rate")
+    #: Triangles per link mesh in ~/world_markers (0: every one).
+    marker_link_faces: int = NODE_PARAMETERS.default("markers.link_faces")
     #: The joint limits: one number for every joint, or one per joint (checked against the world's joints).
     max_velocity_rad_s: float | tuple[float, ...] = NODE_PARAMETERS.default("trajectory.max_velocity")
     max_acceleration_rad_s2: float | tuple[float, ...] = NODE_PARAMETERS.default("trajectory.max_acceleration")
@@ -181,6 +193,7 @@ SETTINGS_FIELDS = {
     "record_max_runs": "record.max_runs",
     "record_max_bytes": "record.max_bytes",
     "playback_rate_hz": "playback.rate",
+    "marker_link_faces": "markers.link_faces",
     "max_velocity_rad_s": "trajectory.max_velocity",
     "max_acceleration_rad_s2": "trajectory.max_acceleration",
     "joint_speed_rad_s": "trajectory.joint_speed",

@@ -90,7 +90,8 @@ Vector = Sequence[float] | np.ndarray
 class LinkMarkerSettings:
     """How ``~/world_markers`` draws the arm's links (so that a recording alone draws the arm, in frames
     that ``/tf`` places): their collision geometry, each mesh simplified to at most ``max_link_faces``
-    triangles (11 Panda links x 400 triangles: about 0.3 MB a message, recorded once per run)."""
+    triangles (11 Panda links x 400 triangles: about 0.3 MB a message, recorded once per run); 0: every
+    triangle, the exact collision geometry (the node's ``markers.link_faces``)."""
 
     max_link_faces: int = 400
 
@@ -459,7 +460,7 @@ def link_markers(
 ) -> list[Marker]:
     """The arm's links as ``robot_links`` markers (id: one per geometry), each in its link's frame and
     ``frame_locked``: a primitive as CUBE / CYLINDER / SPHERE, a mesh as a TRIANGLE_LIST simplified by
-    ``simplify`` (meshes are left out without it)."""
+    ``simplify`` (meshes are left out without it), or whole where ``settings.max_link_faces`` is 0."""
     color = _color("arm")
     markers: list[Marker] = []
     for link in world.robot.links:
@@ -468,10 +469,10 @@ def link_markers(
                 marker = _solid(
                     "robot_links", 0, geometry.kind, geometry.size, geometry.origin, time_ns=time_ns, color=color
                 )
-            elif simplify is not None and len(geometry.faces):
-                vertices, faces = simplify(
-                    np.asarray(geometry.vertices), np.asarray(geometry.faces), settings.max_link_faces
-                )
+            elif len(geometry.faces) and (simplify is not None or settings.max_link_faces == 0):
+                vertices, faces = np.asarray(geometry.vertices), np.asarray(geometry.faces)
+                if settings.max_link_faces > 0 and simplify is not None:
+                    vertices, faces = simplify(vertices, faces, settings.max_link_faces)
                 placed = vertices @ geometry.origin[:3, :3].T + geometry.origin[:3, 3]
                 corners = placed[faces.reshape(-1)]
                 marker = _points("robot_links", Marker.TRIANGLE_LIST, corners, time_ns=time_ns, color=color, scale=1.0)

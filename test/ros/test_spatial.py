@@ -191,3 +191,20 @@ def test_world_yaml_names_the_files_absolutely(loaded) -> None:  # type: ignore[
     assert parameters["world"]["object"]["goal"] == goal
     assert parameters["planner"]["seed"] == 4
     assert setup.tree["world"]["robot"]["urdf"] == "../robots/panda/panda.urdf"  # the setup's tree unchanged
+
+
+def test_markers_link_faces_zero_draws_the_exact_collision_meshes(loaded) -> None:  # type: ignore[no-untyped-def]
+    """markers.link_faces 0: every triangle of every link mesh, at the link's own vertices (no simplification)."""
+    world, _setup = loaded
+    markers = link_markers(world, 0, LinkMarkerSettings(max_link_faces=0), simplify)
+    meshes = {m.header.frame_id: m for m in markers if m.type == Marker.TRIANGLE_LIST}
+    for link in world.robot.links:
+        for geometry in link.geometries:
+            if geometry.kind != "mesh":
+                continue
+            drawn = np.array([[p.x, p.y, p.z] for p in meshes[link.name].points])
+            expected = (geometry.vertices @ geometry.origin[:3, :3].T + geometry.origin[:3, 3])[
+                geometry.faces.reshape(-1)
+            ]
+            assert len(drawn) == 3 * len(geometry.faces)
+            assert np.allclose(drawn, expected)

@@ -8,7 +8,8 @@ touching the harness (``--planners ompl_rrtconnect mypackage.motion:plan``). The
 
 * ``aca``: the project's Ariadne's Clew planner, :func:`clew_ros.spatial.space.plan` on the problem's
   motion-only world (``world.robot.goal``; EXPLORE for transit, SEARCH_TRANSIT, shortcuts checked at
-  0.002 rad), default ``planner.*`` but the seed and the time limit, on the same sphere checker as the
+  0.002 rad), default ``planner.*`` but the seed and the time limit, on the same checker (spheres, then the
+  exact geometry) as the
   OMPL peer (the checker object itself); its kernels are warmed before the clock, as ``clew_plan`` does.
 * ``ompl_rrtconnect``: OMPL 2.x (PyPI ``ompl``, nanobind bindings) ``RRTConnect`` (default range) then its
   ``PathSimplifier`` (``SimpleSetup.simplifySolution`` for what is left of the time limit, at least
@@ -26,7 +27,8 @@ touching the harness (``--planners ompl_rrtconnect mypackage.motion:plan``). The
 Per planner (and per family and robot): success within the time limit, median and p90 wall time (a failure
 counts at the limit), median CPU time, median joint travel of the successful paths (sum over joints of
 |motion|, rad), median configurations checked (where the planner counts them), and the successful paths
-valid under the sphere checker at 0.002 rad per joint (:func:`~clew_ros.spatial.validate.validate_transit`)
+valid under the planner's checker (spheres, then the exact geometry) at 0.002 rad per joint
+(:func:`~clew_ros.spatial.validate.validate_transit`)
 and, with ``--exact`` (roboplan installed), under the exact geometry at 0.002 rad. A planner that is not
 installed is reported as such; the others run. Times exclude each planner's one-off setup (building the
 sphere model and checker, loading meshes): what a MoveIt user sees per query.
@@ -159,7 +161,8 @@ class OmplSettings:
 
 
 class _Validity:
-    """The sphere checker as OMPL's state and motion validators see it; counts the configurations checked."""
+    """The project's checker (spheres, then the exact geometry) as OMPL's state and motion validators see it;
+    counts the configurations checked."""
 
     def __init__(self, problem_context: ProblemContext, settings: OmplSettings) -> None:
         self.checker = problem_context.checker
@@ -186,7 +189,7 @@ class _Validity:
 def ompl_rrtconnect(
     problem: MotionProblem, seed: int, time_limit_s: float, settings: OmplSettings | None = None
 ) -> PlannerResult:
-    """OMPL's RRTConnect and path simplifier on the sphere checker (see the module docstring)."""
+    """OMPL's RRTConnect and path simplifier on the project's checker (see the module docstring)."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -370,7 +373,7 @@ def roboplan_rrtconnect(problem: MotionProblem, seed: int, time_limit_s: float) 
 @functools.cache
 def aca_world(problem: MotionProblem) -> SpatialWorld:
     """The problem's motion-only world (its parameters, read as ``clew_plan`` reads them), planned on the
-    problem's own sphere checker: the peers' collision model, object for object."""
+    problem's own checker (spheres, then the exact geometry): the peers' collision model, object for object."""
     loaded = cached_context(problem)
     built = spatial_world_from_parameters(problem.world_parameters(), CONFIG, prepared=(loaded.robot, loaded.spheres))
     return dataclasses.replace(built, checker=loaded.checker)
@@ -390,7 +393,7 @@ def aca_spheres(problem: MotionProblem, seed: int, time_limit_s: float) -> Plann
 def aca(problem: MotionProblem, seed: int, time_limit_s: float) -> PlannerResult:
     """The project's planner: :func:`clew_ros.spatial.space.plan` on the problem's motion-only world
     (EXPLORE and SEARCH_TRANSIT, then its shortcuts), default ``planner.*`` but ``seed`` and ``time_limit``,
-    on the sphere checker the peers use; the kernels warmed (:func:`clew_ros.spatial.offline.warm_up`)
+    on the checker the peers use; the kernels warmed (:func:`clew_ros.spatial.offline.warm_up`)
     before the clock, as ``clew_plan`` does."""
     return _aca_on(aca_world(problem), seed, time_limit_s)
 
@@ -424,7 +427,7 @@ class Run:
     travel_rad: float | None
     checks: int | None
     waypoints: int
-    valid: bool | None  # under the sphere checker at 0.002 rad (None: no path)
+    valid: bool | None  # under the planner's checker at 0.002 rad (None: no path)
     exact_valid: bool | None  # under the exact geometry at 0.002 rad (None: not checked)
     message: str = ""
     path: list[list[float]] = field(default_factory=list)
@@ -508,7 +511,7 @@ def table(runs: Sequence[Run], planners: Sequence[str], time_limit_s: float) -> 
     lines = [
         (
             "| problems | planner | runs | success | median s | p90 s | median CPU s | travel rad | checks | "
-            "valid (spheres) | valid (exact) |"
+            "valid (checker) | valid (exact) |"
         ),
         "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|",
     ]

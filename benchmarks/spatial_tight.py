@@ -159,7 +159,9 @@ def tighten(problem: MotionProblem, settings: TightSettings | None = None) -> Mo
         tight = dataclasses.replace(problem, name=f"tight_{problem.name}", scene=tight_scene)
         world = spatial_world_from_parameters(tight.world_parameters(), CONFIG, prepared=(robot, spheres))
         reference = ExactChecker(world)  # pinocchio's kinematics, coal: not the planner's checker
-        if reference.configuration_problem(problem.start) or reference.configuration_problem(problem.goal):
+        if reference.configuration_problem(problem.start.tolist()) or reference.configuration_problem(
+            problem.goal.tolist()
+        ):
             continue
         if not witness(reference, problem.goal, settings):
             continue

@@ -260,7 +260,8 @@ LIMITS = Limits()
 #: The name of the development switch: ``true`` lets the :attr:`~ParameterSpec.locked` parameters change while
 #: the node runs.
 RUNTIME_CHANGES = "parameters.allow_runtime_changes"
-#: The switch that lets ``use_sim_time`` (rclpy's) change while the node runs (off: fixed at its start value).
+#: The switch that lets ``use_sim_time`` (the ROS client library's) change while the node runs (off: fixed at
+#: its start value).
 SIM_TIME_CHANGES = "parameters.allow_sim_time_changes"
 #: The switch that fixes every ``planner.*`` parameter at start.
 PLANNER_LOCK = "parameters.lock_planner"

@@ -195,8 +195,8 @@ def straight_samples_clear(
             highs = np.vstack([samples[i][f + 1] for i, f in zip(pick, firsts, strict=True)])
             share = (np.arange(1, refine) / refine)[None, :, None]
             between = (lows[:, None, :] + share * (highs - lows)[:, None, :]).reshape(-1, robot.dof)
-            fine, _ = checker.valid_and_on_spheres(between, groups=np.repeat(owner, refine - 1))
-            fine = fine.reshape(len(lows), refine - 1).all(axis=1)
+            valid, _ = checker.valid_and_on_spheres(between, groups=np.repeat(owner, refine - 1))
+            fine = valid.reshape(len(lows), refine - 1).all(axis=1)
             clear[np.unique(owner[~fine])] = False
     return clear
 

@@ -19,7 +19,7 @@ import importlib
 import math
 import weakref
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,8 +28,17 @@ from clew_ros.spatial.kernels.band import BOUNDS, OBSTACLE, PAIR, SUPPORT
 from clew_ros.spatial.robot import Geometry, RobotModel
 from clew_ros.spatial.scene import Obstacle
 
-if TYPE_CHECKING:  # placements uses this module (an object resting among obstacles)
-    from clew_ros.spatial.placements import MovableObject
+
+class MovableObject(Protocol):
+    """What this module needs of :class:`clew_ros.spatial.placements.MovableObject` (which uses this module
+    for an object resting among obstacles): its primitive."""
+
+    @property
+    def shape(self) -> str: ...
+
+    @property
+    def size(self) -> tuple[float, ...]: ...
+
 
 __all__ = [
     "ExactTier",

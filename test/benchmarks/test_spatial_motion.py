@@ -98,7 +98,7 @@ def test_the_written_files_load_as_a_motion_only_world_with_the_same_obstacles(
 def test_an_unknown_family_or_robot_is_refused_by_name() -> None:
     with pytest.raises(ValueError, match=r"family: expected one of table, shelf, cage, bookshelf, got 'attic'"):
         spatial_scenes.generate("attic", "panda", 0)
-    with pytest.raises(ValueError, match=r"robot: expected one of panda, ur5, got 'kuka'"):
+    with pytest.raises(ValueError, match=r"robot: expected one of panda, ur5 or random-K \(K a seed\), got 'kuka'"):
         spatial_scenes.generate("table", "kuka", 0)
 
 

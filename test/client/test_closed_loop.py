@@ -45,7 +45,9 @@ def _recorded(directory: str, topic_end: str) -> list[Any]:
 def test_two_goals_in_a_row_each_from_where_the_last_ended(tmp_path: Path) -> None:
     parameters = resolved_parameters(WORLD)
     world = spatial_world_from_parameters(parameters, WORLD.parent)
-    parameters["state"] = {"joint_states": True, "points": True, "advance": True}
+    # max_age 5 s: on a loaded machine the node's callbacks can wait a second or two; this test is of the loop
+    # (test/node/test_live_state.py tests the refusal of a stale state)
+    parameters["state"] = {"joint_states": True, "points": True, "advance": True, "max_age": 5.0}
     params = tmp_path / "world.yaml"
     params.write_text(yaml.safe_dump({"clew_planner": {"ros__parameters": parameters}}))
     node = NodeProcess(

@@ -131,6 +131,16 @@ def angle_gap(a: float, b: float) -> float:
     return abs(math.remainder(a - b, 2.0 * math.pi))
 
 
+def roomy(world: Any, qs: np.ndarray) -> np.ndarray:
+    """Which of ``qs`` are free with room to spare (the sphere model alone calls them free, centimetres from
+    any contact), as a user's start and goal usually are: the search's ends, not its tight spots, are tested
+    here (test/spatial/test_tier.py tests the tight ones)."""
+    from clew_ros.spatial.checker import SpatialChecker
+
+    alone = SpatialChecker(world.robot, world.spheres, world.obstacles, world.bounds, exact=False)
+    return alone.valid(qs)
+
+
 def pose_goal_world(root: Path, seed: int) -> Path:
     """``root/world.yaml``: a motion-only world for the arm of ``seed`` (written under ``root/src``) from a
     valid configuration to ``world.robot.goal_pose``, the tcp's pose at another valid one (reachable by
@@ -144,7 +154,7 @@ def pose_goal_world(root: Path, seed: int) -> Path:
     world = spatial_world_from_parameters(parameters, root)
     robot = world.robot
     qs = np.random.default_rng(seed).uniform(robot.lower, robot.upper, (400, robot.dof))
-    start, goal = qs[world.checker.valid(qs)][:2]
+    start, goal = qs[roomy(world, qs)][:2]
     tree = parameters["world"]["robot"]
     del tree["goal"]
     tree["initial"] = [round(float(v), 6) for v in start]

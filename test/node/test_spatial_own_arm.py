@@ -20,7 +20,7 @@ rclpy = pytest.importorskip("rclpy")
 pytest.importorskip("trimesh")
 
 from helpers.node_harness import NodeProcess, Session  # noqa: E402
-from helpers.own_arm import pose_goal_world  # noqa: E402
+from helpers.own_arm import pose_goal_world, roomy  # noqa: E402
 
 from clew_ros.planar.world import read_parameter_file  # noqa: E402
 from clew_ros.ros.spatial import resolved_parameters, with_goal  # noqa: E402
@@ -100,7 +100,7 @@ def test_call_plan_plans_a_motion_only_query_to_joint_values(tmp_path: Path) -> 
     robot = read_parameter_file(world_file)["world"]["robot"]
     world = spatial_world_from_parameters(read_parameter_file(world_file), tmp_path)
     qs = np.random.default_rng(12).uniform(world.robot.lower, world.robot.upper, (400, world.robot.dof))
-    goal = [round(float(v), 6) for v in qs[world.checker.valid(qs)][0]]
+    goal = [round(float(v), 6) for v in qs[roomy(world, qs)][0]]
     document = _node_file(world_file, tmp_path / "joints.yaml", goal=goal)
     tree = yaml.safe_load(document.read_text())
     del tree["/**"]["ros__parameters"]["world"]["robot"]["goal_pose"]

@@ -23,6 +23,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rclpy
@@ -32,6 +33,7 @@ from sensor_msgs.msg import JointState, PointCloud2, PointField
 from std_msgs.msg import Header
 
 from clew_ros.client import PlannerClient, goal_argument
+from clew_ros.core.settings import Outcome
 from clew_ros.ros.qos import CLOUD_QOS, STATE_QOS
 
 __all__ = ["cube_cloud", "main"]
@@ -74,10 +76,12 @@ class ArmWatch:
 
     def __init__(self, node: Node, topic: str) -> None:
         self.positions: dict[str, float] = {}
+        self.count = 0  # messages heard
         node.create_subscription(JointState, topic, self._on_state, STATE_QOS)
 
     def _on_state(self, msg: JointState) -> None:
         self.positions.update(zip(msg.name, msg.position, strict=False))
+        self.count += 1
 
     def at(self, names: list[str], values: list[float], tolerance: float = 1e-6) -> bool:
         return all(abs(self.positions.get(n, np.inf) - v) <= tolerance for n, v in zip(names, values, strict=True))
@@ -102,6 +106,31 @@ def _obstacle(text: str) -> tuple[float, ...]:
     return values
 
 
+def _plan(client: PlannerClient, goal: Any, timeout_s: float) -> Any:
+    """A run to ``goal``, asked again (20 times at most, a quarter second apart) while the planner has no joint
+    state yet (the arm's driver just started: ``START_STATE_UNKNOWN``)."""
+    result = client.plan(goal, timeout_s=timeout_s)
+    for _ in range(20):
+        if result.outcome is not Outcome.START_STATE_UNKNOWN:
+            break
+        client.wait_until(lambda: False, 0.25)
+        result = client.plan(goal, timeout_s=timeout_s)
+    return result
+
+
+def _settled(client: PlannerClient, arm: ArmWatch, trajectory: Any, states: int) -> bool:
+    """Whether the arm came to rest at ``trajectory``'s last point (within 300 s); then ``states`` more joint
+    states heard at rest, so the planner has heard them too before the next goal (its snapshot is the arm at
+    rest)."""
+    names = list(trajectory.joint_names)
+    end = [float(v) for v in trajectory.points[-1].positions]
+    if not client.wait_until(lambda: arm.at(names, end), 300.0):
+        return False
+    heard = arm.count + states
+    client.wait_until(lambda: arm.count >= heard, 10.0)
+    return True
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="pick_and_place_loop", description=__doc__.splitlines()[0])
     parser.add_argument("goals", type=goal_argument, nargs="+", help="X,Y,Z,ROLL,PITCH,YAW: the object's placements")
@@ -112,6 +141,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds a goal may take (default 120)")
     parser.add_argument("--summary", type=Path, help="write the runs (id, outcome, recording) here as JSON")
+    parser.add_argument(
+        "--settle-states", type=int, default=25, help="joint states heard at rest before the next goal (default 25)"
+    )
     args, ros_args = parser.parse_known_args(argv)
     rclpy.init(args=ros_args)
     node = rclpy.create_node("clew_pick_and_place")
@@ -122,13 +154,17 @@ def main(argv: list[str] | None = None) -> int:
     ok = True
     try:
         client.wait_for_planner(timeout_s=30.0)
+        # the arm's driver up first: a goal sent before any joint state has come is refused START_STATE_UNKNOWN
+        if not client.wait_until(lambda: bool(arm.positions), 30.0):
+            print(f"no joint state on {namespace}/joint_states within 30 s: is the arm's driver running?")
+            return 1
         for k, goal in enumerate(args.goals):
             if k == args.cloud_after:
                 x, y, z, edge = args.obstacle
                 cloud = cube_cloud(np.array([x, y, z]), edge, time.time_ns())
                 _send_cloud(node, client, f"{args.planner}/points", cloud)
                 print(f"cloud: a {edge} m cube standing at ({x}, {y}, {z}) published on {args.planner}/points")
-            result = client.plan(goal, timeout_s=args.timeout)
+            result = _plan(client, goal, args.timeout)
             text = f"goal {k + 1}/{len(args.goals)} {tuple(round(v, 3) for v in goal)}: {result.outcome.name}"
             runs.append({"goal": list(goal), "run_id": result.run_id, "outcome": result.outcome.name,
                          "recording": result.recording, "message": result.message})  # fmt: skip
@@ -142,13 +178,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"recording {result.recording}",
                 flush=True,
             )
-            names = list(result.trajectory.joint_names)
-            end = [float(v) for v in result.trajectory.points[-1].positions]
-
-            def rests(names: list[str] = names, end: list[float] = end) -> bool:
-                return arm.at(names, end)
-
-            if not client.wait_until(rests, 300.0):
+            if not _settled(client, arm, result.trajectory, args.settle_states):
                 print("the arm did not reach the end of the trajectory", flush=True)
                 ok = False
                 break

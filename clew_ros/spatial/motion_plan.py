@@ -79,6 +79,9 @@ class MotionSpace(Space, Protocol):
 
     def backed_off(self, checker: SpatialChecker, q: np.ndarray) -> np.ndarray | None: ...
 
+    @property
+    def validation_steps(self) -> np.ndarray: ...
+
 
 def plan_motion(
     space: MotionSpace,
@@ -425,7 +428,9 @@ class _MotionRun:
         exact = self.checker.exact_checks + self.tuning.shortcut_exact_rate * self.settings.improve_time
         while left > 0 and self.checker.exact_checks < exact:
             tries = min(left, self.tuning.motion_shortcut_round)
-            path, taken, _, stopped = shortcut_path(clear, path, tries=tries, rng=rng, stop=self.termination)
+            path, taken, _, stopped = shortcut_path(
+                clear, path, tries=tries, rng=rng, stop=self.termination, steps=self.space.validation_steps
+            )
             shortcuts += taken
             left -= tries
             if stopped or taken == 0 or len(path) <= 2:

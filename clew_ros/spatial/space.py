@@ -312,6 +312,12 @@ class SpatialSpace:
         return checker
 
     @property
+    def validation_steps(self) -> Array:
+        """The validator's step per planned joint (rad, m for a prismatic one)."""
+        robot = self.world.robot
+        return np.where(robot.prismatic, self.validation.step_m, self.validation.step_rad)
+
+    @property
     def exact_checks(self) -> int:
         """Contacts the exact geometry has decided for this space's checkers so far (deterministic work)."""
         checkers = [self.world.checker, *self._transit_checkers.values(), *self._transfer_checkers.values()]
@@ -1232,6 +1238,7 @@ def _shortcut_segments(
                 tries=space.tuning.shortcut_tries,
                 rng=ctx.rng,
                 stop=stop,
+                steps=space.validation_steps,
             )
             shortcuts += taken
             budget.spend(spent)

@@ -10,6 +10,7 @@ compiled kernels instead (:mod:`clew_ros.planar.improve.shortcuts`): the same id
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -29,11 +30,17 @@ def _dedupe(path: Array) -> Array:
     return path[keep]
 
 
-def _point(path: Array, cumulative: Array, s: float) -> tuple[int, Array]:
-    """The piece index ``i`` (``path[i] -> path[i + 1]``) holding travel ``s`` and the point there."""
+def _point(path: Array, cumulative: Array, s: float, steps: Array | None = None) -> tuple[int, Array]:
+    """The piece index ``i`` (``path[i] -> path[i + 1]``) holding travel ``s`` and the point there; with
+    ``steps`` (per joint), the nearest of the piece's own samples (``count`` evenly spaced, no joint moving
+    more than its step between two: the validator's), so that each part of the piece is checked at samples
+    of the whole."""
     i = int(np.clip(np.searchsorted(cumulative, s, side="right") - 1, 0, len(path) - 2))
     length = cumulative[i + 1] - cumulative[i]
     t = 0.0 if length <= 0 else (s - cumulative[i]) / length
+    if steps is not None:
+        count = max(1, math.ceil(float(np.max(np.abs(path[i + 1] - path[i]) / steps))))
+        t = math.floor(t * count + 0.5) / count
     return i, path[i] + t * (path[i + 1] - path[i])
 
 
@@ -44,10 +51,12 @@ def shortcut_path(
     tries: int,
     rng: np.random.Generator,
     stop: Callable[[], bool] | None = None,
+    steps: Array | None = None,
 ) -> tuple[Array, int, int, bool]:
     """``path`` (m, n) shortened (``clear(starts, ends)``: whether each straight move is valid): first its two
-    ends joined, then ``tries`` random shortcuts. Returns the path, the shortcuts taken, the tries spent and
-    whether ``stop()`` cut it short."""
+    ends joined, then ``tries`` random shortcuts. ``steps`` (per joint: the validator's step): the shortcuts'
+    ends fall on their pieces' own samples (see :func:`_point`). Returns the path, the shortcuts taken, the
+    tries spent and whether ``stop()`` cut it short."""
     path = _dedupe(np.asarray(path, dtype=float))
     taken = spent = 0
     if len(path) < 3:
@@ -63,16 +72,20 @@ def shortcut_path(
         if total <= 0 or len(path) < 3:
             break
         a, b = np.sort(rng.uniform(0.0, total, size=2))
-        i, p = _point(path, cumulative, a)
-        j, r = _point(path, cumulative, b)
+        i, p = _point(path, cumulative, a, steps)
+        j, r = _point(path, cumulative, b, steps)
         if j <= i:
             continue  # both on one straight piece: nothing to gain
         before = joint_travel([np.vstack([p, path[i + 1 : j + 1], r])])
         if np.abs(r - p).sum() >= before - 1e-9:
             continue
-        # the shortcut, and the two pieces it cuts in part: a piece's validity is checked at its own samples
-        # (interface.md's 0.002 rad), and a part of a piece is sampled elsewhere than the whole was
-        if not clear(np.stack([p, path[i], r]), np.stack([r, p, path[j + 1]])).all():
+        # the shortcut, and (without ``steps``) the two pieces it cuts in part: a piece's validity is checked at
+        # its own samples (interface.md's 0.002 rad), and a part of a piece is sampled elsewhere than the whole
+        # was unless it is cut at one of them
+        starts, ends = (
+            (p[None], r[None]) if steps is not None else (np.stack([p, path[i], r]), np.stack([r, p, path[j + 1]]))
+        )
+        if not clear(starts, ends).all():
             continue
         path = _dedupe(np.vstack([path[: i + 1], p, r, path[j + 1 :]]))
         taken += 1

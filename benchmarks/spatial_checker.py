@@ -29,6 +29,7 @@ from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.robot import LinkModel, RobotModel, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle, make_obstacle
 from clew_ros.spatial.spheres import SphereModel, over_approximation, sphere_model
+from clew_ros.spatial.tier import coal_shape
 from clew_ros.spatial.transforms import pose_matrix
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"
@@ -121,23 +122,9 @@ class Reference:
 
 
 def _coal_shape(coal: Any, item: Any) -> Any:
+    """A coal shape of a URDF geometry or an obstacle (:func:`clew_ros.spatial.tier.coal_shape`)."""
     kind = getattr(item, "kind", None) or item.shape
-    if kind == "box":
-        return coal.Box(*item.size)
-    if kind == "cylinder":
-        return coal.Cylinder(item.size[1], item.size[0])
-    if kind == "sphere":
-        return coal.Sphere(item.size[0])
-    mesh = coal.BVHModelOBBRSS()
-    vertices, triangles = coal.StdVec_Vec3s(), coal.StdVec_Triangle()
-    for v in item.vertices:
-        vertices.append(np.asarray(v, dtype=np.float64))
-    for f in item.faces:
-        triangles.append(coal.Triangle(int(f[0]), int(f[1]), int(f[2])))
-    mesh.beginModel(len(triangles), len(vertices))
-    mesh.addSubModel(vertices, triangles)
-    mesh.endModel()
-    return mesh
+    return coal_shape(coal, kind, item.size, item if kind == "mesh" else None)
 
 
 def inverse_kinematics(robot: RobotModel, rng: np.random.Generator, count: int) -> None:

@@ -37,9 +37,8 @@ from numpy.typing import NDArray
 
 from clew_ros.core.plan import Plan
 from clew_ros.spatial.placements import MovableObject, Support
-from clew_ros.spatial.robot import Geometry
 from clew_ros.spatial.scene import Obstacle
-from clew_ros.spatial.tier import outside_bounds
+from clew_ros.spatial.tier import coal_shape, outside_bounds
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.spatial.world import SpatialWorld
@@ -75,27 +74,6 @@ def _modules() -> tuple[Any, Any]:
         raise ImportError(
             f"the exact checker needs pinocchio and coal ({error}): pip install 'clew_ros[spatial-ref]'"
         ) from None
-
-
-def _coal_shape(coal: Any, kind: str, size: Sequence[float], item: Geometry | None = None) -> Any:
-    """A coal shape of a primitive (SolidPrimitive sizes) or of a mesh ``item``."""
-    if kind == "box":
-        return coal.Box(*size)
-    if kind == "cylinder":
-        return coal.Cylinder(size[1], size[0])
-    if kind == "sphere":
-        return coal.Sphere(size[0])
-    assert item is not None
-    mesh = coal.BVHModelOBBRSS()
-    vertices, triangles = coal.StdVec_Vec3s(), coal.StdVec_Triangle()
-    for v in item.vertices:
-        vertices.append(np.asarray(v, dtype=np.float64))
-    for f in item.faces:
-        triangles.append(coal.Triangle(int(f[0]), int(f[1]), int(f[2])))
-    mesh.beginModel(len(triangles), len(vertices))
-    mesh.addSubModel(vertices, triangles)
-    mesh.endModel()
-    return mesh
 
 
 def lowest_point(thing: MovableObject, pose: Matrix) -> float:
@@ -143,12 +121,12 @@ class ExactChecker:
         self.tcp_in_tip: Matrix = np.linalg.inv(self.universe @ self._tip(q0)) @ robot.tcp_pose(q0)
         self._check_kinematics()
         self.link_geometries = [
-            [(_coal_shape(coal, g.kind, g.size, g), g.origin) for g in link.geometries] for link in robot.links
+            [(coal_shape(coal, g.kind, g.size, g), g.origin) for g in link.geometries] for link in robot.links
         ]
-        self.obstacle_shapes = [(o, _coal_shape(coal, o.shape, o.size)) for o in world.obstacles]
+        self.obstacle_shapes = [(o, coal_shape(coal, o.shape, o.size)) for o in world.obstacles]
         self.slabs = self._slabs()
         self.object_shape = (
-            None if world.object is None else _coal_shape(coal, world.object.shape.shape, world.object.shape.size)
+            None if world.object is None else coal_shape(coal, world.object.shape.shape, world.object.shape.size)
         )
         self.gripper = {i for i, link in enumerate(robot.links) if link.name in robot.gripper_links}
         self.self_pairs = [

@@ -118,7 +118,7 @@ def plan(
         aims = space.regrasp_aims(goal)
         tried = _Tried()
         if search.search_from_start:
-            landmark, found, closest = _search_start(ctx, explorer, tree, goal, aims=aims)
+            landmark, found, closest = _search_start(ctx, explorer, tree, goal, aims=aims, tried=tried)
             best = min(best, closest)
             if found.success:
                 return succeed(landmark, found, termination.elapsed)
@@ -132,13 +132,18 @@ def plan(
                 continue
             ctx.transit_joins = False  # transits found: joins only while EXPLORE finds none (elsewhere they cost more)
             new = tree.add(**exploration.fields)
-            landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims)
+            landmark, found, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims, tried=tried)
             searched_s = termination.elapsed  # when SEARCH ended: the first plan's time if it found one
             best = min(best, closest)
             report(Progress(len(tree), best, termination.elapsed, tree))
             if found.success:
                 return succeed(landmark, found, searched_s)
-            if exploration.distance < settings.resolution and exploration.covered and exploration.moved:
+            if (
+                search.resolution_proves
+                and exploration.distance < settings.resolution
+                and exploration.covered
+                and exploration.moved
+            ):
                 # the paper's criterion, once EXPLORE has searched every (landmark, grasp) pair's transit:
                 # its farthest new landmark lies within the resolution of the others (and it moved the
                 # object: a step that could not move it at all has explored nothing)
@@ -197,12 +202,15 @@ def _search_chain(
     goal: np.ndarray,
     *,
     aims: RegraspAims,
+    tried: _Tried,
 ) -> tuple[Landmark, _Found, float]:
     """SEARCH from a new landmark; while its closest attempt gets nearer the goal, that attempt becomes a
-    landmark and SEARCH goes on from it (at most ``SearchSettings.search_chain`` times).
+    landmark and SEARCH goes on from it (at most ``SearchSettings.search_chain`` times); then, if none
+    reached the goal, by way of intermediate placements from the new landmark (:func:`_search_via`).
 
     Returns the last landmark, SEARCH's answer from it and the closest goal distance reached (m).
     """
+    first = landmark
     found = _search(ctx, explorer, landmark, goal, aims=aims)
     closest = found.distance
     for _ in range(ctx.search.search_chain):
@@ -211,6 +219,20 @@ def _search_chain(
         landmark = _chained(tree, landmark, found)
         found = _search(ctx, explorer, landmark, goal, aims=aims)
         closest = min(closest, found.distance)
+    if not found.success and ctx.search.via_placements > 0 and first.grasp is not None:
+        candidate = explorer.candidate(first.id, first.grasp)
+        via = _search_via(
+            ctx,
+            explorer,
+            tree,
+            landmark=first,
+            candidates=[] if candidate is None else [candidate],
+            goal=goal,
+            aims=aims,
+            tried=tried,
+        )
+        if via is not None:
+            return via[0], via[1], 0.0
     return landmark, found, closest
 
 
@@ -221,6 +243,7 @@ def _search_start(
     goal: np.ndarray,
     *,
     aims: RegraspAims,
+    tried: _Tried,
 ) -> tuple[Landmark, _Found, float]:
     """SEARCH from the start (``SearchSettings.search_from_start``): SEARCH_TRANSFER from each grasp a transit
     reaches at the object's initial placement (:meth:`Explorer.start_candidates`), by grasp, until one reaches
@@ -231,17 +254,63 @@ def _search_start(
     goal distance reached (m)."""
     root = tree[0]
     found = _Found(False, np.inf)
-    for candidate in explorer.start_candidates():
+    candidates = explorer.start_candidates()
+    for candidate in candidates:
         if ctx.termination():
             break
         found = _closer(ctx, candidate, goal, found)
         if found.success:
             break
+    if not found.success and ctx.search.via_placements > 0 and not ctx.termination():
+        via = _search_via(ctx, explorer, tree, landmark=root, candidates=candidates, goal=goal, aims=aims, tried=tried)
+        if via is not None:
+            return via[0], via[1], 0.0
     if found.success or not _worth_chaining(ctx, root, found, goal) or ctx.termination():
         return root, found, found.distance
     new = _chained(tree, root, found)
-    landmark, chained, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims)
+    landmark, chained, closest = _search_chain(ctx, explorer, tree, new, goal, aims=aims, tried=tried)
     return landmark, chained, min(found.distance, closest)
+
+
+def _search_via(
+    ctx: PlanningContext,
+    explorer: Explorer,
+    tree: LandmarkTree,
+    *,
+    landmark: Landmark,
+    candidates: list[Candidate],
+    goal: np.ndarray,
+    aims: RegraspAims,
+    tried: _Tried,
+) -> tuple[Landmark, _Found] | None:
+    """SEARCH by way of an intermediate placement (``SearchSettings.via_placements``, the paper's closing
+    suggestion of searching for placements inside the optimisation): for each of ``candidates`` (a grasp held
+    at ``landmark``'s placement), SEARCH_TRANSFER to the placements the space proposes for it
+    (:meth:`~clew_ros.core.space.RegraspAims.placements`: where a grasp serving the goal can take the object);
+    each one reached becomes a landmark, and SEARCH (its regrasps in place) goes on from it. Returns that
+    landmark and SEARCH's successful answer from it, or ``None``."""
+    for candidate in candidates:
+        for pose in aims.placements(landmark, candidate.grasp)[: ctx.search.via_placements]:
+            if ctx.termination():
+                return None
+            tried.via_placements += 1
+            result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, pose)
+            if not result.success:
+                continue
+            tried.via_reached += 1
+            middle = tree.add(
+                parent=landmark.id,
+                joints=result.waypoints[-1].copy(),
+                object_pose=result.object_pose,
+                grasp=candidate.grasp,
+                grasp_rel=candidate.grasp_rel,
+                transit=candidate.transit,
+                transfer=result.waypoints,
+            )
+            found = _search(ctx, explorer, middle, goal, aims=aims)
+            if found.success:
+                return middle, found
+    return None
 
 
 def _search(
@@ -369,12 +438,16 @@ class _Tried:
     """What a run tried, for the message of a run stopped without a plan."""
 
     idle_rounds: int = 0  # EXPLORE rounds that found no transit from any landmark
+    via_placements: int = 0  # intermediate placements SEARCH_TRANSFER was sent to
+    via_reached: int = 0  # ... and reached
 
     def summary(self, explorer: Explorer, best: float) -> str:
         found = sum(candidate is not None for candidate in explorer.transits.values())
         text = f"{explorer.transit_searches} transit searches ({found} (landmark, grasp) pairs reached)"
         if self.idle_rounds:
             text += f", {self.idle_rounds} EXPLORE rounds without any transit"
+        if self.via_placements:
+            text += f", {self.via_placements} intermediate placements aimed at ({self.via_reached} reached)"
         if np.isfinite(best):
             text += f", best goal distance {best:.4g} m"
         return text

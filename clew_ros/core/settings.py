@@ -118,6 +118,15 @@ class SearchSettings:
     #: EXPLORE's first landmark, which lies as far from the start as EXPLORE can put it, here perhaps deeper
     #: into the shelf the object starts in); the planar planner keeps the paper's order
     search_from_start: bool = False
+    #: when SEARCH from a landmark (and its chain) fails: SEARCH_TRANSFER to at most this many intermediate
+    #: placements the space proposes (:meth:`~clew_ros.core.space.RegraspAims.placements`: where a grasp that
+    #: holds the object at the goal can take it), SEARCH going on from each it reaches; 0: none (the planar
+    #: planner, whose plans stay as they were)
+    via_placements: int = 0
+    #: whether EXPLORE's new landmark within ``planner.resolution`` of the others ends the run with
+    #: NO_PATH_AT_RESOLUTION (the paper's criterion); ``False``: that proves nothing, the run goes on to its time
+    #: limit (the spatial planner: its EXPLORE samples a space too large for the criterion to cover)
+    resolution_proves: bool = True
     #: an EXPLORE step whose transfer moved the object less than this (m, as the space's goal distance
     #: measures it) did not move it, and its landmark's distance to the others proves nothing (the resolution
     #: criterion, :attr:`Exploration.moved`): well above the few micrometres by which a grasp held within its

@@ -71,6 +71,12 @@ class RegraspAims(Protocol):
         not worth a transit."""
         ...
 
+    def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
+        """Intermediate placements (object poses), best first, to which ``grasp`` could carry the object from
+        ``landmark`` and where a grasp serving the goal could take it on (SEARCH's aimed regrasp,
+        ``SearchSettings.via_placements``); empty: none proposed."""
+        ...
+
 
 class Space(Protocol):
     """A world as the Ariadne's Clew Algorithm sees it (see the module's docstring for the vocabulary)."""

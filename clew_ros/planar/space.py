@@ -127,6 +127,9 @@ class PlanarAims:
             return aimed
         return None if grasp == landmark.grasp else approach
 
+    def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
+        return []  # the planar planner proposes no intermediate placements (SearchSettings.via_placements 0)
+
     def regrasp_approaches(self, object_pose: np.ndarray, grasp: int) -> np.ndarray:
         """Approach cells that could hold ``grasp`` with the object at ``object_pose`` and at the goal (a
         rigid grasp keeps its approach during the transfer): a regrasp in place can end at the goal only

@@ -45,13 +45,14 @@ from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
-from clew_ros.core.tree import Landmark, LandmarkTree, Segment
+from clew_ros.core.tree import LandmarkTree, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
 from clew_ros.spatial.motion_plan import add_branch, connect, plan_motion
 from clew_ros.spatial.placements import Support, face_down, object_extent, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
+from clew_ros.spatial.regrasps import SpatialAims
 from clew_ros.spatial.scene import make_obstacle
 from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import rpy_matrix
@@ -931,8 +932,8 @@ class SpatialSpace:
     def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
         return True  # no aiming: every approach is allowed
 
-    def regrasp_aims(self, goal: np.ndarray) -> _AllowAll:
-        return _AllowAll()
+    def regrasp_aims(self, goal: np.ndarray) -> SpatialAims:
+        return SpatialAims(self, goal, self.tuning.regrasp)
 
     def quick_refusal(self, goal: np.ndarray) -> tuple[Outcome, str] | None:
         """A goal that is no stable placement or that collides, a start in collision, a goal no grasp can
@@ -1112,16 +1113,6 @@ class SpatialSpace:
 def _key(*parts: Array) -> bytes:
     """A cache key of poses (a checker's, a goal tree's): their numbers rounded to 1e-9."""
     return np.round(np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in parts]), 9).tobytes()
-
-
-class _AllowAll:
-    """Regrasp aims that allow everything (:class:`clew_ros.core.space.RegraspAims`)."""
-
-    def retake(self, grasp: int, grasp_rel: np.ndarray) -> bool:
-        return False
-
-    def aim(self, landmark: Landmark, grasp: int) -> np.ndarray:
-        return np.ones(1, dtype=bool)
 
 
 def plan(

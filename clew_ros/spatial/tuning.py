@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from clew_ros.core.settings import ManyJoints, SearchSettings
 from clew_ros.spatial.checker import IntervalSettings
+from clew_ros.spatial.regrasps import RegraspSettings
 
 __all__ = ["SpatialTuning"]
 
@@ -15,8 +16,14 @@ __all__ = ["SpatialTuning"]
 class SpatialTuning:
     """Every tuning value of a spatial run beyond ``planner.*``; a benchmark or a test plans with a copy."""
 
-    #: SEARCH's tuning: core's, but SEARCH runs from the start before the first EXPLORE
-    search: SearchSettings = field(default_factory=lambda: SearchSettings(search_from_start=True))
+    #: SEARCH's tuning: core's, but SEARCH runs from the start before the first EXPLORE, goes by way of up to 3
+    #: intermediate placements where a goal grasp can take the object (:mod:`clew_ros.spatial.regrasps`), and
+    #: the resolution criterion proves nothing (the run goes on to its time limit)
+    search: SearchSettings = field(
+        default_factory=lambda: SearchSettings(search_from_start=True, via_placements=3, resolution_proves=False)
+    )
+    #: how intermediate placements are drawn (:class:`~clew_ros.spatial.regrasps.RegraspSettings`)
+    regrasp: RegraspSettings = field(default_factory=RegraspSettings)
     #: how core adapts the search to arms of many joints, from 6 joints here (a UR5, a Panda): Manhattan
     #: paths of order 1 (``planner.manhattan_order`` lowered to it) and at most 4 generations of EXPLORE's GA:
     #: a free interval costs 0.13-0.25 ms on the Panda, and with them the pick-and-place problems of

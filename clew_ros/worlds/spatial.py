@@ -63,6 +63,7 @@ from clew_ros.worlds.spatial_holds import (
     grasps_of,
     load_arm,
 )
+from clew_ros.worlds.spatial_regrasp import REGRASP_LAYOUTS, RejectedError, regrasp_world
 
 __all__ = [
     "SPATIAL_FAMILIES",
@@ -98,6 +99,8 @@ class SpatialFamily:
     angle_tolerances: tuple[float, ...] = (math.pi, 0.3)
     #: the arm starts at the approach of the start's grasp (not at its home, which may reach over a shelf)
     start_at_approach: bool = False
+    #: a regrasp family: the key of :data:`~clew_ros.worlds.spatial_regrasp.REGRASP_LAYOUTS` ("": none)
+    regrasp: str = ""
 
 
 SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
@@ -125,6 +128,18 @@ SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
             "narrow",
             grasps="side",
             start_at_approach=True,
+        ),
+        SpatialFamily(
+            "spatial_bin_cubby",
+            "spatial: a regrasp is needed: from a bin (grasps from above only) into a cubby (from its open side only)",
+            "regrasp",
+            regrasp="bin_cubby",
+        ),
+        SpatialFamily(
+            "spatial_cubby_bin",
+            "spatial: a regrasp is needed: from a cubby (grasps from its open side only) into a bin (from above only)",
+            "regrasp",
+            regrasp="cubby_bin",
         ),
         SpatialFamily(
             "spatial_unsolvable",
@@ -194,7 +209,7 @@ class _Builder:
 
     # -- holds
 
-    def _point(self, angle: float) -> NDArray[np.float64]:
+    def point(self, angle: float) -> NDArray[np.float64]:
         reach, shoulder = self.arm.reach, self.arm.shoulder
         radius = self.rng.uniform(0.35, 0.7) * reach
         return np.array(
@@ -213,7 +228,7 @@ class _Builder:
         face_a = "-z"
         face_b = self._goal_face(grasp) if self.family.reorient else face_a
         angle = self.rng.uniform(-math.pi, math.pi)
-        start = find_hold(self.solver, self.arm, grasp, face_a, self._point(angle), height=None, rng=self.rng)
+        start = find_hold(self.solver, self.arm, grasp, face_a, self.point(angle), height=None, rng=self.rng)
         if start is None:
             raise _RejectedError("no level hold near the start point")
         turn = self.rng.uniform(0.5, 1.2 if self.family.one_table else 2.2) * self.rng.choice([-1.0, 1.0])
@@ -221,7 +236,7 @@ class _Builder:
         if self.family.one_table:
             height = start.pose[2, 3] - self.thing.height(face_a) + self.thing.height(face_b)
         goal = find_hold(
-            self.solver, self.arm, grasp, face_b, self._point(angle + turn), height=height, rng=self.rng, near=start.q
+            self.solver, self.arm, grasp, face_b, self.point(angle + turn), height=height, rng=self.rng, near=start.q
         )
         if goal is None:
             raise _RejectedError("no level hold near the goal point")
@@ -545,6 +560,39 @@ def _solvable(builder: _Builder) -> SpatialGenerated:
     )
 
 
+def _regrasp(builder: _Builder) -> SpatialGenerated:
+    """A world where a regrasp is needed (:mod:`clew_ros.worlds.spatial_regrasp`)."""
+    family = builder.family
+    tree, plan, notes = regrasp_world(builder, REGRASP_LAYOUTS[family.regrasp])
+    world = builder.world(tree)
+    travel = float(sum(np.abs(np.diff(s.waypoints, axis=0)).sum() for s in plan.segments))
+    stats = {
+        "expected": "solvable",
+        "family": family.name,
+        "robot": builder.robot_name,
+        "seed": builder.seed,
+        "transfers": plan.grasp_count,
+        "joint_travel_rad": round(travel, 6),
+    }
+    what = f"{builder.robot_name} ({world.robot.dof} joints), a {builder.thing.shape} {list(builder.thing.size)} m"
+    notes = [
+        what,
+        *notes,
+        f"Witness: {plan.grasp_count} transfers, joint travel {travel:.2f} rad, validated at 0.002 rad.",
+    ]
+    return SpatialGenerated(
+        family.name,
+        builder.robot_name,
+        builder.seed,
+        {"world": tree},
+        replace(plan, stats=stats),
+        True,
+        tuple(notes),
+        0,
+        stats,
+    )
+
+
 def _unsolvable(builder: _Builder) -> SpatialGenerated:
     """The goal inside a closed box (its support the floor, four walls and a lid), or on a table out of
     reach."""
@@ -672,8 +720,11 @@ def generate_spatial(
     for attempt in range(attempts):
         builder = _Builder(chosen, robot, int(seed), _stream(family, robot, int(seed), attempt), settings)
         try:
-            made = _solvable(builder) if chosen.solvable else _unsolvable(builder)
-        except _RejectedError as rejected:
+            if chosen.regrasp:
+                made = _regrasp(builder)
+            else:
+                made = _solvable(builder) if chosen.solvable else _unsolvable(builder)
+        except (_RejectedError, RejectedError) as rejected:
             reasons.append(str(rejected))
             continue
         return replace(made, attempts=attempt + 1, stats={**made.stats, "attempts": attempt + 1})

@@ -46,6 +46,7 @@ __all__ = [
     "find_hold",
     "footprint",
     "grasps_of",
+    "hold_from",
     "inflated",
     "load_arm",
 ]
@@ -334,9 +335,11 @@ def find_hold(
     height: float | None,
     rng: np.random.Generator,
     near: NDArray[np.float64] | None = None,
+    lift_m: float | None = None,
 ) -> Hold | None:
     """A configuration holding the object level on ``face`` near ``point`` (its centre at ``height`` when
-    given), and the approach above it; ``None`` when the solve does not get there."""
+    given), and the approach above it (the object lifted ``lift_m``, default the settings'); ``None`` when
+    the solve does not get there."""
     seeds = [s for s in (near, arm.home) if s is not None]
     seeds += list(rng.uniform(arm.robot.lower, arm.robot.upper, size=(solver.settings.hold_seeds, arm.robot.dof)))
     for seed in seeds:  # the first seed that gets there, the arm clear of itself
@@ -352,9 +355,26 @@ def find_hold(
     if pose[2, axis] * sign > -0.5:
         return None
     pose[:3, :3] = rpy_matrix(0.0, 0.0, face_yaw(pose[:3, :3], face)) @ rpy_matrix(*FACE_RPY[face])
+    return hold_from(solver, arm, q, pose, face, rng=rng, lift_m=lift_m)
+
+
+def hold_from(
+    solver: Solver,
+    arm: Arm,
+    q: NDArray[np.float64],
+    pose: Matrix,
+    face: str,
+    *,
+    rng: np.random.Generator,
+    lift_m: float | None = None,
+) -> Hold | None:
+    """The hold of the object at ``pose`` by configuration ``q``: the tcp's way back along its approach and the
+    object's lift (straight up, then back along the approach); ``None`` when one leaves the arm's reach."""
+    tcp = solver.kinematics.tcp_poses(q[None])[0]
     distance = solver.settings.approach_m  # in short steps: nearly straight for the tcp
     back = [tcp @ pose_matrix([0.0, 0.0, -f * distance, 0.0, 0.0, 0.0]) for f in APPROACH_STEPS]
-    raised = [pose_matrix([0.0, 0.0, f * solver.settings.lift_m, 0.0, 0.0, 0.0]) @ tcp for f in (0.5, 1.0)]
+    rise = solver.settings.lift_m if lift_m is None else lift_m
+    raised = [pose_matrix([0.0, 0.0, f * rise, 0.0, 0.0, 0.0]) @ tcp for f in (0.5, 1.0)]
     up = [*raised, *(raised[-1] @ pose_matrix([0.0, 0.0, -f * distance, 0.0, 0.0, 0.0]) for f in APPROACH_STEPS)]
     path, lift = follow(solver, arm, q, back, rng), follow(solver, arm, q, up, rng)
     if path is None or lift is None:

@@ -1,0 +1,153 @@
+"""Aimed regrasps in a spatial world: where to put the object down so that a grasp serving the goal can take it.
+
+The paper's closing section proposes searching for intermediate placements inside the optimisation. SEARCH
+from a landmark whose grasps all fail to reach the goal asks :meth:`SpatialAims.placements` for stable
+placements (on any support: tables, boards, the floor of a bin) where
+
+- the landmark's grasp holds the object in a valid configuration (it can put the object there), and
+- another grasp that holds the object at the goal in a valid configuration (a *goal grasp*) holds it there
+  too (it can take the object on from there);
+
+SEARCH_TRANSFER then carries the object to one of them, and SEARCH goes on from that new landmark with its
+regrasps in place (:func:`clew_ros.core.clew._search_via`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from clew_ros.core.tree import Landmark
+from clew_ros.spatial.placements import sample_placements
+from clew_ros.spatial.transforms import matrix_pose, rpy_matrix
+
+if TYPE_CHECKING:
+    from clew_ros.spatial.space import SpatialSpace
+
+__all__ = ["RegraspSettings", "SpatialAims"]
+
+Array = NDArray[np.float64]
+
+
+def _matrix(pose: Array) -> Array:
+    """A pose's 4x4 matrix (6 numbers, URDF rpy)."""
+    out = np.eye(4)
+    out[:3, :3] = rpy_matrix(*(float(v) for v in pose[3:]))
+    out[:3, 3] = pose[:3]
+    return out
+
+
+@dataclass(frozen=True)
+class RegraspSettings:
+    """How intermediate placements are drawn and kept."""
+
+    #: placements drawn per support and face (count) once per run; each costs one inverse kinematics per grasp
+    per_support_face: int = 12
+    #: random starts (count) of the inverse kinematics that decides whether a grasp holds the object at a
+    #: placement or at the goal
+    ik_seeds: int = 4
+    #: the goal turned about z by these (rad, within ``world.goal_angle_tolerance``) when deciding goal grasps
+    goal_yaws: tuple[float, ...] = (0.0, math.pi / 2, -math.pi / 2, math.pi)
+    #: a placement nearer than this (m) to the landmark's or to the goal's is not an intermediate one
+    min_move_m: float = 0.05
+
+
+class SpatialAims:
+    """The regrasp aims of one run towards ``goal`` (6 numbers): every approach allowed in place, and
+    intermediate placements where a goal grasp can take the object (computed lazily, once per run)."""
+
+    def __init__(self, space: SpatialSpace, goal: Array, settings: RegraspSettings | None = None) -> None:
+        self.space, self.goal = space, np.asarray(goal, dtype=float)
+        self.settings = settings or RegraspSettings()
+        self._goal_grasps: list[int] | None = None
+        self._drawn: Array | None = None  # (m, 4, 4) candidate placements
+        self._holds: dict[int, NDArray[np.bool_]] = {}  # grasp -> which candidates it holds
+        self._rng = np.random.default_rng([int(v * 1e6) & 0xFFFFFFFF for v in self.goal])
+
+    # -- the core's RegraspAims
+    def retake(self, grasp: int, grasp_rel: np.ndarray) -> bool:
+        return False
+
+    def aim(self, landmark: Landmark, grasp: int) -> Any | None:
+        return np.ones(1, dtype=bool)  # every approach allowed
+
+    def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
+        """Intermediate placements (6 numbers each), best first: ``grasp`` holds the object there and so does
+        a goal grasp other than it; the best make the shortest detour (landmark to placement to goal, m)."""
+        goal_grasps = [g for g in self.goal_grasps() if g != grasp]
+        if not goal_grasps:
+            return []
+        drawn = self._candidates()
+        if not len(drawn):
+            return []
+        usable = self._held_by(grasp) & np.any([self._held_by(g) for g in goal_grasps], axis=0)
+        here = _matrix(np.asarray(landmark.object_pose, dtype=float))[:3, 3]
+        there = _matrix(self.goal)[:3, 3]
+        centres = drawn[:, :3, 3]
+        near = np.linalg.norm(centres - here, axis=1)
+        far = np.linalg.norm(centres - there, axis=1)
+        usable &= (near > self.settings.min_move_m) & (far > self.settings.min_move_m)
+        order = np.flatnonzero(usable)
+        order = order[np.argsort(near[order] + far[order], kind="stable")]
+        return [np.asarray(matrix_pose(drawn[k])) for k in order]
+
+    # -- what the placements rest on
+    def goal_grasps(self) -> list[int]:
+        """The grasps that hold the object at the goal (any yaw of :attr:`RegraspSettings.goal_yaws` within the
+        goal's tolerance) in a valid configuration inverse kinematics finds."""
+        if self._goal_grasps is None:
+            space = self.space
+            base = _matrix(self.goal)
+            tolerance = space.world.tolerances["goal_angle_tolerance"]
+            poses = []
+            for yaw in self.settings.goal_yaws:
+                if abs(yaw) <= tolerance + 1e-12:
+                    turned = base.copy()
+                    turned[:3, :3] = rpy_matrix(0.0, 0.0, yaw) @ base[:3, :3]
+                    poses.append(turned)
+            self._goal_grasps = [g for g in range(space.grasp_count) if self._holds_any(g, np.array(poses))]
+        return self._goal_grasps
+
+    def _holds_any(self, grasp: int, poses: Array) -> bool:
+        return bool(self._holding(grasp, poses).any())
+
+    def _holding(self, grasp: int, poses: Array) -> NDArray[np.bool_]:
+        """Whether ``grasp`` holds the object at each of ``poses`` (k, 4, 4) in a valid configuration."""
+        space = self.space
+        rel = space.grasp_rel(grasp)
+        grasp_pose = np.asarray(np.linalg.inv(_matrix(np.asarray(rel, dtype=float))), dtype=np.float64)
+        tcps = list(poses @ grasp_pose)
+        seeds = [space.initial_joints[None]] * len(tcps)
+        found = space.ik(self.settings.ik_seeds).solve_many(
+            tcps, self._rng, seeds=seeds, checker=space.transfer_checker(rel)
+        )
+        return np.array([len(f) > 0 for f in found], dtype=bool)
+
+    def _candidates(self) -> Array:
+        if self._drawn is None:
+            world = self.space.world
+            thing = world.object
+            assert thing is not None
+            drawn = [
+                sample_placements(
+                    thing.shape,
+                    support,
+                    face,
+                    world.obstacles,
+                    count=self.settings.per_support_face,
+                    rng=self._rng,
+                )
+                for support in world.supports
+                for face in thing.shape.faces
+            ]
+            self._drawn = np.concatenate(drawn) if drawn else np.zeros((0, 4, 4))
+        return self._drawn
+
+    def _held_by(self, grasp: int) -> NDArray[np.bool_]:
+        if grasp not in self._holds:
+            self._holds[grasp] = self._holding(grasp, self._candidates())
+        return self._holds[grasp]

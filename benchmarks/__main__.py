@@ -51,6 +51,9 @@ COMMANDS: dict[str, Command] = {
     "spatial_families": Command(
         "spatial_families", "the planner on clew_world's spatial families (Panda, UR5, random arms): witness beside"
     ),
+    "spatial_regrasp": Command(
+        "spatial_regrasp", "the planner on spatial worlds that need a regrasp (bin to cubby and back): witness beside"
+    ),
     "spatial_render": Command("spatial_render", "how fast the 3-D renderer draws a spatial world, a still, a frame"),
     "point_clouds": Command("point_clouds", "a 300k-point cloud read and voxelised with the self-filter (~/points)"),
 }

@@ -96,7 +96,7 @@ def plan_motion(
     settings = settings or PlannerSettings()
     termination = termination or Termination(settings.time_limit)
     world = space.world
-    run = _MotionRun(space, settings, termination)
+    run = _MotionRun(space, settings, termination, resolution_stop=space.tuning.search.resolution_proves)
     refusal = _refusal(world, world.goal if goal is None else goal)
     if goal is None and world.goal is None and world.goal_pose is not None:
         refusal = _pose_goals(space, settings)
@@ -247,7 +247,7 @@ class _MotionRun:
             many=tuning.many,
         )
         #: both trees' landmarks (count) after which the run stops
-        self.landmarks = tuning.motion_landmarks if landmarks is None else landmarks
+        self.landmarks = (tuning.motion_landmarks or math.inf) if landmarks is None else landmarks
         #: whether the path found is shortcut (else left to the plan's improvement)
         self.shortcuts = shortcuts
         #: whether a new landmark nearer the others than ``planner.resolution`` ends the run with

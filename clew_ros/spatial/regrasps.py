@@ -48,8 +48,11 @@ class RegraspSettings:
     #: placements drawn per support and face (count) once per run; each costs one inverse kinematics per grasp
     per_support_face: int = 12
     #: random starts (count) of the inverse kinematics that decides whether a grasp holds the object at a
-    #: placement or at the goal
-    ik_seeds: int = 4
+    #: placement ...
+    ik_seeds: int = 16
+    #: ... or at the goal (as many as SEARCH_TRANSFER's goal configurations: a grasp refused here is one that
+    #: SEARCH_TRANSFER would give up at once)
+    goal_seeds: int = 48
     #: the goal turned about z by these (rad, within ``world.goal_angle_tolerance``) when deciding goal grasps
     goal_yaws: tuple[float, ...] = (0.0, math.pi / 2, -math.pi / 2, math.pi)
     #: a placement nearer than this (m) to the landmark's or to the goal's is not an intermediate one
@@ -73,7 +76,11 @@ class SpatialAims:
         return False
 
     def aim(self, landmark: Landmark, grasp: int) -> Any | None:
-        return np.ones(1, dtype=bool)  # every approach allowed
+        """Every approach of a goal grasp (:meth:`goal_grasps`; of every grasp where none was found); ``None``:
+        a regrasp in place with a grasp that holds the object at the goal in no configuration is not worth
+        its transit."""
+        goal_grasps = self.goal_grasps()
+        return np.ones(1, dtype=bool) if grasp in goal_grasps or not goal_grasps else None
 
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
         """Intermediate placements (6 numbers each), best first: ``grasp`` holds the object there and so does
@@ -113,16 +120,16 @@ class SpatialAims:
         return self._goal_grasps
 
     def _holds_any(self, grasp: int, poses: Array) -> bool:
-        return bool(self._holding(grasp, poses).any())
+        return bool(self._holding(grasp, poses, self.settings.goal_seeds).any())
 
-    def _holding(self, grasp: int, poses: Array) -> NDArray[np.bool_]:
+    def _holding(self, grasp: int, poses: Array, starts: int | None = None) -> NDArray[np.bool_]:
         """Whether ``grasp`` holds the object at each of ``poses`` (k, 4, 4) in a valid configuration."""
         space = self.space
         rel = space.grasp_rel(grasp)
         grasp_pose = np.asarray(np.linalg.inv(_matrix(np.asarray(rel, dtype=float))), dtype=np.float64)
         tcps = list(poses @ grasp_pose)
         seeds = [space.initial_joints[None]] * len(tcps)
-        found = space.ik(self.settings.ik_seeds).solve_many(
+        found = space.ik(self.settings.ik_seeds if starts is None else starts).solve_many(
             tcps, self._rng, seeds=seeds, checker=space.transfer_checker(rel)
         )
         return np.array([len(f) > 0 for f in found], dtype=bool)

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
 
@@ -49,6 +49,7 @@ from clew_ros.core.tree import LandmarkTree, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
+from clew_ros.spatial.lift import lifted_segments
 from clew_ros.spatial.motion_plan import add_branch, connect, plan_motion
 from clew_ros.spatial.placements import Support, face_down, object_extent, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
@@ -926,7 +927,52 @@ class SpatialSpace:
             if self.clear(checker, points[:-1], points[1:]).all():
                 via: Array = points[1:]
                 return via
+        return self._other_ways(mode, checker, q, targets, ways)
+
+    def _other_ways(
+        self, mode: dict[str, np.ndarray], checker: SpatialChecker, q: Array, targets: Array, tried: list[list[Array]]
+    ) -> Array | None:
+        """:meth:`way`'s moves by way of a carried object's other approach (:meth:`_approach_poses`: lifted
+        :attr:`SpatialTuning.slide_lift_m` and slid out along the tcp's -z, where lifting it straight up is
+        blocked by a shelf's lid or a cubby's ceiling), which :meth:`offsets` passes over when the first is
+        within reach; the lift and the slide as two moves (one straight joint move sags between them)."""
+        kinds = self._approach_poses(mode, np.vstack([q[None], targets]))
+        if len(kinds) < 2:
+            return None
+        rows = np.vstack([q[None], targets])
+        slid = self._approach_joints(kinds[1][0], rows)
+        raised = self.tcp(rows)
+        raised[:, 2, 3] += self.tuning.slide_lift_m
+        lifted = self._approach_joints(raised, rows)
+        del tried
+        retreats = [[lifted[0], slid[0]], [slid[0]], []]
+        retreats = [r for r in retreats if self._path_clear(checker, [q, *r])]
+        for k in range(min(len(targets), self.tuning.slide_targets)):
+            comings = [[slid[k + 1], lifted[k + 1]], [slid[k + 1]], []]
+            comings = [c for c in comings if self._path_clear(checker, [*c, targets[k]])]
+            for retreat in retreats:
+                for coming in comings:
+                    if not retreat and not coming:
+                        continue  # way()'s direct move
+                    ends = [*retreat[-1:], *coming[:1]] if retreat and coming else []
+                    if len(ends) == 2 and not self._path_clear(checker, ends):
+                        continue
+                    if not retreat and not self.clear(checker, q[None], coming[0][None])[0]:
+                        continue
+                    if not coming and not self.clear(checker, retreat[-1][None], targets[k][None])[0]:
+                        continue
+                    found: Array = np.array([*retreat, *coming, targets[k]])
+                    return found
         return None
+
+    def _path_clear(self, checker: SpatialChecker, path: Sequence[Array]) -> bool:
+        """Whether every straight move of ``path`` (a list of configurations; NaN: none) is valid."""
+        if any(np.isnan(p).any() for p in path):
+            return False
+        if len(path) < 2:
+            return True
+        points = np.asarray(path)
+        return bool(self.clear(checker, points[:-1], points[1:]).all())
 
     # -- regrasps, refusals, improvement --------------------------------------------------------------
     def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
@@ -997,6 +1043,9 @@ class SpatialSpace:
         first plan, with what was refused (the planner's own checks sample the moves where the validator's
         samples may fall elsewhere: an improved move grazing a support within its tolerance is not kept)."""
         better = self.improved(ctx, segments, object_pose, goal)
+        mended = lifted_segments(self, better.segments, self.tuning.lift)
+        if not _same_waypoints(mended, better.segments):
+            better = replace(better, segments=mended, travel=joint_travel(mended))
         if _same_waypoints(better.segments, segments):
             return better  # nothing changed: the first plan, checked by the planner as it was found
         built = [(s.kind, s.grasp, np.asarray(s.waypoints, dtype=float)) for s in better.segments]

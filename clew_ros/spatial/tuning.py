@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from clew_ros.core.settings import ManyJoints, SearchSettings
 from clew_ros.spatial.checker import IntervalSettings
+from clew_ros.spatial.lift import LiftSettings
 from clew_ros.spatial.regrasps import RegraspSettings
 
 __all__ = ["SpatialTuning"]
@@ -22,6 +23,8 @@ class SpatialTuning:
     search: SearchSettings = field(
         default_factory=lambda: SearchSettings(search_from_start=True, via_placements=3, resolution_proves=False)
     )
+    #: how a transfer that drags the object at its ends is mended (:mod:`clew_ros.spatial.lift`)
+    lift: LiftSettings = field(default_factory=LiftSettings)
     #: how intermediate placements are drawn (:class:`~clew_ros.spatial.regrasps.RegraspSettings`)
     regrasp: RegraspSettings = field(default_factory=RegraspSettings)
     #: how core adapts the search to arms of many joints, from 6 joints here (a UR5, a Panda): Manhattan
@@ -86,8 +89,9 @@ class SpatialTuning:
     #: motion-only queries: weight (m/rad) of the joint distance to the goal in SEARCH_TRANSIT's objective
     motion_weight: float = 0.1
     #: motion-only queries: landmarks (count) EXPLORE places at most (each followed by a SEARCH_TRANSIT
-    #: to the goal) before the run gives up with NO_PATH_AT_RESOLUTION's epsilon test
-    motion_landmarks: int = 200
+    #: to the goal) before the run gives up with NO_PATH_AT_RESOLUTION; 0: no such cap, the run goes on to its
+    #: time limit (a cap is no proof that no motion exists)
+    motion_landmarks: int = 0
     # -- motion-only queries (clew_ros.spatial.motion_plan); measured on the motion benchmark's scene seeds
     # -- 10-15 (python -m benchmarks spatial_motion --seed 10 ...), not on the reported seeds 0-2
     #: whether EXPLORE grows a tree from the goal as well as one from the start, in turn, each new landmark's
@@ -142,6 +146,9 @@ class SpatialTuning:
     #: a carried object's approach where lifting it ``approach_m`` is out of reach: lifted this far (m) and
     #: backed off ``approach_m`` along the tcp's -z (a side grasp slides it out of a shelf); 0: no such approach
     slide_lift_m: float = 0.015
+    #: SEARCH's straight moves try that slide (lifted, then slid out, as two moves) to at most this many of
+    #: their targets (count) where the straight lift is blocked: each costs a few checked moves
+    slide_targets: int = 2
     #: whether SEARCH_TRANSFER's Manhattan paths end with the object in the air, where their moves take it
     #: (scored by its distance to the goal; the do-while loop goes on from there; refinement and the straight
     #: moves to the goal configurations set it down at the goal; a search that does not reach the goal sets

@@ -26,16 +26,18 @@ from numpy.typing import NDArray
 
 from clew_ros.core.plan import Plan
 from clew_ros.spatial.checker import Held, SpatialChecker
+from clew_ros.spatial.handling import drag_problems
 from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.placements import MovableObject
 from clew_ros.spatial.plan import make_plan, object_obstacle, validate_plan
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import Obstacle, make_obstacle
+from clew_ros.spatial.space import straight_samples_clear
 from clew_ros.spatial.tier import coal_module, coal_shape, link_shapes, object_touches
 from clew_ros.spatial.transforms import pose_matrix, rpy_matrix
-from clew_ros.spatial.validate import validate_transit
+from clew_ros.spatial.validate import ValidationSettings, validate_transit
 from clew_ros.spatial.world import SpatialWorld
-from clew_ros.worlds.spatial_holds import Arm, Hold, Solver, find_hold, footprint, hold_from
+from clew_ros.worlds.spatial_holds import Arm, Hold, Solver, find_hold, footprint, grasps_of, hold_from
 
 __all__ = [
     "REGRASP_LAYOUTS",
@@ -70,15 +72,22 @@ REGRASP_LAYOUTS = {"bin_cubby": RegraspLayout("bin", "cubby"), "cubby_bin": Regr
 #: A wall or lid this close (m) to the object, drawn per world.
 GAP_RANGE_M = (0.004, 0.015)
 #: The cubby's ceiling this far above the object's top (m).
-CEILING_RANGE_M = (0.018, 0.028)
+CEILING_RANGE_M = (0.02, 0.03)
 #: A bin's walls are this thick (m): a wrist without fingers (the UR5's) still meets them from the side.
 BIN_WALL_M = 0.04
 #: In a cubby the object is lifted this much (m) before it slides out (its ceiling is 1.5-2.5 cm above it).
-CUBBY_LIFT_M = 0.006
+CUBBY_LIFT_M = 0.01
 #: A bin is widened by these (m, all four gaps) until the witness's hand clears its walls.
 WIDEN_M = (0.0, 0.003, 0.006, 0.01)
 #: A witness's transfer or transit that is not free straight goes by way of its ends raised this much (m).
 RAISE_M = 0.2
+#: A path is first checked at every this many of the validator's samples (cheap refusals), then at all.
+COARSE_EVERY = 16
+#: The goal lies this far (rad, either way) round the arm's first joint from the start, the table half-way.
+TURN_RAD = (1.2, 2.2)
+#: Objects stand at most this tall (m) in these worlds: a bin's walls must reach above a side grasp's
+#: fingers and stay below the object's lift.
+MAX_HEIGHT_M = 0.11
 #: A hand counts as blocked when it goes this deep (m) into an obstacle at every pose sampled.
 BLOCK_DEPTH_M = 0.002
 
@@ -308,6 +317,16 @@ def _raised(robot: RobotModel, q: NDArray[np.float64], rng: np.random.Generator)
     return found[np.argmin(np.abs(found - q).sum(axis=1))] if len(found) else None
 
 
+def _clear_path(checker: SpatialChecker, path: Sequence[NDArray[np.float64]]) -> bool:
+    """Whether every straight piece of ``path`` is valid at the validator's samples (no explanation sought)."""
+    points = np.asarray(path)
+    return bool(
+        straight_samples_clear(
+            checker, points[:-1], points[1:], coarse_every=COARSE_EVERY, settings=ValidationSettings()
+        ).all()
+    )
+
+
 def connect(
     what: str,
     checker: SpatialChecker,
@@ -317,20 +336,21 @@ def connect(
     rng: np.random.Generator,
     tries: int,
 ) -> list[NDArray[np.float64]]:
-    """``a`` then ``b`` (paths), joined straight or through one random via configuration under ``checker``."""
+    """``a`` then ``b`` (paths), joined straight, by way of their ends raised, or through one random via
+    configuration under ``checker``."""
     direct = [*a, *b]
-    if not validate_transit(checker, direct):
-        return direct
+    tries_ = [direct]
     robot = checker.robot
     high_a, high_b = _raised(robot, a[-1], rng), _raised(robot, b[0], rng)
     if high_a is not None and high_b is not None:
-        path = [*a, high_a, high_b, *b]
-        if not validate_transit(checker, path):
+        tries_.append([*a, high_a, high_b, *b])
+    for path in tries_:
+        if _clear_path(checker, path):
             return path
     vias = rng.uniform(robot.lower, robot.upper, size=(tries, robot.dof))
     for via in vias[checker.valid(vias)]:
         path = [*a, via, *b]
-        if not validate_transit(checker, path):
+        if _clear_path(checker, path):
             return path
     raise RejectedError(f"{what}: no straight or single-via path: {validate_transit(checker, direct)[0]}")
 
@@ -377,32 +397,36 @@ def regrasp_segments(
     ]
 
 
-def _holds(builder: Any, layout: RegraspLayout, grasps: tuple[int, int]) -> tuple[Hold, Hold, Hold, Hold]:
-    """The witness's four holds: the start (first grasp), the table (first grasp, then second, one pose), the
-    goal (second grasp)."""
+def _holds(
+    builder: Any, layout: RegraspLayout, firsts: list[int], second: int
+) -> tuple[int, tuple[Hold, Hold, Hold, Hold]]:
+    """The first grasp (the first of ``firsts`` that serves) and the witness's four holds: the start (first
+    grasp), the table (first grasp, then ``second``, one pose), the goal (``second``)."""
     arm, solver, rng, settings = builder.arm, builder.solver, builder.rng, builder.settings
-    g1, g2 = (pose_matrix(builder.grasps[i][1]) for i in grasps)
+    g2 = pose_matrix(builder.grasps[second][1])
     angle = rng.uniform(-math.pi, math.pi)
-    turn = rng.uniform(0.6, 1.6) * rng.choice([-1.0, 1.0])
+    turn = rng.uniform(*TURN_RAD) * rng.choice([-1.0, 1.0])
     lifts = {"bin": None, "cubby": CUBBY_LIFT_M}
     point = builder.point
-    start = find_hold(solver, arm, g1, "-z", point(angle), height=None, rng=rng, lift_m=lifts[layout.start])
-    near = None if start is None else start.q
-    goal = find_hold(
-        solver, arm, g2, "-z", point(angle + turn), height=None, rng=rng, near=near, lift_m=lifts[layout.goal]
-    )
-    if start is None or goal is None:
-        raise RejectedError("no hold near the start or the goal point")
+    goal = find_hold(solver, arm, g2, "-z", point(angle + turn), height=None, rng=rng, lift_m=lifts[layout.goal])
+    if goal is None:
+        raise RejectedError("no hold near the goal point")
     table_second = find_hold(solver, arm, g2, "-z", point(angle + turn / 2), height=None, rng=rng, near=goal.q)
     if table_second is None:
         raise RejectedError("no hold at the table")
-    table_first = hold_at(solver, arm, g1, table_second.pose, rng=rng, near=start.q)
-    if table_first is None:
-        raise RejectedError("the first grasp does not hold the object at the table")
+    where = point(angle)
+    for first in firsts:
+        g1 = pose_matrix(builder.grasps[first][1])
+        start = find_hold(solver, arm, g1, "-z", where, height=None, rng=rng, near=goal.q, lift_m=lifts[layout.start])
+        table_first = None if start is None else hold_at(solver, arm, g1, table_second.pose, rng=rng, near=start.q)
+        if start is not None and table_first is not None:
+            break
+    else:
+        raise RejectedError("no first grasp holds the object both at the start and at the table")
     for a, b in ((start, goal), (start, table_first), (table_first, goal)):
-        if np.linalg.norm(a.pose[:3, 3] - b.pose[:3, 3]) < settings.min_carry_m * 0.6:
+        if np.linalg.norm(a.pose[:3, 3] - b.pose[:3, 3]) < settings.min_carry_m:
             raise RejectedError("placements too close")
-    return start, table_first, table_second, goal
+    return first, (start, table_first, table_second, goal)
 
 
 def _enclosure(builder: Any, kind: str, hold: Hold) -> dict[str, dict[str, Any]]:
@@ -431,11 +455,17 @@ def regrasp_world(builder: Any, layout: RegraspLayout) -> tuple[dict[str, Any], 
     arm, rng, settings = builder.arm, builder.rng, builder.settings
     if arm.robot.dof < 6:
         raise RejectedError("the regrasp at the table needs an arm of 6 joints or more")
+    thing = builder.thing
+    if 2 * thing.height("-z") > MAX_HEIGHT_M:  # standing in a bin its lift leaves: as tall as the draw allows
+        tall = round(float(rng.uniform(0.06, MAX_HEIGHT_M)), 3)
+        size = (*thing.size[:2], tall) if thing.shape == "box" else (tall, thing.size[1])
+        builder.thing = MovableObject(thing.shape, size)
+        builder.grasps = grasps_of(builder.thing, settings.grasp_depth_m)
     kinds = [kind for kind, _ in builder.grasps]
     first_kind, second_kind = layout.grasp_kind(layout.start), layout.grasp_kind(layout.goal)
-    first = int(rng.choice([i for i, k in enumerate(kinds) if k == first_kind]))
+    firsts = [int(i) for i in rng.permutation([i for i, k in enumerate(kinds) if k == first_kind])]
     second = int(rng.choice([i for i, k in enumerate(kinds) if k == second_kind]))
-    holds = _holds(builder, layout, (first, second))
+    first, holds = _holds(builder, layout, firsts, second)
     start, goal = holds[0], holds[3]
     enclosures = {}
     for kind, hold in ((layout.start, start), (layout.goal, goal)):
@@ -455,7 +485,7 @@ def regrasp_world(builder: Any, layout: RegraspLayout) -> tuple[dict[str, Any], 
     plan = make_plan(
         world, segments, message="witness: out of the first enclosure, regrasped on the table, into the second"
     )
-    problems = validate_plan(world, plan)
+    problems = validate_plan(world, plan) or drag_problems(world, plan)
     if problems:
         raise RejectedError(f"the witness does not validate: {problems[0]}")
     refutation = single_grasp_refutation(world)

@@ -1,0 +1,126 @@
+"""Transfers that lift the object off its support and set it down from above, as a robot cell needs them.
+
+A transfer found by Manhattan moves may slide the object over its support before it rises (the checker lets a
+carried object touch a support from above). :func:`lifted_segments` mends such a transfer's ends: the object
+is first lifted straight up (the tcp raised a few mm, its orientation kept), and the path joins the transfer
+again at the first of its samples that has left the support's band; the same at the other end, reversed
+(set down from above). Each new move is straight and checked at the validator's resolution; a transfer whose
+ends cannot be mended so is kept as it was (:func:`clew_ros.spatial.handling.drag_problems` reports it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from clew_ros.core.tree import Segment
+from clew_ros.spatial.handling import DragSettings, slides
+from clew_ros.spatial.transforms import pose_matrix
+from clew_ros.spatial.validate import validation_samples
+
+if TYPE_CHECKING:
+    from clew_ros.spatial.space import SpatialSpace
+
+__all__ = ["LiftSettings", "lifted_segments"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class LiftSettings:
+    """How a dragging transfer's ends are mended."""
+
+    #: what counts as dragging (the band above a support, the slide allowed in it)
+    drag: DragSettings = field(default_factory=DragSettings)
+    #: the tcp is raised straight up by the first of these (m) that gives a clear lift
+    lifts_m: tuple[float, ...] = (0.008, 0.015, 0.03)
+    #: samples of the transfer (count) tried as the place where the lifted path joins it again
+    joins: int = 8
+
+
+def lifted_segments(
+    space: SpatialSpace, segments: list[Segment], settings: LiftSettings | None = None
+) -> list[Segment]:
+    """``segments`` with every transfer that drags the object off or onto a support mended at that end (see the
+    module docstring); the others as they are."""
+    settings = settings or LiftSettings()
+    if space.world.object is None:
+        return segments
+    out = []
+    for segment in segments:
+        if segment.kind != "transfer" or segment.grasp is None:
+            out.append(segment)
+            continue
+        rel = space.grasp_rel(segment.grasp)
+        waypoints = np.asarray(segment.waypoints, dtype=float)
+        waypoints = _lifted_start(space, waypoints, rel, settings)
+        waypoints = _lifted_start(space, waypoints[::-1], rel, settings)[::-1]
+        out.append(Segment(segment.kind, segment.grasp, list(waypoints)))
+    return out
+
+
+def _samples(space: SpatialSpace, waypoints: Array) -> tuple[Array, NDArray[np.int64]]:
+    """The validator's samples along ``waypoints`` and the piece each lies on (a junction: the later piece)."""
+    robot = space.world.robot
+    rows, pieces = [waypoints[:1]], [np.zeros(1, dtype=np.int64)]
+    for p in range(len(waypoints) - 1):
+        along = validation_samples(
+            waypoints[p], waypoints[p + 1], space.validation_steps, robot.continuous, robot.lower
+        )
+        rows.append(along[1:])
+        pieces.append(np.full(len(along) - 1, p, dtype=np.int64))
+    return np.vstack(rows), np.concatenate(pieces)
+
+
+def _drags(space: SpatialSpace, path: Array, rel: Array, settings: DragSettings) -> bool:
+    samples, _ = _samples(space, path)
+    poses = _matrices(space, samples, rel)
+    return any(moved > settings.slide_m for _, _, _, moved in slides(space.world, poses, settings))
+
+
+def _matrices(space: SpatialSpace, q: Array, rel: Array) -> Array:
+    """The carried object's 4x4 poses at configurations ``q`` (held as ``rel``, 6 numbers)."""
+    return np.asarray(space.tcp(q) @ pose_matrix([float(v) for v in rel]))
+
+
+def _lifted_start(space: SpatialSpace, waypoints: Array, rel: Array, settings: LiftSettings) -> Array:
+    """``waypoints`` (a transfer, from where the object rests) lifting the object straight up first where they
+    drag it at their start; as they are when they do not, or when no lift joins them clear."""
+    if len(waypoints) < 2:
+        return waypoints
+    samples, piece = _samples(space, waypoints)
+    poses = _matrices(space, samples, rel)
+    leading = [s for s in slides(space.world, poses, settings.drag) if s[1] == 0]
+    if not leading or max(s[3] for s in leading) <= settings.drag.slide_m:
+        return waypoints
+    leave = max(s[2] for s in leading) + 1  # the first sample out of the band
+    if leave >= len(samples):
+        return waypoints
+    checker = space.transfer_checker(rel)
+    start = samples[0]
+    joins = np.unique(np.linspace(leave, len(samples) - 1, settings.joins).astype(np.int64))
+    for rise in settings.lifts_m:
+        target = space.tcp(start[None])[0].copy()
+        target[2, 3] += rise
+        found = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[start[None]], checker=checker)[0]
+        if not len(found):
+            continue
+        up = found[np.argmin(np.abs(found - start).sum(axis=1))]
+        if not space.clear(checker, start[None], up[None])[0]:
+            continue
+        for k in joins.tolist():
+            p = int(piece[k])
+            rest = waypoints[p + 1 :]
+            if len(rest) and np.allclose(rest[0], samples[k]):
+                rest = rest[1:]
+            lead = np.vstack([start, up, samples[k]])
+            ends = np.vstack([samples[k], rest[:1]])  # the join, and the part of piece p left after it
+            if not space.clear(checker, np.vstack([up, samples[k]])[: len(ends)], ends).all():
+                continue
+            if _drags(space, lead, rel, settings.drag):
+                continue
+            return np.vstack([lead, rest])
+    return waypoints

@@ -1,0 +1,141 @@
+"""Regrasping in 3-D (issue 53): generated worlds where a regrasp is necessary, SEARCH by way of intermediate
+placements, transfers that lift the object off and set it down from above, and outcomes that never claim
+more than was shown."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("coal")
+
+from clew_ros.core.explore import Exploration, Explorer
+from clew_ros.core.plan import Plan
+from clew_ros.core.settings import Outcome, PlannerSettings
+from clew_ros.core.tree import Segment
+from clew_ros.spatial.handling import DragSettings, drag_problems
+from clew_ros.spatial.lift import lifted_segments
+from clew_ros.spatial.plan import make_plan, replay, validate_plan
+from clew_ros.spatial.space import SpatialSpace, plan
+from clew_ros.spatial.transforms import pose_matrix
+from clew_ros.spatial.tuning import SpatialTuning
+from clew_ros.spatial.world import SpatialWorld
+from clew_ros.worlds.spatial import SpatialGenerated, generate_spatial
+from clew_ros.worlds.spatial_regrasp import RejectedError, hand_blocked, single_grasp_refutation
+
+
+@functools.cache
+def generated(family: str, seed: int) -> SpatialGenerated:
+    return generate_spatial(family, seed, "panda")
+
+
+@pytest.mark.parametrize("family", ["spatial_bin_cubby", "spatial_cubby_bin"])
+def test_a_regrasp_world_has_a_two_transfer_witness_and_no_single_grasp(family: str) -> None:
+    made = generated(family, 0)
+    world = made.world()
+    assert made.witness.grasp_count == 2
+    assert validate_plan(world, made.witness) == []  # on the exact geometry, at 0.002 rad
+    assert drag_problems(world, made.witness) == []
+    reasons = single_grasp_refutation(world)
+    assert world.object is not None
+    assert len(reasons) == len(world.object.grasps)  # every grasp refuted, at the start or at the goal
+    used = {s.grasp for s in made.witness.segments if s.kind == "transfer"}
+    assert len(used) == 2
+
+
+def test_the_refutation_fails_when_an_enclosure_opens() -> None:
+    world = generated("spatial_bin_cubby", 0).world()
+    walls = ("cubby_ceiling", "cubby_back", "cubby_left", "cubby_right")
+    opened = replace(world, obstacles=tuple(o for o in world.obstacles if o.name not in walls))
+    with pytest.raises(RejectedError, match="blocked neither"):
+        single_grasp_refutation(opened)  # a grasp from above now fits at the goal
+
+
+def test_a_hand_in_a_bin_is_blocked_from_the_side_not_from_above() -> None:
+    made = generated("spatial_bin_cubby", 0)
+    world = made.world()
+    assert world.object is not None
+    start = pose_matrix(list(world.object.initial))
+    blocked = [hand_blocked(world.robot, start @ pose_matrix(list(g)), world.obstacles) for g in world.object.grasps]
+    assert all(blocked[2:])  # the side grasps (clew_ros.worlds.spatial_holds.grasps_of: two from above first)
+    first = next(s.grasp for s in made.witness.segments if s.kind == "transfer")
+    assert first is not None and first < 2 and not blocked[first]  # the witness's grasp from above fits
+
+
+def test_the_planner_regrasps_where_no_single_transfer_exists() -> None:
+    world = generated("spatial_bin_cubby", 0).world()
+    result = plan(world, PlannerSettings(seed=0, time_limit=30.0))
+    assert result.outcome is Outcome.SUCCEEDED, result.message
+    built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in result.segments])
+    assert built.grasp_count >= 2
+    assert validate_plan(world, built) == []
+    again = plan(world, PlannerSettings(seed=0, time_limit=30.0))  # same seed, same plan
+    assert [np.asarray(s.waypoints).tobytes() for s in again.segments] == [
+        np.asarray(s.waypoints).tobytes() for s in result.segments
+    ]
+
+
+@pytest.mark.parametrize("proves", [True, False])
+def test_the_resolution_criterion_is_no_proof_in_spatial_worlds(proves: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    """EXPLORE's every step lands on the landmark it started from, every pair searched (the paper's criterion
+    met at once): the paper's rule answers NO_PATH_AT_RESOLUTION; the spatial planner's
+    (``SearchSettings.resolution_proves`` off) goes on to its time limit and says what it tried."""
+    world = generated("spatial_bin_cubby", 0).world()
+    original = Explorer.explore
+
+    def explore_in_place(self: Explorer) -> Exploration | None:
+        found = original(self)
+        if found is None:
+            return None
+        parent = self.tree[found.fields["parent"]]
+        fields = {**found.fields, "joints": parent.joints.copy(), "object_pose": parent.object_pose.copy()}
+        return Exploration(fields, 0.0, covered=True, moved=True)
+
+    monkeypatch.setattr(Explorer, "explore", explore_in_place)
+    search = replace(SpatialTuning().search, via_placements=0, search_from_start=False, resolution_proves=proves)
+    result = plan(world, PlannerSettings(seed=0, time_limit=2.0, improve_time=0.0), tuning=SpatialTuning(search=search))
+    if proves:
+        assert result.outcome is Outcome.NO_PATH_AT_RESOLUTION, result.message
+    else:
+        assert result.outcome in {Outcome.TIME_LIMIT, Outcome.SUCCEEDED}, result.message
+        assert result.outcome is Outcome.SUCCEEDED or "tried:" in result.message
+
+
+def _sliding_plan(world: SpatialWorld, witness: Plan, shift_m: float) -> tuple[Plan, list[Segment]]:
+    """The witness's first hold, then a transfer that slides the object ``shift_m`` over its table (towards the
+    table's centre) and then lifts it 5 cm, each tcp position reached by inverse kinematics."""
+    space = SpatialSpace(world)
+    first = next(m for m in replay(world, witness) if m.kind == "transfer")
+    q0 = first.configurations[0]
+    tcp = space.tcp(q0[None])[0]
+    towards = np.asarray(world.supports[0].center) - tcp[:2, 3]
+    towards /= np.linalg.norm(towards)
+    path = [q0]
+    for move in [*(towards * f * shift_m for f in (0.25, 0.5, 0.75, 1.0)), None]:
+        target = tcp.copy()
+        target[:2, 3] += towards * shift_m if move is None else move
+        target[2, 3] += 0.05 if move is None else 0.0
+        found = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[path[-1][None]])[0]
+        path.append(found[np.argmin(np.abs(found - path[-1]).sum(axis=1))])
+    segments = [
+        Segment("transit", None, list(witness.segments[0].waypoints)),
+        Segment("transfer", first.grasp, path),
+    ]
+    built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in segments])
+    return built, segments
+
+
+def test_dragging_is_found_and_a_lift_mends_it() -> None:
+    made = generate_spatial("spatial_table", 0, "panda")
+    world = made.world()
+    dragging, segments = _sliding_plan(world, made.witness, 0.03)
+    problems = drag_problems(world, dragging)
+    assert problems and "slides" in problems[0]
+    assert drag_problems(world, dragging, DragSettings(slide_m=0.05)) == []  # 3 cm is within a 5 cm allowance
+    mended = lifted_segments(SpatialSpace(world), segments)
+    built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in mended])
+    assert len(mended[1].waypoints) != len(segments[1].waypoints)
+    assert drag_problems(world, built) == []

@@ -82,6 +82,9 @@ def _list() -> int:
 
 
 def _spatial(args: argparse.Namespace) -> int:
+    robots = SPATIAL_FAMILIES[args.family].robots
+    if (args.robot or "panda") not in robots:
+        return _invalid(f"--robot: family {args.family} is generated on {', '.join(robots)}, got {args.robot!r}")
     try:
         generated = generate_spatial(args.family, args.seed, args.robot or "panda")
         written = write_spatial_world(generated, args.output, witness=not args.no_witness)

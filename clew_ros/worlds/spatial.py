@@ -101,6 +101,9 @@ class SpatialFamily:
     start_at_approach: bool = False
     #: a regrasp family: the key of :data:`~clew_ros.worlds.spatial_regrasp.REGRASP_LAYOUTS` ("": none)
     regrasp: str = ""
+    #: the arms it is generated on (a random arm rarely holds an object both from above and from the side at
+    #: one placement: 0 worlds in 200 draws)
+    robots: tuple[str, ...] = SPATIAL_ROBOTS
 
 
 SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
@@ -134,12 +137,14 @@ SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
             "spatial: a regrasp is needed: from a bin (grasps from above only) into a cubby (from its open side only)",
             "regrasp",
             regrasp="bin_cubby",
+            robots=("panda", "ur5"),
         ),
         SpatialFamily(
             "spatial_cubby_bin",
             "spatial: a regrasp is needed: from a cubby (grasps from its open side only) into a bin (from above only)",
             "regrasp",
             regrasp="cubby_bin",
+            robots=("panda", "ur5"),
         ),
         SpatialFamily(
             "spatial_unsolvable",
@@ -715,6 +720,8 @@ def generate_spatial(
         raise ValueError(f"seed: expected an integer >= 0, got {seed!r}")
     settings = settings or SpatialGeneration()
     chosen = SPATIAL_FAMILIES[family]
+    if robot not in chosen.robots:
+        raise ValueError(f"robot: family {family} is generated on {', '.join(chosen.robots)}, got {robot!r}")
     reasons: list[str] = []
     attempts = settings.random_attempts if robot == "random" else settings.attempts
     for attempt in range(attempts):

@@ -88,6 +88,8 @@ TURN_RAD = (1.2, 2.2)
 #: Objects stand at most this tall (m) in these worlds: a bin's walls must reach above a side grasp's
 #: fingers and stay below the object's lift.
 MAX_HEIGHT_M = 0.11
+#: The table lies these fractions of the way round from the start to the goal, tried in turn.
+TABLE_FRACTIONS = (0.5, 0.3, 0.7)
 #: A hand counts as blocked when it goes this deep (m) into an obstacle at every pose sampled.
 BLOCK_DEPTH_M = 0.002
 
@@ -411,22 +413,50 @@ def _holds(
     goal = find_hold(solver, arm, g2, "-z", point(angle + turn), height=None, rng=rng, lift_m=lifts[layout.goal])
     if goal is None:
         raise RejectedError("no hold near the goal point")
-    table_second = find_hold(solver, arm, g2, "-z", point(angle + turn / 2), height=None, rng=rng, near=goal.q)
-    if table_second is None:
-        raise RejectedError("no hold at the table")
     where = point(angle)
-    for first in firsts:
-        g1 = pose_matrix(builder.grasps[first][1])
-        start = find_hold(solver, arm, g1, "-z", where, height=None, rng=rng, near=goal.q, lift_m=lifts[layout.start])
-        table_first = None if start is None else hold_at(solver, arm, g1, table_second.pose, rng=rng, near=start.q)
-        if start is not None and table_first is not None:
-            break
+    starts: dict[int, Hold | None] = {}
+    for fraction in TABLE_FRACTIONS:  # the table half-way round, else nearer either end
+        table_second = find_hold(
+            solver, arm, g2, "-z", point(angle + fraction * turn), height=None, rng=rng, near=goal.q
+        )
+        if table_second is None:
+            continue
+        for first in firsts:
+            if first not in starts:
+                g1 = pose_matrix(builder.grasps[first][1])
+                starts[first] = find_hold(
+                    solver, arm, g1, "-z", where, height=None, rng=rng, near=goal.q, lift_m=lifts[layout.start]
+                )
+            start = starts[first]
+            if start is None:
+                continue
+            found = _table_holds(builder, (pose_matrix(builder.grasps[first][1]), g2), table_second, (start, goal))
+            if found is not None:
+                table_first, table_second = found
+                break
+        else:
+            continue
+        break
     else:
-        raise RejectedError("no first grasp holds the object both at the start and at the table")
+        raise RejectedError("no first grasp holds the object both at the start and at a table")
     for a, b in ((start, goal), (start, table_first), (table_first, goal)):
         if np.linalg.norm(a.pose[:3, 3] - b.pose[:3, 3]) < settings.min_carry_m:
             raise RejectedError("placements too close")
     return first, (start, table_first, table_second, goal)
+
+
+def _table_holds(
+    builder: Any, grasps: tuple[Matrix, Matrix], second: Hold, ends: tuple[Hold, Hold]
+) -> tuple[Hold, Hold] | None:
+    """The table's two holds at one pose: the first grasp at ``second``'s pose; else the other way round (the
+    first grasp's own level hold there, the second grasp at its pose). ``ends``: the start and goal holds."""
+    arm, solver, rng = builder.arm, builder.solver, builder.rng
+    first = hold_at(solver, arm, grasps[0], second.pose, rng=rng, near=ends[0].q)
+    if first is not None:
+        return first, second
+    other = find_hold(solver, arm, grasps[0], "-z", second.pose[:3, 3], height=None, rng=rng, near=ends[0].q)
+    there = None if other is None else hold_at(solver, arm, grasps[1], other.pose, rng=rng, near=ends[1].q)
+    return None if other is None or there is None else (other, there)
 
 
 def _enclosure(builder: Any, kind: str, hold: Hold) -> dict[str, dict[str, Any]]:

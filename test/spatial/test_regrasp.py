@@ -62,7 +62,9 @@ def test_a_hand_in_a_bin_is_blocked_from_the_side_not_from_above() -> None:
     blocked = [hand_blocked(world.robot, start @ pose_matrix(list(g)), world.obstacles) for g in world.object.grasps]
     assert all(blocked[2:])  # the side grasps (clew_ros.worlds.spatial_holds.grasps_of: two from above first)
     first = next(s.grasp for s in made.witness.segments if s.kind == "transfer")
-    assert first is not None and first < 2 and not blocked[first]  # the witness's grasp from above fits
+    assert first is not None
+    assert first < 2
+    assert not blocked[first]
 
 
 def test_the_planner_regrasps_where_no_single_transfer_exists() -> None:
@@ -133,7 +135,8 @@ def test_dragging_is_found_and_a_lift_mends_it() -> None:
     world = made.world()
     dragging, segments = _sliding_plan(world, made.witness, 0.03)
     problems = drag_problems(world, dragging)
-    assert problems and "slides" in problems[0]
+    assert problems
+    assert "slides" in problems[0]
     assert drag_problems(world, dragging, DragSettings(slide_m=0.05)) == []  # 3 cm is within a 5 cm allowance
     mended = lifted_segments(SpatialSpace(world), segments)
     built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in mended])

@@ -172,7 +172,7 @@ def _plan_all(args: argparse.Namespace) -> tuple[list[FamilyRun], list[str]]:
     runs: list[FamilyRun] = []
     skipped: list[str] = []
     for family in args.families:
-        for robot in args.robots:
+        for robot in [r for r in args.robots if r in SPATIAL_FAMILIES[family].robots]:
             for world_seed in range(args.first_world, args.first_world + args.worlds):
                 try:
                     world_runs = run_world(
@@ -198,7 +198,8 @@ def _plan_all(args: argparse.Namespace) -> tuple[list[FamilyRun], list[str]]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks spatial_families", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--families", nargs="+", default=list(SPATIAL_FAMILIES), choices=list(SPATIAL_FAMILIES))
+    one_transfer = [name for name, family in SPATIAL_FAMILIES.items() if not family.regrasp]  # regrasps: their own
+    parser.add_argument("--families", nargs="+", default=one_transfer, choices=list(SPATIAL_FAMILIES))
     parser.add_argument("--robots", nargs="+", default=list(SPATIAL_ROBOTS), choices=list(SPATIAL_ROBOTS))
     parser.add_argument("--worlds", type=int, default=2, help="worlds per family and robot (default 2)")
     parser.add_argument("--first-world", type=int, default=0, help="the first world's seed (default 0)")

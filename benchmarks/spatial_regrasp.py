@@ -54,10 +54,10 @@ def run_one(family: str, robot: str, seed: int, time_limit: float) -> dict[str, 
     return row
 
 
-def main(argv: list[str] | None = None) -> None:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks spatial_regrasp", description=__doc__.split("\n")[0])
     parser.add_argument("--families", nargs="+", default=FAMILIES, choices=FAMILIES)
-    parser.add_argument("--robots", nargs="+", default=["panda", "ur5", "random"])
+    parser.add_argument("--robots", nargs="+", default=["panda", "ur5"], choices=["panda", "ur5"])
     parser.add_argument("--seeds", type=int, default=4)
     parser.add_argument("--first-seed", type=int, default=100)
     parser.add_argument("--time-limit", type=float, default=10.0)
@@ -79,6 +79,7 @@ def main(argv: list[str] | None = None) -> None:
         every += found
         print(_line(family.removeprefix("spatial_"), robot, found))
     print(_line("all", "all", every))
+    return 0
 
 
 def _line(family: str, robot: str, rows: list[dict[str, Any]]) -> str:
@@ -93,4 +94,4 @@ def _line(family: str, robot: str, rows: list[dict[str, Any]]) -> str:
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

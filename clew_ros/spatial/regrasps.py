@@ -68,7 +68,8 @@ class SpatialAims:
         self.settings = settings or RegraspSettings()
         self._goal_grasps: list[int] | None = None
         self._drawn: Array | None = None  # (m, 4, 4) candidate placements
-        self._holds: dict[int, NDArray[np.bool_]] = {}  # grasp -> which candidates it holds
+        self._holds: dict[int, list[Array]] = {}  # grasp -> per candidate, the configurations holding it
+        self._goal_solutions: dict[int, Array] = {}  # goal grasp -> configurations holding the object at the goal
         self._rng = np.random.default_rng([int(v * 1e6) & 0xFFFFFFFF for v in self.goal])
 
     # -- the core's RegraspAims
@@ -84,22 +85,35 @@ class SpatialAims:
 
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
         """Intermediate placements (6 numbers each), best first: ``grasp`` holds the object there and so does
-        a goal grasp other than it; the best make the shortest detour (landmark to placement to goal, m)."""
+        a goal grasp other than it. The best are nearest in the joints: ``grasp``'s configuration there to the
+        landmark's, plus the goal grasp's there to its configuration at the goal (rad, L1; the nearest of the
+        solutions found): the transfers on either side of the regrasp stay in one posture family."""
         goal_grasps = [g for g in self.goal_grasps() if g != grasp]
         if not goal_grasps:
             return []
         drawn = self._candidates()
         if not len(drawn):
             return []
-        usable = self._held_by(grasp) & np.any([self._held_by(g) for g in goal_grasps], axis=0)
         here = _matrix(np.asarray(landmark.object_pose, dtype=float))[:3, 3]
         there = _matrix(self.goal)[:3, 3]
         centres = drawn[:, :3, 3]
-        near = np.linalg.norm(centres - here, axis=1)
-        far = np.linalg.norm(centres - there, axis=1)
-        usable &= (near > self.settings.min_move_m) & (far > self.settings.min_move_m)
-        order = np.flatnonzero(usable)
-        order = order[np.argsort(near[order] + far[order], kind="stable")]
+        apart = (np.linalg.norm(centres - here, axis=1) > self.settings.min_move_m) & (
+            np.linalg.norm(centres - there, axis=1) > self.settings.min_move_m
+        )
+        joints = np.asarray(landmark.joints, dtype=float)
+        cost = np.full(len(drawn), np.inf)
+        mine = self._solutions(grasp)
+        for k in np.flatnonzero(apart).tolist():
+            if not len(mine[k]):
+                continue
+            put = float(np.min(np.abs(mine[k] - joints).sum(axis=1)))
+            take = min(
+                (_nearest(self._solutions(g)[k], self._goal_solutions[g]) for g in goal_grasps),
+                default=math.inf,
+            )
+            cost[k] = put + take
+        order = np.flatnonzero(np.isfinite(cost))
+        order = order[np.argsort(cost[order], kind="stable")]
         return [np.asarray(matrix_pose(drawn[k])) for k in order]
 
     # -- what the placements rest on
@@ -120,19 +134,22 @@ class SpatialAims:
         return self._goal_grasps
 
     def _holds_any(self, grasp: int, poses: Array) -> bool:
-        return bool(self._holding(grasp, poses, self.settings.goal_seeds).any())
+        found = self._solve(grasp, poses, self.settings.goal_seeds)
+        self._goal_solutions[grasp] = np.vstack([f for f in found if len(f)] or [np.zeros((0, self.space.dof))])
+        return bool(len(self._goal_solutions[grasp]))
 
-    def _holding(self, grasp: int, poses: Array, starts: int | None = None) -> NDArray[np.bool_]:
-        """Whether ``grasp`` holds the object at each of ``poses`` (k, 4, 4) in a valid configuration."""
+    def _solve(self, grasp: int, poses: Array, starts: int) -> list[Array]:
+        """Valid configurations holding the object by ``grasp`` at each of ``poses`` (k, 4, 4): an (m, n) array
+        each (m = 0: none found)."""
         space = self.space
         rel = space.grasp_rel(grasp)
         grasp_pose = np.asarray(np.linalg.inv(_matrix(np.asarray(rel, dtype=float))), dtype=np.float64)
         tcps = list(poses @ grasp_pose)
         seeds = [space.initial_joints[None]] * len(tcps)
-        found = space.ik(self.settings.ik_seeds if starts is None else starts).solve_many(
+        found: list[Array] = space.ik(starts).solve_many(
             tcps, self._rng, seeds=seeds, checker=space.transfer_checker(rel)
         )
-        return np.array([len(f) > 0 for f in found], dtype=bool)
+        return found
 
     def _candidates(self) -> Array:
         if self._drawn is None:
@@ -154,7 +171,15 @@ class SpatialAims:
             self._drawn = np.concatenate(drawn) if drawn else np.zeros((0, 4, 4))
         return self._drawn
 
-    def _held_by(self, grasp: int) -> NDArray[np.bool_]:
+    def _solutions(self, grasp: int) -> list[Array]:
+        """Per candidate placement, the valid configurations found holding it by ``grasp``."""
         if grasp not in self._holds:
-            self._holds[grasp] = self._holding(grasp, self._candidates())
+            self._holds[grasp] = self._solve(grasp, self._candidates(), self.settings.ik_seeds)
         return self._holds[grasp]
+
+
+def _nearest(a: Array, b: Array) -> float:
+    """The least L1 distance (rad) between a row of ``a`` and a row of ``b`` (inf: either is empty)."""
+    if not len(a) or not len(b):
+        return math.inf
+    return float(np.min(np.abs(a[:, None, :] - b[None, :, :]).sum(axis=2)))

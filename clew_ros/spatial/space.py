@@ -935,7 +935,8 @@ class SpatialSpace:
         """:meth:`way`'s moves by way of a carried object's other approach (:meth:`_approach_poses`: lifted
         :attr:`SpatialTuning.slide_lift_m` and slid out along the tcp's -z, where lifting it straight up is
         blocked by a shelf's lid or a cubby's ceiling), which :meth:`offsets` passes over when the first is
-        within reach; the lift and the slide as two moves (one straight joint move sags between them)."""
+        within reach; the lift and the slide as two moves (one straight joint move sags between them); between
+        the retreat and the approach, directly or over the top (both raised :attr:`SpatialTuning.carry_raise_m`)."""
         kinds = self._approach_poses(mode, np.vstack([q[None], targets]))
         if len(kinds) < 2:
             return None
@@ -944,26 +945,49 @@ class SpatialSpace:
         raised = self.tcp(rows)
         raised[:, 2, 3] += self.tuning.slide_lift_m
         lifted = self._approach_joints(raised, rows)
+        steps = self._slide_steps(raised, kinds[1][1], lifted)  # (steps, rows, n): the slide in short moves
         del tried
-        retreats = [[lifted[0], slid[0]], [slid[0]], []]
+        retreats = [[lifted[0], *steps[:, 0]], [lifted[0], slid[0]], [slid[0]], []]
         retreats = [r for r in retreats if self._path_clear(checker, [q, *r])]
+        high: dict[bytes, Array] = {}
         for k in range(min(len(targets), self.tuning.slide_targets)):
-            comings = [[slid[k + 1], lifted[k + 1]], [slid[k + 1]], []]
+            comings = [[*steps[::-1, k + 1], lifted[k + 1]], [slid[k + 1], lifted[k + 1]], [slid[k + 1]], []]
             comings = [c for c in comings if self._path_clear(checker, [*c, targets[k]])]
             for retreat in retreats:
                 for coming in comings:
                     if not retreat and not coming:
                         continue  # way()'s direct move
-                    ends = [*retreat[-1:], *coming[:1]] if retreat and coming else []
-                    if len(ends) == 2 and not self._path_clear(checker, ends):
-                        continue
-                    if not retreat and not self.clear(checker, q[None], coming[0][None])[0]:
-                        continue
-                    if not coming and not self.clear(checker, retreat[-1][None], targets[k][None])[0]:
-                        continue
-                    found: Array = np.array([*retreat, *coming, targets[k]])
-                    return found
+                    a, b = (retreat[-1] if retreat else q), (coming[0] if coming else targets[k])
+                    for middle in ([], [self._raised(a, high), self._raised(b, high)]):
+                        if self._path_clear(checker, [a, *middle, b]):
+                            found: Array = np.array([*retreat, *middle, *coming, targets[k]])
+                            return found
         return None
+
+    def _slide_steps(self, raised: Array, along: Array, lifted: Array) -> Array:
+        """Configurations (steps, m, n) sliding the lifted tcps ``raised`` (m, 4, 4) out along ``along`` (m, 3), in
+        :attr:`SpatialTuning.slide_steps` equal steps, each seeded at the one before (NaN: out of reach)."""
+        count = self.tuning.slide_steps
+        out = np.full((count, *lifted.shape), np.nan)
+        last = lifted
+        for i in range(count):
+            rows = np.flatnonzero(~np.isnan(last).any(axis=1))
+            if not len(rows):
+                break
+            target = raised[rows].copy()
+            target[:, :3, 3] += along[rows] * (i + 1) / count
+            out[i, rows] = self._approach_joints(target, last[rows])
+            last = out[i]
+        return out
+
+    def _raised(self, q: Array, cache: dict[bytes, Array]) -> Array:
+        """The configuration near ``q`` with the tcp :attr:`SpatialTuning.carry_raise_m` higher (NaN: none)."""
+        key = q.tobytes()
+        if key not in cache:
+            target = self.tcp(q[None])
+            target[:, 2, 3] += self.tuning.carry_raise_m
+            cache[key] = self._approach_joints(target, q[None])[0]
+        return cache[key]
 
     def _path_clear(self, checker: SpatialChecker, path: Sequence[Array]) -> bool:
         """Whether every straight move of ``path`` (a list of configurations; NaN: none) is valid."""

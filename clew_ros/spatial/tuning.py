@@ -149,6 +149,12 @@ class SpatialTuning:
     #: SEARCH's straight moves try that slide (lifted, then slid out, as two moves) to at most this many of
     #: their targets (count) where the straight lift is blocked: each costs a few checked moves
     slide_targets: int = 2
+    #: ... the slide in this many straight moves (count), each to inverse kinematics' configuration seeded at
+    #: the one before: a straight joint move over the whole slide sags into a ceiling a few mm above
+    slide_steps: int = 4
+    #: ... and from that retreat to that approach, where the straight move between them is blocked, over the
+    #: top: both raised this much (m)
+    carry_raise_m: float = 0.2
     #: whether SEARCH_TRANSFER's Manhattan paths end with the object in the air, where their moves take it
     #: (scored by its distance to the goal; the do-while loop goes on from there; refinement and the straight
     #: moves to the goal configurations set it down at the goal; a search that does not reach the goal sets

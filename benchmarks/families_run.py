@@ -205,6 +205,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--time-limit", type=float, default=None, help="per run, s (default 10)")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--threads", type=int, default=1, help="planner.threads of every run (default 1)")
+    parser.add_argument(
+        "--min-joints", type=int, default=0, metavar="N", help="leave out generated worlds of fewer joints (default 0)"
+    )
     parser.add_argument("--no-figure1", action="store_true", help="leave out the figure1 reference row")
     parser.add_argument("--out", type=Path, default=Path("bench_out"), help="where families.json/.md go")
     parser.add_argument("--keep-worlds", type=Path, default=None, help="write the worlds here (default: a temp dir)")
@@ -237,6 +240,7 @@ def run(args: argparse.Namespace, directory: Path) -> dict:
     ) as pool:
         jobs = [(f, s) for s in world_seeds(args, world_count) for f in families]
         built = list(pool.map(build_world, *zip(*jobs, strict=True), [str(directory)] * len(jobs)))
+        built = [w for w in built if w.joints >= getattr(args, "min_joints", 0)]
         generation_s = time.monotonic() - started
         print(f"generated {len(built)} worlds in {generation_s:.0f} s", file=sys.stderr)
         worlds = ([] if args.no_figure1 else [reference_world()]) + built

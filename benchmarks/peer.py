@@ -21,7 +21,8 @@ limits, seeded, kept when both ends are valid and at least 1 rad apart).
 * **Project** (:func:`project_transit`): the Ariadne's Clew algorithm posed
   on the transit problem with the core's own pieces: SEARCH is
   ``clew_ros.core.search.local_search`` minimising the joint-space distance
-  to ``q_goal`` over Manhattan paths (the same greedy probe, GA, bouncing, free
+  to ``q_goal`` over Manhattan paths (the same straight probe from
+  ``ManyJoints.straight_transit_joints`` joints, greedy probe, GA, bouncing, free
   intervals and damped least-squares refinement that SEARCH_TRANSIT uses, only the
   objective differs: SEARCH_TRANSIT minimises the tip's distance to a grasp
   point, which any of many configurations satisfies, so it would not pose the
@@ -243,10 +244,13 @@ def project_transit(
     success = False
     searched_from_start = None
     waypoints = landmarks[0][None]
+    # as SEARCH_TRANSIT from ManyJoints.straight_transit_joints: a straight move to the goal first
+    straight = goal[None] if n >= ctx.many.straight_transit_joints else None
     while True:
-        [(tail, distance)] = local_search(
-            ctx, [SearchJob(landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD, mode, toward=goal)]
+        job = SearchJob(
+            landmarks[-1], objective, error, 0.1 * weight * GOAL_TOLERANCE_RAD, mode, toward=goal, straight=straight
         )
+        [(tail, distance)] = local_search(ctx, [job])
         distance /= weight  # rad
         if searched_from_start is None:
             searched_from_start = bool(distance <= GOAL_TOLERANCE_RAD)

@@ -80,7 +80,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     if ctx.search.greedy_probe:
         _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=ga_target)
     searching = np.arange(len(jobs))
-    if not ctx.many.transit_ga:  # arms of many joints: a transit is the straight probe's, or none
+    if n >= ctx.many.straight_probe_joints and not ctx.many.transit_ga:  # a transit is the straight probe's, or none
         searching = np.array([i for i, job in enumerate(jobs) if job.straight is None], dtype=int)
     for _ in range(ctx.settings.search_rounds):
         searching = searching[best[searching] > ga_target]

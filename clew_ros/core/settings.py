@@ -29,6 +29,12 @@ class ManyJoints:
     #: path costs about 100x a 4-joint one, and the greedy Manhattan probe, which swings joint 1 first,
     #: rarely gets past a shelf's walls where a straight move does
     straight_probe_joints: int = 11
+    #: joints (count) from which SEARCH_TRANSIT first tries the direct straight moves of that probe (to its
+    #: :attr:`straight_probes` nearest holds, no retreat and approach), its GA rounds still running when none is
+    #: clear: at 7-10 joints a transit's GA costs 140-820 decoded Manhattan paths where a straight move, one
+    #: continuous check, is clear from 14 to 18 of 20 random starts to their goals (the OMPL peer's problems), as
+    #: RRT-Connect's straight extensions are; below 7 joints the greedy Manhattan probe mostly reaches them
+    straight_transit_joints: int = 7
     #: holding configurations (count, nearest first in joint travel) a transit's straight probe tries
     straight_probes: int = 8
     #: starts (count) of the inverse kinematics seeded from the arm's own configuration: the start itself and

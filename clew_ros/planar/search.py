@@ -54,6 +54,7 @@ __all__ = [
     "goal_reached",
     "goals_reached",
     "join_stalled",
+    "sampled_clear",
     "search_transfer",
     "search_transit",
     "search_transits",
@@ -71,10 +72,12 @@ PROBE_STREAM = 17
 def straight_probe(
     ctx: PlanningContext, jobs: list[SearchJob], q: np.ndarray, best: np.ndarray, waypoints: list[list[np.ndarray]]
 ) -> None:
-    """Jobs with ``straight`` configurations (transits of arms of many joints, :class:`ManyJoints`) try a
-    straight joint-space move from their start to each, nearest first, checked continuously with
+    """Jobs with ``straight`` configurations (transits of arms of ``ManyJoints.straight_transit_joints`` or more)
+    try a straight joint-space move from their start to each, nearest first, checked continuously with
     ``SearchSettings.min_margin_factor`` x the clearance as the improvement's moves are
-    (valid at any checking step); the first clear one ends the search there. Draws nothing at random."""
+    (valid at any checking step); the first clear one ends the search there. On arms of
+    ``ManyJoints.straight_probe_joints`` or more, when none is clear, also by way of a retreat and an approach
+    along the tip's headings. Draws nothing at random."""
     world = world_of(ctx)
     for i, job in enumerate(jobs):
         if job.straight is None or not len(job.straight) or ctx.termination():
@@ -83,7 +86,7 @@ def straight_probe(
         pose = job.pose if "object_poses" in job.mode else None
         rel = job.pose if "grasp_rel" in job.mode else None
         starts = np.broadcast_to(q[i], targets.shape)
-        clear = _sampled_clear(
+        clear = sampled_clear(
             world, starts, targets, object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
         )
         if clear.any():
@@ -91,7 +94,8 @@ def straight_probe(
                 ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
             )
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
-        if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
+        detour = world.robot.dof >= ctx.many.straight_probe_joints  # below: direct moves only, then the GA
+        if way is None and detour:  # by way of a retreat along the tip's heading and an approach along the target's
             back = ctx.many.approach_radii * world.object.radius / 2
             retreat = (
                 _backed_line(world, q[i], back, ctx.many.approach_steps // 2, step_m=ctx.many.approach_step_m) or []
@@ -105,7 +109,7 @@ def straight_probe(
                 if approach is None:
                     continue
                 path = np.array([q[i], *retreat, *approach[::-1], target])
-                if not _sampled_clear(
+                if not sampled_clear(
                     world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
                 ).all():
                     continue
@@ -179,6 +183,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
     results: list[PathResult | None] = []
     jobs, slots = [], []
     many = world.robot.dof >= ctx.many.straight_probe_joints
+    straight = world.robot.dof >= ctx.many.straight_transit_joints
     samples = max(ctx.hold_samples, ctx.many.hold_samples) if many else ctx.hold_samples
     for q0, object_pose, grasp, approach in requests:
         job = _transit_job(
@@ -190,7 +195,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
             samples=samples,
             joins=ctx.transit_joins,
             join_radius=ctx.search.join_radius,
-            straight=ctx.many.straight_probes if many else 0,
+            straight=ctx.many.straight_probes if straight else 0,
             many=ctx.many if many else None,
             reach=reach_of(ctx),
         )
@@ -227,7 +232,7 @@ def _transit_job(
     """SEARCH_TRANSIT's objective for one request, or its failure when it is hopeless. Arms of ``many``
     joints also get holds solved from ``q0`` itself (:func:`holding_configurations_near`)."""
     target = transform_points(object_pose, world.object.grasps[grasp][None])  # (1, 2)
-    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=straight > 0, reach=reach)
+    holds = _holding_configurations(world, object_pose, grasp, approach, samples, aimed=many is not None, reach=reach)
     if many is not None:
         near = holding_configurations_near(
             world, q0, object_pose, grasp, approach, starts=many.near_holds, spread_rad=many.near_spread_rad
@@ -417,7 +422,7 @@ def _moves_clear_stopping(
     return out
 
 
-def _sampled_clear(
+def sampled_clear(
     world: World,
     starts: np.ndarray,
     ends: np.ndarray,
@@ -496,7 +501,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
             turned[0] = line[-1][0]
             ways.append(np.array([job.q0, turned, *line[::-1], target]))
         for way in ways:
-            if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, step_rad=many.screen_step_rad).all():
+            if not sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, step_rad=many.screen_step_rad).all():
                 continue
             if _moves_clear_stopping(ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
                 pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]

@@ -93,8 +93,11 @@ to do).
 **Arms of many joints** (at least ``ManyJoints.straight_probe_joints``, so arms of up to 10 joints are
 improved exactly as before): after the pruning and before the rounds, the plan's postures are solved again
 along its tip's path (:mod:`clew_ros.planar.improve.many`: every grasp, release and placement and the
-object's path kept, the joints moving as little as the tip needs), and the budget is multiplied by the
-joints over :attr:`ImproveSettings.many_budget_joints` (a check costs about the square of the joints).
+object's path kept, the joints moving as little as the tip needs; up to :attr:`ImproveSettings.many_resolve_passes`
+passes, each from the plan the last left), goal shortcuts check their moves a few at a time, shortest first
+(:attr:`ImproveSettings.many_goal_batch`), and the budget is multiplied by the square
+(:attr:`ImproveSettings.many_budget_power`) of the joints over :attr:`ImproveSettings.many_budget_joints` (a check
+costs about the square of the joints).
 
 A change is kept only when it lowers ``(transfers, joint travel)`` or keeps
 them and drops waypoints; joint travel is the sum over joints of the
@@ -191,7 +194,10 @@ class _Improver(_Rebuilding, _ManyJointMoves):
         do)."""
         self.prune()
         many = self.world.robot.dof >= self.ctx.many.straight_probe_joints
-        if many and self.resolve_postures():
+        passes = self.settings.many_resolve_passes if many else 0
+        for _ in range(passes):
+            if not self.resolve_postures():
+                break
             self.prune()
         while True:
             score = plan_score(self.pieces)

@@ -32,7 +32,9 @@ class _ImproverBase:
         self.first = [p.waypoints for p in pieces]
         self.goal = goal
         joints = world_of(ctx).robot.dof
-        scale = joints / self.settings.many_budget_joints if joints >= ctx.many.straight_probe_joints else 1.0
+        scale = 1.0
+        if joints >= ctx.many.straight_probe_joints:
+            scale = (joints / self.settings.many_budget_joints) ** self.settings.many_budget_power
         total = ctx.settings.improve_time * self.settings.work_per_second * scale
         self.budget = WorkBudget(total, work_costs(self.world, self.settings), ctx.termination)
         self.min_margin = self.settings.moves.min_margin_factor * ctx.settings.clearance

@@ -26,6 +26,7 @@ from clew_ros.planar.improve.pieces import _Piece
 from clew_ros.planar.improve.shortcuts import _Shortcutting
 from clew_ros.planar.inverse import solve_point
 from clew_ros.planar.kinematics import tip_poses
+from clew_ros.planar.search import sampled_clear
 
 
 class _BlockedError(Exception):
@@ -132,14 +133,30 @@ class _ManyJointMoves(_Shortcutting):
 
     def farthest_clear(self, piece: _Piece, q: np.ndarray, chain: np.ndarray) -> int:
         """How many points of ``chain`` the straight move from ``q`` to its farthest clear one passes: the last
-        tried first, then halfway, a quarter, ... (0: not even the first)."""
+        tried first, then halfway, a quarter, ... (0: not even the first). The moves are first screened together
+        at configurations ``ManyJoints.screen_step_rad`` apart (one batched check, charged): the continuous check
+        of a long blocked move near a contact costs far more (it took 90 % of the budget on 27-joint plans whose
+        first plan was kept), and runs only on those the screen finds valid."""
+        counts = []
         joined = len(chain)
         while joined:
+            counts.append(joined)
+            joined //= 2
+        if not counts:
+            return 0
+        ends = chain[np.array(counts) - 1]
+        starts = np.broadcast_to(q, ends.shape)
+        step = self.ctx.many.screen_step_rad
+        screened = sampled_clear(
+            self.world, starts, ends, object_pose=piece.start_pose, grasp_rel=piece.grasp_rel, step_rad=step
+        )
+        samples = int((np.ceil(np.abs(ends - starts).max(axis=1) / step) + 1).sum())
+        self.budget.spend_checks(samples)
+        for count, ok in zip(counts, screened, strict=True):
             if not self.budget.left():
                 raise _OutOfWorkError
-            if self.clear_in_pieces(piece, q, chain[joined - 1]):
-                return joined
-            joined //= 2
+            if ok and self.clear_in_pieces(piece, q, chain[count - 1]):
+                return count
         return 0
 
     def clear_in_pieces(self, piece: _Piece, a: np.ndarray, b: np.ndarray) -> bool:

@@ -136,13 +136,28 @@ class ImproveSettings:
     #: and taken again (the pruning joins the two transfers).
     same_rad: float = 1e-12
     #: On arms of at least ``ManyJoints.straight_probe_joints`` joints the budget is multiplied by the joints over
-    #: this many (count): a configuration check costs about the square of the joints (self-collision pairs,
-    #: :func:`~clew_ros.planar.improve.budget.check_work`), so the default budget bought a 37-joint plan's solved
-    #: postures (:mod:`clew_ros.planar.improve.many`) about one continuous check of each of its moves, and nothing
-    #: after (the snake family's first plans of worlds 0-11 and 24-35 improved: median travel 1.04x the witness's
-    #: and the longest 7.2x without it, 1.00x and 5.3x with it; the improvement then takes 0.4-1.9 s of wall time
-    #: on 15-40 joints).
+    #: this many (count), to the power :attr:`many_budget_power`: a configuration check costs about the square of
+    #: the joints (self-collision pairs, :func:`~clew_ros.planar.improve.budget.check_work`), so the default budget
+    #: bought a 37-joint plan's solved postures (:mod:`clew_ros.planar.improve.many`) about one continuous check of
+    #: each of its moves, and nothing after (the snake family's first plans of worlds 0-11 and 24-35 improved:
+    #: median travel 1.04x the witness's and the longest 7.2x without it, 1.00x and 5.3x with it linearly).
     many_budget_joints: int = 10
+    #: ...raised to this power (a number): a check of a many-joint plan's moves costs about the square of the
+    #: joints, so a budget growing only linearly (power 1) ran out within the first solving again of the postures
+    #: of some 32-joint plans, and the first plan was kept (snake worlds 70, 71, 73, 75, 77, seeds 0-1: median
+    #: travel 1.50x the witness's, the longest 6.8x; with 2, 1.08x and 5.7x, the improvement 1-3 s of wall time).
+    many_budget_power: float = 2.0
+    #: Passes (count, at most) of the solving again of a many-joint plan's postures
+    #: (:meth:`~clew_ros.planar.improve.many._ManyJointMoves.resolve_postures`), each from the plan the last one
+    #: left, while one makes it shorter and work is left: a pass that stops at a piece it cannot join pulls the
+    #: pieces before it back to the first plan's postures there, and the next pass, from those, shortens them
+    #: (snake worlds 70, 71, 73, 75, 77, seeds 0-1: the longest plan 5.7x the witness's travel after one pass,
+    #: 2.4x after up to three; snake_96 seed 1 108.9 rad -> 60.0 rad).
+    many_resolve_passes: int = 3
+    #: Goal shortcuts' moves checked in one compiled call on arms of at least ``ManyJoints.straight_probe_joints``
+    #: joints (count), shortest first, the budget and the clock asked between calls: all of a 39-joint plan's
+    #: candidates (its last transfer's waypoints) checked at once took 4 s near the slot, past the time limit.
+    many_goal_batch: int = 4
     #: Error (m; the tip's angle counting 1 m per rad) left by the inverse kinematics of a posture solved again
     #: (:mod:`clew_ros.planar.improve.many`): the object is then held or put down where it was to within this, far
     #: below any tolerance of a world.

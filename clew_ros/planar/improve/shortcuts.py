@@ -179,12 +179,33 @@ class _Shortcutting(_ImproverBase):
         rows = np.flatnonzero(ok & (travel < steps.sum() - self.settings.travel_eps))
         if not len(rows):
             return False
-        clear = self.moves_clear(piece, seeds[rows], held[rows])
-        if self.budget.stopped or not clear.any():
-            return False
-        best = rows[clear][np.argmin(travel[rows[clear]])]
+        if self.world.robot.dof >= self.ctx.many.straight_probe_joints:
+            best = self.shortest_clear(piece, seeds, held, rows[np.argsort(travel[rows], kind="stable")])
+            if best is None:
+                return False
+        else:
+            clear = self.moves_clear(piece, seeds[rows], held[rows])
+            if self.budget.stopped or not clear.any():
+                return False
+            best = rows[clear][np.argmin(travel[rows[clear]])]
         piece.waypoints = without_repeats([*w[: best + 1], held[best]])  # a waypoint on the goal already: itself
         return True
+
+    def shortest_clear(self, piece: _Piece, seeds: np.ndarray, held: np.ndarray, order: np.ndarray) -> int | None:
+        """The first row of ``order`` (shortest first) whose move ``seeds[row] -> held[row]`` is clear, checked
+        :attr:`ImproveSettings.many_goal_batch` at a time, the budget asked before each call (arms of many joints:
+        all of a long last transfer's candidates in one compiled call took 4 s near the slot, past the time
+        limit); None when none is, or the budget or the clock ran out."""
+        for first in range(0, len(order), self.settings.many_goal_batch):
+            if not self.budget.left():
+                return None
+            rows = order[first : first + self.settings.many_goal_batch]
+            clear = self.moves_clear(piece, seeds[rows], held[rows])
+            if self.budget.stopped:
+                return None
+            if clear.any():
+                return int(rows[int(np.argmax(clear))])
+        return None
 
     def shorten(self) -> None:
         """Pruning, then shortcuts: to the goal, greedy, random (and random again after goal shortcuts)."""

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.kernels import ik
+from clew_ros.spatial.kernels.packed import chain_of
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.transforms import pose_matrix
 
@@ -156,19 +157,13 @@ class InverseKinematics:
     def __init__(self, robot: RobotModel, settings: IKSettings | None = None) -> None:
         self.robot = robot
         self.settings = settings or IKSettings()
-        self._arrays: dict[str, Any] = {
-            "lower": robot.lower.astype(np.float64),
-            "upper": robot.upper.astype(np.float64),
-            "base_r": np.ascontiguousarray(robot.base[:3, :3]),
-            "base_t": np.ascontiguousarray(robot.base[:3, 3]),
-            "org_r": np.ascontiguousarray(robot.origins[:, :3, :3]),
-            "org_t": np.ascontiguousarray(robot.origins[:, :3, 3]),
-            "axes": np.ascontiguousarray(robot.axes),
-            "prismatic": robot.prismatic.astype(np.bool_),
-            "tcp_frame": int(robot.tcp_frame),
-            "tcp_r": np.ascontiguousarray(robot.tcp[:3, :3]),
-            "tcp_t": np.ascontiguousarray(robot.tcp[:3, 3]),
-        }
+        #: The kinematics and the solver's settings packed for the kernels (:mod:`clew_ros.spatial.kernels.ik`).
+        self.chain = chain_of(robot)
+        s = self.settings
+        self._solver = ik.Solver(
+            s.max_iterations, s.damping, s.damping_min, s.damping_max, s.position_tolerance_m, s.angle_tolerance_rad,
+            s.max_step_rad, s.stall_ratio, s.stall_steps, s.active_set,
+        )  # fmt: skip
 
     def tcp_poses(self, qs: Any) -> NDArray[np.float64]:
         """The tcp's 4x4 pose in ``world`` for every row of ``qs`` (N, n) (compiled forward kinematics)."""
@@ -177,11 +172,7 @@ class InverseKinematics:
             raise ValueError(f"qs: expected an (N, {self.robot.dof}) array of joint values, got shape {batch.shape}")
         out_r = np.empty((len(batch), 3, 3))
         out_t = np.empty((len(batch), 3))
-        a = self._arrays
-        ik.tcp_batch(
-            batch, a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"], a["prismatic"], a["tcp_frame"],
-            a["tcp_r"], a["tcp_t"], out_r, out_t,
-        )  # fmt: skip
+        ik.tcp_batch(batch, self.chain, out_r, out_t)
         out = np.zeros((len(batch), 4, 4))
         out[:, :3, :3] = out_r
         out[:, :3, 3] = out_t
@@ -220,15 +211,10 @@ class InverseKinematics:
         all_seeds = np.ascontiguousarray(np.concatenate([given, random], axis=1))
         out_q = np.empty_like(all_seeds)
         out_ok = np.zeros(all_seeds.shape[:2], dtype=np.bool_)
-        a, s = self._arrays, self.settings
+        s = self.settings
         if all_seeds.shape[1] > 0 and len(matrices) > 0:
-            ik.solve_batch(
-                np.ascontiguousarray(matrices[:, :3, :3]), np.ascontiguousarray(matrices[:, :3, 3]), all_seeds,
-                a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
-                a["prismatic"], a["tcp_frame"], a["tcp_r"], a["tcp_t"], s.max_iterations, s.damping,
-                s.damping_min, s.damping_max, s.position_tolerance_m, s.angle_tolerance_rad, s.max_step_rad,
-                s.stall_ratio, s.stall_steps, s.active_set, out_q, out_ok,
-            )  # fmt: skip
+            targets = (np.ascontiguousarray(matrices[:, :3, :3]), np.ascontiguousarray(matrices[:, :3, 3]))
+            ik.solve_batch(targets, all_seeds, self.chain, self._solver, (out_q, out_ok))
         out = []
         for t in range(len(matrices)):
             found = out_q[t][out_ok[t]]

@@ -9,33 +9,67 @@ of ``J``); past ``damping_max`` the seed is given up (a local minimum: the targe
 reach from there), as it is after ``stall_steps`` steps in a row that each lower ``|e|^2`` by less than
 the fraction ``stall_ratio`` (creeping towards such a minimum). Frames as in
 :mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is ``tcp_r``, ``tcp_t`` in frame
-``tcp_frame``.
+``tcp_frame`` of the :class:`~clew_ros.spatial.kernels.packed.Chain`; the settings come packed as a
+:class:`Solver`.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.spatial.kernels.collide import forward
+from clew_ros.spatial.kernels.packed import Chain
 
-__all__ = ["pose_error", "solve_batch", "tcp_batch"]
+__all__ = ["Solver", "pose_error", "solve_batch", "tcp_batch"]
 
 Array = NDArray[Any]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 
+class Solver(NamedTuple):
+    """The solver's settings (:class:`clew_ros.spatial.inverse.IKSettings`), packed for :func:`solve_batch`."""
+
+    max_iterations: int
+    damping: float
+    damping_min: float
+    damping_max: float
+    position_tolerance: float
+    angle_tolerance: float
+    max_step: float
+    stall_ratio: float
+    stall_steps: int
+    active_set: bool
+
+
+class _Work(NamedTuple):
+    """Scratch of one seed's run: frames, the tcp's pose, the pose error (now and of the trial step), the
+    Jacobian and the damped system, the configuration, the trial one and the step."""
+
+    frame_r: Array
+    frame_t: Array
+    pr: Array
+    pt: Array
+    m: Array
+    jac: Array
+    scratch: Array
+    e: Array
+    e_trial: Array
+    q: Array
+    trial: Array
+    dq: Array
+
+
 @_jit
-def _tcp(  # noqa: PLR0917
-    frame_r: Array, frame_t: Array, tcp_frame: int, tcp_r: Array, tcp_t: Array, out_r: Array, out_t: Array
-) -> None:
-    fr = frame_r[tcp_frame]
-    ft = frame_t[tcp_frame]
+def _tcp(chain: Chain, frame_r: Array, frame_t: Array, out_r: Array, out_t: Array) -> None:
+    tcp_r, tcp_t = chain.tcp_r, chain.tcp_t
+    fr = frame_r[chain.tcp_frame]
+    ft = frame_t[chain.tcp_frame]
     for a in range(3):
         out_t[a] = fr[a, 0] * tcp_t[0] + fr[a, 1] * tcp_t[1] + fr[a, 2] * tcp_t[2] + ft[a]
         for c in range(3):
@@ -43,10 +77,12 @@ def _tcp(  # noqa: PLR0917
 
 
 @_jit
-def pose_error(target_r: Array, target_t: Array, r: Array, t: Array, m: Array, out: Array) -> float:  # noqa: PLR0917
-    """``out`` (6): the position error ``target_t - t`` (m) and the rotation vector (rad) of ``target_r
-    r^T`` (the rotation that takes ``r`` onto ``target_r``, in ``world``); returns ``|out|^2``. ``m``
-    (3, 3) is scratch."""
+def pose_error(target: Any, pose: Any, m: Array, out: Array) -> float:
+    """``out`` (6): for ``target`` and ``pose`` (``(rotation, translation)`` each), the position error
+    ``target_t - t`` (m) and the rotation vector (rad) of ``target_r r^T`` (the rotation that takes ``r`` onto
+    ``target_r``, in ``world``); returns ``|out|^2``. ``m`` (3, 3) is scratch."""
+    target_r, target_t = target
+    r, t = pose
     for a in range(3):
         out[a] = target_t[a] - t[a]
     # m = target_r @ r^T
@@ -84,11 +120,10 @@ def pose_error(target_r: Array, target_t: Array, r: Array, t: Array, m: Array, o
 
 
 @_jit
-def _jacobian(  # noqa: PLR0917
-    frame_r: Array, frame_t: Array, axes: Array, prismatic: Array, tcp_frame: int, p: Array, out: Array
-) -> None:
+def _jacobian(chain: Chain, frame_r: Array, frame_t: Array, p: Array, out: Array) -> None:
     """The geometric Jacobian (6, n) of the tcp at ``p``: joint j turns about (or slides along) its axis
     through frame j + 1's origin; joints past ``tcp_frame`` do not move it."""
+    axes, prismatic, tcp_frame = chain.axes, chain.prismatic, chain.tcp_frame
     n = axes.shape[0]
     for j in range(n):
         if j >= tcp_frame:
@@ -178,8 +213,9 @@ def _within(e: Array, position2: float, angle2: float) -> bool:
 
 
 @_jit
-def _clamped_step(q: Array, dq: Array, max_step: float, lower: Array, upper: Array, out: Array) -> None:  # noqa: PLR0917
+def _clamped_step(q: Array, dq: Array, max_step: float, chain: Chain, out: Array) -> None:
     """``out = q + dq``, ``dq`` scaled down so no joint moves more than ``max_step``, clamped to the limits."""
+    lower, upper = chain.lower, chain.upper
     biggest = 0.0
     for j in range(q.shape[0]):
         biggest = max(biggest, abs(dq[j]))
@@ -189,22 +225,13 @@ def _clamped_step(q: Array, dq: Array, max_step: float, lower: Array, upper: Arr
 
 
 @_jit
-def _free_limits(  # noqa: PLR0917
-    active_set: bool,
-    jac: Array,
-    e: Array,
-    damping: float,
-    q: Array,
-    lower: Array,
-    upper: Array,
-    scratch: Array,
-    dq: Array,
-) -> None:
+def _free_limits(solver: Solver, chain: Chain, damping: float, work: _Work) -> None:
     """Zero the Jacobian's columns of the joints at a limit that the damped step would push past it: the
     step is then taken by the other joints (an active set), where clamping it would leave the error's share
     of those joints unmet and stall (a target reachable only with joints at their limits, as a generated
-    world's hold may be); nothing without ``active_set``. ``dq`` is scratch."""
-    if not active_set or not _damped_step(jac, e, damping, scratch, dq):
+    world's hold may be); nothing without ``active_set``. ``work.dq`` is scratch."""
+    jac, q, dq, lower, upper = work.jac, work.q, work.dq, chain.lower, chain.upper
+    if not solver.active_set or not _damped_step(jac, work.e, damping, work.scratch, dq):
         return
     for j in range(q.shape[0]):
         if (q[j] <= lower[j] and dq[j] < 0.0) or (q[j] >= upper[j] and dq[j] > 0.0):
@@ -213,114 +240,90 @@ def _free_limits(  # noqa: PLR0917
 
 
 @_jit
-def solve_batch(  # noqa: PLR0917, C901
-    targets_r: Array,
-    targets_t: Array,
-    seeds: Array,
-    lower: Array,
-    upper: Array,
-    base_r: Array,
-    base_t: Array,
-    org_r: Array,
-    org_t: Array,
-    axes: Array,
-    prismatic: Array,
-    tcp_frame: int,
-    tcp_r: Array,
-    tcp_t: Array,
-    max_iterations: int,
-    damping: float,
-    damping_min: float,
-    damping_max: float,
-    position_tolerance: float,
-    angle_tolerance: float,
-    max_step: float,
-    stall_ratio: float,
-    stall_steps: int,
-    active_set: bool,
-    out_q: Array,
-    out_ok: Array,
-) -> None:
-    """For target ``t`` (``targets_r[t]`` 3x3, ``targets_t[t]`` m) and seed ``s`` (``seeds[t, s]``, n):
-    ``out_q[t, s]`` the configuration reached (within the limits) and ``out_ok[t, s]`` whether its tcp is
-    within ``position_tolerance`` (m) and ``angle_tolerance`` (rad) of the target."""
-    n = seeds.shape[2]
-    frame_r = np.empty((n + 1, 3, 3))
-    frame_t = np.empty((n + 1, 3))
-    pr = np.empty((3, 3))
-    pt = np.empty(3)
-    m = np.empty((3, 3))
-    jac = np.empty((6, n))
-    scratch = np.empty((7, 6))
-    e = np.empty(6)
-    e_trial = np.empty(6)
-    q = np.empty(n)
-    trial = np.empty(n)
-    dq = np.empty(n)
-    tol_p2 = position_tolerance * position_tolerance
-    tol_r2 = angle_tolerance * angle_tolerance
-    for t in range(seeds.shape[0]):
-        tr = targets_r[t]
-        tt = targets_t[t]
-        for s in range(seeds.shape[1]):
-            for j in range(n):
-                q[j] = min(max(seeds[t, s, j], lower[j]), upper[j])
-            forward(q, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
-            _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, pr, pt)
-            cost = pose_error(tr, tt, pr, pt, m, e)
-            lam = damping
-            stalls = 0
-            for _ in range(max_iterations):
-                if _within(e, tol_p2, tol_r2):
-                    break
-                _jacobian(frame_r, frame_t, axes, prismatic, tcp_frame, pt, jac)
-                _free_limits(active_set, jac, e, lam, q, lower, upper, scratch, dq)
-                improved = False
-                while lam <= damping_max:
-                    if not _damped_step(jac, e, lam, scratch, dq):
-                        lam *= 10.0
-                        continue
-                    _clamped_step(q, dq, max_step, lower, upper, trial)
-                    forward(trial, base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
-                    _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, pr, pt)
-                    trial_cost = pose_error(tr, tt, pr, pt, m, e_trial)
-                    if trial_cost < cost:
-                        improved = True
-                        stalls = stalls + 1 if trial_cost > cost * (1.0 - stall_ratio) else 0
-                        cost = trial_cost
-                        for j in range(n):
-                            q[j] = trial[j]
-                        for k in range(6):
-                            e[k] = e_trial[k]
-                        lam = max(lam * 0.1, damping_min)
-                        break
-                    lam *= 10.0
-                if not improved or stalls >= stall_steps:
-                    break
-            for j in range(n):
-                out_q[t, s, j] = q[j]
-            out_ok[t, s] = _within(e, tol_p2, tol_r2)
+def _new_work(n: int) -> _Work:
+    return _Work(
+        np.empty((n + 1, 3, 3)), np.empty((n + 1, 3)), np.empty((3, 3)), np.empty(3), np.empty((3, 3)),
+        np.empty((6, n)), np.empty((7, 6)), np.empty(6), np.empty(6), np.empty(n), np.empty(n), np.empty(n),
+    )  # fmt: skip
 
 
 @_jit
-def tcp_batch(  # noqa: PLR0917
-    qs: Array,
-    base_r: Array,
-    base_t: Array,
-    org_r: Array,
-    org_t: Array,
-    axes: Array,
-    prismatic: Array,
-    tcp_frame: int,
-    tcp_r: Array,
-    tcp_t: Array,
-    out_r: Array,
-    out_t: Array,
-) -> None:
+def _pose_cost(chain: Chain, q: Array, target: Any, work: _Work, e: Array) -> float:
+    """The tcp's squared pose error at ``q`` (its error into ``e``); ``work``'s frames and tcp left at ``q``."""
+    forward(q, chain, work.frame_r, work.frame_t)
+    _tcp(chain, work.frame_r, work.frame_t, work.pr, work.pt)
+    return pose_error(target, (work.pr, work.pt), work.m, e)
+
+
+@_jit
+def _run(chain: Chain, solver: Solver, target: Any, work: _Work) -> None:
+    """Damped least squares from ``work.q`` (within the limits) towards ``target`` (``(rotation,
+    translation)``): ``work.q`` and ``work.e`` left at the configuration reached and its error."""
+    n = work.q.shape[0]
+    q, e, e_trial, trial, dq, jac, scratch = work.q, work.e, work.e_trial, work.trial, work.dq, work.jac, work.scratch
+    tol_p2 = solver.position_tolerance * solver.position_tolerance
+    tol_r2 = solver.angle_tolerance * solver.angle_tolerance
+    cost = _pose_cost(chain, q, target, work, e)
+    lam = solver.damping
+    stalls = 0
+    for _ in range(solver.max_iterations):
+        if _within(e, tol_p2, tol_r2):
+            break
+        _jacobian(chain, work.frame_r, work.frame_t, work.pt, jac)
+        _free_limits(solver, chain, lam, work)
+        improved = False
+        while lam <= solver.damping_max:
+            if not _damped_step(jac, e, lam, scratch, dq):
+                lam *= 10.0
+                continue
+            _clamped_step(q, dq, solver.max_step, chain, trial)
+            trial_cost = _pose_cost(chain, trial, target, work, e_trial)
+            if trial_cost < cost:
+                improved = True
+                stalls = stalls + 1 if trial_cost > cost * (1.0 - solver.stall_ratio) else 0
+                cost = trial_cost
+                for j in range(n):
+                    q[j] = trial[j]
+                for k in range(6):
+                    e[k] = e_trial[k]
+                lam = max(lam * 0.1, solver.damping_min)
+                break
+            lam *= 10.0
+        if not improved or stalls >= solver.stall_steps:
+            break
+
+
+@_jit
+def solve_batch(targets: Any, seeds: Array, chain: Chain, solver: Solver, out: Any) -> None:
+    """For target ``t`` (``targets``: ``(rotations (T, 3, 3), translations (T, 3) m)``) and seed ``s``
+    (``seeds[t, s]``, n), into ``out`` (``(q, ok)``): ``q[t, s]`` the configuration reached (within the limits)
+    and ``ok[t, s]`` whether its tcp is within ``position_tolerance`` (m) and ``angle_tolerance`` (rad) of
+    the target."""
+    targets_r, targets_t = targets
+    out_q, out_ok = out
+    lower, upper = chain.lower, chain.upper
+    n = seeds.shape[2]
+    work = _new_work(n)
+    q = work.q
+    tol_p2 = solver.position_tolerance * solver.position_tolerance
+    tol_r2 = solver.angle_tolerance * solver.angle_tolerance
+    for t in range(seeds.shape[0]):
+        target = (targets_r[t], targets_t[t])
+        for s in range(seeds.shape[1]):
+            for j in range(n):
+                q[j] = min(max(seeds[t, s, j], lower[j]), upper[j])
+            _run(chain, solver, target, work)
+            for j in range(n):
+                out_q[t, s, j] = q[j]
+            out_ok[t, s] = _within(work.e, tol_p2, tol_r2)
+
+
+@_jit
+def tcp_batch(qs: Array, chain: Chain, out_r: Array, out_t: Array) -> None:
     """The tcp pose (``out_r[b]`` 3x3, ``out_t[b]`` m, in ``world``) of every row of ``qs`` (N, n)."""
     n = qs.shape[1]
     frame_r = np.empty((n + 1, 3, 3))
     frame_t = np.empty((n + 1, 3))
     for b in range(qs.shape[0]):
-        forward(qs[b], base_r, base_t, org_r, org_t, axes, prismatic, frame_r, frame_t)
-        _tcp(frame_r, frame_t, tcp_frame, tcp_r, tcp_t, out_r[b], out_t[b])
+        forward(qs[b], chain, frame_r, frame_t)
+        _tcp(chain, frame_r, frame_t, out_r[b], out_t[b])

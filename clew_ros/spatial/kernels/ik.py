@@ -7,7 +7,9 @@ lowers ``|e|^2`` is taken (clamped to the limits) and ``lambda`` shrinks, one th
 and ``lambda`` grows (with ``active_set``, joints at a limit that the step would push past it are left out
 of ``J``); past ``damping_max`` the seed is given up (a local minimum: the target is out of
 reach from there), as it is after ``stall_steps`` steps in a row that each lower ``|e|^2`` by less than
-the fraction ``stall_ratio`` (creeping towards such a minimum). Frames as in
+the fraction ``stall_ratio`` (creeping towards such a minimum). Some rows of ``e`` may be left free (a
+level face at any yaw, a position at any orientation): then only the others count, and the Jacobian's rotation
+rows are the rotation vector's own derivative (:func:`_partial_rows`). Frames as in
 :mod:`~clew_ros.spatial.kernels.collide` (:func:`forward`); the tcp is ``tcp_r``, ``tcp_t`` in frame
 ``tcp_frame`` of the :class:`~clew_ros.spatial.kernels.packed.Chain`; the settings come packed as a
 :class:`Solver`.
@@ -206,10 +208,19 @@ def _damped_step(jac: Array, e: Array, damping: float, scratch: Array, out: Arra
 
 
 @_jit
-def _within(e: Array, position2: float, angle2: float) -> bool:
-    return bool(
-        e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= position2 and e[3] * e[3] + e[4] * e[4] + e[5] * e[5] <= angle2
-    )
+def _within(e: Array, rows: Array, position2: float, angle2: float) -> bool:
+    """Whether the pose error ``e`` on ``rows`` is within the squared tolerances (position, then angle)."""
+    if rows.all():
+        return bool(
+            e[0] * e[0] + e[1] * e[1] + e[2] * e[2] <= position2 and e[3] * e[3] + e[4] * e[4] + e[5] * e[5] <= angle2
+        )
+    position = angle = 0.0
+    for a in range(3):
+        if rows[a]:
+            position += e[a] * e[a]
+        if rows[a + 3]:
+            angle += e[a + 3] * e[a + 3]
+    return position <= position2 and angle <= angle2
 
 
 @_jit
@@ -240,6 +251,33 @@ def _free_limits(solver: Solver, chain: Chain, damping: float, work: _Work) -> N
 
 
 @_jit
+def _partial_rows(rows: Array, e: Array, jac: Array) -> None:
+    """The Jacobian ``jac`` (6, n) made the derivative of the rows ``rows`` of the pose error, the others 0 (then
+    ``J J^T + damping I`` keeps only the damping there and the step ignores them). Its rotation rows turn from
+    the tcp's angular velocity into the derivative of the rotation vector ``phi = e[3:]``:
+    ``J_r^-1(phi) w``, ``J_r^-1(phi) = I + [phi]/2 + (1/t^2 - (1 + cos t) / (2 t sin t)) [phi]^2``, ``t = |phi|``.
+    A whole pose keeps the angular velocity (the two agree where the error vanishes): a few rows left free
+    leave the rotation error large where the rows met converge, as a level face at any yaw."""
+    px, py, pz = e[3], e[4], e[5]
+    t2 = px * px + py * py + pz * pz
+    t = math.sqrt(t2)
+    c = 0.0
+    if t > 1e-6:
+        c = 1.0 / t2 - (1.0 + math.cos(t)) / (2.0 * t * math.sin(t)) if math.sin(t) > 1e-9 else 1.0 / t2
+    for j in range(jac.shape[1]):
+        wx, wy, wz = jac[3, j], jac[4, j], jac[5, j]
+        cx, cy, cz = py * wz - pz * wy, pz * wx - px * wz, px * wy - py * wx  # phi x w
+        dx, dy, dz = py * cz - pz * cy, pz * cx - px * cz, px * cy - py * cx  # phi x (phi x w)
+        jac[3, j] = wx + 0.5 * cx + c * dx
+        jac[4, j] = wy + 0.5 * cy + c * dy
+        jac[5, j] = wz + 0.5 * cz + c * dz
+    for a in range(6):
+        if not rows[a]:
+            for j in range(jac.shape[1]):
+                jac[a, j] = 0.0
+
+
+@_jit
 def _new_work(n: int) -> _Work:
     return _Work(
         np.empty((n + 1, 3, 3)), np.empty((n + 1, 3)), np.empty((3, 3)), np.empty(3), np.empty((3, 3)),
@@ -249,16 +287,26 @@ def _new_work(n: int) -> _Work:
 
 @_jit
 def _pose_cost(chain: Chain, q: Array, target: Any, work: _Work, e: Array) -> float:
-    """The tcp's squared pose error at ``q`` (its error into ``e``); ``work``'s frames and tcp left at ``q``."""
+    """The tcp's squared pose error at ``q`` on the rows ``target[2]`` keeps (its whole error into ``e``);
+    ``work``'s frames and tcp left at ``q``."""
     forward(q, chain, work.frame_r, work.frame_t)
     _tcp(chain, work.frame_r, work.frame_t, work.pr, work.pt)
-    return pose_error(target, (work.pr, work.pt), work.m, e)
+    total = pose_error((target[0], target[1]), (work.pr, work.pt), work.m, e)
+    rows = target[2]
+    if not rows.all():
+        total = 0.0
+        for a in range(6):
+            if rows[a]:
+                total += e[a] * e[a]
+    return total
 
 
 @_jit
 def _run(chain: Chain, solver: Solver, target: Any, work: _Work) -> None:
-    """Damped least squares from ``work.q`` (within the limits) towards ``target`` (``(rotation,
-    translation)``): ``work.q`` and ``work.e`` left at the configuration reached and its error."""
+    """Damped least squares from ``work.q`` (within the limits) towards ``target`` (``(rotation, translation,
+    rows)``, ``rows`` the mask (6,) of the pose error's rows to meet, the others left free): ``work.q`` and
+    ``work.e`` left at the configuration reached and its (whole) error."""
+    rows = target[2]
     n = work.q.shape[0]
     q, e, e_trial, trial, dq, jac, scratch = work.q, work.e, work.e_trial, work.trial, work.dq, work.jac, work.scratch
     tol_p2 = solver.position_tolerance * solver.position_tolerance
@@ -267,9 +315,11 @@ def _run(chain: Chain, solver: Solver, target: Any, work: _Work) -> None:
     lam = solver.damping
     stalls = 0
     for _ in range(solver.max_iterations):
-        if _within(e, tol_p2, tol_r2):
+        if _within(e, rows, tol_p2, tol_r2):
             break
         _jacobian(chain, work.frame_r, work.frame_t, work.pt, jac)
+        if not rows.all():
+            _partial_rows(rows, e, jac)
         _free_limits(solver, chain, lam, work)
         improved = False
         while lam <= solver.damping_max:
@@ -295,11 +345,12 @@ def _run(chain: Chain, solver: Solver, target: Any, work: _Work) -> None:
 
 @_jit
 def solve_batch(targets: Any, seeds: Array, chain: Chain, solver: Solver, out: Any) -> None:
-    """For target ``t`` (``targets``: ``(rotations (T, 3, 3), translations (T, 3) m)``) and seed ``s``
+    """For target ``t`` (``targets``: ``(rotations (T, 3, 3), translations (T, 3) m, rows (6,))``) and seed ``s``
     (``seeds[t, s]``, n), into ``out`` (``(q, ok)``): ``q[t, s]`` the configuration reached (within the limits)
     and ``ok[t, s]`` whether its tcp is within ``position_tolerance`` (m) and ``angle_tolerance`` (rad) of
-    the target."""
-    targets_r, targets_t = targets
+    the target on the pose error's ``rows`` (the mask of :data:`clew_ros.spatial.inverse.POSE_ROWS` met; the
+    others free)."""
+    targets_r, targets_t, rows = targets
     out_q, out_ok = out
     lower, upper = chain.lower, chain.upper
     n = seeds.shape[2]
@@ -308,14 +359,14 @@ def solve_batch(targets: Any, seeds: Array, chain: Chain, solver: Solver, out: A
     tol_p2 = solver.position_tolerance * solver.position_tolerance
     tol_r2 = solver.angle_tolerance * solver.angle_tolerance
     for t in range(seeds.shape[0]):
-        target = (targets_r[t], targets_t[t])
+        target = (targets_r[t], targets_t[t], rows)
         for s in range(seeds.shape[1]):
             for j in range(n):
                 q[j] = min(max(seeds[t, s, j], lower[j]), upper[j])
             _run(chain, solver, target, work)
             for j in range(n):
                 out_q[t, s, j] = q[j]
-            out_ok[t, s] = _within(work.e, tol_p2, tol_r2)
+            out_ok[t, s] = _within(work.e, rows, tol_p2, tol_r2)
 
 
 @_jit

@@ -124,10 +124,11 @@ def _inner_arrays(
     )
 
 
-def _levers(  # noqa: PLR0917
+def _levers(
     robot: RobotModel,
     centres: NDArray[np.float64],
     radii: NDArray[np.float64],
+    *,
     frames: NDArray[np.int64],
     owners: NDArray[np.int64],
     pieces: int,
@@ -148,6 +149,12 @@ def _levers(  # noqa: PLR0917
             if frame_of[p] >= j + 1:
                 out[j, p] = chain[j + 1 : frame_of[p]].sum() + far[p]
     return out
+
+
+def _stepping(settings: IntervalSettings, reach: NDArray[np.float64], fold: bool) -> Stepping:
+    """How :func:`clew_ros.spatial.kernels.intervals.free_intervals` steps: ``settings``, with ``reach`` (one per
+    row) and ``fold``."""
+    return Stepping(settings.margin_m, settings.min_step, settings.max_steps, reach, fold)
 
 
 class SpatialChecker:
@@ -249,7 +256,7 @@ class SpatialChecker:
         )
         #: per joint and piece, how far (m) a point of the piece the joint moves can be from its axis (0: the
         #: joint does not move the piece): the lever of a band step
-        self._lever = _levers(robot, centers, radii, frames, owners, pieces)
+        self._lever = _levers(robot, centers, radii, frames=frames, owners=owners, pieces=pieces)
         #: Whether a link that no joint moves (on ``base_link``'s frame) touches an obstacle or leaves the
         #: bounds: then no configuration is valid. Checked once here, never per configuration (on the exact
         #: geometry where the spheres touch).
@@ -432,33 +439,28 @@ class SpatialChecker:
             lo[:] = hi[:] = batch[:, joint]
             ok[:] = False
             return lo, hi, ok
-        self._sphere_intervals(batch, joint, settings, bound, fold, (lo, hi, ok))
+        self._sphere_intervals(batch, joint, _stepping(settings, bound, fold), (lo, hi, ok))
         if self.exact and self.band_intervals:
-            self._band_intervals(batch, joint, settings, bound, lo, hi, ok)
+            self._band_intervals(batch, joint, settings, bound, (lo, hi, ok))
         return lo, hi, ok
 
-    def _sphere_intervals(  # noqa: PLR0917
+    def _sphere_intervals(
         self,
         batch: NDArray[np.float64],
         joint: int,
-        settings: IntervalSettings,
-        bound: NDArray[np.float64],
-        fold: bool,
+        stepping: Stepping,
         out: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]],
     ) -> None:
         """The sphere model's free intervals (the compiled conservative steps) into ``out`` (lo, hi, ok)."""
-        stepping = Stepping(settings.margin_m, settings.min_step, settings.max_steps, bound, fold)
         intervals.free_intervals(batch, joint, self.model, stepping, out)
 
-    def _band_intervals(  # noqa: PLR0917
+    def _band_intervals(
         self,
         batch: NDArray[np.float64],
         joint: int,
         settings: IntervalSettings,
         bound: NDArray[np.float64],
-        lo: NDArray[np.float64],
-        hi: NDArray[np.float64],
-        ok: NDArray[np.bool_],
+        out: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]],
     ) -> None:
         """The rows the spheres refused but the exact geometry accepts (near a contact): their intervals by
         samples ``settings.band_step`` apart, each the middle of a cell it proves free (checked with the
@@ -466,6 +468,7 @@ class SpatialChecker:
         growing ``settings.band_growth`` times; past them, where the spheres clear the row again, the
         conservative steps go on."""
         robot = self.robot
+        lo, hi, ok = out
         rows = np.flatnonzero(~ok & (batch >= robot.lower).all(axis=1) & (batch <= robot.upper).all(axis=1))
         if not len(rows):
             return
@@ -485,8 +488,9 @@ class SpatialChecker:
             for stage in reversed(range(settings.band_stages)):  # the longest steps first (far from contact)
                 step = settings.band_step * settings.band_growth**stage
                 going = self._band_stage(
-                    batch, mine, joint, side * step, lever * step / 2, settings, room, proven, active
-                )
+                    batch, mine, joint, side * step, margin=lever * step / 2, settings=settings, room=room,
+                    proven=proven, alive=active,
+                )  # fmt: skip
                 alive = going | (alive & ~active)  # rows that cleared every sample stop refining
                 active = active & ~going & (proven < room)  # a refusal: the next stage goes on in finer steps
                 if stage == 0:
@@ -499,7 +503,7 @@ class SpatialChecker:
                 rest[:, joint] = ends[onward]
                 more = (np.empty(len(onward)), np.empty(len(onward)), np.empty(len(onward), dtype=np.bool_))
                 left = np.ascontiguousarray(room[onward] - reach[onward])
-                self._sphere_intervals(rest, joint, settings, left, False, more)
+                self._sphere_intervals(rest, joint, _stepping(settings, left, False), more)
                 more_lo, more_hi, more_ok = more
                 far = more_hi if side > 0 else more_lo
                 ends[onward] = np.where(more_ok, far, ends[onward])
@@ -508,12 +512,13 @@ class SpatialChecker:
             else:
                 lo[mine] = np.minimum(lo[mine], ends)
 
-    def _band_stage(  # noqa: PLR0917
+    def _band_stage(
         self,
         batch: NDArray[np.float64],
         mine: NDArray[np.int64],
         joint: int,
         step: float,
+        *,
         margin: NDArray[np.float64],
         settings: IntervalSettings,
         room: NDArray[np.float64],

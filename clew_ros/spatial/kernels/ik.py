@@ -24,7 +24,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from clew_ros.spatial.kernels.collide import forward
+from clew_ros.spatial.kernels.collide import _leaf, forward  # helpers that allocate nothing: no reference counting
 from clew_ros.spatial.kernels.packed import Chain
 
 __all__ = ["Solver", "pose_error", "solve_batch", "tcp_batch"]
@@ -49,25 +49,7 @@ class Solver(NamedTuple):
     active_set: bool
 
 
-class _Work(NamedTuple):
-    """Scratch of one seed's run: frames, the tcp's pose, the pose error (now and of the trial step), the
-    Jacobian and the damped system, the configuration, the trial one and the step."""
-
-    frame_r: Array
-    frame_t: Array
-    pr: Array
-    pt: Array
-    m: Array
-    jac: Array
-    scratch: Array
-    e: Array
-    e_trial: Array
-    q: Array
-    trial: Array
-    dq: Array
-
-
-@_jit
+@_leaf
 def _tcp(chain: Chain, frame_r: Array, frame_t: Array, out_r: Array, out_t: Array) -> None:
     tcp_r, tcp_t = chain.tcp_r, chain.tcp_t
     fr = frame_r[chain.tcp_frame]
@@ -78,7 +60,7 @@ def _tcp(chain: Chain, frame_r: Array, frame_t: Array, out_r: Array, out_t: Arra
             out_r[a, c] = fr[a, 0] * tcp_r[0, c] + fr[a, 1] * tcp_r[1, c] + fr[a, 2] * tcp_r[2, c]
 
 
-@_jit
+@_leaf
 def pose_error(target: Any, pose: Any, m: Array, out: Array) -> float:
     """``out`` (6): for ``target`` and ``pose`` (``(rotation, translation)`` each), the position error
     ``target_t - t`` (m) and the rotation vector (rad) of ``target_r r^T`` (the rotation that takes ``r`` onto
@@ -121,7 +103,7 @@ def pose_error(target: Any, pose: Any, m: Array, out: Array) -> float:
     return total
 
 
-@_jit
+@_leaf
 def _jacobian(chain: Chain, frame_r: Array, frame_t: Array, p: Array, out: Array) -> None:
     """The geometric Jacobian (6, n) of the tcp at ``p``: joint j turns about (or slides along) its axis
     through frame j + 1's origin; joints past ``tcp_frame`` do not move it."""
@@ -149,7 +131,7 @@ def _jacobian(chain: Chain, frame_r: Array, frame_t: Array, p: Array, out: Array
         out[3, j], out[4, j], out[5, j] = zx, zy, zz
 
 
-@_jit
+@_leaf
 def _cholesky(a: Array) -> bool:
     """Factor the symmetric 6x6 ``a`` (its lower triangle) in place into ``L`` with ``L L^T = a``; False
     when it is not positive definite (the damping too small for the rounding)."""
@@ -167,7 +149,7 @@ def _cholesky(a: Array) -> bool:
     return True
 
 
-@_jit
+@_leaf
 def _solve_factored(a: Array, e: Array, y: Array) -> None:
     """``y = (L L^T)^-1 e`` for the factor ``L`` in the lower triangle of ``a``."""
     for r in range(6):
@@ -182,7 +164,7 @@ def _solve_factored(a: Array, e: Array, y: Array) -> None:
         y[r] = s / a[r, r]
 
 
-@_jit
+@_leaf
 def _damped_step(jac: Array, e: Array, damping: float, scratch: Array, out: Array) -> bool:
     """``out = J^T (J J^T + damping I)^-1 e``; ``scratch`` (7, 6): the system and its solution. False when
     the system is not positive definite."""
@@ -207,7 +189,7 @@ def _damped_step(jac: Array, e: Array, damping: float, scratch: Array, out: Arra
     return True
 
 
-@_jit
+@_leaf
 def _within(e: Array, rows: Array, position2: float, angle2: float) -> bool:
     """Whether the pose error ``e`` on ``rows`` is within the squared tolerances (position, then angle)."""
     if rows.all():
@@ -223,7 +205,7 @@ def _within(e: Array, rows: Array, position2: float, angle2: float) -> bool:
     return position <= position2 and angle <= angle2
 
 
-@_jit
+@_leaf
 def _clamped_step(q: Array, dq: Array, max_step: float, chain: Chain, out: Array) -> None:
     """``out = q + dq``, ``dq`` scaled down so no joint moves more than ``max_step``, clamped to the limits."""
     lower, upper = chain.lower, chain.upper
@@ -235,14 +217,16 @@ def _clamped_step(q: Array, dq: Array, max_step: float, chain: Chain, out: Array
         out[j] = min(max(q[j] + scale * dq[j], lower[j]), upper[j])
 
 
-@_jit
-def _free_limits(solver: Solver, chain: Chain, damping: float, work: _Work) -> None:
+@_leaf
+def _free_limits(solver: Solver, chain: Chain, damping: float, state: Any) -> None:
     """Zero the Jacobian's columns of the joints at a limit that the damped step would push past it: the
     step is then taken by the other joints (an active set), where clamping it would leave the error's share
     of those joints unmet and stall (a target reachable only with joints at their limits, as a generated
-    world's hold may be); nothing without ``active_set``. ``work.dq`` is scratch."""
-    jac, q, dq, lower, upper = work.jac, work.q, work.dq, chain.lower, chain.upper
-    if not solver.active_set or not _damped_step(jac, work.e, damping, work.scratch, dq):
+    world's hold may be); nothing without ``active_set``. ``state``: ``(jac, e, q, scratch, dq)``, ``dq``
+    scratch."""
+    jac, e, q, scratch, dq = state
+    lower, upper = chain.lower, chain.upper
+    if not solver.active_set or not _damped_step(jac, e, damping, scratch, dq):
         return
     for j in range(q.shape[0]):
         if (q[j] <= lower[j] and dq[j] < 0.0) or (q[j] >= upper[j] and dq[j] > 0.0):
@@ -250,7 +234,7 @@ def _free_limits(solver: Solver, chain: Chain, damping: float, work: _Work) -> N
                 jac[a, j] = 0.0
 
 
-@_jit
+@_leaf
 def _partial_rows(rows: Array, e: Array, jac: Array) -> None:
     """The Jacobian ``jac`` (6, n) made the derivative of the rows ``rows`` of the pose error, the others 0 (then
     ``J J^T + damping I`` keeps only the damping there and the step ignores them). Its rotation rows turn from
@@ -277,74 +261,22 @@ def _partial_rows(rows: Array, e: Array, jac: Array) -> None:
                 jac[a, j] = 0.0
 
 
-@_jit
-def _new_work(n: int) -> _Work:
-    return _Work(
-        np.empty((n + 1, 3, 3)), np.empty((n + 1, 3)), np.empty((3, 3)), np.empty(3), np.empty((3, 3)),
-        np.empty((6, n)), np.empty((7, 6)), np.empty(6), np.empty(6), np.empty(n), np.empty(n), np.empty(n),
-    )  # fmt: skip
-
-
-@_jit
-def _pose_cost(chain: Chain, q: Array, target: Any, work: _Work, e: Array) -> float:
-    """The tcp's squared pose error at ``q`` on the rows ``target[2]`` keeps (its whole error into ``e``);
-    ``work``'s frames and tcp left at ``q``."""
-    forward(q, chain, work.frame_r, work.frame_t)
-    _tcp(chain, work.frame_r, work.frame_t, work.pr, work.pt)
-    total = pose_error((target[0], target[1]), (work.pr, work.pt), work.m, e)
-    rows = target[2]
-    if not rows.all():
-        total = 0.0
-        for a in range(6):
-            if rows[a]:
-                total += e[a] * e[a]
+@_leaf
+def _masked_cost(e: Array, rows: Array, total: float) -> float:
+    """``total`` (``|e|^2``) or, when some rows are free, the squares of ``e`` on ``rows`` alone."""
+    if rows.all():
+        return total
+    total = 0.0
+    for a in range(6):
+        if rows[a]:
+            total += e[a] * e[a]
     return total
 
 
 @_jit
-def _run(chain: Chain, solver: Solver, target: Any, work: _Work) -> None:
-    """Damped least squares from ``work.q`` (within the limits) towards ``target`` (``(rotation, translation,
-    rows)``, ``rows`` the mask (6,) of the pose error's rows to meet, the others left free): ``work.q`` and
-    ``work.e`` left at the configuration reached and its (whole) error."""
-    rows = target[2]
-    n = work.q.shape[0]
-    q, e, e_trial, trial, dq, jac, scratch = work.q, work.e, work.e_trial, work.trial, work.dq, work.jac, work.scratch
-    tol_p2 = solver.position_tolerance * solver.position_tolerance
-    tol_r2 = solver.angle_tolerance * solver.angle_tolerance
-    cost = _pose_cost(chain, q, target, work, e)
-    lam = solver.damping
-    stalls = 0
-    for _ in range(solver.max_iterations):
-        if _within(e, rows, tol_p2, tol_r2):
-            break
-        _jacobian(chain, work.frame_r, work.frame_t, work.pt, jac)
-        if not rows.all():
-            _partial_rows(rows, e, jac)
-        _free_limits(solver, chain, lam, work)
-        improved = False
-        while lam <= solver.damping_max:
-            if not _damped_step(jac, e, lam, scratch, dq):
-                lam *= 10.0
-                continue
-            _clamped_step(q, dq, solver.max_step, chain, trial)
-            trial_cost = _pose_cost(chain, trial, target, work, e_trial)
-            if trial_cost < cost:
-                improved = True
-                stalls = stalls + 1 if trial_cost > cost * (1.0 - solver.stall_ratio) else 0
-                cost = trial_cost
-                for j in range(n):
-                    q[j] = trial[j]
-                for k in range(6):
-                    e[k] = e_trial[k]
-                lam = max(lam * 0.1, solver.damping_min)
-                break
-            lam *= 10.0
-        if not improved or stalls >= solver.stall_steps:
-            break
-
-
-@_jit
-def solve_batch(targets: Any, seeds: Array, chain: Chain, solver: Solver, out: Any) -> None:
+def solve_batch(  # noqa: C901, PLR0912, PLR0915  # one loop: split into calls it ran 40 % slower
+    targets: Any, seeds: Array, chain: Chain, solver: Solver, out: Any
+) -> None:
     """For target ``t`` (``targets``: ``(rotations (T, 3, 3), translations (T, 3) m, rows (6,))``) and seed ``s``
     (``seeds[t, s]``, n), into ``out`` (``(q, ok)``): ``q[t, s]`` the configuration reached (within the limits)
     and ``ok[t, s]`` whether its tcp is within ``position_tolerance`` (m) and ``angle_tolerance`` (rad) of
@@ -354,19 +286,63 @@ def solve_batch(targets: Any, seeds: Array, chain: Chain, solver: Solver, out: A
     out_q, out_ok = out
     lower, upper = chain.lower, chain.upper
     n = seeds.shape[2]
-    work = _new_work(n)
-    q = work.q
+    frame_r = np.empty((n + 1, 3, 3))
+    frame_t = np.empty((n + 1, 3))
+    pr = np.empty((3, 3))
+    pt = np.empty(3)
+    m = np.empty((3, 3))
+    jac = np.empty((6, n))
+    scratch = np.empty((7, 6))
+    e = np.empty(6)
+    e_trial = np.empty(6)
+    q = np.empty(n)
+    trial = np.empty(n)
+    dq = np.empty(n)
     tol_p2 = solver.position_tolerance * solver.position_tolerance
     tol_r2 = solver.angle_tolerance * solver.angle_tolerance
+    every_row = rows.all()
     for t in range(seeds.shape[0]):
-        target = (targets_r[t], targets_t[t], rows)
+        target = (targets_r[t], targets_t[t])
         for s in range(seeds.shape[1]):
             for j in range(n):
                 q[j] = min(max(seeds[t, s, j], lower[j]), upper[j])
-            _run(chain, solver, target, work)
+            forward(q, chain, frame_r, frame_t)
+            _tcp(chain, frame_r, frame_t, pr, pt)
+            cost = _masked_cost(e, rows, pose_error(target, (pr, pt), m, e))
+            lam = solver.damping
+            stalls = 0
+            for _ in range(solver.max_iterations):
+                if _within(e, rows, tol_p2, tol_r2):
+                    break
+                _jacobian(chain, frame_r, frame_t, pt, jac)
+                if not every_row:
+                    _partial_rows(rows, e, jac)
+                _free_limits(solver, chain, lam, (jac, e, q, scratch, dq))
+                improved = False
+                while lam <= solver.damping_max:
+                    if not _damped_step(jac, e, lam, scratch, dq):
+                        lam *= 10.0
+                        continue
+                    _clamped_step(q, dq, solver.max_step, chain, trial)
+                    forward(trial, chain, frame_r, frame_t)
+                    _tcp(chain, frame_r, frame_t, pr, pt)
+                    trial_cost = _masked_cost(e_trial, rows, pose_error(target, (pr, pt), m, e_trial))
+                    if trial_cost < cost:
+                        improved = True
+                        stalls = stalls + 1 if trial_cost > cost * (1.0 - solver.stall_ratio) else 0
+                        cost = trial_cost
+                        for j in range(n):
+                            q[j] = trial[j]
+                        for k in range(6):
+                            e[k] = e_trial[k]
+                        lam = max(lam * 0.1, solver.damping_min)
+                        break
+                    lam *= 10.0
+                if not improved or stalls >= solver.stall_steps:
+                    break
             for j in range(n):
                 out_q[t, s, j] = q[j]
-            out_ok[t, s] = _within(work.e, rows, tol_p2, tol_r2)
+            out_ok[t, s] = _within(e, rows, tol_p2, tol_r2)
 
 
 @_jit

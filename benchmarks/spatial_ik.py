@@ -10,7 +10,10 @@ compiled kernel warmed up first). Then the same number of unreachable targets (3
 reach): the share wrongly solved (must be 0) and their CPU time per target. For the shipped robots, also
 the share of targets with a collision-free solution in the 30-box scene of
 :mod:`benchmarks.spatial_checker` (targets from valid configurations there) and the CPU time per target
-including the checker's filtering.
+including the checker's filtering. For the generated chains, also :meth:`InverseKinematics.solve_rows` (one seed
+per target, the target's configuration moved by up to 0.3 rad a joint): a level face (rows z, rx, ry of a frame
+5 cm under the tcp; the target turned about world z by up to 3 rad and moved up to 0.3 m sideways) and a position
+(rows x, y, z; a random orientation): the share met and CPU milliseconds per target.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import numpy as np
 
 from benchmarks.spatial_checker import CONFIG, ROBOTS, scene
 from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.inverse import IKSettings, InverseKinematics
+from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
 from clew_ros.spatial.random_robot import random_robot
 from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.spheres import sphere_model
@@ -80,6 +83,29 @@ def measure_in_scene(label: str, robot: RobotModel, targets: int, settings: IKSe
     )
 
 
+def measure_rows(label: str, robot: RobotModel, targets: int, seed: int) -> None:
+    """:meth:`InverseKinematics.solve_rows` on a level face and on a position (see the module docstring)."""
+    solver = InverseKinematics(robot)
+    rng = np.random.default_rng(seed)
+    qs = rng.uniform(robot.lower, robot.upper, (targets, robot.dof))
+    seeds = np.clip(qs + rng.uniform(-0.3, 0.3, qs.shape), robot.lower, robot.upper)
+    face = pose_matrix([0.0, 0.0, -0.05, 0.3, 0.0, 0.0])
+    level = np.array([pose_matrix([*rng.uniform(-0.3, 0.3, 2), 0.0, 0.0, 0.0, rng.uniform(-3, 3)]) for _ in qs])
+    level = level @ solver.tcp_poses(qs) @ face
+    position = solver.tcp_poses(qs)
+    position[:, :3, :3] = np.array([pose_matrix([0, 0, 0, *rng.uniform(-3, 3, 3)])[:3, :3] for _ in qs])
+    parts = []
+    for name, goal, rows, frame in (
+        ("level face", level, pose_rows(("z", "rx", "ry")), face),
+        ("position", position, pose_rows(("x", "y", "z")), None),
+    ):
+        solver.solve_rows(goal[:2], seeds[:2], rows, frame=frame)  # compiles (or loads) the kernel
+        start = time.process_time()
+        _, ok = solver.solve_rows(goal, seeds, rows, frame=frame)
+        parts.append(f"{name} met {ok.mean():6.1%} {(time.process_time() - start) / targets * 1e3:6.3f} ms/target")
+    print(f"{label:<14} dof {robot.dof}  solve_rows: " + "  ".join(parts))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--robots", nargs="*", default=list(ROBOTS), choices=list(ROBOTS))
@@ -95,7 +121,9 @@ def main(argv: list[str] | None = None) -> int:
         measure_in_scene(name, robot, args.targets, settings, seed=2)
     if args.random_robots:
         for k in range(args.random_robots):
-            measure(f"random {100 + k}", random_robot(np.random.default_rng(100 + k)), args.targets, settings, seed=1)
+            robot = random_robot(np.random.default_rng(100 + k))
+            measure(f"random {100 + k}", robot, args.targets, settings, seed=1)
+            measure_rows(f"random {100 + k}", robot, args.targets, seed=7)
     return 0
 
 

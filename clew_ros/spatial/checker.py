@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from clew_ros.spatial.kernels import band, collide
+from clew_ros.spatial.kernels import band, collide, intervals
+from clew_ros.spatial.kernels.packed import HeldObject, InnerSpheres, Model, Scene, Spheres, Stepping, chain_of
 from clew_ros.spatial.placements import MovableObject, Support
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.scene import Obstacle, obstacle_arrays
@@ -69,15 +70,15 @@ def _bounding(centers: NDArray[np.float64], radii: NDArray[np.float64]) -> tuple
     return middle, float(np.max(np.linalg.norm(centers - middle, axis=1) + radii))
 
 
-def _held_arrays(robot: RobotModel, held: Held | None, obstacles: Sequence[Obstacle], n_links: int) -> dict[str, Any]:
+def _held_arrays(robot: RobotModel, held: Held | None, obstacles: Sequence[Obstacle], n_links: int) -> HeldObject:
     """The held object packed for the kernels: its piece's index (-1: none), its corners (a box) or cap
     centres (a cylinder) and its axis in the tcp's frame, its radius (0 for a box), and the supports it may
     touch from above: their obstacle indices and tops."""
     if held is None:
-        return {
-            "held_link": -1, "held_points": np.zeros((0, 3)), "held_disc": 0.0, "held_axis": np.zeros(3),
-            "sup_index": np.zeros(0, dtype=np.int64), "sup_top": np.zeros(0), "sup_tol": 0.0,
-        }  # fmt: skip
+        return HeldObject(
+            held_link=-1, held_points=np.zeros((0, 3)), held_disc=0.0, held_axis=np.zeros(3),
+            sup_index=np.zeros(0, dtype=np.int64), sup_top=np.zeros(0), sup_tol=0.0,
+        )  # fmt: skip
     placed = robot.tcp @ np.linalg.inv(held.grasp)
     if held.shape.shape == "box":
         half = np.asarray(held.shape.size) / 2
@@ -90,20 +91,20 @@ def _held_arrays(robot: RobotModel, held: Held | None, obstacles: Sequence[Obsta
     missing = [s.name for s in held.supports if s.name not in names]
     if missing:
         raise ValueError(f"held.supports: {missing} are not among the obstacles")
-    return {
-        "held_link": n_links,
-        "held_points": np.ascontiguousarray(points @ placed[:3, :3].T + placed[:3, 3]),
-        "held_disc": disc,
-        "held_axis": np.ascontiguousarray(placed[:3, 2]),
-        "sup_index": np.array([names.index(s.name) for s in held.supports], dtype=np.int64),
-        "sup_top": np.array([s.top for s in held.supports], dtype=np.float64),
-        "sup_tol": float(held.tolerance_m),
-    }
+    return HeldObject(
+        held_link=n_links,
+        held_points=np.ascontiguousarray(points @ placed[:3, :3].T + placed[:3, 3]),
+        held_disc=disc,
+        held_axis=np.ascontiguousarray(placed[:3, 2]),
+        sup_index=np.array([names.index(s.name) for s in held.supports], dtype=np.int64),
+        sup_top=np.array([s.top for s in held.supports], dtype=np.float64),
+        sup_tol=float(held.tolerance_m),
+    )
 
 
 def _inner_arrays(
     spheres: SphereModel, held: Held | None, placed: NDArray[np.float64], tcp_frame: int, n_links: int
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+) -> InnerSpheres:
     """The inner spheres packed for :mod:`~clew_ros.spatial.kernels.band` (centres, radii, each piece's first
     sphere): the links' (:attr:`SphereModel.inner`), then the held object's (``placed`` in frame ``tcp_frame``)."""
     inner = spheres.inner
@@ -116,17 +117,18 @@ def _inner_arrays(
         radii = np.concatenate([radii, local_r])
         owners = np.concatenate([owners, np.full(len(local_r), n_links)])
     pieces = n_links + (held is not None)
-    return (
+    return InnerSpheres(
         np.ascontiguousarray(centres, dtype=np.float64),
         np.ascontiguousarray(radii, dtype=np.float64),
         np.searchsorted(owners, np.arange(pieces + 1)).astype(np.int64),
     )
 
 
-def _levers(  # noqa: PLR0917
+def _levers(
     robot: RobotModel,
     centres: NDArray[np.float64],
     radii: NDArray[np.float64],
+    *,
     frames: NDArray[np.int64],
     owners: NDArray[np.int64],
     pieces: int,
@@ -147,6 +149,12 @@ def _levers(  # noqa: PLR0917
             if frame_of[p] >= j + 1:
                 out[j, p] = chain[j + 1 : frame_of[p]].sum() + far[p]
     return out
+
+
+def _stepping(settings: IntervalSettings, reach: NDArray[np.float64], fold: bool) -> Stepping:
+    """How :func:`clew_ros.spatial.kernels.intervals.free_intervals` steps: ``settings``, with ``reach`` (one per
+    row) and ``fold``."""
+    return Stepping(settings.margin_m, settings.min_step, settings.max_steps, reach, fold)
 
 
 class SpatialChecker:
@@ -205,12 +213,11 @@ class SpatialChecker:
         self.exact, self.band_intervals = exact, band_intervals
         self._tier: ExactTier | None = None
         self._held_pose = None if held is None else (held.shape, placed)
-        self._inner = _inner_arrays(spheres, held, placed, robot.tcp_frame, n_links)
         ignore = np.zeros((pieces, len(self.obstacles)), dtype=np.bool_)
         if resting_object is not None:
             ignore[:n_links, -1] = gripper
         if held is not None:
-            ignore[n_links, held_arrays["sup_index"]] = True  # its supports: the from-above test instead
+            ignore[n_links, held_arrays.sup_index] = True  # its supports: the from-above test instead
         link_c = np.zeros((pieces, 3))
         link_r = np.zeros(pieces)
         for i in range(pieces):
@@ -224,57 +231,36 @@ class SpatialChecker:
         if held is not None:
             pairs += [(i, n_links) for i in range(n_links) if not gripper[i]]
         self.pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
-        self._arrays: dict[str, Any] = {
-            "lower": robot.lower.astype(np.float64),
-            "upper": robot.upper.astype(np.float64),
-            "base_r": np.ascontiguousarray(robot.base[:3, :3]),
-            "base_t": np.ascontiguousarray(robot.base[:3, 3]),
-            "org_r": np.ascontiguousarray(robot.origins[:, :3, :3]),
-            "org_t": np.ascontiguousarray(robot.origins[:, :3, 3]),
-            "axes": np.ascontiguousarray(robot.axes),
-            "prismatic": robot.prismatic.astype(np.bool_),
-            "sph_c": np.ascontiguousarray(centers),
-            "sph_r": np.ascontiguousarray(radii),
-            "sph_frame": frames.astype(np.int64),
-            "sph_link": owners.astype(np.int64),
-            "link_start": starts.astype(np.int64),
-            "link_c": link_c,
-            "link_r": link_r,
-            "link_frame": np.array(link_frame, dtype=np.int64),
-            **obstacle_arrays(self.obstacles),
-            "ignore": ignore,
-            "pairs": self.pairs,
-            "bounds": np.zeros(6) if bounds is None else np.asarray(bounds, dtype=np.float64),
-            "has_bounds": bounds is not None,
-            **held_arrays,
-        }
-
-        a = self._arrays
-        self._band = (
-            (a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"], a["prismatic"]),
-            (a["sph_c"], a["sph_r"], a["link_start"], a["link_c"], a["link_r"], a["link_frame"]),
-            self._inner,
-            (
-                a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"], a["pairs"],
-                a["bounds"], a["has_bounds"],
+        #: Everything the kernels read, packed once (:mod:`clew_ros.spatial.kernels.packed`).
+        self.model = Model(
+            chain=chain_of(robot),
+            spheres=Spheres(
+                sph_c=np.ascontiguousarray(centers),
+                sph_r=np.ascontiguousarray(radii),
+                sph_frame=frames.astype(np.int64),
+                sph_link=owners.astype(np.int64),
+                link_start=starts.astype(np.int64),
+                link_c=link_c,
+                link_r=link_r,
+                link_frame=np.array(link_frame, dtype=np.int64),
             ),
-            (
-                a["held_link"], a["held_points"], a["held_disc"], a["held_axis"], a["sup_index"], a["sup_top"],
-                a["sup_tol"],
+            inner=_inner_arrays(spheres, held, placed, robot.tcp_frame, n_links),
+            scene=Scene(
+                **obstacle_arrays(self.obstacles),
+                ignore=ignore,
+                pairs=self.pairs,
+                bounds=np.zeros(6) if bounds is None else np.asarray(bounds, dtype=np.float64),
+                has_bounds=bounds is not None,
             ),
-        )  # fmt: skip
+            held=held_arrays,
+        )
         #: per joint and piece, how far (m) a point of the piece the joint moves can be from its axis (0: the
         #: joint does not move the piece): the lever of a band step
-        self._lever = _levers(robot, centers, radii, frames, owners, pieces)
+        self._lever = _levers(robot, centers, radii, frames=frames, owners=owners, pieces=pieces)
         #: Whether a link that no joint moves (on ``base_link``'s frame) touches an obstacle or leaves the
         #: bounds: then no configuration is valid. Checked once here, never per configuration (on the exact
         #: geometry where the spheres touch).
-        self.static_collision = bool(
-            collide.static_collides(
-                a["base_r"], a["base_t"], a["sph_c"], a["sph_r"], a["sph_frame"], a["sph_link"], a["obs_kind"],
-                a["obs_r"], a["obs_t"], a["obs_dims"], a["ignore"], a["bounds"], a["has_bounds"],
-            )
-        )  # fmt: skip
+        self.static_collision = bool(collide.static_collides(self.model))
         if self.static_collision and exact:
             self.static_collision = self._static_exact()
 
@@ -302,13 +288,13 @@ class SpatialChecker:
     def _static_exact(self) -> bool:
         """Whether a link no joint moves touches an obstacle (but those it ignores) or the bounds, exactly."""
         tier = self.tier
-        a = self._arrays
-        frame_r = np.broadcast_to(a["base_r"], (self.robot.dof + 1, 3, 3))
-        frame_t = np.broadcast_to(a["base_t"], (self.robot.dof + 1, 3))
+        chain, ignore = self.model.chain, self.model.scene.ignore
+        frame_r = np.broadcast_to(chain.base_r, (self.robot.dof + 1, 3, 3))
+        frame_t = np.broadcast_to(chain.base_t, (self.robot.dof + 1, 3))
         for i, link in enumerate(self.robot.links):
             if link.frame != 0:
                 continue
-            rows = [(band.OBSTACLE, i, o) for o in range(len(self.obstacles)) if not a["ignore"][i, o]]
+            rows = [(band.OBSTACLE, i, o) for o in range(len(self.obstacles)) if not ignore[i, o]]
             rows += [(band.BOUNDS, i, -1)] if self.bounds is not None else []
             rot, pos = tier.placements(frame_r[None], frame_t[None])
             if not tier.free(np.array(rows, dtype=np.int64).reshape(-1, 3), (rot[0], pos[0])):
@@ -330,30 +316,43 @@ class SpatialChecker:
         margin (:meth:`ExactTier.contact`). ``groups`` (one label per row): only whether every row of a group is
         valid matters (the samples of one straight move), so once a row of a group is refused the group's other
         rows are not decided on the exact geometry (reported refused)."""
-        margins = np.broadcast_to(np.asarray(margin, dtype=np.float64), (len(self._arrays["link_r"]),))
+        return self._two_tiers(self._batch(qs), margin, moved_only=moved_only, groups=groups)[0]
+
+    def _two_tiers(
+        self,
+        batch: NDArray[np.float64],
+        margin: float | NDArray[np.float64],
+        *,
+        moved_only: bool = False,
+        groups: NDArray[np.int64] | None = None,
+        spheres_first: bool = False,
+    ) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
+        """:meth:`classify` and each row's status (:data:`~clew_ros.spatial.kernels.band.FREE`: its spheres
+        touch nothing). ``spheres_first`` (``margin`` 0): the rows the spheres clear are not classified further,
+        as :meth:`valid_and_on_spheres` wants them."""
+        margins = np.broadcast_to(np.asarray(margin, dtype=np.float64), (len(self.model.spheres.link_r),))
         margin = float(margins.max(initial=0.0))  # the kernel's: every contact within the largest is listed
-        batch = self._batch(qs)
         n = len(batch)
         out = np.zeros(n, dtype=np.bool_)
+        status = np.full(n, band.CERTAIN, dtype=np.int64)
         if self.static_collision or not n:
-            return out
+            return out, status
         cap = 32
-        status = np.empty(n, dtype=np.int64)
         contacts = np.empty((n, cap, 3), dtype=np.int64)
         counts = np.empty(n, dtype=np.int64)
         frames_r = np.empty((n, self.robot.dof + 1, 3, 3))
         frames_t = np.empty((n, self.robot.dof + 1, 3))
-        band.contacts_batch(batch, *self._band, status, contacts, counts, frames_r, frames_t, margin)
+        band.contacts_batch(batch, self.model, (status, contacts, counts, frames_r, frames_t), margin, spheres_first)
         out[status == band.FREE] = True
         overflow = np.flatnonzero(status == band.OVERFLOW)
         if len(overflow):  # more open contacts than the list holds: again, with room for every one
-            a = self._arrays
-            room = len(a["link_r"]) * (len(self.obstacles) + 1) + len(a["pairs"]) + len(a["sup_index"])
+            pieces, pairs, supports = len(self.model.spheres.link_r), len(self.pairs), len(self.model.held.sup_index)
+            room = pieces * (len(self.obstacles) + 1) + pairs + supports
             k = len(overflow)
             again = np.empty((k, room, 3), dtype=np.int64)
             sub, sub_counts = np.empty(k, dtype=np.int64), np.empty(k, dtype=np.int64)
             sub_r, sub_t = np.empty((k, self.robot.dof + 1, 3, 3)), np.empty((k, self.robot.dof + 1, 3))
-            band.contacts_batch(batch[overflow], *self._band, sub, again, sub_counts, sub_r, sub_t, margin)
+            band.contacts_batch(batch[overflow], self.model, (sub, again, sub_counts, sub_r, sub_t), margin, False)
             if self.exact:
                 rot, pos = self.tier.placements(sub_r, sub_t)
             for m, row in enumerate(overflow):
@@ -374,7 +373,7 @@ class SpatialChecker:
                 out[b] = self.tier.free(contacts[b, : counts[b]], (rot[k], pos[k]), margins, moved_only=moved_only)
                 if groups is not None and not out[b]:
                     refused.add(groups[b])
-        return out
+        return out, status
 
     def valid_on_spheres(self, qs: Any) -> NDArray[np.bool_]:
         """For each row of ``qs``: inside the joint limits and its (outer) spheres touch nothing: free for
@@ -384,14 +383,7 @@ class SpatialChecker:
         if self.static_collision:
             out[:] = False
             return out
-        a = self._arrays
-        collide.valid_batch(
-            batch, a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
-            a["prismatic"], a["sph_c"], a["sph_r"], a["sph_frame"], a["link_start"], a["link_c"], a["link_r"],
-            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"],
-            a["pairs"], a["bounds"], a["has_bounds"], a["held_link"], a["held_points"], a["held_disc"],
-            a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"], out,
-        )  # fmt: skip
+        collide.valid_batch(batch, self.model, out)
         return out
 
     def valid(self, qs: Any) -> NDArray[np.bool_]:
@@ -402,16 +394,15 @@ class SpatialChecker:
     def valid_and_on_spheres(
         self, qs: Any, groups: NDArray[np.int64] | None = None
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        """:meth:`valid` and :meth:`valid_on_spheres` of the rows of ``qs``, for the price of one; ``groups``:
-        see :meth:`classify` (a row of a refused group may be reported refused)."""
+        """:meth:`valid` and :meth:`valid_on_spheres` of the rows of ``qs``, for the price of one (one kernel: the
+        rows the spheres refuse are classified on the spot, their frames not computed twice); ``groups``: see
+        :meth:`classify` (a row of a refused group may be reported refused)."""
         batch = self._batch(qs)
-        spheres = self.valid_on_spheres(batch)
-        out = spheres.copy()
-        if self.exact and not self.static_collision:
-            open_rows = np.flatnonzero(~out)
-            if len(open_rows):
-                out[open_rows] = self.classify(batch[open_rows], groups=None if groups is None else groups[open_rows])
-        return out, spheres
+        if not self.exact:
+            spheres = self.valid_on_spheres(batch)
+            return spheres.copy(), spheres
+        out, status = self._two_tiers(batch, 0.0, groups=groups, spheres_first=True)
+        return out, status == band.FREE
 
     def free_intervals(
         self,
@@ -448,40 +439,28 @@ class SpatialChecker:
             lo[:] = hi[:] = batch[:, joint]
             ok[:] = False
             return lo, hi, ok
-        self._sphere_intervals(batch, joint, settings, bound, fold, (lo, hi, ok))
+        self._sphere_intervals(batch, joint, _stepping(settings, bound, fold), (lo, hi, ok))
         if self.exact and self.band_intervals:
-            self._band_intervals(batch, joint, settings, bound, lo, hi, ok)
+            self._band_intervals(batch, joint, settings, bound, (lo, hi, ok))
         return lo, hi, ok
 
-    def _sphere_intervals(  # noqa: PLR0917
+    def _sphere_intervals(
         self,
         batch: NDArray[np.float64],
         joint: int,
-        settings: IntervalSettings,
-        bound: NDArray[np.float64],
-        fold: bool,
+        stepping: Stepping,
         out: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]],
     ) -> None:
         """The sphere model's free intervals (the compiled conservative steps) into ``out`` (lo, hi, ok)."""
-        a = self._arrays
-        collide.free_intervals(
-            batch, joint, a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
-            a["prismatic"], a["sph_c"], a["sph_r"], a["sph_frame"], a["link_start"], a["link_c"], a["link_r"],
-            a["link_frame"], a["obs_kind"], a["obs_r"], a["obs_t"], a["obs_dims"], a["obs_bound"], a["ignore"],
-            a["pairs"], a["bounds"], a["has_bounds"], a["held_link"], a["held_points"], a["held_disc"],
-            a["held_axis"], a["sup_index"], a["sup_top"], a["sup_tol"], settings.margin_m, settings.min_step,
-            settings.max_steps, bound, fold, *out,
-        )  # fmt: skip
+        intervals.free_intervals(batch, joint, self.model, stepping, out)
 
-    def _band_intervals(  # noqa: PLR0917
+    def _band_intervals(
         self,
         batch: NDArray[np.float64],
         joint: int,
         settings: IntervalSettings,
         bound: NDArray[np.float64],
-        lo: NDArray[np.float64],
-        hi: NDArray[np.float64],
-        ok: NDArray[np.bool_],
+        out: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]],
     ) -> None:
         """The rows the spheres refused but the exact geometry accepts (near a contact): their intervals by
         samples ``settings.band_step`` apart, each the middle of a cell it proves free (checked with the
@@ -489,6 +468,7 @@ class SpatialChecker:
         growing ``settings.band_growth`` times; past them, where the spheres clear the row again, the
         conservative steps go on."""
         robot = self.robot
+        lo, hi, ok = out
         rows = np.flatnonzero(~ok & (batch >= robot.lower).all(axis=1) & (batch <= robot.upper).all(axis=1))
         if not len(rows):
             return
@@ -508,8 +488,9 @@ class SpatialChecker:
             for stage in reversed(range(settings.band_stages)):  # the longest steps first (far from contact)
                 step = settings.band_step * settings.band_growth**stage
                 going = self._band_stage(
-                    batch, mine, joint, side * step, lever * step / 2, settings, room, proven, active
-                )
+                    batch, mine, joint, side * step, margin=lever * step / 2, settings=settings, room=room,
+                    proven=proven, alive=active,
+                )  # fmt: skip
                 alive = going | (alive & ~active)  # rows that cleared every sample stop refining
                 active = active & ~going & (proven < room)  # a refusal: the next stage goes on in finer steps
                 if stage == 0:
@@ -522,7 +503,7 @@ class SpatialChecker:
                 rest[:, joint] = ends[onward]
                 more = (np.empty(len(onward)), np.empty(len(onward)), np.empty(len(onward), dtype=np.bool_))
                 left = np.ascontiguousarray(room[onward] - reach[onward])
-                self._sphere_intervals(rest, joint, settings, left, False, more)
+                self._sphere_intervals(rest, joint, _stepping(settings, left, False), more)
                 more_lo, more_hi, more_ok = more
                 far = more_hi if side > 0 else more_lo
                 ends[onward] = np.where(more_ok, far, ends[onward])
@@ -531,12 +512,13 @@ class SpatialChecker:
             else:
                 lo[mine] = np.minimum(lo[mine], ends)
 
-    def _band_stage(  # noqa: PLR0917
+    def _band_stage(
         self,
         batch: NDArray[np.float64],
         mine: NDArray[np.int64],
         joint: int,
         step: float,
+        *,
         margin: NDArray[np.float64],
         settings: IntervalSettings,
         room: NDArray[np.float64],
@@ -565,14 +547,10 @@ class SpatialChecker:
 
     def sphere_positions(self, q: Sequence[float]) -> NDArray[np.float64]:
         """Every sphere's centre in ``world`` (S, 3) at ``q`` (compiled forward kinematics)."""
-        a = self._arrays
         n = self.robot.dof
         frame_r = np.empty((n + 1, 3, 3))
         frame_t = np.empty((n + 1, 3))
-        collide.forward(
-            np.asarray(q, dtype=np.float64), a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
-            a["prismatic"], frame_r, frame_t,
-        )  # fmt: skip
+        collide.forward(np.asarray(q, dtype=np.float64), self.model.chain, frame_r, frame_t)
         local = self.spheres.centers
         out: NDArray[np.float64] = np.einsum("sij,sj->si", frame_r[self.spheres.frames], local)
         return out + frame_t[self.spheres.frames]

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.kernels import ik
+from clew_ros.spatial.kernels.packed import chain_of
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.transforms import pose_matrix
 
@@ -106,24 +107,6 @@ def pose_rows(names: Sequence[str]) -> NDArray[np.bool_]:
     return np.array([row in names for row in POSE_ROWS], dtype=bool)
 
 
-def _rotation_vectors(rotations: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Rotation vectors (B, 3) (axis times angle, rad) of rotations (B, 3, 3) (up to a half turn)."""
-    vec = 0.5 * np.stack(
-        [
-            rotations[:, 2, 1] - rotations[:, 1, 2],
-            rotations[:, 0, 2] - rotations[:, 2, 0],
-            rotations[:, 1, 0] - rotations[:, 0, 1],
-        ],
-        axis=1,
-    )
-    sine = np.linalg.norm(vec, axis=1)
-    cosine = np.clip((np.trace(rotations, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
-    angle = np.arctan2(sine, cosine)
-    scale = np.where(sine > 1e-12, angle / np.maximum(sine, 1e-300), 1.0)
-    out: NDArray[np.float64] = vec * scale[:, None]
-    return out
-
-
 def distinct(solutions: NDArray[np.float64], distance: float) -> NDArray[np.float64]:
     """The rows of ``solutions`` (k, n) in order, dropping each one within joint distance ``distance``
     (max over joints of the absolute difference) of a row already kept."""
@@ -156,19 +139,13 @@ class InverseKinematics:
     def __init__(self, robot: RobotModel, settings: IKSettings | None = None) -> None:
         self.robot = robot
         self.settings = settings or IKSettings()
-        self._arrays: dict[str, Any] = {
-            "lower": robot.lower.astype(np.float64),
-            "upper": robot.upper.astype(np.float64),
-            "base_r": np.ascontiguousarray(robot.base[:3, :3]),
-            "base_t": np.ascontiguousarray(robot.base[:3, 3]),
-            "org_r": np.ascontiguousarray(robot.origins[:, :3, :3]),
-            "org_t": np.ascontiguousarray(robot.origins[:, :3, 3]),
-            "axes": np.ascontiguousarray(robot.axes),
-            "prismatic": robot.prismatic.astype(np.bool_),
-            "tcp_frame": int(robot.tcp_frame),
-            "tcp_r": np.ascontiguousarray(robot.tcp[:3, :3]),
-            "tcp_t": np.ascontiguousarray(robot.tcp[:3, 3]),
-        }
+        #: The kinematics and the solver's settings packed for the kernels (:mod:`clew_ros.spatial.kernels.ik`).
+        self.chain = chain_of(robot)
+        s = self.settings
+        self._solver = ik.Solver(
+            s.max_iterations, s.damping, s.damping_min, s.damping_max, s.position_tolerance_m, s.angle_tolerance_rad,
+            s.max_step_rad, s.stall_ratio, s.stall_steps, s.active_set,
+        )  # fmt: skip
 
     def tcp_poses(self, qs: Any) -> NDArray[np.float64]:
         """The tcp's 4x4 pose in ``world`` for every row of ``qs`` (N, n) (compiled forward kinematics)."""
@@ -177,11 +154,7 @@ class InverseKinematics:
             raise ValueError(f"qs: expected an (N, {self.robot.dof}) array of joint values, got shape {batch.shape}")
         out_r = np.empty((len(batch), 3, 3))
         out_t = np.empty((len(batch), 3))
-        a = self._arrays
-        ik.tcp_batch(
-            batch, a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"], a["prismatic"], a["tcp_frame"],
-            a["tcp_r"], a["tcp_t"], out_r, out_t,
-        )  # fmt: skip
+        ik.tcp_batch(batch, self.chain, out_r, out_t)
         out = np.zeros((len(batch), 4, 4))
         out[:, :3, :3] = out_r
         out[:, :3, 3] = out_t
@@ -220,15 +193,14 @@ class InverseKinematics:
         all_seeds = np.ascontiguousarray(np.concatenate([given, random], axis=1))
         out_q = np.empty_like(all_seeds)
         out_ok = np.zeros(all_seeds.shape[:2], dtype=np.bool_)
-        a, s = self._arrays, self.settings
+        s = self.settings
         if all_seeds.shape[1] > 0 and len(matrices) > 0:
-            ik.solve_batch(
-                np.ascontiguousarray(matrices[:, :3, :3]), np.ascontiguousarray(matrices[:, :3, 3]), all_seeds,
-                a["lower"], a["upper"], a["base_r"], a["base_t"], a["org_r"], a["org_t"], a["axes"],
-                a["prismatic"], a["tcp_frame"], a["tcp_r"], a["tcp_t"], s.max_iterations, s.damping,
-                s.damping_min, s.damping_max, s.position_tolerance_m, s.angle_tolerance_rad, s.max_step_rad,
-                s.stall_ratio, s.stall_steps, s.active_set, out_q, out_ok,
-            )  # fmt: skip
+            targets = (
+                np.ascontiguousarray(matrices[:, :3, :3]),
+                np.ascontiguousarray(matrices[:, :3, 3]),
+                np.ones(6, dtype=np.bool_),
+            )
+            ik.solve_batch(targets, all_seeds, self.chain, self._solver, (out_q, out_ok))
         out = []
         for t in range(len(matrices)):
             found = out_q[t][out_ok[t]]
@@ -247,62 +219,24 @@ class InverseKinematics:
     ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """From each seed (B, n), a configuration whose ``frame`` (a 4x4 pose in the tcp's frame, default the
         tcp) meets its target (B, 4, 4) on the pose error's ``rows`` (a mask (6,), :func:`pose_rows`) within
-        the tolerances, the other rows free: damped least squares (Levenberg-Marquardt, a finite-difference
-        Jacobian, :attr:`IKSettings.max_iterations` steps at most) within the joint limits, so the free rows
-        stay near the seed's. Returns the configurations reached and whether each met its rows (an arm of
+        the tolerances, the other rows free: the damped least squares of :meth:`solve` (the same compiled
+        solver, its Jacobian's free rows left out) from that one seed, within the joint limits, so the free
+        rows stay near the seed's. Returns the configurations reached and whether each met its rows (an arm of
         4-5 joints holds a level face at a height, or a position, where the whole pose is out of reach).
         Deterministic: no random seeds."""
-        s = self.settings
         goal = np.asarray(targets, dtype=np.float64).reshape(-1, 4, 4)
-        start = np.array(seeds, dtype=np.float64).reshape(len(goal), self.robot.dof)
-        q = np.clip(start, self.robot.lower, self.robot.upper)
-        mask = np.asarray(rows, dtype=bool).reshape(6)
-        tool = np.eye(4) if frame is None else np.asarray(frame, dtype=np.float64).reshape(4, 4)
-        n, h = self.robot.dof, 1e-7
-        positions = int(mask[:3].sum())  # the position rows come first
-
-        def errors(qs: NDArray[np.float64], index: NDArray[np.int64]) -> NDArray[np.float64]:
-            poses = self.tcp_poses(qs) @ tool
-            target = goal[index]
-            rotation = _rotation_vectors(np.einsum("bij,bkj->bik", target[:, :3, :3], poses[:, :3, :3]))
-            full = np.concatenate([target[:, :3, 3] - poses[:, :3, 3], rotation], axis=1)
-            out: NDArray[np.float64] = full[:, mask]
-            return out
-
-        def within(e: NDArray[np.float64]) -> NDArray[np.bool_]:
-            position, angle = e[:, :positions], e[:, positions:]
-            return np.asarray(
-                (np.linalg.norm(position, axis=1) <= s.position_tolerance_m)
-                & (np.linalg.norm(angle, axis=1) <= s.angle_tolerance_rad)
-            )
-
-        everyone = np.arange(len(goal))
-        e = errors(q, everyone)
-        cost = (e**2).sum(axis=1)
-        damping = np.full(len(goal), s.damping)
-        active = ~within(e)
-        for _ in range(s.max_iterations):
-            index = np.flatnonzero(active)
-            if not len(index):
-                break
-            here = q[index]
-            shifted = (here[:, None, :] + h * np.eye(n)[None]).reshape(-1, n)
-            moved = errors(shifted, np.repeat(index, n)).reshape(len(index), n, -1)
-            jacobian = ((moved - e[index][:, None, :]) / h).transpose(0, 2, 1)  # (b, k, n): d e / d q
-            system = jacobian @ jacobian.transpose(0, 2, 1) + damping[index, None, None] * np.eye(jacobian.shape[1])
-            step = -np.einsum("bkn,bk->bn", jacobian, np.linalg.solve(system, e[index][..., None])[..., 0])
-            biggest = np.max(np.abs(step), axis=1, keepdims=True)
-            step *= np.minimum(1.0, s.max_step_rad / np.maximum(biggest, 1e-300))
-            trial = np.clip(here + step, self.robot.lower, self.robot.upper)
-            e_trial = errors(trial, index)
-            cost_trial = (e_trial**2).sum(axis=1)
-            better = cost_trial < cost[index]
-            taken = index[better]
-            q[taken], e[taken], cost[taken] = trial[better], e_trial[better], cost_trial[better]
-            damping[taken] = np.maximum(damping[taken] * 0.1, s.damping_min)
-            damping[index[~better]] *= 10.0
-            active[index] = ~within(e[index]) & (damping[index] <= s.damping_max)
-        return q, within(e)
+        start = np.array(seeds, dtype=np.float64).reshape(len(goal), 1, self.robot.dof)
+        mask = np.ascontiguousarray(rows, dtype=np.bool_).reshape(6)
+        chain = self.chain
+        if frame is not None:  # the frame met instead of the tcp: the chain's tcp moved onto it
+            tool = self.robot.tcp @ np.asarray(frame, dtype=np.float64).reshape(4, 4)
+            chain = chain._replace(tcp_r=np.ascontiguousarray(tool[:3, :3]), tcp_t=np.ascontiguousarray(tool[:3, 3]))
+        out_q = np.empty_like(start)
+        out_ok = np.zeros(start.shape[:2], dtype=np.bool_)
+        if len(goal):
+            targets = (np.ascontiguousarray(goal[:, :3, :3]), np.ascontiguousarray(goal[:, :3, 3]), mask)
+            ik.solve_batch(targets, start, chain, self._solver, (out_q, out_ok))
+        return out_q[:, 0], out_ok[:, 0]
 
     def solve_grasps(
         self, object_pose: Any, grasps: Any, rng: np.random.Generator, *, checker: SpatialChecker | None = None

@@ -128,7 +128,7 @@ def test_pose_error_is_the_rotation_vector(angle: float) -> None:
     target[:3, :3] = axis_motion(axis, angle, prismatic=False)[:3, :3] @ current[:3, :3]
     target[:3, 3] += [0.01, -0.02, 0.03]
     out = np.empty(6)
-    total = pose_error(target[:3, :3], target[:3, 3], current[:3, :3], current[:3, 3], np.empty((3, 3)), out)
+    total = pose_error((target[:3, :3], target[:3, 3]), (current[:3, :3], current[:3, 3]), np.empty((3, 3)), out)
     np.testing.assert_allclose(out[:3], [0.01, -0.02, 0.03], atol=1e-12)
     if angle > math.pi - 1e-6:  # a half turn either way is the same rotation
         assert min(np.linalg.norm(out[3:] - axis * angle), np.linalg.norm(out[3:] + axis * angle)) < 1e-6

@@ -46,6 +46,7 @@ from clew_ros.core.parameters import (
     retired_message,
 )
 from clew_ros.core.settings import Outcome
+from clew_ros.kinds import kind_of
 from clew_ros.node.live_state import LiveState, StateRefusalError, describe_inputs
 from clew_ros.node.live_view import start_live_view
 from clew_ros.node.namespaces import namespaced_directory
@@ -54,7 +55,6 @@ from clew_ros.node.run import CancelKind, Run, Source
 from clew_ros.node.run_recording import NO_RECORDING, Recordings, RunRecording
 from clew_ros.node.worker import RunWorker
 from clew_ros.planar.kernel import warm_up
-from clew_ros.planar.world import World
 from clew_ros.ros import messages
 from clew_ros.ros.parameters import (
     OWN_PREFIXES,
@@ -67,7 +67,6 @@ from clew_ros.ros.parameters import (
     runtime_changes_allowed,
 )
 from clew_ros.ros.qos import GOAL_QOS
-from clew_ros.ros.spatial import goal_from_pose_stamped as spatial_goal_from_pose_stamped
 
 __all__ = ["NODE_NAME", "PlannerNode", "StartupError"]
 
@@ -301,10 +300,7 @@ class PlannerNode(Node):
             world = self._config.world
         stamp_ns = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         try:
-            if isinstance(world, World):
-                goal = messages.goal_from_pose_stamped(msg, world)
-            else:  # a spatial world: a full orientation, a stable placement
-                goal = spatial_goal_from_pose_stamped(msg, world)
+            goal = kind_of(world).goal_from_pose_stamped(msg, world)
         except messages.GoalPoseError as error:
             self._refuse(Outcome.INVALID_WORLD, f"refused: {error}", "goal_pose", stamp_ns)
             return

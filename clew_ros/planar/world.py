@@ -36,6 +36,7 @@ __all__ = [
     "MAX_ABS_VALUE",
     "MAX_LINKS",
     "MAX_PARAMETER_FILE_BYTES",
+    "WORLD_KIND",
     "MovableObject",
     "Obstacle",
     "Robot",
@@ -47,6 +48,8 @@ __all__ = [
     "world_to_parameters",
 ]
 
+#: ``world.kind`` of a planar world (the default) and a plan file's ``world_kind`` for it.
+WORLD_KIND = "planar"
 #: A grasp point lies on the object's boundary when it is this close to it (m).
 GRASP_ON_BOUNDARY_TOLERANCE_M = 1e-6
 #: Largest magnitude of any number of the world (m or rad). Beyond it the

@@ -21,7 +21,6 @@ from clew_ros.core.clew import Progress
 from clew_ros.core.plan import Plan
 from clew_ros.kinds.base import (
     DEFAULT_KIND,
-    AnyProblem,
     WorldKind,
     kind_named,
     kind_of,
@@ -32,6 +31,8 @@ from clew_ros.kinds.base import (
 )
 from clew_ros.kinds.planar import PlanarKind
 from clew_ros.kinds.spatial import SpatialKind
+from clew_ros.planar.offline import Problem
+from clew_ros.spatial.offline import SpatialProblem
 
 __all__ = [
     "DEFAULT_KIND",
@@ -49,6 +50,9 @@ __all__ = [
     "warm_up",
     "world_kind",
 ]
+
+#: An offline problem of a registered kind (a world and the settings to plan it with).
+AnyProblem = Problem | SpatialProblem
 
 register(PlanarKind())
 register(SpatialKind())
@@ -72,7 +76,10 @@ def problem_from_parameters(
     start (the parameter file's folder). Raises :class:`~clew_ros.core.errors.ParameterError` naming the
     parameter at fault."""
     kind = kind_of_parameters(parameters)
-    return kind.problem_from_parameters(parameters, folder, seed=seed, time_limit=time_limit, improve_time=improve_time)
+    problem: AnyProblem = kind.problem_from_parameters(
+        parameters, folder, seed=seed, time_limit=time_limit, improve_time=improve_time
+    )
+    return problem
 
 
 def warm_up(problem: AnyProblem) -> float:

@@ -13,7 +13,7 @@ import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -25,7 +25,6 @@ from clew_ros.core.tree import LandmarkTree
 
 __all__ = [
     "DEFAULT_KIND",
-    "AnyProblem",
     "WorldKind",
     "kind_named",
     "kind_of",
@@ -33,16 +32,6 @@ __all__ = [
     "kinds",
     "register",
 ]
-
-
-class AnyProblem(Protocol):
-    """An offline problem of any kind: a world and the settings to plan it with."""
-
-    @property
-    def world(self) -> Any: ...
-
-    @property
-    def settings(self) -> PlannerSettings: ...
 
 
 class WorldKind(ABC):

@@ -296,7 +296,7 @@ class LiveState:
         from clew_ros.spatial.snapshot import snapshot_tree
         from clew_ros.spatial.world import spatial_world_from_parameters
 
-        setup, world = config.spatial, config.world
+        setup, world = config.spatial, self._world
         assert setup is not None  # a spatial world (checked at start)
         robot = world.robot
         q = np.asarray(state.initial, dtype=float)

@@ -164,7 +164,8 @@ class Run:
         world = self.config.world
         if self.source == "plan":  # the configured goal (a spatial motion-only query: as it is)
             return world
-        return kind_of(world).with_goal(world, self.goal)
+        moved: World | SpatialWorld = kind_of(world).with_goal(world, self.goal)
+        return moved
 
     @property
     def phase(self) -> Phase:

@@ -178,6 +178,19 @@ class WorldKind(ABC):
     ) -> None:
         """A plan written into ``run`` (``clew_batch --record``'s recorder) as the node records its run."""
 
+    # ------------------------------------------------------------------ a client (PlannerClient)
+
+    @abstractmethod
+    def pose_goal(self, msg: Any) -> tuple[float, ...]:
+        """The goal a ``geometry_msgs/PoseStamped`` names, as this kind's pose numbers."""
+
+    @abstractmethod
+    def plan_from_trajectory(
+        self, parameters: Mapping[str, Any], trajectory: Any, outcome_fields: Mapping[str, Any], message: str
+    ) -> Plan | None:
+        """A run's plan rebuilt from its ``~/trajectory`` and its outcome event's fields in the world of
+        ``parameters`` (the planner's ``~/world_yaml``); ``None`` while that world cannot be read."""
+
     # ------------------------------------------------------------------ the live view
 
     #: Whether the live view draws the kind in 3-D (the ``links`` and ``tf`` channels).

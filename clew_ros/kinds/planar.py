@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -11,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from clew_ros.core.clew import PlanResult, Progress
+from clew_ros.core.errors import ClewError
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree
@@ -20,7 +22,8 @@ from clew_ros.planar import offline
 from clew_ros.planar.kernel import warm_up
 from clew_ros.planar.plan import checked_plan
 from clew_ros.planar.space import plan
-from clew_ros.planar.world import WORLD_KIND, World
+from clew_ros.planar.world import WORLD_KIND, World, world_from_parameters
+from clew_ros.recording.trajectory import trajectory_to_plan
 from clew_ros.ros import messages
 
 __all__ = ["PlanarKind"]
@@ -110,6 +113,20 @@ class PlanarKind(WorldKind):
     ) -> None:
         del setup
         out.planar_sample(world, track, state, time_ns=time_ns, recording=recording)
+
+    def pose_goal(self, msg: Any) -> tuple[float, ...]:
+        p, q = msg.pose.position, msg.pose.orientation
+        return (p.x, p.y, 2.0 * math.atan2(q.z, q.w))
+
+    def plan_from_trajectory(
+        self, parameters: Mapping[str, Any], trajectory: Any, outcome_fields: Mapping[str, Any], message: str
+    ) -> Plan | None:
+        del outcome_fields
+        try:
+            world = world_from_parameters(parameters)
+        except ClewError:
+            return None
+        return trajectory_to_plan(world, trajectory, message=message, strict=True)
 
     def record_run(
         self,

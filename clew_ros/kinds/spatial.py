@@ -16,10 +16,12 @@ from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.kinds.base import WorldKind
 from clew_ros.motion.spatial import spatial_track
+from clew_ros.recording.trajectory import spatial_trajectory_plan
 from clew_ros.ros import spatial as spatial_messages
 from clew_ros.ros.events import spatial_plan_fields
 from clew_ros.spatial import offline
 from clew_ros.spatial.plan import WORLD_KIND
+from clew_ros.spatial.transforms import matrix_pose, quaternion_matrix
 from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["SpatialKind"]
@@ -143,6 +145,17 @@ class SpatialKind(WorldKind):
     ) -> None:
         del track
         out.spatial_sample(world, setup, state, time_ns=time_ns, recording=recording)
+
+    def pose_goal(self, msg: Any) -> tuple[float, ...]:
+        p, q = msg.pose.position, msg.pose.orientation
+        return tuple(matrix_pose(quaternion_matrix([p.x, p.y, p.z], [q.x, q.y, q.z, q.w])))
+
+    def plan_from_trajectory(
+        self, parameters: Mapping[str, Any], trajectory: Any, outcome_fields: Mapping[str, Any], message: str
+    ) -> Plan | None:
+        world = parameters.get("world")
+        name = world.get("name", WORLD_KIND) if isinstance(world, Mapping) else WORLD_KIND
+        return spatial_trajectory_plan(trajectory, dict(outcome_fields), message, str(name or WORLD_KIND))
 
     def record_run(
         self,

@@ -19,8 +19,7 @@ from clew_ros.motion.spatial import spatial_track
 from clew_ros.recording.trajectory import spatial_trajectory_plan
 from clew_ros.ros import spatial as spatial_messages
 from clew_ros.ros.events import spatial_plan_fields
-from clew_ros.spatial import offline
-from clew_ros.spatial.plan import WORLD_KIND
+from clew_ros.spatial import WORLD_KIND, offline
 from clew_ros.spatial.transforms import matrix_pose, quaternion_matrix
 from clew_ros.spatial.world import SpatialWorld
 

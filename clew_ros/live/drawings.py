@@ -14,7 +14,7 @@ import numpy as np
 
 from clew_ros.kinds import kind_of
 from clew_ros.planar.world import WORLD_KIND as PLANAR
-from clew_ros.spatial.plan import WORLD_KIND as SPATIAL
+from clew_ros.spatial import WORLD_KIND as SPATIAL
 
 if TYPE_CHECKING:
     from clew_ros.core.plan import Plan

@@ -67,6 +67,7 @@ from clew_ros.core.parameters import (
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.planar.collision import check_start_and_goal
 from clew_ros.planar.world import World, read_parameter_file, world_from_parameters
+from clew_ros.spatial import WORLD_KIND as SPATIAL_WORLD_KIND
 
 if TYPE_CHECKING:
     from clew_ros.ros.spatial import SpatialSetup
@@ -233,7 +234,7 @@ class Configuration:
 
 
 #: The value of ``world.kind`` that selects a spatial world (section 1b); ``planar`` is the default.
-SPATIAL_KIND = "spatial"
+SPATIAL_KIND = SPATIAL_WORLD_KIND
 
 #: The spec of a spatial world's parameters other than those of :data:`WORLD_PARAMETERS` (the spatial
 #: world parser checks them, naming the one at fault).

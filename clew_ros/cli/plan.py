@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.plan import Plan
+from clew_ros.core.plan import FORMAT, Plan
 from clew_ros.kinds import AnyProblem, kind_of, plan_problem, problem_from_parameters, warm_up
 from clew_ros.live import DEFAULT_PORT, HOST, INSTALL_HINT, LiveView, LiveViewError, LiveViewUnavailableError
 from clew_ros.planar.world import read_parameter_file
@@ -44,7 +44,7 @@ EXIT_ABORTED = 130
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="clew_plan", description=__doc__.split("\n\n")[0])
     parser.add_argument("world", type=Path, help="ROS 2 parameter file holding world.* (and planner.*)")
-    parser.add_argument("--output", "-o", type=Path, required=True, help="plan file to write (clew-plan/1 JSON)")
+    parser.add_argument("--output", "-o", type=Path, required=True, help=f"plan file to write ({FORMAT} JSON)")
     parser.add_argument("--seed", type=int, default=None, help="overrides planner.seed")
     parser.add_argument("--time-limit", type=float, default=None, help="overrides planner.time_limit (s)")
     parser.add_argument(

@@ -61,11 +61,21 @@ __all__ = [
     "transfer_probe_target",
 ]
 
-#: A join's generator is seeded with (planner.seed, this, where the search stalled): its own stream.
-JOIN_STREAM = 13
-#: The transfer probe's inverse kinematics draws from a generator seeded with (planner.seed, this, where
-#: the transfer starts): its own stream, as a join's.
-PROBE_STREAM = 17
+
+@dataclasses.dataclass(frozen=True)
+class SearchStreams:
+    """The random streams of SEARCH's own draws: a generator is seeded with (``planner.seed``, the stream,
+    where the draw happens), so that each draw is the same whatever ran before it."""
+
+    #: A join's generator (with where the search stalled).
+    join: int = 13
+    #: The transfer probe's inverse kinematics (with where the transfer starts); the connection probe
+    #: uses the next stream.
+    probe: int = 17
+
+
+#: The streams SEARCH draws from.
+STREAMS = SearchStreams()
 
 
 def straight_probe(
@@ -135,7 +145,7 @@ def join_stalled(
     stalled = waypoints[-1]
     # a generator of the join's own, seeded by the planner's seed and where the search stalled: a join that
     # fails leaves the run's random stream, and so the rest of the run, as they would have been without it
-    rng = own_generator(ctx, JOIN_STREAM, stalled, job.pose)
+    rng = own_generator(ctx, STREAMS.join, stalled, job.pose)
     targets = job.targets(stalled, rng)
     if not len(targets) or ctx.termination():
         return waypoints, distance
@@ -374,7 +384,7 @@ def transfer_probe_target(
     holds the object at the goal."""
     if not (ctx.search.greedy_probe and ctx.search.transfer_probe):
         return None
-    rng = own_generator(ctx, PROBE_STREAM, q0, grasp_rel)
+    rng = own_generator(ctx, STREAMS.probe, q0, grasp_rel)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
     held = goal_configurations(world_of(ctx), q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)
     return held[0] if len(held) else None
@@ -477,7 +487,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
     object in place; ``None`` when none is clear. Its own generator (the run's stream is untouched)."""
     world, many = world_of(ctx), ctx.many
     grasp_rel = job.pose
-    rng = own_generator(ctx, PROBE_STREAM + 1, job.q0, grasp_rel)
+    rng = own_generator(ctx, STREAMS.probe + 1, job.q0, grasp_rel)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
     held = goal_configurations(world, job.q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)[
         : many.straight_probes

@@ -5,7 +5,7 @@ no rclpy, so it is tested without a ROS graph. ``messages`` turns a
 :class:`Track` into a ``JointTrajectory``; the node samples it in time to
 publish ``~/joint_states`` and ``~/object_pose``.
 
-Timing (interface.md §3 leaves it to us, README documents it):
+Timing (interface.md §3 leaves it to us, docs/ros.md documents it):
 
 - the points are the plan's waypoints (interface.md §3), the first at ``t = 0``;
 - a move between two points of one segment is the rest-to-rest quintic of

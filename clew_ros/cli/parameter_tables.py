@@ -19,7 +19,6 @@ from typing import Any
 
 from clew_ros.core.parameters import (
     LIMITS,
-    NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
     PLANNER_PARAMETERS,
     REQUIRED,
@@ -27,6 +26,7 @@ from clew_ros.core.parameters import (
     Limits,
     ParameterSpec,
 )
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 
 __all__ = ["limits_table", "main", "markdown_tables", "marked_tables", "update_markdown"]
 

@@ -64,7 +64,7 @@ import numpy as np
 
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.parameters import NODE_PARAMETERS, ParameterType, check_joint_count, check_value
+from clew_ros.core.parameters import PLAYBACK_PARAMETERS, ParameterType, check_joint_count, check_value
 from clew_ros.core.plan import Plan
 from clew_ros.live.drawings import Drawing, drawing_for
 from clew_ros.live.errors import LiveViewError, LiveViewUnavailableError
@@ -158,10 +158,10 @@ class LiveView:
         port: int = DEFAULT_PORT,
         namespace: str = "/clew_plan",
         name: str = "clew_plan",
-        rate_hz: float = NODE_PARAMETERS.default("playback.rate"),
-        max_velocity_rad_s: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_velocity"),
-        max_acceleration_rad_s2: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_acceleration"),
-        grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell"),
+        rate_hz: float = PLAYBACK_PARAMETERS.default("playback.rate"),
+        max_velocity_rad_s: float | Sequence[float] = PLAYBACK_PARAMETERS.default("trajectory.max_velocity"),
+        max_acceleration_rad_s2: float | Sequence[float] = PLAYBACK_PARAMETERS.default("trajectory.max_acceleration"),
+        grasp_dwell_s: float = PLAYBACK_PARAMETERS.default("trajectory.grasp_dwell"),
         spatial: bool = False,
     ) -> None:
         if not 0 <= port <= 65535:
@@ -209,9 +209,9 @@ class LiveView:
             if not isinstance(tree, Mapping):
                 raise ParameterError(group, f"expected a mapping, got {tree!r:.80}")
             if leaf in tree:
-                values[keyword] = check_value(NODE_PARAMETERS[key], tree[leaf])
-                if joints is not None and NODE_PARAMETERS[key].type is ParameterType.DOUBLE_PER_JOINT:
-                    check_joint_count(NODE_PARAMETERS[key], values[keyword], joints)
+                values[keyword] = check_value(PLAYBACK_PARAMETERS[key], tree[leaf])
+                if joints is not None and PLAYBACK_PARAMETERS[key].type is ParameterType.DOUBLE_PER_JOINT:
+                    check_joint_count(PLAYBACK_PARAMETERS[key], values[keyword], joints)
         return cls(port=port, spatial=spatial, **values)
 
     # ------------------------------------------------------------------ life

@@ -13,7 +13,7 @@ values. Three families:
   names the parameter at fault.
 - ``planner.*``: :data:`~clew_ros.core.parameters.PLANNER_PARAMETERS`,
   checked by :class:`~clew_ros.core.settings.PlannerSettings`.
-- the node's own: :data:`~clew_ros.core.parameters.NODE_PARAMETERS`
+- the node's own: :data:`~clew_ros.ros.node_parameters.NODE_PARAMETERS`
   (``record.*``, ``playback.*``, ``trajectory.*``, ``live.*``,
   ``parameters.*``), checked here into :class:`NodeSettings`.
 
@@ -50,7 +50,6 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.parameters import (
     LIMITS,
-    NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
     PLANNER_LOCK,
     PLANNER_PARAMETERS,
@@ -67,6 +66,7 @@ from clew_ros.core.parameters import (
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.planar.collision import check_start_and_goal
 from clew_ros.planar.world import World, read_parameter_file, world_from_parameters
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 from clew_ros.spatial import WORLD_KIND as SPATIAL_WORLD_KIND
 
 if TYPE_CHECKING:
@@ -113,7 +113,7 @@ OWN_PREFIXES = (
 
 @dataclass(frozen=True)
 class NodeSettings:
-    """The node's own parameters, checked (defaults from :data:`~clew_ros.core.parameters.NODE_PARAMETERS`)."""
+    """The node's own parameters, checked (defaults from :data:`~clew_ros.ros.node_parameters.NODE_PARAMETERS`)."""
 
     record_enabled: bool = NODE_PARAMETERS.default("record.enabled")
     record_directory: str = NODE_PARAMETERS.default("record.directory")

@@ -11,7 +11,6 @@ import pytest
 from clew_ros.cli.parameter_tables import main, markdown_tables, update_markdown
 from clew_ros.core.errors import ParameterError, short_repr
 from clew_ros.core.parameters import (
-    NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
     PLANNER_PARAMETERS,
     REQUIRED,
@@ -22,6 +21,7 @@ from clew_ros.core.parameters import (
     check_value,
 )
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 
 README = Path(__file__).resolve().parents[2] / "docs" / "parameters.md"  # where the tables are
 TABLES = (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS)

@@ -20,11 +20,11 @@ from clew_ros.cli.parameter_tables import limits_table, markdown_tables
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.parameters import (
     LIMITS,
-    NODE_PARAMETERS,
     PLANNER_PARAMETERS,
     check_value,
 )
 from clew_ros.planar.world import world_from_parameters
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 
 #: A tiny valid world (two links, one obstacle), changed by each case.
 BASE: dict[str, Any] = {

@@ -46,7 +46,7 @@ from clew_ros.planar.reach import (
     two_link_grasps,
     within_reach,
 )
-from clew_ros.planar.world import World, world_of
+from clew_ros.planar.world import World
 
 __all__ = [
     "goal_configurations",
@@ -79,13 +79,18 @@ STREAMS = SearchStreams()
 
 
 def straight_probe(
-    ctx: PlanningContext, jobs: list[SearchJob], q: np.ndarray, best: np.ndarray, waypoints: list[list[np.ndarray]]
+    world: World,
+    ctx: PlanningContext,
+    jobs: list[SearchJob],
+    q: np.ndarray,
+    best: np.ndarray,
+    *,
+    waypoints: list[list[np.ndarray]],
 ) -> None:
     """Jobs with ``straight`` configurations (transits of arms of many joints, :class:`ManyJoints`) try a
     straight joint-space move from their start to each, nearest first, checked continuously with
     ``SearchSettings.min_margin_factor`` x the clearance as the improvement's moves are
     (valid at any checking step); the first clear one ends the search there. Draws nothing at random."""
-    world = world_of(ctx)
     for i, job in enumerate(jobs):
         if job.straight is None or not len(job.straight) or ctx.termination():
             continue
@@ -98,7 +103,7 @@ def straight_probe(
         )
         if clear.any():
             clear[clear] = _moves_clear_stopping(
-                ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
+                world, ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
             )
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
         if way is None:  # by way of a retreat along the tip's heading and an approach along the target's
@@ -119,7 +124,9 @@ def straight_probe(
                     world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
                 ).all():
                     continue
-                if _moves_clear_stopping(ctx, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, until=False).all():
+                if _moves_clear_stopping(
+                    world, ctx, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, until=False
+                ).all():
                     way = path[1:]
                     break
         if way is not None:
@@ -132,14 +139,13 @@ def straight_probe(
 
 
 def join_stalled(
-    ctx: PlanningContext, job: SearchJob, waypoints: np.ndarray, distance: float
+    world: World, ctx: PlanningContext, job: SearchJob, waypoints: np.ndarray, distance: float
 ) -> tuple[np.ndarray, float]:
     """A search that failed, stalled near its target (``distance`` at most ``job.join_within``), extended by
     RRT-Connect to one of ``job.targets`` (in the same mode, every move checked continuously with
     ``SearchSettings.min_margin_factor`` x the clearance, at most ``SearchSettings.join_rounds`` rounds,
     then once more at the validator's 0.002 rad); its waypoints and objective, unchanged when no way was
     found."""
-    world = world_of(ctx)
     if job.targets is None or distance > job.join_within:
         return waypoints, distance
     stalled = waypoints[-1]
@@ -169,7 +175,13 @@ def join_stalled(
 
 
 def search_transit(
-    ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None = None
+    world: World,
+    ctx: PlanningContext,
+    q0: np.ndarray,
+    object_pose: np.ndarray,
+    *,
+    grasp: int,
+    approach: np.ndarray | None = None,
 ) -> PathResult:
     """SEARCH_TRANSIT: move the arm, object at rest, until its tip holds ``grasp``.
 
@@ -179,13 +191,12 @@ def search_transit(
     two-joint arm whose valid holding configurations all bend the elbow one
     way, the residual also gains how far the elbow bends the other way.
     """
-    return search_transits(ctx, [(q0, object_pose, grasp, approach)])[0]
+    return search_transits(world, ctx, [(q0, object_pose, grasp, approach)])[0]
 
 
-def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
+def search_transits(world: World, ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
     """:func:`search_transit` for independent requests ``(q0, object_pose, grasp, approach)`` at once:
     their genetic algorithms run as islands of one batch."""
-    world = world_of(ctx)
     results: list[PathResult | None] = []
     jobs, slots = [], []
     many = world.robot.dof >= ctx.many.straight_probe_joints
@@ -213,7 +224,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
     if jobs:
         for slot, job, (found, reached) in zip(slots, jobs, local_search(ctx, jobs), strict=True):
             success = reached <= 0.5 * world.grasp_tolerance
-            waypoints, distance = (found, reached) if success else join_stalled(ctx, job, found, reached)
+            waypoints, distance = (found, reached) if success else join_stalled(world, ctx, job, found, reached)
             success = distance <= 0.5 * world.grasp_tolerance
             grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
             results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
@@ -376,7 +387,7 @@ def goal_configurations(
 
 
 def transfer_probe_target(
-    ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
+    world: World, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
 ) -> np.ndarray | None:
     """The configuration SEARCH_TRANSFER's greedy probe heads for: the nearest (largest joint move) of
     :func:`goal_configurations` from ``q0``, drawn from a generator of its own seeded by the planner's seed
@@ -386,11 +397,12 @@ def transfer_probe_target(
         return None
     rng = own_generator(ctx, STREAMS.probe, q0, grasp_rel)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
-    held = goal_configurations(world_of(ctx), q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)
+    held = goal_configurations(world, q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)
     return held[0] if len(held) else None
 
 
 def _moves_clear_stopping(
+    world: World,
     ctx: PlanningContext,
     starts: np.ndarray,
     ends: np.ndarray,
@@ -406,7 +418,6 @@ def _moves_clear_stopping(
     check of a long move near a contact can take seconds, past the time limit. The moves are checked in
     order until the first whose answer is ``until`` (the first clear one, or the first blocked one); the
     others, and a move whose check was stopped, come back not clear."""
-    world = world_of(ctx)
     lengths = world.robot.link_lengths
     arm = np.cumsum(lengths[::-1])[::-1] + (world.object.radius if grasp_rel is not None else 0.0)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
@@ -480,12 +491,12 @@ def _backed_line(
     return line[1:]
 
 
-def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -> PathResult | None:
+def _straight_transfer(world: World, ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -> PathResult | None:
     """Arms of many joints (:class:`ManyJoints`): SEARCH_TRANSFER by straight joint-space moves, checked
     continuously, to a configuration holding the object at the goal (:func:`goal_configurations`, nearest
     first), directly or by way of the line along which the tip, backed along its own heading, puts the
     object in place; ``None`` when none is clear. Its own generator (the run's stream is untouched)."""
-    world, many = world_of(ctx), ctx.many
+    many = ctx.many
     grasp_rel = job.pose
     rng = own_generator(ctx, STREAMS.probe + 1, job.q0, grasp_rel)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
@@ -508,7 +519,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
         for way in ways:
             if not _sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, step_rad=many.screen_step_rad).all():
                 continue
-            if _moves_clear_stopping(ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
+            if _moves_clear_stopping(world, ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
                 pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]
                 distance = float(np.linalg.norm(goal_error(world, pose[None], goal)[0]))
                 if goal_reached(world, pose, goal) and distance <= 0.5 * world.goal_tolerance:
@@ -517,11 +528,10 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
 
 
 def search_transfer(
-    ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
+    world: World, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
 ) -> PathResult:
     """SEARCH_TRANSFER: carry the object (held as ``grasp_rel``) toward the ``goal`` placement; stalled near it,
     joined to it (:func:`join_stalled`, towards :func:`goal_configurations`) unless ``joins`` is false."""
-    world = world_of(ctx)
     mode = {"grasp_rel": np.asarray(grasp_rel, float)[None]}
 
     def error(q: np.ndarray) -> np.ndarray:
@@ -545,10 +555,10 @@ def search_transfer(
         )
 
     within = ctx.search.join_radius * world.robot.reach
-    toward = transfer_probe_target(ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
+    toward = transfer_probe_target(world, ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
     job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within, toward)
     if world.robot.dof >= ctx.many.straight_probe_joints:
-        straight = _straight_transfer(ctx, job, goal)
+        straight = _straight_transfer(world, ctx, job, goal)
         if straight is not None:
             return straight
     if world.robot.dof >= ctx.many.straight_probe_joints and not ctx.many.transfer_ga:
@@ -563,6 +573,6 @@ def search_transfer(
 
     success, final_pose = succeeded(waypoints, distance)
     if not success:
-        waypoints, distance = join_stalled(ctx, job, waypoints, distance)
+        waypoints, distance = join_stalled(world, ctx, job, waypoints, distance)
         success, final_pose = succeeded(waypoints, distance)
     return PathResult(success, waypoints, distance, object_pose=final_pose)

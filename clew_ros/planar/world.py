@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import shapely
@@ -27,9 +27,6 @@ import yaml
 from clew_ros.core.errors import WorldError, short_repr
 from clew_ros.core.files import FileRefusedError, read_regular_file, yaml_error_place
 from clew_ros.core.parameters import LIMITS, REQUIRED, WORLD_PARAMETERS, Limits
-
-if TYPE_CHECKING:
-    from clew_ros.core.space import PlanningContext
 
 __all__ = [
     "MAX_LINKS",
@@ -44,7 +41,6 @@ __all__ = [
     "load_world",
     "read_parameter_file",
     "world_from_parameters",
-    "world_of",
     "world_to_parameters",
 ]
 
@@ -520,11 +516,3 @@ def world_to_parameters(world: World) -> dict[str, Any]:
         tree["obstacle_names"] = [o.name for o in world.obstacles]
         tree["obstacles"] = {o.name: o.vertices.ravel().tolist() for o in world.obstacles}
     return {"world": tree}
-
-
-def world_of(ctx: PlanningContext) -> World:
-    """The planar world of a planning run's space (:class:`clew_ros.planar.space.PlanarSpace`)."""
-    world = getattr(ctx.space, "world", None)
-    if not isinstance(world, World):
-        raise TypeError(f"expected a planning context over a planar space, got {type(ctx.space).__name__}")
-    return world

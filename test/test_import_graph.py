@@ -31,11 +31,12 @@ ROOT = Path(__file__).resolve().parents[1] / PACKAGE
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("core",),  # the Ariadne's Clew Algorithm; never imports rclpy
     ("planar", "spatial"),  # the kinds of world the algorithm plans in, side by side
-    ("worlds", "motion", "offline"),  # clew_world's worlds; a plan timed and played back; a file to a plan
+    ("worlds", "motion"),  # clew_world's worlds; a plan timed and played back
     ("scene",),  # one description of what to draw (items, palette) for the picture, RViz and Foxglove
     ("ros",),  # ROS messages, QoS, topics, parameters, frames, URDF: message types, no node
     ("recording",),  # the rosbag2 MCAP writer and reader
     ("render",),  # PNG / GIF / SVG of a world, a plan or a recording
+    ("kinds",),  # one adapter per kind of world: what the code above asks a world (a parameter file to a plan)
     ("batch", "live"),  # clew_batch (and its --record); the Foxglove live view
     ("node", "client"),  # the ROS 2 node; PlannerClient and call_plan
     ("cli", "examples"),  # the programs

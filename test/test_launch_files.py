@@ -17,9 +17,9 @@ import pytest
 import yaml
 from helpers.launch_api import Recorded, describe, install, of_type, started_nodes
 
-from clew_ros.core.parameters import NODE_PARAMETERS
 from clew_ros.node.namespaces import DEMO_WORLDS
 from clew_ros.planar.world import read_parameter_file
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 
 ROOT = Path(__file__).resolve().parents[1]
 LAUNCH = ROOT / "launch"

@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from clew_ros.batch.errors import BatchError
-from clew_ros.core.files import PRIVATE_FOLDER_MODE
+from clew_ros.core.files import FILES
 
 __all__ = [
     "FILE_MODE",
@@ -25,7 +25,7 @@ __all__ = [
     "write_private",
 ]
 
-FOLDER_MODE = PRIVATE_FOLDER_MODE
+FOLDER_MODE = FILES.private_folder_mode
 FILE_MODE = 0o600
 
 

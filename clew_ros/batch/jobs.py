@@ -34,7 +34,7 @@ from clew_ros.batch.errors import BatchInputError
 from clew_ros.core.errors import ParameterError
 from clew_ros.core.parameters import PLANNER_PARAMETERS, check_value
 from clew_ros.core.settings import PlannerSettings
-from clew_ros.offline import AnyProblem, problem_from_parameters
+from clew_ros.kinds import AnyProblem, problem_from_parameters
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.worlds import GenerationError, UnknownFamilyError, generate, write_world
 

@@ -45,10 +45,10 @@ from std_msgs.msg import String
 
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.kinds import kind_of
 from clew_ros.motion.playback import node_track
 from clew_ros.motion.player import scheduled_samples
 from clew_ros.motion.spatial import spatial_track
-from clew_ros.planar.world import World
 from clew_ros.recording import RecordingError, RunRecorder
 from clew_ros.recording.cdr import tf_message
 from clew_ros.ros import frames, messages, spatial
@@ -65,6 +65,7 @@ from clew_ros.ros.qos import GOAL_QOS
 from clew_ros.ros.topics import TF_TOPICS, TOPICS
 
 if TYPE_CHECKING:
+    from clew_ros.planar.world import World
     from clew_ros.ros.spatial import SpatialSetup
     from clew_ros.spatial.world import SpatialWorld
 
@@ -126,6 +127,25 @@ class _Run:
         self.tf(spatial.state_transforms(setup, world, joints, object_pose), time_ns)
         self.write("scene", spatial.scene_markers(world, joints, gripper, object_pose, time_ns), time_ns)
 
+    def record_planar(  # the kind's record_run: a planar run
+        self, world: World, plan: Plan, *, planner: PlannerSettings, node: NodeSettings, recording_text: str
+    ) -> None:
+        _accepted(self, world, plan, planner, recording_text)
+        _concluded(self, world, plan, node, recording_text)
+
+    def record_spatial(  # the kind's record_run: a spatial run
+        self,
+        world: SpatialWorld,
+        setup: SpatialSetup,
+        plan: Plan,
+        *,
+        planner: PlannerSettings,
+        node: NodeSettings,
+        recording_text: str,
+    ) -> None:
+        _spatial_accepted(self, world, setup, planner, recording_text)
+        _spatial_concluded(self, world, setup, plan, node, recording_text)
+
 
 def record_plan(
     directory: str | Path,
@@ -167,14 +187,9 @@ def record_plan(
     recorder = RunRecorder(directory, run_id.hex, node_name=node_name)
     with recorder:
         run = _Run(recorder, run_id, node_name, start_ns)
-        if isinstance(world, World):
-            _accepted(run, world, plan, planner, recording_text)
-            _concluded(run, world, plan, node, recording_text)
-        else:
-            if setup is None:
-                raise ValueError("a spatial world is recorded with its setup (clew_ros.ros.spatial.load_spatial)")
-            _spatial_accepted(run, world, setup, planner, recording_text)
-            _spatial_concluded(run, world, setup, plan, node, recording_text)
+        kind_of(world).record_run(
+            run, world, plan, planner=planner, node=node, recording_text=recording_text, setup=setup
+        )
     if recorder.error:
         raise RecordingError(recorder.error)
     return recorder.path

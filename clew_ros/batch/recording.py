@@ -17,7 +17,6 @@ here. Without ``--record`` nothing here imports ROS.
 
 from __future__ import annotations
 
-import copy
 import shutil
 import tempfile
 import uuid
@@ -98,19 +97,11 @@ def recording_files(
     parameter of the world file is invalid).
     """
     from clew_ros.batch.plan_recording import record_plan
-    from clew_ros.planar.world import World
+    from clew_ros.kinds import kind_of
     from clew_ros.ros.parameters import flatten, node_settings
 
     node = node_settings(flatten(parameters), world.robot.dof)
-    setup = None
-    if not isinstance(world, World):
-        from clew_ros.ros.spatial import absolute_paths, load_spatial
-
-        start = Path() if folder is None else folder
-        tree = copy.deepcopy(dict(parameters))
-        if isinstance(tree.get("world"), dict):
-            absolute_paths(tree["world"], start.resolve())
-        _, setup = load_spatial(tree, start)
+    setup = kind_of(world).setup_of(parameters, Path() if folder is None else folder)
     with tempfile.TemporaryDirectory(prefix="clew_batch_record_") as temporary:
         path = record_plan(
             temporary,

@@ -38,7 +38,7 @@ from clew_ros.batch.worker import JobOutcome, JobSpec
 from clew_ros.core.errors import PlanFileError
 from clew_ros.core.files import private_folders
 from clew_ros.core.plan import Plan
-from clew_ros.offline import failed_plan
+from clew_ros.kinds import failed_plan
 
 __all__ = ["DEFAULT_GRACE_S", "BatchReport", "has_valid_output", "job_spec", "run_batch"]
 

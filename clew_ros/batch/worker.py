@@ -113,8 +113,7 @@ def run_job(spec: JobSpec) -> JobOutcome:
     without a recording (``recording`` ``None``: the driver tries once more, else the job is redone by
     the next run); its time counts in the job's time-out (time limit + grace).
     """
-    from clew_ros.offline import plan_problem, problem_from_parameters, warm_up
-    from clew_ros.planar.world import World
+    from clew_ros.kinds import kind_of, plan_problem, problem_from_parameters
 
     started, started_ns = time.monotonic(), time.time_ns()
     problem = problem_from_parameters(
@@ -124,8 +123,7 @@ def run_job(spec: JobSpec) -> JobOutcome:
         time_limit=spec.time_limit_s,
         improve_time=spec.improve_time_s,
     )
-    if not isinstance(problem.world, World):  # a spatial world's kernels, compiled once per process
-        warm_up(problem)
+    kind_of(problem).warm_up_worker(problem)  # what the kind compiles once per process
     plan = plan_problem(replace(problem, settings=replace(problem.settings, threads=1)))
     wall_time_s = time.monotonic() - started
     recording = None

@@ -29,12 +29,13 @@ from typing import TYPE_CHECKING
 
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.plan import Plan
+from clew_ros.core.plan import FORMAT, Plan
+from clew_ros.kinds import AnyProblem, kind_of, plan_problem, problem_from_parameters, warm_up
 from clew_ros.live import DEFAULT_PORT, HOST, INSTALL_HINT, LiveView, LiveViewError, LiveViewUnavailableError
-from clew_ros.offline import AnyProblem, plan_problem, problem_from_parameters, warm_up
-from clew_ros.planar.world import World, read_parameter_file
+from clew_ros.planar.world import read_parameter_file
 
 if TYPE_CHECKING:
+    from clew_ros.planar.world import World
     from clew_ros.spatial.world import SpatialWorld
 
 EXIT_ABORTED = 130
@@ -43,7 +44,7 @@ EXIT_ABORTED = 130
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="clew_plan", description=__doc__.split("\n\n")[0])
     parser.add_argument("world", type=Path, help="ROS 2 parameter file holding world.* (and planner.*)")
-    parser.add_argument("--output", "-o", type=Path, required=True, help="plan file to write (clew-plan/1 JSON)")
+    parser.add_argument("--output", "-o", type=Path, required=True, help=f"plan file to write ({FORMAT} JSON)")
     parser.add_argument("--seed", type=int, default=None, help="overrides planner.seed")
     parser.add_argument("--time-limit", type=float, default=None, help="overrides planner.time_limit (s)")
     parser.add_argument(
@@ -114,11 +115,11 @@ def _cancel_on_signals(cancel: threading.Event, doing: str = "canceling the run"
     return restore
 
 
-def _start_live_view(parameters: dict, port: int, joints: int, *, spatial: bool) -> LiveView | str:
-    """The started live view (timed for a robot of ``joints`` joints; ``spatial``: drawing a spatial world),
+def _start_live_view(parameters: dict, port: int, joints: int, *, in_3d: bool) -> LiveView | str:
+    """The started live view (timed for a robot of ``joints`` joints; ``in_3d``: drawing a world in 3-D),
     or why it cannot start (a message for stderr)."""
     try:
-        return LiveView.from_parameters(parameters, port=port, joints=joints, spatial=spatial).start()
+        return LiveView.from_parameters(parameters, port=port, joints=joints, spatial=in_3d).start()
     except LiveViewUnavailableError:
         return f"--foxglove needs foxglove-sdk, which is not installed: {INSTALL_HINT}"
     except (LiveViewError, ParameterError) as error:
@@ -169,8 +170,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.foxglove is None:
         return _plan(args, problem, None)
-    spatial = not isinstance(problem.world, World)
-    view = _start_live_view(parameters, args.foxglove, problem.world.robot.dof, spatial=spatial)
+    in_3d = kind_of(problem).live_in_3d
+    view = _start_live_view(parameters, args.foxglove, problem.world.robot.dof, in_3d=in_3d)
     if isinstance(view, str):
         print(f"clew_plan: {view}", file=sys.stderr)
         return 2

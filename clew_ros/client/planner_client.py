@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import threading
 import time
 import weakref
@@ -59,8 +58,8 @@ from clew_ros.client.run import (
 from clew_ros.client.world_now import StartState, StateSender
 from clew_ros.core.errors import ClewError
 from clew_ros.core.settings import Outcome
-from clew_ros.planar.world import World, world_from_parameters
-from clew_ros.recording.trajectory import spatial_trajectory_plan, trajectory_to_plan
+from clew_ros.kinds import DEFAULT_KIND, WorldKind, kind_named, kind_of_parameters
+from clew_ros.recording.trajectory import spatial_trajectory_plan
 from clew_ros.ros import messages
 from clew_ros.ros.qos import EVENTS_QOS, GOAL_QOS, LATCHED_QOS, STREAM_QOS
 
@@ -217,13 +216,7 @@ class PlannerClient:
         if isinstance(goal, PoseStamped):
             msg = goal
             msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 10**9)
-            p, q = msg.pose.position, msg.pose.orientation
-            if self._world_kind() == "spatial":
-                from clew_ros.spatial.transforms import matrix_pose, quaternion_matrix
-
-                target = tuple(matrix_pose(quaternion_matrix([p.x, p.y, p.z], [q.x, q.y, q.z, q.w])))
-            else:
-                target = (p.x, p.y, 2.0 * math.atan2(q.z, q.w))
+            target = (self._kind() or kind_named(DEFAULT_KIND)).pose_goal(msg)
         else:
             target = tuple(float(v) for v in goal)
             if len(target) == 6:
@@ -380,15 +373,13 @@ class PlannerClient:
         trajectory = self._trajectory_of(handle)
         if trajectory is None:
             return
+        kind, parameters = self._kind(), self._world_parameters()
+        if kind is None or parameters is None:
+            return
         try:
-            if self._world_kind() == "spatial":
-                name = self._world_parameter("name", "spatial") or "spatial"
-                plan = spatial_trajectory_plan(trajectory, handle.outcome_fields, result.message, name)
-            else:
-                world = self._world()
-                if world is None:
-                    return
-                plan = trajectory_to_plan(world, trajectory, message=result.message, strict=True)
+            plan = kind.plan_from_trajectory(parameters, trajectory, handle.outcome_fields, result.message)
+            if plan is None:
+                return
         except (
             ValueError,
             IndexError,
@@ -413,29 +404,24 @@ class PlannerClient:
             later = [t for t in self._trajectories if t.header.stamp.sec * 10**9 + t.header.stamp.nanosec >= accepted]
         return later[0] if later else None
 
-    def _world_parameter(self, key: str, default: str) -> str | None:
-        """``world.<key>`` as the planner's ``~/world_yaml`` says (``None``: not seen yet)."""
+    def _world_parameters(self) -> dict[str, Any] | None:
+        """The planner's parameters as its ``~/world_yaml`` says (``None``: not seen yet)."""
         if self._world_text is None:
             return None
         try:
-            document = yaml.safe_load(self._world_text)
-            value = next(iter(document.values()))["ros__parameters"]["world"].get(key, default)
+            parameters = next(iter(yaml.safe_load(self._world_text).values()))["ros__parameters"]
         except (yaml.YAMLError, AttributeError, KeyError, StopIteration, TypeError):
             return None
-        return str(value)
+        return parameters if isinstance(parameters, dict) else None
 
-    def _world_kind(self) -> str | None:
-        """``planar`` or ``spatial``, as the planner's ``~/world_yaml`` says (``None``: not seen yet)."""
-        return self._world_parameter("kind", "planar")
-
-    def _world(self) -> World | None:
-        if self._world_text is None:
+    def _kind(self) -> WorldKind | None:
+        """The kind of the planner's world, as its ``~/world_yaml`` says (``None``: not seen yet, or unknown)."""
+        parameters = self._world_parameters()
+        if parameters is None:
             return None
         try:
-            document = yaml.safe_load(self._world_text)
-            parameters = next(iter(document.values()))["ros__parameters"]
-            return world_from_parameters(parameters)
-        except (ClewError, yaml.YAMLError, AttributeError, KeyError, StopIteration, TypeError):
+            return kind_of_parameters(parameters)
+        except ClewError:
             return None
 
     def _on_status(self, msg: GoalStatusArray) -> None:

@@ -7,22 +7,33 @@ from __future__ import annotations
 import errno
 import os
 import stat
+from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
 __all__ = [
-    "PRIVATE_FOLDER_MODE",
+    "FILES",
     "FileRefusedError",
+    "FileSettings",
     "private_folders",
     "read_at_most",
     "read_regular_file",
     "yaml_error_place",
 ]
 
-#: Mode of the folders :func:`private_folders` makes: the owner's alone (recordings, batch results).
-PRIVATE_FOLDER_MODE = 0o700
 
-_PIECE = 1 << 20  # bytes read at a time: memory grows with the file, not with the limit
+@dataclass(frozen=True)
+class FileSettings:
+    """How files are read and private folders made."""
+
+    #: Mode of the folders :func:`private_folders` makes: the owner's alone (recordings, batch results).
+    private_folder_mode: int = 0o700
+    #: Bytes read at a time (bytes): memory grows with the file, not with the limit.
+    read_piece_bytes: int = 1 << 20
+
+
+#: The settings this module works with.
+FILES = FileSettings()
 
 
 def read_at_most(stream: BinaryIO, limit: int) -> bytes:
@@ -34,7 +45,7 @@ def read_at_most(stream: BinaryIO, limit: int) -> bytes:
     pieces = []
     total = 0
     while total <= limit:
-        piece = stream.read(min(_PIECE, limit + 1 - total))
+        piece = stream.read(min(FILES.read_piece_bytes, limit + 1 - total))
         if not piece:
             break
         pieces.append(piece)
@@ -93,10 +104,10 @@ def private_folders(path: Path) -> Path:
         folder = folder.parent
     for folder in reversed(missing):
         try:
-            folder.mkdir(mode=PRIVATE_FOLDER_MODE)
+            folder.mkdir(mode=FILES.private_folder_mode)
         except FileExistsError:
             continue  # made meanwhile: its mode is its maker's
-        folder.chmod(PRIVATE_FOLDER_MODE)
+        folder.chmod(FILES.private_folder_mode)
     if not path.is_dir():
         raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path))
     return path

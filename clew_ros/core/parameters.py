@@ -6,8 +6,9 @@ description), one :class:`ParameterTable` per namespace:
 - :data:`WORLD_PARAMETERS`: ``world.*`` (interface.md §1), plus the pattern
   :data:`OBSTACLE_PARAMETER` for ``world.obstacles.<name>``;
 - :data:`PLANNER_PARAMETERS`: ``planner.*``;
-- :data:`NODE_PARAMETERS`: the node's own ``record.*``, ``playback.*``,
-  ``trajectory.*``, ``live.*`` and ``parameters.*``;
+- :data:`PLAYBACK_PARAMETERS`: ``playback.*`` and ``trajectory.*``, the playback's timing (the node's
+  and ``clew_plan``'s live view's); the node's own ``record.*``, ``live.*``, ``state.*``, ``markers.*`` and
+  ``parameters.*`` are specified with the node (``clew_ros.ros.node_parameters``);
 - :data:`LIMITS`: the caps on the size of what the parameters describe
   (links, obstacles, vertices, grasps, parameter count and name lengths).
 
@@ -17,10 +18,10 @@ Derived from these tables: the defaults of
 ``clew_ros.ros.parameters.NodeSettings``; the defaults and required keys of
 the world parser; the checks of scalar parameters (:func:`check_value`); the
 ROS 2 parameter descriptors (``clew_ros.ros.parameters.descriptor_for``);
-and the parameter tables of README.md (:func:`markdown_tables`)::
+and the parameter tables of docs/parameters.md (``clew_ros.cli.parameter_tables.markdown_tables``)::
 
     python -m clew_ros.cli.parameter_tables        # print the tables
-    python -m clew_ros.cli.parameter_tables --update README.md
+    python -m clew_ros.cli.parameter_tables --update docs/parameters.md
 
 The ``world.*`` lists, polygons and the rules that tie several keys together
 are checked by the world parser (:mod:`clew_ros.planar.world`). Pure data and
@@ -32,7 +33,6 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
-import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -42,10 +42,10 @@ from clew_ros.core.errors import ParameterError, short_repr
 __all__ = [
     "LIMITS",
     "LOCKED_PREFIXES",
-    "NODE_PARAMETERS",
     "OBSTACLE_PARAMETER",
     "PLANNER_LOCK",
     "PLANNER_PARAMETERS",
+    "PLAYBACK_PARAMETERS",
     "REQUIRED",
     "RETIRED_PARAMETERS",
     "RUNTIME_CHANGES",
@@ -57,10 +57,7 @@ __all__ = [
     "ParameterType",
     "check_joint_count",
     "check_value",
-    "limits_table",
-    "markdown_tables",
     "retired_message",
-    "update_markdown",
 ]
 
 
@@ -87,7 +84,7 @@ def retired_message(name: str) -> str:
 
 
 class ParameterType(enum.Enum):
-    """The type of a parameter's value; ``value`` is the name README and the descriptors show."""
+    """The type of a parameter's value; ``value`` is the name the parameter tables and the descriptors show."""
 
     BOOL = "bool"
     INTEGER = "integer"
@@ -137,7 +134,7 @@ class ParameterSpec:
 
     @property
     def at_run_time(self) -> str:
-        """What README's tables say about a change while the node runs."""
+        """What the parameter tables say about a change while the node runs."""
         if self.read_only:
             return "fixed"
         return "fixed (dev switch)" if self.locked else "settable"
@@ -454,199 +451,11 @@ PLANNER_PARAMETERS = ParameterTable(
 
 #: The world as it is now (interface.md section 3c; spatial worlds): inputs the node reads while it runs. Each is
 #: off unless turned on; all read only (taken when the node starts).
-STATE_PARAMETERS = [
-    ParameterSpec(
-        "state.joint_states",
-        _B,
-        False,
-        "Plan each run from the latest joint_states (sensor_msgs/JointState, a relative name: /joint_states "
-        "unless remapped): the planned joints by name (the fixed joints too when the message has them). "
-        "Read only.",
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.max_age",
-        _D,
-        1.0,
-        "With state.joint_states: a run asked while a planned joint has no state, or its latest is older than "
-        "this by the node's clock (header stamp; the receive time when the stamp is zero), is refused "
-        "START_STATE_UNKNOWN (10). Read only.",
-        "s",
-        (0.001, 3600.0),
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.object_pose",
-        _B,
-        False,
-        "Start each run with the object at the latest ~/object (geometry_msgs/PoseStamped, frame world), "
-        "snapped onto the nearest stable placement within state.snap_m and state.snap_rad, else refused "
-        "INVALID_WORLD saying why. Read only.",
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.snap_m",
-        _D,
-        0.01,
-        "How far (m) an ~/object pose's resting face may lie from a support's top face and still be snapped "
-        "onto it. Read only.",
-        "m",
-        (0.0, 1.0),
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.snap_rad",
-        _D,
-        0.05,
-        "How far (rad) an ~/object pose's resting face may be tilted from level and still be snapped level. Read only.",
-        "rad",
-        (0.0, 1.0),
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.obstacles",
-        _B,
-        False,
-        "Obstacles added at run time from ~/obstacles (visualization_msgs/MarkerArray: CUBE, SPHERE, "
-        "CYLINDER; ADD/MODIFY, DELETE, DELETEALL), named <ns>/<id>. Read only.",
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.points",
-        _B,
-        False,
-        "Sensed obstacles from ~/points (sensor_msgs/PointCloud2, float32 x y z, frame world): each message "
-        "replaces the previous cloud; points on the arm or the object are dropped, the rest occupy cubes of "
-        "edge state.voxel_m, each a box obstacle points/<i>. Read only.",
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.voxel_m",
-        _D,
-        0.02,
-        "Edge (m) of the cubes a point cloud occupies. Read only.",
-        "m",
-        (0.001, 1.0),
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.self_filter_m",
-        _D,
-        0.02,
-        "Points within this distance (m) of the arm's links (their sphere cover) or of the object are dropped "
-        "from a cloud. Read only.",
-        "m",
-        (0.0, 1.0),
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.max_points",
-        _I,
-        1_000_000,
-        "Most points one ~/points message may hold; a larger one is refused with one warning and the previous "
-        "cloud stays. Read only.",
-        "points",
-        (1, 100_000_000),
-        read_only=True,
-    ),
-    ParameterSpec(
-        "state.advance",
-        _B,
-        False,
-        "After a run that succeeds, the next starts where its plan ended (the arm at its last waypoint, the "
-        "object at its final pose) unless joint_states or ~/object say otherwise. Read only.",
-        read_only=True,
-    ),
-]
-
-NODE_PARAMETERS = ParameterTable(
+#: The playback's timing: what the node times ``~/trajectory`` and its playback with, and ``clew_plan``'s live
+#: view too (the node's own parameters, :data:`clew_ros.ros.parameters.NODE_PARAMETERS`, include these).
+PLAYBACK_PARAMETERS = ParameterTable(
     "",
     [
-        ParameterSpec(
-            "live.foxglove_port",
-            _I,
-            0,
-            "Serve the runs live to Foxglove over a WebSocket on 127.0.0.1 at this port (0: off; needs the live "
-            "extra, foxglove-sdk). Read only: taken when the node starts.",
-            "",
-            (0, 65535),
-            read_only=True,
-            locked=True,
-        ),
-        ParameterSpec(
-            RUNTIME_CHANGES,
-            _B,
-            False,
-            "Development switch: true lets ros2 param set change the world.*, record.*, trajectory.* and live.* "
-            "parameters while the node runs (when no plan runs); false fixes them at start, and a change is "
-            "refused naming the parameter. Read only: taken when the node starts.",
-            read_only=True,
-        ),
-        ParameterSpec(
-            SIM_TIME_CHANGES,
-            _B,
-            False,
-            "true lets ros2 param set change use_sim_time while the node runs; false fixes it at its start value "
-            "(a peer that switched it on would stamp ~/trajectory with its own /clock), and a change is refused "
-            "naming it. Read only: taken when the node starts.",
-            read_only=True,
-        ),
-        ParameterSpec(
-            PLANNER_LOCK,
-            _B,
-            False,
-            "true fixes every planner.* parameter at its start value (a change is refused naming it), so that no "
-            "peer can change how much CPU a run takes or which plan a seed gives; false: planner.* settable. "
-            "Read only: taken when the node starts.",
-            read_only=True,
-        ),
-        ParameterSpec(
-            "record.enabled",
-            _B,
-            True,
-            "Record every run as a rosbag2 directory <record.directory>/<run id>/ (folders mode 0700, files 0600).",
-            locked=True,
-        ),
-        ParameterSpec(
-            "record.directory",
-            _S,
-            "~/.ros/clew_recordings",
-            "Where runs are recorded, resolved once at start to an absolute path: '~' is expanded, environment "
-            "variables are not (a '$' is refused); symbolic links and '..' are resolved, and every run folder "
-            "is made inside the resolved directory.",
-            locked=True,
-        ),
-        ParameterSpec(
-            "record.max_runs",
-            _I,
-            100,
-            "Most run folders kept in record.directory: as a run starts, the oldest complete runs beyond it are "
-            "deleted (logged), never the run being recorded; only folders named by a run id that hold a "
-            "metadata.yaml are counted or deleted. 0: no limit.",
-            limits=(0, 1_000_000),
-            locked=True,
-        ),
-        ParameterSpec(
-            "record.max_bytes",
-            _I,
-            2**30,
-            "Most bytes kept in the complete run folders of record.directory: as a run starts, the oldest are "
-            "deleted (logged) until the rest fit (the run being recorded is not counted). 0: no limit.",
-            "bytes",
-            (0, 2**62),
-            locked=True,
-        ),
-        ParameterSpec(
-            "markers.link_faces",
-            _I,
-            400,
-            "Triangles per link mesh that ~/world_markers draws of a spatial arm (namespace robot_links: its "
-            "collision geometry, in each link's frame): each mesh simplified to at most this many; 0: every "
-            "triangle, the exact collision geometry validity is decided on. Read only: taken when the node starts.",
-            "",
-            (0, 1_000_000),
-            read_only=True,
-        ),
         ParameterSpec(
             "playback.rate",
             _D,
@@ -694,14 +503,13 @@ NODE_PARAMETERS = ParameterTable(
             (0.001, 60.0),
             locked=True,
         ),
-        *STATE_PARAMETERS,
     ],
 )
 
 # A parameter is locked exactly when it lies under one of LOCKED_PREFIXES.
 assert all(
     spec.locked == spec.name.startswith(LOCKED_PREFIXES)
-    for spec in (*WORLD_PARAMETERS.values(), *PLANNER_PARAMETERS.values(), *NODE_PARAMETERS.values())
+    for spec in (*WORLD_PARAMETERS.values(), *PLANNER_PARAMETERS.values(), *PLAYBACK_PARAMETERS.values())
 )
 
 
@@ -790,161 +598,3 @@ def check_joint_count(spec: ParameterSpec, value: float | tuple[float, ...] | No
         f"expected a number for every joint or a list with one per joint ({joints}: {names}), "
         f"got a list of {len(value)}",
     )
-
-
-# --------------------------------------------------------------------------- README tables
-
-_BEGIN = "<!-- BEGIN generated parameter table: {} (python -m clew_ros.cli.parameter_tables --update README.md) -->"
-_END = "<!-- END generated parameter table: {} -->"
-
-
-def _cell(value: Any) -> str:
-    """A default or a limit as README shows it (``pi`` for math.pi, YAML's ``true``/``false``)."""
-    if value is REQUIRED:
-        return "required"
-    if value is None:
-        return "none"
-    if isinstance(value, bool):
-        return f"`{str(value).lower()}`"
-    if isinstance(value, float) and value == math.pi:
-        return "`pi`"
-    return f"`{value}`"
-
-
-def _literal(text: str) -> str:
-    return text.replace("|", "\\|").replace("<", "\\<")  # literal, not HTML
-
-
-def _rows(specs: Iterable[ParameterSpec], *, ranges: bool) -> list[str]:
-    rows = []
-    for spec in specs:
-        cells = [f"`{spec.name}`", spec.type.value, _cell(spec.default), spec.unit]
-        if ranges:
-            cells.append(f"[{spec.limits[0]}, {spec.limits[1]}]" if spec.limits else "")
-        cells.append(spec.at_run_time)
-        cells.append(_literal(spec.description))
-        rows.append("| " + " | ".join(cells) + " |")
-    return rows
-
-
-def limits_table() -> str:
-    """The caps of :data:`LIMITS` as a Markdown table: the field, its value, what it caps."""
-    rows = ["| limit | value | unit | caps |", "|---|---|---|---|"]
-    rows.extend(
-        f"| `{field.name}` | `{getattr(LIMITS, field.name)}` | {_LIMIT_UNIT[field.name]} | "
-        f"{_literal(_LIMIT_TEXT[field.name])} |"
-        for field in dataclasses.fields(Limits)
-    )
-    return "\n".join(rows)
-
-
-#: What README says each cap limits (the comments of :class:`Limits` say why).
-_LIMIT_TEXT = {
-    "max_links": "links of the robot (world.robot.link_lengths)",
-    "max_obstacles": "obstacles (world.obstacle_names)",
-    "max_polygon_vertices": "vertices of one polygon (world.obstacles.<name>, world.object.polygon)",
-    "max_world_vertices": "vertices of all the world's polygons together",
-    "max_grasps": "grasps (world.object.grasps)",
-    "max_parameters": "parameters one node holds, at start and after a change",
-    "max_name_chars": "characters of a parameter name, an obstacle name or world.name",
-    "max_string_chars": "characters of a string parameter (record.directory)",
-    "max_quoted_chars": "characters of a ~/goal_pose frame_id quoted in logs and events (printable only)",
-    "max_parameter_file_bytes": "size of a parameter file, before it is parsed",
-    "max_urdf_bytes": "size of a URDF or SRDF (world.robot.urdf, .description, .srdf), before it is parsed",
-    "max_mesh_file_bytes": "size of one mesh file a URDF names, before it is read",
-    "max_mesh_triangles": "triangles of one mesh",
-    "max_total_triangles": "triangles of all the robot's meshes",
-    "max_mesh_scale": "each factor of a URDF <mesh scale>",
-    "max_urdf_links": "links, and joints, of a URDF",
-    "max_urdf_elements": "XML elements of a URDF, counted before the URDF parser reads it",
-    "max_mesh_cells": "cells of one mesh's voxel grid for the sphere model (from its extent, before voxelising)",
-    "max_split_triangles": "triangles of one mesh split to the voxel size (estimated before splitting)",
-    "max_solid_cells": "cells of one mesh's voxelised solid the sphere cover chooses among",
-    "max_spheres": "spheres of the robot's sphere model",
-    "max_scene_file_bytes": "size of a planning scene file (world.scene_file), before it is parsed",
-    "max_scene_objects": "primitives of a planning scene's collision objects, counted after YAML aliases expand",
-    "max_points": "points of one ~/points cloud (the highest state.max_points)",
-    "max_recorded_refusals": "refused requests recorded in the current run's recording (the rest: published only)",
-}
-#: The unit of each cap.
-_LIMIT_UNIT = {
-    "max_links": "links",
-    "max_obstacles": "obstacles",
-    "max_polygon_vertices": "vertices",
-    "max_world_vertices": "vertices",
-    "max_grasps": "grasps",
-    "max_parameters": "parameters",
-    "max_name_chars": "characters",
-    "max_string_chars": "characters",
-    "max_quoted_chars": "characters",
-    "max_parameter_file_bytes": "bytes",
-    "max_urdf_bytes": "bytes",
-    "max_mesh_file_bytes": "bytes",
-    "max_mesh_triangles": "triangles",
-    "max_total_triangles": "triangles",
-    "max_mesh_scale": "factor",
-    "max_urdf_links": "links",
-    "max_urdf_elements": "elements",
-    "max_mesh_cells": "cells",
-    "max_split_triangles": "triangles",
-    "max_solid_cells": "cells",
-    "max_spheres": "spheres",
-    "max_scene_file_bytes": "bytes",
-    "max_points": "points",
-    "max_scene_objects": "objects",
-    "max_recorded_refusals": "events",
-}
-assert set(_LIMIT_UNIT) == set(_LIMIT_TEXT)
-assert list(_LIMIT_TEXT) == [field.name for field in dataclasses.fields(Limits)]
-
-
-def markdown_tables() -> dict[str, str]:
-    """The README tables, by name (``world``, ``planner``, ``node``): Markdown, one line per parameter.
-
-    The column "at run time" says whether ``ros2 param set`` may change the parameter while the node runs:
-    ``settable``; ``fixed`` (taken at start); ``fixed (dev switch)``: fixed unless the node was started
-    with ``parameters.allow_runtime_changes: true``.
-    """
-    world_header = ["| name | type | default | unit | at run time | meaning |", "|---|---|---|---|---|---|"]
-    ranged_header = [
-        "| name | type | default | unit | range | at run time | meaning |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    world = list(WORLD_PARAMETERS.values())
-    names = [i for i, spec in enumerate(world) if spec.name == "world.obstacle_names"]
-    world.insert(names[0] + 1, OBSTACLE_PARAMETER)
-    return {
-        "world": "\n".join(world_header + _rows(world, ranges=False)),
-        "planner": "\n".join(ranged_header + _rows(PLANNER_PARAMETERS.values(), ranges=True)),
-        "node": "\n".join(ranged_header + _rows(NODE_PARAMETERS.values(), ranges=True)),
-    }
-
-
-def _optional_tables() -> dict[str, str]:
-    """Tables :func:`update_markdown` rewrites only where their markers are (``limits``)."""
-    return {"limits": limits_table()}
-
-
-def update_markdown(text: str) -> str:
-    """``text`` (README.md) with each generated table between its markers replaced by :func:`markdown_tables`.
-
-    Raises :class:`ValueError` when a table's markers are missing.
-    """
-    for name, table in markdown_tables().items():
-        begin, end = _BEGIN.format(name), _END.format(name)
-        match = re.search(re.escape(begin) + r"\n.*?" + re.escape(end), text, re.DOTALL)
-        if match is None:
-            raise ValueError(f"no generated table '{name}': expected a line {begin!r}, the table, then {end!r}")
-        text = f"{text[: match.start()]}{begin}\n{table}\n{end}{text[match.end() :]}"
-    for name, table in _optional_tables().items():
-        begin, end = _BEGIN.format(name), _END.format(name)
-        match = re.search(re.escape(begin) + r"\n.*?" + re.escape(end), text, re.DOTALL)
-        if match is not None:
-            text = f"{text[: match.start()]}{begin}\n{table}\n{end}{text[match.end() :]}"
-    return text
-
-
-def marked_tables() -> str:
-    """Every generated table between its markers, as :func:`update_markdown` finds them."""
-    tables = {**markdown_tables(), **_optional_tables()}
-    return "\n".join(f"{_BEGIN.format(name)}\n{table}\n{_END.format(name)}\n" for name, table in tables.items())

@@ -64,17 +64,17 @@ import numpy as np
 
 from clew_ros.core.clew import Progress
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.parameters import NODE_PARAMETERS, ParameterType, check_joint_count, check_value
+from clew_ros.core.parameters import PLAYBACK_PARAMETERS, ParameterType, check_joint_count, check_value
 from clew_ros.core.plan import Plan
+from clew_ros.live.drawings import Drawing, drawing_for
 from clew_ros.live.errors import LiveViewError, LiveViewUnavailableError
-from clew_ros.planar.world import World
 
 if TYPE_CHECKING:
     import foxglove
     from foxglove.websocket import ServerListener, WebSocketServer
 
     from clew_ros.live.messages import LandmarkLike
-    from clew_ros.motion.playback import Track
+    from clew_ros.planar.world import World
     from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["DEFAULT_PORT", "HOST", "LiveView", "is_available"]
@@ -158,10 +158,10 @@ class LiveView:
         port: int = DEFAULT_PORT,
         namespace: str = "/clew_plan",
         name: str = "clew_plan",
-        rate_hz: float = NODE_PARAMETERS.default("playback.rate"),
-        max_velocity_rad_s: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_velocity"),
-        max_acceleration_rad_s2: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_acceleration"),
-        grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell"),
+        rate_hz: float = PLAYBACK_PARAMETERS.default("playback.rate"),
+        max_velocity_rad_s: float | Sequence[float] = PLAYBACK_PARAMETERS.default("trajectory.max_velocity"),
+        max_acceleration_rad_s2: float | Sequence[float] = PLAYBACK_PARAMETERS.default("trajectory.max_acceleration"),
+        grasp_dwell_s: float = PLAYBACK_PARAMETERS.default("trajectory.grasp_dwell"),
         spatial: bool = False,
     ) -> None:
         if not 0 <= port <= 65535:
@@ -187,6 +187,7 @@ class LiveView:
         self._resender: threading.Thread | None = None
         self._stopping = threading.Event()
         self._world: World | SpatialWorld | None = None
+        self._drawing: Drawing | None = None  # how the world's kind is drawn
 
     @classmethod
     def from_parameters(
@@ -208,9 +209,9 @@ class LiveView:
             if not isinstance(tree, Mapping):
                 raise ParameterError(group, f"expected a mapping, got {tree!r:.80}")
             if leaf in tree:
-                values[keyword] = check_value(NODE_PARAMETERS[key], tree[leaf])
-                if joints is not None and NODE_PARAMETERS[key].type is ParameterType.DOUBLE_PER_JOINT:
-                    check_joint_count(NODE_PARAMETERS[key], values[keyword], joints)
+                values[keyword] = check_value(PLAYBACK_PARAMETERS[key], tree[leaf])
+                if joints is not None and PLAYBACK_PARAMETERS[key].type is ParameterType.DOUBLE_PER_JOINT:
+                    check_joint_count(PLAYBACK_PARAMETERS[key], values[keyword], joints)
         return cls(port=port, spatial=spatial, **values)
 
     # ------------------------------------------------------------------ life
@@ -303,37 +304,24 @@ class LiveView:
 
     def publish_world(self, world: World | SpatialWorld, *, goal: np.ndarray | None = None) -> None:
         """Publish ``world`` (its goal, or ``goal`` (3,)) and the arm at its start; the world
-        :meth:`publish_landmarks` and :meth:`play` draw in from now on. Clears the landmarks. A spatial
-        world needs a view made with ``spatial=True`` (its goal is its own)."""
-        from clew_ros.live import messages
-
-        if not isinstance(world, World):
-            self._publish_spatial_world(world)
-            return
-        self._world = world
-        now = time.time_ns()
-        self._send("scene", messages.world_update(world, now, goal=goal), latch=True)
-        self._send("landmarks", messages.landmarks_update(world, [], now), latch=True)
-        self._send_arm(world.robot.initial, 0.0, world.object.initial, now)
-        self._send("events", {"kind": "world", "world": world.name})
+        :meth:`publish_landmarks` and :meth:`play` draw in from now on. Clears the landmarks. A world drawn in
+        3-D (spatial) adds the ``links`` and ``tf`` channels unless the view was made with ``spatial=True``
+        (its goal is its own)."""
+        drawing = drawing_for(world)
+        self._world, self._drawing = world, drawing
+        drawing.world(self, world, goal, time.time_ns())
+        self.send("events", {"kind": "world", "world": world.name})
 
     def publish_landmarks(self, landmarks: Iterable[LandmarkLike]) -> None:
         """Publish the landmark tree: a :class:`~clew_ros.core.tree.LandmarkTree` or a plan's landmarks."""
-        from clew_ros.live import messages
-
-        world = self._current_world()
-        if not isinstance(world, World):
-            from clew_ros.live import spatial
-
-            self._send("landmarks", spatial.landmarks_update(world, landmarks, time.time_ns()), latch=True)
-            return
-        self._send("landmarks", messages.landmarks_update(world, landmarks, time.time_ns()), latch=True)
+        world, drawing = self._current_world()
+        self.send("landmarks", drawing.landmarks(world, landmarks, time.time_ns()), latch=True)
 
     def publish_progress(self, progress: Progress) -> None:
         """Publish a run's progress (``/progress``) and its landmark tree."""
         best = progress.best_distance if np.isfinite(progress.best_distance) else None
         record = {"landmarks": progress.landmarks, "best_distance_m": best, "elapsed_s": round(progress.elapsed, 4)}
-        self._send("progress", record, latch=True)
+        self.send("progress", record, latch=True)
         self.publish_landmarks(progress.tree)
 
     def on_progress(self, progress: Progress) -> None:
@@ -344,7 +332,7 @@ class LiveView:
         """Publish a run's outcome (an ``outcome`` event) and the landmarks its plan lists."""
         if plan.landmarks:
             self.publish_landmarks(plan.landmarks)
-        self._send(
+        self.send(
             "events",
             {"kind": "outcome", "code": plan.code or "", "message": plan.message, "landmarks": len(plan.landmarks)},
         )
@@ -356,24 +344,13 @@ class LiveView:
         :meth:`stop` or ``stop`` ended it first. A plan without segments plays nothing (``True``).
         """
         from clew_ros.live import messages
-        from clew_ros.motion.playback import GripperEvent, TrackState, track_from_plan
+        from clew_ros.motion.playback import GripperEvent, TrackState
         from clew_ros.motion.player import play
 
-        world = self._current_world()
+        world, drawing = self._current_world()
         if not plan.segments:
             return True
-        if isinstance(world, World):
-            track = track_from_plan(
-                world,
-                plan,
-                max_velocity_rad_s=self._max_velocity_rad_s,
-                max_acceleration_rad_s2=self._max_acceleration_rad_s2,
-                grasp_dwell_s=self._grasp_dwell_s,
-            )
-            names = track.joint_names[:-1]
-        else:
-            track = self._spatial_track(world, plan)
-            names = list(track.joint_names)
+        track, names = drawing.track(self, world, plan)
 
         def wait_stop(timeout_s: float) -> bool:
             if stop is None:
@@ -382,18 +359,15 @@ class LiveView:
 
         def on_sample(state: TrackState) -> None:
             now = time.time_ns()
-            if isinstance(world, World):
-                self._send_arm(state.joints, state.gripper, state.object_pose, now)
-            else:
-                self._send_spatial_state(world, state.joints, state.gripper, state.object_pose, now)
-            self._send("joint_states", messages.joint_states(names, state.joints, state.gripper, now))
+            drawing.state(self, world, state.joints, state.gripper, state.object_pose, now)
+            self.send("joint_states", messages.joint_states(names, state.joints, state.gripper, now))
 
         def on_event(event: GripperEvent) -> None:
-            self._send("events", {"kind": event.kind, "grasp": event.grasp, "time_s": round(event.time_s, 4)})
+            self.send("events", {"kind": event.kind, "grasp": event.grasp, "time_s": round(event.time_s, 4)})
 
         end = play(track, self._rate_hz, wait_stop=wait_stop, on_sample=on_sample, on_event=on_event)
         if not end.stopped:
-            self._send("events", {"kind": "playback_done", "time_s": round(track.duration_s, 4)})
+            self.send("events", {"kind": "playback_done", "time_s": round(track.duration_s, 4)})
         return not end.stopped
 
     def publish_sample(
@@ -403,39 +377,30 @@ class LiveView:
         from clew_ros.live import messages
 
         now = time.time_ns()
-        self._send_arm(joints, gripper, object_pose, now)
-        self._send("joint_states", messages.joint_states(list(joint_names), joints, gripper, now))
+        world, drawing = self._current_world()
+        drawing.state(self, world, joints, gripper, object_pose, now)
+        self.send("joint_states", messages.joint_states(list(joint_names), joints, gripper, now))
 
     def publish_event(self, kind: str, **fields: Any) -> None:
         """One ``events`` message: ``{"kind": kind, **fields}`` (fields JSON-ready)."""
-        self._send("events", {"kind": kind, **fields})
+        self.send("events", {"kind": kind, **fields})
 
     # ------------------------------------------------------------------ internals
 
-    def _publish_spatial_world(self, world: SpatialWorld) -> None:
-        """The spatial world (:mod:`clew_ros.live.spatial`): the scene, the links (latched), the arm at its
-        start; the landmarks cleared."""
-        from clew_ros.live import spatial
-
-        self._add_spatial_channels()
-        self._world = world
-        now = time.time_ns()
-        self._send("scene", spatial.world_update(world, now), latch=True)
-        self._send("links", spatial.links_update(world, now, _mesh_simplifier()), latch=True)
-        self._send("landmarks", spatial.landmarks_update(world, [], now), latch=True)
-        pose = None if world.object is None else np.asarray(world.object.initial, dtype=float)
-        self._send_spatial_state(world, world.initial, 0.0, pose, now)
-        self._send("events", {"kind": "world", "world": world.name})
-
     def publish_spatial_sample(self, joints: np.ndarray, gripper: float, object_pose: np.ndarray | None) -> None:
-        """One state of a spatial playback run elsewhere (the node's): the links' transforms, the tcp and the
-        object, the joint states."""
-        world = self._current_world()
-        if isinstance(world, World):
+        """One state of a playback run elsewhere (the node's) in a world drawn in 3-D: the links' transforms,
+        the tcp and the object, the joint states."""
+        world, drawing = self._current_world()
+        if not drawing.in_3d:
             raise LiveViewError("publish_spatial_sample: the world published is planar; use publish_sample")
-        self._send_spatial_state(world, np.asarray(joints, dtype=float), gripper, object_pose, time.time_ns())
+        drawing.state(self, world, np.asarray(joints, dtype=float), gripper, object_pose, time.time_ns())
 
-    def _add_spatial_channels(self) -> None:
+    @property
+    def timing(self) -> _Timing:
+        """This view's playback limits, as the node's :class:`~clew_ros.motion.playback.TrackTiming`."""
+        return _Timing(self._max_velocity_rad_s, self._max_acceleration_rad_s2, self._grasp_dwell_s)
+
+    def add_3d_channels(self) -> None:
         """The ``links`` and ``tf`` channels, when the view was not made with ``spatial=True`` (advertised to
         the clients connected from now on and to those connected already)."""
         if self._server is None or "tf" in self._channels:
@@ -446,36 +411,12 @@ class LiveView:
             self._channels["links"] = SceneUpdateChannel(self.topic("links"), context=self._context)
             self._channels["tf"] = FrameTransformsChannel(self.topic("tf"), context=self._context)
 
-    def _send_spatial_state(
-        self, world: SpatialWorld, joints: np.ndarray, gripper: float, object_pose: np.ndarray | None, now: int
-    ) -> None:
-        from clew_ros.live import messages, spatial
-
-        pose = None if world.object is None else object_pose
-        self._send("tf", spatial.transforms(world, joints, pose, now), latch=True)
-        self._send("arm", spatial.state_update(world, joints, gripper, pose, now), latch=True)
-        self._send("joint_states", messages.joint_states(list(world.robot.joint_names), joints, gripper, now))
-
-    def _spatial_track(self, world: SpatialWorld, plan: Plan) -> Track:
-        """A spatial plan timed as the node times it: the URDF's velocity limits and this view's."""
-        from clew_ros.motion.spatial import UrdfTree, spatial_track
-
-        timing = _Timing(self._max_velocity_rad_s, self._max_acceleration_rad_s2, self._grasp_dwell_s)
-        return spatial_track(world, plan, UrdfTree(world.robot.urdf), timing)
-
-    def _current_world(self) -> World | SpatialWorld:
-        if self._world is None:
+    def _current_world(self) -> tuple[World | SpatialWorld, Drawing]:
+        if self._world is None or self._drawing is None:
             raise LiveViewError("publish_world() first: the live view draws in the world it was given")
-        return self._world
+        return self._world, self._drawing
 
-    def _send_arm(self, joints: np.ndarray, gripper: float, object_pose: np.ndarray, now: int) -> None:
-        from clew_ros.live import messages
-
-        world = self._current_world()
-        assert isinstance(world, World)  # a spatial world's arm: _send_spatial_state
-        self._send("arm", messages.arm_update(world, joints, gripper, object_pose, now), latch=True)
-
-    def _send(self, name: str, message: Any, *, latch: bool = False) -> None:
+    def send(self, name: str, message: Any, *, latch: bool = False) -> None:
         """Log ``message`` on channel ``name`` (nothing when not started); ``latch``: keep it for late subscribers."""
         with self._lock:
             channel = self._channels.get(name)
@@ -520,16 +461,6 @@ class _Timing:
         object.__setattr__(self, "velocity_limit_rad_s", plain(velocity))
         object.__setattr__(self, "max_acceleration_rad_s2", plain(acceleration))
         object.__setattr__(self, "grasp_dwell_s", float(dwell))
-
-
-def _mesh_simplifier() -> Callable[[np.ndarray, np.ndarray, int], tuple[np.ndarray, np.ndarray]] | None:
-    """The picture package's mesh simplification for the links' meshes (``None`` without its dependencies:
-    the links' primitives alone are drawn)."""
-    try:
-        from clew_ros.render.spatial.meshes import simplify
-    except ImportError:
-        return None
-    return simplify
 
 
 def _listener(subscribed: threading.Event, resend: Callable[[int], None]) -> ServerListener:

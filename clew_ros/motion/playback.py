@@ -5,7 +5,7 @@ no rclpy, so it is tested without a ROS graph. ``messages`` turns a
 :class:`Track` into a ``JointTrajectory``; the node samples it in time to
 publish ``~/joint_states`` and ``~/object_pose``.
 
-Timing (interface.md §3 leaves it to us, README documents it):
+Timing (interface.md §3 leaves it to us, docs/ros.md documents it):
 
 - the points are the plan's waypoints (interface.md §3), the first at ``t = 0``;
 - a move between two points of one segment is the rest-to-rest quintic of
@@ -35,7 +35,7 @@ from typing import Protocol
 
 import numpy as np
 
-from clew_ros.core.parameters import NODE_PARAMETERS
+from clew_ros.core.parameters import PLAYBACK_PARAMETERS
 from clew_ros.core.plan import Plan
 from clew_ros.motion.timing import profile, rest_to_rest_duration_s
 from clew_ros.planar.kinematics import compose, tip_poses
@@ -192,9 +192,9 @@ def track_from_plan(
     world: World,
     plan: Plan,
     *,
-    max_velocity_rad_s: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_velocity"),
-    max_acceleration_rad_s2: float | Sequence[float] = NODE_PARAMETERS.default("trajectory.max_acceleration"),
-    grasp_dwell_s: float = NODE_PARAMETERS.default("trajectory.grasp_dwell"),
+    max_velocity_rad_s: float | Sequence[float] = PLAYBACK_PARAMETERS.default("trajectory.max_velocity"),
+    max_acceleration_rad_s2: float | Sequence[float] = PLAYBACK_PARAMETERS.default("trajectory.max_acceleration"),
+    grasp_dwell_s: float = PLAYBACK_PARAMETERS.default("trajectory.grasp_dwell"),
 ) -> Track:
     """Time a successful plan (its ``segments``) for ``world``.
 

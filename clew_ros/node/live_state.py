@@ -33,7 +33,6 @@ from visualization_msgs.msg import MarkerArray
 from clew_ros.core.errors import WorldError
 from clew_ros.core.settings import Outcome
 from clew_ros.node.run_recording import NO_RECORDING
-from clew_ros.planar.world import World
 from clew_ros.ros import spatial as spatial_messages
 from clew_ros.ros.qos import CLOUD_QOS, STATE_QOS
 from clew_ros.ros.state_messages import (
@@ -297,9 +296,8 @@ class LiveState:
         from clew_ros.spatial.snapshot import snapshot_tree
         from clew_ros.spatial.world import spatial_world_from_parameters
 
-        setup, world = config.spatial, config.world
+        setup, world = config.spatial, self._world
         assert setup is not None  # a spatial world (checked at start)
-        assert not isinstance(world, World)
         robot = world.robot
         q = np.asarray(state.initial, dtype=float)
         outside = (q < robot.lower) | (q > robot.upper)

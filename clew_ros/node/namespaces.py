@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from clew_ros.core.errors import ClewError
-from clew_ros.core.parameters import NODE_PARAMETERS
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 from clew_ros.ros.spatial import resolved_parameters
 
 __all__ = [

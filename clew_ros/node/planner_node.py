@@ -39,35 +39,30 @@ from clew_ros.core.errors import ParameterError
 from clew_ros.core.parameters import (
     LIMITS,
     LOCKED_PREFIXES,
-    PLANNER_LOCK,
-    RETIRED_PARAMETERS,
     RUNTIME_CHANGES,
-    SIM_TIME_CHANGES,
-    retired_message,
 )
 from clew_ros.core.settings import Outcome
+from clew_ros.kinds import kind_of
 from clew_ros.node.live_state import LiveState, StateRefusalError, describe_inputs
 from clew_ros.node.live_view import start_live_view
 from clew_ros.node.namespaces import namespaced_directory
+from clew_ros.node.parameter_changes import declare_all, locked_or_over_caps, own_values, unknown_parameter
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.run import CancelKind, Run, Source
 from clew_ros.node.run_recording import NO_RECORDING, Recordings, RunRecording
 from clew_ros.node.worker import RunWorker
 from clew_ros.planar.kernel import warm_up
-from clew_ros.planar.world import World
 from clew_ros.ros import messages
 from clew_ros.ros.parameters import (
     OWN_PREFIXES,
     Configuration,
     check_parameter_names,
     configuration_from_values,
-    descriptor_for,
     initial_values,
     plain_value,
     runtime_changes_allowed,
 )
 from clew_ros.ros.qos import GOAL_QOS
-from clew_ros.ros.spatial import goal_from_pose_stamped as spatial_goal_from_pose_stamped
 
 __all__ = ["NODE_NAME", "PlannerNode", "StartupError"]
 
@@ -301,10 +296,7 @@ class PlannerNode(Node):
             world = self._config.world
         stamp_ns = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         try:
-            if isinstance(world, World):
-                goal = messages.goal_from_pose_stamped(msg, world)
-            else:  # a spatial world: a full orientation, a stable placement
-                goal = spatial_goal_from_pose_stamped(msg, world)
+            goal = kind_of(world).goal_from_pose_stamped(msg, world)
         except messages.GoalPoseError as error:
             self._refuse(Outcome.INVALID_WORLD, f"refused: {error}", "goal_pose", stamp_ns)
             return
@@ -345,28 +337,12 @@ class PlannerNode(Node):
         except ParameterError as error:
             self.get_logger().error(f"invalid parameter {error}; not starting")
             raise StartupError(str(error)) from None
-        for name, value in values.items():
-            if name in RETIRED_PARAMETERS:
-                self.get_logger().warning(retired_message(name))
-                continue
-            descriptor = descriptor_for(name, allow_runtime_changes=allow, lock_planner=config.node.lock_planner)
-            if name in overrides and plain_value(self.get_parameter(name).value) == value:
-                self.set_descriptor(name, descriptor)
-            else:  # not given, or given and changed here (record.directory); an empty list has no parameter type
-                if self.has_parameter(name):
-                    self.undeclare_parameter(name)
-                self.declare_parameter(name, None if value == [] else value, descriptor, ignore_override=True)
+        declare_all(self, values, overrides, allow_runtime_changes=allow, lock_planner=config.node.lock_planner)
         return config
 
     def _own_values(self) -> dict[str, Any]:
         """Current values of the node's own parameters, by full name."""
-        values = {}
-        for prefix in OWN_PREFIXES:
-            group = prefix.rstrip(".")
-            for name, parameter in self.get_parameters_by_prefix(group).items():
-                # rclpy annotates the values, but they are Parameter objects
-                values[f"{group}.{name}"] = plain_value(parameter.value)  # type: ignore[union-attr]
-        return values
+        return own_values(self)
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         try:
@@ -380,48 +356,11 @@ class PlannerNode(Node):
                 f"change ({type(error).__name__}: {error}); nothing was changed",
             )
 
-    def _locked_or_over_caps(self, parameters: list[Parameter]) -> str | None:
-        """Why a change is refused before it is checked: a parameter fixed at start, or too many or too long
-        names; ``None`` if neither.
-
-        A declared locked parameter is read-only, so rclpy refused it already; this refuses the others: a
-        new name under a locked prefix (an obstacle, while the switch is off), and names beyond the caps.
-        """
-        node = self._config.node
-        for p in parameters:
-            if not node.allow_runtime_changes and p.name.startswith(LOCKED_PREFIXES):
-                return (
-                    f"{p.name}: fixed at start, like every {', '.join(x + '*' for x in LOCKED_PREFIXES)} "
-                    f"parameter (start the node with {RUNTIME_CHANGES}: true to change them at run time)"
-                )
-            if node.lock_planner and p.name.startswith("planner."):
-                return f"{p.name}: fixed at start, like every planner.* parameter ({PLANNER_LOCK} is true)"
-            if p.name == "use_sim_time" and not node.allow_sim_time_changes:
-                return (
-                    f"use_sim_time: fixed at start (start the node with {SIM_TIME_CHANGES}: true to change it at "
-                    "run time)"
-                )
-        names = set(self.get_parameters_by_prefix(""))
-        names |= {p.name for p in parameters if p.type_ != Parameter.Type.NOT_SET}
-        try:
-            check_parameter_names(names)
-        except ParameterError as error:
-            return f"{error}; nothing was changed"
-        return None
-
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        refusal = self._locked_or_over_caps(parameters)
+        refusal = locked_or_over_caps(parameters, self._config.node, set(self.get_parameters_by_prefix("")))
+        refusal = refusal or unknown_parameter(parameters, self.has_parameter)
         if refusal is not None:
             return SetParametersResult(successful=False, reason=refusal)
-        for p in parameters:
-            if not p.name.startswith(OWN_PREFIXES) and not self.has_parameter(p.name):
-                return SetParametersResult(
-                    successful=False,
-                    reason=(
-                        f"{p.name}: unknown parameter; clew_planner takes "
-                        + ", ".join(prefix + "*" for prefix in OWN_PREFIXES)
-                    ),
-                )
         own = [p for p in parameters if p.name.startswith(OWN_PREFIXES)]
         if not own:
             return SetParametersResult(successful=True)

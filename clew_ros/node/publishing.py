@@ -41,15 +41,16 @@ from rclpy.node import Node
 from std_msgs.msg import String
 
 from clew_ros.core.settings import Outcome, PlannerSettings
-from clew_ros.motion.playback import TrackState
+from clew_ros.kinds import kind_of
+from clew_ros.motion.playback import Track, TrackState
 from clew_ros.node.run import Phase, Run, StatusTable
 from clew_ros.node.run_recording import RunRecording
-from clew_ros.planar.world import World
 from clew_ros.ros import frames, messages, spatial
 from clew_ros.ros.topics import TF_TOPICS, TOPICS
 
 if TYPE_CHECKING:
     from clew_ros.live import LiveView
+    from clew_ros.planar.world import World
     from clew_ros.ros.spatial import SpatialSetup
     from clew_ros.spatial.world import SpatialWorld
 from clew_ros.recording.cdr import tf_message
@@ -135,18 +136,27 @@ class Publishing:
     ) -> None:
         """``~/world_yaml``, ``~/world_markers`` and the arm of a problem: ``~/robot_description``,
         ``/tf_static``, and ``/tf`` and ``~/scene`` at the start (arm at ``robot.initial``, gripper open,
-        object at its initial pose). A spatial world comes with its ``spatial`` setup."""
-        if not isinstance(world, World):
-            assert spatial is not None  # a spatial world has its setup
-            self._spatial_world(world, spatial, planner, recording)
-            return
+        object at its initial pose), as the world's kind puts them out; a spatial world comes with its
+        ``spatial`` setup."""
+        kind_of(world).announce_world(self, world, planner, recording, spatial)
+
+    def planar_world(self, world: World, planner: PlannerSettings, recording: RunRecording) -> None:
+        """:meth:`world` for a planar world."""
         for name, msg in messages.world_messages(world, planner, self._node_name, self.now_ns()):
             self.publish(name, msg, recording)
         self.publish_tf(frames.static_transforms(world.robot), self.now_ns(), recording, static=True)
         self.to_live("the world", lambda live: live.publish_world(world, goal=world.object.goal))
         self.arm(world, world.robot.initial, 0.0, world.object.initial, time_ns=self.now_ns(), recording=recording)
 
-    def _spatial_world(
+    def planar_sample(
+        self, world: World, track: Track, state: TrackState, *, time_ns: int, recording: RunRecording
+    ) -> None:
+        """One played-back state of a planar run: ``~/joint_states``, ``~/object_pose``, ``/tf`` and ``~/scene``."""
+        for name, msg in messages.playback_messages(track.joint_names, state, time_ns):
+            self.publish(name, msg, recording)
+        self.arm(world, state.joints, state.gripper, state.object_pose, time_ns=time_ns, recording=recording)
+
+    def spatial_world(
         self, world: SpatialWorld, setup: SpatialSetup, planner: PlannerSettings, recording: RunRecording
     ) -> None:
         now = self.now_ns()

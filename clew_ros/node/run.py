@@ -28,7 +28,6 @@ not known yet, and the playback after.
 
 from __future__ import annotations
 
-import dataclasses
 import enum
 import threading
 import time
@@ -41,13 +40,14 @@ import numpy as np
 from action_msgs.msg import GoalStatus
 
 from clew_ros.core.settings import Outcome, Termination
+from clew_ros.kinds import kind_of
 from clew_ros.motion.playback import Track
 from clew_ros.node.run_recording import NO_RECORDING, RunRecording
-from clew_ros.planar.world import World
 from clew_ros.ros.events import outcome_status
 from clew_ros.ros.parameters import Configuration
 
 if TYPE_CHECKING:
+    from clew_ros.planar.world import World
     from clew_ros.spatial.world import SpatialWorld
 
 __all__ = [
@@ -66,14 +66,11 @@ STATUS_HISTORY = 100
 Source = Literal["plan", "goal_pose"]
 
 
-def default_goal(world: World | SpatialWorld) -> np.ndarray:
-    """What ``~/plan`` plans to: the object's goal (planar ``(x, y, theta)``, spatial 6 numbers), or a
-    spatial motion-only query's ``world.robot.goal`` (joints) or ``world.robot.goal_pose`` (the tcp's pose)."""
-    if isinstance(world, World):
-        return np.asarray(world.object.goal, dtype=float)
-    if world.object is not None:
-        return np.asarray(world.object.goal, dtype=float)
-    return np.asarray(world.goal if world.goal is not None else world.goal_pose, dtype=float)
+def default_goal(world: object) -> np.ndarray:
+    """What ``~/plan`` plans to, as the world's kind says: the object's goal (planar ``(x, y, theta)``,
+    spatial 6 numbers), or a spatial motion-only query's ``world.robot.goal`` (joints) or
+    ``world.robot.goal_pose`` (the tcp's pose)."""
+    return kind_of(world).default_goal(world)
 
 
 class Phase(enum.Enum):
@@ -165,11 +162,10 @@ class Run:
     def world(self) -> World | SpatialWorld:
         """The problem this run solves: the configured world with the run's goal."""
         world = self.config.world
-        if not isinstance(world, World):  # a spatial world: its goal placement (a motion-only query: as it is)
-            from clew_ros.ros.spatial import with_goal
-
-            return world if self.source == "plan" else with_goal(world, self.goal)
-        return dataclasses.replace(world, object=dataclasses.replace(world.object, goal=self.goal))
+        if self.source == "plan":  # the configured goal (a spatial motion-only query: as it is)
+            return world
+        moved: World | SpatialWorld = kind_of(world).with_goal(world, self.goal)
+        return moved
 
     @property
     def phase(self) -> Phase:

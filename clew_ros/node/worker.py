@@ -21,25 +21,19 @@ from action_msgs.msg import GoalStatus
 from clew_ros.core.clew import PlanResult, Progress
 from clew_ros.core.settings import Outcome
 from clew_ros.core.tree import LandmarkTree
-from clew_ros.motion.playback import GripperEvent, Track, TrackState, node_track
+from clew_ros.kinds import kind_of
+from clew_ros.motion.playback import GripperEvent, Track, TrackState
 from clew_ros.motion.player import play
-from clew_ros.motion.spatial import spatial_track
 from clew_ros.node.publishing import Publishing
 from clew_ros.node.run import Phase, Run
 from clew_ros.node.run_recording import Recordings
-from clew_ros.planar.plan import checked_plan
-from clew_ros.planar.space import plan
-from clew_ros.planar.world import World
 from clew_ros.ros import messages
-from clew_ros.ros import spatial as spatial_messages
-from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields, spatial_plan_fields
+from clew_ros.ros.events import accepted_fields, landmark_fields, outcome_event, outcome_fields
 from clew_ros.ros.qos import GOAL_QOS
 
 if TYPE_CHECKING:
     from rclpy.impl.rcutils_logger import RcutilsLogger
     from visualization_msgs.msg import MarkerArray
-
-    from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["RunWorker", "timed_plan"]
 
@@ -93,10 +87,9 @@ class RunWorker:
         out.set_status(run.id, run.accepted_ns, GoalStatus.STATUS_ACCEPTED, current=True)
         out.world(run.world, config.planner, run.recording, config.spatial)
         now = out.now_ns()
-        if config.spatial is None:
-            run.recording.write(self._goal_topic, messages.goal_pose_stamped(run.goal, now), now, GOAL_QOS)
-        elif run.world.object is not None or getattr(run.world, "goal", None) is None:  # a pose, not joints
-            run.recording.write(self._goal_topic, spatial_messages.pose_stamped(run.goal, now), now, GOAL_QOS)
+        goal = kind_of(run.world).goal_message(run.world, run.goal, now)
+        if goal is not None:  # a pose (a joint goal is none)
+            run.recording.write(self._goal_topic, goal, now, GOAL_QOS)
         out.publish_status(run.recording)
         request = {} if run.goal_stamp_ns is None else {"goal_stamp_ns": run.goal_stamp_ns}
         fields = accepted_fields(
@@ -153,18 +146,14 @@ class RunWorker:
                 self._logger.error(f"run {run.hex}: cannot publish progress: {error!r}")
 
         world = run.world
-        if isinstance(world, World):
-            result = plan(
-                world,
-                config.planner,
-                goal=None if run.source == "plan" else run.goal,
-                termination=run.termination(),
-                progress=on_progress,
-            )
-        else:  # a spatial world, its goal in it: clew_plan's planner, same settings, same plan
-            from clew_ros.spatial.space import plan as spatial_plan
-
-            result = spatial_plan(world, config.planner, termination=run.termination(), progress=on_progress)
+        kind = kind_of(world)
+        result = kind.plan(
+            world,
+            config.planner,
+            goal=None if run.source == "plan" else run.goal,
+            termination=run.termination(),
+            progress=on_progress,
+        )
         canceled = run.end_planning()
         run.landmarks = len(result.tree)
         self._announce_landmarks(run, result.tree, announced)
@@ -175,10 +164,8 @@ class RunWorker:
         if outcome is Outcome.CANCELED and self._closing.is_set():
             message += " (the node is shutting down)"
         track = None
-        if outcome is Outcome.START_IN_COLLISION and not isinstance(world, World):
-            from clew_ros.spatial.snapshot import start_contacts
-
-            message = f"{message}: {start_contacts(world)}"
+        if outcome is Outcome.START_IN_COLLISION and (detail := kind.start_collision_detail(world)) is not None:
+            message = f"{message}: {detail}"
         if outcome is Outcome.SUCCEEDED:
             outcome, message, track = timed_plan(run, result)
         run.conclude(outcome, message, float(result.stats.get("time_s", time.monotonic() - run.start_s)), track)
@@ -203,8 +190,8 @@ class RunWorker:
         fields = outcome_fields(
             outcome, run.message, landmarks=run.landmarks, time_s=run.elapsed_s, recording=run.recording.text
         )
-        if run.track is not None and not run.track.gripper_joint:
-            fields |= spatial_plan_fields(run.track, has_object=getattr(run.world, "object", None) is not None)
+        if run.track is not None:
+            fields |= kind_of(run.world).plan_fields(run.world, run.track)
         out.event(run.id, outcome_event(outcome), run.recording, **fields)
         if run.track is None:
             run.recording.close()  # no playback follows: the recording is complete before the answer goes out
@@ -227,17 +214,18 @@ class RunWorker:
         along the track, in time."""
         out, track = self._out, run.track
         assert track is not None  # PLAYBACK follows a plan
+        kind = kind_of(run.world)
 
         def on_sample(state: TrackState) -> None:
-            now = out.now_ns()
-            world = run.world
-            if not isinstance(world, World):
-                assert run.config.spatial is not None  # a spatial world has its setup
-                out.spatial_sample(world, run.config.spatial, state, time_ns=now, recording=run.recording)
-                return
-            for name, msg in messages.playback_messages(track.joint_names, state, now):
-                out.publish(name, msg, run.recording)
-            out.arm(world, state.joints, state.gripper, state.object_pose, time_ns=now, recording=run.recording)
+            kind.publish_sample(
+                out,
+                run.world,
+                state,
+                setup=run.config.spatial,
+                track=track,
+                time_ns=out.now_ns(),
+                recording=run.recording,
+            )
 
         def on_event(event: GripperEvent) -> None:
             out.event(run.id, event.kind, run.recording, at_s=float(event.time_s), grasp=event.grasp)
@@ -257,40 +245,24 @@ class RunWorker:
 def timed_plan(run: Run, result: PlanResult) -> tuple[Outcome, str, Track | None]:
     """A successful result as a validated, timed plan, or ``INTERNAL_ERROR`` if it fails validation.
 
-    The plan is checked against the run's problem (its goal) by
-    :func:`~clew_ros.planar.plan.checked_plan`; one that fails is never published.
+    The plan is checked against the run's problem (its goal) by its kind's ``checked_plan``; one that fails is
+    never published. Where the plan leaves the arm and the object is kept for ``state.advance``.
     """
     world = run.world
-    if not isinstance(world, World):
-        return _timed_spatial_plan(run, world, result)
-    planned = checked_plan(world, result)
+    kind = kind_of(world)
+    planned = kind.checked_plan(world, result)
     if not planned.success:
         return Outcome.INTERNAL_ERROR, planned.message, None
-    return result.outcome, result.message, node_track(world, planned, run.config.node)
+    end = kind.end_state(planned)
+    if end is not None:
+        run.end_state = end
+    return result.outcome, result.message, kind.track(world, planned, run.config.spatial, run.config.node)
 
 
-def _timed_spatial_plan(run: Run, world: SpatialWorld, result: PlanResult) -> tuple[Outcome, str, Track | None]:
-    setup = run.config.spatial
-    assert setup is not None  # a spatial world has its setup
-    from clew_ros.spatial.offline import checked_plan as checked_spatial_plan
-
-    planned = checked_spatial_plan(world, result)
-    if not planned.success:
-        return Outcome.INTERNAL_ERROR, planned.message, None
-    final = planned.final_object_pose
-    run.end_state = (np.array(planned.segments[-1].waypoints[-1], dtype=float), None if final is None else tuple(final))
-    return result.outcome, result.message, spatial_track(world, planned, setup.joints, run.config.node)
-
-
-def _root_tree(world: World | SpatialWorld) -> LandmarkTree:
+def _root_tree(world: object) -> LandmarkTree:
     """The landmark tree's root (the start), as the planner's tree starts."""
-    if isinstance(world, World):
-        return LandmarkTree(world.robot.initial, world.object.initial)
-    pose = np.zeros(6) if world.object is None else np.asarray(world.object.initial, dtype=float)
-    return LandmarkTree(world.initial, pose)
+    return kind_of(world).root_tree(world)
 
 
-def _landmark_markers(world: World | SpatialWorld, tree: LandmarkTree, time_ns: int) -> MarkerArray:
-    if isinstance(world, World):
-        return messages.landmark_markers(tree, time_ns, world.object.polygon)
-    return spatial_messages.landmark_markers(world, tree, time_ns)
+def _landmark_markers(world: object, tree: LandmarkTree, time_ns: int) -> MarkerArray:
+    return kind_of(world).landmark_markers(world, tree, time_ns)

@@ -157,8 +157,15 @@ def packed_carrying(world: World) -> tuple[PackedWorld, PackedWorld]:
     return without_object, links_but_last
 
 
-#: Largest boxes x obstacles comparison done per call; beyond it one box around all obstacles.
-_BOX_PAIRS = 1 << 22
+@dataclass(frozen=True)
+class BroadPhase:
+    """The boxes' broad phase."""
+
+    #: Largest boxes x obstacles comparison done per call (pairs); beyond it one box around all obstacles.
+    max_box_pairs: int = 1 << 22
+
+
+_BROAD_PHASE = BroadPhase()
 
 
 def _box_rounding(coordinates: np.ndarray) -> float:
@@ -175,7 +182,7 @@ def _box_pairs(low: np.ndarray, high: np.ndarray, boxes: np.ndarray, pad: float)
         return tuple(np.zeros(0, int) for _ in range(low.ndim))
     pad = pad + _box_rounding(boxes)
     low, high = low - pad, high + pad
-    everything = low[..., 0].size * len(boxes) > _BOX_PAIRS
+    everything = low[..., 0].size * len(boxes) > _BROAD_PHASE.max_box_pairs
     if everything:
         boxes = np.array([[boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)]])
     meet = low[..., 0, None] <= boxes[:, 1, 0]  # (..., O), one axis at a time: no size-2 reductions

@@ -46,379 +46,34 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clew_ros.planar.collision import packed_world
-from clew_ros.planar.inverse import FULL_TURN_RAD, mirrored, solve_point
-from clew_ros.planar.kernel import clearly_valid, screen_routes
+from clew_ros.planar.inverse import mirrored
 from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points
-from clew_ros.planar.search import goals_reached
+from clew_ros.planar.regrasp_keys import (
+    ROUTES,
+    Effort,
+    Kinematics,
+    Proposal,
+    RegraspSettings,
+    directions,
+    goal_holds_near,
+    l1_distances,
+    route_waypoints,
+    screen_samples,
+    unique_rows,
+    with_mirrors,
+)
 from clew_ros.planar.world import World
 
-__all__ = ["ROUTES", "Effort", "Proposal", "RegraspSettings", "propose", "route_waypoints", "screen_samples"]
-
-#: Ways along a move, as :func:`route_waypoints` lays them out: straight, one joint after the other
-#: (first joint first), one joint after the other (last joint first). All are as long in joint travel.
-ROUTES = ("straight", "first joint first", "last joint first")
-
-
-@dataclass(frozen=True)
-class RegraspSettings:
-    """Tuning of :func:`propose` and :func:`goal_holds_near` (passed in; a test or a benchmark varies a copy)."""
-
-    #: A grasp configuration puts the tip this close to the grasp point (m).
-    hold_error_m: float = 1e-9
-    #: The goal's inverse kinematics, in passes of (share of goal_angle_tolerance the object's angle is brought
-    #: within, share of goal_tolerance the solver's error may leave, the angle's weight in m/rad or None for the
-    #: object's radius); a pass after the first only for the rows the ones before left off the goal, on a goal of
-    #: narrow angle and an arm of two joints (more set the angle apart from the position). First with room to
-    #: spare (a goal configuration puts the object's origin within a quarter of goal_tolerance); then with nearly
-    #: all of both tolerances and the angle weighted heavily, so that the position gives way to it: an arm of two
-    #: joints may carry a grasp onto the goal only at the edge of both (shapes2 seed 60: no one-transfer proposal
-    #: was made and every plan kept a regrasp, 7.43 rad, where the grid reference carries the object once in 5.84
-    #: rad, 0.49 rad and 0.015 m off the goal).
-    goal_passes: tuple[tuple[float, float, float | None], ...] = ((0.8, 0.25, None), (0.99, 0.9, 1.0))
-    #: Release configurations drawn per grasp configuration (and per its mirror image) along the way to where
-    #: the object comes closest to the goal.
-    towards: int = 6
-    #: Release configurations drawn per grasp configuration (and per its mirror image) putting the object down
-    #: around the goal.
-    near: int = 20
-    #: Release configurations drawn per grasp configuration anywhere.
-    anywhere: int = 8
-    #: Releases drawn around the goal put the object within this distance of it (m).
-    near_radius_m: float = 0.6
-    #: Releases tried per configuration where the plan put the object down (itself, then drawn around it).
-    hinted: int = 4
-    #: The spread (rad) of the releases drawn around where the plan put the object down.
-    hint_spread_rad: float = 0.2
-    #: Refinement rounds around the best releases of each grasp configuration: how many are kept, samples
-    #: around each, spread (rad).
-    rounds: tuple[tuple[int, int, float], ...] = ((4, 6, 0.3), (3, 6, 0.1))
-    #: Releases refined in one round, and proposals returned, lie at least this far apart (rad, largest joint
-    #: difference) when they take the same grasps.
-    distinct_rad: float = 0.3
-    #: Continuations (grasp and posture after a release) screened per release (the shortest ways).
-    continuations: int = 2
-    #: Releases screened per grasp configuration and round (the shortest ways; the others are dropped).
-    screened: int = 8
-    #: Joint travel (rad) between configurations sampled by the screen, about.
-    screen_step_rad: float = 0.1
-    #: Joint travel (rad) a move that looks blocked counts extra when proposals are ranked.
-    blocked_penalty_rad: float = 8.0
-    #: Configurations closer than this (rad, largest joint difference) count as one.
-    unique_rad: float = 1e-6
-    #: Configurations drawn per placement to seed how each grasp can hold the goal (:func:`_goal_holds`).
-    aligned_draws: int = 4
-    #: Proposals returned at most.
-    max_proposals: int = 24
-    #: On an arm of three or more joints, inverse kinematics for a placement's grasp configurations and, for
-    #: one-transfer proposals, the goal's is also solved from this many seeds drawn around each seed (normal,
-    #: :attr:`restart_spreads_rad` in turn), and the valid solution nearest the seed (joint travel; around the
-    #: plan's own grasp configuration, nearest the arm's) is added: a redundant arm's first solution often folds
-    #: into an obstacle, the object or itself, or lies far from where the arm is.
-    restarts: int = 8
-    #: The spreads (rad) of the restarts' seeds, in turn.
-    restart_spreads_rad: tuple[float, ...] = (0.5, 1.0)
-
-
-@dataclass
-class Effort:
-    """The work :func:`propose` did: configurations checked, calls of the check, inverse-kinematics steps (one
-    configuration, one iteration), calls of the compiled screen."""
-
-    checks: int = 0
-    calls: int = 0
-    steps: int = 0
-    screens: int = 0  # compiled calls of the screen (:meth:`_Kinematics.routes`), each many moves
-
-
-@dataclass(frozen=True)
-class Proposal:
-    """A way to the goal: ``keys`` ``(2 k + 1, n)`` = the arm's configuration, then for each of the ``k``
-    transfers its grasp configuration and its end (a release, the last one at the goal). ``routes``:
-    per move (transit, transfer, ...) the index into :data:`ROUTES` of the first way that looked
-    clear, -1 when none did (``blocked`` counts those)."""
-
-    travel: float  # rad, joint travel of the moves between the keys
-    blocked: int
-    grasps: tuple[int, ...]
-    keys: np.ndarray
-    routes: tuple[int, ...]
-    penalty_rad: float  # joint travel a move that looked blocked counts extra (RegraspSettings.blocked_penalty_rad)
-
-    @property
-    def rank(self) -> tuple[float, int]:
-        """What proposals are ranked by: joint travel plus ``penalty_rad`` per move that looked blocked, then
-        fewer transfers."""
-        return self.travel + self.penalty_rad * self.blocked, len(self.grasps)
-
-
-def route_waypoints(a: np.ndarray, b: np.ndarray, route: int) -> np.ndarray:
-    """The waypoints ``(m, n)`` of way ``route`` (:data:`ROUTES`) from ``a`` to ``b`` (repeated corners dropped)."""
-    if route == 0:
-        return np.array([a, b])
-    order = range(len(a)) if route == 1 else range(len(a) - 1, -1, -1)
-    points = [np.asarray(a, dtype=float)]
-    for joint in order:
-        corner = points[-1].copy()
-        corner[joint] = b[joint]
-        if corner[joint] != points[-1][joint]:
-            points.append(corner)
-    if len(points) == 1:
-        points.append(points[0].copy())
-    return np.array(points)
-
-
-def screen_samples(a: np.ndarray, b: np.ndarray, step_rad: float) -> np.ndarray:
-    """How many configurations the screen samples along each move ``a[k] -> b[k]``: about one every
-    ``step_rad`` of joint travel (:attr:`RegraspSettings.screen_step_rad`), at least 8, at most 32."""
-    return (8 * 2 ** np.clip(np.ceil(np.log2(np.maximum(_l1(a, b) / step_rad, 1.0) / 8.0)), 0, 2)).astype(np.int64)
-
-
-class _Kinematics:
-    """Batched inverse kinematics (:meth:`solve`) and validity with a margin, counting the work."""
-
-    def __init__(
-        self,
-        world: World,
-        margin_m: float,
-        should_stop: Callable[[], bool] | None = None,
-        max_checks: int | None = None,
-        step_checks: float = 0.0,
-        *,
-        settings: RegraspSettings | None = None,
-    ) -> None:
-        self.settings = RegraspSettings() if settings is None else settings
-        self.world = world
-        self.packed = dataclasses.replace(packed_world(world), rounding=max(margin_m, packed_world(world).rounding))
-        self.effort = Effort()
-        self.should_stop = should_stop
-        self.max_checks = max_checks
-        self.step_checks = step_checks
-
-    @property
-    def exhausted(self) -> bool:
-        """Whether the work allowed is done: configurations checked, and inverse-kinematics steps counted as
-        ``step_checks`` checks each."""
-        done = self.effort.checks + self.step_checks * self.effort.steps
-        return self.max_checks is not None and done >= self.max_checks
-
-    def solve(
-        self,
-        seeds: np.ndarray,
-        targets: np.ndarray,
-        reached_m: float,
-        *,
-        offsets: np.ndarray | None = None,
-        angles: np.ndarray | None = None,
-        angle_tolerance: float = np.pi,
-        angle_scale: float = 1.0,
-        tolerance_m: float | None = None,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`solve_point` from ``seeds`` ``(B, n)`` onto ``targets`` (``(B, 2)`` or one point; ``offsets``
-        and ``angles`` per row), counting its steps; the rows it leaves more than ``reached_m`` from their
-        target are solved again taking a joint that turns all the way round past its limits (``full_turns``),
-        and the nearer answer kept. A target behind the base lies past joint 1's limit from seeds on one side
-        (shapes2 seed 50: every grasp point, from the start and from its mirror image, so no grasp
-        configuration was found there); a redundant arm mostly reaches it without a turn, nearer its seed, as
-        before. The configurations and their errors (m)."""
-        robot = self.world.robot
-        points = np.broadcast_to(np.asarray(targets, float), (len(seeds), 2))
-
-        def solved(rows: np.ndarray | slice, full_turns: bool) -> tuple[np.ndarray, np.ndarray, int]:
-            return solve_point(
-                robot,
-                seeds[rows],
-                points[rows],
-                offsets=None if offsets is None else offsets[rows],
-                angles=None if angles is None else angles[rows],
-                angle_tolerance=angle_tolerance,
-                angle_scale=angle_scale,
-                tolerance_m=tolerance_m,
-                full_turns=full_turns,
-            )
-
-        q, error, steps = solved(slice(None), False)
-        self.effort.steps += steps + len(q)
-        short = np.flatnonzero(error > reached_m)
-        if len(short) and np.any(robot.joint_upper - robot.joint_lower >= FULL_TURN_RAD):
-            again, left, more = solved(short, True)
-            self.effort.steps += more + len(short)
-            nearer = left < error[short]  # by error alone: the answers differ only where the first met a limit
-            q[short[nearer]], error[short[nearer]] = again[nearer], left[nearer]
-        return q, error
-
-    def stop(self) -> bool:
-        return self.exhausted or (self.should_stop is not None and self.should_stop())
-
-    def valid(self, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
-        if not len(q):
-            return np.zeros(0, dtype=bool)
-        self.effort.checks += len(q)
-        self.effort.calls += 1
-        return clearly_valid(self.packed, np.ascontiguousarray(q), np.ascontiguousarray(poses))
-
-    def routes(
-        self, a: np.ndarray, b: np.ndarray, *, resting: np.ndarray | None = None, grasp_rel: np.ndarray | None = None
-    ) -> np.ndarray:
-        """Per move ``a[k] -> b[k]``, the first way of :data:`ROUTES` whose sampled configurations are all
-        valid (the object resting at ``resting[k]`` or held as ``grasp_rel[k]``); -1 when none is. A move
-        is sampled about every :attr:`RegraspSettings.screen_step_rad` of joint travel (at least 8, at most 32 samples),
-        every fourth sample first; one compiled call (:func:`clew_ros.planar.kernel.screen_routes`)."""
-        if self.exhausted or not len(a):
-            return np.full(len(a), -1)
-        route, checked = screen_routes(
-            self.packed, a, b, screen_samples(a, b, self.settings.screen_step_rad), resting=resting, grasp_rel=grasp_rel
-        )
-        self.effort.checks += checked
-        self.effort.screens += 1
-        return route
-
-    def holding(
-        self, placements: np.ndarray, grasps: np.ndarray, seeds: np.ndarray, tip_angles: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Configurations near ``seeds`` holding ``grasps`` of the object resting at ``placements`` (all
-        ``(B, .)``), with the tip at ``tip_angles`` ``(B,)`` if given (else any), and which ones do, validly."""
-        robot = self.world.robot
-        targets = transform_points(placements, self.world.object.grasps)[np.arange(len(grasps)), grasps]
-        q = np.array(seeds, dtype=float)
-        ok = _within_reach(robot.link_lengths, np.hypot(*(targets - robot.base).T), 0.0)
-        angles = None if tip_angles is None else tip_angles[ok]
-        solved, error = self.solve(
-            seeds[ok], targets[ok], self.settings.hold_error_m, angles=angles, angle_tolerance=0.0
-        )
-        q[ok] = solved
-        ok[ok] = error <= self.settings.hold_error_m
-        ok[ok] = self.valid(q[ok], placements[ok])
-        return q, ok
-
-    def restarted(
-        self,
-        solve: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
-        seeds: np.ndarray,
-        rng: np.random.Generator,
-        origins: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``solve(rows, seeds)`` (configurations for queries ``rows`` from ``seeds``, and which are valid) for
-        each seed; on an arm of three or more joints also from :attr:`RegraspSettings.restarts` seeds drawn around
-        each, whose valid solution nearest the query's origin (joint travel; ``origins`` ``(B, n)``, default the seeds)
-        comes as one more row when it is nearer than the seed's own. Returns the query of each row, the
-        configurations and which are valid."""
-        count, n = seeds.shape
-        origins = seeds if origins is None else origins
-        q, ok = solve(np.arange(count), seeds)
-        if self.world.robot.dof < 3 or not count:
-            return np.arange(count), q, ok
-        restarts = self.settings.restarts
-        spreads = np.resize(np.asarray(self.settings.restart_spreads_rad, dtype=float), restarts)
-        drawn = seeds[None] + spreads[:, None, None] * rng.normal(0.0, 1.0, size=(restarts, count, n))
-        more, fine = solve(np.tile(np.arange(count), restarts), drawn.reshape(-1, n))
-        more, fine = more.reshape(restarts, count, n), fine.reshape(restarts, count)
-        distance = np.where(fine, np.abs(more - origins[None]).sum(axis=2), np.inf)
-        best = np.argmin(distance, axis=0)
-        rows = np.arange(count)
-        nearer = np.flatnonzero(distance[best, rows] < np.where(ok, np.abs(q - origins).sum(axis=1), np.inf))
-        return (
-            np.concatenate([rows, nearer]),
-            np.concatenate([q, more[best[nearer], nearer]]),
-            np.concatenate([ok, np.ones(len(nearer), dtype=bool)]),
-        )
-
-    def at_goal(self, grasp_rel: np.ndarray, seeds: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Configurations near ``seeds`` putting the object, held as ``grasp_rel``, on the goal within its
-        tolerances, and which do, validly."""
-        world = self.world
-        lengths = np.broadcast_to(world.robot.link_lengths, (len(grasp_rel), world.robot.dof)).copy()
-        lengths[:, -1] = np.hypot(lengths[:, -1] + grasp_rel[:, 0], grasp_rel[:, 1])  # joint n to the object
-        distance = np.full(len(grasp_rel), float(np.hypot(*(goal[:2] - world.robot.base))))
-        narrow = world.goal_angle_tolerance < np.pi - 1e-6
-        q = np.array(seeds, dtype=float)
-        ok = np.zeros(len(q), dtype=bool)
-        # an arm of fewer than three joints cannot set the object's angle apart from its position: on a narrow
-        # goal angle its rows the first pass left off the goal try the next
-        goal_passes = self.settings.goal_passes
-        passes = goal_passes if narrow and world.robot.dof < 3 else goal_passes[:1]
-        for slack, share, weight in passes:
-            reach = _within_reach(lengths, distance, share * world.goal_tolerance)
-            rows = np.flatnonzero(reach & ~ok)  # the rows the tighter pass left off the goal try the wider one
-            if not len(rows):
-                break
-            solved, error = self.solve(
-                seeds[rows],
-                goal[:2],
-                share * world.goal_tolerance,
-                offsets=grasp_rel[rows, :2],
-                angles=goal[2] - grasp_rel[rows, 2] if narrow else None,
-                angle_tolerance=slack * world.goal_angle_tolerance,
-                angle_scale=world.object.radius if weight is None else weight,
-                tolerance_m=1e-9,
-            )
-            q[rows] = solved
-            ok[rows] = error <= share * world.goal_tolerance
-        # That error bounds both the position's error and the angle's weight times its excess over the slack share
-        # of the tolerance, which need not keep the angle within the tolerance itself: the goal's own test decides.
-        held = compose(tip_poses(world.robot, q[ok]), grasp_rel[ok])
-        reached = goals_reached(world, held, goal)
-        ok[ok] = reached
-        ok[ok] = self.valid(q[ok], held[reached])
-        return q, ok
-
-    def toward(self, grasp_rel: np.ndarray, seeds: np.ndarray, points: np.ndarray) -> np.ndarray:
-        """Where the object's origin, held as ``grasp_rel``, gets closest to ``points`` from ``seeds`` (reached
-        or not)."""
-        q, _ = self.solve(seeds, points, 1e-6, offsets=grasp_rel[:, :2], tolerance_m=1e-6)
-        return q
-
-
-def goal_holds_near(
-    world: World,
-    grasp_rel: np.ndarray,
-    seeds: np.ndarray,
-    goal: np.ndarray,
-    *,
-    margin_m: float,
-    settings: RegraspSettings | None = None,
-) -> tuple[np.ndarray, np.ndarray, Effort]:
-    """Configurations near ``seeds`` ``(B, n)`` (inverse kinematics from each) putting the object, held as
-    ``grasp_rel`` ``(B, 3)``, on ``goal`` within its tolerances, which ones do, valid with ``margin_m`` to
-    spare, and the work done: the goal configurations of :func:`propose`'s one-transfer proposals (``settings``:
-    the tuning, the default :class:`RegraspSettings` when not given)."""
-    kinematics = _Kinematics(world, margin_m, settings=settings)
-    q, ok = kinematics.at_goal(np.asarray(grasp_rel, dtype=float), np.asarray(seeds, dtype=float), goal)
-    return q, ok, kinematics.effort
-
-
-def _within_reach(lengths: np.ndarray, distance: np.ndarray, slack: float) -> np.ndarray:
-    """Whether a chain of ``lengths`` (``(n,)`` or ``(B, n)``) can end ``distance`` ``(B,)`` from its base."""
-    lengths = np.atleast_2d(lengths)
-    total = lengths.sum(axis=1)
-    inner = np.maximum(0.0, 2.0 * lengths.max(axis=1) - total)
-    reachable: np.ndarray = (distance >= inner - slack) & (distance <= total + slack)
-    return reachable
-
-
-def _direction(world: World, points: np.ndarray) -> np.ndarray:
-    v = np.asarray(points, float) - world.robot.base
-    direction: np.ndarray = np.arctan2(v[..., 1], v[..., 0])
-    return direction
-
-
-def _with_mirrors(world: World, q: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """Seeds ``(2 B, n)``: ``q`` ``(B, n)`` and its mirror images about the lines from the base to ``targets``."""
-    return np.concatenate([q, mirrored(world.robot, q, _direction(world, targets))])
-
-
-def _l1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    distance: np.ndarray = np.abs(a - b).sum(axis=-1)
-    return distance
-
-
-def _unique_rows(q: np.ndarray, tolerance: float) -> np.ndarray:
-    """Indices of the first of each group of rows closer than ``tolerance`` (largest joint difference)."""
-    keep: list[int] = []
-    for i in range(len(q)):
-        if not keep or np.min(np.max(np.abs(q[keep] - q[i]), axis=1)) > tolerance:
-            keep.append(i)
-    return np.array(keep, dtype=int)
+__all__ = [
+    "ROUTES",
+    "Effort",
+    "Proposal",
+    "RegraspSettings",
+    "goal_holds_near",
+    "propose",
+    "route_waypoints",
+    "screen_samples",
+]
 
 
 @dataclass
@@ -432,7 +87,7 @@ class _Start:
     grasp_rel: np.ndarray  # (A, 3)
     route: np.ndarray  # (A,)
     goal_seeds: np.ndarray  # (A, n) a configuration holding the goal with the same approach (NaN: none known)
-    drawn: np.ndarray  # (A,) found by restarts (:meth:`_Kinematics.restarted`) besides their seed's own
+    drawn: np.ndarray  # (A,) found by restarts (:meth:`Kinematics.restarted`) besides their seed's own
 
     def seeded(self) -> _Start:
         """Without the configurations found by restarts besides a valid one from their seed: the two-transfer
@@ -490,7 +145,7 @@ def propose(
     :class:`RegraspSettings` when not given.
     Returns the proposals (at most :attr:`RegraspSettings.max_proposals`) and the work done.
     """
-    kinematics = _Kinematics(world, margin_m, should_stop, max_checks, step_checks, settings=settings)
+    kinematics = Kinematics(world, margin_m, should_stop, max_checks, step_checks, settings=settings)
     restarts = rng if restarts is None else restarts
     start, placement = np.asarray(start, float), np.asarray(placement, float)
     finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
@@ -528,7 +183,7 @@ def _distinct(proposals: list[Proposal], settings: RegraspSettings) -> list[Prop
 
 
 def _grasps_at_start(
-    kinematics: _Kinematics,
+    kinematics: Kinematics,
     start: np.ndarray,
     placement: np.ndarray,
     own: list[tuple[int, np.ndarray]],
@@ -553,7 +208,7 @@ def _grasps_at_start(
         goal_seeds = np.concatenate([goal_seeds, np.array([e for _, _, e in extra], dtype=float).reshape(-1, n)])
     if not len(first):
         return None
-    unique = _unique_rows(first, kinematics.settings.unique_rad)
+    unique = unique_rows(first, kinematics.settings.unique_rad)
     for k in np.flatnonzero(~np.isnan(goal_seeds[:, 0])):  # a row kept for an aligned one takes its goal seed
         kept = unique[np.max(np.abs(first[unique] - first[k]), axis=1) <= kinematics.settings.unique_rad][0]
         if np.isnan(goal_seeds[kept, 0]):
@@ -566,14 +221,14 @@ def _grasps_at_start(
 
 
 def _grasp_configurations(
-    kinematics: _Kinematics,
+    kinematics: Kinematics,
     start: np.ndarray,
     placement: np.ndarray,
     own: list[tuple[int, np.ndarray]],
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Valid configurations holding each grasp from the start and its mirror image, with the restarts'
-    (:meth:`_Kinematics.restarted`) and, around the plan's own grasp configurations, ones nearer the start
+    (:meth:`Kinematics.restarted`) and, around the plan's own grasp configurations, ones nearer the start
     (three joints or more; the plan's own are proposed as they are by the caller):
     the configurations, their grasps, and which came from restarts besides a valid solution from their seed
     (a restart in place of a seed whose own solution is not valid counts as that seed's)."""
@@ -581,7 +236,7 @@ def _grasp_configurations(
     n = len(start)
     grasps = np.repeat(np.arange(len(world.object.grasps)), 2)
     targets = transform_points(placement, world.object.grasps)[grasps]
-    seeds = mirrored(world.robot, np.repeat(start[None], len(grasps), axis=0), _direction(world, targets))
+    seeds = mirrored(world.robot, np.repeat(start[None], len(grasps), axis=0), directions(world, targets))
     seeds[0::2] = start
     placements = np.broadcast_to(placement, (len(grasps), 3))
     rows, first, ok = kinematics.restarted(lambda k, q: kinematics.holding(placements[k], grasps[k], q), seeds, rng)
@@ -624,7 +279,7 @@ class _GoalHolds:
 
 
 def _goal_holds(
-    kinematics: _Kinematics, start: np.ndarray, goal: np.ndarray, *, finals: np.ndarray, rng: np.random.Generator
+    kinematics: Kinematics, start: np.ndarray, goal: np.ndarray, *, finals: np.ndarray, rng: np.random.Generator
 ) -> _GoalHolds:
     """How each grasp can hold the object on the goal, valid with the margin: inverse kinematics from the
     start, from ``finals`` ``(m, n)`` (the plan's configurations at the goal), from
@@ -640,18 +295,18 @@ def _goal_holds(
     origins = np.vstack([start[None], finals.reshape(-1, robot.dof), drawn])
     grasps = np.tile(np.arange(count), 2 * len(origins))
     seeds = np.repeat(origins, count, axis=0)
-    seeds = _with_mirrors(world, seeds, transform_points(goal, world.object.grasps)[grasps[: len(seeds)]])
+    seeds = with_mirrors(world, seeds, transform_points(goal, world.object.grasps)[grasps[: len(seeds)]])
     goals = np.broadcast_to(goal, (len(grasps), 3))
     held, ok = kinematics.holding(goals, grasps, seeds)
     grasps, held = grasps[ok], held[ok]
-    unique = _unique_rows(held, kinematics.settings.unique_rad)
+    unique = unique_rows(held, kinematics.settings.unique_rad)
     grasps, held = grasps[unique], held[unique]
     approach = relative(tip_poses(robot, held), goals[: len(held)])[:, 2]
     return _GoalHolds(grasps, held, approach)
 
 
 def _aligned_at(
-    kinematics: _Kinematics, start: np.ndarray, placement: np.ndarray, holds: _GoalHolds
+    kinematics: Kinematics, start: np.ndarray, placement: np.ndarray, holds: _GoalHolds
 ) -> list[tuple[int, np.ndarray, np.ndarray]]:
     """Grasp configurations ``(grasp, q, at_goal)`` near ``start`` holding the object at ``placement`` with the
     approach of one of ``holds`` (whose configuration at the goal comes with it): carried rigidly, the
@@ -672,11 +327,11 @@ def _and_goal_seeds(seeds: np.ndarray, rows: np.ndarray, goal_seeds: np.ndarray)
     return np.concatenate([seeds, goal_seeds[known]]), np.concatenate([rows, known])
 
 
-def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng: np.random.Generator) -> list[Proposal]:
+def _one_transfer(kinematics: Kinematics, begin: _Start, goal: np.ndarray, rng: np.random.Generator) -> list[Proposal]:
     """Grasp configurations carried straight to the goal."""
     world = kinematics.world
     first = begin.first
-    seeds = _with_mirrors(world, first, np.broadcast_to(goal[:2], (len(first), 2)))
+    seeds = with_mirrors(world, first, np.broadcast_to(goal[:2], (len(first), 2)))
     rows = np.tile(np.arange(len(first)), 2)
     seeds, rows = _and_goal_seeds(seeds, rows, begin.goal_seeds)
     queries, ends, ok = kinematics.restarted(
@@ -684,7 +339,7 @@ def _one_transfer(kinematics: _Kinematics, begin: _Start, goal: np.ndarray, rng:
     )
     rows, ends = rows[queries[ok]], ends[ok]
     route = kinematics.routes(first[rows], ends, grasp_rel=begin.grasp_rel[rows])
-    travel = _l1(begin.start, first[rows]) + _l1(first[rows], ends)
+    travel = l1_distances(begin.start, first[rows]) + l1_distances(first[rows], ends)
     return [
         Proposal(
             float(travel[k]),
@@ -727,7 +382,7 @@ class _Releases:
 
 
 def _continue(
-    kinematics: _Kinematics,
+    kinematics: Kinematics,
     begin: _Start,
     option: np.ndarray,
     release: np.ndarray,
@@ -757,7 +412,7 @@ def _continue(
     rows = np.repeat(alive, count)  # (release, grasp) pairs
     grasp = np.tile(np.arange(count), len(alive))
     targets = transform_points(placement[rows], world.object.grasps)[np.arange(len(rows)), grasp]
-    seeds = _with_mirrors(world, release[rows], targets)
+    seeds = with_mirrors(world, release[rows], targets)
     rows, grasp = np.tile(rows, 2), np.tile(grasp, 2)
     regrasp, ok = kinematics.holding(placement[rows], grasp, seeds)
     unaligned = (rows[ok], grasp[ok], regrasp[ok], np.full((int(ok.sum()), n), np.nan))
@@ -765,20 +420,20 @@ def _continue(
         kinematics, placement, release, alive, holds=holds, regrasps=unaligned
     )
     rel2 = relative(tip_poses(world.robot, regrasp), placement[rows])
-    seeds = _with_mirrors(world, regrasp, np.broadcast_to(goal[:2], (len(regrasp), 2)))
+    seeds = with_mirrors(world, regrasp, np.broadcast_to(goal[:2], (len(regrasp), 2)))
     pick = np.tile(np.arange(len(regrasp)), 2)
     seeds, pick = _and_goal_seeds(seeds, pick, goal_seeds)
     end, ok = kinematics.at_goal(rel2[pick], seeds, goal)
     pick, end = pick[ok], end[ok]
     rows, grasp, regrasp, rel2 = rows[pick], grasp[pick], regrasp[pick], rel2[pick]
-    travel = _l1(release[rows], regrasp) + _l1(regrasp, end)
+    travel = l1_distances(release[rows], regrasp) + l1_distances(regrasp, end)
     order = np.lexsort((travel, rows))  # per release, its shortest continuations first
     rank = np.zeros(len(order), dtype=int)
     if len(order):
         starts = np.r_[True, rows[order][1:] != rows[order][:-1]]
         group = np.cumsum(starts) - 1
         rank[order] = np.arange(len(order)) - np.flatnonzero(starts)[group]
-    total = _l1(begin.start, first[rows]) + _l1(first[rows], release[rows]) + travel
+    total = l1_distances(begin.start, first[rows]) + l1_distances(first[rows], release[rows]) + travel
     screened = _shortest_per_option(option, rows, total, kinematics.settings.screened)
     keep = np.flatnonzero((rank < kinematics.settings.continuations) & np.isin(rows, screened))
     rows, grasp, regrasp, end, rel2, total = rows[keep], grasp[keep], regrasp[keep], end[keep], rel2[keep], total[keep]
@@ -801,7 +456,7 @@ def _continue(
 
 
 def _and_aligned(
-    kinematics: _Kinematics,
+    kinematics: Kinematics,
     placement: np.ndarray,
     release: np.ndarray,
     alive: np.ndarray,
@@ -843,12 +498,12 @@ def _best_distinct(found: _Releases, option: int, keep: int, settings: RegraspSe
     score = found.score(settings.blocked_penalty_rad)
     rows = np.flatnonzero((found.option == option) & np.isfinite(score))
     ranked = rows[np.argsort(score[rows], kind="stable")][: 8 * keep]
-    chosen: np.ndarray = ranked[_unique_rows(found.release[ranked], settings.distinct_rad)][:keep]
+    chosen: np.ndarray = ranked[unique_rows(found.release[ranked], settings.distinct_rad)][:keep]
     return chosen
 
 
 def _two_transfers(
-    kinematics: _Kinematics,
+    kinematics: Kinematics,
     begin: _Start,
     goal: np.ndarray,
     rng: np.random.Generator,
@@ -865,7 +520,7 @@ def _two_transfers(
     count, n = first.shape
     goal_side = np.broadcast_to(goal[:2], (count, 2))
     sides = np.tile(np.arange(count), 2)  # from each grasp configuration and its mirror image
-    closest = kinematics.toward(begin.grasp_rel[sides], _with_mirrors(world, first, goal_side), goal[:2])
+    closest = kinematics.toward(begin.grasp_rel[sides], with_mirrors(world, first, goal_side), goal[:2])
     share = np.linspace(1.0 / tuning.towards, 1.0, tuning.towards)
     along = first[sides][:, None, :] + share[None, :, None] * (closest - first[sides])[:, None, :]
     # around the goal: the object put down at points drawn within near_radius_m of it (both elbows)
@@ -874,7 +529,7 @@ def _two_transfers(
     points = goal[:2] + np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1)
     near_sides = np.repeat(sides, tuning.near)
     near = kinematics.toward(
-        begin.grasp_rel[near_sides], np.repeat(_with_mirrors(world, first, goal_side), tuning.near, axis=0), points
+        begin.grasp_rel[near_sides], np.repeat(with_mirrors(world, first, goal_side), tuning.near, axis=0), points
     )
     anywhere = rng.uniform(robot.joint_lower, robot.joint_upper, size=(count * tuning.anywhere, n))
     hinted = np.repeat(hints, tuning.hinted, axis=0)  # each hint itself, then drawn around it

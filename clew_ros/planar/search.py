@@ -46,7 +46,7 @@ from clew_ros.planar.reach import (
     two_link_grasps,
     within_reach,
 )
-from clew_ros.planar.world import World, world_of
+from clew_ros.planar.world import World
 
 __all__ = [
     "goal_configurations",
@@ -62,15 +62,31 @@ __all__ = [
     "transfer_probe_target",
 ]
 
-#: A join's generator is seeded with (planner.seed, this, where the search stalled): its own stream.
-JOIN_STREAM = 13
-#: The transfer probe's inverse kinematics draws from a generator seeded with (planner.seed, this, where
-#: the transfer starts): its own stream, as a join's.
-PROBE_STREAM = 17
+
+@dataclasses.dataclass(frozen=True)
+class SearchStreams:
+    """The random streams of SEARCH's own draws: a generator is seeded with (``planner.seed``, the stream,
+    where the draw happens), so that each draw is the same whatever ran before it."""
+
+    #: A join's generator (with where the search stalled).
+    join: int = 13
+    #: The transfer probe's inverse kinematics (with where the transfer starts); the connection probe
+    #: uses the next stream.
+    probe: int = 17
+
+
+#: The streams SEARCH draws from.
+STREAMS = SearchStreams()
 
 
 def straight_probe(
-    ctx: PlanningContext, jobs: list[SearchJob], q: np.ndarray, best: np.ndarray, waypoints: list[list[np.ndarray]]
+    world: World,
+    ctx: PlanningContext,
+    jobs: list[SearchJob],
+    q: np.ndarray,
+    best: np.ndarray,
+    *,
+    waypoints: list[list[np.ndarray]],
 ) -> None:
     """Jobs with ``straight`` configurations (transits of arms of ``ManyJoints.straight_transit_joints`` or more)
     try a straight joint-space move from their start to each, nearest first, checked continuously with
@@ -78,7 +94,6 @@ def straight_probe(
     (valid at any checking step); the first clear one ends the search there. On arms of
     ``ManyJoints.straight_probe_joints`` or more, when none is clear, also by way of a retreat and an approach
     along the tip's headings. Draws nothing at random."""
-    world = world_of(ctx)
     for i, job in enumerate(jobs):
         if job.straight is None or not len(job.straight) or ctx.termination():
             continue
@@ -91,7 +106,7 @@ def straight_probe(
         )
         if clear.any():
             clear[clear] = _moves_clear_stopping(
-                ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
+                world, ctx, starts[clear], targets[clear], object_pose=pose, grasp_rel=rel, until=True
             )
         way = targets[int(np.argmax(clear))][None] if clear.any() else None
         detour = world.robot.dof >= ctx.many.straight_probe_joints  # below: direct moves only, then the GA
@@ -113,7 +128,9 @@ def straight_probe(
                     world, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
                 ).all():
                     continue
-                if _moves_clear_stopping(ctx, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, until=False).all():
+                if _moves_clear_stopping(
+                    world, ctx, path[:-1], path[1:], object_pose=pose, grasp_rel=rel, until=False
+                ).all():
                     way = path[1:]
                     break
         if way is not None:
@@ -126,20 +143,19 @@ def straight_probe(
 
 
 def join_stalled(
-    ctx: PlanningContext, job: SearchJob, waypoints: np.ndarray, distance: float
+    world: World, ctx: PlanningContext, job: SearchJob, waypoints: np.ndarray, distance: float
 ) -> tuple[np.ndarray, float]:
     """A search that failed, stalled near its target (``distance`` at most ``job.join_within``), extended by
     RRT-Connect to one of ``job.targets`` (in the same mode, every move checked continuously with
     ``SearchSettings.min_margin_factor`` x the clearance, at most ``SearchSettings.join_rounds`` rounds,
     then once more at the validator's 0.002 rad); its waypoints and objective, unchanged when no way was
     found."""
-    world = world_of(ctx)
     if job.targets is None or distance > job.join_within:
         return waypoints, distance
     stalled = waypoints[-1]
     # a generator of the join's own, seeded by the planner's seed and where the search stalled: a join that
     # fails leaves the run's random stream, and so the rest of the run, as they would have been without it
-    rng = own_generator(ctx, JOIN_STREAM, stalled, job.pose)
+    rng = own_generator(ctx, STREAMS.join, stalled, job.pose)
     targets = job.targets(stalled, rng)
     if not len(targets) or ctx.termination():
         return waypoints, distance
@@ -163,7 +179,13 @@ def join_stalled(
 
 
 def search_transit(
-    ctx: PlanningContext, q0: np.ndarray, object_pose: np.ndarray, grasp: int, approach: np.ndarray | None = None
+    world: World,
+    ctx: PlanningContext,
+    q0: np.ndarray,
+    object_pose: np.ndarray,
+    *,
+    grasp: int,
+    approach: np.ndarray | None = None,
 ) -> PathResult:
     """SEARCH_TRANSIT: move the arm, object at rest, until its tip holds ``grasp``.
 
@@ -173,13 +195,12 @@ def search_transit(
     two-joint arm whose valid holding configurations all bend the elbow one
     way, the residual also gains how far the elbow bends the other way.
     """
-    return search_transits(ctx, [(q0, object_pose, grasp, approach)])[0]
+    return search_transits(world, ctx, [(q0, object_pose, grasp, approach)])[0]
 
 
-def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
+def search_transits(world: World, ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
     """:func:`search_transit` for independent requests ``(q0, object_pose, grasp, approach)`` at once:
     their genetic algorithms run as islands of one batch."""
-    world = world_of(ctx)
     results: list[PathResult | None] = []
     jobs, slots = [], []
     many = world.robot.dof >= ctx.many.straight_probe_joints
@@ -208,7 +229,7 @@ def search_transits(ctx: PlanningContext, requests: list[TransitRequest]) -> lis
     if jobs:
         for slot, job, (found, reached) in zip(slots, jobs, local_search(ctx, jobs), strict=True):
             success = reached <= 0.5 * world.grasp_tolerance
-            waypoints, distance = (found, reached) if success else join_stalled(ctx, job, found, reached)
+            waypoints, distance = (found, reached) if success else join_stalled(world, ctx, job, found, reached)
             success = distance <= 0.5 * world.grasp_tolerance
             grasp_rel = relative(tip_poses(world.robot, waypoints[-1:])[0], job.pose) if success else None
             results[slot] = PathResult(success, waypoints, distance, grasp_rel=grasp_rel)
@@ -371,7 +392,7 @@ def goal_configurations(
 
 
 def transfer_probe_target(
-    ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
+    world: World, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
 ) -> np.ndarray | None:
     """The configuration SEARCH_TRANSFER's greedy probe heads for: the nearest (largest joint move) of
     :func:`goal_configurations` from ``q0``, drawn from a generator of its own seeded by the planner's seed
@@ -379,13 +400,14 @@ def transfer_probe_target(
     holds the object at the goal."""
     if not (ctx.search.greedy_probe and ctx.search.transfer_probe):
         return None
-    rng = own_generator(ctx, PROBE_STREAM, q0, grasp_rel)
+    rng = own_generator(ctx, STREAMS.probe, q0, grasp_rel)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
-    held = goal_configurations(world_of(ctx), q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)
+    held = goal_configurations(world, q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)
     return held[0] if len(held) else None
 
 
 def _moves_clear_stopping(
+    world: World,
     ctx: PlanningContext,
     starts: np.ndarray,
     ends: np.ndarray,
@@ -401,7 +423,6 @@ def _moves_clear_stopping(
     check of a long move near a contact can take seconds, past the time limit. The moves are checked in
     order until the first whose answer is ``until`` (the first clear one, or the first blocked one); the
     others, and a move whose check was stopped, come back not clear."""
-    world = world_of(ctx)
     lengths = world.robot.link_lengths
     arm = np.cumsum(lengths[::-1])[::-1] + (world.object.radius if grasp_rel is not None else 0.0)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
@@ -475,14 +496,14 @@ def _backed_line(
     return line[1:]
 
 
-def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -> PathResult | None:
+def _straight_transfer(world: World, ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -> PathResult | None:
     """Arms of many joints (:class:`ManyJoints`): SEARCH_TRANSFER by straight joint-space moves, checked
     continuously, to a configuration holding the object at the goal (:func:`goal_configurations`, nearest
     first), directly or by way of the line along which the tip, backed along its own heading, puts the
     object in place; ``None`` when none is clear. Its own generator (the run's stream is untouched)."""
-    world, many = world_of(ctx), ctx.many
+    many = ctx.many
     grasp_rel = job.pose
-    rng = own_generator(ctx, PROBE_STREAM + 1, job.q0, grasp_rel)
+    rng = own_generator(ctx, STREAMS.probe + 1, job.q0, grasp_rel)
     margin = ctx.search.min_margin_factor * ctx.settings.clearance
     held = goal_configurations(world, job.q0, grasp_rel, goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds)[
         : many.straight_probes
@@ -503,7 +524,7 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
         for way in ways:
             if not sampled_clear(world, way[:-1], way[1:], grasp_rel=grasp_rel, step_rad=many.screen_step_rad).all():
                 continue
-            if _moves_clear_stopping(ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
+            if _moves_clear_stopping(world, ctx, way[:-1], way[1:], grasp_rel=grasp_rel, until=False).all():
                 pose = compose(tip_poses(world.robot, way[-1:]), grasp_rel[None])[0]
                 distance = float(np.linalg.norm(goal_error(world, pose[None], goal)[0]))
                 if goal_reached(world, pose, goal) and distance <= 0.5 * world.goal_tolerance:
@@ -512,11 +533,10 @@ def _straight_transfer(ctx: PlanningContext, job: SearchJob, goal: np.ndarray) -
 
 
 def search_transfer(
-    ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
+    world: World, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray, *, joins: bool = True
 ) -> PathResult:
     """SEARCH_TRANSFER: carry the object (held as ``grasp_rel``) toward the ``goal`` placement; stalled near it,
     joined to it (:func:`join_stalled`, towards :func:`goal_configurations`) unless ``joins`` is false."""
-    world = world_of(ctx)
     mode = {"grasp_rel": np.asarray(grasp_rel, float)[None]}
 
     def error(q: np.ndarray) -> np.ndarray:
@@ -540,10 +560,10 @@ def search_transfer(
         )
 
     within = ctx.search.join_radius * world.robot.reach
-    toward = transfer_probe_target(ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
+    toward = transfer_probe_target(world, ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
     job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within, toward)
     if world.robot.dof >= ctx.many.straight_probe_joints:
-        straight = _straight_transfer(ctx, job, goal)
+        straight = _straight_transfer(world, ctx, job, goal)
         if straight is not None:
             return straight
     if world.robot.dof >= ctx.many.straight_probe_joints and not ctx.many.transfer_ga:
@@ -558,6 +578,6 @@ def search_transfer(
 
     success, final_pose = succeeded(waypoints, distance)
     if not success:
-        waypoints, distance = join_stalled(ctx, job, waypoints, distance)
+        waypoints, distance = join_stalled(world, ctx, job, waypoints, distance)
         success, final_pose = succeeded(waypoints, distance)
     return PathResult(success, waypoints, distance, object_pose=final_pose)

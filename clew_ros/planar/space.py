@@ -215,12 +215,12 @@ class PlanarSpace:
         return distance
 
     def search_transits(self, ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
-        return planar_search.search_transits(ctx, requests)
+        return planar_search.search_transits(self.world, ctx, requests)
 
     def search_transfer(
         self, ctx: PlanningContext, q0: np.ndarray, grasp_rel: np.ndarray, goal: np.ndarray
     ) -> PathResult:
-        return planar_search.search_transfer(ctx, q0, grasp_rel, goal)
+        return planar_search.search_transfer(self.world, ctx, q0, grasp_rel, goal)
 
     def straight_probe(
         self,
@@ -230,7 +230,7 @@ class PlanarSpace:
         best: np.ndarray,
         waypoints: list[list[np.ndarray]],
     ) -> None:
-        planar_search.straight_probe(ctx, jobs, q, best, waypoints)
+        planar_search.straight_probe(self.world, ctx, jobs, q, best, waypoints=waypoints)
 
     def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
         # the last link's direction in the object frame is -grasp_rel[2]
@@ -263,4 +263,4 @@ class PlanarSpace:
     def improve(
         self, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
     ) -> Improvement:
-        return improve(ctx, segments, object_pose, goal, self.improve_settings)
+        return improve(self.world, ctx, segments, object_pose, goal, settings=self.improve_settings)

@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import shapely
@@ -28,30 +28,39 @@ from clew_ros.core.errors import WorldError, short_repr
 from clew_ros.core.files import FileRefusedError, read_regular_file, yaml_error_place
 from clew_ros.core.parameters import LIMITS, REQUIRED, WORLD_PARAMETERS, Limits
 
-if TYPE_CHECKING:
-    from clew_ros.core.space import PlanningContext
-
 __all__ = [
-    "GRASP_ON_BOUNDARY_TOLERANCE_M",
-    "MAX_ABS_VALUE",
     "MAX_LINKS",
     "MAX_PARAMETER_FILE_BYTES",
+    "WORLD_CHECKS",
+    "WORLD_KIND",
     "MovableObject",
     "Obstacle",
     "Robot",
     "World",
+    "WorldChecks",
     "load_world",
     "read_parameter_file",
     "world_from_parameters",
-    "world_of",
     "world_to_parameters",
 ]
 
-#: A grasp point lies on the object's boundary when it is this close to it (m).
-GRASP_ON_BOUNDARY_TOLERANCE_M = 1e-6
-#: Largest magnitude of any number of the world (m or rad). Beyond it the
-#: geometry loses its precision (and squares overflow); no planar arm needs it.
-MAX_ABS_VALUE = 1e6
+#: ``world.kind`` of a planar world (the default) and a plan file's ``world_kind`` for it.
+WORLD_KIND = "planar"
+
+
+@dataclass(frozen=True)
+class WorldChecks:
+    """What a planar world's numbers are checked against when it is read."""
+
+    #: A grasp point lies on the object's boundary when it is this close to it (m).
+    grasp_on_boundary_tolerance_m: float = 1e-6
+    #: Largest magnitude of any number of the world (m or rad). Beyond it the geometry loses its precision
+    #: (and squares overflow); no planar arm needs it.
+    max_abs_value: float = 1e6
+
+
+#: The checks :func:`world_from_parameters` makes.
+WORLD_CHECKS = WorldChecks()
 #: Most links a robot may have (:attr:`Limits.max_links <clew_ros.core.parameters.Limits.max_links>`).
 MAX_LINKS = LIMITS.max_links
 #: Largest parameter file read (bytes); ``/dev/zero`` is not a world.
@@ -177,10 +186,10 @@ def _as_float(value: Any) -> float:
 
 
 def _check_magnitude(name: str, values: np.ndarray) -> None:
-    if values.size and float(np.max(np.abs(values))) > MAX_ABS_VALUE:
+    if values.size and float(np.max(np.abs(values))) > WORLD_CHECKS.max_abs_value:
         raise WorldError(
             name,
-            f"expected numbers within +-{MAX_ABS_VALUE:g} (m or rad), got "
+            f"expected numbers within +-{WORLD_CHECKS.max_abs_value:g} (m or rad), got "
             f"{float(values.flat[np.argmax(np.abs(values))]):.6g}",
         )
 
@@ -450,11 +459,11 @@ def _movable_object(tree: Mapping[str, Any], limits: Limits) -> MovableObject:
     boundary = shapely.Polygon(polygon).exterior
     distances = np.atleast_1d(shapely.distance(boundary, shapely.points(grasps)))
     for index, distance in enumerate(distances):
-        if distance > GRASP_ON_BOUNDARY_TOLERANCE_M:
+        if distance > WORLD_CHECKS.grasp_on_boundary_tolerance_m:
             raise WorldError(
                 f"{op}.grasps",
                 f"expected every grasp on the object's boundary (within "
-                f"{GRASP_ON_BOUNDARY_TOLERANCE_M} m), but grasp {index} "
+                f"{WORLD_CHECKS.grasp_on_boundary_tolerance_m} m), but grasp {index} "
                 f"{grasps[index].tolist()} is {distance:.6g} m away",
             )
     return MovableObject(
@@ -507,11 +516,3 @@ def world_to_parameters(world: World) -> dict[str, Any]:
         tree["obstacle_names"] = [o.name for o in world.obstacles]
         tree["obstacles"] = {o.name: o.vertices.ravel().tolist() for o in world.obstacles}
     return {"world": tree}
-
-
-def world_of(ctx: PlanningContext) -> World:
-    """The planar world of a planning run's space (:class:`clew_ros.planar.space.PlanarSpace`)."""
-    world = getattr(ctx.space, "world", None)
-    if not isinstance(world, World):
-        raise TypeError(f"expected a planning context over a planar space, got {type(ctx.space).__name__}")
-    return world

@@ -23,6 +23,7 @@ from clew_ros.planar.kinematics import tip_poses, transform_points
 from clew_ros.planar.plan import replay
 from clew_ros.planar.world import World
 from clew_ros.recording.errors import TrajectoryError
+from clew_ros.spatial import WORLD_KIND as SPATIAL_WORLD_KIND
 
 __all__ = ["GRIPPER_JOINT", "spatial_trajectory_plan", "trajectory_to_plan"]
 
@@ -190,5 +191,5 @@ def spatial_trajectory_plan(trajectory: Any, fields: dict[str, Any], message: st
         final_object_pose=None if final is None else np.array(final, dtype=float),
         landmarks=(),
         stats={},
-        world_kind="spatial",
+        world_kind=SPATIAL_WORLD_KIND,
     )

@@ -13,7 +13,7 @@ values. Three families:
   names the parameter at fault.
 - ``planner.*``: :data:`~clew_ros.core.parameters.PLANNER_PARAMETERS`,
   checked by :class:`~clew_ros.core.settings.PlannerSettings`.
-- the node's own: :data:`~clew_ros.core.parameters.NODE_PARAMETERS`
+- the node's own: :data:`~clew_ros.ros.node_parameters.NODE_PARAMETERS`
   (``record.*``, ``playback.*``, ``trajectory.*``, ``live.*``,
   ``parameters.*``), checked here into :class:`NodeSettings`.
 
@@ -50,7 +50,6 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.parameters import (
     LIMITS,
-    NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
     PLANNER_LOCK,
     PLANNER_PARAMETERS,
@@ -67,6 +66,8 @@ from clew_ros.core.parameters import (
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.planar.collision import check_start_and_goal
 from clew_ros.planar.world import World, read_parameter_file, world_from_parameters
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
+from clew_ros.spatial import WORLD_KIND as SPATIAL_WORLD_KIND
 
 if TYPE_CHECKING:
     from clew_ros.ros.spatial import SpatialSetup
@@ -112,7 +113,7 @@ OWN_PREFIXES = (
 
 @dataclass(frozen=True)
 class NodeSettings:
-    """The node's own parameters, checked (defaults from :data:`~clew_ros.core.parameters.NODE_PARAMETERS`)."""
+    """The node's own parameters, checked (defaults from :data:`~clew_ros.ros.node_parameters.NODE_PARAMETERS`)."""
 
     record_enabled: bool = NODE_PARAMETERS.default("record.enabled")
     record_directory: str = NODE_PARAMETERS.default("record.directory")
@@ -233,7 +234,7 @@ class Configuration:
 
 
 #: The value of ``world.kind`` that selects a spatial world (section 1b); ``planar`` is the default.
-SPATIAL_KIND = "spatial"
+SPATIAL_KIND = SPATIAL_WORLD_KIND
 
 #: The spec of a spatial world's parameters other than those of :data:`WORLD_PARAMETERS` (the spatial
 #: world parser checks them, naming the one at fault).

@@ -35,3 +35,9 @@
 
 It runs without ROS (a test keeps it so).
 """
+
+__all__ = ["WORLD_KIND"]
+
+#: ``world.kind`` of a spatial world and a plan file's ``world_kind`` for it (the kind's name, written here once
+#: for the modules that must not import the spatial planner to know it).
+WORLD_KIND = "spatial"

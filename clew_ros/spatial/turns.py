@@ -4,8 +4,8 @@ values taking the short way round.
 A plan's straight piece from ``a`` to ``b`` turns each continuous joint by ``remainder(b - a, 2 pi)`` (the
 short way; :func:`short_way`), every other joint by ``b - a``. The planner's own pieces are straight in the
 joint values it checked; :func:`split_turns` cuts any piece that turns a continuous joint by more than
-:data:`LARGEST_TURN_RAD` into equal straight parts, so that the short way and the straight line are one motion
-and a plan reads the same to the validator and to a controller. :func:`unwrapped` writes a path so that
+:attr:`TurnSettings.largest_turn_rad` into equal straight parts, so that the short way and the straight line
+are one motion and a plan reads the same to the validator and to a controller. :func:`unwrapped` writes a path so that
 consecutive points differ by less than pi on the continuous joints (what a ``joint_trajectory_controller``,
 which interpolates the values it is given, needs); :func:`joint_gaps` is the distance modulo 2 pi;
 :func:`goal_turns` lists a goal's values modulo 2 pi that lie within the joint limits (each a goal the
@@ -17,12 +17,14 @@ from __future__ import annotations
 
 import itertools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
-    "LARGEST_TURN_RAD",
+    "TURNS",
+    "TurnSettings",
     "goal_turns",
     "joint_features",
     "joint_gaps",
@@ -35,9 +37,19 @@ __all__ = [
 
 Array = NDArray[np.float64]
 TURN = 2.0 * math.pi
-#: The largest turn of a continuous joint between two waypoints of a plan (rad): below pi, so that the
-#: short way is the straight line.
-LARGEST_TURN_RAD = 3.0
+
+
+@dataclass(frozen=True)
+class TurnSettings:
+    """How a plan's continuous joints turn."""
+
+    #: The largest turn of a continuous joint between two waypoints of a plan (rad): below pi, so that the
+    #: short way is the straight line.
+    largest_turn_rad: float = 3.0
+
+
+#: The settings :func:`split_turns` cuts with by default.
+TURNS = TurnSettings()
 
 
 def _mask(continuous: NDArray[np.bool_] | None, n: int) -> NDArray[np.bool_]:
@@ -91,7 +103,10 @@ def unwrapped(path: Array, continuous: NDArray[np.bool_] | None) -> Array:
 
 
 def split_turns(
-    path: Array, continuous: NDArray[np.bool_] | None, largest: float = LARGEST_TURN_RAD, steps: Array | None = None
+    path: Array,
+    continuous: NDArray[np.bool_] | None,
+    largest: float = TURNS.largest_turn_rad,
+    steps: Array | None = None,
 ) -> Array:
     """``path`` (k, n) with equal straight parts inserted in each piece that turns a continuous joint by more
     than ``largest`` (rad, below pi): the same motion, on which the short way is the straight line. ``steps``

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numba
@@ -20,11 +21,21 @@ from numpy.typing import NDArray
 
 from clew_ros.spatial.scene import Obstacle
 
-__all__ = ["GRID_CELLS", "occupied_cubes"]
+__all__ = ["VOXELS", "VoxelSettings", "occupied_cubes"]
 
 Array = NDArray[np.float64]
-#: The most cells (bytes) of the dense occupancy grid; a cloud spread wider is voxelised by sorting its keys.
-GRID_CELLS = 64_000_000
+
+
+@dataclass(frozen=True)
+class VoxelSettings:
+    """How a point cloud is voxelised."""
+
+    #: The most cells (bytes) of the dense occupancy grid; a cloud spread wider is voxelised by sorting its keys.
+    grid_cells: int = 64_000_000
+
+
+#: The settings :func:`occupied_cubes` works with.
+VOXELS = VoxelSettings()
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -178,7 +189,7 @@ def occupied_cubes(
         return np.zeros((0, 3))
     low_cell = extent[0]
     span = extent[1] - low_cell + 1
-    if int(np.prod(span)) <= GRID_CELLS:
+    if int(np.prod(span)) <= VOXELS.grid_cells:
         grid = np.zeros(int(np.prod(span)), dtype=np.uint8)
         out: Array = np.empty((_mark(cells, keep, low_cell, span, grid), 3))
         _centres(grid, low_cell, span, float(voxel_m), out)

@@ -9,7 +9,7 @@ from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.planar.space import PlanarSpace
-from clew_ros.planar.world import load_world, world_of
+from clew_ros.planar.world import load_world
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 
@@ -24,7 +24,7 @@ def _explorer(name: str, seed: int) -> tuple[Explorer, PlanningContext, Landmark
 
 def test_explore_beats_random_single_manipulation_paths():
     explorer, ctx, tree = _explorer("single_transfer", 3)
-    world, settings = world_of(ctx), ctx.settings
+    world, settings = ctx.space.world, ctx.settings
     exploration = explorer.explore()
     assert exploration is not None
     assert exploration.moved  # the farthest landmark carried the object away from its start
@@ -68,7 +68,7 @@ def test_a_transit_missed_once_is_tried_again_before_giving_up():
 
 def test_forget_failures_keeps_only_found_transits():
     explorer, ctx, _tree = _explorer("figure1", 0)
-    found = [explorer.candidate(0, grasp) for grasp in range(len(world_of(ctx).object.grasps))]
+    found = [explorer.candidate(0, grasp) for grasp in range(len(ctx.space.world.object.grasps))]
     assert any(c is None for c in found)
     assert any(c is not None for c in found)
     explorer.forget_failures()
@@ -87,13 +87,13 @@ def test_the_transits_of_one_step_are_searched_together_and_each_holds_its_grasp
     batches = []
     real = search.search_transits
 
-    def spy(context, requests):
+    def spy(world, context, requests):
         batches.append(len(requests))
-        return real(context, requests)
+        return real(world, context, requests)
 
     monkeypatch.setattr(search, "search_transits", spy)  # PlanarSpace.search_transits calls it by its name
     assert explorer.explore() is not None
-    world = world_of(ctx)
+    world = ctx.space.world
     assert batches
     assert max(batches) >= 2
     found = [c for c in explorer.transits.values() if c is not None and c.transit is not None]
@@ -120,7 +120,7 @@ def test_a_landmark_takes_its_own_grasp_again_with_another_approach_when_asked()
     exploration = explorer.explore()
     assert exploration is not None
     landmark = tree.add(**exploration.fields)
-    world, grasp = world_of(ctx), landmark.grasp
+    world, grasp = ctx.space.world, landmark.grasp
     here = approach_cell(-landmark.grasp_rel[2])
     # its own approach allowed: the landmark itself, no transit
     allowed = np.zeros(cells_count, bool)

@@ -33,7 +33,7 @@ def test_the_transfer_into_the_slot_is_found_from_the_witness_regrasp(seed: int)
     last = list(replay(world, generated.witness, None))[-1]  # the witness's transfer into the slot
     assert last.grasp_rel is not None
     ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
-    result = search_transfer(ctx, last.configurations[0], last.grasp_rel, world.object.goal)
+    result = search_transfer(world, ctx, last.configurations[0], last.grasp_rel, world.object.goal)
     assert result.success
     assert ctx.counters.evaluations == 0  # straight moves only: no Manhattan path was decoded
 
@@ -72,11 +72,11 @@ def test_a_straight_probe_move_is_checked_in_pieces_asking_the_termination_befor
     many = dataclasses.replace(ManyJoints(), check_sweep_m=5e-3)  # pieces of 5 mm sweep: several of them
     running = _CountingTermination(None)
     ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), running, many=many)
-    assert _moves_clear_stopping(ctx, starts, ends, object_pose=world.object.initial, until=True).all()
+    assert _moves_clear_stopping(world, ctx, starts, ends, object_pose=world.object.initial, until=True).all()
     assert running.asked >= 5  # asked before each piece, not once for the whole move
     stopping = _CountingTermination(3)
     ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), stopping, many=many)
-    clear = _moves_clear_stopping(ctx, starts, ends, object_pose=world.object.initial, until=True)
+    clear = _moves_clear_stopping(world, ctx, starts, ends, object_pose=world.object.initial, until=True)
     assert not clear.any()  # stopped: not proven clear
     assert stopping.asked <= running.asked // 2  # and no piece was checked after the stop
 
@@ -114,7 +114,7 @@ def test_a_many_joint_transfer_decodes_no_manhattan_path_when_its_straight_probe
     ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), Termination(60.0))
     start = np.asarray(world.robot.initial, float)
     # the object held 5 cm ahead of the tip from the arm's start posture: no straight move puts it in the slot
-    result = search_transfer(ctx, start, np.array([0.05, 0.0, 0.0]), world.object.goal)
+    result = search_transfer(world, ctx, start, np.array([0.05, 0.0, 0.0]), world.object.goal)
     assert not result.success
     assert ctx.counters.evaluations == 0  # ManyJoints.transfer_ga is off: no GA round
 

@@ -8,10 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from clew_ros.cli.parameter_tables import main
+from clew_ros.cli.parameter_tables import main, markdown_tables, update_markdown
 from clew_ros.core.errors import ParameterError, short_repr
 from clew_ros.core.parameters import (
-    NODE_PARAMETERS,
     OBSTACLE_PARAMETER,
     PLANNER_PARAMETERS,
     REQUIRED,
@@ -20,20 +19,19 @@ from clew_ros.core.parameters import (
     ParameterType,
     check_joint_count,
     check_value,
-    markdown_tables,
-    update_markdown,
 )
 from clew_ros.core.settings import PlannerSettings
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+README = Path(__file__).resolve().parents[2] / "docs" / "parameters.md"  # where the tables are
 TABLES = (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS)
 
 
 def test_readme_tables_are_generated_from_the_specification() -> None:
-    """README.md holds the tables markdown_tables() makes; after a change to the specification run
-    ``python -m clew_ros.cli.parameter_tables --update README.md``."""
+    """docs/parameters.md holds the tables markdown_tables() makes; after a change to the specification run
+    ``python -m clew_ros.cli.parameter_tables --update docs/parameters.md``."""
     text = README.read_text(encoding="utf-8")
-    assert update_markdown(text) == text, "run: python -m clew_ros.cli.parameter_tables --update README.md"
+    assert update_markdown(text) == text, "run: python -m clew_ros.cli.parameter_tables --update docs/parameters.md"
     for name, table in markdown_tables().items():
         assert table in text, name
     for table in TABLES:
@@ -45,7 +43,7 @@ def test_the_update_and_check_commands(tmp_path: Path, capsys: pytest.CaptureFix
     stale = README.read_text(encoding="utf-8").replace(
         "| `planner.seed` | integer | `0` |", "| `planner.seed` | integer | `7` |"
     )
-    path = tmp_path / "README.md"
+    path = tmp_path / "parameters.md"
     path.write_text(stale, encoding="utf-8")
     assert main(["--check", str(path)]) == 1
     assert main(["--update", str(path)]) == 0

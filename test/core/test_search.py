@@ -31,7 +31,7 @@ def context(world, seed: int = 0) -> PlanningContext:
 
 def test_search_transit_reaches_a_grasp_without_touching_the_resting_object(world) -> None:
     pose = world.object.initial
-    result = search_transit(context(world), world.robot.initial, pose, grasp=1)
+    result = search_transit(world, context(world), world.robot.initial, pose, grasp=1)
     assert result.success
     target = transform_points(pose, world.object.grasps[1][None])[0]
     tip = tip_poses(world.robot, result.waypoints[-1:])[0]
@@ -45,10 +45,10 @@ def test_search_transit_reaches_a_grasp_without_touching_the_resting_object(worl
 
 def test_search_transfer_carries_the_object_to_the_goal(world) -> None:
     ctx = context(world)
-    transit = search_transit(ctx, world.robot.initial, world.object.initial, grasp=1)
+    transit = search_transit(world, ctx, world.robot.initial, world.object.initial, grasp=1)
     assert transit.success
     goal = world.object.goal
-    result = search_transfer(ctx, transit.waypoints[-1], transit.grasp_rel, goal)
+    result = search_transfer(world, ctx, transit.waypoints[-1], transit.grasp_rel, goal)
     assert result.success
     assert goal_reached(world, result.object_pose, goal)
     configurations = interpolate(result.waypoints, 0.002)
@@ -58,12 +58,12 @@ def test_search_transfer_carries_the_object_to_the_goal(world) -> None:
 
 
 def test_same_seed_same_path_and_an_unreachable_goal_fails_without_searching(world) -> None:
-    first = search_transit(context(world, 3), world.robot.initial, world.object.initial, grasp=0)
-    again = search_transit(context(world, 3), world.robot.initial, world.object.initial, grasp=0)
+    first = search_transit(world, context(world, 3), world.robot.initial, world.object.initial, grasp=0)
+    again = search_transit(world, context(world, 3), world.robot.initial, world.object.initial, grasp=0)
     assert np.array_equal(first.waypoints, again.waypoints)
     far = np.array([5.0, 5.0, 0.0])
     ctx = context(world)
-    result = search_transfer(ctx, first.waypoints[-1], first.grasp_rel, far)
+    result = search_transfer(world, ctx, first.waypoints[-1], first.grasp_rel, far)
     assert not result.success
     assert len(result.waypoints) == 1
     assert ctx.counters.evaluations == 0
@@ -137,18 +137,18 @@ def test_transfer_probe_heads_for_a_configuration_holding_the_object_at_the_goal
     from clew_ros.planar import search
 
     ctx = context(world)
-    transit = search_transit(ctx, world.robot.initial, world.object.initial, grasp=1)
+    transit = search_transit(world, ctx, world.robot.initial, world.object.initial, grasp=1)
     assert transit.success
     q0, goal = transit.waypoints[-1], world.object.goal
     state = ctx.rng.bit_generator.state
-    toward = search.transfer_probe_target(ctx, q0, transit.grasp_rel, goal)
+    toward = search.transfer_probe_target(world, ctx, q0, transit.grasp_rel, goal)
     assert ctx.rng.bit_generator.state == state  # drawn from a generator of its own: the run's stream is as it was
     assert toward is not None
     pose = compose(tip_poses(world.robot, toward[None]), transit.grasp_rel[None])[0]
     assert goal_reached(world, pose, goal)
     assert is_valid(world, toward[None], pose[None]).all()
-    again = search.transfer_probe_target(context(world), q0, transit.grasp_rel, goal)
+    again = search.transfer_probe_target(world, context(world), q0, transit.grasp_rel, goal)
     assert again is not None
     assert np.array_equal(toward, again)  # same request, same target
     off = dataclasses.replace(ctx, search=SearchSettings(transfer_probe=False))
-    assert search.transfer_probe_target(off, q0, transit.grasp_rel, goal) is None
+    assert search.transfer_probe_target(world, off, q0, transit.grasp_rel, goal) is None

@@ -7,7 +7,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-from clew_ros.core.parameters import NODE_PARAMETERS
 from clew_ros.node.namespaces import (
     DEMO_WORLDS,
     PlannerArgumentError,
@@ -19,6 +18,7 @@ from clew_ros.node.namespaces import (
     world_parameters,
 )
 from clew_ros.planar.world import read_parameter_file
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 

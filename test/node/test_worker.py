@@ -13,7 +13,7 @@ rclpy = pytest.importorskip("rclpy")
 from action_msgs.msg import GoalStatus  # noqa: E402
 
 from clew_ros.core.settings import Outcome  # noqa: E402
-from clew_ros.node import worker  # noqa: E402
+from clew_ros.kinds import planar as planar_kind  # noqa: E402  (the planner the planar kind runs)
 from clew_ros.node.run import Phase  # noqa: E402
 from clew_ros.planar.world import read_parameter_file  # noqa: E402
 from clew_ros.ros.parameters import flatten  # noqa: E402
@@ -59,7 +59,7 @@ def test_a_planner_fault_ends_the_run_internal_error(node, tmp_path: Path, monke
     def broken_plan(*args: object, **kwargs: object) -> None:
         raise RuntimeError("injected")
 
-    monkeypatch.setattr(worker, "plan", broken_plan)
+    monkeypatch.setattr(planar_kind, "plan", broken_plan)
     run, refusal = node.request_plan("plan")
     assert run is not None, refusal
     assert run.wait_outcome(10.0)
@@ -82,13 +82,13 @@ def test_a_planner_fault_ends_the_run_internal_error(node, tmp_path: Path, monke
 
 def test_requests_while_a_run_plans_are_refused_busy(node, monkeypatch: pytest.MonkeyPatch) -> None:
     release = threading.Event()
-    real_plan = worker.plan
+    real_plan = planar_kind.plan
 
     def held_plan(*args: object, **kwargs: object):  # planning until released
         release.wait(10.0)
         return real_plan(*args, **kwargs)
 
-    monkeypatch.setattr(worker, "plan", held_plan)
+    monkeypatch.setattr(planar_kind, "plan", held_plan)
     run, refusal = node.request_plan("plan")
     assert run is not None, refusal
     second, refusal = node.request_plan("goal_pose", run.goal)

@@ -131,7 +131,7 @@ def test_improve_time_zero_gives_exactly_the_first_plan() -> None:
     assert result.message == f"plan found with {len(result.tree)} landmarks, {result.stats['transfers']} grasp(s)"
     settings = PlannerSettings(seed=1, improve_time=0.0)
     ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng(0), Termination(10))
-    same = improve(ctx, result.segments, result.final_object_pose, world.object.goal)
+    same = improve(world, ctx, result.segments, result.final_object_pose, world.object.goal)
     assert same.segments is result.segments
     assert same.final_object_pose is result.final_object_pose
 
@@ -164,7 +164,7 @@ def test_cancel_during_improvement_returns_the_best_plan_so_far() -> None:
     rng = np.random.default_rng([2, IMPROVE_STREAM])
     termination = _StopAtPoll(STOP_AT_POLL, Outcome.CANCELED)
     ctx = PlanningContext(PlanarSpace(world), settings, rng, termination)
-    better = improve(ctx, first.segments, first.final_object_pose, world.object.goal)
+    better = improve(world, ctx, first.segments, first.final_object_pose, world.object.goal)
     assert better.stopped  # it ended at the stop, not at its 60 s budget nor on its own
     assert better.travel <= better.first_travel
     assert better.transfers <= better.first_transfers
@@ -179,7 +179,7 @@ def test_the_time_limit_stops_improvement_and_keeps_the_plan() -> None:
     settings = PlannerSettings(seed=0, improve_time=60.0)
     termination = _StopAtPoll(STOP_AT_POLL, Outcome.TIME_LIMIT)
     ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng([0, IMPROVE_STREAM]), termination)
-    better = improve(ctx, first.segments, first.final_object_pose, world.object.goal)
+    better = improve(world, ctx, first.segments, first.final_object_pose, world.object.goal)
     assert better.stopped
     assert better.travel <= better.first_travel
     result = dataclasses.replace(first, segments=better.segments, final_object_pose=better.final_object_pose)
@@ -236,7 +236,7 @@ def test_routing_around_a_blocked_move_gives_valid_paths_between_its_ends(seed, 
         paths = []
         for _ in range(2):
             ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng([seed, trial]), Termination(30))
-            improver = _Improver(ctx, [piece], world.object.goal)
+            improver = _Improver(world, ctx, [piece], world.object.goal)
             if improver.clear(piece, a, b):
                 break  # not blocked
             paths.append(improver.connect(piece, a, b))
@@ -280,7 +280,7 @@ def test_improving_random_manhattan_paths_never_makes_them_invalid_or_longer(see
     settings = PlannerSettings(seed=seed, improve_time=0.2)
     ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng(seed), Termination(30))
     before = joint_travel(segments)
-    better = improve(ctx, segments, final, final)
+    better = improve(world, ctx, segments, final, final)
     assert better.travel <= before + 1e-9
     assert better.travel < 0.9 * before  # random Manhattan paths wander: a shortcut always helps here
     assert better.transfers == 1
@@ -354,7 +354,7 @@ def test_a_needless_regrasp_is_dropped_and_the_plan_gets_shorter(monkeypatch) ->
     ctx = PlanningContext(
         PlanarSpace(world), PlannerSettings(seed=0, improve_time=0.3), np.random.default_rng(0), Termination(30)
     )
-    better = improve(ctx, segments, goal, np.asarray(world.object.goal, dtype=float))
+    better = improve(world, ctx, segments, goal, np.asarray(world.object.goal, dtype=float))
     assert better.first_transfers == 2
     assert better.transfers == 1
     assert better.travel < better.first_travel - 0.5
@@ -393,7 +393,7 @@ def _improver_on_first_plan(name: str, seed: int = 0):
     )
 
     def fresh() -> _Improver:
-        return _Improver(ctx, _pieces(world, first.segments), goal)
+        return _Improver(world, ctx, _pieces(world, first.segments), goal)
 
     return world, fresh(), fresh
 
@@ -416,7 +416,7 @@ def test_goal_shortcuts_end_the_last_transfer_on_the_goal_sooner_by_a_clear_stra
                 np.random.default_rng(seed),
                 Termination(30),
             )
-            improver = _Improver(ctx, _pieces(world, first.segments), goal)
+            improver = _Improver(world, ctx, _pieces(world, first.segments), goal)
             before = [p.waypoints.copy() for p in improver.pieces]
             spent = improver.budget.spent
             moved = improver.goal_shortcuts()
@@ -498,7 +498,7 @@ def test_goal_shortcuts_change_nothing_after_a_transit_or_once_stopped() -> None
     for pieces, limit in ((_pieces(world, first.segments)[:-1], 30.0), (_pieces(world, first.segments), 0.0)):
         settings = PlannerSettings(seed=0, improve_time=0.4)
         ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng(0), Termination(limit))
-        improver = _Improver(ctx, pieces, goal)  # ends with a transit; or its time limit is past
+        improver = _Improver(world, ctx, pieces, goal)  # ends with a transit; or its time limit is past
         before = [p.waypoints.copy() for p in improver.pieces]
         assert not improver.goal_shortcuts()
         assert improver.budget.spent == 0

@@ -37,7 +37,7 @@ def _improved(world: World, first: PlanResult, planner_seed: int) -> Improvement
         PlanarSpace(world), settings, np.random.default_rng([planner_seed, IMPROVE_STREAM]), Termination(120.0)
     )
     assert first.final_object_pose is not None
-    return improve(ctx, first.segments, first.final_object_pose, world.object.goal)
+    return improve(world, ctx, first.segments, first.final_object_pose, world.object.goal)
 
 
 @pytest.mark.parametrize(("world_seed", "planner_seed"), [(24, 1), (7, 1), (7, 0)])
@@ -66,7 +66,7 @@ def test_postures_solved_again_along_the_tip_path_shorten_a_wandering_plan() -> 
     ctx = PlanningContext(
         PlanarSpace(world), PlannerSettings(seed=1), np.random.default_rng([1, IMPROVE_STREAM]), Termination(120.0)
     )
-    improver = _Improver(ctx, _pieces(world, first.segments), world.object.goal)
+    improver = _Improver(world, ctx, _pieces(world, first.segments), world.object.goal)
     before = plan_score(improver.pieces)
     assert improver.resolve_postures()
     after = plan_score(improver.pieces)
@@ -82,11 +82,11 @@ def test_arms_of_few_joints_get_no_many_joint_budget() -> None:
     world = generate("arm10", 0).world()
     assert world.robot.dof == 10
     ctx = PlanningContext(PlanarSpace(world), PlannerSettings(seed=0), np.random.default_rng(0), Termination(10.0))
-    few = _Improver(ctx, [], world.object.goal)
+    few = _Improver(world, ctx, [], world.object.goal)
     assert few.budget.total == pytest.approx(ctx.settings.improve_time * few.settings.work_per_second)
     snake = generate("snake", 7).world()
     ctx = PlanningContext(PlanarSpace(snake), PlannerSettings(seed=0), np.random.default_rng(0), Termination(10.0))
-    many = _Improver(ctx, [], snake.object.goal)
+    many = _Improver(snake, ctx, [], snake.object.goal)
     joints = snake.robot.dof
     scale = (joints / many.settings.many_budget_joints) ** many.settings.many_budget_power
     assert many.settings.many_budget_power == 2.0  # the square: a check costs about the square of the joints

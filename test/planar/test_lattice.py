@@ -439,7 +439,7 @@ def test_a_routed_move_is_the_lattice_s_when_shorter_than_rrt_connect_s_and_with
             tuning = ImproveSettings(lattice=LatticeSettings(max_joints=0 if not lattice else 3))  # 0: no lattice
             settings = PlannerSettings(seed=seed, improve_time=5.0)
             ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng([seed, 1]), Termination(30))
-            return _Improver(ctx, [piece], world.object.goal, tuning).connect(piece, a, b, longest)
+            return _Improver(world, ctx, [piece], world.object.goal, tuning).connect(piece, a, b, longest)
 
         alone, path = routed(lattice=False), routed()
         if alone is None:

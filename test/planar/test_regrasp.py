@@ -184,7 +184,8 @@ def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_
     # a rigid grasp keeps its approach while carried: each grasp configuration at the start comes with a
     # configuration at the goal, and carrying the object from one to the other puts it on the goal. These
     # worlds' witnesses carry the object from its start to the goal with one grasp, so some grasp can.
-    from clew_ros.planar.regrasp import _aligned_at, _goal_holds, _Kinematics
+    from clew_ros.planar.regrasp import _aligned_at, _goal_holds
+    from clew_ros.planar.regrasp_keys import Kinematics
     from clew_ros.worlds import generate
 
     generated = generate(family, seed)
@@ -193,7 +194,7 @@ def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_
     placement = np.asarray(world.object.initial, dtype=float)
     goal = np.asarray(world.object.goal, dtype=float)
     finals = np.asarray(generated.witness.segments[-1].waypoints[-1], dtype=float)[None]
-    kinematics = _Kinematics(world, 5e-4)
+    kinematics = Kinematics(world, 5e-4)
     holds = _goal_holds(kinematics, start, goal, finals=finals, rng=np.random.default_rng(0))
     aligned = _aligned_at(kinematics, start, placement, holds)
     assert aligned
@@ -210,20 +211,22 @@ def test_goal_aligned_grasps_hold_the_placement_with_an_approach_that_holds_the_
 
 def test_a_two_joint_arm_gets_no_goal_aligned_grasps() -> None:
     # it holds a placement in at most two ways (the two elbows), which propose tries anyway
-    from clew_ros.planar.regrasp import _goal_holds, _Kinematics
+    from clew_ros.planar.regrasp import _goal_holds
+    from clew_ros.planar.regrasp_keys import Kinematics
 
     world = load_world(ROOT / "config" / "figure1.yaml")
     rng = np.random.default_rng(0)
     state = rng.bit_generator.state
     start, goal = world.robot.initial, np.asarray(world.object.goal, float)
-    assert len(_goal_holds(_Kinematics(world, 0.0), start, goal, finals=np.zeros((0, 2)), rng=rng).grasps) == 0
+    assert len(_goal_holds(Kinematics(world, 0.0), start, goal, finals=np.zeros((0, 2)), rng=rng).grasps) == 0
     assert rng.bit_generator.state == state  # nothing drawn: no goal-aligned grasps for two joints
 
 
 def test_a_two_joint_arms_own_grasp_configurations_cost_no_inverse_kinematics() -> None:
     # they are proposed as they are, and no restart is drawn around them: with or without them, the grasp
     # configurations take the same work
-    from clew_ros.planar.regrasp import _grasp_configurations, _Kinematics
+    from clew_ros.planar.regrasp import _grasp_configurations
+    from clew_ros.planar.regrasp_keys import Kinematics
 
     world = load_world(ROOT / "config" / "figure1.yaml")
     start = np.asarray(world.robot.initial, dtype=float)
@@ -231,7 +234,7 @@ def test_a_two_joint_arms_own_grasp_configurations_cost_no_inverse_kinematics() 
     own = [(0, start + 0.1), (1, start - 0.1)]
     efforts = []
     for mine in ([], own):
-        kinematics = _Kinematics(world, 0.0)
+        kinematics = Kinematics(world, 0.0)
         _grasp_configurations(kinematics, start, placement, mine, np.random.default_rng(0))
         efforts.append(kinematics.effort)
     assert efforts[0].steps > 0
@@ -246,14 +249,15 @@ def test_a_restart_in_place_of_a_seeds_colliding_solution_starts_two_transfer_pr
     from clew_ros.core.settings import PlannerSettings
     from clew_ros.planar.continuous import ContinuousSettings
     from clew_ros.planar.inverse import mirrored
-    from clew_ros.planar.regrasp import _direction, _grasp_configurations, _Kinematics
+    from clew_ros.planar.regrasp import _grasp_configurations
+    from clew_ros.planar.regrasp_keys import Kinematics, directions
 
     world = load_world(ROOT / "config" / "arm3_regrasp.yaml")
     start = np.asarray(world.robot.initial, dtype=float)
     placement = np.asarray(world.object.initial, dtype=float)
-    kinematics = _Kinematics(world, ContinuousSettings().min_margin_factor * PlannerSettings().clearance)
+    kinematics = Kinematics(world, ContinuousSettings().min_margin_factor * PlannerSettings().clearance)
     target = transform_points(placement, world.object.grasps[1:2])
-    seeds = np.vstack([start, mirrored(world.robot, start[None], _direction(world, target))])
+    seeds = np.vstack([start, mirrored(world.robot, start[None], directions(world, target))])
     _, own = kinematics.holding(np.vstack([placement, placement]), np.array([1, 1]), seeds)
     assert not own.any()  # the premise: grasp 1's solutions from the start and its mirror image collide
     for seed in range(3):
@@ -266,12 +270,13 @@ def test_a_restart_in_place_of_a_seeds_colliding_solution_starts_two_transfer_pr
 
 
 def _aligned_setup(family: str, seed: int):
-    from clew_ros.planar.regrasp import _aligned_at, _goal_holds, _Kinematics
+    from clew_ros.planar.regrasp import _aligned_at, _goal_holds
+    from clew_ros.planar.regrasp_keys import Kinematics
     from clew_ros.worlds import generate
 
     generated = generate(family, seed)
     world = generated.world()
-    kinematics = _Kinematics(world, 5e-4)
+    kinematics = Kinematics(world, 5e-4)
     start = np.asarray(world.robot.initial, dtype=float)
     placement = np.asarray(world.object.initial, dtype=float)
     goal = np.asarray(world.object.goal, dtype=float)
@@ -320,11 +325,11 @@ def test_regrasps_aligned_at_releases_carry_the_object_onto_the_goal() -> None:
 def test_restarts_add_valid_grasp_configurations_nearer_the_seed_on_a_redundant_arm() -> None:
     # a ten-joint arm's inverse kinematics from its start folds into collisions or ends far away: solutions
     # from seeds drawn around it are added when valid and nearer
-    from clew_ros.planar.regrasp import _Kinematics
+    from clew_ros.planar.regrasp_keys import Kinematics
     from clew_ros.worlds import generate
 
     world = generate("arm10", 0).world()
-    kinematics = _Kinematics(world, 5e-4)
+    kinematics = Kinematics(world, 5e-4)
     placement = np.asarray(world.object.initial, dtype=float)
     grasps = np.arange(len(world.object.grasps))
     seeds = np.repeat(np.asarray(world.robot.initial, dtype=float)[None], len(grasps), axis=0)
@@ -353,10 +358,10 @@ def test_restarts_add_valid_grasp_configurations_nearer_the_seed_on_a_redundant_
 
 
 def test_a_two_joint_arm_gets_no_restarts() -> None:
-    from clew_ros.planar.regrasp import _Kinematics
+    from clew_ros.planar.regrasp_keys import Kinematics
 
     world = load_world(ROOT / "config" / "figure1.yaml")
-    kinematics = _Kinematics(world, 0.0)
+    kinematics = Kinematics(world, 0.0)
     rng = np.random.default_rng(0)
     state = rng.bit_generator.state
     seeds = np.repeat(np.asarray(world.robot.initial, dtype=float)[None], 3, axis=0)
@@ -368,12 +373,12 @@ def test_a_two_joint_arm_gets_no_restarts() -> None:
 
 def test_restarts_around_a_configuration_add_ones_nearer_an_origin() -> None:
     # the plan's own grasp configuration: solutions drawn around it are kept when nearer the arm's start
-    from clew_ros.planar.regrasp import _Kinematics
+    from clew_ros.planar.regrasp_keys import Kinematics
     from clew_ros.worlds import generate
 
     generated = generate("arm10", 1)
     world = generated.world()
-    kinematics = _Kinematics(world, 5e-4)
+    kinematics = Kinematics(world, 5e-4)
     witness = generated.witness.segments
     own = np.asarray(witness[1].waypoints[0], dtype=float)[None]  # the witness's grasp configuration
     grasp = np.array([int(witness[1].grasp)])

@@ -12,9 +12,10 @@ import pytest
 pytest.importorskip("rclpy")
 
 from clew_ros.core.errors import ParameterError, WorldError
-from clew_ros.core.parameters import NODE_PARAMETERS, PLANNER_PARAMETERS, WORLD_PARAMETERS
+from clew_ros.core.parameters import PLANNER_PARAMETERS, WORLD_PARAMETERS
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.ros import parameters
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 from clew_ros.ros.parameters import (
     NodeSettings,
     configuration_from_values,

@@ -16,16 +16,15 @@ from typing import Any
 
 import pytest
 
+from clew_ros.cli.parameter_tables import limits_table, markdown_tables
 from clew_ros.core.errors import ParameterError, WorldError
 from clew_ros.core.parameters import (
     LIMITS,
-    NODE_PARAMETERS,
     PLANNER_PARAMETERS,
     check_value,
-    limits_table,
-    markdown_tables,
 )
 from clew_ros.planar.world import world_from_parameters
+from clew_ros.ros.node_parameters import NODE_PARAMETERS
 
 #: A tiny valid world (two links, one obstacle), changed by each case.
 BASE: dict[str, Any] = {
@@ -200,7 +199,7 @@ def test_a_goal_frame_id_is_quoted_short_and_printable() -> None:
 
 
 def test_the_caps_are_documented() -> None:
-    """README's tables (generated) name each cap: the limits table, and the world parameters they cap."""
+    """docs/parameters.md's tables (generated) name each cap: the limits table, and the world parameters they cap."""
     table = limits_table()
     for field in ("max_links", "max_obstacles", "max_grasps", "max_parameters", "max_name_chars"):
         assert f"| `{field}` | `{getattr(LIMITS, field)}` |" in table

@@ -16,8 +16,9 @@ from helpers.security_spatial import CASES, SECRET, crafted_worlds
 pytest.importorskip("trimesh")
 pytest.importorskip("urdf_parser_py")
 
+from clew_ros.cli.parameter_tables import limits_table
 from clew_ros.core.errors import WorldError
-from clew_ros.core.parameters import LIMITS, Limits, limits_table
+from clew_ros.core.parameters import LIMITS, Limits
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.spatial.scene import world_obstacles
 from clew_ros.spatial.world import spatial_world_from_parameters
@@ -151,8 +152,8 @@ def test_the_spatial_caps_are_in_the_specification_with_units() -> None:
     for field, unit in spatial:
         assert f"| `{field}` | `{getattr(LIMITS, field)}` | {unit} |" in table
     assert LIMITS.max_points == Limits().max_points == 1_000_000  # interface.md 3c: state.max_points' default
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    assert table in readme
+    parameters = (ROOT / "docs" / "parameters.md").read_text(encoding="utf-8")
+    assert table in parameters
     security = (ROOT / "docs" / "security.md").read_text(encoding="utf-8")
     for field, _ in spatial:
         assert f"`{field}`" in security, field

@@ -80,7 +80,7 @@ def test_the_sorted_keys_give_the_same_cubes_as_the_dense_grid(monkeypatch: pyte
     points = _cloud(np.random.default_rng(4))
     options = {"voxel_m": VOXEL, "grow_m": GROW, "sphere_centers": SPHERES, "sphere_radii": RADII, "solids": SOLIDS}
     dense = occupied_cubes(points, **options)  # type: ignore[arg-type]
-    monkeypatch.setattr(voxels, "GRID_CELLS", 10)
+    monkeypatch.setattr(voxels, "VOXELS", voxels.VoxelSettings(grid_cells=10))
     assert np.array_equal(occupied_cubes(points, **options), dense)  # type: ignore[arg-type]
 
 

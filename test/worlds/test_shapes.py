@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import shapely
 
-from clew_ros.planar.world import GRASP_ON_BOUNDARY_TOLERANCE_M
+from clew_ros.planar.world import WORLD_CHECKS
 from clew_ros.worlds.shapes import MIN_EDGE_M, MIN_THICKNESS_M, SHAPES, make_shape
 
 
@@ -25,7 +25,7 @@ def test_a_shape_is_a_simple_polygon_with_grasps_on_its_edges(kind: str, seed: i
     assert shape.radius <= 0.3
     assert len(shape.grasps) >= 3
     distances = shapely.distance(polygon.exterior, shapely.points(shape.grasps))
-    assert np.all(distances <= GRASP_ON_BOUNDARY_TOLERANCE_M / 10)
+    assert np.all(distances <= WORLD_CHECKS.grasp_on_boundary_tolerance_m / 10)
     assert np.allclose(np.linalg.norm(shape.normals, axis=1), 1.0)
     outside = shapely.points(shape.grasps + 1e-3 * shape.normals)
     inside = shapely.points(shape.grasps - 1e-3 * shape.normals)

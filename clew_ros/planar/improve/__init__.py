@@ -168,7 +168,7 @@ from clew_ros.planar.improve.pieces import Improvement, _Piece, _pieces
 from clew_ros.planar.improve.rebuild import _Rebuilding
 from clew_ros.planar.improve.settings import ImproveSettings
 from clew_ros.planar.improve.shortcuts import _draw_shortcuts
-from clew_ros.planar.world import world_of
+from clew_ros.planar.world import World
 
 __all__ = [
     "ImproveSettings",
@@ -213,26 +213,27 @@ class _Improver(_Rebuilding, _ManyJointMoves):
 
 
 def improve(
+    world: World,
     ctx: PlanningContext,
     segments: list[Segment],
     final_object_pose: np.ndarray,
     goal: np.ndarray,
+    *,
     settings: ImproveSettings = ImproveSettings(),
 ) -> Improvement:
     """Improve a found plan within ``ctx.settings.improve_time`` of work (module docstring).
 
-    ``ctx`` carries the world, the settings, the generator the improvement draws from and the
-    termination (time limit, cancel); ``settings`` the improvement's tuning. Returns the better plan, or the
-    first one.
+    ``world`` is the planar world planned in; ``ctx`` carries the settings, the generator the improvement draws
+    from and the termination (time limit, cancel); ``settings`` the improvement's tuning. Returns the better
+    plan, or the first one.
     """
-    world = world_of(ctx)
     first = _pieces(world, segments)
     first_score = plan_score(first)
     if ctx.settings.improve_time <= 0 or ctx.termination():
         return Improvement(
             segments, final_object_pose, first_score[1], first_score[0], first_score[1], first_score[0], 0, 0, False
         )
-    improver = _Improver(ctx, _pieces(world, segments), goal, settings)
+    improver = _Improver(world, ctx, _pieces(world, segments), goal, settings)
     pieces = improver.run()
     pieces = _pieces(world, [p.segment() for p in pieces])  # the object carried along the final paths
     changed = [

@@ -15,7 +15,7 @@ from clew_ros.planar.improve.final import _dense_count
 from clew_ros.planar.improve.pieces import _Piece
 from clew_ros.planar.improve.settings import ImproveSettings
 from clew_ros.planar.lattice import KnownNodes
-from clew_ros.planar.world import world_of
+from clew_ros.planar.world import World
 
 
 class _ImproverBase:
@@ -23,15 +23,20 @@ class _ImproverBase:
     tuning, the default :class:`ImproveSettings` when not given)."""
 
     def __init__(
-        self, ctx: PlanningContext, pieces: list[_Piece], goal: np.ndarray, settings: ImproveSettings | None = None
+        self,
+        world: World,
+        ctx: PlanningContext,
+        pieces: list[_Piece],
+        goal: np.ndarray,
+        settings: ImproveSettings | None = None,
     ) -> None:
         self.settings = ImproveSettings() if settings is None else settings
         self.ctx = ctx
-        self.world = world_of(ctx)
+        self.world = world
         self.pieces = pieces
         self.first = [p.waypoints for p in pieces]
         self.goal = goal
-        joints = world_of(ctx).robot.dof
+        joints = world.robot.dof
         scale = 1.0
         if joints >= ctx.many.straight_probe_joints:
             scale = (joints / self.settings.many_budget_joints) ** self.settings.many_budget_power

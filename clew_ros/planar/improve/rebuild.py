@@ -122,7 +122,7 @@ class _Rebuilding(_Proposals):
             piece = self.pieces[index]
             assert piece.grasp_rel is not None
             before = self.ctx.counters.evaluations
-            result = search_transfer(self.ctx, piece.waypoints[0], piece.grasp_rel, self.goal, joins=False)
+            result = search_transfer(self.world, self.ctx, piece.waypoints[0], piece.grasp_rel, self.goal, joins=False)
             self.budget.spend(self.settings.evaluation_work * (self.ctx.counters.evaluations - before))
             if not result.success:
                 continue

@@ -351,7 +351,7 @@ def screen_routes(
     resting: np.ndarray | None,
     grasp_rel: np.ndarray | None,
 ) -> tuple[np.ndarray, int]:
-    """The proposals' screen (:meth:`clew_ros.planar.regrasp._Kinematics.routes`), compiled: per move
+    """The proposals' screen (:meth:`clew_ros.planar.regrasp_keys.Kinematics.routes`), compiled: per move
     ``starts[k] -> ends[k]`` ``(M, n)``, the first way (0 straight, 1 one joint after the other from the
     first, 2 from the last) whose ``samples[k]`` configurations (cosine-spaced along the way's joint travel,
     every fourth first) pass :func:`~.validity.clearly_valid` with the world's rounding as the margin, the object

@@ -29,6 +29,7 @@ from clew_ros.core.files import FileRefusedError, read_regular_file
 from clew_ros.core.plan import FORMAT, PlanFileLimits
 from clew_ros.planar.world import read_parameter_file
 from clew_ros.render.errors import RenderError
+from clew_ros.spatial import WORLD_KIND
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.world import SpatialWorld
 
@@ -72,7 +73,7 @@ def is_spatial_world_file(path: str | Path) -> bool:
     except ClewError as error:
         raise RenderError(str(error)) from None
     world = parameters.get("world")
-    return isinstance(world, Mapping) and world.get("kind") == "spatial"
+    return isinstance(world, Mapping) and world.get("kind") == WORLD_KIND
 
 
 def load_spatial_world(path: str | Path) -> SpatialWorld:
@@ -129,7 +130,7 @@ def _check_plan(world: SpatialWorld, plan: Any, source: str) -> list[Any]:
     """The plan's segments, once its header is the world's: format, world kind and name, joint names."""
     if not isinstance(plan, Mapping) or plan.get("format") != FORMAT:
         raise RenderError(f"{source}: expected a JSON object with format {FORMAT!r}")
-    if plan.get("world_kind", "spatial") != "spatial":
+    if plan.get("world_kind", WORLD_KIND) != WORLD_KIND:
         raise RenderError(f"{source}: world_kind: expected spatial (the world is), got {plan.get('world_kind')!r:.40}")
     if plan.get("world") != world.name:
         raise RenderError(f"{source}: world: the plan is for world {plan.get('world')!r:.80}, not {world.name!r}")

@@ -30,6 +30,7 @@ from clew_ros.core.errors import ClewError
 from clew_ros.core.parameters import LIMITS
 from clew_ros.render.errors import RenderError
 from clew_ros.render.spatial.frames import FrameSampling, SpatialFrames, frames_from_plan
+from clew_ros.spatial import WORLD_KIND
 from clew_ros.spatial.transforms import matrix_pose, pose_matrix, quaternion_matrix
 from clew_ros.spatial.world import SpatialWorld
 
@@ -67,7 +68,7 @@ def recorded_parameters(text: str, source: str) -> dict[str, Any] | None:
     entry = next(iter(document.values()))
     parameters = entry.get("ros__parameters") if isinstance(entry, Mapping) else None
     world = parameters.get("world") if isinstance(parameters, Mapping) else None
-    if not isinstance(world, Mapping) or world.get("kind") != "spatial":
+    if not isinstance(world, Mapping) or world.get("kind") != WORLD_KIND:
         return None
     return dict(parameters)  # type: ignore[arg-type]
 

@@ -37,12 +37,13 @@ def run_one(family: str, robot: str, seed: int, time_limit: float) -> dict[str, 
     except GenerationError:
         return None
     world = generated.world()
-    began = time.perf_counter()
+    began, cpu = time.perf_counter(), time.process_time()
     result = plan(world, PlannerSettings(time_limit=time_limit, seed=0))
-    elapsed = time.perf_counter() - began
+    elapsed, cpu = time.perf_counter() - began, time.process_time() - cpu
     row: dict[str, Any] = {
         "outcome": result.outcome.name,
         "time_s": elapsed,
+        "cpu_s": cpu,
         "witness_transfers": generated.witness.grasp_count,
         "no_path": result.outcome is Outcome.NO_PATH_AT_RESOLUTION,
     }
@@ -72,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
                     continue
                 rows[family, robot].append(row)
                 print(f"{family} {robot} {seed}: {row}", flush=True)
-    header = "| family | arm | solved | median s | transfers <= witness + 1 | false no path | valid | drags |"
+    header = "| family | arm | solved | median s (CPU s) | transfers <= witness + 1 | false no path | valid | drags |"
     print("\n" + header + "\n|" + "---|" * 8)
     every: list[dict[str, Any]] = []
     for (family, robot), found in rows.items():
@@ -85,9 +86,10 @@ def main(argv: list[str] | None = None) -> int:
 def _line(family: str, robot: str, rows: list[dict[str, Any]]) -> str:
     solved = [r for r in rows if r["outcome"] == "SUCCEEDED"]
     median = statistics.median(r["time_s"] for r in rows) if rows else float("nan")
+    cpu = statistics.median(r["cpu_s"] for r in rows) if rows else float("nan")
     few = sum(r["transfers"] <= r["witness_transfers"] + 1 for r in solved)
     return (
-        f"| {family} | {robot} | {len(solved)}/{len(rows)} | {median:.2f} | {few}/{len(solved)} | "
+        f"| {family} | {robot} | {len(solved)}/{len(rows)} | {median:.2f} ({cpu:.2f}) | {few}/{len(solved)} | "
         f"{sum(r['no_path'] for r in rows)} | {sum(r['valid'] for r in solved)}/{len(solved)} | "
         f"{sum(r['drags'] for r in solved)}/{len(solved)} |"
     )

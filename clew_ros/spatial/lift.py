@@ -24,7 +24,7 @@ from clew_ros.spatial.validate import validation_samples
 if TYPE_CHECKING:
     from clew_ros.spatial.space import SpatialSpace
 
-__all__ = ["LiftSettings", "lifted_segments"]
+__all__ = ["LiftSettings", "drag_free", "lifted_segments"]
 
 Array = NDArray[np.float64]
 
@@ -59,6 +59,20 @@ def lifted_segments(
         waypoints = _lifted_start(space, waypoints, rel, settings)
         waypoints = _lifted_start(space, waypoints[::-1], rel, settings)[::-1]
         out.append(Segment(segment.kind, segment.grasp, list(waypoints)))
+    return out
+
+
+def drag_free(
+    space: SpatialSpace, starts: Array, ends: Array, rel: Array, settings: DragSettings | None = None
+) -> NDArray[np.bool_]:
+    """Whether each straight move ``starts[i] -> ends[i]`` (the object held as ``rel``) keeps from dragging it:
+    no stretch near a support where it slides more than ``settings.slide_m`` (at the validator's samples)."""
+    settings = settings or DragSettings()
+    out = np.ones(len(starts), dtype=bool)
+    for i, (a, b) in enumerate(zip(starts, ends, strict=True)):
+        samples, _ = _samples(space, np.vstack([a, b]))
+        poses = _matrices(space, samples, rel)
+        out[i] = all(moved <= settings.slide_m for _, _, _, moved in slides(space.world, poses, settings))
     return out
 
 

@@ -49,7 +49,7 @@ from clew_ros.core.tree import LandmarkTree, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
-from clew_ros.spatial.lift import lifted_segments
+from clew_ros.spatial.lift import drag_free, lifted_segments
 from clew_ros.spatial.motion_plan import add_branch, connect, plan_motion
 from clew_ros.spatial.placements import Support, face_down, object_extent, placement_pose, resting_on
 from clew_ros.spatial.plan import make_plan, path_problems
@@ -1262,6 +1262,16 @@ def _pruned(segments: list[Segment], same_rad: float) -> list[_Piece]:
     return joined_regrasps(pieces, same_rad)
 
 
+def _clear_lifted(
+    space: SpatialSpace, checker: SpatialChecker, rel: Array, starts: Array, ends: Array
+) -> NDArray[np.bool_]:
+    """A transfer's shortcuts: clear, and not dragging the object over a support (:func:`lift.drag_free`)."""
+    clear = space.clear(checker, starts, ends)
+    if clear.any():
+        clear[clear] = drag_free(space, starts[clear], ends[clear], rel, space.tuning.lift.drag)
+    return clear
+
+
 def _shortcut_segments(
     space: SpatialSpace, ctx: PlanningContext, segments: list[Segment], object_pose: Array
 ) -> Improvement:
@@ -1296,8 +1306,9 @@ def _shortcut_segments(
             rel = None
             checker = space.transit_checker(resting)
         if not budget.stopped:
+            clear = partial(space.clear, checker) if rel is None else partial(_clear_lifted, space, checker, rel)
             path, taken, spent, _ = shortcut_path(
-                partial(space.clear, checker),
+                clear,
                 path,
                 tries=space.tuning.shortcut_tries,
                 rng=ctx.rng,

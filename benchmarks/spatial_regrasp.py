@@ -64,6 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--time-limit", type=float, default=10.0)
     args = parser.parse_args(argv)
     rows: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+    run_one(args.families[0], args.robots[0], args.first_seed, 1.0)  # warm-up: compiled kernels and caches, not kept
     for family in args.families:
         for robot in args.robots:
             for seed in range(args.first_seed, args.first_seed + args.seeds):

@@ -17,7 +17,7 @@ from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.core.tree import Segment
 from clew_ros.spatial.handling import DragSettings, drag_problems
-from clew_ros.spatial.lift import lifted_segments
+from clew_ros.spatial.lift import drag_free, lifted_segments
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.space import SpatialSpace, plan
 from clew_ros.spatial.transforms import pose_matrix
@@ -138,7 +138,12 @@ def test_dragging_is_found_and_a_lift_mends_it() -> None:
     assert problems
     assert "slides" in problems[0]
     assert drag_problems(world, dragging, DragSettings(slide_m=0.05)) == []  # 3 cm is within a 5 cm allowance
-    mended = lifted_segments(SpatialSpace(world), segments)
+    space = SpatialSpace(world)
+    path = np.asarray(segments[1].waypoints)
+    rel = space.grasp_rel(segments[1].grasp)
+    assert not drag_free(space, path[:1], path[4:5], rel)[0]  # the slide, as one straight move (a shortcut)
+    assert drag_free(space, path[4:5], path[5:6], rel)[0]  # the lift after it
+    mended = lifted_segments(space, segments)
     built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in mended])
     assert len(mended[1].waypoints) != len(segments[1].waypoints)
     assert drag_problems(world, built) == []

@@ -46,7 +46,7 @@ class RegraspSettings:
     """How intermediate placements are drawn and kept."""
 
     #: placements drawn per support and face (count) once per run; each costs one inverse kinematics per grasp
-    per_support_face: int = 12
+    per_support_face: int = 32
     #: random starts (count) of the inverse kinematics that decides whether a grasp holds the object at a
     #: placement ...
     ik_seeds: int = 16

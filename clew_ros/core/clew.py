@@ -284,32 +284,35 @@ def _search_via(
     tried: _Tried,
 ) -> tuple[Landmark, _Found] | None:
     """SEARCH by way of an intermediate placement (``SearchSettings.via_placements``, the paper's closing
-    suggestion of searching for placements inside the optimisation): for each of ``candidates`` (a grasp held
-    at ``landmark``'s placement), SEARCH_TRANSFER to the placements the space proposes for it
-    (:meth:`~clew_ros.core.space.RegraspAims.placements`: where a grasp serving the goal can take the object);
-    each one reached becomes a landmark, and SEARCH (its regrasps in place) goes on from it. Returns that
-    landmark and SEARCH's successful answer from it, or ``None``."""
-    for candidate in candidates:
-        for pose in aims.placements(landmark, candidate.grasp)[: ctx.search.via_placements]:
-            if ctx.termination():
-                return None
-            tried.via_placements += 1
-            result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, pose)
-            if not result.success:
-                continue
-            tried.via_reached += 1
-            middle = tree.add(
-                parent=landmark.id,
-                joints=result.waypoints[-1].copy(),
-                object_pose=result.object_pose,
-                grasp=candidate.grasp,
-                grasp_rel=candidate.grasp_rel,
-                transit=candidate.transit,
-                transfer=result.waypoints,
-            )
-            found = _search(ctx, explorer, middle, goal, aims=aims)
-            if found.success:
-                return middle, found
+    suggestion of searching for placements inside the optimisation): for ``candidates`` (grasps held at
+    ``landmark``'s placement), SEARCH_TRANSFER to the placements the space proposes for each
+    (:meth:`~clew_ros.core.space.RegraspAims.placements`: where a grasp serving the goal can take the object),
+    every candidate's best placement first, then every one's second, and so on; each one reached becomes a
+    landmark, and SEARCH (its regrasps in place) goes on from it. Returns that landmark and SEARCH's
+    successful answer from it, or ``None``."""
+    proposed = [(c, aims.placements(landmark, c.grasp)[: ctx.search.via_placements]) for c in candidates]
+    rounds = max((len(poses) for _, poses in proposed), default=0)
+    tries = [(c, poses[r]) for r in range(rounds) for c, poses in proposed if r < len(poses)]  # breadth first
+    for candidate, pose in tries:
+        if ctx.termination():
+            return None
+        tried.via_placements += 1
+        result = ctx.space.search_transfer(ctx, candidate.start, candidate.grasp_rel, pose)
+        if not result.success:
+            continue
+        tried.via_reached += 1
+        middle = tree.add(
+            parent=landmark.id,
+            joints=result.waypoints[-1].copy(),
+            object_pose=result.object_pose,
+            grasp=candidate.grasp,
+            grasp_rel=candidate.grasp_rel,
+            transit=candidate.transit,
+            transfer=result.waypoints,
+        )
+        found = _search(ctx, explorer, middle, goal, aims=aims)
+        if found.success:
+            return middle, found
     return None
 
 

@@ -11,22 +11,42 @@ ends cannot be mended so is kept as it was (:func:`clew_ros.spatial.handling.dra
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.tree import Segment
+from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.handling import DragSettings, slides
+from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.validate import validation_samples
-
-if TYPE_CHECKING:
-    from clew_ros.spatial.space import SpatialSpace
+from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["LiftSettings", "drag_free", "lifted_segments"]
 
 Array = NDArray[np.float64]
+
+
+class SpatialSpace(Protocol):
+    """What the mending asks of :class:`clew_ros.spatial.space.SpatialSpace`."""
+
+    @property
+    def world(self) -> SpatialWorld: ...
+
+    def grasp_rel(self, grasp: int) -> NDArray[np.float64]: ...
+
+    def ik(self, seeds: int) -> InverseKinematics: ...
+
+    def transfer_checker(self, grasp_rel: NDArray[np.float64]) -> SpatialChecker: ...
+
+    @property
+    def validation_steps(self) -> Array: ...
+
+    def tcp(self, q: Array) -> Array: ...
+
+    def clear(self, checker: SpatialChecker, starts: Array, ends: Array) -> NDArray[np.bool_]: ...
 
 
 @dataclass(frozen=True)

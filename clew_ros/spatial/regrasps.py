@@ -16,21 +16,43 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.tree import Landmark
+from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.placements import sample_placements
 from clew_ros.spatial.transforms import matrix_pose, rpy_matrix
-
-if TYPE_CHECKING:
-    from clew_ros.spatial.space import SpatialSpace
+from clew_ros.spatial.world import SpatialWorld
 
 __all__ = ["RegraspSettings", "SpatialAims"]
 
 Array = NDArray[np.float64]
+
+
+class SpatialSpace(Protocol):
+    """What the aims ask of :class:`clew_ros.spatial.space.SpatialSpace`."""
+
+    @property
+    def world(self) -> SpatialWorld: ...
+
+    def grasp_rel(self, grasp: int) -> NDArray[np.float64]: ...
+
+    def ik(self, seeds: int) -> InverseKinematics: ...
+
+    def transfer_checker(self, grasp_rel: NDArray[np.float64]) -> SpatialChecker: ...
+
+    @property
+    def dof(self) -> int: ...
+
+    @property
+    def grasp_count(self) -> int: ...
+
+    @property
+    def initial_joints(self) -> np.ndarray: ...
 
 
 def _matrix(pose: Array) -> Array:

@@ -117,7 +117,7 @@ def test_goal_shortcut_moves_checked_a_few_at_a_time_find_the_first_clear_one_in
     ctx = PlanningContext(
         PlanarSpace(world), PlannerSettings(seed=1), np.random.default_rng([1, IMPROVE_STREAM]), Termination(120.0)
     )
-    improver = _Improver(ctx, _pieces(world, first.segments), world.object.goal)
+    improver = _Improver(world, ctx, _pieces(world, first.segments), world.object.goal)
     piece = max(improver.pieces, key=lambda p: len(p.waypoints))
     w = piece.waypoints
     rng = np.random.default_rng(3)

@@ -97,7 +97,7 @@ def test_only_transits_of_seven_joints_or_more_get_straight_targets(
     ctx = _context(world)
     start = np.asarray(world.robot.initial, float)
     for grasp in range(len(world.object.grasps)):
-        planar_search.search_transit(ctx, start, np.asarray(world.object.initial, float), grasp)
+        planar_search.search_transit(world, ctx, start, np.asarray(world.object.initial, float), grasp=grasp)
     assert seen, "no transit got as far as SEARCH"
     assert all((job.straight is not None) == straight for job in seen)
     if straight:

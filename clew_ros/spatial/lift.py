@@ -59,6 +59,9 @@ class LiftSettings:
     lifts_m: tuple[float, ...] = (0.008, 0.015, 0.03)
     #: samples of the transfer (count) tried as the place where the lifted path joins it again
     joins: int = 8
+    #: stretches (count) mended in the middle of one transfer at most: the object set down on a support on
+    #: its way and slid, replaced by the same move with both ends raised
+    middles: int = 3
 
 
 def lifted_segments(
@@ -78,6 +81,11 @@ def lifted_segments(
         waypoints = np.asarray(segment.waypoints, dtype=float)
         waypoints = _lifted_start(space, waypoints, rel, settings)
         waypoints = _lifted_start(space, waypoints[::-1], rel, settings)[::-1]
+        for _ in range(settings.middles):
+            mended = _lifted_middle(space, waypoints, rel, settings)
+            if mended is None:
+                break
+            waypoints = mended
         out.append(Segment(segment.kind, segment.grasp, list(waypoints)))
     return out
 
@@ -118,6 +126,43 @@ def _drags(space: SpatialSpace, path: Array, rel: Array, settings: DragSettings)
 def _matrices(space: SpatialSpace, q: Array, rel: Array) -> Array:
     """The carried object's 4x4 poses at configurations ``q`` (held as ``rel``, 6 numbers)."""
     return np.asarray(space.tcp(q) @ pose_matrix([float(v) for v in rel]))
+
+
+def _up(space: SpatialSpace, q: Array, rise: float, checker: SpatialChecker) -> Array | None:
+    """The valid configuration nearest ``q`` with the tcp ``rise`` higher, its orientation kept (``None``: none)."""
+    target = space.tcp(q[None])[0].copy()
+    target[2, 3] += rise
+    found = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[q[None]], checker=checker)[0]
+    return None if not len(found) else np.asarray(found[np.argmin(np.abs(found - q).sum(axis=1))])
+
+
+def _lifted_middle(space: SpatialSpace, waypoints: Array, rel: Array, settings: LiftSettings) -> Array | None:
+    """``waypoints`` with the last stretch in their middle that drags the object over a support replaced: from
+    the sample before it to the sample after it, raised at both ends (straight moves, checked); ``None``
+    when none drags or none can be mended so."""
+    samples, piece = _samples(space, waypoints)
+    poses = _matrices(space, samples, rel)
+    last = len(samples) - 1
+    bad = [
+        s
+        for s in slides(space.world, poses, settings.drag)
+        if s[3] > settings.drag.slide_m and s[1] > 0 and s[2] < last
+    ]
+    if not bad:
+        return None
+    _, first, end, _ = max(bad, key=lambda s: s[1])
+    a, b = samples[first - 1], samples[end + 1]
+    checker = space.transfer_checker(rel)
+    before, after = waypoints[: int(piece[first - 1]) + 1], waypoints[int(piece[end + 1]) + 1 :]
+    for rise in settings.lifts_m:
+        a_up, b_up = _up(space, a, rise, checker), _up(space, b, rise, checker)
+        if a_up is None or b_up is None:
+            continue
+        path = np.vstack([before[-1:], a, a_up, b_up, b, after[:1]])
+        if not space.clear(checker, path[:-1], path[1:]).all() or _drags(space, path[1:5], rel, settings.drag):
+            continue
+        return np.vstack([before, a, a_up, b_up, b, after])
+    return None
 
 
 def _lifted_start(space: SpatialSpace, waypoints: Array, rel: Array, settings: LiftSettings) -> Array:

@@ -147,3 +147,23 @@ def test_dragging_is_found_and_a_lift_mends_it() -> None:
     built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in mended])
     assert len(mended[1].waypoints) != len(segments[1].waypoints)
     assert drag_problems(world, built) == []
+
+
+def test_a_slide_in_the_middle_of_a_transfer_is_lifted_too() -> None:
+    """The object lifted off, put back down on its table, slid 3 cm and lifted: the slide in the middle is
+    replaced by the same move raised at both ends."""
+    made = generate_spatial("spatial_table", 0, "panda")
+    world = made.world()
+    _, segments = _sliding_plan(world, made.witness, 0.03)
+    space = SpatialSpace(world)
+    path = np.asarray(segments[1].waypoints)
+    target = space.tcp(path[:1])[0].copy()
+    target[2, 3] += 0.03
+    up = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[path[:1]])[0][0]
+    segments[1] = Segment("transfer", segments[1].grasp, [path[0], up, *path])
+    built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in segments])
+    assert drag_problems(world, built)
+    mended = lifted_segments(space, segments)
+    again = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in mended])
+    assert drag_problems(world, again) == []
+    assert np.array_equal(np.asarray(mended[1].waypoints[0]), path[0])  # it still starts where the object rests

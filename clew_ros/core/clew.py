@@ -301,15 +301,10 @@ def _search_via(
         if not result.success:
             continue
         tried.via_reached += 1
-        middle = tree.add(
-            parent=landmark.id,
-            joints=result.waypoints[-1].copy(),
-            object_pose=result.object_pose,
-            grasp=candidate.grasp,
-            grasp_rel=candidate.grasp_rel,
-            transit=candidate.transit,
-            transfer=result.waypoints,
+        reached = _Found(
+            True, 0.0, candidate.grasp, candidate.transit, result.waypoints, result.object_pose, candidate.grasp_rel
         )
+        middle = _chained(tree, landmark, reached)
         found = _search(ctx, explorer, middle, goal, aims=aims)
         if found.success:
             return middle, found
@@ -378,7 +373,8 @@ def _closer(ctx: PlanningContext, candidate: Candidate, goal: np.ndarray, closes
 
 
 def _chained(tree: LandmarkTree, parent: Landmark, found: _Found) -> Landmark:
-    """SEARCH's closest attempt from ``parent`` (one that moved the object) as a new landmark: SEARCH's chain."""
+    """SEARCH's attempt from ``parent`` (one that moved the object) as a new landmark: its closest (SEARCH's
+    chain), or one that reached an intermediate placement (:func:`_search_via`)."""
     assert found.transfer is not None  # worth chaining: the closest attempt moved the object
     return tree.add(
         parent=parent.id,

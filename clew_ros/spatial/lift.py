@@ -19,27 +19,17 @@ from numpy.typing import NDArray
 from clew_ros.core.tree import Segment
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.handling import DragSettings, slides
-from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.validate import validation_samples
-from clew_ros.spatial.world import SpatialWorld
+from clew_ros.spatial.views import HeldObjectView
 
 __all__ = ["LiftSettings", "drag_free", "lifted_segments"]
 
 Array = NDArray[np.float64]
 
 
-class SpatialSpace(Protocol):
-    """What the mending asks of :class:`clew_ros.spatial.space.SpatialSpace`."""
-
-    @property
-    def world(self) -> SpatialWorld: ...
-
-    def grasp_rel(self, grasp: int) -> NDArray[np.float64]: ...
-
-    def ik(self, seeds: int) -> InverseKinematics: ...
-
-    def transfer_checker(self, grasp_rel: NDArray[np.float64]) -> SpatialChecker: ...
+class SpatialSpace(HeldObjectView, Protocol):
+    """What the mending ask of :class:`clew_ros.spatial.space.SpatialSpace` beyond :class:`HeldObjectView`."""
 
     @property
     def validation_steps(self) -> Array: ...

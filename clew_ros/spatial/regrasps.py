@@ -22,28 +22,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.tree import Landmark
-from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.inverse import InverseKinematics
 from clew_ros.spatial.placements import sample_placements
 from clew_ros.spatial.transforms import matrix_pose, rpy_matrix
-from clew_ros.spatial.world import SpatialWorld
+from clew_ros.spatial.views import HeldObjectView
 
 __all__ = ["RegraspSettings", "SpatialAims"]
 
 Array = NDArray[np.float64]
 
 
-class SpatialSpace(Protocol):
-    """What the aims ask of :class:`clew_ros.spatial.space.SpatialSpace`."""
-
-    @property
-    def world(self) -> SpatialWorld: ...
-
-    def grasp_rel(self, grasp: int) -> NDArray[np.float64]: ...
-
-    def ik(self, seeds: int) -> InverseKinematics: ...
-
-    def transfer_checker(self, grasp_rel: NDArray[np.float64]) -> SpatialChecker: ...
+class SpatialSpace(HeldObjectView, Protocol):
+    """What the aims ask of :class:`clew_ros.spatial.space.SpatialSpace` beyond :class:`HeldObjectView`."""
 
     @property
     def dof(self) -> int: ...

@@ -541,15 +541,7 @@ def _solvable(builder: _Builder) -> SpatialGenerated:
     problems = validate_plan(world, plan)
     if problems:
         raise _RejectedError(f"the witness does not validate among the obstacles: {problems[0]}")
-    travel = float(sum(np.abs(np.diff(s.waypoints, axis=0)).sum() for s in plan.segments))
-    stats = {
-        "expected": "solvable",
-        "family": family.name,
-        "robot": builder.robot_name,
-        "seed": builder.seed,
-        "transfers": plan.grasp_count,
-        "joint_travel_rad": round(travel, 6),
-    }
+    travel, stats = _witness_stats(builder, plan)
     plan = replace(plan, stats=stats)
     what = (
         f"{builder.robot_name} ({world.robot.dof} joints), a {builder.thing.shape} {list(builder.thing.size)} m, "
@@ -565,20 +557,26 @@ def _solvable(builder: _Builder) -> SpatialGenerated:
     )
 
 
-def _regrasp(builder: _Builder) -> SpatialGenerated:
-    """A world where a regrasp is needed (:mod:`clew_ros.worlds.spatial_regrasp`)."""
-    family = builder.family
-    tree, plan, notes = regrasp_world(builder, REGRASP_LAYOUTS[family.regrasp])
-    world = builder.world(tree)
+def _witness_stats(builder: _Builder, plan: Plan) -> tuple[float, dict[str, Any]]:
+    """A solvable world's witness: its joint travel (rad) and the stats the file records."""
     travel = float(sum(np.abs(np.diff(s.waypoints, axis=0)).sum() for s in plan.segments))
     stats = {
         "expected": "solvable",
-        "family": family.name,
+        "family": builder.family.name,
         "robot": builder.robot_name,
         "seed": builder.seed,
         "transfers": plan.grasp_count,
         "joint_travel_rad": round(travel, 6),
     }
+    return travel, stats
+
+
+def _regrasp(builder: _Builder) -> SpatialGenerated:
+    """A world where a regrasp is needed (:mod:`clew_ros.worlds.spatial_regrasp`)."""
+    family = builder.family
+    tree, plan, notes = regrasp_world(builder, REGRASP_LAYOUTS[family.regrasp])
+    world = builder.world(tree)
+    travel, stats = _witness_stats(builder, plan)
     what = f"{builder.robot_name} ({world.robot.dof} joints), a {builder.thing.shape} {list(builder.thing.size)} m"
     notes = [
         what,

@@ -71,6 +71,11 @@ class RegraspAims(Protocol):
         not worth a transit."""
         ...
 
+    def ranked(self, landmark: Landmark, grasps: list[int]) -> list[int]:
+        """``grasps`` (the regrasps in place SEARCH may try at ``landmark``, in a random order) in the order
+        to try them (planar: as they are)."""
+        ...
+
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
         """Intermediate placements (object poses), best first, to which ``grasp`` could carry the object from
         ``landmark`` and where a grasp serving the goal could take it on (SEARCH's aimed regrasp,

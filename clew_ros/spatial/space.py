@@ -45,7 +45,7 @@ from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
 from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
-from clew_ros.core.tree import LandmarkTree, Segment
+from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.enclosure import enclosure_refusal
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, pose_rows
@@ -58,7 +58,7 @@ from clew_ros.spatial.scene import make_obstacle
 from clew_ros.spatial.tier import object_touches
 from clew_ros.spatial.transforms import rpy_matrix
 from clew_ros.spatial.tuning import SpatialTuning
-from clew_ros.spatial.turns import joint_features, nearest_turns, split_turns
+from clew_ros.spatial.turns import joint_features, nearest_turns, split_turns, turnable
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.spatial.world import SpatialWorld
 
@@ -203,6 +203,18 @@ def straight_samples_clear(
     return clear
 
 
+def aimed_holds(holds: Array, q0: Array, approach: Any | None) -> Array:
+    """``holds`` (configurations holding a grasp, nearest ``q0`` first) in the order a regrasp aimed at
+    ``approach`` tries them: with an aim (:meth:`clew_ros.spatial.regrasps.SpatialAims.aim`: the grasp's
+    configurations at the goal, (k, n)), by joint travel from ``q0`` plus to the nearest of those (rad, L1),
+    so that the transfer after the regrasp stays in the posture family it ends in; without one, as they are."""
+    aim = None if approach is None else np.asarray(approach)
+    if aim is None or aim.ndim != 2 or not len(aim) or not len(holds) or aim.dtype.kind != "f":
+        return holds
+    cost = np.abs(holds - q0).sum(axis=1) + np.abs(holds[:, None, :] - aim[None]).sum(axis=2).min(axis=1)
+    return holds[np.argsort(cost, kind="stable")]
+
+
 def _footprint_inside(world: SpatialWorld, support: Support, face: str, pose: Array) -> bool:
     assert world.object is not None
     thing = world.object.shape
@@ -229,6 +241,7 @@ class SpatialSpace:
         #: the goal trees of the failed SEARCH_TRANSFERs (:meth:`transfer_trees`), by held pose and goal: each
         #: grows over the run, as the ACA's landmarks do
         self._goal_trees: dict[bytes, LandmarkTree] = {}
+        self._way_out_lengths: dict[bytes, float] = {}  # (grasp, goal, goal pose) -> m (_way_out_m)
         thing = world.object
         self._grasps = matrices(thing.grasps) if thing is not None else np.zeros((0, 4, 4))
         #: the object's size scale (m): its half diagonal, the radius of the orientation's chord
@@ -577,7 +590,7 @@ class SpatialSpace:
         rng = own_generator(ctx, HOLD_STREAM, q0, np.r_[object_pose, grasp])
         found = self.ik(ctx.hold_samples).solve(target, rng, seeds=q0[None], checker=self.transit_checker(object_pose))
         if len(found):
-            found = self._nearest_turns(q0, found[self.transfer_checker(self.grasp_rel(grasp)).valid(found)])
+            found = self.nearest_turns(q0, found[self.transfer_checker(self.grasp_rel(grasp)).valid(found)])
         return found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
 
     def grasp_rel(self, grasp: int) -> Array:
@@ -591,10 +604,10 @@ class SpatialSpace:
         slots: list[int] = []
         targets: list[Array] = []
         weight = self.tuning.angle_weight_m
-        for start, resting, grasp, _approach in requests:
+        for start, resting, grasp, approach in requests:
             q0 = np.asarray(start, dtype=float)
             object_pose = np.asarray(resting, dtype=float)
-            holds = self.holds(ctx, q0, object_pose, grasp)
+            holds = aimed_holds(self.holds(ctx, q0, object_pose, grasp), q0, approach)
             if not len(holds):
                 results.append(PathResult(False, q0[None], math.inf))
                 continue
@@ -716,7 +729,7 @@ class SpatialSpace:
         (:func:`clew_ros.spatial.motion_plan.connect`: EXPLORE for transfer paths, the object carried as
         ``grasp_rel``) given :attr:`SpatialTuning.transfer_tree_landmarks` steps; the path from ``q0`` to the
         goal, or ``None``. One tree is rooted at ``q0``, with the GA's path ``searched`` (from ``q0``, the
-        object in the air) and the object's way out from there (:meth:`_way_out`) as landmarks; the other at the
+        object in the air) and the object's way out from there (:meth:`way_out`) as landmarks; the other at the
         goal configuration nearest ``q0`` (``found``: :meth:`goal_configurations`), with its way out as a
         landmark, and kept for the later SEARCH_TRANSFERs of the same grasp and goal, which grow it further:
         where the object rests in a shelf, single-joint moves from the root barely move it."""
@@ -730,10 +743,23 @@ class SpatialSpace:
         tree = self.goal_tree(rel, goal)
         if tree is None:
             tree = self._goal_trees[_key(rel, goal)] = LandmarkTree(found[0], np.zeros(6))
-            out_of_goal = self._way_out(checker, mode, found[0])
+            root: Landmark | None = tree[0]
+        else:  # a goal configuration with a way in that the tree's roots may lack
+            roots = [k for k in range(len(tree)) if tree[k].parent is None]
+            apart = self.tuning.transfer_goal_apart_rad
+            root = None
+            if len(roots) < self.tuning.transfer_goal_roots and all(
+                np.max(np.abs(found[0] - tree[k].joints)) >= apart for k in roots
+            ):
+                root = tree.add(
+                    parent=None, joints=found[0].copy(), object_pose=np.zeros(6), grasp=None, grasp_rel=None,
+                    transit=None, transfer=None,
+                )  # fmt: skip
+        if root is not None:
+            out_of_goal = self.way_out(checker, mode, found[0])
             if out_of_goal is not None:
-                add_branch(tree, 0, out_of_goal)
-        ways = [self._way_out(checker, mode, q0)]
+                add_branch(tree, root.id, out_of_goal)
+        ways = [self.way_out(checker, mode, q0)]
         if searched is not None and len(searched) > 1 and np.max(np.abs(searched[-1] - q0)) > 0:
             ways.append(searched)
         return connect(
@@ -754,16 +780,26 @@ class SpatialSpace:
         ``goal`` (``None``: none grown yet)."""
         return self._goal_trees.get(_key(np.asarray(grasp_rel, dtype=float), np.asarray(goal, dtype=float)))
 
-    def _way_out(self, checker: SpatialChecker, mode: dict[str, Array], q: Array) -> Array | None:
+    def way_out(self, checker: SpatialChecker, mode: dict[str, Array], q: Array) -> Array | None:
         """The carried object's way out from ``q`` (k + 1, n), along the first of its approaches (:meth:`offsets`:
-        lifted, or lifted a little and slid back along the tcp's -z) whose first step is clear, repeated step by
+        lifted, or lifted a little and slid back along the tcp's -z, the slide in
+        :attr:`SpatialTuning.slide_steps` short moves) whose first step is clear, repeated step by
         step (each ``approach_m`` further, inverse kinematics seeded at the step before, each straight move
         clear) up to :attr:`SpatialTuning.transfer_way_out_m` while they stay clear: out of a shelf deeper than
         one approach; ``None`` if no first step is clear."""
         steps = max(1, math.ceil(self.tuning.transfer_way_out_m / self.tuning.approach_m - 1e-9))
-        for first, along in self._approach_poses(mode, q[None]):
-            way = [q]
-            for k in range(steps):
+        for kind, (first, along) in enumerate(self._approach_poses(mode, q[None])):
+            way, done = [q], 0
+            if kind == 1:  # lifted a little, then slid out in short moves (one straight joint move sags)
+                raised = self.tcp(q[None])
+                raised[:, 2, 3] += self.tuning.slide_lift_m
+                lifted = self._approach_joints(raised, q[None])
+                for step in [lifted[0], *self._slide_steps(raised, along, lifted)[:, 0]]:
+                    if np.isnan(step).any() or not self.clear(checker, way[-1][None], step[None])[0]:
+                        break
+                    way.append(step)
+                done = 1 if len(way) == self.tuning.slide_steps + 2 else steps
+            for k in range(done, steps):
                 target = first[0].copy()
                 target[:3, 3] += k * along[0]
                 step = self._approach_joints(target[None], way[-1][None])
@@ -801,17 +837,38 @@ class SpatialSpace:
         rng = own_generator(ctx, GOAL_STREAM, q0, np.r_[grasp_rel, goal])
         back = _inverse(matrices(grasp_rel)[0])
         tcp_goals = [pose @ back for pose in self.goal_poses(goal)]
+        checker = self.transfer_checker(grasp_rel)
         solutions = self.ik(ctx.search.goal_seeds).solve_many(
-            tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=self.transfer_checker(grasp_rel)
+            tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=checker
         )
-        found = self._nearest_turns(q0, np.vstack(solutions))
-        ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
+        found = self.nearest_turns(q0, np.vstack(solutions))
+        travel = np.abs(found - q0).sum(axis=1)
+        pose_of = np.repeat(np.arange(len(solutions)), [len(s) for s in solutions])
+        way_out = np.zeros(len(solutions))
+        for k in np.unique(pose_of).tolist():
+            rows = np.flatnonzero(pose_of == k)
+            way_out[k] = self._way_out_m(checker, grasp_rel, goal, k, found[rows[np.argmin(travel[rows])]])
+        order = np.lexsort((travel, -np.round(way_out[pose_of], 2)))
+        ordered: Array = found[order]
         return ordered
 
-    def _nearest_turns(self, q0: Array, found: Array) -> Array:
-        """IK solutions with their continuous joints the short way from ``q0`` (within the limits)."""
+    def _way_out_m(self, checker: SpatialChecker, grasp_rel: Array, goal: Array, pose: int, q: Array) -> float:
+        """How far (m) the object held as ``grasp_rel`` at the goal pose ``pose`` (:meth:`goal_poses`' index) gets
+        by its way out (:meth:`way_out`) from ``q``, once per grasp, goal and pose: a hand that can only lift
+        its object a little in a cubby (its slide out meets a wall) comes in that way no more."""
+        key = _key(grasp_rel, goal, np.array([float(pose)]))
+        if key not in self._way_out_lengths:
+            rel = np.asarray(grasp_rel, dtype=float)
+            way = self.way_out(checker, {"grasp_rel": rel[None]}, q)
+            held = self.held_object_poses(np.vstack([q[None], q[None] if way is None else way[-1:]]), rel)
+            self._way_out_lengths[key] = float(np.linalg.norm(held[1, :3] - held[0, :3]))
+        return self._way_out_lengths[key]
+
+    def nearest_turns(self, q0: Array, found: Array) -> Array:
+        """IK solutions with each joint whose limits span a turn (:func:`~clew_ros.spatial.turns.turnable`)
+        moved by whole turns the short way from ``q0`` (within the limits): the same postures, nearest."""
         robot = self.world.robot
-        return nearest_turns(q0, found, robot.lower, robot.upper, robot.continuous)
+        return nearest_turns(q0, found, robot.lower, robot.upper, turnable(robot.prismatic, robot.lower, robot.upper))
 
     def goal_poses(self, goal: Array) -> list[Array]:
         """The goal placement (4x4) turned about world z through its centre by each of
@@ -868,7 +925,7 @@ class SpatialSpace:
     def _approach_poses(self, mode: dict[str, np.ndarray], qs: Array) -> list[tuple[Array, Array]]:
         """The tcp's approach poses (m, 4, 4) for configurations ``qs`` (m, n), first choice first (:meth:`offsets`):
         backed off along its -z (transit); the object lifted, then lifted a little and slid out (transfer). Each
-        with the move (m, 3) that takes it one approach further the same way (:meth:`_way_out`)."""
+        with the move (m, 3) that takes it one approach further the same way (:meth:`way_out`)."""
         here = self.tcp(qs)
         tuning = self.tuning
         shift = tuning.approach_m
@@ -1000,7 +1057,7 @@ class SpatialSpace:
 
     # -- regrasps, refusals, improvement --------------------------------------------------------------
     def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
-        return True  # no aiming: every approach is allowed
+        return True  # an aim orders the configurations a transit may end at (aimed_holds); it refuses none
 
     def regrasp_aims(self, goal: np.ndarray) -> SpatialAims:
         return SpatialAims(self, goal, self.tuning.regrasp)

@@ -147,6 +147,20 @@ SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
             robots=("panda", "ur5"),
         ),
         SpatialFamily(
+            "spatial_shelf_bin",
+            "spatial: a regrasp is needed: from under a shelf's lid (grasps from the side only) into a bin",
+            "regrasp",
+            regrasp="shelf_bin",
+            robots=("panda", "ur5"),
+        ),
+        SpatialFamily(
+            "spatial_bin_shelf",
+            "spatial: a regrasp is needed: from a bin (grasps from above only) onto a shelf under its lid",
+            "regrasp",
+            regrasp="bin_shelf",
+            robots=("panda", "ur5"),
+        ),
+        SpatialFamily(
             "spatial_unsolvable",
             "spatial: the goal inside a closed box, or on a table out of every grasp's reach",
             "unsolvable",

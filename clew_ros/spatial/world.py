@@ -123,8 +123,9 @@ def _object(
     goal = _pose(world_value(part, "world.object.goal"), "world.object.goal")
     initial_on = check_placement(shape, initial, supports, tolerance, "world.object.initial")
     goal_on = check_placement(shape, goal, supports, tolerance, "world.object.goal")
+    given = world_value(part, "world.object.grasps")
     try:
-        flat = np.array([float(v) for v in world_value(part, "world.object.grasps")])
+        flat = np.array([float(v) for v in given])
     except (TypeError, ValueError):
         flat = np.zeros(1)
     if len(flat) == 0 or len(flat) % 6 or not np.all(np.isfinite(flat)):
@@ -132,6 +133,11 @@ def _object(
             "world.object.grasps", "expected a flat list of tcp poses in the object's frame, 6 numbers each"
         )
     grasps = flat.reshape(-1, 6)
+    if len(grasps) > LIMITS.max_grasps:
+        raise WorldError(
+            "world.object.grasps",
+            f"expected at most {LIMITS.max_grasps} grasps (Limits.max_grasps), got {len(grasps)}",
+        )
     for k, grasp in enumerate(grasps):
         if _outside(shape, grasp[:3]) > grasp_tolerance:
             raise WorldError(

@@ -10,15 +10,19 @@ values. Three families:
   ``world.obstacle_names``. Checked by the core
   (:func:`~clew_ros.planar.world.world_from_parameters`, then
   :func:`~clew_ros.planar.collision.check_start_and_goal`), so every refusal
-  names the parameter at fault.
+  names the parameter at fault. A spatial world's (``world.kind: spatial``,
+  §1b): :data:`~clew_ros.spatial.parameters.SPATIAL_WORLD_PARAMETERS` and
+  ``world.obstacles.<name>.shape / .size / .pose``, checked by the spatial
+  world parser (:func:`~clew_ros.ros.spatial.load_spatial`); a name neither
+  specifies is refused.
 - ``planner.*``: :data:`~clew_ros.core.parameters.PLANNER_PARAMETERS`,
   checked by :class:`~clew_ros.core.settings.PlannerSettings`.
 - the node's own: :data:`~clew_ros.ros.node_parameters.NODE_PARAMETERS`
   (``record.*``, ``playback.*``, ``trajectory.*``, ``live.*``,
-  ``parameters.*``), checked here into :class:`NodeSettings`.
+  ``parameters.*``, ``markers.*``, ``state.*``), checked here into :class:`NodeSettings`.
 
 The parameters that matter for safety (``world.*``, ``record.*``,
-``trajectory.*``, ``live.*``: :data:`~clew_ros.core.parameters.LOCKED_PREFIXES`)
+``trajectory.*``, ``live.*``: :data:`~clew_ros.ros.node_parameters.LOCKED_PREFIXES`)
 are declared read-only, so that rclpy refuses a change from any peer with a
 reason naming the parameter, unless the node is started with
 ``parameters.allow_runtime_changes: true`` (itself read-only).

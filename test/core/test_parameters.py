@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import fields
 from pathlib import Path
 
@@ -207,3 +208,17 @@ def test_a_retired_parameter_still_loads_with_a_warning() -> None:
     assert not hasattr(settings, "max_sweep_steps")
     with pytest.raises(ParameterError, match=r"planner\.max_sweep_step\b"):
         PlannerSettings.from_parameters({"planner": {"max_sweep_step": 48}})  # a misspelt name is still an error
+
+
+def test_the_world_as_it_is_now_has_the_contracts_defaults() -> None:
+    """Every state.* parameter of docs/interface.md section 3c is specified, with the default the contract
+    gives it, and read only (the contract: read-only while running)."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "interface.md").read_text(encoding="utf-8")
+    section = text[text.index("## 3c.") : text.index("## 4.")]
+    written = dict(re.findall(r"`(state\.[a-z_]+)`(?: \(|, )(true|false|\d[\d.,]*\d)\b", section))
+    assert len(written) == 11
+    for name, default in written.items():
+        spec = NODE_PARAMETERS[name]
+        word = default.replace(",", "")
+        assert spec.default == (word == "true" if word in ("true", "false") else float(word)), name
+        assert spec.read_only, name

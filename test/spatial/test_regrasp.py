@@ -17,7 +17,7 @@ from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Landmark, Segment
-from clew_ros.spatial.handling import DragSettings, drag_problems
+from clew_ros.spatial.handling import DragSettings, drag_problems, slides
 from clew_ros.spatial.lift import drag_free, lifted_segments
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.space import SpatialSpace, plan
@@ -239,3 +239,15 @@ def test_regrasps_in_place_try_the_goal_grasps_nearest_the_goal_first() -> None:
     assert takes == sorted(takes)
     assert np.isfinite(takes[0])  # a goal grasp takes the object on the table
     assert ranked[len(goal_grasps) :] == others
+
+
+@pytest.mark.parametrize(("rise", "drags"), [(0.002, True), (-0.15, False)])
+def test_an_object_carried_under_a_board_does_not_drag_on_it(rise: float, drags: bool) -> None:
+    world = generated("spatial_bin_cubby", 0).world()
+    assert world.object is not None
+    goal = pose_matrix(list(world.object.goal))  # resting on the cubby's board
+    poses = np.repeat(goal[None], 6, axis=0)
+    poses[:, 0, 3] += np.linspace(0.0, 0.03, 6)  # 3 cm along x ...
+    poses[:, 2, 3] += rise  # ... just above the board, or well under it
+    moved = [m for name, _, _, m in slides(world, poses, DragSettings()) if name == world.object.goal_on[0]]
+    assert (max(moved, default=0.0) > DragSettings().slide_m) is drags

@@ -203,18 +203,6 @@ def straight_samples_clear(
     return clear
 
 
-def aimed_holds(holds: Array, q0: Array, approach: Any | None) -> Array:
-    """``holds`` (configurations holding a grasp, nearest ``q0`` first) in the order a regrasp aimed at
-    ``approach`` tries them: with an aim (:meth:`clew_ros.spatial.regrasps.SpatialAims.aim`: the grasp's
-    configurations at the goal, (k, n)), by joint travel from ``q0`` plus to the nearest of those (rad, L1),
-    so that the transfer after the regrasp stays in the posture family it ends in; without one, as they are."""
-    aim = None if approach is None else np.asarray(approach)
-    if aim is None or aim.ndim != 2 or not len(aim) or not len(holds) or aim.dtype.kind != "f":
-        return holds
-    cost = np.abs(holds - q0).sum(axis=1) + np.abs(holds[:, None, :] - aim[None]).sum(axis=2).min(axis=1)
-    return holds[np.argsort(cost, kind="stable")]
-
-
 def _footprint_inside(world: SpatialWorld, support: Support, face: str, pose: Array) -> bool:
     assert world.object is not None
     thing = world.object.shape
@@ -604,10 +592,10 @@ class SpatialSpace:
         slots: list[int] = []
         targets: list[Array] = []
         weight = self.tuning.angle_weight_m
-        for start, resting, grasp, approach in requests:
+        for start, resting, grasp, _approach in requests:
             q0 = np.asarray(start, dtype=float)
             object_pose = np.asarray(resting, dtype=float)
-            holds = aimed_holds(self.holds(ctx, q0, object_pose, grasp), q0, approach)
+            holds = self.holds(ctx, q0, object_pose, grasp)
             if not len(holds):
                 results.append(PathResult(False, q0[None], math.inf))
                 continue
@@ -1057,7 +1045,7 @@ class SpatialSpace:
 
     # -- regrasps, refusals, improvement --------------------------------------------------------------
     def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
-        return True  # an aim orders the configurations a transit may end at (aimed_holds); it refuses none
+        return True  # no aiming: every approach is allowed
 
     def regrasp_aims(self, goal: np.ndarray) -> SpatialAims:
         return SpatialAims(self, goal, self.tuning.regrasp)

@@ -8,7 +8,7 @@ They take the world packed once into plain arrays (:func:`clew_ros.planar.collis
 module                                         what it holds
 =============================================  =======================================================================
 :mod:`~clew_ros.planar.kernel.jit`             numba's options for every kernel, the threading layer
-:mod:`~clew_ros.planar.kernel.packed`          :class:`PackedWorld`, arrays as the kernels take them
+:mod:`~clew_ros.planar.kernel.packed`          :class:`PackedWorld`, the named tuples the kernels take
 :mod:`~clew_ros.planar.kernel.segments`        a point's distance to a segment, an edge placed at a pose
 :mod:`~clew_ros.planar.kernel.kinematics`      forward kinematics (:func:`chain`), inverse (:func:`solve_point`)
 :mod:`~clew_ros.planar.kernel.contacts`        contact angles of a turning point against a stadium
@@ -41,7 +41,7 @@ from clew_ros.planar.kernel.lattice import (
     release_totals,
 )
 from clew_ros.planar.kernel.moves import moves_clear, screen_routes
-from clew_ros.planar.kernel.packed import PackedWorld
+from clew_ros.planar.kernel.packed import Chain, MoveCheck, PackedWorld, Rounds, Solving, Trees
 from clew_ros.planar.kernel.path_shortcuts import shortcuts
 from clew_ros.planar.kernel.rrt_connect import connect_rounds
 from clew_ros.planar.kernel.validity import clearly_valid
@@ -54,7 +54,12 @@ __all__ = [
     "EDGE_UNKNOWN",
     "FULL_TURN_RAD",
     "MAX_MOVE_RAD",
+    "Chain",
+    "MoveCheck",
     "PackedWorld",
+    "Rounds",
+    "Solving",
+    "Trees",
     "available_threads",
     "bounce_array",
     "chain",

@@ -56,8 +56,24 @@ def _decode(
     ``(B, k, n)``, ``poses`` ``(B, 3)`` per individual), one after the other. ``world``:
     :attr:`~.packed.PackedWorld.plain`."""
     model = _named(world)
-    work = _scratch(model)
     q = np.empty(model.chain.lengths.shape[0])
+    _decode_rows(waypoints, genes, first, last, transfer, poses, margin, model, _scratch(model), q)
+
+
+@_leaf
+def _decode_rows(
+    waypoints: np.ndarray,
+    genes: np.ndarray,
+    first: int,
+    last: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    model: Model,
+    work: IntervalWork,
+    q: np.ndarray,
+) -> None:
+    """The loop of :func:`_decode`, counting no references (:func:`~.free_intervals._interval_rows`)."""
     for b in range(waypoints.shape[0]):
         _decode_one(b, waypoints, genes, first, last, transfer, poses, margin, model, work, q)
 

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from clew_ros.planar.kernel.jit import _jit, _leaf
+from clew_ros.planar.kernel.jit import _inlined_leaf, _jit, _leaf
 from clew_ros.planar.kernel.kinematics import _forward
 from clew_ros.planar.kernel.packed import Model, PackedWorld, Placed, _arg, _named, _poses
 from clew_ros.planar.kernel.segments import _place, _point_segment_distance
@@ -85,7 +85,7 @@ def _placed(model: Model) -> Placed:
     )
 
 
-@_leaf
+@_inlined_leaf
 def _valid_beyond(  # noqa: C901, PLR0911, PLR0912 - one compiled pass per configuration, leaving at the first doubt
     q: np.ndarray, px: float, py: float, pt: float, eps: float, shrunk_links: int, placed: Placed, model: Model
 ) -> bool:

@@ -1,7 +1,9 @@
 """The compiled kernels of the planar world (numba), one module per concern.
 
-They take the world packed once into plain arrays (:func:`clew_ros.planar.collision.packed_world`,
-:class:`PackedWorld`), never objects, loop over whole batches and release the GIL. What
+They take the world packed once into arrays (:func:`clew_ros.planar.collision.packed_world`,
+:class:`PackedWorld`) and read it as a few named tuples (:mod:`~clew_ros.planar.kernel.packed`: the arm's chain,
+the scene, the object's shape, the mode, the tuning, the scratch), never objects, so that no kernel takes more than
+12 arguments; they loop over whole batches and release the GIL. What
 :mod:`clew_ros.core.manhattan` describes is computed here, one compiled call per batch.
 
 =============================================  =======================================================================

@@ -19,13 +19,7 @@ MAX_PARAMETERS = 12
 
 #: Functions allowed over the bar, as ``(module path, function name)``; each names why. An entry that is no
 #: longer over the bar fails the test too: the list only shrinks.
-EXEMPT: frozenset[tuple[str, str]] = frozenset(
-    {
-        # the spatial world's loader (15): its parameter specification is being reworked (issue 55, the
-        # parameter specification part), which replaces these keyword arguments
-        ("clew_ros/spatial/robot.py", "load_robot"),
-    }
-)
+EXEMPT: frozenset[tuple[str, str]] = frozenset()
 
 
 def parameters(function: ast.FunctionDef | ast.AsyncFunctionDef) -> int:

@@ -23,7 +23,7 @@ from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.validate import validation_samples
 from clew_ros.spatial.views import HeldObjectView
 
-__all__ = ["LiftSettings", "drag_free", "lifted_segments"]
+__all__ = ["LiftSettings", "drag_free", "lifted_segments", "slid_level"]
 
 Array = NDArray[np.float64]
 
@@ -52,6 +52,10 @@ class LiftSettings:
     #: stretches (count) mended in the middle of one transfer at most: the object set down on a support on
     #: its way and slid, replaced by the same move with both ends raised
     middles: int = 3
+    #: where no straight joint move joins the lifted start to the transfer (under a cubby's ceiling or a
+    #: shelf's lid), the lifted object first slides level in this many short moves (count), as far as the
+    #: transfer took it sideways before it left the band
+    slide_steps: int = 4
 
 
 def lifted_segments(
@@ -180,16 +184,66 @@ def _lifted_start(space: SpatialSpace, waypoints: Array, rel: Array, settings: L
         up = found[np.argmin(np.abs(found - start).sum(axis=1))]
         if not space.clear(checker, start[None], up[None])[0]:
             continue
-        for k in joins.tolist():
-            p = int(piece[k])
-            rest = waypoints[p + 1 :]
-            if len(rest) and np.allclose(rest[0], samples[k]):
-                rest = rest[1:]
-            lead = np.vstack([start, up, samples[k]])
-            ends = np.vstack([samples[k], rest[:1]])  # the join, and the part of piece p left after it
-            if not space.clear(checker, np.vstack([up, samples[k]])[: len(ends)], ends).all():
-                continue
-            if _drags(space, lead, rel, settings.drag):
-                continue
-            return np.vstack([lead, rest])
+        shift = poses[leave, :3, 3] - poses[0, :3, 3]
+        shift[2] = 0.0
+        for ways in ([up], slid_level(space, up, shift, settings.slide_steps, checker)):
+            joined = (
+                None
+                if ways is None
+                else _joined(
+                    space, [start, *ways], waypoints, along=(samples, piece), joins=joins, rel=rel, drag=settings.drag
+                )
+            )
+            if joined is not None:
+                return joined
     return waypoints
+
+
+def _joined(
+    space: SpatialSpace,
+    lead: list[Array],
+    waypoints: Array,
+    *,
+    along: tuple[Array, NDArray[np.int64]],
+    joins: NDArray[np.int64],
+    rel: Array,
+    drag: DragSettings,
+) -> Array | None:
+    """``lead`` (from the transfer's start, lifted) joined by a straight move to the first of the ``joins`` (of
+    ``along``: :func:`_samples` of ``waypoints``) it reaches clear without dragging, then the rest of
+    ``waypoints``; ``None``: none."""
+    samples, piece = along
+    checker = space.transfer_checker(rel)
+    for k in joins.tolist():
+        p = int(piece[k])
+        rest = waypoints[p + 1 :]
+        if len(rest) and np.allclose(rest[0], samples[k]):
+            rest = rest[1:]
+        path = np.vstack([*lead, samples[k]])
+        ends = np.vstack([samples[k], rest[:1]])  # the join, and the part of piece p left after it
+        if not space.clear(checker, np.vstack([lead[-1], samples[k]])[: len(ends)], ends).all():
+            continue
+        if _drags(space, path, rel, drag):
+            continue
+        return np.vstack([path, rest])
+    return None
+
+
+def slid_level(space: SpatialSpace, up: Array, shift: Array, steps: int, checker: SpatialChecker) -> list[Array] | None:
+    """``up`` then the configurations moving its tcp level by ``shift`` (3,) in ``steps`` short moves, each found
+    by inverse kinematics seeded at the one before and clear from it (``None``: one is not)."""
+    if steps <= 0 or float(np.linalg.norm(shift)) <= 0.0:
+        return None
+    way = [up]
+    start = space.tcp(up[None])[0]
+    for i in range(1, steps + 1):
+        target = start.copy()
+        target[:3, 3] += shift * i / steps
+        found = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[way[-1][None]], checker=checker)[0]
+        if not len(found):
+            return None
+        step = found[np.argmin(np.abs(found - way[-1]).sum(axis=1))]
+        if not space.clear(checker, way[-1][None], step[None])[0]:
+            return None
+        way.append(step)
+    return way

@@ -18,7 +18,7 @@ from clew_ros.core.settings import Outcome, PlannerSettings
 from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Landmark, Segment
 from clew_ros.spatial.handling import DragSettings, drag_problems, slides
-from clew_ros.spatial.lift import drag_free, lifted_segments
+from clew_ros.spatial.lift import drag_free, lifted_segments, slid_level
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.space import SpatialSpace, plan
 from clew_ros.spatial.transforms import pose_matrix
@@ -251,3 +251,22 @@ def test_an_object_carried_under_a_board_does_not_drag_on_it(rise: float, drags:
     poses[:, 2, 3] += rise  # ... just above the board, or well under it
     moved = [m for name, _, _, m in slides(world, poses, DragSettings()) if name == world.object.goal_on[0]]
     assert (max(moved, default=0.0) > DragSettings().slide_m) is drags
+
+
+def test_a_lifted_object_slides_level_in_short_moves() -> None:
+    made = generate_spatial("spatial_table", 0, "panda")
+    world = made.world()
+    space = SpatialSpace(world)
+    transfer = next(s for s in made.witness.segments if s.kind == "transfer")
+    assert transfer.grasp is not None
+    rel = space.grasp_rel(transfer.grasp)
+    checker = space.transfer_checker(rel)
+    q = np.asarray(transfer.waypoints[len(transfer.waypoints) // 2], dtype=float)  # in the air, mid-transfer
+    shift = np.array([0.02, -0.01, 0.0])
+    way = slid_level(space, q, shift, 4, checker)
+    assert way is not None
+    assert len(way) == 5
+    tcps = space.tcp(np.array(way))
+    assert np.allclose(tcps[-1, :3, 3] - tcps[0, :3, 3], shift, atol=1e-4)  # moved by the shift, level
+    assert np.allclose(np.diff(tcps[:, :3, 3], axis=0), shift / 4, atol=1e-4)  # in equal short moves
+    assert slid_level(space, q, np.zeros(3), 4, checker) is None  # nothing to slide

@@ -234,11 +234,13 @@ def sample_placements(
     rng: np.random.Generator,
     tries: int = 20,
     settings: SphereSettings | None = None,
+    around: tuple[Matrix, float, float] | None = None,
 ) -> NDArray[np.float64]:
     """Up to ``count`` poses (k, 4, 4) of ``thing`` resting on ``face`` on ``support`` with its footprint
     inside the top face and touching no obstacle but the support (its conservative sphere cover first, its
-    exact box or cylinder where the spheres touch), drawn uniformly in position and yaw; at most ``tries`` x
-    ``count`` draws."""
+    exact box or cylinder where the spheres touch), drawn uniformly in position and yaw, or with ``around``
+    (a pose of the object on that face and support, a distance in m, an angle in rad) within that distance
+    and yaw of it; at most ``tries`` x ``count`` draws."""
     centers, radii = cover(thing.geometry(), settings or SphereSettings())
     others = [o for o in obstacles if o.name != support.name]
     packed = obstacle_arrays(others)
@@ -246,15 +248,13 @@ def sample_placements(
     for _ in range(tries * count):
         if len(out) == count:
             break
-        u, v = rng.uniform(-1.0, 1.0, size=2)
-        if support.round:
-            angle, reach = rng.uniform(0.0, 2 * math.pi), support.half[0] * math.sqrt(rng.uniform())
-            local = np.array([reach * math.cos(angle), reach * math.sin(angle)])
+        if around is None:
+            x, y, yaw = (*_on_support(support, rng), rng.uniform(-math.pi, math.pi))
         else:
-            local = np.array([u * support.half[0], v * support.half[1]])
-        c, s = math.cos(support.yaw), math.sin(support.yaw)
-        x, y = support.center[0] + c * local[0] - s * local[1], support.center[1] + s * local[0] + c * local[1]
-        pose = placement_pose(thing, support, face, x=x, y=y, yaw=rng.uniform(-math.pi, math.pi))
+            base, spread_m, spread_rad = around
+            x, y = base[:2, 3] + rng.uniform(-spread_m, spread_m, size=2)
+            yaw = face_yaw(base[:3, :3], face) + rng.uniform(-spread_rad, spread_rad)
+        pose = placement_pose(thing, support, face, x=x, y=y, yaw=yaw)
         if not _footprint_inside(thing, support, face, pose):
             continue
         placed = centers @ pose[:3, :3].T + pose[:3, 3]
@@ -269,6 +269,18 @@ def sample_placements(
             continue  # the spheres touch an obstacle, and so does the exact box or cylinder
         out.append(pose)
     return np.array(out).reshape(-1, 4, 4)
+
+
+def _on_support(support: Support, rng: np.random.Generator) -> tuple[float, float]:
+    """A point drawn uniformly on ``support``'s top face (x, y)."""
+    u, v = rng.uniform(-1.0, 1.0, size=2)
+    if support.round:
+        angle, reach = rng.uniform(0.0, 2 * math.pi), support.half[0] * math.sqrt(rng.uniform())
+        local = np.array([reach * math.cos(angle), reach * math.sin(angle)])
+    else:
+        local = np.array([u * support.half[0], v * support.half[1]])
+    c, s = math.cos(support.yaw), math.sin(support.yaw)
+    return support.center[0] + c * local[0] - s * local[1], support.center[1] + s * local[0] + c * local[1]
 
 
 def object_extent(thing: MovableObject, pose: Matrix) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

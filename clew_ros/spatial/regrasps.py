@@ -70,6 +70,14 @@ class RegraspSettings:
     goal_yaws: tuple[float, ...] = (0.0, math.pi / 2, -math.pi / 2, math.pi)
     #: a placement nearer than this (m) to the landmark's or to the goal's is not an intermediate one
     min_move_m: float = 0.05
+    #: where no drawn placement is held by both a landmark's grasp and a goal grasp (an arm that holds the
+    #: object on few of them), placements are drawn again near those held by either, once per grasp: this
+    #: many (count) near each of at most ``refine_sources`` of each grasp's, within ``refine_m`` (m) and
+    #: ``refine_rad`` (rad of yaw)
+    refine_draws: int = 8
+    refine_sources: int = 8
+    refine_m: float = 0.05
+    refine_rad: float = 0.7
 
 
 class SpatialAims:
@@ -81,6 +89,8 @@ class SpatialAims:
         self.settings = settings or RegraspSettings()
         self._goal_grasps: list[int] | None = None
         self._drawn: Array | None = None  # (m, 4, 4) candidate placements
+        self._where: list[tuple[int, str]] = []  # per candidate: its support (index) and face
+        self._refined: set[int] = set()  # the grasps whose placements were refined (_refine)
         self._holds: dict[int, list[Array]] = {}  # grasp -> per candidate, the configurations holding it
         self._goal_solutions: dict[int, Array] = {}  # goal grasp -> configurations holding the object at the goal
         self._rng = np.random.default_rng([int(v * 1e6) & 0xFFFFFFFF for v in self.goal])
@@ -123,9 +133,18 @@ class SpatialAims:
         goal_grasps = [g for g in self.goal_grasps() if g != grasp]
         if not goal_grasps:
             return []
-        drawn = self._candidates()
-        if not len(drawn):
+        if not len(self._candidates()):
             return []
+        found = self._placements(landmark, grasp, goal_grasps)
+        if not found and grasp not in self._refined:
+            self._refined.add(grasp)
+            self._refine([grasp, *goal_grasps])
+            found = self._placements(landmark, grasp, goal_grasps)
+        return found
+
+    def _placements(self, landmark: Landmark, grasp: int, goal_grasps: list[int]) -> list[np.ndarray]:
+        """:meth:`placements` among the candidates drawn so far."""
+        drawn = self._candidates()
         here = _matrix(np.asarray(landmark.object_pose, dtype=float))[:3, 3]
         there = _matrix(self.goal)[:3, 3]
         centres = drawn[:, :3, 3]
@@ -195,20 +214,51 @@ class SpatialAims:
             world = self.space.world
             thing = world.object
             assert thing is not None
-            drawn = [
-                sample_placements(
-                    thing.shape,
-                    support,
-                    face,
-                    world.obstacles,
-                    count=self.settings.per_support_face,
-                    rng=self._rng,
-                )
-                for support in world.supports
-                for face in thing.shape.faces
-            ]
+            drawn, where = [], []
+            for s, support in enumerate(world.supports):
+                for face in thing.shape.faces:
+                    poses = sample_placements(
+                        thing.shape, support, face, world.obstacles, count=self.settings.per_support_face, rng=self._rng
+                    )
+                    drawn.append(poses)
+                    where += [(s, face)] * len(poses)
             self._drawn = np.concatenate(drawn) if drawn else np.zeros((0, 4, 4))
+            self._where = where
         return self._drawn
+
+    def _refine(self, grasps: list[int]) -> None:
+        """New candidates near those ``grasps`` hold (:attr:`RegraspSettings.refine_draws`), solved for every
+        grasp asked so far."""
+        world, settings = self.space.world, self.settings
+        thing = world.object
+        assert thing is not None
+        drawn = self._candidates()
+        sources = sorted(
+            {
+                k
+                for g in grasps
+                for k in [k for k, q in enumerate(self._solutions(g)) if len(q)][: settings.refine_sources]
+            }
+        )
+        near = [
+            sample_placements(
+                thing.shape,
+                world.supports[self._where[k][0]],
+                self._where[k][1],
+                world.obstacles,
+                count=settings.refine_draws,
+                rng=self._rng,
+                around=(drawn[k], settings.refine_m, settings.refine_rad),
+            )
+            for k in sources
+        ]
+        if not near or not sum(len(n) for n in near):
+            return
+        added = np.concatenate(near)
+        self._drawn = np.concatenate([drawn, added])
+        self._where += [self._where[k] for k, n in zip(sources, near, strict=True) for _ in range(len(n))]
+        for g in self._holds:
+            self._holds[g] = self._holds[g] + self._solve(g, added, settings.ik_seeds)
 
     def _solutions(self, grasp: int) -> list[Array]:
         """Per candidate placement, the valid configurations found holding it by ``grasp``."""

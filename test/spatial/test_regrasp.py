@@ -5,6 +5,7 @@ more than was shown."""
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -19,6 +20,7 @@ from clew_ros.core.space import PlanningContext
 from clew_ros.core.tree import Landmark, Segment
 from clew_ros.spatial.handling import DragSettings, drag_problems, slides
 from clew_ros.spatial.lift import drag_free, lifted_segments, slid_level
+from clew_ros.spatial.placements import face_yaw, sample_placements
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.space import SpatialSpace, plan
 from clew_ros.spatial.transforms import pose_matrix
@@ -270,3 +272,42 @@ def test_a_lifted_object_slides_level_in_short_moves() -> None:
     assert np.allclose(tcps[-1, :3, 3] - tcps[0, :3, 3], shift, atol=1e-4)  # moved by the shift, level
     assert np.allclose(np.diff(tcps[:, :3, 3], axis=0), shift / 4, atol=1e-4)  # in equal short moves
     assert slid_level(space, q, np.zeros(3), 4, checker) is None  # nothing to slide
+
+
+def test_placements_are_drawn_again_near_those_one_grasp_holds() -> None:
+    """A random arm holds the object by its first grasp on few drawn placements, none shared with a goal grasp:
+    the placements drawn again near those either grasp holds give one both hold."""
+    made = generate_spatial("spatial_bin_cubby", 2, "random")
+    world = made.world()
+    assert world.object is not None
+    first = next(s for s in made.witness.segments if s.kind == "transfer")
+    assert first.grasp is not None
+    start = Landmark(0, None, np.asarray(first.waypoints[0]), np.asarray(world.object.initial), None, None, None, None)
+    found = {}
+    for draws in (0, 8):
+        space = SpatialSpace(
+            world, replace(SpatialTuning(), regrasp=replace(SpatialTuning().regrasp, refine_draws=draws))
+        )
+        aims = space.regrasp_aims(np.asarray(world.object.goal, dtype=float))
+        found[draws] = aims.placements(start, first.grasp)
+    assert found[0] == []  # the first draw: no placement both grasps hold
+    assert found[8]
+    space = SpatialSpace(world)
+    for pose in found[8][:3]:  # each a stable placement on a support, free of the obstacles
+        assert space.rests(np.asarray(pose))
+
+
+def test_placements_drawn_near_a_pose_stay_near_it() -> None:
+    world = generated("spatial_bin_cubby", 0).world()
+    assert world.object is not None
+    table = next(s for s in world.supports if s.name == "table")
+    thing = world.object.shape
+    base = sample_placements(thing, table, "-z", world.obstacles, count=1, rng=np.random.default_rng(0))[0]
+    near = sample_placements(
+        thing, table, "-z", world.obstacles, count=16, rng=np.random.default_rng(1), around=(base, 0.02, 0.3)
+    )
+    assert len(near)
+    assert np.all(np.abs(near[:, :2, 3] - base[:2, 3]) <= 0.02 + 1e-12)
+    assert np.allclose(near[:, 2, 3], base[2, 3])  # on the same face, on the same support
+    turn = [abs(math.remainder(face_yaw(p[:3, :3], "-z") - face_yaw(base[:3, :3], "-z"), 2 * math.pi)) for p in near]
+    assert max(turn) <= 0.3 + 1e-9

@@ -9,7 +9,9 @@ ones, a bin-to-cubby regrasp). ``test/core/test_plans_unchanged.py`` plans them 
 and compares every key: same seed, same plan, across refactors.
 
 When the algorithm changes on purpose, the plans change: regenerate them with
-``python test/helpers/saved_plans.py [WORLD ...]`` (all of them without a name) and say so in the commit message.
+``python test/helpers/saved_plans.py [WORLD ...]`` (all of them without a name) and say so
+in the commit message. ``python test/helpers/saved_plans.py --check [WORLD ...]`` plans them
+again and compares the files byte for byte (the test allows 1e-9).
 
 ``clew_plan`` runs in a process of its own with numpy's AVX-512 kernels turned off
 (``NPY_DISABLE_CPU_FEATURES``): on a CPU that has them, numpy's vectorised sin, cos and
@@ -67,21 +69,31 @@ def plan_file(world: str, seed: int, output: Path) -> tuple[int, dict]:
     return code, document
 
 
-def main(names: list[str]) -> int:
-    """Plan and save the worlds ``names`` (all of :data:`WORLDS` when empty)."""
+def main(arguments: list[str]) -> int:
+    """Plan and save the worlds named (all of :data:`WORLDS` when none is); with ``--check``, compare each
+    plan with its saved file byte for byte instead (exit 1 if one differs)."""
+    check = "--check" in arguments
+    names = [a for a in arguments if a != "--check"]
     unknown = sorted(set(names) - set(WORLDS))
     if unknown:
         print(f"saved_plans: unknown world(s) {unknown}; expected some of {sorted(WORLDS)}", file=sys.stderr)
         return 2
     DIRECTORY.mkdir(parents=True, exist_ok=True)
+    different = 0
     with tempfile.TemporaryDirectory() as tmp:
         for world in names or list(WORLDS):
             for seed in WORLDS[world][1]:
                 _, document = plan_file(world, seed, Path(tmp) / "plan.json")
                 path = DIRECTORY / f"{world}_seed{seed}.json"
-                path.write_text(json.dumps(document, indent=1) + "\n")
+                text = json.dumps(document, indent=1) + "\n"
+                if check:
+                    same = path.exists() and path.read_text() == text
+                    different += not same
+                    print(f"{path.relative_to(ROOT)}: {'byte-identical' if same else 'DIFFERENT'}")
+                    continue
+                path.write_text(text)
                 print(f"{path.relative_to(ROOT)}: {document['message'].splitlines()[0]}")
-    return 0
+    return 1 if different else 0
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.improve import WorkBudget, WorkCosts, joined_regrasps, joint_travel, pruned_path, shortcut_path
-from clew_ros.core.space import Improvement, PlanningContext
+from clew_ros.core.space import Improvement, Mode, PlanningContext, TransitRequest
 from clew_ros.core.tree import Segment
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.lift import drag_free, lifted_segments
@@ -93,13 +93,15 @@ def improved(
             )
     if better.transfers <= 1 or better.stopped:
         return better
-    start, resting = space.initial_joints, space.initial_object_pose
+    world = parts.world
+    assert world.object is not None
+    start, resting = world.initial, np.asarray(world.object.initial, dtype=float)
     for grasp in range(space.grasp_count):
         if ctx.termination():
             break
         if not len(goal_configurations(parts, ctx, start, parts.grasp_rel(grasp), goal)):
             continue  # no configuration holds the object at the goal with this grasp: spare its searches
-        transit = space.search_transits(ctx, [(start, resting, grasp, None)])[0]
+        transit = space.search_transits(ctx, [TransitRequest(start, resting, grasp, None)])[0]
         if not transit.success or transit.grasp_rel is None:
             continue
         carried = space.search_transfer(ctx, transit.waypoints[-1], transit.grasp_rel, goal)
@@ -147,8 +149,8 @@ def straight_plan(parts: SpaceParts, ctx: PlanningContext, goal: Array) -> tuple
             i, j = np.unravel_index(flat, cost.shape)
             if best is not None and cost[i, j] >= best[0]:
                 break
-            reach = way(parts, {"object_poses": pose[None]}, start, held[i][None])
-            carry = None if reach is None else way(parts, {"grasp_rel": rel[None]}, held[i], goals[j][None])
+            reach = way(parts, Mode.resting(pose[None]), start, held[i][None])
+            carry = None if reach is None else way(parts, Mode.held(rel[None]), held[i], goals[j][None])
             if reach is None or carry is None:
                 continue
             segments = [

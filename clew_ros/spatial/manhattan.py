@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
+from clew_ros.core.space import Mode
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.settle import settle
 from clew_ros.spatial.space_parts import SpaceParts
@@ -38,21 +39,20 @@ def decode(
     parts: SpaceParts,
     q0: Array,
     genes: Array,
+    mode: Mode,
     *,
     counters: Counters | None,
     should_stop: Callable[[], bool] | None,
-    object_poses: Array | None,
-    grasp_rel: Array | None,
     in_air: bool,
 ) -> ManhattanPaths:
-    """Genes (B, k, n) decoded from ``q0`` (B, n): each move bounced into its joint's free interval; a
+    """Genes (B, k, n) decoded from ``q0`` (B, n) in ``mode``: each move bounced into its joint's free interval; a
     transfer then sets the object down (unless ``in_air``: SEARCH_TRANSFER's ends stay in the air). The
     waypoints are (B, k n + 2, n): the moves, then the settled end (a repeat of the last move's in transit)."""
     genes = np.asarray(genes, dtype=float)
     count, order, n = genes.shape
     q = np.array(q0, dtype=float).reshape(count, n)
-    transfer = grasp_rel is not None
-    modes = np.asarray(grasp_rel if transfer else object_poses, dtype=float).reshape(-1, 6)
+    transfer = mode.transfer
+    modes = np.asarray(mode.poses, dtype=float).reshape(-1, 6)
     modes = np.broadcast_to(modes, (count, 6))
     groups = _groups(parts, modes, transfer)
     way = np.empty((count, order * n + 2, n))

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
-from clew_ros.core.space import PathResult, PlanningContext, TransitRequest
+from clew_ros.core.space import Mode, PathResult, PlanningContext, TransitRequest
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.spatial.distances import at_goal, goal_distance
 from clew_ros.spatial.motion_plan import MotionSpace, add_branch, connect
@@ -88,7 +88,7 @@ def search_transits(space: SearchSpace, ctx: PlanningContext, requests: list[Tra
                 objective,
                 error,
                 accept=1e-7,
-                mode={"object_poses": object_pose[None]},
+                mode=Mode.resting(object_pose[None]),
                 toward=found[0],
                 straight=found[: tuning.straight_probes],
             )
@@ -151,7 +151,7 @@ def search_transfer(
         objective,
         error,
         accept=1e-7,
-        mode={"grasp_rel": rel[None]},
+        mode=Mode.held(rel[None]),
         toward=found[0] if len(found) else None,
         straight=found[: tuning.straight_probes] if len(found) else None,
     )
@@ -205,7 +205,7 @@ def transfer_trees(
         return None
     rel = np.asarray(grasp_rel, dtype=float)
     rng = own_generator(ctx, TRANSFER_TREES_STREAM, q0, np.r_[rel, goal])
-    mode = {"grasp_rel": rel[None]}
+    mode = Mode.held(rel[None])
     checker = parts.transfer_checker(rel)
     tree = goal_tree(parts, rel, goal)
     if tree is None:

@@ -31,7 +31,7 @@ from clew_ros.core import clew
 from clew_ros.core.manhattan import Counters, ManhattanPaths
 from clew_ros.core.search import SearchJob
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
+from clew_ros.core.space import Approach, Improvement, Mode, PathResult, PlanningContext, TransitRequest
 from clew_ros.core.tree import Segment
 from clew_ros.spatial import distances, improvement, manhattan, search
 from clew_ros.spatial.checker import SpatialChecker
@@ -97,28 +97,26 @@ class SpatialSpace:
         self,
         q0: np.ndarray,
         genes: np.ndarray,
+        mode: Mode,
         *,
         margin_m: float,
         counters: Counters | None,
         should_stop: Callable[[], bool] | None,
         threads: int,
-        object_poses: np.ndarray | None = None,
-        grasp_rel: np.ndarray | None = None,
     ) -> ManhattanPaths:
         """:func:`clew_ros.spatial.manhattan.decode` (the clearance is the checker's, one thread)."""
         return manhattan.decode(
             self.parts,
             q0,
             genes,
+            mode,
             counters=counters,
             should_stop=should_stop,
-            object_poses=object_poses,
-            grasp_rel=grasp_rel,
             in_air=self.in_air,
         )
 
     def single_moves(
-        self, q: np.ndarray, moves: np.ndarray, *, margin_m: float, counters: Counters | None, **mode: np.ndarray
+        self, q: np.ndarray, moves: np.ndarray, mode: Mode, *, margin_m: float, counters: Counters | None
     ) -> np.ndarray:
         return manhattan.single_moves(q, moves, checker=self.parts.checker_of(mode), counters=counters)
 
@@ -149,7 +147,7 @@ class SpatialSpace:
     ) -> None:
         search.straight_probe(self.parts, ctx, jobs, q, best, waypoints=waypoints)
 
-    def approach_allows(self, approach: object, grasp_rel: np.ndarray) -> bool:
+    def approach_allows(self, approach: Approach, grasp_rel: np.ndarray) -> bool:
         return True  # no aiming: every approach is allowed
 
     def regrasp_aims(self, goal: np.ndarray) -> SpatialAims:

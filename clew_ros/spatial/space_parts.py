@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from clew_ros.core.space import Mode
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.spatial.checker import Held, SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics
@@ -96,11 +97,11 @@ class SpaceParts:
             self._transfer_checkers[key] = checker
         return checker
 
-    def checker_of(self, mode: dict[str, np.ndarray]) -> SpatialChecker:
-        """The checker of a mode ``{"object_poses": (1, 6)}`` or ``{"grasp_rel": (1, 6)}``."""
-        if mode.get("grasp_rel") is not None:
-            return self.transfer_checker(mode["grasp_rel"].reshape(-1)[:6])
-        return self.transit_checker(mode["object_poses"].reshape(-1)[:6])
+    def checker_of(self, mode: Mode) -> SpatialChecker:
+        """The checker of a mode of one pose ``(1, 6)``: the object resting there, or held so."""
+        if mode.transfer:
+            return self.transfer_checker(mode.poses.reshape(-1)[:6])
+        return self.transit_checker(mode.poses.reshape(-1)[:6])
 
     @property
     def validation_steps(self) -> Array:

@@ -11,6 +11,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from clew_ros.core.space import Mode
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.inverse import pose_rows
 from clew_ros.spatial.space_parts import SpaceParts
@@ -23,7 +24,7 @@ Array = NDArray[np.float64]
 _POSITION_ROWS = pose_rows(("x", "y", "z"))
 
 
-def way(parts: SpaceParts, mode: dict[str, np.ndarray], q: Array, targets: Array) -> Array | None:
+def way(parts: SpaceParts, mode: Mode, q: Array, targets: Array) -> Array | None:
     """Waypoints (without ``q``) of straight joint-space moves from ``q`` to the first of ``targets``
     (nearest first) it reaches, each move checked at the validator's 0.002 rad in ``mode``: directly, or by
     way of the target's approach (:func:`offsets`: the tcp backed off, the object lifted), or from ``q``'s
@@ -53,7 +54,7 @@ def way(parts: SpaceParts, mode: dict[str, np.ndarray], q: Array, targets: Array
     return _other_ways(parts, mode, checker, q, targets)
 
 
-def offsets(parts: SpaceParts, mode: dict[str, np.ndarray], qs: Array) -> Array:
+def offsets(parts: SpaceParts, mode: Mode, qs: Array) -> Array:
     """Configurations (m, n) near ``qs`` (m, n) with the tcp moved :attr:`SpatialTuning.approach_m` away
     along its own -z (transit: backed off a grasp's approach) or up (transfer: the object lifted; where
     that is out of reach, lifted :attr:`SpatialTuning.slide_lift_m` and backed off along the tcp's -z, as
@@ -69,7 +70,7 @@ def offsets(parts: SpaceParts, mode: dict[str, np.ndarray], qs: Array) -> Array:
     return out
 
 
-def approach_poses(parts: SpaceParts, mode: dict[str, np.ndarray], qs: Array) -> list[tuple[Array, Array]]:
+def approach_poses(parts: SpaceParts, mode: Mode, qs: Array) -> list[tuple[Array, Array]]:
     """The tcp's approach poses (m, 4, 4) for configurations ``qs`` (m, n), first choice first (:func:`offsets`):
     backed off along its -z (transit); the object lifted, then lifted a little and slid out (transfer). Each
     with the move (m, 3) that takes it one approach further the same way (:func:`way_out`)."""
@@ -79,7 +80,7 @@ def approach_poses(parts: SpaceParts, mode: dict[str, np.ndarray], qs: Array) ->
     back = -shift * here[:, :3, 2]
     backed = here.copy()
     backed[:, :3, 3] += back
-    if mode.get("grasp_rel") is None:
+    if not mode.transfer:
         return [(backed, back)]
     up = np.broadcast_to([0.0, 0.0, shift], back.shape)
     lifted = here.copy()
@@ -106,9 +107,7 @@ def _approach_joints(parts: SpaceParts, targets: Array, qs: Array) -> Array:
     return out
 
 
-def _other_ways(
-    parts: SpaceParts, mode: dict[str, np.ndarray], checker: SpatialChecker, q: Array, targets: Array
-) -> Array | None:
+def _other_ways(parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array, targets: Array) -> Array | None:
     """:func:`way`'s moves by way of a carried object's other approach (:func:`approach_poses`: lifted
     :attr:`SpatialTuning.slide_lift_m` and slid out along the tcp's -z, where lifting it straight up is
     blocked by a shelf's lid or a cubby's ceiling), which :func:`offsets` passes over when the first is
@@ -178,7 +177,7 @@ def _path_clear(parts: SpaceParts, checker: SpatialChecker, path: Sequence[Array
     return bool(parts.clear(checker, points[:-1], points[1:]).all())
 
 
-def way_out(parts: SpaceParts, checker: SpatialChecker, mode: dict[str, Array], q: Array) -> Array | None:
+def way_out(parts: SpaceParts, checker: SpatialChecker, mode: Mode, q: Array) -> Array | None:
     """The carried object's way out from ``q`` (k + 1, n), along the first of its approaches
     (:func:`approach_poses`: lifted, or lifted a little and slid back along the tcp's -z) whose first step is
     clear, repeated step by step (each ``approach_m`` further, inverse kinematics seeded at the step before,

@@ -24,7 +24,7 @@ from clew_ros.core.improve import joint_travel
 from clew_ros.core.manhattan import Counters, ManhattanPaths, bounce
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings
-from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
+from clew_ros.core.space import Approach, Improvement, Mode, PathResult, PlanningContext, TransitRequest
 from clew_ros.core.tree import Landmark, Segment
 
 #: the wall (x_min, y_min, x_max, y_max, m) between the object's start and its goal; above it the way is open
@@ -56,7 +56,7 @@ class ToyAims:
     def retake(self, grasp: int, grasp_rel: np.ndarray) -> bool:
         return False
 
-    def aim(self, landmark: Landmark, grasp: int) -> np.ndarray | None:
+    def aim(self, landmark: Landmark, grasp: int) -> Approach | None:
         return np.ones(1, dtype=bool)
 
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
@@ -91,17 +91,16 @@ class ToySpace:
         self,
         q0: np.ndarray,
         genes: np.ndarray,
+        mode: Mode,
         *,
         margin_m: float,
         counters: Counters | None,
         should_stop: Callable[[], bool] | None,
         threads: int,
-        object_poses: np.ndarray | None = None,
-        grasp_rel: np.ndarray | None = None,
     ) -> ManhattanPaths:
         count, order, n = genes.shape
         q = np.array(q0, dtype=float).reshape(count, n)
-        rel = None if grasp_rel is None else np.broadcast_to(np.asarray(grasp_rel, dtype=float), (count, 2))
+        rel = np.broadcast_to(np.asarray(mode.poses, dtype=float), (count, 2)) if mode.transfer else None
         way = np.empty((count, order * n + 1, n))
         way[:, 0] = q
         for step in range(order * n):
@@ -112,8 +111,7 @@ class ToySpace:
             if counters is not None:
                 counters.clearance_checks += count
         if rel is None:
-            assert object_poses is not None
-            return ManhattanPaths(way, np.array(np.broadcast_to(object_poses, (count, 2)), dtype=float))
+            return ManhattanPaths(way, np.array(np.broadcast_to(mode.poses, (count, 2)), dtype=float))
         return ManhattanPaths(way, q + rel)
 
     def _interval(self, q: np.ndarray, joint: int, rel: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -126,9 +124,9 @@ class ToySpace:
         return low, high
 
     def single_moves(
-        self, q: np.ndarray, moves: np.ndarray, *, margin_m: float, counters: Counters | None, **mode: np.ndarray
+        self, q: np.ndarray, moves: np.ndarray, mode: Mode, *, margin_m: float, counters: Counters | None
     ) -> np.ndarray:
-        rel = mode.get("grasp_rel")
+        rel = mode.grasp_rel
         current = np.array(q, dtype=float)
         out = [current.copy()]
         for j in np.flatnonzero(moves):
@@ -159,7 +157,7 @@ class ToySpace:
                 distance: np.ndarray = np.linalg.norm(q - target, axis=1)
                 return distance
 
-            mode = {"object_poses": np.asarray(resting, dtype=float)[None]}
+            mode = Mode.resting(np.asarray(resting, dtype=float)[None])
             jobs.append(SearchJob(np.asarray(start, dtype=float), objective, error, 1e-9, mode, toward=target))
         results = []
         for (_, _, grasp, _), (waypoints, distance) in zip(requests, local_search(ctx, jobs), strict=True):
@@ -176,7 +174,7 @@ class ToySpace:
         def objective(_q: np.ndarray, object_poses: np.ndarray) -> np.ndarray:
             return self.goal_distance(object_poses, goal)
 
-        mode = {"grasp_rel": np.asarray(grasp_rel, dtype=float)[None]}
+        mode = Mode.held(np.asarray(grasp_rel, dtype=float)[None])
         job = SearchJob(np.asarray(q0, dtype=float), objective, error, 1e-9, mode, toward=goal - grasp_rel)
         waypoints, distance = local_search(ctx, [job])[0]
         success = distance <= GOAL_TOLERANCE_M
@@ -192,7 +190,7 @@ class ToySpace:
     ) -> None:
         """No straight moves: two joints are the Manhattan paths' own."""
 
-    def approach_allows(self, approach: object, grasp_rel: np.ndarray) -> bool:
+    def approach_allows(self, approach: Approach, grasp_rel: np.ndarray) -> bool:
         return True
 
     def regrasp_aims(self, goal: np.ndarray) -> ToyAims:

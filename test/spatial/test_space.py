@@ -14,6 +14,7 @@ import pytest
 
 from clew_ros.core.manhattan import bounce
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.space import Mode
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.spatial.distances import at_goal
 from clew_ros.spatial.motion_plan import _MotionRun
@@ -159,8 +160,8 @@ def test_a_motion_joined_at_a_goal_tree_landmark_runs_from_start_to_goal(boxes: 
     ends = {}
     for tree, root, name in ((run.tree, boxes.initial, "start"), (run.goal_tree, boxes.goal, "goal")):
         decoded = space.manhattan(
-            root[None], rng.normal(0.0, 0.5, size=(1, 1, 7)), margin_m=1e-3, counters=None, should_stop=None,
-            threads=1, object_poses=none[None],
+            root[None], rng.normal(0.0, 0.5, size=(1, 1, 7)), Mode.resting(none[None]), margin_m=1e-3,
+            counters=None, should_stop=None, threads=1,
         )  # fmt: skip
         way = decoded.waypoints[0]
         tree.add(parent=0, joints=way[-1], object_pose=none, grasp=None, grasp_rel=None, transit=way, transfer=None)
@@ -307,11 +308,11 @@ def test_decoded_transfers_end_with_the_object_resting(table: SpatialWorld) -> N
     paths = space.manhattan(
         np.repeat(start[None], 12, axis=0),
         genes,
+        Mode.held(np.repeat(rel[None], 12, axis=0)),
         margin_m=0.0,
         counters=None,
         should_stop=None,
         threads=1,
-        grasp_rel=np.repeat(rel[None], 12, axis=0),
     )
     assert all(rests(space.world, pose) for pose in paths.object_poses)
     checker = space.transfer_checker(rel)

@@ -1,6 +1,7 @@
 """The planner on spatial worlds where a regrasp is necessary (:mod:`clew_ros.worlds.spatial_regrasp`).
 
-For each family (``spatial_bin_cubby``, ``spatial_cubby_bin``), arm (Panda, UR5, random arms of 6+ joints) and
+For each family (``spatial_bin_cubby``, ``spatial_cubby_bin``, ``spatial_shelf_bin``, ``spatial_bin_shelf``), arm
+(Panda, UR5, random arms of 6-7 joints ending in a wrist) and
 world seed, the world is generated (not timed; its witness has two transfers and no grasp is valid at both the
 start and the goal) and planned once within ``--time-limit``. Printed per family and arm: success, median
 time, transfers against the witness's, false "no path" answers (NO_PATH_AT_RESOLUTION on a world with a
@@ -58,7 +59,7 @@ def run_one(family: str, robot: str, seed: int, time_limit: float) -> dict[str, 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks spatial_regrasp", description=__doc__.split("\n")[0])
     parser.add_argument("--families", nargs="+", default=FAMILIES, choices=FAMILIES)
-    parser.add_argument("--robots", nargs="+", default=["panda", "ur5"], choices=["panda", "ur5"])
+    parser.add_argument("--robots", nargs="+", default=["panda", "ur5", "random"], choices=["panda", "ur5", "random"])
     parser.add_argument("--seeds", type=int, default=4)
     parser.add_argument("--first-seed", type=int, default=100)
     parser.add_argument("--time-limit", type=float, default=10.0)

@@ -1,9 +1,10 @@
 """``python -m clew_ros.cli.parameter_tables [--update FILE | --check FILE]``: docs/parameters.md's tables.
 
 The tables are generated from the one parameter specification
-(:mod:`clew_ros.core.parameters`): :func:`markdown_tables` (``world``, ``planner``, ``node``) and the caps
-(``limits``). Without options they are printed; with ``--update docs/parameters.md`` they are rewritten
-between their markers; with ``--check docs/parameters.md`` the exit code is 1 when they are out of date.
+(:mod:`clew_ros.core.parameters`, :mod:`clew_ros.spatial.parameters`, :mod:`clew_ros.ros.node_parameters`):
+:func:`markdown_tables` (``world``, ``spatial_world``, ``planner``, ``node``) and the caps (``limits``). Without
+options they are printed; with ``--update docs/parameters.md`` they are rewritten between their markers; with
+``--check docs/parameters.md`` the exit code is 1 when they are out of date.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from clew_ros.core.parameters import (
+    KIND_PARAMETER,
     LIMITS,
     OBSTACLE_PARAMETER,
     PLANNER_PARAMETERS,
@@ -27,6 +29,7 @@ from clew_ros.core.parameters import (
     ParameterSpec,
 )
 from clew_ros.ros.node_parameters import NODE_PARAMETERS
+from clew_ros.spatial.parameters import SPATIAL_OBSTACLE_PARAMETERS, SPATIAL_WORLD_PARAMETERS
 
 __all__ = ["limits_table", "main", "markdown_tables", "marked_tables", "update_markdown"]
 
@@ -49,6 +52,11 @@ def _cell(value: Any) -> str:
     return f"`{value}`"
 
 
+def _bound(value: float) -> str:
+    """An end of a range: ``pi`` and ``2 pi`` for the angles, else as Python writes it."""
+    return {math.pi: "pi", 2.0 * math.pi: "2 pi"}.get(value, str(value))
+
+
 def _literal(text: str) -> str:
     return text.replace("|", "\\|").replace("<", "\\<")  # literal, not HTML
 
@@ -58,7 +66,7 @@ def _rows(specs: Iterable[ParameterSpec], *, ranges: bool) -> list[str]:
     for spec in specs:
         cells = [f"`{spec.name}`", spec.type.value, _cell(spec.default), spec.unit]
         if ranges:
-            cells.append(f"[{spec.limits[0]}, {spec.limits[1]}]" if spec.limits else "")
+            cells.append(f"[{_bound(spec.limits[0])}, {_bound(spec.limits[1])}]" if spec.limits else "")
         cells.append(spec.at_run_time)
         cells.append(_literal(spec.description))
         rows.append("| " + " | ".join(cells) + " |")
@@ -136,8 +144,16 @@ assert set(_LIMIT_UNIT) == set(_LIMIT_TEXT)
 assert list(_LIMIT_TEXT) == [field.name for field in dataclasses.fields(Limits)]
 
 
+def _with_obstacles(specs: Iterable[ParameterSpec], obstacles: Iterable[ParameterSpec]) -> list[ParameterSpec]:
+    """``specs`` with the obstacles' pattern rows after ``world.obstacle_names``."""
+    out = list(specs)
+    at = next(i for i, spec in enumerate(out) if spec.name == "world.obstacle_names") + 1
+    return out[:at] + list(obstacles) + out[at:]
+
+
 def markdown_tables() -> dict[str, str]:
-    """docs/parameters.md's tables, by name (``world``, ``planner``, ``node``): Markdown, a line per parameter.
+    """docs/parameters.md's tables, by name (``world``, ``spatial_world``, ``planner``, ``node``): Markdown, a
+    line per parameter.
 
     The column "at run time" says whether ``ros2 param set`` may change the parameter while the node runs:
     ``settable``; ``fixed`` (taken at start); ``fixed (dev switch)``: fixed unless the node was started
@@ -148,11 +164,11 @@ def markdown_tables() -> dict[str, str]:
         "| name | type | default | unit | range | at run time | meaning |",
         "|---|---|---|---|---|---|---|",
     ]
-    world = list(WORLD_PARAMETERS.values())
-    names = [i for i, spec in enumerate(world) if spec.name == "world.obstacle_names"]
-    world.insert(names[0] + 1, OBSTACLE_PARAMETER)
+    world = _with_obstacles([KIND_PARAMETER, *WORLD_PARAMETERS.values()], [OBSTACLE_PARAMETER])
+    spatial = _with_obstacles(SPATIAL_WORLD_PARAMETERS.values(), SPATIAL_OBSTACLE_PARAMETERS.values())
     return {
         "world": "\n".join(world_header + _rows(world, ranges=False)),
+        "spatial_world": "\n".join(ranged_header + _rows(spatial, ranges=True)),
         "planner": "\n".join(ranged_header + _rows(PLANNER_PARAMETERS.values(), ranges=True)),
         "node": "\n".join(ranged_header + _rows(NODE_PARAMETERS.values(), ranges=True)),
     }

@@ -322,14 +322,14 @@ def _search(
     """SEARCH from a new landmark: SEARCH_TRANSFER with its grasp; then, if the space says so
     (:meth:`~clew_ros.core.space.RegraspAims.retake`: planar, the grasp is held outside the goal's approach
     core), with the same grasp taken again in place; then with every other grasp reachable by a transit at
-    its placement (a regrasp in place, aimed as :meth:`~clew_ros.core.space.RegraspAims.aim` says), until one
-    reaches the goal."""
+    its placement (a regrasp in place, aimed as :meth:`~clew_ros.core.space.RegraspAims.aim` says, in the
+    order :meth:`~clew_ros.core.space.RegraspAims.ranked` gives), until one reaches the goal."""
     closest = _Found(False, np.inf)
     own = landmark.grasp
     assert own is not None  # SEARCH starts from landmarks holding a grasp
     own_rel = landmark.grasp_rel
     assert own_rel is not None
-    others = [g for g in ctx.rng.permutation(ctx.space.grasp_count).tolist() if g != own]
+    others = aims.ranked(landmark, [g for g in ctx.rng.permutation(ctx.space.grasp_count).tolist() if g != own])
 
     def tries() -> Iterator[tuple[int, bool]]:  # (grasp, regrasped in place), asked for while SEARCH fails
         yield own, False

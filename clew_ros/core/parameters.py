@@ -8,7 +8,9 @@ description), one :class:`ParameterTable` per namespace:
 - :data:`PLANNER_PARAMETERS`: ``planner.*``;
 - :data:`PLAYBACK_PARAMETERS`: ``playback.*`` and ``trajectory.*``, the playback's timing (the node's
   and ``clew_plan``'s live view's); the node's own ``record.*``, ``live.*``, ``state.*``, ``markers.*`` and
-  ``parameters.*`` are specified with the node (``clew_ros.ros.node_parameters``);
+  ``parameters.*``, and which namespaces it fixes at start, are specified with the node
+  (``clew_ros.ros.node_parameters``); a spatial world's ``world.*`` with the spatial world
+  (``clew_ros.spatial.parameters``);
 - :data:`LIMITS`: the caps on the size of what the parameters describe
   (links, obstacles, vertices, grasps, parameter count and name lengths).
 
@@ -40,16 +42,13 @@ from typing import Any
 from clew_ros.core.errors import ParameterError, short_repr
 
 __all__ = [
+    "KIND_PARAMETER",
     "LIMITS",
-    "LOCKED_PREFIXES",
     "OBSTACLE_PARAMETER",
-    "PLANNER_LOCK",
     "PLANNER_PARAMETERS",
     "PLAYBACK_PARAMETERS",
     "REQUIRED",
     "RETIRED_PARAMETERS",
-    "RUNTIME_CHANGES",
-    "SIM_TIME_CHANGES",
     "WORLD_PARAMETERS",
     "Limits",
     "ParameterSpec",
@@ -111,8 +110,8 @@ class ParameterSpec:
     ``unit`` is the unit of a number (``m``, ``rad``, ``s``, ...), ``""`` if it
     has none. ``read_only``: taken when the node starts, never changed while it runs.
     ``locked``: it matters for safety (what the robot may hit, how fast it may move,
-    where runs are recorded), so it is fixed at start too, unless the node is started
-    with :data:`RUNTIME_CHANGES` true (a development switch).
+    where runs are recorded), so the node fixes it at start too, unless it is started
+    with its development switch (``parameters.allow_runtime_changes``, :mod:`clew_ros.ros.node_parameters`).
     """
 
     name: str
@@ -254,20 +253,6 @@ class Limits:
 LIMITS = Limits()
 
 
-#: The name of the development switch: ``true`` lets the :attr:`~ParameterSpec.locked` parameters change while
-#: the node runs.
-RUNTIME_CHANGES = "parameters.allow_runtime_changes"
-#: The switch that lets ``use_sim_time`` (the ROS client library's) change while the node runs (off: fixed at
-#: its start value).
-SIM_TIME_CHANGES = "parameters.allow_sim_time_changes"
-#: The switch that fixes every ``planner.*`` parameter at start.
-PLANNER_LOCK = "parameters.lock_planner"
-#: The namespaces whose parameters are :attr:`~ParameterSpec.locked` (fixed at start): the world (the robot,
-#: its limits, the obstacles), the trajectory limits a controller follows, where and whether runs are
-#: recorded, the live view. A parameter under them that was not declared at start cannot be added later.
-LOCKED_PREFIXES = ("world.", "record.", "trajectory.", "live.")
-
-
 def _locked(specs: Iterable[ParameterSpec]) -> list[ParameterSpec]:
     return [dataclasses.replace(spec, locked=True) for spec in specs]
 
@@ -368,6 +353,17 @@ OBSTACLE_PARAMETER = ParameterSpec(
     f"Obstacle polygon as a flat x0, y0, x1, y1, ... list (m); at most {LIMITS.max_polygon_vertices} vertices "
     f"(and {LIMITS.max_world_vertices} in all the world's polygons).",
     "m",
+    locked=True,
+)
+
+#: ``world.kind``: the kind of world the ``world.*`` parameters describe; absent, a planar world's (this module's
+#: tables). Not a key of :data:`WORLD_PARAMETERS`: a planar world need not name its kind.
+KIND_PARAMETER = ParameterSpec(
+    "world.kind",
+    _S,
+    None,
+    "The kind of world: planar (these parameters; the default when absent) or spatial (interface.md section 1b: "
+    "the spatial world's parameters).",
     locked=True,
 )
 
@@ -505,13 +501,6 @@ PLAYBACK_PARAMETERS = ParameterTable(
         ),
     ],
 )
-
-# A parameter is locked exactly when it lies under one of LOCKED_PREFIXES.
-assert all(
-    spec.locked == spec.name.startswith(LOCKED_PREFIXES)
-    for spec in (*WORLD_PARAMETERS.values(), *PLANNER_PARAMETERS.values(), *PLAYBACK_PARAMETERS.values())
-)
-
 
 # --------------------------------------------------------------------------- checks
 

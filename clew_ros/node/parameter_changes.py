@@ -14,15 +14,16 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.parameters import (
-    LOCKED_PREFIXES,
-    PLANNER_LOCK,
-    RETIRED_PARAMETERS,
-    RUNTIME_CHANGES,
-    SIM_TIME_CHANGES,
-    retired_message,
+from clew_ros.core.parameters import RETIRED_PARAMETERS, retired_message
+from clew_ros.ros.node_parameters import LOCKED_PREFIXES, PLANNER_LOCK, RUNTIME_CHANGES, SIM_TIME_CHANGES
+from clew_ros.ros.parameters import (
+    OWN_PREFIXES,
+    NodeSettings,
+    check_parameter_names,
+    descriptor_for,
+    is_spatial,
+    plain_value,
 )
-from clew_ros.ros.parameters import OWN_PREFIXES, NodeSettings, check_parameter_names, descriptor_for, plain_value
 
 __all__ = ["declare_all", "locked_or_over_caps", "own_values", "unknown_parameter"]
 
@@ -89,11 +90,14 @@ def declare_all(
     The ``overrides`` (``--params-file`` / ``-p``) are declared already, typed by their value; they get their
     descriptor here. The others are declared with their start values.
     """
+    spatial = is_spatial(values)  # a spatial world's world.* are described by the spatial world's specification
     for name, value in values.items():
         if name in RETIRED_PARAMETERS:
             node.get_logger().warning(retired_message(name))
             continue
-        descriptor = descriptor_for(name, allow_runtime_changes=allow_runtime_changes, lock_planner=lock_planner)
+        descriptor = descriptor_for(
+            name, spatial=spatial, allow_runtime_changes=allow_runtime_changes, lock_planner=lock_planner
+        )
         if name in overrides and plain_value(node.get_parameter(name).value) == value:
             node.set_descriptor(name, descriptor)
         else:  # not given, or given and changed here (record.directory); an empty list has no parameter type

@@ -36,11 +36,7 @@ from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 
 from clew_ros.core.errors import ParameterError
-from clew_ros.core.parameters import (
-    LIMITS,
-    LOCKED_PREFIXES,
-    RUNTIME_CHANGES,
-)
+from clew_ros.core.parameters import LIMITS
 from clew_ros.core.settings import Outcome
 from clew_ros.kinds import kind_of
 from clew_ros.node.live_state import LiveState, StateRefusalError, describe_inputs
@@ -53,6 +49,7 @@ from clew_ros.node.run_recording import NO_RECORDING, Recordings, RunRecording
 from clew_ros.node.worker import RunWorker
 from clew_ros.planar.kernel import warm_up
 from clew_ros.ros import messages
+from clew_ros.ros.node_parameters import LOCKED_PREFIXES, RUNTIME_CHANGES
 from clew_ros.ros.parameters import (
     OWN_PREFIXES,
     Configuration,

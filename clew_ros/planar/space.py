@@ -126,6 +126,9 @@ class PlanarAims:
             return aimed
         return None if grasp == landmark.grasp else approach
 
+    def ranked(self, landmark: Landmark, grasps: list[int]) -> list[int]:
+        return grasps  # the aim (approach cells) decides, not the order
+
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
         return []  # the planar planner proposes no intermediate placements (SearchSettings.via_placements 0)
 

@@ -1,5 +1,7 @@
 """The node's own parameters: ``live.*``, ``parameters.*``, ``record.*``, ``markers.*`` and ``state.*``, with the
-playback's timing (:data:`~clew_ros.core.parameters.PLAYBACK_PARAMETERS`) in :data:`NODE_PARAMETERS`.
+playback's timing (:data:`~clew_ros.core.parameters.PLAYBACK_PARAMETERS`) in :data:`NODE_PARAMETERS`; its switches
+(:data:`RUNTIME_CHANGES`, :data:`SIM_TIME_CHANGES`, :data:`PLANNER_LOCK`) and the namespaces it fixes at start
+(:data:`LOCKED_PREFIXES`).
 
 Specified as the core's parameters are (:class:`~clew_ros.core.parameters.ParameterSpec`); they mean nothing
 offline, so they live with the node's settings (:mod:`clew_ros.ros.parameters`) rather than in the core. The ROS
@@ -9,17 +11,39 @@ descriptors and the node table of docs/parameters.md are derived from them.
 from __future__ import annotations
 
 from clew_ros.core.parameters import (
-    LOCKED_PREFIXES,
-    PLANNER_LOCK,
+    KIND_PARAMETER,
+    OBSTACLE_PARAMETER,
+    PLANNER_PARAMETERS,
     PLAYBACK_PARAMETERS,
-    RUNTIME_CHANGES,
-    SIM_TIME_CHANGES,
+    WORLD_PARAMETERS,
     ParameterSpec,
     ParameterTable,
     ParameterType,
 )
+from clew_ros.spatial.parameters import SPATIAL_OBSTACLE_PARAMETERS, SPATIAL_WORLD_PARAMETERS
 
-__all__ = ["NODE_PARAMETERS", "STATE_PARAMETERS"]
+__all__ = [
+    "LOCKED_PREFIXES",
+    "NODE_PARAMETERS",
+    "PLANNER_LOCK",
+    "RUNTIME_CHANGES",
+    "SIM_TIME_CHANGES",
+    "STATE_PARAMETERS",
+]
+
+#: The name of the development switch: ``true`` lets the :attr:`~clew_ros.core.parameters.ParameterSpec.locked`
+#: parameters change while the node runs.
+RUNTIME_CHANGES = "parameters.allow_runtime_changes"
+#: The switch that lets ``use_sim_time`` (the ROS client library's) change while the node runs (off: fixed at
+#: its start value).
+SIM_TIME_CHANGES = "parameters.allow_sim_time_changes"
+#: The switch that fixes every ``planner.*`` parameter at start.
+PLANNER_LOCK = "parameters.lock_planner"
+#: The namespaces whose parameters are :attr:`~clew_ros.core.parameters.ParameterSpec.locked` (fixed at start):
+#: the world (the robot, its limits, the obstacles), the trajectory limits a controller follows, where and
+#: whether runs are recorded, the live view. A parameter under them that was not declared at start cannot be
+#: added later.
+LOCKED_PREFIXES = ("world.", "record.", "trajectory.", "live.")
 
 _B, _I, _D, _S = ParameterType.BOOL, ParameterType.INTEGER, ParameterType.DOUBLE, ParameterType.STRING
 
@@ -221,5 +245,15 @@ NODE_PARAMETERS = ParameterTable(
     ],
 )
 
-# A parameter is locked exactly when it lies under one of LOCKED_PREFIXES.
-assert all(spec.locked == spec.name.startswith(LOCKED_PREFIXES) for spec in NODE_PARAMETERS.values())
+# A parameter is locked exactly when it lies under one of LOCKED_PREFIXES, whichever table specifies it.
+assert all(
+    spec.locked == spec.name.startswith(LOCKED_PREFIXES)
+    for table in (
+        WORLD_PARAMETERS,
+        PLANNER_PARAMETERS,
+        NODE_PARAMETERS,
+        SPATIAL_WORLD_PARAMETERS,
+        SPATIAL_OBSTACLE_PARAMETERS,
+    )
+    for spec in (*table.values(), OBSTACLE_PARAMETER, KIND_PARAMETER)
+)

@@ -10,15 +10,19 @@ values. Three families:
   ``world.obstacle_names``. Checked by the core
   (:func:`~clew_ros.planar.world.world_from_parameters`, then
   :func:`~clew_ros.planar.collision.check_start_and_goal`), so every refusal
-  names the parameter at fault.
+  names the parameter at fault. A spatial world's (``world.kind: spatial``,
+  §1b): :data:`~clew_ros.spatial.parameters.SPATIAL_WORLD_PARAMETERS` and
+  ``world.obstacles.<name>.shape / .size / .pose``, checked by the spatial
+  world parser (:func:`~clew_ros.ros.spatial.load_spatial`); a name neither
+  specifies is refused.
 - ``planner.*``: :data:`~clew_ros.core.parameters.PLANNER_PARAMETERS`,
   checked by :class:`~clew_ros.core.settings.PlannerSettings`.
 - the node's own: :data:`~clew_ros.ros.node_parameters.NODE_PARAMETERS`
   (``record.*``, ``playback.*``, ``trajectory.*``, ``live.*``,
-  ``parameters.*``), checked here into :class:`NodeSettings`.
+  ``parameters.*``, ``markers.*``, ``state.*``), checked here into :class:`NodeSettings`.
 
 The parameters that matter for safety (``world.*``, ``record.*``,
-``trajectory.*``, ``live.*``: :data:`~clew_ros.core.parameters.LOCKED_PREFIXES`)
+``trajectory.*``, ``live.*``: :data:`~clew_ros.ros.node_parameters.LOCKED_PREFIXES`)
 are declared read-only, so that rclpy refuses a change from any peer with a
 reason naming the parameter, unless the node is started with
 ``parameters.allow_runtime_changes: true`` (itself read-only).
@@ -47,15 +51,13 @@ from typing import TYPE_CHECKING, Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
-from clew_ros.core.errors import ParameterError, WorldError
+from clew_ros.core.errors import ParameterError, WorldError, short_repr
 from clew_ros.core.parameters import (
+    KIND_PARAMETER,
     LIMITS,
     OBSTACLE_PARAMETER,
-    PLANNER_LOCK,
     PLANNER_PARAMETERS,
     RETIRED_PARAMETERS,
-    RUNTIME_CHANGES,
-    SIM_TIME_CHANGES,
     WORLD_PARAMETERS,
     Limits,
     ParameterSpec,
@@ -65,9 +67,16 @@ from clew_ros.core.parameters import (
 )
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.planar.collision import check_start_and_goal
+from clew_ros.planar.world import WORLD_KIND as PLANAR_WORLD_KIND
 from clew_ros.planar.world import World, read_parameter_file, world_from_parameters
-from clew_ros.ros.node_parameters import NODE_PARAMETERS
+from clew_ros.ros.node_parameters import NODE_PARAMETERS, PLANNER_LOCK, RUNTIME_CHANGES, SIM_TIME_CHANGES
 from clew_ros.spatial import WORLD_KIND as SPATIAL_WORLD_KIND
+from clew_ros.spatial.parameters import (
+    OBSTACLE_PREFIX,
+    SPATIAL_OBSTACLE_PARAMETERS,
+    SPATIAL_WORLD_PARAMETERS,
+    spatial_spec,
+)
 
 if TYPE_CHECKING:
     from clew_ros.ros.spatial import SpatialSetup
@@ -77,7 +86,6 @@ __all__ = [
     "DEFAULT_WORLD_FILE",
     "NODE_PARAMETERS",
     "OWN_PREFIXES",
-    "SPATIAL_PARAMETER",
     "WORLD_PARAMETERS",
     "Configuration",
     "NodeSettings",
@@ -236,17 +244,6 @@ class Configuration:
 #: The value of ``world.kind`` that selects a spatial world (section 1b); ``planar`` is the default.
 SPATIAL_KIND = SPATIAL_WORLD_KIND
 
-#: The spec of a spatial world's parameters other than those of :data:`WORLD_PARAMETERS` (the spatial
-#: world parser checks them, naming the one at fault).
-SPATIAL_PARAMETER = ParameterSpec(
-    "world.<spatial>",
-    ParameterType.STRING,
-    None,
-    "A parameter of a spatial world (interface.md section 1b: world.kind spatial), checked with the whole "
-    "world when the node starts.",
-    locked=True,
-)
-
 
 def is_spatial(values: Mapping[str, Any]) -> bool:
     """Whether parameter values (full name -> value) describe a spatial world (``world.kind: spatial``)."""
@@ -337,10 +334,18 @@ def initial_values(overrides: Mapping[str, Any], default_file: Path | None = Non
 
 
 def _check_known(name: str, *, spatial: bool = False) -> None:
-    if name in RETIRED_PARAMETERS:
-        return  # accepted and ignored (the node warns at start: retired_names)
+    if name in RETIRED_PARAMETERS or name == KIND_PARAMETER.name:
+        return  # a retired one is accepted and ignored (the node warns at start: retired_names)
     if spatial and name.startswith("world."):
-        return  # the spatial world parser checks the whole tree, naming the parameter at fault
+        if spatial_spec(name) is None:
+            raise WorldError(
+                name,
+                "unknown parameter of a spatial world; known: "
+                + ", ".join(spec.name for spec in SPATIAL_WORLD_PARAMETERS.values())
+                + ", "
+                + ", ".join(spec.name for spec in SPATIAL_OBSTACLE_PARAMETERS.values()),
+            )
+        return  # checked with the whole world by the spatial world parser, naming the parameter at fault
     if name.startswith("world."):
         key = name[len("world.") :]
         if key in WORLD_PARAMETERS:
@@ -401,6 +406,11 @@ def configuration_from_values(
     if spatial:
         world, setup = _spatial_world(world_tree, previous)
     else:
+        kind = values.get(KIND_PARAMETER.name)
+        if kind is not None and kind != PLANAR_WORLD_KIND:
+            raise WorldError(
+                KIND_PARAMETER.name, f"expected {PLANAR_WORLD_KIND} or {SPATIAL_KIND}, got {short_repr(kind, 40)}"
+            )
         world = check_start_and_goal(world_from_parameters(world_tree))
         for name in ("state.joint_states", "state.object_pose", "state.obstacles", "state.points", "state.advance"):
             if values.get(name) is True:
@@ -456,9 +466,10 @@ def _node_value(spec: ParameterSpec, value: Any) -> Any:
 
 
 def descriptor_for(
-    name: str, *, allow_runtime_changes: bool = False, lock_planner: bool = False
+    name: str, *, spatial: bool = False, allow_runtime_changes: bool = False, lock_planner: bool = False
 ) -> ParameterDescriptor:
-    """The descriptor a parameter is declared with: its spec's description, type and default, and range.
+    """The descriptor a parameter is declared with: its spec's description, type and default, and range;
+    ``spatial``: a ``world.*`` name is a spatial world's (:mod:`clew_ros.spatial.parameters`).
 
     Every parameter is declared with ``dynamic_typing`` (a ``30`` is as good
     as ``30.0``: the value is checked by this module, not by rclpy). It is
@@ -466,7 +477,7 @@ def descriptor_for(
     ``record.*``, ``trajectory.*``, ``live.*``) unless ``allow_runtime_changes``; ``planner.*`` too with
     ``lock_planner``.
     """
-    spec = _spec_of(name)
+    spec = _spec_of(name, spatial=spatial)
     descriptor = ParameterDescriptor(
         name=name,
         dynamic_typing=True,
@@ -486,12 +497,20 @@ def descriptor_for(
     return descriptor
 
 
-def _spec_of(name: str) -> ParameterSpec:
+def _spec_of(name: str, *, spatial: bool = False) -> ParameterSpec:
+    """The spec of parameter ``name`` (``spatial``: of a spatial world); :class:`KeyError` for one the node
+    does not take."""
+    if name == KIND_PARAMETER.name:
+        return SPATIAL_WORLD_PARAMETERS["kind"] if spatial else KIND_PARAMETER
+    if spatial and name.startswith("world."):
+        spec = spatial_spec(name)
+        if spec is None:
+            raise KeyError(f"{name} is not a parameter of a spatial world")
+        return spec
     if name.startswith("world.obstacles.") and name.count(".") == 2:
         return OBSTACLE_PARAMETER
     if name.startswith("world."):
-        key = name[len("world.") :]
-        return WORLD_PARAMETERS.get(key, SPATIAL_PARAMETER)
+        return WORLD_PARAMETERS[name[len("world.") :]]
     if name.startswith("planner."):
         return PLANNER_PARAMETERS[name[len("planner.") :]]
     return NODE_PARAMETERS[name]
@@ -506,7 +525,10 @@ def _constraints(spec: ParameterSpec) -> str:
         )
     if spec.name.startswith("world."):
         given = "required" if spec.required else "optional" if spec.default is None else f"default {spec.default!r}"
-        return f"{spec.type.value}; {given}; fixed at start (unless {RUNTIME_CHANGES}: then not while a plan runs)"
+        text = f"{spec.type.value}; {given}; fixed at start (unless {RUNTIME_CHANGES}: then not while a plan runs)"
+        if spec.name.startswith(OBSTACLE_PREFIX):
+            return f"{text}; one per name in world.obstacle_names"
+        return text if spec.limits is None else f"{text}; in [{spec.limits[0]}, {spec.limits[1]}]"
     if spec.name.startswith("planner."):
         assert spec.limits is not None
         return f"{spec.type.python_type.__name__} in [{spec.limits[0]}, {spec.limits[1]}]; default {spec.default}"

@@ -53,7 +53,8 @@ def slides(
     xy = poses[:, :2, 3]
     out = []
     for support in world.supports:
-        near = support.contains(xy) & (low - support.top <= settings.band_m)
+        above = low - support.top
+        near = support.contains(xy) & (above <= settings.band_m) & (above >= -settings.band_m)  # not under it
         edges = np.flatnonzero(np.diff(np.r_[0, near.astype(np.int8), 0]))
         for first, end in zip(edges[::2], edges[1::2], strict=True):
             moved = float(np.max(np.linalg.norm(xy[first:end] - xy[first], axis=1)))

@@ -27,7 +27,9 @@ _SCHEME = "package://"
 def package_paths_from_parameters(robot: Mapping[str, Any], folder: Path) -> tuple[Path, ...]:
     """The folders of ``world.robot.package_paths`` (a list of paths; absent: none), relative ones taken
     from ``folder`` (the parameter file's)."""
-    value = robot.get("package_paths", [])
+    from clew_ros.spatial.parameters import world_value
+
+    value = world_value(robot, PACKAGE_PATHS_PARAMETER) or []
     if isinstance(value, str) or not isinstance(value, Sequence) or not all(isinstance(v, str) and v for v in value):
         raise WorldError(
             PACKAGE_PATHS_PARAMETER, f"expected a list of folders that hold ROS packages, got {short_repr(value)}"

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from clew_ros.core.errors import WorldError, short_repr
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
+from clew_ros.spatial.parameters import checked_value, world_value
 from clew_ros.spatial.robot import Geometry
 from clew_ros.spatial.scene import Obstacle, obstacle_arrays
 from clew_ros.spatial.spheres import SphereSettings, cover
@@ -151,7 +152,7 @@ def _support(obstacle: Obstacle) -> Support:
 
 def supports_from_parameters(world: Mapping[str, Any], obstacles: Sequence[Obstacle]) -> tuple[Support, ...]:
     """The supports ``world.supports`` names, among ``obstacles``."""
-    names = world.get("supports", [])
+    names = world_value(world, "world.supports") or []
     if isinstance(names, str) or not all(isinstance(n, str) for n in names):
         raise WorldError("world.supports", f"expected a list of obstacle names, got {short_repr(names)}")
     by_name = {o.name: o for o in obstacles}
@@ -166,19 +167,18 @@ def object_from_parameters(world: Mapping[str, Any]) -> MovableObject:
     tree = world.get("object")
     if not isinstance(tree, Mapping):
         raise WorldError("world.object", "expected shape and size")
-    shape = tree.get("shape")
+    shape = checked_value(tree, "world.object.shape")
     if shape not in ("box", "cylinder"):
         raise WorldError("world.object.shape", f"expected box or cylinder, got {short_repr(shape)}")
     count = 3 if shape == "box" else 2
+    given = world_value(tree, "world.object.size")
     try:
-        size = tuple(float(v) for v in tree.get("size", []))
+        size = tuple(float(v) for v in given)
     except (TypeError, ValueError):
         size = ()
     if len(size) != count or not all(math.isfinite(v) and v > 0.0 for v in size):
         what = "[x, y, z] full extents" if shape == "box" else "[height, radius]"
-        raise WorldError(
-            "world.object.size", f"expected {count} positive numbers {what}, got {short_repr(tree.get('size'))}"
-        )
+        raise WorldError("world.object.size", f"expected {count} positive numbers {what}, got {short_repr(given)}")
     return MovableObject(shape, size)
 
 

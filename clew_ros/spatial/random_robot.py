@@ -51,6 +51,11 @@ class RandomRobotSettings:
     limit_half_width_rad: tuple[float, float] = (1.0, math.pi)
     #: Centre of each joint's range (rad): ranges are not all symmetric about 0.
     limit_center_rad: tuple[float, float] = (-0.5, 0.5)
+    #: The last three joints a wrist (``joints`` from 6): their axes z, y and z of their own frames, each
+    #: the next one's offset along its own z (in line, as a Panda's or a UR5's wrist nearly is), the tool
+    #: beyond the last, their lengths the shortest ``length_m`` allows (+ 5 cm), their ranges a full turn (pi
+    #: either side of a centre): the tool reaches an object from above and from the side alike.
+    wrist: bool = False
 
     def __post_init__(self) -> None:
         for name in (
@@ -66,6 +71,8 @@ class RandomRobotSettings:
         for name in ("length_m", "radius_m", "base_height_m", "limit_half_width_rad"):
             if getattr(self, name)[0] <= 0:
                 raise ValueError(f"RandomRobotSettings.{name}: expected positive values, got {getattr(self, name)}")
+        if self.wrist and self.joints[0] < 6:
+            raise ValueError(f"RandomRobotSettings.joints: a wrist needs 6 joints or more, got {self.joints}")
         if self.length_m[0] <= 2 * math.sqrt(2) * self.radius_m[1]:
             raise ValueError(
                 "RandomRobotSettings.length_m: expected the shortest link longer than twice the thickest "
@@ -121,7 +128,10 @@ def random_robot_urdf(
     n = int(rng.integers(settings.joints[0], settings.joints[1] + 1))
     # joint k (1..n) sits at offsets[k - 1] in the previous link's frame; tool at offsets[n] in link_n's
     offsets = [np.array([0.0, 0.0, rng.uniform(*settings.base_height_m)])]
-    offsets += [_unit(rng) * rng.uniform(*settings.length_m) for _ in range(n)]
+    wrist = n - 3 if settings.wrist else n  # joints wrist + 1 .. n: the wrist
+    offsets += [_unit(rng) * rng.uniform(*settings.length_m) for _ in range(wrist)]
+    short = (settings.length_m[0], settings.length_m[0] + 0.05)
+    offsets += [np.array([0.0, 0.0, rng.uniform(*short)]) for _ in range(n - wrist)]
     links = [BASE_LINK] + [f"link_{k}" for k in range(1, n + 1)]
     parts = [f'<?xml version="1.0"?>\n<robot name={quoteattr(name)}>']
     for k, link in enumerate(links):
@@ -129,13 +139,14 @@ def random_robot_urdf(
         parts.append(f"  <link name={quoteattr(link)}>{collisions}</link>")
     parts.append(f"  <link name={quoteattr(TIP_LINK)}/>")
     for k in range(1, n + 1):
-        rpy = rng.uniform(-math.pi, math.pi, size=3)
+        rpy = rng.uniform(-math.pi, math.pi, size=3) if k <= wrist + 1 else np.zeros(3)
         center = float(rng.uniform(*settings.limit_center_rad))
-        half = float(rng.uniform(*settings.limit_half_width_rad))
+        half = float(rng.uniform(*settings.limit_half_width_rad)) if k <= wrist else math.pi
+        axis = _unit(rng) if k <= wrist else np.array([0.0, float(k == wrist + 2), float(k != wrist + 2)])
         parts.append(
             f'  <joint name="joint_{k}" type="revolute"><parent link={quoteattr(links[k - 1])}/>'
             f'<child link={quoteattr(links[k])}/><origin xyz="{_numbers(offsets[k - 1])}" rpy="{_numbers(rpy)}"/>'
-            f'<axis xyz="{_numbers(_unit(rng))}"/>'
+            f'<axis xyz="{_numbers(axis)}"/>'
             f'<limit lower="{_number(center - half)}" upper="{_number(center + half)}" effort="10" velocity="1"/>'
             "</joint>"
         )

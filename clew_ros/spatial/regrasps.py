@@ -43,6 +43,8 @@ class SpatialSpace(HeldObjectView, Protocol):
     @property
     def initial_joints(self) -> np.ndarray: ...
 
+    def nearest_turns(self, q0: Array, found: Array) -> Array: ...
+
 
 def _matrix(pose: Array) -> Array:
     """A pose's 4x4 matrix (6 numbers, URDF rpy)."""
@@ -88,11 +90,33 @@ class SpatialAims:
         return False
 
     def aim(self, landmark: Landmark, grasp: int) -> Any | None:
-        """Every approach of a goal grasp (:meth:`goal_grasps`; of every grasp where none was found); ``None``:
-        a regrasp in place with a grasp that holds the object at the goal in no configuration is not worth
-        its transit."""
+        """A regrasp in place with a goal grasp (:meth:`goal_grasps`; every grasp where none was found) aims
+        at that grasp's configurations at the goal, (k, n): its transit ends at the configuration nearest
+        them (:func:`clew_ros.spatial.targets.aimed_holds`). ``None``: a grasp that holds the object at the goal
+        in no configuration is not worth its transit."""
         goal_grasps = self.goal_grasps()
-        return np.ones(1, dtype=bool) if grasp in goal_grasps or not goal_grasps else None
+        if not goal_grasps:
+            return np.zeros((0, self.space.dof))
+        return self._goal_solutions[grasp] if grasp in goal_grasps else None
+
+    def ranked(self, landmark: Landmark, grasps: list[int]) -> list[int]:
+        """The goal grasps among ``grasps`` first, nearest first: the joint distance (rad, L1) from a
+        configuration holding the object by it at ``landmark``'s placement to one holding it at the goal (the
+        transfer after the regrasp); then the others, as they were."""
+        goal_grasps = set(self.goal_grasps())
+        serving = [g for g in grasps if g in goal_grasps]
+        if len(serving) < 2:
+            return serving + [g for g in grasps if g not in goal_grasps]
+        cost = {g: self.take_cost(g, landmark.object_pose) for g in serving}
+        return sorted(serving, key=lambda g: cost[g]) + [g for g in grasps if g not in goal_grasps]
+
+    def take_cost(self, grasp: int, object_pose: Array) -> float:
+        """The least joint distance (rad, L1, by whole turns) from a configuration holding the object by
+        ``grasp`` at ``object_pose`` (6 numbers) to one holding it at the goal (inf: either is not found)."""
+        if grasp not in self.goal_grasps():
+            return math.inf
+        here = _matrix(np.asarray(object_pose, dtype=float))[None]
+        return self._nearest(self._solve(grasp, here, self.settings.ik_seeds)[0], self._goal_solutions[grasp])
 
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
         """Intermediate placements (6 numbers each), best first: ``grasp`` holds the object there and so does
@@ -117,9 +141,9 @@ class SpatialAims:
         for k in np.flatnonzero(apart).tolist():
             if not len(mine[k]):
                 continue
-            put = float(np.min(np.abs(mine[k] - joints).sum(axis=1)))
+            put = float(np.min(np.abs(self.space.nearest_turns(joints, mine[k]) - joints).sum(axis=1)))
             take = min(
-                (_nearest(self._solutions(g)[k], self._goal_solutions[g]) for g in goal_grasps),
+                (self._nearest(self._solutions(g)[k], self._goal_solutions[g]) for g in goal_grasps),
                 default=math.inf,
             )
             cost[k] = put + take
@@ -162,6 +186,13 @@ class SpatialAims:
         )
         return found
 
+    def _nearest(self, a: Array, b: Array) -> float:
+        """The least L1 distance (rad) between a row of ``a`` and a row of ``b``, each of ``b`` taken by whole
+        turns nearest the row of ``a`` (inf: either is empty)."""
+        if not len(a) or not len(b):
+            return math.inf
+        return min(float(np.abs(self.space.nearest_turns(row, b) - row).sum(axis=1).min()) for row in a)
+
     def _candidates(self) -> Array:
         if self._drawn is None:
             world = self.space.world
@@ -187,10 +218,3 @@ class SpatialAims:
         if grasp not in self._holds:
             self._holds[grasp] = self._solve(grasp, self._candidates(), self.settings.ik_seeds)
         return self._holds[grasp]
-
-
-def _nearest(a: Array, b: Array) -> float:
-    """The least L1 distance (rad) between a row of ``a`` and a row of ``b`` (inf: either is empty)."""
-    if not len(a) or not len(b):
-        return math.inf
-    return float(np.min(np.abs(a[:, None, :] - b[None, :, :]).sum(axis=2)))

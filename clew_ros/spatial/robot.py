@@ -28,6 +28,7 @@ from clew_ros.core.errors import WorldError, short_repr
 from clew_ros.core.files import FileRefusedError, read_regular_file
 from clew_ros.core.parameters import LIMITS, Limits
 from clew_ros.spatial.packages import package_paths_from_parameters, resolve_package_uri
+from clew_ros.spatial.parameters import checked_value, world_value
 from clew_ros.spatial.transforms import axis_motion, pose_matrix
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "GivenMeshes",
     "LinkModel",
     "RobotModel",
+    "RobotOptions",
     "load_robot",
     "read_text",
     "resolve_uri",
@@ -447,6 +449,25 @@ def _exempt(
     return frozenset(exempt)
 
 
+@dataclass(frozen=True)
+class RobotOptions:
+    """What a world adds to a URDF's chain (interface.md section 1b), each as its ``world.robot.*`` parameter
+    says: ``srdf_text`` (its ``disable_collisions`` pairs), ``joint_lower`` / ``joint_upper`` (narrowing the
+    URDF's limits; ``None``: the URDF's), ``fixed_joint_names`` / ``fixed_joint_positions`` (the other
+    movable joints), ``gripper_links``, ``package_paths`` (the folders that hold the packages of ``package://``
+    mesh URIs, before the ament index) and ``meshes``: the meshes themselves (a recording's), so that no file
+    the URDF names is opened."""
+
+    srdf_text: str | None = None
+    joint_lower: Sequence[float] | None = None
+    joint_upper: Sequence[float] | None = None
+    fixed_joint_names: Sequence[str] = ()
+    fixed_joint_positions: Sequence[float] = ()
+    gripper_links: Sequence[str] = ()
+    package_paths: Sequence[Path] = ()
+    meshes: GivenMeshes | None = None
+
+
 def load_robot(
     urdf_text: str,
     *,
@@ -455,24 +476,17 @@ def load_robot(
     tip_link: str,
     tcp: Sequence[float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
     base_pose: Sequence[float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
-    srdf_text: str | None = None,
-    joint_lower: Sequence[float] | None = None,
-    joint_upper: Sequence[float] | None = None,
-    fixed_joint_names: Sequence[str] = (),
-    fixed_joint_positions: Sequence[float] = (),
-    gripper_links: Sequence[str] = (),
     source: str = "world.robot.urdf",
-    package_paths: Sequence[Path] = (),
-    meshes: GivenMeshes | None = None,
+    options: RobotOptions | None = None,
 ) -> RobotModel:
     """Parse a URDF (its text; ``folder`` resolves relative mesh paths) into a :class:`RobotModel`.
 
-    ``source`` names the parameter the URDF came from, for errors; ``package_paths`` the folders that hold
-    the packages of ``package://`` mesh URIs (``world.robot.package_paths``, before the ament index). Poses
-    are ``[x, y, z, roll, pitch, yaw]`` (m, rad): ``tcp`` in ``tip_link``'s frame, ``base_pose`` of
-    ``base_link`` in ``world``. ``meshes``: the meshes themselves (a recording's), so that no file the URDF
-    names is opened.
+    ``source`` names the parameter the URDF came from, for errors. Poses are ``[x, y, z, roll, pitch, yaw]``
+    (m, rad): ``tcp`` in ``tip_link``'s frame, ``base_pose`` of ``base_link`` in ``world``. ``options``: what
+    the world adds (:class:`RobotOptions`; default none).
     """
+    options = options or RobotOptions()
+    srdf_text, meshes, package_paths = options.srdf_text, options.meshes, options.package_paths
     _check_robot_text(urdf_text, srdf_text, source, LIMITS)
     robot = _parse_urdf(urdf_text, source)
     _check_origins(robot, source)
@@ -480,18 +494,18 @@ def load_robot(
     parent_joint, root = _tree(robot, base_link, tip_link, source)
     planned = _planned(parent_joint, base_link, tip_link)
     planned_names = [joint.name for joint in planned]
-    fixed = _fixed_positions(robot, planned_names, fixed_joint_names, fixed_joint_positions, source)
+    fixed = _fixed_positions(robot, planned_names, options.fixed_joint_names, options.fixed_joint_positions, source)
     axes = {joint.name: _axis(joint, source) for joint in robot.joints if joint.type in _MOVABLE}
     pose, frame_of = _reference(robot, root, planned_names, fixed, axes)
     frame_pose = [pose[base_link]] + [pose[joint.child] for joint in planned]
     inverse = [np.linalg.inv(f) for f in frame_pose]
 
     limits = np.array([_limits(joint, source) for joint in planned])
-    lower = _narrowed(limits[:, 0], joint_lower, planned_names, "world.robot.joint_lower", lower=True)
-    upper = _narrowed(limits[:, 1], joint_upper, planned_names, "world.robot.joint_upper", lower=False)
+    lower = _narrowed(limits[:, 0], options.joint_lower, planned_names, "world.robot.joint_lower", lower=True)
+    upper = _narrowed(limits[:, 1], options.joint_upper, planned_names, "world.robot.joint_upper", lower=False)
     if np.any(lower > upper):
         raise WorldError("world.robot.joint_lower", "expected joint_lower <= joint_upper for every joint")
-    for name in gripper_links:
+    for name in options.gripper_links:
         if name not in names:
             raise WorldError("world.robot.gripper_links", f"link {name!r} is not in the URDF")
 
@@ -521,7 +535,7 @@ def load_robot(
         links=links,
         parents=parents,
         exempt=_exempt(links, parents, srdf_text, names),
-        gripper_links=tuple(gripper_links),
+        gripper_links=tuple(options.gripper_links),
         fixed_positions=dict(fixed),
         continuous=_wrapping(planned, lower, upper),
     )
@@ -555,14 +569,18 @@ def _pose(value: Any, parameter: str) -> list[float]:
 
 
 def _strings(tree: Mapping[str, Any], key: str) -> list[str]:
-    value = tree.get(key, [])
+    value = world_value(tree, f"world.robot.{key}")
+    if value is None:
+        return []
     if isinstance(value, str) or not all(isinstance(v, str) for v in value):
         raise WorldError(f"world.robot.{key}", f"expected a list of names, got {short_repr(value)}")
     return list(value)
 
 
 def _floats(tree: Mapping[str, Any], key: str) -> list[float]:
-    value = tree.get(key, [])
+    value = world_value(tree, f"world.robot.{key}")
+    if value is None:
+        return []
     try:
         out = [float(v) for v in value]
     except (TypeError, ValueError):
@@ -574,18 +592,16 @@ def _floats(tree: Mapping[str, Any], key: str) -> list[float]:
 
 def robot_from_parameters(robot: Mapping[str, Any], folder: Path, meshes: GivenMeshes | None = None) -> RobotModel:
     """The robot of a ``world.robot`` parameter tree (interface.md section 1b); relative paths are read from
-    ``folder`` (the parameter file's). ``meshes``: the URDF's meshes given (:func:`load_robot`)."""
+    ``folder`` (the parameter file's). ``meshes``: the URDF's meshes given (:func:`load_robot`). Defaults,
+    required keys and the scalars' checks: :data:`~clew_ros.spatial.parameters.SPATIAL_WORLD_PARAMETERS`."""
     has_file, has_text = "urdf" in robot, "description" in robot
     if has_file == has_text:
         raise WorldError("world.robot.urdf", "expected exactly one of world.robot.urdf and world.robot.description")
-    for key in ("base_link", "tip_link"):
-        if not isinstance(robot.get(key), str) or not robot[key]:
-            raise WorldError(f"world.robot.{key}", f"expected a link name, got {short_repr(robot.get(key))}")
+    base_link = checked_value(robot, "world.robot.base_link")
+    tip_link = checked_value(robot, "world.robot.tip_link")
     packages = package_paths_from_parameters(robot, folder)
     if has_file:
-        if not isinstance(robot["urdf"], str):
-            raise WorldError("world.robot.urdf", f"expected a path, got {short_repr(robot['urdf'])}")
-        path = resolve_uri(robot["urdf"], folder, "world.robot.urdf", packages)
+        path = resolve_uri(checked_value(robot, "world.robot.urdf"), folder, "world.robot.urdf", packages)
         text, urdf_folder, source = read_text(path, "world.robot.urdf"), path.parent, "world.robot.urdf"
     else:
         if not isinstance(robot["description"], str):
@@ -593,33 +609,29 @@ def robot_from_parameters(robot: Mapping[str, Any], folder: Path, meshes: GivenM
         text, urdf_folder, source = robot["description"], folder, "world.robot.description"
     srdf = None
     if "srdf" in robot:
-        srdf = read_text(resolve_uri(str(robot["srdf"]), folder, "world.robot.srdf", packages), "world.robot.srdf")
-    model = load_robot(
-        text,
-        folder=urdf_folder,
-        base_link=robot["base_link"],
-        tip_link=robot["tip_link"],
-        tcp=robot.get("tcp", (0.0,) * 6),
-        base_pose=robot.get("base_pose", (0.0,) * 6),
+        srdf_path = resolve_uri(checked_value(robot, "world.robot.srdf"), folder, "world.robot.srdf", packages)
+        srdf = read_text(srdf_path, "world.robot.srdf")
+    options = RobotOptions(
         srdf_text=srdf,
-        joint_lower=robot.get("joint_lower"),
-        joint_upper=robot.get("joint_upper"),
+        joint_lower=world_value(robot, "world.robot.joint_lower"),
+        joint_upper=world_value(robot, "world.robot.joint_upper"),
         fixed_joint_names=_strings(robot, "fixed_joint_names"),
         fixed_joint_positions=_floats(robot, "fixed_joint_positions"),
         gripper_links=_strings(robot, "gripper_links"),
-        source=source,
         package_paths=packages,
         meshes=meshes,
     )
-    return replace(model, padding=_padding(robot))
-
-
-def _padding(robot: Mapping[str, Any]) -> float:
-    """``world.robot.padding``: metres every link's collision geometry is grown by (default 0)."""
-    value = robot.get("padding", 0.0)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or not 0 <= value <= 1:
-        raise WorldError("world.robot.padding", f"expected a distance in metres from 0 to 1, got {short_repr(value)}")
-    return float(value)
+    model = load_robot(
+        text,
+        folder=urdf_folder,
+        base_link=base_link,
+        tip_link=tip_link,
+        tcp=world_value(robot, "world.robot.tcp"),
+        base_pose=world_value(robot, "world.robot.base_pose"),
+        source=source,
+        options=options,
+    )
+    return replace(model, padding=checked_value(robot, "world.robot.padding"))
 
 
 # ----------------------------------------------------------------------------------------- caps

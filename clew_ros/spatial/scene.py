@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from clew_ros.core.errors import WorldError, short_repr
 from clew_ros.core.files import FileRefusedError, read_regular_file, yaml_error_place
 from clew_ros.core.parameters import LIMITS, Limits
+from clew_ros.spatial.parameters import checked_value, world_value
 from clew_ros.spatial.transforms import pose_matrix, quaternion_matrix
 
 __all__ = [
@@ -98,7 +99,7 @@ def make_obstacle(
 def obstacles_from_parameters(world: Mapping[str, Any]) -> tuple[Obstacle, ...]:
     """The obstacles ``world.obstacle_names`` lists, each from ``world.obstacles.<name>.shape / .size /
     .pose``."""
-    names = world.get("obstacle_names", [])
+    names = world_value(world, "world.obstacle_names") or []
     if isinstance(names, str) or not all(isinstance(n, str) for n in names):
         raise WorldError("world.obstacle_names", f"expected a list of names, got {short_repr(names)}")
     if len(names) > LIMITS.max_obstacles:
@@ -116,11 +117,9 @@ def obstacles_from_parameters(world: Mapping[str, Any]) -> tuple[Obstacle, ...]:
         entry = table.get(name)
         if not isinstance(entry, Mapping):
             raise WorldError(parameter, "expected shape, size and pose (world.obstacle_names lists it)")
-        for key in ("shape", "size", "pose"):
-            if key not in entry:
-                raise WorldError(f"{parameter}.{key}", "missing")
-        pose = pose_matrix(_numbers(entry["pose"], f"{parameter}.pose", 6, "a pose [x, y, z, roll, pitch, yaw]"))
-        out.append(make_obstacle(name, entry["shape"], entry["size"], pose, parameter))
+        shape, size, pose = (world_value(entry, f"{parameter}.{key}") for key in ("shape", "size", "pose"))
+        matrix = pose_matrix(_numbers(pose, f"{parameter}.pose", 6, "a pose [x, y, z, roll, pitch, yaw]"))
+        out.append(make_obstacle(name, shape, size, matrix, parameter))
     return tuple(out)
 
 
@@ -206,7 +205,8 @@ def world_obstacles(
     out = list(obstacles_from_parameters(world))
     if "scene_file" in world:
         known = {"world": np.eye(4), **(frames or {})}
-        out.extend(scene_obstacles(read_scene_file(world["scene_file"], folder), known, "world.scene_file"))
+        scene = read_scene_file(checked_value(world, "world.scene_file"), folder)
+        out.extend(scene_obstacles(scene, known, "world.scene_file"))
     if len(out) > LIMITS.max_obstacles:
         raise WorldError(
             "world.scene_file",

@@ -19,12 +19,12 @@ from numpy.typing import NDArray
 
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
 from clew_ros.core.space import Mode, PathResult, PlanningContext, TransitRequest
-from clew_ros.core.tree import LandmarkTree
+from clew_ros.core.tree import Landmark, LandmarkTree
 from clew_ros.spatial.distances import at_goal, goal_distance
 from clew_ros.spatial.motion_plan import MotionSpace, add_branch, connect
 from clew_ros.spatial.settle import rests, settle
 from clew_ros.spatial.space_parts import SpaceParts, cache_key
-from clew_ros.spatial.targets import goal_configurations, holds
+from clew_ros.spatial.targets import aimed_holds, goal_configurations, holds
 from clew_ros.spatial.transforms import matrices, rotation_vectors
 from clew_ros.spatial.ways import way, way_out
 
@@ -62,10 +62,10 @@ def search_transits(space: SearchSpace, ctx: PlanningContext, requests: list[Tra
     slots: list[int] = []
     targets: list[Array] = []
     weight = tuning.angle_weight_m
-    for start, resting, grasp, _approach in requests:
+    for start, resting, grasp, approach in requests:
         q0 = np.asarray(start, dtype=float)
         object_pose = np.asarray(resting, dtype=float)
-        found = holds(parts, ctx, q0, object_pose, grasp)
+        found = aimed_holds(holds(parts, ctx, q0, object_pose, grasp), q0, approach)
         if not len(found):
             results.append(PathResult(False, q0[None], math.inf))
             continue
@@ -210,9 +210,22 @@ def transfer_trees(
     tree = goal_tree(parts, rel, goal)
     if tree is None:
         tree = parts.goal_trees[cache_key(rel, goal)] = LandmarkTree(found[0], np.zeros(6))
+        root: Landmark | None = tree[0]
+    else:  # a goal configuration with a way in that the tree's roots may lack
+        roots = [k for k in range(len(tree)) if tree[k].parent is None]
+        apart = parts.tuning.transfer_goal_apart_rad
+        root = None
+        if len(roots) < parts.tuning.transfer_goal_roots and all(
+            np.max(np.abs(found[0] - tree[k].joints)) >= apart for k in roots
+        ):
+            root = tree.add(
+                parent=None, joints=found[0].copy(), object_pose=np.zeros(6), grasp=None, grasp_rel=None,
+                transit=None, transfer=None,
+            )  # fmt: skip
+    if root is not None:
         out_of_goal = way_out(parts, checker, mode, found[0])
         if out_of_goal is not None:
-            add_branch(tree, 0, out_of_goal)
+            add_branch(tree, root.id, out_of_goal)
     ways = [way_out(parts, checker, mode, q0)]
     if searched is not None and len(searched) > 1 and np.max(np.abs(searched[-1] - q0)) > 0:
         ways.append(searched)

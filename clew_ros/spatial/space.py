@@ -148,7 +148,7 @@ class SpatialSpace:
         search.straight_probe(self.parts, ctx, jobs, q, best, waypoints=waypoints)
 
     def approach_allows(self, approach: Approach, grasp_rel: np.ndarray) -> bool:
-        return True  # no aiming: every approach is allowed
+        return True  # an aim orders the configurations a transit may end at (targets.aimed_holds); it refuses none
 
     def regrasp_aims(self, goal: np.ndarray) -> SpatialAims:
         return SpatialAims(self, goal, self.tuning.regrasp)
@@ -189,6 +189,9 @@ class SpatialSpace:
 
     def backed_off(self, checker: SpatialChecker, q: Array) -> Array | None:
         return backed_off(self.parts, checker, q)
+
+    def nearest_turns(self, q0: Array, found: Array) -> Array:
+        return self.parts.nearest_turns(q0, found)
 
 
 def plan(

@@ -15,7 +15,7 @@ from clew_ros.spatial.scene import make_obstacle
 from clew_ros.spatial.straight import straight_samples_clear
 from clew_ros.spatial.transforms import inverse_matrix, matrices, poses
 from clew_ros.spatial.tuning import SpatialTuning
-from clew_ros.spatial.turns import nearest_turns
+from clew_ros.spatial.turns import nearest_turns, turnable
 from clew_ros.spatial.validate import ValidationSettings
 from clew_ros.spatial.world import SpatialWorld
 
@@ -44,6 +44,9 @@ class SpaceParts:
         #: the goal trees of the failed SEARCH_TRANSFERs (:func:`clew_ros.spatial.search.transfer_trees`), by held
         #: pose and goal: each grows over the run, as the ACA's landmarks do
         self.goal_trees: dict[bytes, LandmarkTree] = {}
+        #: how far (m) the object gets by its way out at a goal pose, by (grasp, goal, goal pose)
+        #: (:func:`clew_ros.spatial.targets.goal_configurations`)
+        self.way_out_lengths: dict[bytes, float] = {}
         thing = world.object
         #: the grasps: the tcp's 4x4 pose in the object's frame (G, 4, 4)
         self.grasps = matrices(thing.grasps) if thing is not None else np.zeros((0, 4, 4))
@@ -143,6 +146,7 @@ class SpaceParts:
         return poses(self.tcp(q) @ rel)
 
     def nearest_turns(self, q0: Array, found: Array) -> Array:
-        """IK solutions with their continuous joints the short way from ``q0`` (within the limits)."""
+        """IK solutions with each joint whose limits span a turn (:func:`~clew_ros.spatial.turns.turnable`)
+        moved by whole turns the short way from ``q0`` (within the limits): the same postures, nearest."""
         robot = self.world.robot
-        return nearest_turns(q0, found, robot.lower, robot.upper, robot.continuous)
+        return nearest_turns(q0, found, robot.lower, robot.upper, turnable(robot.prismatic, robot.lower, robot.upper))

@@ -8,11 +8,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.search import own_generator
-from clew_ros.core.space import PlanningContext
-from clew_ros.spatial.space_parts import SpaceParts
+from clew_ros.core.space import Approach, Mode, PlanningContext
+from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.space_parts import SpaceParts, cache_key
 from clew_ros.spatial.transforms import inverse_matrix, matrices, rpy_matrix
+from clew_ros.spatial.ways import way_out
 
-__all__ = ["GOAL_STREAM", "HOLD_STREAM", "goal_configurations", "goal_poses", "holds"]
+__all__ = ["GOAL_STREAM", "HOLD_STREAM", "aimed_holds", "goal_configurations", "goal_poses", "holds"]
 
 Array = NDArray[np.float64]
 
@@ -35,19 +37,56 @@ def holds(parts: SpaceParts, ctx: PlanningContext, q0: Array, object_pose: Array
     return ordered
 
 
+def aimed_holds(holds: Array, q0: Array, approach: Approach | None) -> Array:
+    """``holds`` (configurations holding a grasp, nearest ``q0`` first) in the order a regrasp aimed at
+    ``approach`` tries them: with an aim (:meth:`clew_ros.spatial.regrasps.SpatialAims.aim`: the grasp's
+    configurations at the goal, (k, n)), by joint travel from ``q0`` plus to the nearest of those (rad, L1),
+    so that the transfer after the regrasp stays in the posture family it ends in; without one, as they are."""
+    aim = None if approach is None else np.asarray(approach)
+    if aim is None or aim.ndim != 2 or not len(aim) or not len(holds) or aim.dtype.kind != "f":
+        return holds
+    cost = np.abs(holds - q0).sum(axis=1) + np.abs(holds[:, None, :] - aim[None]).sum(axis=2).min(axis=1)
+    ordered: Array = holds[np.argsort(cost, kind="stable")]
+    return ordered
+
+
 def goal_configurations(parts: SpaceParts, ctx: PlanningContext, q0: Array, grasp_rel: Array, goal: Array) -> Array:
-    """Valid configurations (m, n) holding the object (as ``grasp_rel``) at the goal (:func:`goal_poses`),
-    nearest ``q0`` first: inverse kinematics seeded at ``q0`` and ``SearchSettings.goal_seeds`` random
-    starts drawn from a generator of the request's own."""
+    """Valid configurations (m, n) holding the object (as ``grasp_rel``) at the goal (:func:`goal_poses`): those
+    of the goal poses the object gets farthest out of by its way out (:func:`_way_out_m`, to the cm) first, then
+    nearest ``q0``; inverse kinematics seeded at ``q0`` and ``SearchSettings.goal_seeds`` random starts drawn
+    from a generator of the request's own."""
     rng = own_generator(ctx, GOAL_STREAM, q0, np.r_[grasp_rel, goal])
     back = inverse_matrix(matrices(grasp_rel)[0])
     tcp_goals = [pose @ back for pose in goal_poses(parts, goal)]
+    checker = parts.transfer_checker(grasp_rel)
     solutions = parts.ik(ctx.search.goal_seeds).solve_many(
-        tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=parts.transfer_checker(grasp_rel)
+        tcp_goals, rng, seeds=[q0[None]] * len(tcp_goals), checker=checker
     )
     found = parts.nearest_turns(q0, np.vstack(solutions))
-    ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
+    travel = np.abs(found - q0).sum(axis=1)
+    pose_of = np.repeat(np.arange(len(solutions)), [len(s) for s in solutions])
+    out_m = np.zeros(len(solutions))
+    for k in np.unique(pose_of).tolist():
+        rows = np.flatnonzero(pose_of == k)
+        out_m[k] = _way_out_m(parts, checker, grasp_rel, goal, pose=k, q=found[rows[np.argmin(travel[rows])]])
+    order = np.lexsort((travel, -np.round(out_m[pose_of], 2)))
+    ordered: Array = found[order]
     return ordered
+
+
+def _way_out_m(
+    parts: SpaceParts, checker: SpatialChecker, grasp_rel: Array, goal: Array, *, pose: int, q: Array
+) -> float:
+    """How far (m) the object held as ``grasp_rel`` at the goal pose ``pose`` (:func:`goal_poses`' index) gets
+    by its way out (:func:`~clew_ros.spatial.ways.way_out`) from ``q``, once per grasp, goal and pose: a hand
+    that can only lift its object a little in a cubby (its slide out meets a wall) comes in that way no more."""
+    key = cache_key(grasp_rel, goal, np.array([float(pose)]))
+    if key not in parts.way_out_lengths:
+        rel = np.asarray(grasp_rel, dtype=float)
+        way = way_out(parts, checker, Mode.held(rel[None]), q)
+        held = parts.held_object_poses(np.vstack([q[None], q[None] if way is None else way[-1:]]), rel)
+        parts.way_out_lengths[key] = float(np.linalg.norm(held[1, :3] - held[0, :3]))
+    return parts.way_out_lengths[key]
 
 
 def goal_poses(parts: SpaceParts, goal: Array) -> list[Array]:

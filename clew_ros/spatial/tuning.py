@@ -166,6 +166,12 @@ class SpatialTuning:
     #: reach the goal (EXPLORE for transfer paths: the motion-only search, the object carried, from the
     #: landmark and from the nearest goal configuration); 0: none
     transfer_tree_landmarks: int = 8
+    #: goal configurations (count) a goal tree is rooted at: the first SEARCH_TRANSFER's best goal
+    #: configuration (:func:`~clew_ros.spatial.targets.goal_configurations`: the way out carrying the object farthest,
+    #: then the nearest), then each later one's best where it is at least ``transfer_goal_apart_rad`` (largest
+    #: joint difference) from every root (its inverse kinematics found a posture the first did not)
+    transfer_goal_roots: int = 3
+    transfer_goal_apart_rad: float = 1.0
     #: how far (m) those trees' first landmarks carry the object out from the landmark and from the goal
     #: along its approach, in steps of ``approach_m`` while they are clear: out of a shelf deeper than one
     #: approach

@@ -31,6 +31,7 @@ __all__ = [
     "nearest_turns",
     "short_way",
     "split_turns",
+    "turnable",
     "unwrapped",
     "wrapped",
 ]
@@ -143,6 +144,14 @@ def nearest_turns(q0: Array, qs: Array, lower: Array, upper: Array, continuous: 
     near = short_way(q0, qs, continuous)
     inside = (near >= lower) & (near <= upper)
     return np.where(inside, near, qs)
+
+
+def turnable(prismatic: NDArray[np.bool_], lower: Array, upper: Array) -> NDArray[np.bool_]:
+    """The revolute joints whose limits span a full turn or more (a UR5's, +-2 pi; continuous joints): their
+    values a turn apart are one posture, so an inverse kinematics solution may be moved by whole turns within
+    the limits (:func:`nearest_turns`)."""
+    out: NDArray[np.bool_] = ~np.asarray(prismatic, dtype=bool) & (np.asarray(upper) - np.asarray(lower) >= TURN - 1e-9)
+    return out
 
 
 def joint_features(joints: Array, continuous: NDArray[np.bool_] | None) -> Array:

@@ -179,14 +179,24 @@ def _path_clear(parts: SpaceParts, checker: SpatialChecker, path: Sequence[Array
 
 def way_out(parts: SpaceParts, checker: SpatialChecker, mode: Mode, q: Array) -> Array | None:
     """The carried object's way out from ``q`` (k + 1, n), along the first of its approaches
-    (:func:`approach_poses`: lifted, or lifted a little and slid back along the tcp's -z) whose first step is
-    clear, repeated step by step (each ``approach_m`` further, inverse kinematics seeded at the step before,
-    each straight move clear) up to :attr:`SpatialTuning.transfer_way_out_m` while they stay clear: out of a
-    shelf deeper than one approach; ``None`` if no first step is clear."""
+    (:func:`approach_poses`: lifted, or lifted a little and slid back along the tcp's -z, the slide in
+    :attr:`SpatialTuning.slide_steps` short moves) whose first step is clear, repeated step by step (each
+    ``approach_m`` further, inverse kinematics seeded at the step before, each straight move clear) up to
+    :attr:`SpatialTuning.transfer_way_out_m` while they stay clear: out of a shelf deeper than one approach;
+    ``None`` if no first step is clear."""
     steps = max(1, math.ceil(parts.tuning.transfer_way_out_m / parts.tuning.approach_m - 1e-9))
-    for first, along in approach_poses(parts, mode, q[None]):
-        path = [q]
-        for k in range(steps):
+    for kind, (first, along) in enumerate(approach_poses(parts, mode, q[None])):
+        path, done = [q], 0
+        if kind == 1:  # lifted a little, then slid out in short moves (one straight joint move sags)
+            raised = parts.tcp(q[None])
+            raised[:, 2, 3] += parts.tuning.slide_lift_m
+            lifted = _approach_joints(parts, raised, q[None])
+            for step in [lifted[0], *_slide_steps(parts, raised, along, lifted)[:, 0]]:
+                if np.isnan(step).any() or not parts.clear(checker, path[-1][None], step[None])[0]:
+                    break
+                path.append(step)
+            done = 1 if len(path) == parts.tuning.slide_steps + 2 else steps
+        for k in range(done, steps):
             target = first[0].copy()
             target[:3, 3] += k * along[0]
             step = _approach_joints(parts, target[None], path[-1][None])

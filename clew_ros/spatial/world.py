@@ -19,8 +19,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.errors import WorldError, short_repr
-from clew_ros.core.parameters import WORLD_PARAMETERS
+from clew_ros.core.parameters import LIMITS
 from clew_ros.spatial.checker import SpatialChecker
+from clew_ros.spatial.parameters import checked_value, world_value
 from clew_ros.spatial.placements import (
     MovableObject,
     Support,
@@ -32,15 +33,17 @@ from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle, bounds_from_parameters, world_obstacles
 from clew_ros.spatial.spheres import SphereModel, SphereSettings, sphere_model
 
-__all__ = ["SPATIAL_DEFAULTS", "SpatialObject", "SpatialWorld", "spatial_world_from_parameters"]
+__all__ = ["TOLERANCES", "SpatialObject", "SpatialWorld", "spatial_world_from_parameters"]
 
-#: Defaults of the spatial world's own tolerances (section 1b): a stable placement's face within 1 mm of the
-#: support's top; a grasp held within 0.01 rad; any yaw at the goal.
-SPATIAL_DEFAULTS: dict[str, float] = {
-    "placement_tolerance": 0.001,
-    "grasp_angle_tolerance": 0.01,
-    "goal_angle_tolerance": math.pi,
-}
+#: The spatial world's tolerances (section 1b), keys of ``SpatialWorld.tolerances``: their defaults and
+#: ranges are :data:`~clew_ros.spatial.parameters.SPATIAL_WORLD_PARAMETERS`'.
+TOLERANCES = (
+    "placement_tolerance",
+    "grasp_tolerance",
+    "grasp_angle_tolerance",
+    "goal_tolerance",
+    "goal_angle_tolerance",
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,14 +96,6 @@ def _joints(value: Any, robot: RobotModel, parameter: str) -> NDArray[np.float64
     return out
 
 
-def _tolerance(tree: Mapping[str, Any], key: str) -> float:
-    default = SPATIAL_DEFAULTS[key] if key in SPATIAL_DEFAULTS else WORLD_PARAMETERS.default(key)
-    value = tree.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
-        raise WorldError(f"world.{key}", f"expected a non-negative number, got {short_repr(value)}")
-    return float(value)
-
-
 def _pose(value: Any, parameter: str) -> tuple[float, ...]:
     try:
         out = tuple(float(v) for v in value)
@@ -124,12 +119,13 @@ def _object(
 ) -> SpatialObject:
     shape = object_from_parameters(tree)
     part = tree["object"]
-    initial = _pose(part.get("initial"), "world.object.initial")
-    goal = _pose(part.get("goal"), "world.object.goal")
+    initial = _pose(world_value(part, "world.object.initial"), "world.object.initial")
+    goal = _pose(world_value(part, "world.object.goal"), "world.object.goal")
     initial_on = check_placement(shape, initial, supports, tolerance, "world.object.initial")
     goal_on = check_placement(shape, goal, supports, tolerance, "world.object.goal")
+    given = world_value(part, "world.object.grasps")
     try:
-        flat = np.array([float(v) for v in part.get("grasps", [])])
+        flat = np.array([float(v) for v in given])
     except (TypeError, ValueError):
         flat = np.zeros(1)
     if len(flat) == 0 or len(flat) % 6 or not np.all(np.isfinite(flat)):
@@ -137,6 +133,11 @@ def _object(
             "world.object.grasps", "expected a flat list of tcp poses in the object's frame, 6 numbers each"
         )
     grasps = flat.reshape(-1, 6)
+    if len(grasps) > LIMITS.max_grasps:
+        raise WorldError(
+            "world.object.grasps",
+            f"expected at most {LIMITS.max_grasps} grasps (Limits.max_grasps), got {len(grasps)}",
+        )
     for k, grasp in enumerate(grasps):
         if _outside(shape, grasp[:3]) > grasp_tolerance:
             raise WorldError(
@@ -173,28 +174,20 @@ def spatial_world_from_parameters(
         raise WorldError("world", f"expected a mapping of world parameters, got {short_repr(tree)}")
     if tree.get("kind") != "spatial":
         raise WorldError("world.kind", f"expected spatial, got {short_repr(tree.get('kind', 'planar'))}")
-    name = tree.get("name", "spatial")
-    if not isinstance(name, str) or not name:
-        raise WorldError("world.name", f"expected a non-empty string, got {short_repr(name)}")
+    name = checked_value(tree, "world.name")
+    if len(name) > LIMITS.max_name_chars:
+        raise WorldError(
+            "world.name",
+            f"expected a name of at most {LIMITS.max_name_chars} characters (Limits.max_name_chars), got {len(name)}",
+        )
     if not isinstance(tree.get("robot"), Mapping):
         raise WorldError("world.robot", "expected the robot's parameters (urdf or description, base_link, tip_link)")
     robot = robot_from_parameters(tree["robot"], folder) if prepared is None else prepared[0]
     obstacles = world_obstacles(tree, folder, {robot.base_link: robot.base})
     bounds = bounds_from_parameters(tree)
     supports = supports_from_parameters(tree, obstacles)
-    tolerances = {
-        key: _tolerance(tree, key)
-        for key in (
-            "placement_tolerance",
-            "grasp_tolerance",
-            "grasp_angle_tolerance",
-            "goal_tolerance",
-            "goal_angle_tolerance",
-        )
-    }
-    if "initial" not in tree["robot"]:
-        raise WorldError("world.robot.initial", "missing: the planned joints' values at the start")
-    initial = _joints(tree["robot"]["initial"], robot, "world.robot.initial")
+    tolerances = {key: checked_value(tree, f"world.{key}") for key in TOLERANCES}
+    initial = _joints(world_value(tree["robot"], "world.robot.initial"), robot, "world.robot.initial")
     goal = _joints(tree["robot"]["goal"], robot, "world.robot.goal") if "goal" in tree["robot"] else None
     goal_pose = _goal_pose(tree["robot"], goal is not None, "object" in tree)
     thing = None

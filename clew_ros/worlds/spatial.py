@@ -101,8 +101,8 @@ class SpatialFamily:
     start_at_approach: bool = False
     #: a regrasp family: the key of :data:`~clew_ros.worlds.spatial_regrasp.REGRASP_LAYOUTS` ("": none)
     regrasp: str = ""
-    #: the arms it is generated on (a random arm rarely holds an object both from above and from the side at
-    #: one placement: 0 worlds in 200 draws)
+    #: the arms it is generated on (a regrasp family's random arm ends in a wrist: without one, a random arm
+    #: rarely holds an object both from above and from the side at one placement, 0 worlds in 200 draws)
     robots: tuple[str, ...] = SPATIAL_ROBOTS
 
 
@@ -137,14 +137,24 @@ SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
             "spatial: a regrasp is needed: from a bin (grasps from above only) into a cubby (from its open side only)",
             "regrasp",
             regrasp="bin_cubby",
-            robots=("panda", "ur5"),
         ),
         SpatialFamily(
             "spatial_cubby_bin",
             "spatial: a regrasp is needed: from a cubby (grasps from its open side only) into a bin (from above only)",
             "regrasp",
             regrasp="cubby_bin",
-            robots=("panda", "ur5"),
+        ),
+        SpatialFamily(
+            "spatial_shelf_bin",
+            "spatial: a regrasp is needed: from under a shelf's lid (grasps from the side only) into a bin",
+            "regrasp",
+            regrasp="shelf_bin",
+        ),
+        SpatialFamily(
+            "spatial_bin_shelf",
+            "spatial: a regrasp is needed: from a bin (grasps from above only) onto a shelf under its lid",
+            "regrasp",
+            regrasp="bin_shelf",
         ),
         SpatialFamily(
             "spatial_unsolvable",
@@ -204,7 +214,7 @@ class _Builder:
     ) -> None:
         self.family, self.seed, self.rng, self.settings = family, seed, rng, settings
         self.robot_name = robot
-        self.arm = load_arm(robot, rng)
+        self.arm = load_arm(robot, rng, wrist=bool(family.regrasp))
         self.solver = Solver(self.arm, settings)
         self.thing = draw_object(rng)
         self.grasps = grasps_of(self.thing, settings.grasp_depth_m)

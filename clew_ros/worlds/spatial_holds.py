@@ -27,7 +27,7 @@ from clew_ros.spatial.inverse import IKSettings, InverseKinematics
 from clew_ros.spatial.kernels.collide import clearance_of_sphere
 from clew_ros.spatial.placements import FACE_NORMALS, FACE_RPY, MovableObject, face_yaw
 from clew_ros.spatial.plan import replay
-from clew_ros.spatial.random_robot import BASE_LINK, TIP_LINK, random_robot_urdf
+from clew_ros.spatial.random_robot import BASE_LINK, TIP_LINK, RandomRobotSettings, random_robot_urdf
 from clew_ros.spatial.robot import RobotModel, load_robot, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle, obstacle_arrays
 from clew_ros.spatial.spheres import SphereModel, SphereSettings, cover, sphere_model
@@ -150,10 +150,12 @@ def shipped_arm(name: str) -> Arm:
     return Arm(tree, robot, sphere_model(robot), home, reach, shoulder)
 
 
-def load_arm(name: str, rng: np.random.Generator) -> Arm:
+def load_arm(name: str, rng: np.random.Generator, *, wrist: bool = False) -> Arm:
+    """The shipped arm ``name``, or a random arm drawn from ``rng`` (``wrist``: of 6-7 joints, its last three a
+    wrist: :attr:`~clew_ros.spatial.random_robot.RandomRobotSettings.wrist`)."""
     if name != "random":
         return shipped_arm(name)
-    text = random_robot_urdf(rng)
+    text = random_robot_urdf(rng, RandomRobotSettings(joints=(6, 7), wrist=True) if wrist else None)
     robot = load_robot(text, folder=Path.cwd(), base_link=BASE_LINK, tip_link=TIP_LINK, source="random_robot")
     last = f"link_{robot.dof}"
     tree = {"description": text, "base_link": BASE_LINK, "tip_link": TIP_LINK, "gripper_links": [last]}

@@ -4,8 +4,10 @@ The object starts in one enclosure and must end in another that admits other gra
 
 - a **bin** (a floor and four walls a few millimetres from the object, as high as the witness's lift lets
   them be) admits grasps from above only: the hand of a grasp from the side meets a wall;
-- a **cubby** (a board, a ceiling 1.5-2.5 cm above the object, a back wall and two side walls, open towards
-  the arm) admits grasps from its open side only: the hand of a grasp from above meets the ceiling.
+- a **cubby** (a board, a ceiling 2-3 cm above the object, a back wall and two side walls, open towards
+  the arm) admits grasps from its open side only: the hand of a grasp from above meets the ceiling;
+- a **shelf** (a board and a lid 2-3 cm above the object, a back wall, open at the front and on both sides,
+  running on 8-25 cm beyond the object) admits grasps from the side only, as a cubby does.
 
 A free table on the way carries the regrasp: the witness takes the object out with the first grasp, sets it
 down on the table, takes it again with the second and puts it in. The proof that no single transfer exists is
@@ -57,25 +59,32 @@ class RejectedError(Exception):
 
 @dataclass(frozen=True)
 class RegraspLayout:
-    """Where the object starts and ends (``bin`` or ``cubby``) and the grasp kind each admits."""
+    """Where the object starts and ends (``bin``, ``cubby`` or ``shelf``) and the grasp kind each admits."""
 
     start: str
     goal: str
 
     @staticmethod
     def grasp_kind(enclosure: str) -> str:
-        return {"bin": "top", "cubby": "side"}[enclosure]
+        return {"bin": "top", "cubby": "side", "shelf": "side"}[enclosure]
 
 
-REGRASP_LAYOUTS = {"bin_cubby": RegraspLayout("bin", "cubby"), "cubby_bin": RegraspLayout("cubby", "bin")}
+REGRASP_LAYOUTS = {
+    "bin_cubby": RegraspLayout("bin", "cubby"),
+    "cubby_bin": RegraspLayout("cubby", "bin"),
+    "shelf_bin": RegraspLayout("shelf", "bin"),
+    "bin_shelf": RegraspLayout("bin", "shelf"),
+}
 
 #: A wall or lid this close (m) to the object, drawn per world.
 GAP_RANGE_M = (0.004, 0.015)
-#: The cubby's ceiling this far above the object's top (m).
+#: A shelf's board and lid run on this far (m) beyond the object on either side (it has no side walls).
+SHELF_SIDE_M = (0.08, 0.25)
+#: The cubby's (and shelf's) ceiling this far above the object's top (m).
 CEILING_RANGE_M = (0.02, 0.03)
 #: A bin's walls are this thick (m): a wrist without fingers (the UR5's) still meets them from the side.
 BIN_WALL_M = 0.04
-#: In a cubby the object is lifted this much (m) before it slides out (its ceiling is 1.5-2.5 cm above it).
+#: In a cubby the object is lifted this much (m) before it slides out (its ceiling is 2-3 cm above it).
 CUBBY_LIFT_M = 0.01
 #: A bin is widened by these (m, all four gaps) until the witness's hand clears its walls.
 WIDEN_M = (0.0, 0.003, 0.006, 0.01)
@@ -235,11 +244,18 @@ def bin_around(
 
 
 def cubby_around(
-    thing: MovableObject, hold: Hold, approach: Matrix, rng: np.random.Generator, thickness: float
+    thing: MovableObject,
+    hold: Hold,
+    approach: Matrix,
+    rng: np.random.Generator,
+    thickness: float,
+    *,
+    shelf: bool = False,
 ) -> dict[str, dict[str, Any]]:
     """A cubby around ``hold``'s placement, open against ``approach`` (the hand's horizontal approach
-    direction): a board (the support), a ceiling 1.5-2.5 cm above the object, a back wall and two side walls a
-    few mm from it; the board and ceiling end at the object's front face."""
+    direction): a board (the support), a ceiling 2-3 cm above the object, a back wall and two side walls a few
+    mm from it; the board and ceiling end at the object's front face. A ``shelf`` has no side walls: its board
+    and lid run on 8-25 cm beyond the object on either side."""
     centre = hold.pose[:3, 3]
     bottom = float(centre[2] - thing.height(hold.face))
     height = 2 * thing.height(hold.face)
@@ -248,6 +264,8 @@ def cubby_around(
     frame[:3, 3] = (centre[0], centre[1], bottom)
     half = _half_extent(thing, hold, frame)
     back, left, right = rng.uniform(*GAP_RANGE_M, size=3)
+    if shelf:
+        left, right = rng.uniform(*SHELF_SIDE_M, size=2)
     ceiling = float(rng.uniform(*CEILING_RANGE_M))
     front = -half[0]
     rear = half[0] + back
@@ -255,22 +273,25 @@ def cubby_around(
     inside = height + ceiling
     depth = rear - front
     mid_x, mid_y = (rear + front) / 2, (width_hi + width_lo) / 2
-    span = width_hi - width_lo + 2 * thickness
-    return {
-        "cubby_board": _frame_entry(
+    span = width_hi - width_lo + (0.0 if shelf else 2 * thickness)
+    name = "shelf" if shelf else "cubby"
+    out = {
+        f"{name}_board": _frame_entry(
             "", frame, [mid_x + thickness / 2, mid_y, -thickness / 2], [depth + thickness, span, thickness]
         ),
-        "cubby_ceiling": _frame_entry(
+        f"{name}_ceiling": _frame_entry(
             "", frame, [mid_x + thickness / 2, mid_y, inside + thickness / 2], [depth + thickness, span, thickness]
         ),
-        "cubby_back": _frame_entry("", frame, [rear + thickness / 2, mid_y, inside / 2], [thickness, span, inside]),
-        "cubby_left": _frame_entry(
-            "", frame, [mid_x, width_hi + thickness / 2, inside / 2], [depth, thickness, inside]
-        ),
-        "cubby_right": _frame_entry(
-            "", frame, [mid_x, width_lo - thickness / 2, inside / 2], [depth, thickness, inside]
-        ),
+        f"{name}_back": _frame_entry("", frame, [rear + thickness / 2, mid_y, inside / 2], [thickness, span, inside]),
     }
+    if not shelf:
+        out["cubby_left"] = _frame_entry(
+            "", frame, [mid_x, width_hi + thickness / 2, inside / 2], [depth, thickness, inside]
+        )
+        out["cubby_right"] = _frame_entry(
+            "", frame, [mid_x, width_lo - thickness / 2, inside / 2], [depth, thickness, inside]
+        )
+    return out
 
 
 # ------------------------------------------------------------------------------------------ the witness
@@ -408,7 +429,7 @@ def _holds(
     g2 = pose_matrix(builder.grasps[second][1])
     angle = rng.uniform(-math.pi, math.pi)
     turn = rng.uniform(*TURN_RAD) * rng.choice([-1.0, 1.0])
-    lifts = {"bin": None, "cubby": CUBBY_LIFT_M}
+    lifts = {"bin": None, "cubby": CUBBY_LIFT_M, "shelf": CUBBY_LIFT_M}
     point = builder.point
     goal = find_hold(solver, arm, g2, "-z", point(angle + turn), height=None, rng=rng, lift_m=lifts[layout.goal])
     if goal is None:
@@ -460,11 +481,11 @@ def _table_holds(
 
 
 def _enclosure(builder: Any, kind: str, hold: Hold) -> dict[str, dict[str, Any]]:
-    """A bin or a cubby around ``hold``'s placement (its support first)."""
+    """A bin, a cubby or a shelf around ``hold``'s placement (its support first)."""
     arm, solver, rng, thing, settings = builder.arm, builder.solver, builder.rng, builder.thing, builder.settings
-    if kind == "cubby":
+    if kind in ("cubby", "shelf"):
         approach = solver.kinematics.tcp_poses(hold.q[None])[0][:3, 2]
-        return cubby_around(thing, hold, approach, rng, settings.board_thickness_m)
+        return cubby_around(thing, hold, approach, rng, settings.board_thickness_m, shelf=kind == "shelf")
     # above a side grasp's fingers, below the palm of one from above and the object's lift
     tall = 2 * thing.height(hold.face)
     low, high = 0.75 * tall + 0.012, min(tall + 0.025, settings.lift_m + settings.approach_m - 0.012)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import fields
 from pathlib import Path
 
@@ -22,6 +23,7 @@ from clew_ros.core.parameters import (
 )
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.ros.node_parameters import NODE_PARAMETERS
+from clew_ros.spatial.parameters import SPATIAL_OBSTACLE_PARAMETERS, SPATIAL_WORLD_PARAMETERS
 
 README = Path(__file__).resolve().parents[2] / "docs" / "parameters.md"  # where the tables are
 TABLES = (WORLD_PARAMETERS, PLANNER_PARAMETERS, NODE_PARAMETERS)
@@ -37,6 +39,28 @@ def test_readme_tables_are_generated_from_the_specification() -> None:
     for table in TABLES:
         for spec in table.values():
             assert f"| `{spec.name}` |" in text, spec.name
+
+
+def test_the_tables_hold_the_spatial_world_and_the_world_as_it_is_now() -> None:
+    """docs/parameters.md has a row for every spatial world.* parameter (its own table, beside the planar
+    world's) and every state.* parameter (the node's table), each as its spec says."""
+    tables = markdown_tables()
+    assert list(tables) == ["world", "spatial_world", "planner", "node"]
+    spatial = tables["spatial_world"].splitlines()[2:]
+    specs = [*SPATIAL_WORLD_PARAMETERS.values(), *SPATIAL_OBSTACLE_PARAMETERS.values()]
+    assert sorted(row.split(" | ")[0].removeprefix("| ") for row in spatial) == sorted(f"`{s.name}`" for s in specs)
+    assert (
+        "| `world.robot.padding` | double | `0.0` | m | [0.0, 1.0] | fixed (dev switch) | How far (m)"
+        in tables["spatial_world"]
+    )
+    assert "| `world.goal_angle_tolerance` | double | `pi` | rad | [0.0, 2 pi] |" in tables["spatial_world"]
+    assert "| `world.kind` | string | none |" in tables["world"]  # planar: the default kind
+    states = [name for name in NODE_PARAMETERS if name.startswith("state.")]
+    assert len(states) == 11
+    for name in states:
+        assert f"| `{name}` |" in tables["node"], name
+    text = README.read_text(encoding="utf-8")
+    assert tables["spatial_world"] in text
 
 
 def test_the_update_and_check_commands(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -184,3 +208,17 @@ def test_a_retired_parameter_still_loads_with_a_warning() -> None:
     assert not hasattr(settings, "max_sweep_steps")
     with pytest.raises(ParameterError, match=r"planner\.max_sweep_step\b"):
         PlannerSettings.from_parameters({"planner": {"max_sweep_step": 48}})  # a misspelt name is still an error
+
+
+def test_the_world_as_it_is_now_has_the_contracts_defaults() -> None:
+    """Every state.* parameter of docs/interface.md section 3c is specified, with the default the contract
+    gives it, and read only (the contract: read-only while running)."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "interface.md").read_text(encoding="utf-8")
+    section = text[text.index("## 3c.") : text.index("## 4.")]
+    written = dict(re.findall(r"`(state\.[a-z_]+)`(?: \(|, )(true|false|\d[\d.,]*\d)\b", section))
+    assert len(written) == 11
+    for name, default in written.items():
+        spec = NODE_PARAMETERS[name]
+        word = default.replace(",", "")
+        assert spec.default == (word == "true" if word in ("true", "false") else float(word)), name
+        assert spec.read_only, name

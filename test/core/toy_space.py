@@ -51,13 +51,17 @@ def free_interval(points: np.ndarray, joint: int) -> tuple[np.ndarray, np.ndarra
 
 @dataclass
 class ToyAims:
-    """Regrasps in place are always worth a transit, by any approach; no intermediate placements."""
+    """Regrasps in place are always worth a transit, by any approach, in the order given; no intermediate
+    placements."""
 
     def retake(self, grasp: int, grasp_rel: np.ndarray) -> bool:
         return False
 
     def aim(self, landmark: Landmark, grasp: int) -> Approach | None:
         return np.ones(1, dtype=bool)
+
+    def ranked(self, landmark: Landmark, grasps: list[int]) -> list[int]:
+        return grasps
 
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
         return []

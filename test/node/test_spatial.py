@@ -279,6 +279,19 @@ def test_parameters_change_as_for_a_planar_world_and_world_yaml_names_absolute_f
         request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
         return session.client.call(session.srv("set_parameters"), SetParameters, request, timeout_s=20.0).results[0]
 
+    # each given spatial world.* parameter is declared with its spec's descriptor: read-only, described
+    from rcl_interfaces.srv import DescribeParameters
+
+    from clew_ros.spatial.parameters import spatial_spec
+
+    names = ["world.robot.base_link", "world.robot.initial", "world.scene_file"]
+    request = DescribeParameters.Request(names=names)
+    described = session.client.call(session.srv("describe_parameters"), DescribeParameters, request, timeout_s=20.0)
+    for name, descriptor in zip(names, described.descriptors, strict=True):
+        spec = spatial_spec(name)
+        assert spec is not None
+        assert descriptor.read_only, name
+        assert descriptor.description == spec.description, name
     seed = set_parameter("planner.seed", ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=3))
     assert seed.successful, seed.reason
     initial = ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[0.0] * 7)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import array
 import json
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -270,4 +271,74 @@ def test_the_world_as_it_is_now_needs_a_spatial_world_and_is_fixed_at_start(name
     values[name] = False
     values["state.max_age"] = 0.0
     with pytest.raises(ParameterError, match=r"^state\.max_age: expected a value in \[0\.001, 3600\.0\]"):
+        configuration_from_values(values)
+
+
+# --------------------------------------------------------------------------- spatial worlds' world.*
+
+SPATIAL_WORLD = Path(__file__).parents[2] / "config" / "spatial" / "panda_table_to_table.yaml"
+
+
+def spatial_values() -> dict:
+    from clew_ros.ros.spatial import resolved_parameters
+
+    return initial_values(flatten(resolved_parameters(SPATIAL_WORLD)))
+
+
+def test_a_spatial_worlds_descriptors_come_from_its_specification() -> None:
+    """Each spatial world.* parameter is declared read-only (locked, as the planar world's) with its spec's
+    description and range; the development switch lifts the lock."""
+    from clew_ros.spatial.parameters import SPATIAL_OBSTACLE_PARAMETERS, SPATIAL_WORLD_PARAMETERS
+
+    specs = [*SPATIAL_WORLD_PARAMETERS.values(), *SPATIAL_OBSTACLE_PARAMETERS.values()]
+    for spec in specs:
+        name = spec.name.replace("<name>", "table")
+        d = descriptor_for(name, spatial=True)
+        assert d.name == name
+        assert d.read_only, name
+        assert d.dynamic_typing
+        assert d.description == spec.description, name
+        assert "fixed at start" in d.additional_constraints
+        ranges = [(r.from_value, r.to_value) for r in (*d.integer_range, *d.floating_point_range)]
+        assert ranges == ([spec.limits] if spec.limits else []), name
+        assert not descriptor_for(name, spatial=True, allow_runtime_changes=True).read_only
+    padding = descriptor_for("world.robot.padding", spatial=True)
+    assert padding.description.startswith("How far (m) every link's collision geometry is grown")
+    assert padding.additional_constraints.startswith("double; default 0.0;")
+    assert descriptor_for("world.robot.initial", spatial=True).additional_constraints.startswith("double[]; required;")
+    # the same name in a planar world is the planar world's
+    assert descriptor_for("world.robot.initial").description == WORLD_PARAMETERS["robot.initial"].description
+    with pytest.raises(KeyError):
+        descriptor_for("world.robot.link_lengths", spatial=True)
+
+
+def test_the_node_declares_each_given_spatial_parameter_with_a_descriptor() -> None:
+    values = spatial_values()
+    world = [name for name in values if name.startswith("world.")]
+    assert "world.robot.base_link" in world
+    assert "world.obstacles.table_a.shape" in world
+    for name in world:
+        assert descriptor_for(name, spatial=True).description, name
+
+
+@pytest.mark.parametrize("name", ["world.robot.tcpp", "world.robot.link_lengths", "world.obstacles.table_a.colour"])
+def test_an_unknown_spatial_parameter_is_refused_naming_the_known_ones(name: str) -> None:
+    values = spatial_values()
+    values[name] = [0.0]
+    with pytest.raises(WorldError, match=rf"^{re.escape(name)}: unknown parameter of a spatial world; known: ") as e:
+        configuration_from_values(values)
+    assert "world.robot.padding" in str(e.value)
+    assert "world.obstacles.<name>.pose" in str(e.value)
+
+
+def test_world_kind_planar_is_the_default_kind_and_any_other_is_refused() -> None:
+    values = initial_values(file_values("node_quick.yaml"))
+    values["world.kind"] = "planar"
+    assert (
+        configuration_from_values(values).world.name
+        == configuration_from_values({k: v for k, v in values.items() if k != "world.kind"}).world.name
+    )
+    assert descriptor_for("world.kind").read_only
+    values["world.kind"] = "mobile"
+    with pytest.raises(WorldError, match=r"^world\.kind: expected planar or spatial, got 'mobile'$"):
         configuration_from_values(values)

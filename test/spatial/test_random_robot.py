@@ -115,3 +115,17 @@ def test_ik_solves_targets_from_forward_kinematics(robots: list[RobotModel]) -> 
 def test_bad_settings_are_refused_naming_them(change: dict[str, tuple[float, float]], message: str) -> None:
     with pytest.raises(ValueError, match=message):
         RandomRobotSettings(**change)  # type: ignore[arg-type]
+
+
+def test_a_wrist_ends_the_arm_in_three_axes_in_line() -> None:
+    settings = RandomRobotSettings(joints=(6, 7), wrist=True)
+    for seed in range(5):
+        robot = random_robot(np.random.default_rng(seed), settings)
+        assert robot.dof in (6, 7)
+        wrist = robot.axes[-3:]  # each in its own frame: z, y, z
+        assert np.allclose(wrist, [[0, 0, 1], [0, 1, 0], [0, 0, 1]])
+        assert np.allclose(robot.origins[-2:, :3, :3], np.eye(3))  # in line: no turn between them
+        assert np.allclose(robot.origins[-2:, :2, 3], 0.0)  # each the next one's offset along its own z
+        assert np.all(robot.upper[-3:] - robot.lower[-3:] >= 2 * math.pi - 1e-6)  # a full turn (9 digits in the URDF)
+    with pytest.raises(ValueError, match="wrist needs 6 joints"):
+        RandomRobotSettings(joints=(4, 8), wrist=True)

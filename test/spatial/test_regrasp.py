@@ -15,13 +15,17 @@ pytest.importorskip("coal")
 from clew_ros.core.explore import Exploration, Explorer
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings
-from clew_ros.core.tree import Segment
-from clew_ros.spatial.handling import DragSettings, drag_problems
+from clew_ros.core.space import Mode, PlanningContext
+from clew_ros.core.tree import Landmark, Segment
+from clew_ros.spatial.handling import DragSettings, drag_problems, slides
 from clew_ros.spatial.lift import drag_free, lifted_segments
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.space import SpatialSpace, plan
+from clew_ros.spatial.targets import goal_configurations
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.tuning import SpatialTuning
+from clew_ros.spatial.turns import turnable
+from clew_ros.spatial.ways import way_out
 from clew_ros.spatial.world import SpatialWorld
 from clew_ros.worlds.spatial import SpatialGenerated, generate_spatial
 from clew_ros.worlds.spatial_regrasp import RejectedError, hand_blocked, single_grasp_refutation
@@ -32,7 +36,7 @@ def generated(family: str, seed: int) -> SpatialGenerated:
     return generate_spatial(family, seed, "panda")
 
 
-@pytest.mark.parametrize("family", ["spatial_bin_cubby", "spatial_cubby_bin"])
+@pytest.mark.parametrize("family", ["spatial_bin_cubby", "spatial_cubby_bin", "spatial_shelf_bin", "spatial_bin_shelf"])
 def test_a_regrasp_world_has_a_two_transfer_witness_and_no_single_grasp(family: str) -> None:
     made = generated(family, 0)
     world = made.world()
@@ -167,3 +171,85 @@ def test_a_slide_in_the_middle_of_a_transfer_is_lifted_too() -> None:
     again = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in mended])
     assert drag_problems(world, again) == []
     assert np.array_equal(np.asarray(mended[1].waypoints[0]), path[0])  # it still starts where the object rests
+
+
+@functools.cache
+def ur5_cubby() -> SpatialWorld:
+    """A UR5 world whose goal lies in a cubby turned so that, with the goal turned a quarter, the UR5's
+    fingerless tool reaches it through a side wall: a goal configuration with no way in."""
+    return generate_spatial("spatial_bin_cubby", 401, "ur5").world()
+
+
+def _context(space: SpatialSpace, seed: int = 0) -> PlanningContext:
+    return PlanningContext(space, PlannerSettings(seed=seed), np.random.default_rng(seed), search=space.tuning.search)
+
+
+def test_joints_whose_limits_span_a_turn_come_the_short_way() -> None:
+    world = ur5_cubby()
+    space = SpatialSpace(world)
+    robot = world.robot
+    assert not robot.continuous.any()  # revolute, +-2 pi
+    assert turnable(robot.prismatic, robot.lower, robot.upper).all()
+    q0 = np.zeros(robot.dof)
+    far = np.full(robot.dof, 5.5)
+    near = space.nearest_turns(q0, far[None])[0]
+    assert np.allclose(near, 5.5 - 2 * np.pi)  # the same posture, a turn nearer
+    narrowed = replace(robot, lower=np.full(robot.dof, -1.0), upper=np.full(robot.dof, 5.0))  # 6 rad: less than a turn
+    assert not turnable(narrowed.prismatic, narrowed.lower, narrowed.upper).any()
+
+
+def test_goal_configurations_with_a_way_in_come_first() -> None:
+    world = ur5_cubby()
+    space = SpatialSpace(world)
+    assert world.object is not None
+    goal = np.asarray(world.object.goal, dtype=float)
+    ctx = _context(space)
+    witness = generate_spatial("spatial_bin_cubby", 401, "ur5").witness
+    grasp = next(s.grasp for s in reversed(witness.segments) if s.kind == "transfer")
+    assert grasp is not None
+    rel = space.grasp_rel(grasp)
+    checker = space.transfer_checker(rel)
+    found = goal_configurations(space.parts, ctx, np.asarray(world.initial, dtype=float), rel, goal)
+    assert len(found) >= 2
+    outs = []
+    for q in found:
+        way = way_out(space.parts, checker, Mode.held(rel[None]), q)
+        held = space.held_object_poses(np.vstack([q[None], q[None] if way is None else way[-1:]]), rel)
+        outs.append(float(np.linalg.norm(held[1, :3] - held[0, :3])))
+    assert outs[0] > 0.1  # the first slides the object out of the cubby (and so comes in that way)
+    assert min(outs) < 0.05  # another can only lift it under the ceiling: found, but not first
+
+
+def test_regrasps_in_place_try_the_goal_grasps_nearest_the_goal_first() -> None:
+    made = generate_spatial("spatial_bin_cubby", 401, "ur5")
+    world = made.world()
+    space = SpatialSpace(world)
+    assert world.object is not None
+    aims = space.regrasp_aims(np.asarray(world.object.goal, dtype=float))
+    goal_grasps = aims.goal_grasps()
+    others = [g for g in range(space.grasp_count) if g not in goal_grasps]
+    assert len(goal_grasps) >= 2
+    assert others
+    first = next(s for s in made.witness.segments if s.kind == "transfer")  # out of the bin, onto the table
+    assert first.grasp is not None
+    on_table = space.held_object_poses(first.waypoints[-1:], space.grasp_rel(first.grasp))[0]
+    landmark = Landmark(1, 0, first.waypoints[-1], on_table, first.grasp, None, None, None)
+    ranked = aims.ranked(landmark, [*others, *goal_grasps[::-1]])
+    served = ranked[: len(goal_grasps)]
+    assert set(served) == set(goal_grasps)
+    takes = [aims.take_cost(g, landmark.object_pose) for g in served]
+    assert takes == sorted(takes)
+    assert np.isfinite(takes[0])  # a goal grasp takes the object on the table
+    assert ranked[len(goal_grasps) :] == others
+
+
+@pytest.mark.parametrize(("rise", "drags"), [(0.002, True), (-0.15, False)])
+def test_an_object_carried_under_a_board_does_not_drag_on_it(rise: float, drags: bool) -> None:
+    world = generated("spatial_bin_cubby", 0).world()
+    assert world.object is not None
+    goal = pose_matrix(list(world.object.goal))  # resting on the cubby's board
+    poses = np.repeat(goal[None], 6, axis=0)
+    poses[:, 0, 3] += np.linspace(0.0, 0.03, 6)  # 3 cm along x ...
+    poses[:, 2, 3] += rise  # ... just above the board, or well under it
+    moved = [m for name, _, _, m in slides(world, poses, DragSettings()) if name == world.object.goal_on[0]]
+    assert (max(moved, default=0.0) > DragSettings().slide_m) is drags

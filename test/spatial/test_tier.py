@@ -79,7 +79,7 @@ def test_padding_grows_every_link(panda: RobotModel, panda_spheres: SphereModel)
 def test_padding_is_read_and_checked() -> None:
     robot = robot_from_parameters({**PANDA, "padding": 0.004}, CONFIG)
     assert robot.padding == 0.004
-    with pytest.raises(ValueError, match=r"world\.robot\.padding.*metres"):
+    with pytest.raises(ValueError, match=r"^world\.robot\.padding: expected a value in \[0\.0, 1\.0\], got -0\.01$"):
         robot_from_parameters({**PANDA, "padding": -0.01}, CONFIG)
 
 

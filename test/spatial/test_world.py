@@ -95,7 +95,7 @@ def test_a_motion_only_query(tmp_path: Path) -> None:
         ("object.grasps", [0.0, 0.0, 0.2, 0.0, 0.0, 0.0], "world.object.grasps", "grasp 0"),
         ("object.grasps", [0.0] * 5, "world.object.grasps", "6 numbers each"),
         ("supports", ["shelf"], "world.supports", "'shelf' is not an obstacle"),
-        ("placement_tolerance", -1.0, "world.placement_tolerance", "non-negative"),
+        ("placement_tolerance", -1.0, "world.placement_tolerance", "expected a value in [0.0, 1.0], got -1.0"),
         ("bounds", [0, 0, 0, 1, 1], "world.bounds", "6 finite numbers"),
     ],
 )

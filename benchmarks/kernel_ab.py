@@ -15,6 +15,11 @@ world and mode (transit: object at rest; transfer: held at grasp 0):
   call (``kernel.intervals``), every joint in turn;
 * ``decode24``: intervals per second as a population of 24 decodes its
   Manhattan paths of order 2 in one call (``kernel.decode``, one thread);
+* ``valid24``: configurations per second through the validity test's first
+  pass, 24 a call (``kernel.clearly_valid``);
+* ``moves24``: straight moves per second, 24 a call, each from a configuration
+  0.3 rad per joint towards zero, checked continuously (``kernel.moves_clear``, the
+  improvement's margins);
 * ``same``: whether both kernels gave the same numbers, bit for bit.
 """
 
@@ -45,6 +50,8 @@ from clew_ros.planar.world import World, world_from_parameters
 __all__ = ["baseline_kernel", "compare"]
 
 ROOT = Path(__file__).resolve().parents[1]
+#: ``moves24``: each move goes this far (rad) on every joint.
+MOVE_RAD = 0.3
 
 
 def baseline_kernel(revision: str, directory: Path) -> ModuleType:
@@ -93,6 +100,8 @@ class _Case:
     transfer: bool
     poses: np.ndarray  # (1, 3)
     genes: np.ndarray  # (24, 2, n)
+    held_poses: list[np.ndarray]  # (24, 3) per batch: where the grasp holds the object (transfer)
+    ends: list[np.ndarray]  # (24, n) per batch: each configuration MOVE_RAD per joint towards zero
 
     def intervals(self, module: ModuleType, packed: object) -> list[tuple[np.ndarray, np.ndarray]]:
         return [
@@ -102,6 +111,23 @@ class _Case:
     @property
     def decoded_batches(self) -> list[np.ndarray]:
         return self.batches[: max(1, len(self.batches) // 4)]
+
+    def valid(self, module: ModuleType, packed: object) -> list[np.ndarray]:
+        pose = self.poses[0]
+        if self.transfer:  # the object where the grasp holds it: valid as the batches are
+            return [module.clearly_valid(packed, b, self.held_poses[i]) for i, b in enumerate(self.batches)]
+        return [module.clearly_valid(packed, b, pose) for b in self.batches]
+
+    def moves(self, module: ModuleType, packed: object) -> list[tuple[np.ndarray, int]]:
+        mode = (
+            {"resting": None, "grasp_rel": self.poses[0]}
+            if self.transfer
+            else {"resting": self.poses[0], "grasp_rel": None}
+        )
+        return [
+            module.moves_clear(packed, b, e, **mode, min_margin=5e-4, max_margin=0.05, coarse_stride=4)
+            for b, e in zip(self.batches, self.ends, strict=True)
+        ]
 
     def decoded(self, module: ModuleType, packed: object) -> list[np.ndarray]:
         out = []
@@ -118,6 +144,11 @@ def _same(case: _Case, base: ModuleType, theirs: object, ours: object) -> bool:
     """Both kernels give the same numbers, bit for bit (this also loads both, untimed)."""
     pairs = zip(case.intervals(base, theirs), case.intervals(kernel, ours), strict=True)
     if not all(np.array_equal(x[0], y[0]) and np.array_equal(x[1], y[1]) for x, y in pairs):
+        return False
+    if not all(np.array_equal(x, y) for x, y in zip(case.valid(base, theirs), case.valid(kernel, ours), strict=True)):
+        return False
+    moves = zip(case.moves(base, theirs), case.moves(kernel, ours), strict=True)
+    if not all(np.array_equal(x[0], y[0]) and x[1] == y[1] for x, y in moves):
         return False
     return all(
         np.array_equal(x, y) for x, y in zip(case.decoded(base, theirs), case.decoded(kernel, ours), strict=True)
@@ -140,10 +171,17 @@ def compare(world: World, base: ModuleType, configs: int, repeats: int, seed: in
         placed = compose(tip_poses(world.robot, q), grasp_rel[None]) if transfer else poses
         sample = q[is_valid(world, q, placed)]
         batches = [np.ascontiguousarray(sample[i : i + 24]) for i in range(0, len(sample) - 23, 24)]
-        case = _Case(n, batches, transfer, poses, genes)
+        held = [np.ascontiguousarray(compose(tip_poses(world.robot, b), grasp_rel[None])) for b in batches]
+        ends = [np.ascontiguousarray(b - np.sign(b) * MOVE_RAD) for b in batches]
+        case = _Case(n, batches, transfer, poses, genes, held, ends)
         same = _same(case, base, theirs, ours)
-        counts = {"b24": len(batches) * 24 * n, "decode24": len(case.decoded_batches) * 24 * 2 * n}
-        works = {"b24": case.intervals, "decode24": case.decoded}
+        counts = {
+            "b24": len(batches) * 24 * n,
+            "decode24": len(case.decoded_batches) * 24 * 2 * n,
+            "valid24": len(batches) * 24,
+            "moves24": len(batches) * 24,
+        }
+        works = {"b24": case.intervals, "decode24": case.decoded, "valid24": case.valid, "moves24": case.moves}
         rates: dict[str, dict[str, list[float]]] = {k: {"before": [], "after": []} for k in counts}
         for _turn in range(repeats):
             for label, module, packed in (("before", base, theirs), ("after", kernel, ours)):
@@ -180,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"{row['world']:14s} {row['mode']:8s} same={row['same']!s:5s} "
                     + "  ".join(
                         f"{k} {row[k]['before']:,.0f} -> {row[k]['after']:,.0f} /s (x{row[k]['after_over_before']:.2f})"
-                        for k in ("b24", "decode24")
+                        for k in ("b24", "decode24", "valid24", "moves24")
                     ),
                     file=sys.stderr,
                 )

@@ -35,7 +35,7 @@ from clew_ros.core.settings import PlannerSettings
 from clew_ros.planar.continuous import ContinuousSettings, straight_moves_clear
 from clew_ros.planar.improve import ImproveSettings, check_work, joint_travel
 from clew_ros.planar.kinematics import compose, relative
-from clew_ros.planar.lattice import KnownNodes, grasp_configurations, lattice_route, pose_configurations
+from clew_ros.planar.lattice import KnownNodes, LatticeWork, grasp_configurations, lattice_route, pose_configurations
 from clew_ros.planar.plan import validate_plan
 from clew_ros.planar.world import World
 
@@ -75,6 +75,7 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
     """The shortest one-transfer plan of a 3-joint ``world`` on the lattice of ``step`` (module docstring)."""
     started = time.perf_counter()
     budget = _Unlimited(world)
+    work = LatticeWork(budget, math.inf, ImproveSettings().expansion_work)
     start, rest, goal = np.asarray(world.robot.initial, float), world.object.initial, world.object.goal
     q, which, rels = grasp_configurations(world, rest, start, approaches)
     valid = straight_moves_clear(world, q, q, object_pose=rest, min_margin=margin) & np.array(
@@ -107,8 +108,7 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
             break
         transit = lattice_route(
             world, start, q[k], object_pose=rest, grasp_rel=None, shorter_than=limit - np.abs(ends[0] - q[k]).sum(),
-            min_margin=margin, budget=budget, allowance=math.inf, expansion_work=ImproveSettings().expansion_work,
-            nodes_known=transit_known, step=step,
+            min_margin=margin, work=work, nodes_known=transit_known, step=step,
         )  # fmt: skip
         if transit is None:
             continue
@@ -119,8 +119,7 @@ def one_transfer_bound(world: World, *, step: float, approaches: int, goal_angle
                 break
             carried = lattice_route(
                 world, q[k], end, object_pose=rest, grasp_rel=rels[k], shorter_than=limit, nodes_known=known,
-                min_margin=margin, budget=budget, allowance=math.inf, expansion_work=ImproveSettings().expansion_work,
-                step=step,
+                min_margin=margin, work=work, step=step,
             )  # fmt: skip
             if carried is not None:
                 best = (joint_travel([transit]) + joint_travel([carried]), transit, carried, int(which[k]))

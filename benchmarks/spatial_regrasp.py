@@ -20,6 +20,7 @@ from collections import defaultdict
 from typing import Any
 
 from clew_ros.core.settings import Outcome, PlannerSettings
+from clew_ros.spatial.exact import exact_available, exact_problems
 from clew_ros.spatial.handling import drag_problems
 from clew_ros.spatial.plan import make_plan, validate_plan
 from clew_ros.spatial.space import plan
@@ -31,8 +32,9 @@ __all__ = ["main", "run_one"]
 FAMILIES = [name for name, family in SPATIAL_FAMILIES.items() if family.regrasp]
 
 
-def run_one(family: str, robot: str, seed: int, time_limit: float) -> dict[str, Any] | None:
-    """One generated world planned once: its figures, or ``None`` when no world was generated."""
+def run_one(family: str, robot: str, seed: int, time_limit: float, *, exact: bool = False) -> dict[str, Any] | None:
+    """One generated world planned once: its figures, or ``None`` when no world was generated; ``exact``: its
+    plan checked on the exact geometry by pinocchio and coal too (:func:`clew_ros.spatial.exact.exact_problems`)."""
     try:
         generated = generate_spatial(family, seed, robot)
     except GenerationError:
@@ -53,6 +55,8 @@ def run_one(family: str, robot: str, seed: int, time_limit: float) -> dict[str, 
         row["transfers"] = built.grasp_count
         row["valid"] = not validate_plan(world, built)
         row["drags"] = bool(drag_problems(world, built))
+        if exact:
+            row["exact"] = not exact_problems(world, built)
     return row
 
 
@@ -63,20 +67,26 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=4)
     parser.add_argument("--first-seed", type=int, default=100)
     parser.add_argument("--time-limit", type=float, default=10.0)
+    parser.add_argument(
+        "--exact", action="store_true", help="check every plan with pinocchio + coal too (the spatial-ref extra)"
+    )
     args = parser.parse_args(argv)
+    if args.exact and not exact_available():
+        parser.error("--exact: needs pinocchio and coal (pip install -e '.[spatial-ref]')")
     rows: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
     run_one(args.families[0], args.robots[0], args.first_seed, 1.0)  # warm-up: compiled kernels and caches, not kept
     for family in args.families:
         for robot in args.robots:
             for seed in range(args.first_seed, args.first_seed + args.seeds):
-                row = run_one(family, robot, seed, args.time_limit)
+                row = run_one(family, robot, seed, args.time_limit, exact=args.exact)
                 if row is None:
                     print(f"{family} {robot} {seed}: no world generated", flush=True)
                     continue
                 rows[family, robot].append(row)
                 print(f"{family} {robot} {seed}: {row}", flush=True)
     header = "| family | arm | solved | median s (CPU s) | transfers <= witness + 1 | false no path | valid | drags |"
-    print("\n" + header + "\n|" + "---|" * 8)
+    header += " valid (pinocchio) |" if args.exact else ""
+    print("\n" + header + "\n|" + "---|" * (9 if args.exact else 8))
     every: list[dict[str, Any]] = []
     for (family, robot), found in rows.items():
         every += found
@@ -94,6 +104,7 @@ def _line(family: str, robot: str, rows: list[dict[str, Any]]) -> str:
         f"| {family} | {robot} | {len(solved)}/{len(rows)} | {median:.2f} ({cpu:.2f}) | {few}/{len(solved)} | "
         f"{sum(r['no_path'] for r in rows)} | {sum(r['valid'] for r in solved)}/{len(solved)} | "
         f"{sum(r['drags'] for r in solved)}/{len(solved)} |"
+        + (f" {sum(r['exact'] for r in solved)}/{len(solved)} |" if any("exact" in r for r in solved) else "")
     )
 
 

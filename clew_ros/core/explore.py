@@ -63,9 +63,7 @@ class Explorer:
         self.ctx = ctx
         self.tree = tree
         self._transits: dict[tuple[int, int], Candidate | None] = {}
-        self._aimed: dict[
-            tuple[int, int, str, tuple[int, ...], bytes], Candidate | None
-        ] = {}  # SEARCH's transits aimed at cells
+        self._aimed: dict[tuple[int, int, bytes], Candidate | None] = {}  # SEARCH's transits aimed at cells
         #: transit searches run so far (retries of failed pairs included)
         self.transit_searches = 0
 
@@ -107,8 +105,7 @@ class Explorer:
 
     def _aimed_transit(self, landmark: Landmark, grasp: int, approach: Approach) -> Candidate | None:
         """The transit from ``landmark`` to ``grasp`` aimed at ``approach``, searched once per approach."""
-        aimed = np.asarray(approach)
-        key = (landmark.id, grasp, aimed.dtype.str, aimed.shape, aimed.tobytes())
+        key = (landmark.id, grasp, np.packbits(np.asarray(approach)).tobytes())
         if key not in self._aimed:
             self._aimed[key] = self._transit(landmark, grasp, approach)
         return self._aimed[key]

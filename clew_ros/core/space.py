@@ -16,8 +16,8 @@ Vocabulary of the protocol (every array is a batch along its first axis):
 - a *held pose* ``grasp_rel``: the object's pose in the tool's frame while it is carried;
 - a *mode* (:class:`Mode`): the object resting at ``(B, p)`` poses (transit) or carried, its ``(B, p)`` poses
   in the tool's frame (transfer), as SEARCH's jobs and the Manhattan decoding take it;
-- an *approach* (:data:`Approach`): how a space aims a regrasp, an array of its own (planar: a mask of cells of
-  the last link's angle in the object's frame), opaque to the algorithm, ``None`` for no aim.
+- an *approach* (:data:`Approach`): a mask of the approaches a space allows a regrasp (planar: cells of the
+  last link's angle in the object's frame), opaque to the algorithm, ``None`` for no restriction.
 
 What EXPLORE and SEARCH ask is :class:`Space`; the run around them (:func:`clew_ros.core.clew.plan`) asks a
 :class:`PlanningSpace` for the start, the goal, the answers knowable at once, the regrasps' aims and the
@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,10 +53,10 @@ __all__ = [
     "TransitRequest",
 ]
 
-#: How a space aims a regrasp (:meth:`RegraspAims.aim`, :meth:`Space.approach_allows`), an array of its own
-#: (planar: a mask of the approach cells allowed; spatial: the grasp's configurations at the goal, which order
-#: the transit's ends); the algorithm only passes it on, and keys its cache by it.
-Approach = NDArray[Any]
+#: The approaches a space allows a regrasp, as a mask of its own cells (:meth:`RegraspAims.aim`,
+#: :meth:`Space.approach_allows`; planar: cells of the last link's angle, spatial: one, every approach); the
+#: algorithm only passes it on, and keys its cache by it.
+Approach = NDArray[np.bool_]
 
 
 class TransitRequest(NamedTuple):

@@ -30,7 +30,7 @@ import numpy as np
 
 from clew_ros.planar.collision import packed_world
 from clew_ros.planar.continuous import ContinuousSettings, StopOnly, straight_move_clear
-from clew_ros.planar.kernel import connect_rounds
+from clew_ros.planar.kernel import MoveCheck, Rounds, Trees, connect_rounds
 from clew_ros.planar.world import World
 
 __all__ = ["Clear", "ConnectSettings", "RoutingBudget", "join", "rrt_connect", "shortened"]
@@ -131,6 +131,7 @@ def rrt_connect(
     state = np.zeros(4, dtype=np.int64)  # tree extended first, node grown, node reached, met
     packed = packed_world(world)
     mode = {"resting": None if grasp_rel is not None else object_pose, "grasp_rel": grasp_rel}
+    check_moves = MoveCheck(min_margin, check.max_margin_m, check.coarse_stride)
     done = 0
     while done < rounds:
         allowed = budget.allowance()
@@ -144,19 +145,12 @@ def rrt_connect(
         budget.spend(
             connect_rounds(
                 packed,
-                nodes,
-                parents,
-                sizes,
+                Trees(nodes, parents, sizes),
                 state,
                 targets,
-                step_rad=step_rad,
-                allowed=allowed,
-                check_work=budget.check_work,
-                round_work=budget.round_work,
+                Rounds(step_rad, allowed, budget.check_work, budget.round_work),
                 **mode,
-                min_margin=min_margin,
-                max_margin=check.max_margin_m,
-                coarse_stride=check.coarse_stride,
+                check=check_moves,
             )
         )
         if state[3]:

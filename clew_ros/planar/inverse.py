@@ -82,21 +82,20 @@ def solve_point(
     seeds = np.array(seeds, dtype=float, ndmin=2)
     count = len(seeds)
     q, error, steps = kernel.solve_point(
-        robot.base,
-        robot.link_lengths,
-        robot.joint_lower,
-        robot.joint_upper,
+        kernel.Chain(robot.base, robot.link_lengths, robot.joint_lower, robot.joint_upper),
         np.clip(seeds, robot.joint_lower, robot.joint_upper),
         np.broadcast_to(np.asarray(targets, float), (count, 2)),
         np.zeros((count, 2)) if offsets is None else np.broadcast_to(np.asarray(offsets, float), (count, 2)),
         np.full(count, np.nan) if angles is None else np.broadcast_to(np.asarray(angles, float), (count,)),
-        angle_tolerance=angle_tolerance,
-        angle_scale=angle_scale,
-        iterations=tuning.iterations if iterations is None else iterations,
-        damping=tuning.damping_m2,
-        max_step=tuning.max_step_rad,
-        tolerance=tuning.tolerance_m if tolerance_m is None else tolerance_m,
-        full_turns=full_turns,
+        kernel.Solving(
+            angle_tolerance=angle_tolerance,
+            angle_scale=angle_scale,
+            iterations=tuning.iterations if iterations is None else iterations,
+            damping=tuning.damping_m2,
+            max_step=tuning.max_step_rad,
+            tolerance=tuning.tolerance_m if tolerance_m is None else tolerance_m,
+            full_turns=full_turns,
+        ),
     )
     return Solution(q, error, int(steps.sum()))
 

@@ -68,6 +68,7 @@ __all__ = [
     "KnownNodes",
     "LatticeBudget",
     "LatticeSettings",
+    "LatticeWork",
     "grasp_configurations",
     "lattice_regrasp",
     "lattice_route",
@@ -124,6 +125,18 @@ class LatticeBudget(Protocol):
     def spend_checks(self, configurations: int, calls: int = 1) -> None: ...
 
     def stop(self) -> bool: ...
+
+
+@dataclass(frozen=True)
+class LatticeWork:
+    """What a lattice search (:func:`lattice_route`, :func:`lattice_regrasp`) may spend and what it charges: the
+    ``budget`` it charges its work to, the work units it may spend there (``allowance``), and the units a node it
+    expands (``expansion_work``) and, in :func:`lattice_regrasp`, a release each round (``release_work``) cost."""
+
+    budget: LatticeBudget
+    allowance: float
+    expansion_work: float
+    release_work: float = 0.0
 
 
 class KnownNodes:
@@ -206,9 +219,7 @@ def lattice_route(
     grasp_rel: np.ndarray | None,
     min_margin: float,
     shorter_than: float,
-    budget: LatticeBudget,
-    allowance: float,
-    expansion_work: float,
+    work: LatticeWork,
     nodes_known: KnownNodes | None = None,
     step: float | None = None,
     settings: LatticeSettings | None = None,
@@ -218,10 +229,10 @@ def lattice_route(
     ``grasp_rel``), every move clear with ``min_margin`` (m) to spare: the shortest lattice path between
     them (module docstring), through the lattice's nodes. ``None`` when there is none shorter than
     ``shorter_than`` rad of joint travel, the arm has no lattice (:func:`lattice_step`), checking the nodes
-    that could lie on such a path would take more than ``node_share`` of ``allowance`` work units (those
+    that could lie on such a path would take more than ``node_share`` of ``work.allowance`` work units (those
     checked in the same mode before are not counted), the routing has spent
-    ``allowance`` units (it stops between calls), or ``budget`` says stop. Each search costs
-    ``expansion_work`` units a node it expands. ``nodes_known``: the nodes checked by earlier routings in the
+    ``work.allowance`` units (it stops between calls), or ``work.budget`` says stop. Each search costs
+    ``work.expansion_work`` units a node it expands. ``nodes_known``: the nodes checked by earlier routings in the
     same mode with the same margin (not checked again); those this routing checks are added to it. ``step``:
     the lattice's step (rad), :func:`lattice_step` unless given (a benchmark's finer lattice). ``settings``
     default :class:`LatticeSettings`; ``moves``: the straight-move check's settings (default
@@ -233,6 +244,7 @@ def lattice_route(
         return None
     lattice = _Lattice(world, step)
     nodes = lattice.inside(a, b, shorter_than)
+    budget, allowance = work.budget, work.allowance
     limit = budget.spent + allowance
 
     def spent() -> bool:
@@ -259,7 +271,7 @@ def lattice_route(
     joins = _joins(lattice, layer.usable, a, b, clear)
     while joins is not None and not spent():
         path, _, expanded = lattice_search(lattice.counts, lattice.lower, step, edges, *joins, b, shorter_than)
-        budget.spend(math.ceil(expansion_work * expanded))
+        budget.spend(math.ceil(work.expansion_work * expanded))
         if not len(path) or spent():
             return None
         if _edges_clear(lattice, path, edges, clear):  # checked: the path stands, however much that took
@@ -390,10 +402,7 @@ def lattice_regrasp(
     *,
     min_margin: float,
     shorter_than: float,
-    budget: LatticeBudget,
-    allowance: float,
-    expansion_work: float,
-    release_work: float,
+    work: LatticeWork,
     screen_step_rad: float,
     nodes_known: tuple[KnownNodes, KnownNodes] | None = None,
     settings: LatticeSettings | None = None,
@@ -406,12 +415,12 @@ def lattice_regrasp(
     transfer to ``last``. Returns the three moves' waypoints, shorter than ``shorter_than`` rad of joint
     travel in all, every move clear with ``min_margin`` (m) to spare; ``None`` when there is none, the arm
     has not three joints and a lattice, checking the nodes inside the L1 ellipse of ``first`` and ``last``
-    in both modes would take more than ``node_share`` of ``allowance`` (those of ``nodes_known``, one
-    per grasp, not counted), the search has spent ``allowance`` work units or ``regrasp_rounds``
-    rounds, or ``budget`` says stop. Each search costs ``expansion_work`` units a node it expands (a repair the
-    nodes it expands again and ``repair_pass_share`` of that a node of the lattice for its pass over them), and
-    each round ``release_work`` units a release (totalling them when a search changed, and picking the best).
-    The put-down and join moves are screened about every ``screen_step_rad`` of joint travel
+    in both modes would take more than ``node_share`` of ``work.allowance`` (those of ``nodes_known``, one
+    per grasp, not counted), the search has spent ``work.allowance`` work units or ``regrasp_rounds``
+    rounds, or ``work.budget`` says stop. Each search costs ``work.expansion_work`` units a node it expands (a
+    repair the nodes it expands again and ``repair_pass_share`` of that a node of the lattice for its pass over
+    them), and each round ``work.release_work`` units a release (totalling them when a search changed, and picking
+    the best). The put-down and join moves are screened about every ``screen_step_rad`` of joint travel
     (:func:`clew_ros.planar.regrasp.screen_samples`). ``settings`` and ``moves`` as :func:`lattice_route`'s."""
     tuning = settings if settings is not None else LatticeSettings()
     step = lattice_step(world, tuning)
@@ -423,9 +432,7 @@ def lattice_regrasp(
         _Lattice(world, step),
         (first_rel, last_rel),
         min_margin=min_margin,
-        budget=budget,
-        allowance=allowance,
-        release_work=release_work,
+        work=work,
         screen_step_rad=screen_step_rad,
         settings=tuning,
         moves=moves,
@@ -435,7 +442,7 @@ def lattice_regrasp(
     for _ in range(tuning.regrasp_rounds):
         if search.spent():
             return None
-        found = search.round(shorter_than, expansion_work)
+        found = search.round(shorter_than, work.expansion_work)
         if found is not None or search.exhausted:
             return found
     return None
@@ -451,19 +458,18 @@ class _RegraspSearch:
         grasps: tuple[np.ndarray, np.ndarray],
         *,
         min_margin: float,
-        budget: LatticeBudget,
-        allowance: float,
-        release_work: float,
+        work: LatticeWork,
         screen_step_rad: float,
         settings: LatticeSettings,
         moves: ContinuousSettings | None,
     ) -> None:
+        budget, allowance = work.budget, work.allowance
         self.world, self.lattice, self.budget = world, lattice, budget
         self.settings, self.moves = settings, moves
         self.screen_step_rad = screen_step_rad  # rad of joint travel between the screen's samples
         (self.first_rel, self.last_rel), self.min_margin = grasps, min_margin
         self.exhausted = False  # no regrasp left below the bound
-        self.release_work = release_work  # work units a release, each round
+        self.release_work = work.release_work  # work units a release, each round
         self.totals = self.joined = np.zeros((2, 0))
         self.first, self.last = np.zeros(3), np.zeros(3)
         self.limit = budget.spent + allowance

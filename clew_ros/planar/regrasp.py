@@ -67,13 +67,39 @@ from clew_ros.planar.world import World
 __all__ = [
     "ROUTES",
     "Effort",
+    "PlanHints",
     "Proposal",
+    "ProposalLimits",
     "RegraspSettings",
     "goal_holds_near",
     "propose",
     "route_waypoints",
     "screen_samples",
 ]
+
+
+@dataclass(frozen=True)
+class PlanHints:
+    """What the plan being improved tells :func:`propose`: its grasp configurations ``own`` (``(grasp, q)``) that
+    hold the object at the placement, tried as they are; the configurations ``releases`` ``(m, n)`` where it put
+    the object down, tried (and around them) as releases; and its configurations at the goal ``finals``
+    ``(m, n)``, from which :func:`_goal_holds` finds how each grasp can hold the goal."""
+
+    own: tuple[tuple[int, np.ndarray], ...] = ()
+    releases: np.ndarray | None = None
+    finals: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class ProposalLimits:
+    """When :func:`propose` stops: ``should_stop`` (the planner's termination) says so, asked between stages (each
+    a few tens of milliseconds at most), or ``max_checks`` configurations have been checked, each
+    inverse-kinematics step (one configuration, one iteration) counting ``step_checks`` (moves not checked then
+    count as blocked)."""
+
+    should_stop: Callable[[], bool] | None = None
+    max_checks: int | None = None
+    step_checks: float = 0.0
 
 
 @dataclass
@@ -115,52 +141,46 @@ def propose(
     goal: np.ndarray,
     rng: np.random.Generator,
     *,
-    own: list[tuple[int, np.ndarray]] | None = None,
-    releases: np.ndarray | None = None,
-    finals: np.ndarray | None = None,
+    hints: PlanHints | None = None,
     one_transfer: bool = True,
     two_transfers: bool = True,
     margin_m: float = 0.0,
-    should_stop: Callable[[], bool] | None = None,
-    max_checks: int | None = None,
-    step_checks: float = 0.0,
+    limits: ProposalLimits | None = None,
     restarts: np.random.Generator | None = None,
     settings: RegraspSettings | None = None,
 ) -> tuple[list[Proposal], Effort]:
     """Ways to the goal from the arm at ``start`` with the object resting at ``placement``, with one transfer
-    (if ``one_transfer``) and two (if ``two_transfers``). ``own``: grasp configurations ``(grasp, q)`` of
-    the plan that hold the object at this placement, tried as they are. ``releases`` ``(m, n)``:
-    configurations where the plan put the object down, tried (and around them) as releases. ``finals``
-    ``(m, n)``: the plan's configurations at the goal, from which :func:`_goal_holds` finds how each grasp
-    can hold the goal, for grasp configurations here and at releases with that approach. Ranked by joint
-    travel plus :attr:`RegraspSettings.blocked_penalty_rad` per move that looked blocked; alike ones dropped
-    (:func:`_distinct`).
+    (if ``one_transfer``) and two (if ``two_transfers``), using what the plan tells (``hints``, default none).
+    Ranked by joint travel plus :attr:`RegraspSettings.blocked_penalty_rad` per move that looked blocked; alike
+    ones dropped (:func:`_distinct`).
 
-    ``should_stop`` (the planner's termination) is asked between stages (each a few tens of
-    milliseconds at most): when it says stop, the proposals found so far are returned; so they are
-    once ``max_checks`` configurations have been checked, each inverse-kinematics step (one
-    configuration, one iteration) counting ``step_checks`` (moves not checked then count as blocked).
+    When ``limits`` (default none) say stop, the proposals found so far are returned.
     ``restarts``: the generator the inverse kinematics' restarts (:attr:`RegraspSettings.restarts`) draw from, default
     ``rng``; one of its own leaves ``rng``'s stream to the releases. ``settings``: the tuning, the default
     :class:`RegraspSettings` when not given.
     Returns the proposals (at most :attr:`RegraspSettings.max_proposals`) and the work done.
     """
-    kinematics = Kinematics(world, margin_m, should_stop, max_checks, step_checks, settings=settings)
+    hints = hints if hints is not None else PlanHints()
+    limits = limits if limits is not None else ProposalLimits()
+    kinematics = Kinematics(
+        world, margin_m, limits.should_stop, limits.max_checks, limits.step_checks, settings=settings
+    )
+    own, releases, finals = list(hints.own), hints.releases, hints.finals
     restarts = rng if restarts is None else restarts
     start, placement = np.asarray(start, float), np.asarray(placement, float)
     finals = np.zeros((0, len(start))) if finals is None else np.asarray(finals, float)
     holds = _goal_holds(kinematics, start, goal, finals=finals, rng=rng)
     aligned = _aligned_at(kinematics, start, placement, holds)
     begin = _grasps_at_start(
-        kinematics, start, placement, own or [], aligned, rng=restarts, own_goal=finals[-1] if len(finals) else None
+        kinematics, start, placement, own, aligned, rng=restarts, own_goal=finals[-1] if len(finals) else None
     )
     if begin is None:
         return [], kinematics.effort
     proposals = _one_transfer(kinematics, begin, goal, restarts) if one_transfer else []
     seeded = begin.seeded()
     if two_transfers and len(seeded.first) and not kinematics.stop():
-        hints = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
-        proposals += _two_transfers(kinematics, seeded, goal, rng, hints, holds=holds.first_per_grasp())
+        tried = np.zeros((0, len(begin.start))) if releases is None else np.asarray(releases, float)
+        proposals += _two_transfers(kinematics, seeded, goal, rng, tried, holds=holds.first_per_grasp())
     proposals.sort(key=lambda p: p.rank)
     return _distinct(proposals, kinematics.settings), kinematics.effort
 

@@ -90,14 +90,11 @@ class SpatialAims:
         return False
 
     def aim(self, landmark: Landmark, grasp: int) -> Any | None:
-        """A regrasp in place with a goal grasp (:meth:`goal_grasps`; every grasp where none was found) aims
-        at that grasp's configurations at the goal, (k, n): its transit ends at the configuration nearest
-        them (:func:`clew_ros.spatial.targets.aimed_holds`). ``None``: a grasp that holds the object at the goal
-        in no configuration is not worth its transit."""
+        """Every approach of a goal grasp (:meth:`goal_grasps`; of every grasp where none was found); ``None``:
+        a regrasp in place with a grasp that holds the object at the goal in no configuration is not worth
+        its transit."""
         goal_grasps = self.goal_grasps()
-        if not goal_grasps:
-            return np.zeros((0, self.space.dof))
-        return self._goal_solutions[grasp] if grasp in goal_grasps else None
+        return np.ones(1, dtype=bool) if grasp in goal_grasps or not goal_grasps else None
 
     def ranked(self, landmark: Landmark, grasps: list[int]) -> list[int]:
         """The goal grasps among ``grasps`` first, nearest first: the joint distance (rad, L1) from a

@@ -24,7 +24,7 @@ from clew_ros.spatial.distances import at_goal, goal_distance
 from clew_ros.spatial.motion_plan import MotionSpace, add_branch, connect
 from clew_ros.spatial.settle import rests, settle
 from clew_ros.spatial.space_parts import SpaceParts, cache_key
-from clew_ros.spatial.targets import aimed_holds, goal_configurations, holds
+from clew_ros.spatial.targets import goal_configurations, holds
 from clew_ros.spatial.transforms import matrices, rotation_vectors
 from clew_ros.spatial.ways import way, way_out
 
@@ -62,10 +62,10 @@ def search_transits(space: SearchSpace, ctx: PlanningContext, requests: list[Tra
     slots: list[int] = []
     targets: list[Array] = []
     weight = tuning.angle_weight_m
-    for start, resting, grasp, approach in requests:
+    for start, resting, grasp, _approach in requests:
         q0 = np.asarray(start, dtype=float)
         object_pose = np.asarray(resting, dtype=float)
-        found = aimed_holds(holds(parts, ctx, q0, object_pose, grasp), q0, approach)
+        found = holds(parts, ctx, q0, object_pose, grasp)
         if not len(found):
             results.append(PathResult(False, q0[None], math.inf))
             continue

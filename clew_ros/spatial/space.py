@@ -148,7 +148,7 @@ class SpatialSpace:
         search.straight_probe(self.parts, ctx, jobs, q, best, waypoints=waypoints)
 
     def approach_allows(self, approach: Approach, grasp_rel: np.ndarray) -> bool:
-        return True  # an aim orders the configurations a transit may end at (targets.aimed_holds); it refuses none
+        return True  # no aiming: every approach is allowed
 
     def regrasp_aims(self, goal: np.ndarray) -> SpatialAims:
         return SpatialAims(self, goal, self.tuning.regrasp)

@@ -8,13 +8,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.search import own_generator
-from clew_ros.core.space import Approach, Mode, PlanningContext
+from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.space_parts import SpaceParts, cache_key
 from clew_ros.spatial.transforms import inverse_matrix, matrices, rpy_matrix
 from clew_ros.spatial.ways import way_out
 
-__all__ = ["GOAL_STREAM", "HOLD_STREAM", "aimed_holds", "goal_configurations", "goal_poses", "holds"]
+__all__ = ["GOAL_STREAM", "HOLD_STREAM", "goal_configurations", "goal_poses", "holds"]
 
 Array = NDArray[np.float64]
 
@@ -34,19 +34,6 @@ def holds(parts: SpaceParts, ctx: PlanningContext, q0: Array, object_pose: Array
     if len(found):
         found = parts.nearest_turns(q0, found[parts.transfer_checker(parts.grasp_rel(grasp)).valid(found)])
     ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
-    return ordered
-
-
-def aimed_holds(holds: Array, q0: Array, approach: Approach | None) -> Array:
-    """``holds`` (configurations holding a grasp, nearest ``q0`` first) in the order a regrasp aimed at
-    ``approach`` tries them: with an aim (:meth:`clew_ros.spatial.regrasps.SpatialAims.aim`: the grasp's
-    configurations at the goal, (k, n)), by joint travel from ``q0`` plus to the nearest of those (rad, L1),
-    so that the transfer after the regrasp stays in the posture family it ends in; without one, as they are."""
-    aim = None if approach is None else np.asarray(approach)
-    if aim is None or aim.ndim != 2 or not len(aim) or not len(holds) or aim.dtype.kind != "f":
-        return holds
-    cost = np.abs(holds - q0).sum(axis=1) + np.abs(holds[:, None, :] - aim[None]).sum(axis=2).min(axis=1)
-    ordered: Array = holds[np.argsort(cost, kind="stable")]
     return ordered
 
 

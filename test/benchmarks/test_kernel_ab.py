@@ -22,7 +22,8 @@ def _in_a_repository() -> bool:
 @pytest.mark.skipif(not _in_a_repository(), reason="needs git and a git checkout (the benchmark reads a revision)")
 def test_the_kernel_of_a_revision_runs_beside_this_one_with_the_same_numbers(tmp_path):
     """HEAD's kernel, loaded from git as a package of its own, gives this code's numbers (transit and
-    transfer, intervals and decoding), and every figure is a positive rate; no speed is asserted."""
+    transfer, intervals, decoding, the validity first pass and straight moves), and every figure is a positive rate;
+    no speed is asserted."""
     base = baseline_kernel("HEAD", tmp_path)
     assert Path(base.__file__).is_relative_to(tmp_path)  # kernel_baseline.py, or kernel_baseline/ (a package)
     assert base.intervals.__module__.startswith("kernel_baseline")  # not this code's kernel
@@ -32,7 +33,7 @@ def test_the_kernel_of_a_revision_runs_beside_this_one_with_the_same_numbers(tmp
     for row in rows:
         assert row["same"], row
         assert row["configurations"] >= 24
-        for name in ("b24", "decode24"):
+        for name in ("b24", "decode24", "valid24", "moves24"):
             assert np.isfinite(row[name]["after_over_before"])
             assert row[name]["before"] > 0
             assert row[name]["after"] > 0

@@ -30,6 +30,7 @@ from clew_ros.planar.kinematics import compose, relative, tip_poses, wrap_angle
 from clew_ros.planar.lattice import (
     KnownNodes,
     LatticeSettings,
+    LatticeWork,
     _edges_clear,
     _joins,
     _Lattice,
@@ -258,9 +259,7 @@ def _route(world, a, b, transfer, shorter_than, budget=None, known=None, allowan
         grasp_rel=GRASP_REL if transfer else None,
         min_margin=5e-4,
         shorter_than=shorter_than,
-        budget=budget or _Counter(),
-        allowance=allowance,
-        expansion_work=expansion_work,
+        work=LatticeWork(budget or _Counter(), allowance, expansion_work),
         nodes_known=known,
     )
 
@@ -469,10 +468,7 @@ def _regrasp(world, a, b, *, budget=None, shorter_than=40.0, allowance=1e9):
         OTHER_REL,
         min_margin=5e-4,
         shorter_than=shorter_than,
-        budget=budget or _Counter(),
-        allowance=allowance,
-        expansion_work=0.2,
-        release_work=0.1,
+        work=LatticeWork(budget or _Counter(), allowance, expansion_work=0.2, release_work=0.1),
         screen_step_rad=0.1,
     )
 

@@ -11,7 +11,7 @@ import pytest
 
 from clew_ros.planar.collision import is_valid
 from clew_ros.planar.kinematics import compose, relative, tip_poses, transform_points
-from clew_ros.planar.regrasp import ROUTES, RegraspSettings, propose, route_waypoints
+from clew_ros.planar.regrasp import ROUTES, ProposalLimits, RegraspSettings, propose, route_waypoints
 from clew_ros.planar.search import goal_reached
 from clew_ros.planar.world import load_world
 
@@ -162,7 +162,12 @@ def test_a_stop_request_ends_the_proposals_early() -> None:
     goal = np.asarray(world.object.goal, dtype=float)
     _, effort = propose(world, world.robot.initial, world.object.initial, goal, np.random.default_rng(1))
     cut, less = propose(
-        world, world.robot.initial, world.object.initial, goal, np.random.default_rng(1), should_stop=lambda: True
+        world,
+        world.robot.initial,
+        world.object.initial,
+        goal,
+        np.random.default_rng(1),
+        limits=ProposalLimits(should_stop=lambda: True),
     )
     assert less.checks < effort.checks
     assert all(len(p.grasps) == 1 for p in cut)  # stopped before the two-transfer search
@@ -173,8 +178,8 @@ def test_inverse_kinematics_counts_against_the_checks_allowed() -> None:
     world = load_world(ROOT / "config" / "arm3_regrasp.yaml")
     goal = np.asarray(world.object.goal, dtype=float)
     args = (world, world.robot.initial, world.object.initial, goal)
-    _, free = propose(*args, np.random.default_rng(1), max_checks=5000)
-    _, counted = propose(*args, np.random.default_rng(1), max_checks=5000, step_checks=0.5)
+    _, free = propose(*args, np.random.default_rng(1), limits=ProposalLimits(max_checks=5000))
+    _, counted = propose(*args, np.random.default_rng(1), limits=ProposalLimits(max_checks=5000, step_checks=0.5))
     assert counted.checks + 0.5 * counted.steps < free.checks + 0.5 * free.steps
     assert counted.checks < free.checks
 

@@ -12,7 +12,14 @@ import numpy as np
 from clew_ros.core.improve import joint_travel, plan_score, pruned_path
 from clew_ros.planar.improve.base import _ImproverBase
 from clew_ros.planar.improve.pieces import _Piece, _span_key
-from clew_ros.planar.lattice import KnownNodes, grasp_configurations, lattice_regrasp, lattice_route, lattice_step
+from clew_ros.planar.lattice import (
+    KnownNodes,
+    LatticeWork,
+    grasp_configurations,
+    lattice_regrasp,
+    lattice_route,
+    lattice_step,
+)
 
 
 class _LatticeUse(_ImproverBase):
@@ -33,9 +40,7 @@ class _LatticeUse(_ImproverBase):
             grasp_rel=piece.grasp_rel,
             min_margin=self.min_margin,
             shorter_than=shorter_than,
-            budget=self.budget,
-            allowance=allowance,
-            expansion_work=self.settings.expansion_work,
+            work=LatticeWork(self.budget, allowance, self.settings.expansion_work),
             nodes_known=known,
             settings=self.settings.lattice,
             moves=self.settings.moves,
@@ -154,10 +159,7 @@ class _LatticeUse(_ImproverBase):
             two.grasp_rel,
             min_margin=self.min_margin,
             shorter_than=shorter_than,
-            budget=self.budget,
-            allowance=allowance,
-            expansion_work=self.settings.flood_work,
-            release_work=self.settings.release_work,
+            work=LatticeWork(self.budget, allowance, self.settings.flood_work, self.settings.release_work),
             screen_step_rad=self.settings.regrasp.screen_step_rad,
             nodes_known=(self.known("transfer", one.grasp_rel), self.known("transfer", two.grasp_rel)),
             settings=self.settings.lattice,

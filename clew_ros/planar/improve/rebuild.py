@@ -11,7 +11,7 @@ import numpy as np
 from clew_ros.core.improve import plan_score, pruned_path
 from clew_ros.planar.improve.pieces import _Piece
 from clew_ros.planar.improve.proposals import _Proposals
-from clew_ros.planar.regrasp import Proposal, propose
+from clew_ros.planar.regrasp import PlanHints, Proposal, ProposalLimits, propose
 from clew_ros.planar.search import search_transfer
 
 
@@ -72,15 +72,13 @@ class _Rebuilding(_Proposals):
                     placement,
                     self.goal,
                     self.ctx.rng,
-                    own=own,
-                    releases=hints,
-                    finals=self.pieces[-1].waypoints[-1:],
+                    hints=PlanHints(tuple(own), hints, self.pieces[-1].waypoints[-1:]),
                     one_transfer=grasps == 1,
                     two_transfers=grasps == 2,
                     margin_m=self.min_margin,
-                    should_stop=self.budget.stop,
-                    max_checks=self.proposal_checks(),
-                    step_checks=self.settings.ik_work / self.budget.check_work,
+                    limits=ProposalLimits(
+                        self.budget.stop, self.proposal_checks(), self.settings.ik_work / self.budget.check_work
+                    ),
                     restarts=self.restarts,
                     settings=self.settings.regrasp,
                 )

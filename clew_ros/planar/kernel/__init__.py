@@ -1,14 +1,16 @@
 """The compiled kernels of the planar world (numba), one module per concern.
 
-They take the world packed once into plain arrays (:func:`clew_ros.planar.collision.packed_world`,
-:class:`PackedWorld`), never objects, loop over whole batches and release the GIL. What
+They take the world packed once into arrays (:func:`clew_ros.planar.collision.packed_world`,
+:class:`PackedWorld`) and read it as a few named tuples (:mod:`~clew_ros.planar.kernel.packed`: the arm's chain,
+the scene, the object's shape, the mode, the tuning, the scratch), never objects, so that no kernel takes more than
+12 arguments; they loop over whole batches and release the GIL. What
 :mod:`clew_ros.core.manhattan` describes is computed here, one compiled call per batch.
 
 =============================================  =======================================================================
 module                                         what it holds
 =============================================  =======================================================================
 :mod:`~clew_ros.planar.kernel.jit`             numba's options for every kernel, the threading layer
-:mod:`~clew_ros.planar.kernel.packed`          :class:`PackedWorld`, arrays as the kernels take them
+:mod:`~clew_ros.planar.kernel.packed`          :class:`PackedWorld`, the named tuples the kernels take
 :mod:`~clew_ros.planar.kernel.segments`        a point's distance to a segment, an edge placed at a pose
 :mod:`~clew_ros.planar.kernel.kinematics`      forward kinematics (:func:`chain`), inverse (:func:`solve_point`)
 :mod:`~clew_ros.planar.kernel.contacts`        contact angles of a turning point against a stadium
@@ -41,7 +43,7 @@ from clew_ros.planar.kernel.lattice import (
     release_totals,
 )
 from clew_ros.planar.kernel.moves import moves_clear, screen_routes
-from clew_ros.planar.kernel.packed import PackedWorld
+from clew_ros.planar.kernel.packed import Chain, MoveCheck, PackedWorld, Rounds, Solving, Trees
 from clew_ros.planar.kernel.path_shortcuts import shortcuts
 from clew_ros.planar.kernel.rrt_connect import connect_rounds
 from clew_ros.planar.kernel.validity import clearly_valid
@@ -54,7 +56,12 @@ __all__ = [
     "EDGE_UNKNOWN",
     "FULL_TURN_RAD",
     "MAX_MOVE_RAD",
+    "Chain",
+    "MoveCheck",
     "PackedWorld",
+    "Rounds",
+    "Solving",
+    "Trees",
     "available_threads",
     "bounce_array",
     "chain",

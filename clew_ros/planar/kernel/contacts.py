@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from clew_ros.planar.kernel.jit import _leaf
+from clew_ros.planar.kernel.packed import Stadium
 from clew_ros.planar.kernel.segments import _point_segment_distance
 
 _TWO_PI = 2.0 * math.pi
@@ -85,26 +86,12 @@ def _contact(px: float, py: float, cx: float, cy: float, start: float, turn: flo
 
 @_leaf
 def _point_meets_stadium(
-    px: float,
-    py: float,
-    rho: float,
-    ax: float,
-    ay: float,
-    bx: float,
-    by: float,
-    ra: float,
-    rb: float,
-    near: float,
-    far: float,
-    keep: float,
-    margin: float,
-    turn: float,
-    best: np.ndarray,
+    px: float, py: float, rho: float, stadium: Stadium, keep: float, margin: float, turn: float, best: np.ndarray
 ) -> None:
     """Rotation angles (times ``turn``) at which point ``p`` (at distance ``rho`` from the pivot),
     turning about the pivot, meets the boundary of the stadium of radius ``keep`` (+ ``margin`` if it
-    starts clear of it) around segment ``[a, b]`` (end points at ``ra``, ``rb``; nearest and farthest
-    points at ``near``, ``far``); all relative to the pivot."""
+    starts clear of it) around the segment of ``stadium``; all relative to the pivot."""
+    ax, ay, bx, by, ra, rb, near, far = stadium
     reach = keep + margin
     if rho < near - reach or rho > far + reach:
         return  # the point's circle misses the stadium's annulus about the pivot
@@ -158,10 +145,12 @@ def _pair(
     ax, ay, bx, by = moving[i, 0, 0], moving[i, 0, 1], moving[i, 1, 0], moving[i, 1, 1]
     cx, cy, dx, dy = static[s, 0, 0], static[s, 0, 1], static[s, 1, 0], static[s, 1, 1]
     ra, rb, rc, rd = m[i, 2], m[i, 3], t[s, 2], t[s, 3]
-    _point_meets_stadium(ax, ay, ra, cx, cy, dx, dy, rc, rd, t[s, 0], t[s, 1], keep, margin, 1.0, best)
-    _point_meets_stadium(bx, by, rb, cx, cy, dx, dy, rc, rd, t[s, 0], t[s, 1], keep, margin, 1.0, best)
-    _point_meets_stadium(cx, cy, rc, ax, ay, bx, by, ra, rb, m[i, 0], m[i, 1], keep, margin, -1.0, best)
-    _point_meets_stadium(dx, dy, rd, ax, ay, bx, by, ra, rb, m[i, 0], m[i, 1], keep, margin, -1.0, best)
+    still = Stadium(cx, cy, dx, dy, rc, rd, t[s, 0], t[s, 1])
+    _point_meets_stadium(ax, ay, ra, still, keep, margin, 1.0, best)
+    _point_meets_stadium(bx, by, rb, still, keep, margin, 1.0, best)
+    turning = Stadium(ax, ay, bx, by, ra, rb, m[i, 0], m[i, 1])
+    _point_meets_stadium(cx, cy, rc, turning, keep, margin, -1.0, best)
+    _point_meets_stadium(dx, dy, rd, turning, keep, margin, -1.0, best)
 
 
 @_leaf

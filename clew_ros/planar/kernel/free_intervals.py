@@ -27,13 +27,14 @@ places between the nearest ones found so far is skipped before its ``atan2``
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from clew_ros.planar.kernel.contacts import _annulus, _annulus_of, _bound_crossings, _pieces, _reset
-from clew_ros.planar.kernel.jit import _jit, _leaf
+from clew_ros.planar.kernel.jit import _inlined_leaf, _jit, _leaf
 from clew_ros.planar.kernel.kinematics import _forward
-from clew_ros.planar.kernel.packed import PackedWorld, _arg, _poses
+from clew_ros.planar.kernel.packed import IntervalWork, Model, PackedWorld, _arg, _named, _poses
 from clew_ros.planar.kernel.segments import _place
 
 #: Largest move of one joint in one Manhattan move (rad), as in the paper.
@@ -89,32 +90,20 @@ def _place_obstacles(
             _annulus_of(obstacle_rel, obstacle_radii, e)
 
 
-@_leaf
+@_inlined_leaf
 def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair kind, commented step by step
-    q: np.ndarray,
-    joint: int,
-    transfer: bool,
-    pose: np.ndarray,
-    margin: float,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    r: float,
-    self_collision: bool,
-    bounds: np.ndarray,
-    obstacles: np.ndarray,
-    groups: np.ndarray,
-    object_edges: np.ndarray,
-    shrunk_edges: np.ndarray,
-    scratch: tuple[np.ndarray, ...],
+    q: np.ndarray, joint: int, transfer: bool, pose: np.ndarray, margin: float, model: Model, work: IntervalWork
 ) -> tuple[float, float]:
     """Free interval ``(low <= 0, high >= 0)`` of ``joint`` at configuration ``q`` ``(n,)``.
 
     ``pose``: the resting object's pose (transit) or its pose in the end-effector frame
-    (transfer). ``scratch`` holds the work arrays of :func:`_scratch`.
+    (transfer). ``work``: scratch (:func:`_scratch`).
     """
-    links, link_radii, obstacle_rel, obstacle_radii, object_rel, object_radii, shrunk_rel, shrunk_radii, best = scratch
+    links, link_radii, obstacle_rel, obstacle_radii, object_rel, object_radii, shrunk_rel, shrunk_radii, best = work
+    base, lengths, lower, upper = model.chain
+    r, self_collision, bounds = model.link_radius, model.self_collision, model.scene.bounds
+    obstacles, groups = model.scene.edges, model.scene.groups
+    object_edges, shrunk_edges = model.shape.edges, model.shape.shrunk_edges
     n = lengths.shape[0]
     tip_x, tip_y, tip_theta = _forward(q, base, lengths, links)
     px, py = links[joint, 0, 0], links[joint, 0, 1]  # the pivot p_joint: everything relative to it
@@ -169,8 +158,11 @@ def _interval(  # noqa: C901, PLR0912 - one compiled loop nest over every pair k
 
 
 @_jit
-def _scratch(n: int, n_obstacles: int, n_object: int, n_shrunk: int) -> tuple[np.ndarray, ...]:
-    return (
+def _scratch(model: Model) -> IntervalWork:
+    """Scratch for :func:`_interval` in ``model``'s world."""
+    n, n_obstacles = model.chain.lengths.shape[0], model.scene.edges.shape[0]
+    n_object, n_shrunk = model.shape.edges.shape[0], model.shape.shrunk_edges.shape[0]
+    return IntervalWork(
         np.empty((n, 2, 2)),
         np.empty((n, 4)),
         np.empty((n_obstacles, 2, 2)),
@@ -191,42 +183,31 @@ def _intervals(
     poses: np.ndarray,
     margin: float,
     out: np.ndarray,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    r: float,
-    self_collision: bool,
-    bounds: np.ndarray,
-    obstacles: np.ndarray,
-    groups: np.ndarray,
-    object_edges: np.ndarray,
-    shrunk_edges: np.ndarray,
+    world: tuple[Any, ...],
 ) -> None:
     """Free intervals ``out[0]`` (low) and ``out[1]`` (high), ``(2, B)``, of ``joint`` for configurations
-    ``q (B, n)``; ``poses`` is ``(B, 3)`` or one pose ``(1, 3)`` for all."""
-    scratch = _scratch(lengths.shape[0], obstacles.shape[0], object_edges.shape[0], shrunk_edges.shape[0])
+    ``q (B, n)``; ``poses`` is ``(B, 3)`` or one pose ``(1, 3)`` for all. ``world``:
+    :attr:`~.packed.PackedWorld.plain`."""
+    model = _named(world)
+    _interval_rows(q, joint, transfer, poses, margin, out, model, _scratch(model))
+
+
+@_leaf
+def _interval_rows(
+    q: np.ndarray,
+    joint: int,
+    transfer: bool,
+    poses: np.ndarray,
+    margin: float,
+    out: np.ndarray,
+    model: Model,
+    work: IntervalWork,
+) -> None:
+    """The loop of :func:`_intervals`, in a function that allocates nothing and so counts no references (written
+    in the entry point, which allocates, the loop took a twentieth longer)."""
     shared = poses.shape[0] == 1
     for b in range(q.shape[0]):
-        out[0, b], out[1, b] = _interval(
-            q[b],
-            joint,
-            transfer,
-            poses[0] if shared else poses[b],
-            margin,
-            base,
-            lengths,
-            lower,
-            upper,
-            r,
-            self_collision,
-            bounds,
-            obstacles,
-            groups,
-            object_edges,
-            shrunk_edges,
-            scratch,
-        )
+        out[0, b], out[1, b] = _interval(q[b], joint, transfer, poses[0] if shared else poses[b], margin, model, work)
 
 
 @_leaf
@@ -246,7 +227,7 @@ def intervals(
     out = np.empty((2, len(q)))
     poses = _arg(poses)
     rows = poses if poses.shape == (1, 3) else _poses(poses, len(q))  # one pose for all: no copies
-    _intervals(q, int(joint), transfer, rows, float(margin), out, *world.arguments())
+    _intervals(q, int(joint), transfer, rows, float(margin), out, world.plain)
     return out[0], out[1]
 
 

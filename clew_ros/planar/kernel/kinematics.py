@@ -4,11 +4,12 @@ kinematics of one tool point per row (damped least squares within the joint limi
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from clew_ros.planar.kernel.jit import _jit, _leaf
-from clew_ros.planar.kernel.packed import _arg
+from clew_ros.planar.kernel.packed import Chain, Solving, _arg, plain
 
 _TWO_PI = 2.0 * math.pi
 #: Limits at least this far apart (rad) let a joint turn all the way round (worlds write +-3.14159, just inside
@@ -59,17 +60,8 @@ def _solve_point(  # noqa: PLR0915 - one compiled loop per row: kinematics, Jaco
     targets: np.ndarray,
     offsets: np.ndarray,
     angles: np.ndarray,
-    angle_tolerance: float,
-    angle_scale: float,
-    iterations: int,
-    damping: float,
-    max_step: float,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    tolerance: float,
-    full_turns: bool,
+    chain: tuple[Any, ...],
+    solving: tuple[Any, ...],
     error: np.ndarray,
     steps: np.ndarray,
 ) -> None:
@@ -77,7 +69,10 @@ def _solve_point(  # noqa: PLR0915 - one compiled loop per row: kinematics, Jaco
     to ``targets[b]``, and (``angles[b]`` not NaN) the frame's angle within ``angle_tolerance`` of it;
     a row stops once its error is at most ``tolerance``; a step past a limit is :func:`_within_limits`.
     ``error[b]``: what is left (m; the angle's excess counts ``angle_scale`` m per rad); ``steps[b]``: the
-    steps taken."""
+    steps taken. ``chain`` and ``solving``: a :class:`~.packed.Chain` and :class:`~.packed.Solving` as plain tuples.
+    """
+    base, lengths, lower, upper = Chain(*chain)
+    angle_tolerance, angle_scale, iterations, damping, max_step, tolerance, full_turns = Solving(*solving)
     n = lengths.shape[0]
     px = np.empty(n)
     py = np.empty(n)
@@ -149,45 +144,22 @@ def chain(base: np.ndarray, lengths: np.ndarray, q: np.ndarray) -> tuple[np.ndar
 
 
 def solve_point(
-    base: np.ndarray,
-    lengths: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    seeds: np.ndarray,
-    targets: np.ndarray,
-    offsets: np.ndarray,
-    angles: np.ndarray,
-    *,
-    angle_tolerance: float,
-    angle_scale: float,
-    iterations: int,
-    damping: float,
-    max_step: float,
-    tolerance: float = 0.0,
-    full_turns: bool = False,
+    chain: Chain, seeds: np.ndarray, targets: np.ndarray, offsets: np.ndarray, angles: np.ndarray, solving: Solving
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Compiled damped least squares from ``seeds (B, n)`` (see :func:`clew_ros.planar.inverse.solve_point`):
     the configurations, the error left and the steps taken ``(B,)``."""
     q = np.array(seeds, dtype=np.float64, order="C")
     error = np.empty(len(q))
     steps = np.zeros(len(q), dtype=np.int64)
-    _solve_point(
-        q,
-        _arg(targets),
-        _arg(offsets),
-        _arg(angles),
-        float(angle_tolerance),
-        float(angle_scale),
-        int(iterations),
-        float(damping),
-        float(max_step),
-        _arg(base),
-        _arg(lengths),
-        _arg(lower),
-        _arg(upper),
-        float(tolerance),
-        bool(full_turns),
-        error,
-        steps,
+    chain = Chain(*(_arg(array) for array in chain))
+    solving = Solving(
+        float(solving.angle_tolerance),
+        float(solving.angle_scale),
+        int(solving.iterations),
+        float(solving.damping),
+        float(solving.max_step),
+        float(solving.tolerance),
+        bool(solving.full_turns),
     )
+    _solve_point(q, _arg(targets), _arg(offsets), _arg(angles), plain(chain), plain(solving), error, steps)
     return q, error, steps

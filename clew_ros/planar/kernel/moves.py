@@ -5,35 +5,28 @@ screen of routes (straight, or one joint after the other)."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from clew_ros.planar.kernel.jit import _jit, _leaf
 from clew_ros.planar.kernel.kinematics import _forward
-from clew_ros.planar.kernel.packed import PackedWorld, _arg
-from clew_ros.planar.kernel.validity import _valid_beyond
+from clew_ros.planar.kernel.packed import Chain, Mode, Model, MoveCheck, PackedWorld, _arg, _named, plain
+from clew_ros.planar.kernel.validity import _placed, _valid_beyond
 
 
 @_leaf
 def _at(
-    a: np.ndarray,
-    b: np.ndarray,
-    t: float,
-    q: np.ndarray,
-    transfer: bool,
-    grasp_rel: np.ndarray,
-    resting: np.ndarray,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    links: np.ndarray,
+    a: np.ndarray, b: np.ndarray, t: float, q: np.ndarray, mode: Mode, chain: Chain, links: np.ndarray
 ) -> tuple[float, float, float]:
-    """``q = a + t (b - a)`` and the object's pose there: at ``resting``, or held as ``grasp_rel`` by the tip
-    (the tip's frame composed with ``grasp_rel``, as :func:`clew_ros.planar.kinematics.compose` does)."""
+    """``q = a + t (b - a)`` and the object's pose there: at ``mode.resting``, or held as ``mode.grasp_rel`` by the
+    tip (the tip's frame composed with it, as :func:`clew_ros.planar.kinematics.compose` does)."""
     for j in range(q.shape[0]):
         q[j] = a[j] + t * (b[j] - a[j])
-    if not transfer:
-        return resting[0], resting[1], resting[2]
-    return _held(q, grasp_rel[0], grasp_rel[1], grasp_rel[2], base, lengths, links)
+    if not mode.transfer:
+        return mode.resting[0], mode.resting[1], mode.resting[2]
+    grasp_rel = mode.grasp_rel
+    return _held(q, grasp_rel[0], grasp_rel[1], grasp_rel[2], chain.base, chain.lengths, links)
 
 
 @_leaf
@@ -49,37 +42,17 @@ def _held(
 
 @_jit
 def _move_clear(  # noqa: C901, PLR0911, PLR0912 - the levels of one move, commented step by step
-    a: np.ndarray,
-    b: np.ndarray,
-    transfer: bool,
-    grasp_rel: np.ndarray,
-    resting: np.ndarray,
-    min_margin: float,
-    max_margin: float,
-    coarse_stride: int,
-    checked: np.ndarray,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    r: float,
-    self_collision: bool,
-    bounds: np.ndarray,
-    obstacles: np.ndarray,
-    obstacle_starts: np.ndarray,
-    boxes: np.ndarray,
-    object_edges: np.ndarray,
-    shrunk_edges: np.ndarray,
-    shrunk_starts: np.ndarray,
-    rounding: float,
+    a: np.ndarray, b: np.ndarray, mode: Mode, check: MoveCheck, checked: np.ndarray, model: Model
 ) -> bool:
     """:func:`clew_ros.planar.continuous.straight_move_clear` of one move ``a -> b`` (its docstring says why it
     is sound); adds the configurations it checks to ``checked[0]``."""
+    chain, object_edges, rounding = model.chain, model.shape.edges, model.rounding
+    lengths, lower, upper = chain.lengths, chain.lower, chain.upper
+    transfer, grasp_rel = mode.transfer, mode.grasp_rel
+    min_margin, max_margin, coarse_stride = check
     n = lengths.shape[0]
     q = np.empty(n)
-    links = np.empty((n, 2, 2))
-    shape = np.empty((object_edges.shape[0], 2, 2))
-    shrunk = np.empty((shrunk_edges.shape[0], 2, 2))
+    placed = _placed(model)
     for j in range(n):  # both ends within the joint limits
         if a[j] < lower[j] or a[j] > upper[j] or b[j] < lower[j] or b[j] > upper[j]:
             return False
@@ -99,24 +72,18 @@ def _move_clear(  # noqa: C901, PLR0911, PLR0912 - the levels of one move, comme
     # in a transfer the last link and the object it holds keep their distance: it is checked once, at a
     tested = n - 1 if transfer else n
     if transfer:
-        px, py, pt = _at(a, b, 0.0, q, transfer, grasp_rel, resting, base, lengths, links)
+        px, py, pt = _at(a, b, 0.0, q, mode, chain, placed.links)
         checked[0] += 1
-        if not _valid_beyond(
-            q, px, py, pt, min_margin, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
-            obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
-        ):  # fmt: skip
+        if not _valid_beyond(q, px, py, pt, min_margin, n, placed, model):
             return False
     # level k: 2**k pieces, each cleared by its midpoint with margin motion / 2**(k + 1)
     level = max(0, math.ceil(math.log2(max(motion / (2.0 * max_margin), 1.0))))
     count = 2**level
     if count >= 2 * coarse_stride:  # a long move: every coarse_stride-th midpoint first, valid at all?
         for piece in range(coarse_stride // 2, count, coarse_stride):
-            px, py, pt = _at(a, b, (piece + 0.5) / count, q, transfer, grasp_rel, resting, base, lengths, links)
+            px, py, pt = _at(a, b, (piece + 0.5) / count, q, mode, chain, placed.links)
             checked[0] += 1
-            if not _valid_beyond(
-                q, px, py, pt, rounding, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
-                obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
-            ):  # fmt: skip
+            if not _valid_beyond(q, px, py, pt, rounding, n, placed, model):
                 return False  # most blocked moves end here, for a fraction of the first level's checks
     pending = np.arange(count)  # piece indices at this level
     while pending.shape[0]:
@@ -126,21 +93,15 @@ def _move_clear(  # noqa: C901, PLR0911, PLR0912 - the levels of one move, comme
         nfailed = 0
         for k in range(pending.shape[0]):
             t = (pending[k] + 0.5) / pieces
-            px, py, pt = _at(a, b, t, q, transfer, grasp_rel, resting, base, lengths, links)
+            px, py, pt = _at(a, b, t, q, mode, chain, placed.links)
             checked[0] += 1
-            if _valid_beyond(
-                q, px, py, pt, margin, tested, links, shape, shrunk, base, lengths, r, self_collision, bounds,
-                obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
-            ):  # fmt: skip
+            if _valid_beyond(q, px, py, pt, margin, tested, placed, model):
                 continue
             if margin <= min_margin:
                 return False
             # a midpoint that is not valid at all rejects the move at once (halving would only find it later)
             checked[0] += 1
-            if not _valid_beyond(
-                q, px, py, pt, rounding, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
-                obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
-            ):  # fmt: skip
+            if not _valid_beyond(q, px, py, pt, rounding, n, placed, model):
                 return False
             failed[nfailed] = pending[k]
             nfailed += 1
@@ -158,50 +119,33 @@ def _moves_clear(
     starts: np.ndarray,
     ends: np.ndarray,
     every: bool,
-    transfer: bool,
-    grasp_rel: np.ndarray,
-    resting: np.ndarray,
-    min_margin: float,
-    max_margin: float,
-    coarse_stride: int,
+    mode: tuple[Any, ...],
+    check: tuple[Any, ...],
     out: np.ndarray,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    r: float,
-    self_collision: bool,
-    bounds: np.ndarray,
-    obstacles: np.ndarray,
-    obstacle_starts: np.ndarray,
-    boxes: np.ndarray,
-    object_edges: np.ndarray,
-    shrunk_edges: np.ndarray,
-    shrunk_starts: np.ndarray,
-    rounding: float,
+    world: tuple[Any, ...],
 ) -> int:
     """``out[k]``: :func:`_move_clear` of ``starts[k] -> ends[k]``; when ``every``, the moves after the first
-    that is not clear are left unchecked (False). Returns how many configurations were checked."""
+    that is not clear are left unchecked (False). Returns how many configurations were checked. ``mode``,
+    ``check``: a :class:`~.packed.Mode` and :class:`~.packed.MoveCheck` as plain tuples; ``world``:
+    :attr:`~.packed.PackedWorld.plain`."""
+    model = _named(world)
+    named_mode, named_check = Mode(*mode), MoveCheck(*check)
     out[:] = False
     checked = np.zeros(1, np.int64)
     for k in range(starts.shape[0]):
-        out[k] = _move_clear(
-            starts[k], ends[k], transfer, grasp_rel, resting, min_margin, max_margin, coarse_stride, checked,
-            base, lengths, lower, upper, r, self_collision, bounds, obstacles, obstacle_starts, boxes,
-            object_edges, shrunk_edges, shrunk_starts, rounding,
-        )  # fmt: skip
+        out[k] = _move_clear(starts[k], ends[k], named_mode, named_check, checked, model)
         if every and not out[k]:
             break
     return int(checked[0])
 
 
-def _mode(resting: np.ndarray | None, grasp_rel: np.ndarray | None) -> tuple[bool, np.ndarray, np.ndarray]:
+def _mode(resting: np.ndarray | None, grasp_rel: np.ndarray | None) -> Mode:
     """A mode as the move kernels take it: whether the object is held, its pose held, its pose at rest."""
     if (resting is None) == (grasp_rel is None):
         raise ValueError("give the object's pose at rest (a transit) or the grasp_rel it is held by (a transfer)")
     if grasp_rel is None:
-        return False, _NOWHERE, _arg(resting)  # type: ignore[arg-type]  # not None: tested above
-    return True, _arg(grasp_rel), _NOWHERE
+        return Mode(False, _NOWHERE, _arg(resting))  # type: ignore[arg-type]  # not None: tested above
+    return Mode(True, _arg(grasp_rel), _NOWHERE)
 
 
 _NOWHERE = np.zeros(3)  # the pose a mode does not use
@@ -230,50 +174,23 @@ def moves_clear(
             f"starts, ends: expected two (K, {len(world.lengths)}) arrays, got {starts.shape}, {ends.shape}"
         )
     out = np.empty(len(starts), dtype=np.bool_)
-    transfer, held, at_rest = _mode(resting, grasp_rel)
-    checked = _moves_clear(
-        starts,
-        ends,
-        bool(every),
-        transfer,
-        held,
-        at_rest,
-        float(min_margin),
-        float(max_margin),
-        int(coarse_stride),
-        out,
-        *world.move_arguments,
-    )
+    check = (float(min_margin), float(max_margin), int(coarse_stride))
+    checked = _moves_clear(starts, ends, bool(every), plain(_mode(resting, grasp_rel)), check, out, world.plain)
     return out, int(checked)
 
 
 @_jit
 def _screen(
-    a: np.ndarray,
-    b: np.ndarray,
-    samples: np.ndarray,
-    transfer: bool,
-    held: np.ndarray,
-    at_rest: np.ndarray,
-    route: np.ndarray,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    r: float,
-    self_collision: bool,
-    bounds: np.ndarray,
-    obstacles: np.ndarray,
-    obstacle_starts: np.ndarray,
-    boxes: np.ndarray,
-    object_edges: np.ndarray,
-    shrunk_edges: np.ndarray,
-    shrunk_starts: np.ndarray,
-    eps: float,
+    a: np.ndarray, b: np.ndarray, samples: np.ndarray, mode: tuple[Any, ...], route: np.ndarray, world: tuple[Any, ...]
 ) -> int:
-    """:func:`screen_routes` into ``route``; returns how many configurations were checked."""
+    """:func:`screen_routes` into ``route``; returns how many configurations were checked. ``mode``: a
+    :class:`~.packed.Mode` (poses ``(M, 3)``) as a plain tuple; ``world``: :attr:`~.packed.PackedWorld.plain`."""
+    model = _named(world)
+    transfer, held, at_rest = mode
+    base, lengths = model.chain.base, model.chain.lengths
     m, n = a.shape
-    links = np.empty((n, 2, 2))
-    shape = np.empty((object_edges.shape[0], 2, 2))
-    shrunk = np.empty((shrunk_edges.shape[0], 2, 2))
+    placed = _placed(model)
+    links = placed.links
     q, moved, start = np.empty(n), np.empty(n), np.empty(n)
     checked = 0
     for k in range(m):
@@ -300,10 +217,7 @@ def _screen(
                 if transfer:
                     px, py, pt = _held(q, held[k, 0], held[k, 1], held[k, 2], base, lengths, links)
                 checked += 1
-                if not _valid_beyond(
-                    q, px, py, pt, eps, n, links, shape, shrunk, base, lengths, r, self_collision, bounds,
-                    obstacles, obstacle_starts, boxes, object_edges, shrunk_edges, shrunk_starts,
-                ):  # fmt: skip
+                if not _valid_beyond(q, px, py, pt, model.rounding, n, placed, model):
                     clear = False
                     break
             if clear:
@@ -374,5 +288,5 @@ def screen_routes(
             f"resting, grasp_rel: expected ({len(starts)}, 3), got {(held if transfer else at_rest).shape}"
         )
     route = np.empty(len(starts), dtype=np.int64)
-    checked = _screen(starts, ends, count, transfer, held, at_rest, route, *world.validity_arguments())
+    checked = _screen(starts, ends, count, (transfer, held, at_rest), route, world.plain)
     return route, int(checked)

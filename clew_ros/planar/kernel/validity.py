@@ -4,12 +4,13 @@ distance clear of its threshold by more than the world's rounding); the others g
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
-from clew_ros.planar.kernel.jit import _jit, _leaf
+from clew_ros.planar.kernel.jit import _inlined_leaf, _jit, _leaf
 from clew_ros.planar.kernel.kinematics import _forward
-from clew_ros.planar.kernel.packed import PackedWorld, _arg, _poses
+from clew_ros.planar.kernel.packed import Model, PackedWorld, Placed, _arg, _named, _poses
 from clew_ros.planar.kernel.segments import _place, _point_segment_distance
 
 
@@ -62,81 +63,44 @@ def _segment_clear_of_ring(
 
 
 @_jit
-def _clearly_valid(
-    q: np.ndarray,
-    poses: np.ndarray,
-    out: np.ndarray,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    r: float,
-    self_collision: bool,
-    bounds: np.ndarray,
-    obstacles: np.ndarray,
-    obstacle_starts: np.ndarray,
-    boxes: np.ndarray,
-    object_edges: np.ndarray,
-    shrunk_edges: np.ndarray,
-    shrunk_starts: np.ndarray,
-    eps: float,
-) -> None:
+def _clearly_valid(q: np.ndarray, poses: np.ndarray, out: np.ndarray, world: tuple[Any, ...]) -> None:
     """``out[b]``: configuration ``q[b]`` with the object at ``poses[b]`` passes the validity test of
-    interface.md section 1 with every distance at least ``eps`` past its threshold. False means
-    "not sure": the exact test decides (touching, within rounding, or invalid)."""
-    n = lengths.shape[0]
-    links = np.empty((n, 2, 2))
-    shape = np.empty((object_edges.shape[0], 2, 2))
-    shrunk = np.empty((shrunk_edges.shape[0], 2, 2))
+    interface.md section 1 with every distance at least the world's rounding past its threshold. False means
+    "not sure": the exact test decides (touching, within rounding, or invalid). ``world``:
+    :attr:`~.packed.PackedWorld.plain`."""
+    model = _named(world)
+    n = model.chain.lengths.shape[0]
+    placed = _placed(model)
     for b in range(q.shape[0]):
-        out[b] = _valid_beyond(
-            q[b],
-            poses[b, 0],
-            poses[b, 1],
-            poses[b, 2],
-            eps,
-            n,
-            links,
-            shape,
-            shrunk,
-            base,
-            lengths,
-            r,
-            self_collision,
-            bounds,
-            obstacles,
-            obstacle_starts,
-            boxes,
-            object_edges,
-            shrunk_edges,
-            shrunk_starts,
-        )
+        out[b] = _valid_beyond(q[b], poses[b, 0], poses[b, 1], poses[b, 2], model.rounding, n, placed, model)
 
 
-@_leaf
+@_jit
+def _placed(model: Model) -> Placed:
+    """Scratch for :func:`_valid_beyond` in ``model``'s world."""
+    shape = model.shape
+    n = model.chain.lengths.shape[0]
+    return Placed(
+        np.empty((n, 2, 2)), np.empty((shape.edges.shape[0], 2, 2)), np.empty((shape.shrunk_edges.shape[0], 2, 2))
+    )
+
+
+@_inlined_leaf
 def _valid_beyond(  # noqa: C901, PLR0911, PLR0912 - one compiled pass per configuration, leaving at the first doubt
-    q: np.ndarray,
-    px: float,
-    py: float,
-    pt: float,
-    eps: float,
-    shrunk_links: int,
-    links: np.ndarray,
-    shape: np.ndarray,
-    shrunk: np.ndarray,
-    base: np.ndarray,
-    lengths: np.ndarray,
-    r: float,
-    self_collision: bool,
-    bounds: np.ndarray,
-    obstacles: np.ndarray,
-    obstacle_starts: np.ndarray,
-    boxes: np.ndarray,
-    object_edges: np.ndarray,
-    shrunk_edges: np.ndarray,
-    shrunk_starts: np.ndarray,
+    q: np.ndarray, px: float, py: float, pt: float, eps: float, shrunk_links: int, placed: Placed, model: Model
 ) -> bool:
     """One configuration ``q (n,)`` of :func:`_clearly_valid`, the object at ``(px, py, pt)``; only the
-    first ``shrunk_links`` links are tested against the shrunk object. ``links``, ``shape`` and ``shrunk``
-    are scratch arrays of the sizes of the links, ``object_edges`` and ``shrunk_edges``."""
+    first ``shrunk_links`` links are tested against the shrunk object. ``placed``: scratch (:func:`_placed`)."""
+    links, shape, shrunk = placed
+    base, lengths = model.chain.base, model.chain.lengths
+    r, self_collision = model.link_radius, model.self_collision
+    bounds, obstacles, obstacle_starts, boxes = (
+        model.scene.bounds,
+        model.scene.edges,
+        model.scene.starts,
+        model.scene.boxes,
+    )
+    object_edges, shrunk_edges, shrunk_starts = model.shape
     n = lengths.shape[0]
     xmin, ymin, xmax, ymax = bounds[0], bounds[1], bounds[2], bounds[3]
     _forward(q, base, lengths, links)
@@ -207,5 +171,5 @@ def clearly_valid(world: PackedWorld, q: np.ndarray, poses: np.ndarray) -> np.nd
     others (invalid, touching, or within rounding of a threshold) need the exact test."""
     q = _arg(np.atleast_2d(q))
     out = np.empty(len(q), dtype=np.bool_)
-    _clearly_valid(q, _poses(poses, len(q)), out, *world.validity_arguments())
+    _clearly_valid(q, _poses(poses, len(q)), out, world.plain)
     return out

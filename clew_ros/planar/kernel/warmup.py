@@ -11,7 +11,7 @@ from clew_ros.planar.kernel.free_intervals import bounce_array, intervals
 from clew_ros.planar.kernel.kinematics import chain, solve_point
 from clew_ros.planar.kernel.lattice import lattice_costs, lattice_repair, lattice_search, release_totals
 from clew_ros.planar.kernel.moves import moves_clear, screen_routes
-from clew_ros.planar.kernel.packed import PackedWorld
+from clew_ros.planar.kernel.packed import MoveCheck, PackedWorld, Rounds, Solving, Trees
 from clew_ros.planar.kernel.path_shortcuts import shortcuts
 from clew_ros.planar.kernel.rrt_connect import connect_rounds
 from clew_ros.planar.kernel.validity import clearly_valid
@@ -73,35 +73,25 @@ def warm_up() -> float:
         nodes, parents = np.zeros((2, 8, 2)), np.full((2, 8), -1, dtype=np.int64)
         connect_rounds(
             world,
-            nodes,
-            parents,
-            np.ones(2, dtype=np.int64),
+            Trees(nodes, parents, np.ones(2, dtype=np.int64)),
             np.zeros(4, dtype=np.int64),
             np.zeros((1, 2)),
-            step_rad=0.35,
-            allowed=1.0,
-            check_work=1.0,
-            round_work=1.0,
+            Rounds(step_rad=0.35, allowed=1.0, check_work=1.0, round_work=1.0),
             resting=at_rest,
             grasp_rel=held,
-            **moving,  # type: ignore[arg-type]
+            check=MoveCheck(**moving),  # type: ignore[arg-type]
         )
     for angles in (np.zeros(1), np.full(1, np.nan)):
-        solve_point(
-            world.base,
-            world.lengths,
-            world.lower,
-            world.upper,
-            waypoints[:, 0],
-            np.ones((1, 2)),
-            np.zeros((1, 2)),
-            angles,
+        solving = Solving(
             angle_tolerance=0.1,
             angle_scale=1.0,
             iterations=2,
             damping=1e-6,
             max_step=0.4,
+            tolerance=0.0,
+            full_turns=False,
         )
+        solve_point(world.model.chain, waypoints[:, 0], np.ones((1, 2)), np.zeros((1, 2)), angles, solving)
     chain(world.base, world.lengths, waypoints[:, 0])
     lattice_search(
         np.full(2, 3, dtype=np.int64),

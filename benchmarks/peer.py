@@ -54,7 +54,7 @@ from benchmarks.worlds import all_worlds, select
 from clew_ros.core.genetic import minimize
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import PlannerSettings, Termination
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.planar.collision import check_start_and_goal, is_valid
 from clew_ros.planar.space import PlanarSpace
 from clew_ros.planar.world import World, world_from_parameters
@@ -224,7 +224,7 @@ def project_transit(
     settings = settings or PlannerSettings(seed=seed, time_limit=time_limit_s, threads=1)  # one core, as OMPL
     termination = Termination(time_limit_s)
     ctx = PlanningContext(PlanarSpace(world), settings, np.random.default_rng(seed), termination)
-    mode = {"object_poses": np.asarray(world.object.initial, float)[None]}
+    mode = Mode.resting(np.asarray(world.object.initial, float)[None])
     n = world.robot.dof
     k = settings.manhattan_order
     goal = np.asarray(q_goal, float)
@@ -265,7 +265,7 @@ def project_transit(
 
         def decode(population: np.ndarray, starts: np.ndarray = starts):
             index = np.clip(population[:, 0].astype(int), 0, len(landmarks) - 1)
-            return index, ctx.manhattan(starts[index], population[:, 1:].reshape(-1, k, n), **mode)
+            return index, ctx.manhattan(starts[index], population[:, 1:].reshape(-1, k, n), mode)
 
         def evaluate(population: np.ndarray, starts: np.ndarray = starts) -> np.ndarray:
             _, paths = decode(population)

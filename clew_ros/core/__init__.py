@@ -6,7 +6,8 @@ Nothing here looks at a world: the algorithm asks a :class:`~clew_ros.core.space
 ==========================================================  =================  ==================================
 paper                                                       module             what
 ==========================================================  =================  ==================================
-what the ACA asks of a world; a run's shared state          ``space``          ``Space``, ``PlanningContext``
+what the ACA asks of a world; a run's shared state          ``space``          ``Space``, ``PlanningSpace``,
+                                                                               ``Mode``, ``PlanningContext``
 1.3.1 Manhattan paths, 1.3.3 bouncing                       ``manhattan``      ``bounce``, ``ManhattanPaths``
 "we have used genetic algorithms"                           ``genetic``        ``minimize``, ``minimize_islands``
 1.3.2 f_a, f_b; 1.3.4 SEARCH's do-while loop                ``search``         ``local_search``, ``SearchJob``

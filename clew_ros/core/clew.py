@@ -12,7 +12,7 @@ import numpy as np
 
 from clew_ros.core.explore import Candidate, Explorer
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, SearchSettings, Termination
-from clew_ros.core.space import Improvement, PlanningContext, RegraspAims, Space
+from clew_ros.core.space import Improvement, PlanningContext, PlanningSpace, RegraspAims
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment, append_step
 
 __all__ = ["PlanResult", "Progress", "plan"]
@@ -51,7 +51,7 @@ class PlanResult:
 
 
 def plan(
-    space: Space,
+    space: PlanningSpace,
     settings: PlannerSettings | None = None,
     *,
     goal: np.ndarray | None = None,
@@ -97,7 +97,7 @@ def plan(
         segments = tree.history_of(landmark.id)
         append_step(segments, found.grasp, found.transit, found.transfer)
         assert found.object_pose is not None  # a successful SEARCH_TRANSFER says where the object ends
-        better = _improved(ctx, segments, found.object_pose, goal)
+        better = _improved(space, ctx, segments, found.object_pose, goal)
         result = finish(
             Outcome.SUCCEEDED,
             _found_message(len(tree), better, settings.improve_time),
@@ -395,12 +395,14 @@ def _worth_chaining(ctx: PlanningContext, landmark: Landmark, found: _Found, goa
     return found.distance < here - ctx.settings.resolution
 
 
-def _improved(ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray) -> Improvement:
-    """The first plan improved within ``planner.improve_time`` (:meth:`~clew_ros.core.space.Space.improve`),
+def _improved(
+    space: PlanningSpace, ctx: PlanningContext, segments: list[Segment], object_pose: np.ndarray, goal: np.ndarray
+) -> Improvement:
+    """The first plan improved within ``planner.improve_time`` (:meth:`~clew_ros.core.space.PlanningSpace.improve`),
     drawing from its own generator, seeded from ``planner.seed``."""
     rng = np.random.default_rng([ctx.settings.seed, IMPROVE_STREAM])
     own = dataclasses.replace(ctx, rng=rng, hold_samples=ctx.search.hold_samples, transit_joins=False)
-    return ctx.space.improve(own, segments, object_pose, goal)
+    return space.improve(own, segments, object_pose, goal)
 
 
 def _found_message(landmarks: int, better: Improvement, improve_time: float) -> str:

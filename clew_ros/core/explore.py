@@ -22,7 +22,7 @@ import numpy as np
 
 from clew_ros.core.genetic import minimize
 from clew_ros.core.manhattan import ManhattanPaths
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import Approach, Mode, PlanningContext, TransitRequest
 from clew_ros.core.tree import Landmark, LandmarkTree
 
 __all__ = ["Candidate", "Exploration", "Explorer"]
@@ -72,7 +72,7 @@ class Explorer:
         """The transits searched so far, by ``(landmark id, grasp)`` (``None``: none found), read only."""
         return MappingProxyType(self._transits)
 
-    def candidate(self, landmark_id: int, grasp: int, approach: Any | None = None) -> Candidate | None:
+    def candidate(self, landmark_id: int, grasp: int, approach: Approach | None = None) -> Candidate | None:
         """The single manipulation path's transit part from a landmark to a grasp (cached).
 
         With ``approach`` (the space's aim of SEARCH's regrasp towards the
@@ -103,7 +103,7 @@ class Explorer:
             self._transits[key] = found
         return found
 
-    def _aimed_transit(self, landmark: Landmark, grasp: int, approach: Any) -> Candidate | None:
+    def _aimed_transit(self, landmark: Landmark, grasp: int, approach: Approach) -> Candidate | None:
         """The transit from ``landmark`` to ``grasp`` aimed at ``approach``, searched once per approach."""
         key = (landmark.id, grasp, np.packbits(np.asarray(approach)).tobytes())
         if key not in self._aimed:
@@ -122,7 +122,7 @@ class Explorer:
         stochastic: a transit that failed once may succeed with other draws)."""
         self._transits = {key: found for key, found in self._transits.items() if found is not None}
 
-    def _transit(self, landmark: Landmark, grasp: int, approach: Any | None) -> Candidate | None:
+    def _transit(self, landmark: Landmark, grasp: int, approach: Approach | None) -> Candidate | None:
         return self._transits_to([(landmark, grasp)], approach)[0]
 
     def _search_transits(self, pairs: list[tuple[int, int]]) -> None:
@@ -132,11 +132,12 @@ class Explorer:
         found = self._transits_to([(self.tree[i], g) for i, g in pairs], None)
         self._transits.update(zip(pairs, found, strict=True))
 
-    def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: Any | None) -> list[Candidate | None]:
+    def _transits_to(self, pairs: list[tuple[Landmark, int]], approach: Approach | None) -> list[Candidate | None]:
         """SEARCH_TRANSIT from each landmark to its grasp, all at once: the candidates, None where it failed."""
         self.transit_searches += len(pairs)
         results = self.ctx.space.search_transits(
-            self.ctx, [(landmark.joints, landmark.object_pose, grasp, approach) for landmark, grasp in pairs]
+            self.ctx,
+            [TransitRequest(landmark.joints, landmark.object_pose, grasp, approach) for landmark, grasp in pairs],
         )
         return [
             Candidate(landmark.id, grasp, result.waypoints[-1], result.grasp_rel, result.waypoints)
@@ -175,7 +176,7 @@ class Explorer:
         def decode(population: np.ndarray) -> tuple[np.ndarray, ManhattanPaths]:
             index = np.clip(population[:, 0].astype(int), 0, len(candidates) - 1)
             genes = population[:, 1:].reshape(-1, k, n)
-            return index, ctx.manhattan(starts[index], genes, grasp_rel=rels[index])
+            return index, ctx.manhattan(starts[index], genes, Mode.held(rels[index]))
 
         def evaluate(population: np.ndarray) -> np.ndarray:
             _, paths = decode(population)

@@ -19,42 +19,13 @@ the space's: :meth:`~clew_ros.core.space.Space.search_transits` and
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from clew_ros.core.genetic import minimize_islands
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import Mode, PlanningContext, SearchJob
 
 __all__ = ["SearchJob", "local_search", "object_at", "own_generator"]
-
-
-@dataclass
-class SearchJob:
-    """One local search: from ``q0``, minimise ``objective(final_q, object_poses)``; refinement drives
-    ``error(q)`` ``(B, m)`` below ``accept``. ``pose``: the resting object's pose (transit) or its
-    pose in the end-effector frame (transfer), as ``mode`` says."""
-
-    q0: np.ndarray
-    objective: Callable[[np.ndarray, np.ndarray], np.ndarray]
-    error: Callable[[np.ndarray], np.ndarray]
-    accept: float
-    mode: dict[str, np.ndarray]  # {"object_poses": (1, 3)} (transit) or {"grasp_rel": (1, 3)} (transfer)
-    #: The configurations ``(m, n)`` a search that stalled at ``q`` may be joined to, drawn from a generator
-    #: (the space's joins), or ``None``.
-    targets: Callable[[np.ndarray, np.random.Generator], np.ndarray] | None = None
-    join_within: float = 0.0  # m: a search stalled farther than this from its target is not joined
-    #: A configuration ``(n,)`` that meets the target, which the greedy probe heads for (:func:`_greedy_probe`);
-    #: ``None``: no probe.
-    toward: np.ndarray | None = None
-    #: Configurations ``(m, n)`` meeting the target, nearest first, that a straight joint-space move
-    #: from ``q0`` may reach (:meth:`Space.straight_probe`, arms of many joints); ``None``: no such probe.
-    straight: np.ndarray | None = None
-
-    @property
-    def pose(self) -> np.ndarray:
-        pose: np.ndarray = next(iter(self.mode.values()))[0]
-        return pose
 
 
 def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.ndarray, float]]:
@@ -67,7 +38,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     n = ctx.space.dof
     k = ctx.settings.manhattan_order
     size = ctx.settings.population
-    key = next(iter(jobs[0].mode))  # "object_poses" (transit) or "grasp_rel" (transfer)
+    kind = jobs[0].mode  # all transits or all transfers: their poses stacked in this kind of mode
     poses = np.array([job.pose for job in jobs])
     q = np.array([np.asarray(job.q0, dtype=float) for job in jobs])
     waypoints: list[list[np.ndarray]] = [[row[None].copy()] for row in q]
@@ -78,7 +49,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
     ga_target = refine_radius * ctx.search.ga_target_share
     ctx.space.straight_probe(ctx, jobs, q, best, waypoints)
     if ctx.search.greedy_probe:
-        _greedy_probe(ctx, jobs, q, best, waypoints, key=key, poses=poses, target=ga_target)
+        _greedy_probe(ctx, jobs, q, best, waypoints, kind=kind, poses=poses, target=ga_target)
     searching = np.arange(len(jobs))
     if n >= ctx.many.straight_probe_joints and not ctx.many.transit_ga:  # a transit is the straight probe's, or none
         searching = np.array([i for i, job in enumerate(jobs) if job.straight is None], dtype=int)
@@ -99,7 +70,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
             paths = ctx.manhattan(
                 np.repeat(starts[islands], children, axis=0),
                 population.reshape(-1, k, n),
-                **{key: np.repeat(poses[searching[islands]], children, axis=0)},
+                kind.with_poses(np.repeat(poses[searching[islands]], children, axis=0)),
             )
             ctx.counters.evaluations += count * children
             finals = paths.final.reshape(count, children, n)
@@ -123,7 +94,7 @@ def local_search(ctx: PlanningContext, jobs: list[SearchJob]) -> list[tuple[np.n
             break
         genes = np.array([result.genes for result in results])[moved].reshape(-1, k, n)
         searching = searching[moved]
-        paths = ctx.manhattan(q[searching], genes, **{key: poses[searching]})
+        paths = ctx.manhattan(q[searching], genes, kind.with_poses(poses[searching]))
         for row, i in enumerate(searching):
             waypoints[i].append(paths.waypoints[row, 1:])
             q[i] = paths.final[row]
@@ -146,14 +117,14 @@ def _greedy_probe(
     best: np.ndarray,
     waypoints: list[list[np.ndarray]],
     *,
-    key: str,
+    kind: Mode,
     poses: np.ndarray,
     target: float,
 ) -> None:
     """Before the GA, every job with a configuration to head for (``toward``) and not yet within
     ``target`` tries one Manhattan path: each joint in turn moved by what separates it from ``toward``,
     bounced into its free interval as a GA individual's gene would be (RRT-Connect's greedy connection
-    to its goal, one joint at a time), the object at the jobs' ``poses`` under mode ``key`` (as
+    to its goal, one joint at a time), the object at the jobs' ``poses`` in a mode of ``kind`` (as
     :func:`local_search` has them). Kept, in ``q``, ``best`` and ``waypoints``, where it gets closer.
     One decoded path per job, cheap next to a generation; where the way is open the GA has nothing
     left to do."""
@@ -163,7 +134,7 @@ def _greedy_probe(
     genes = np.zeros((len(probe), ctx.settings.manhattan_order, ctx.space.dof))
     for a, i in enumerate(probe):
         genes[a, 0] = np.asarray(jobs[i].toward) - q[i]
-    paths = ctx.manhattan(q[probe], genes, **{key: poses[probe]})
+    paths = ctx.manhattan(q[probe], genes, kind.with_poses(poses[probe]))
     ctx.counters.evaluations += len(probe)
     for a, i in enumerate(probe):
         value = float(jobs[i].objective(paths.final[a][None], paths.object_poses[a][None])[0])
@@ -180,12 +151,11 @@ def own_generator(ctx: PlanningContext, stream: int, q: np.ndarray, pose: np.nda
     return np.random.default_rng([ctx.settings.seed, stream, *request.tolist()])
 
 
-def object_at(ctx: PlanningContext, q: np.ndarray, mode: dict[str, np.ndarray]) -> np.ndarray:
+def object_at(ctx: PlanningContext, q: np.ndarray, mode: Mode) -> np.ndarray:
     """Where the object is at configurations ``q`` ``(B, n)`` in ``mode``: at rest, or held."""
-    if mode.get("grasp_rel") is None:
-        poses = mode["object_poses"]
-        return np.broadcast_to(poses, (len(q), poses.shape[-1]))
-    return ctx.space.held_object_poses(q, mode["grasp_rel"])
+    if not mode.transfer:
+        return np.broadcast_to(mode.poses, (len(q), mode.poses.shape[-1]))
+    return ctx.space.held_object_poses(q, mode.poses)
 
 
 def _refine(
@@ -193,7 +163,7 @@ def _refine(
     q: np.ndarray,
     error: Callable[[np.ndarray], np.ndarray],
     accept: float,
-    mode: dict[str, np.ndarray],
+    mode: Mode,
 ) -> np.ndarray:
     """Damped least squares on ``error``, moved one joint at a time within free intervals (the tuning:
     ``SearchSettings.refine_iterations``, ``refine_damping``, ``refine_step_rad``)."""
@@ -212,7 +182,7 @@ def _refine(
         largest = np.max(np.abs(step))
         if largest > tuning.refine_step_rad:
             step *= tuning.refine_step_rad / largest
-        moved = ctx.space.single_moves(q, step, margin_m=ctx.settings.clearance, counters=ctx.counters, **mode)
+        moved = ctx.space.single_moves(q, step, mode, margin_m=ctx.settings.clearance, counters=ctx.counters)
         if len(moved) < 2 or np.max(np.abs(moved[-1] - q)) < 1e-10:
             break
         waypoints.extend(moved[1:])

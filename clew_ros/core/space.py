@@ -14,19 +14,24 @@ Vocabulary of the protocol (every array is a batch along its first axis):
 - a *configuration* ``q``: ``(n,)`` joint angles (rad), ``n`` = :attr:`Space.dof`;
 - an *object pose*: the resting object's placement (``(3,)`` planar: x, y, theta);
 - a *held pose* ``grasp_rel``: the object's pose in the tool's frame while it is carried;
-- a *mode*: ``{"object_poses": (B, p)}`` (transit: the object rests there) or ``{"grasp_rel": (B, p)}``
-  (transfer: the object is carried), as SEARCH's jobs and the Manhattan decoding take it;
-- an *approach*: whatever a space uses to aim a regrasp (planar: cells of the last link's angle in the
-  object's frame), opaque to the algorithm, ``None`` for no restriction.
+- a *mode* (:class:`Mode`): the object resting at ``(B, p)`` poses (transit) or carried, its ``(B, p)`` poses
+  in the tool's frame (transfer), as SEARCH's jobs and the Manhattan decoding take it;
+- an *approach* (:data:`Approach`): a mask of the approaches a space allows a regrasp (planar: cells of the
+  last link's angle in the object's frame), opaque to the algorithm, ``None`` for no restriction.
+
+What EXPLORE and SEARCH ask is :class:`Space`; the run around them (:func:`clew_ros.core.clew.plan`) asks a
+:class:`PlanningSpace` for the start, the goal, the answers knowable at once, the regrasps' aims and the
+improvement of the first plan besides.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from clew_ros.core.manhattan import Counters, ManhattanPaths
 from clew_ros.core.settings import ManyJoints, PlannerSettings, SearchSettings, Termination
@@ -35,11 +40,94 @@ if TYPE_CHECKING:
     from clew_ros.core.settings import Outcome
     from clew_ros.core.tree import Landmark, Segment
 
-__all__ = ["Improvement", "PathResult", "PlanningContext", "RegraspAims", "Space", "TransitRequest"]
+__all__ = [
+    "Approach",
+    "Improvement",
+    "Mode",
+    "PathResult",
+    "PlanningContext",
+    "PlanningSpace",
+    "RegraspAims",
+    "SearchJob",
+    "Space",
+    "TransitRequest",
+]
 
-#: One SEARCH_TRANSIT request: start joints ``(n,)``, the resting object's pose, the grasp's index and the
-#: allowed approach (or ``None``): :meth:`Space.search_transits`.
-TransitRequest = tuple[np.ndarray, np.ndarray, int, Any]
+#: The approaches a space allows a regrasp, as a mask of its own cells (:meth:`RegraspAims.aim`,
+#: :meth:`Space.approach_allows`; planar: cells of the last link's angle, spatial: one, every approach); the
+#: algorithm only passes it on, and keys its cache by it.
+Approach = NDArray[np.bool_]
+
+
+class TransitRequest(NamedTuple):
+    """One SEARCH_TRANSIT request (:meth:`Space.search_transits`)."""
+
+    start: np.ndarray  # (n,) joints
+    object_pose: np.ndarray  # where the object rests
+    grasp: int  # the grasp's index
+    approach: Approach | None  # the approaches allowed (None: any)
+
+
+@dataclass(frozen=True)
+class Mode:
+    """Where the object is along a path: resting at ``poses`` (transit), or carried with ``poses`` its pose in
+    the tool's frame (transfer); ``(B, p)``, or ``(1, p)`` for a whole batch."""
+
+    transfer: bool
+    poses: np.ndarray
+
+    @classmethod
+    def resting(cls, object_poses: np.ndarray) -> Mode:
+        """Transit: the object rests at ``object_poses``."""
+        return cls(False, object_poses)
+
+    @classmethod
+    def held(cls, grasp_rel: np.ndarray) -> Mode:
+        """Transfer: the object is carried, ``grasp_rel`` its pose in the tool's frame."""
+        return cls(True, grasp_rel)
+
+    @property
+    def object_poses(self) -> np.ndarray | None:
+        """Where the object rests (transit), else ``None``."""
+        return None if self.transfer else self.poses
+
+    @property
+    def grasp_rel(self) -> np.ndarray | None:
+        """The carried object's pose in the tool's frame (transfer), else ``None``."""
+        return self.poses if self.transfer else None
+
+    def with_poses(self, poses: np.ndarray) -> Mode:
+        """The same kind of mode at other poses."""
+        return Mode(self.transfer, poses)
+
+
+@dataclass
+class SearchJob:
+    """One local search (:func:`clew_ros.core.search.local_search`): from ``q0``, minimise
+    ``objective(final_q, object_poses)``; refinement drives ``error(q)`` ``(B, m)`` below ``accept``, the
+    object as ``mode`` says."""
+
+    q0: np.ndarray
+    objective: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    error: Callable[[np.ndarray], np.ndarray]
+    accept: float
+    mode: Mode  # (1, p): the resting object's pose (transit) or its pose in the tool's frame (transfer)
+    #: The configurations ``(m, n)`` a search that stalled at ``q`` may be joined to, drawn from a generator
+    #: (the space's joins), or ``None``.
+    targets: Callable[[np.ndarray, np.random.Generator], np.ndarray] | None = None
+    join_within: float = 0.0  # m: a search stalled farther than this from its target is not joined
+    #: A configuration ``(n,)`` that meets the target, which the greedy probe heads for
+    #: (:func:`clew_ros.core.search.local_search`); ``None``: no probe.
+    toward: np.ndarray | None = None
+    #: Configurations ``(m, n)`` meeting the target, nearest first, that a straight joint-space move
+    #: from ``q0`` may reach (:meth:`Space.straight_probe`, arms of many joints); ``None``: no such probe.
+    straight: np.ndarray | None = None
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The mode's pose ``(p,)``."""
+        pose: np.ndarray = self.mode.poses[0]
+        return pose
 
 
 @dataclass
@@ -66,7 +154,7 @@ class RegraspAims(Protocol):
         to the goal where holding it as it is could not (planar: held outside the goal's approach core)."""
         ...
 
-    def aim(self, landmark: Landmark, grasp: int) -> Any | None:
+    def aim(self, landmark: Landmark, grasp: int) -> Approach | None:
         """The approach a regrasp of ``grasp`` in place at ``landmark`` aims at; ``None``: that regrasp is
         not worth a transit."""
         ...
@@ -84,7 +172,7 @@ class RegraspAims(Protocol):
 
 
 class Space(Protocol):
-    """A world as the Ariadne's Clew Algorithm sees it (see the module's docstring for the vocabulary)."""
+    """A world as EXPLORE and SEARCH see it (see the module's docstring for the vocabulary)."""
 
     @property
     def dof(self) -> int:
@@ -101,40 +189,23 @@ class Space(Protocol):
         """Grasps of the object (the landmark space's ``[grasp]`` dimension)."""
         ...
 
-    @property
-    def initial_joints(self) -> np.ndarray:
-        """The start configuration ``(n,)``: the root landmark's joints."""
-        ...
-
-    @property
-    def initial_object_pose(self) -> np.ndarray:
-        """Where the object rests at the start: the root landmark's pose."""
-        ...
-
-    @property
-    def goal(self) -> np.ndarray:
-        """The world's goal placement of the object."""
-        ...
-
     def manhattan(
         self,
         q0: np.ndarray,
         genes: np.ndarray,
+        mode: Mode,
         *,
         margin_m: float,
         counters: Counters | None,
         should_stop: Callable[[], bool] | None,
         threads: int,
-        object_poses: np.ndarray | None = None,
-        grasp_rel: np.ndarray | None = None,
     ) -> ManhattanPaths:
-        """Genes ``(B, k, n)`` decoded into collision-free Manhattan paths from ``q0`` ``(B, n)``: each move
-        bounced into its joint's free interval (paper 1.3.1, 1.3.3). Transit with ``object_poses``,
-        transfer with ``grasp_rel``."""
+        """Genes ``(B, k, n)`` decoded into collision-free Manhattan paths from ``q0`` ``(B, n)`` in ``mode``:
+        each move bounced into its joint's free interval (paper 1.3.1, 1.3.3)."""
         ...
 
     def single_moves(
-        self, q: np.ndarray, moves: np.ndarray, *, margin_m: float, counters: Counters | None, **mode: np.ndarray
+        self, q: np.ndarray, moves: np.ndarray, mode: Mode, *, margin_m: float, counters: Counters | None
     ) -> np.ndarray:
         """Joint moves ``(n,)`` applied one joint at a time, each clamped to its free interval: the
         waypoints ``(m, n)`` (SEARCH's refinement, where bouncing would undo the step)."""
@@ -163,14 +234,39 @@ class Space(Protocol):
         ...
 
     def straight_probe(
-        self, ctx: PlanningContext, jobs: list[Any], q: np.ndarray, best: np.ndarray, waypoints: list[list[np.ndarray]]
+        self,
+        ctx: PlanningContext,
+        jobs: list[SearchJob],
+        q: np.ndarray,
+        best: np.ndarray,
+        waypoints: list[list[np.ndarray]],
     ) -> None:
         """Before SEARCH's GA rounds, jobs with ``straight`` targets try direct moves to them (arms of many
         joints); kept in ``q``, ``best`` and ``waypoints`` where they get closer."""
         ...
 
-    def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
+    def approach_allows(self, approach: Approach, grasp_rel: np.ndarray) -> bool:
         """Whether a grasp held as ``grasp_rel`` comes in at an allowed ``approach``."""
+        ...
+
+
+class PlanningSpace(Space, Protocol):
+    """A world as the whole run sees it (:func:`clew_ros.core.clew.plan`): EXPLORE's and SEARCH's space, and
+    the start, the goal, the answers knowable at once, the regrasps' aims and the improvement."""
+
+    @property
+    def initial_joints(self) -> np.ndarray:
+        """The start configuration ``(n,)``: the root landmark's joints."""
+        ...
+
+    @property
+    def initial_object_pose(self) -> np.ndarray:
+        """Where the object rests at the start: the root landmark's pose."""
+        ...
+
+    @property
+    def goal(self) -> np.ndarray:
+        """The world's goal placement of the object."""
         ...
 
     def regrasp_aims(self, goal: np.ndarray) -> RegraspAims:
@@ -211,16 +307,16 @@ class PlanningContext:
     #: SEARCH's own tuning (probes, joins, chains)
     search: SearchSettings = field(default_factory=SearchSettings)
 
-    def manhattan(self, q0: np.ndarray, genes: np.ndarray, **mode: np.ndarray) -> ManhattanPaths:
+    def manhattan(self, q0: np.ndarray, genes: np.ndarray, mode: Mode) -> ManhattanPaths:
         """:meth:`Space.manhattan` with this run's clearance, counters, stop test and threads."""
         return self.space.manhattan(
             q0,
             genes,
+            mode,
             margin_m=self.settings.clearance,
             counters=self.counters,
             should_stop=self.termination,
             threads=self.settings.threads,
-            **mode,
         )
 
     def initial_genes(self, count: int, islands: int | None = None) -> np.ndarray:

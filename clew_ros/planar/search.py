@@ -26,7 +26,7 @@ import numpy as np
 
 from clew_ros.core.search import SearchJob, local_search, object_at, own_generator
 from clew_ros.core.settings import ManyJoints, SearchSettings
-from clew_ros.core.space import PathResult, PlanningContext, TransitRequest
+from clew_ros.core.space import Mode, PathResult, PlanningContext, TransitRequest
 from clew_ros.planar.collision import is_valid, packed_world
 from clew_ros.planar.connect import join
 from clew_ros.planar.continuous import StopOnly, path_valid, straight_move_clear
@@ -98,8 +98,8 @@ def straight_probe(
         if job.straight is None or not len(job.straight) or ctx.termination():
             continue
         targets = job.straight
-        pose = job.pose if "object_poses" in job.mode else None
-        rel = job.pose if "grasp_rel" in job.mode else None
+        pose = None if job.mode.transfer else job.pose
+        rel = job.pose if job.mode.transfer else None
         starts = np.broadcast_to(q[i], targets.shape)
         clear = sampled_clear(
             world, starts, targets, object_pose=pose, grasp_rel=rel, step_rad=ctx.many.screen_step_rad
@@ -159,8 +159,8 @@ def join_stalled(
     targets = job.targets(stalled, rng)
     if not len(targets) or ctx.termination():
         return waypoints, distance
-    pose = job.mode.get("object_poses")
-    held = job.mode.get("grasp_rel")
+    pose = job.mode.object_poses
+    held = job.mode.grasp_rel
     mode = {"object_pose": None if pose is None else pose[0], "grasp_rel": None if held is None else held[0]}
     path = join(
         world,
@@ -195,7 +195,7 @@ def search_transit(
     two-joint arm whose valid holding configurations all bend the elbow one
     way, the residual also gains how far the elbow bends the other way.
     """
-    return search_transits(world, ctx, [(q0, object_pose, grasp, approach)])[0]
+    return search_transits(world, ctx, [TransitRequest(q0, object_pose, grasp, approach)])[0]
 
 
 def search_transits(world: World, ctx: PlanningContext, requests: list[TransitRequest]) -> list[PathResult]:
@@ -281,7 +281,7 @@ def _transit_job(
     hopeless = (approach is not None and not approach.any()) or not len(holds)
     if hopeless or not within_reach(world, target[0]):
         return PathResult(False, q0[None], float(objective(q0[None], None)[0]))
-    mode = {"object_poses": object_pose[None]}
+    mode = Mode.resting(object_pose[None])
     held = holds[objective(holds, None) <= 0.5 * world.grasp_tolerance]  # the transit's own success test
     # the greedy probe heads for the nearest of them (joint travel)
     toward = held[np.argmin(np.abs(held - q0).sum(axis=1))] if len(held) else None
@@ -537,10 +537,11 @@ def search_transfer(
 ) -> PathResult:
     """SEARCH_TRANSFER: carry the object (held as ``grasp_rel``) toward the ``goal`` placement; stalled near it,
     joined to it (:func:`join_stalled`, towards :func:`goal_configurations`) unless ``joins`` is false."""
-    mode = {"grasp_rel": np.asarray(grasp_rel, float)[None]}
+    carried = np.asarray(grasp_rel, float)[None]
+    mode = Mode.held(carried)
 
     def error(q: np.ndarray) -> np.ndarray:
-        return goal_error(world, compose(tip_poses(world.robot, q), mode["grasp_rel"]), goal)
+        return goal_error(world, compose(tip_poses(world.robot, q), carried), goal)
 
     def objective(_q: np.ndarray | None, poses: np.ndarray) -> np.ndarray:
         distance: np.ndarray = np.linalg.norm(goal_error(world, poses, goal), axis=1)
@@ -548,7 +549,7 @@ def search_transfer(
 
     accept = 0.25 * world.goal_tolerance
     if not goal_within_reach(world, grasp_rel, goal):
-        start_pose = compose(tip_poses(world.robot, np.asarray(q0, float)[None]), mode["grasp_rel"])
+        start_pose = compose(tip_poses(world.robot, np.asarray(q0, float)[None]), carried)
         return PathResult(
             False, np.asarray(q0, float)[None], float(objective(None, start_pose)[0]), object_pose=start_pose[0]
         )
@@ -556,11 +557,11 @@ def search_transfer(
     def targets(stalled: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         margin = ctx.search.min_margin_factor * ctx.settings.clearance
         return goal_configurations(
-            world, stalled, mode["grasp_rel"][0], goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds
+            world, stalled, carried[0], goal, rng, min_margin=margin, seeds=ctx.search.goal_seeds
         )
 
     within = ctx.search.join_radius * world.robot.reach
-    toward = transfer_probe_target(world, ctx, np.asarray(q0, float), mode["grasp_rel"][0], goal)
+    toward = transfer_probe_target(world, ctx, np.asarray(q0, float), carried[0], goal)
     job = SearchJob(np.asarray(q0, float), objective, error, accept, mode, targets if joins else None, within, toward)
     if world.robot.dof >= ctx.many.straight_probe_joints:
         straight = _straight_transfer(world, ctx, job, goal)
@@ -573,7 +574,7 @@ def search_transfer(
         [(waypoints, distance)] = local_search(ctx, [job])
 
     def succeeded(path: np.ndarray, reached: float) -> tuple[bool, np.ndarray]:
-        pose = compose(tip_poses(world.robot, path[-1:]), mode["grasp_rel"])[0]
+        pose = compose(tip_poses(world.robot, path[-1:]), carried)[0]
         return goal_reached(world, pose, goal) and reached <= 0.5 * world.goal_tolerance, pose
 
     success, final_pose = succeeded(waypoints, distance)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -20,7 +19,7 @@ from clew_ros.core import clew
 from clew_ros.core.manhattan import Counters, ManhattanPaths
 from clew_ros.core.search import SearchJob
 from clew_ros.core.settings import ManyJoints, Outcome, PlannerSettings, SearchSettings, Termination
-from clew_ros.core.space import Improvement, PathResult, PlanningContext, TransitRequest
+from clew_ros.core.space import Approach, Improvement, Mode, PathResult, PlanningContext, TransitRequest
 from clew_ros.core.tree import Landmark, Segment
 from clew_ros.planar import search as planar_search
 from clew_ros.planar.collision import is_placement_valid, is_valid
@@ -182,20 +181,19 @@ class PlanarSpace:
         self,
         q0: np.ndarray,
         genes: np.ndarray,
+        mode: Mode,
         *,
         margin_m: float,
         counters: Counters | None,
         should_stop: Callable[[], bool] | None,
         threads: int,
-        object_poses: np.ndarray | None = None,
-        grasp_rel: np.ndarray | None = None,
     ) -> ManhattanPaths:
         return run_manhattan(
             self.world,
             q0,
             genes,
-            object_poses=object_poses,
-            grasp_rel=grasp_rel,
+            object_poses=mode.object_poses,
+            grasp_rel=mode.grasp_rel,
             margin_m=margin_m,
             counters=counters,
             should_stop=should_stop,
@@ -203,9 +201,17 @@ class PlanarSpace:
         )
 
     def single_moves(
-        self, q: np.ndarray, moves: np.ndarray, *, margin_m: float, counters: Counters | None, **mode: np.ndarray
+        self, q: np.ndarray, moves: np.ndarray, mode: Mode, *, margin_m: float, counters: Counters | None
     ) -> np.ndarray:
-        return single_moves(self.world, q, moves, margin_m=margin_m, counters=counters, **mode)
+        return single_moves(
+            self.world,
+            q,
+            moves,
+            margin_m=margin_m,
+            counters=counters,
+            object_poses=mode.object_poses,
+            grasp_rel=mode.grasp_rel,
+        )
 
     def held_object_poses(self, q: np.ndarray, grasp_rel: np.ndarray) -> np.ndarray:
         return compose(tip_poses(self.world.robot, q), grasp_rel)
@@ -235,7 +241,7 @@ class PlanarSpace:
     ) -> None:
         planar_search.straight_probe(self.world, ctx, jobs, q, best, waypoints=waypoints)
 
-    def approach_allows(self, approach: Any, grasp_rel: np.ndarray) -> bool:
+    def approach_allows(self, approach: Approach, grasp_rel: np.ndarray) -> bool:
         # the last link's direction in the object frame is -grasp_rel[2]
         return bool(approach[approach_cell(-grasp_rel[2], len(approach))])
 

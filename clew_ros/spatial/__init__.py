@@ -23,11 +23,17 @@
 - :mod:`~clew_ros.spatial.enclosure`: the proof that the goal placement is closed off by obstacles (a quick
   answer of the planner).
 - :mod:`~clew_ros.spatial.world`: a whole spatial world from its parameters, checked, with its checker.
-- :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions).
+- :mod:`~clew_ros.spatial.transforms`: poses as 4x4 matrices (URDF ``rpy``, quaternions), one or a batch.
 - :mod:`~clew_ros.spatial.space`: the world as the Ariadne's Clew Algorithm's space
   (:class:`~clew_ros.spatial.space.SpatialSpace`) and :func:`~clew_ros.spatial.space.plan`, the spatial
-  planner's entry point; :mod:`~clew_ros.spatial.motion_plan` (motion-only queries: the ACA's transit
-  search), :mod:`~clew_ros.spatial.tuning`; the improvement's shortcuts and pruning are the generic ones of
+  planner's entry point; a facade over one module per concern: :mod:`~clew_ros.spatial.space_parts` (the
+  checkers, kinematics and grasps every part shares), :mod:`~clew_ros.spatial.manhattan` (decoding),
+  :mod:`~clew_ros.spatial.settle` (a carried object set down), :mod:`~clew_ros.spatial.distances`,
+  :mod:`~clew_ros.spatial.search` (SEARCH's jobs), :mod:`~clew_ros.spatial.targets` (the configurations they
+  aim at), :mod:`~clew_ros.spatial.ways` and :mod:`~clew_ros.spatial.straight` (straight moves),
+  :mod:`~clew_ros.spatial.refusals` (quick answers), :mod:`~clew_ros.spatial.improvement`;
+  :mod:`~clew_ros.spatial.motion_plan` (motion-only queries: the ACA's transit search),
+  :mod:`~clew_ros.spatial.tuning`; the improvement's shortcuts and pruning are the generic ones of
   :mod:`clew_ros.core.improve`.
 
 - :mod:`~clew_ros.spatial.offline`: a parameter tree to a checked spatial plan (what ``clew_plan``,

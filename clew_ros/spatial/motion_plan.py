@@ -44,7 +44,7 @@ from clew_ros.core.improve import shortcut_path
 from clew_ros.core.manhattan import Counters
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
-from clew_ros.core.space import PlanningContext, Space
+from clew_ros.core.space import Mode, PlanningContext, Space
 from clew_ros.core.tree import Landmark, LandmarkTree, Segment
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.inverse import IKSettings, InverseKinematics, distinct
@@ -120,14 +120,14 @@ def connect(
     start: np.ndarray,
     goal: np.ndarray,
     *,
-    mode: dict[str, np.ndarray],
+    mode: Mode,
     checker: SpatialChecker,
     landmarks: int,
     rng: np.random.Generator,
     goal_tree: LandmarkTree | None = None,
     start_ways: Sequence[np.ndarray] = (),
 ) -> np.ndarray | None:
-    """A path (m, n) from ``start`` to ``goal`` (joints) in ``mode`` (``{"grasp_rel": (1, 6)}``: the object
+    """A path (m, n) from ``start`` to ``goal`` (joints) in ``mode`` (``Mode.held``: the object
     carried), each piece checked by ``checker``: the motion-only search's two trees (rooted at ``start`` and at
     ``goal``, or ``goal_tree``'s root: a goal tree an earlier call grew, grown further in place) given at most
     ``landmarks`` EXPLORE steps and new landmarks, on ``ctx``'s settings, stop test and counters and on ``rng``;
@@ -223,7 +223,7 @@ class _MotionRun:
         termination: Termination,
         *,
         start: np.ndarray | None = None,
-        mode: dict[str, np.ndarray] | None = None,
+        mode: Mode | None = None,
         checker: SpatialChecker | None = None,
         rng: np.random.Generator | None = None,
         counters: Counters | None = None,
@@ -273,7 +273,7 @@ class _MotionRun:
         )
         self.none = np.zeros(6)
         #: the Manhattan decoding's mode (the arm alone, or carrying the object) and its checker
-        self.mode = {"object_poses": self.none[None]} if mode is None else mode
+        self.mode = Mode.resting(self.none[None]) if mode is None else mode
         self.checker = self.world.checker if checker is None else checker
         self.tree = LandmarkTree(self.world.initial if start is None else start, self.none)
         self.goal_tree: LandmarkTree | None = None
@@ -467,7 +467,7 @@ class _MotionRun:
 
 
 def _explore(
-    ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float, mode: dict[str, np.ndarray]
+    ctx: PlanningContext, space: MotionSpace, tree: LandmarkTree, weight: float, mode: Mode
 ) -> tuple[int, np.ndarray, float] | None:
     """EXPLORE for transit: the landmark (a category gene) and Manhattan genes whose decoded end lies
     farthest from every landmark of ``tree``: the distance between the joints times ``weight`` and the tcp's
@@ -477,12 +477,11 @@ def _explore(
     k = ctx.settings.manhattan_order
     joints = tree.joints()
     landmarks = _features(space, joints, weight)
-    ((key, pose),) = mode.items()
 
     def decode(population: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         index = np.clip(population[:, 0].astype(int), 0, len(joints) - 1)
         genes = population[:, 1:].reshape(-1, k, n)
-        paths = ctx.manhattan(joints[index], genes, **{key: np.repeat(pose, len(population), axis=0)})
+        paths = ctx.manhattan(joints[index], genes, mode.with_poses(np.repeat(mode.poses, len(population), axis=0)))
         return index, paths.waypoints
 
     def evaluate(population: np.ndarray) -> np.ndarray:

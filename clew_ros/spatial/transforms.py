@@ -1,4 +1,4 @@
-"""Rigid transforms as 4x4 matrices: URDF ``rpy`` poses, quaternions, axis-angle motions.
+"""Rigid transforms as 4x4 matrices: URDF ``rpy`` poses, quaternions, axis-angle motions, and their batches.
 
 A pose is ``[x, y, z, roll, pitch, yaw]`` with rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF's ``rpy``,
 interface.md section 1b).
@@ -14,10 +14,14 @@ from numpy.typing import NDArray
 
 __all__ = [
     "axis_motion",
+    "inverse_matrix",
+    "matrices",
     "matrix_pose",
     "matrix_quaternion",
     "pose_matrix",
+    "poses",
     "quaternion_matrix",
+    "rotation_vectors",
     "rpy_matrix",
     "translation_matrix",
 ]
@@ -109,3 +113,54 @@ def matrix_quaternion(r: Matrix) -> tuple[float, float, float, float]:
         q = ((r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s)
     x, y, z, w = (float(v) for v in q)
     return x, y, z, w
+
+
+def matrices(poses: Matrix) -> Matrix:
+    """4x4 transforms (B, 4, 4) of poses (B, 6) ``[x, y, z, roll, pitch, yaw]`` (vectorised :func:`pose_matrix`)."""
+    poses = np.asarray(poses, dtype=float).reshape(-1, 6)
+    cr, sr = np.cos(poses[:, 3]), np.sin(poses[:, 3])
+    cp, sp = np.cos(poses[:, 4]), np.sin(poses[:, 4])
+    cy, sy = np.cos(poses[:, 5]), np.sin(poses[:, 5])
+    out = np.zeros((len(poses), 4, 4))
+    out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = -sp, cp * sr, cp * cr
+    out[:, :3, 3] = poses[:, :3]
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def poses(transforms: Matrix) -> Matrix:
+    """Poses (B, 6) of 4x4 transforms (B, 4, 4) (vectorised :func:`matrix_pose`)."""
+    r = np.asarray(transforms, dtype=float).reshape(-1, 4, 4)
+    pitch = np.arcsin(np.clip(-r[:, 2, 0], -1.0, 1.0))
+    flat = np.abs(np.cos(pitch)) < 1e-9
+    roll = np.where(flat, 0.0, np.arctan2(r[:, 2, 1], r[:, 2, 2]))
+    yaw = np.where(flat, np.arctan2(-r[:, 0, 1], r[:, 1, 1]), np.arctan2(r[:, 1, 0], r[:, 0, 0]))
+    return np.column_stack([r[:, 0, 3], r[:, 1, 3], r[:, 2, 3], roll, pitch, yaw])
+
+
+def rotation_vectors(rotations: Matrix) -> Matrix:
+    """Rotation vectors (B, 3) (axis times angle, rad) of rotations (B, 3, 3)."""
+    vec = 0.5 * np.stack(
+        [
+            rotations[:, 2, 1] - rotations[:, 1, 2],
+            rotations[:, 0, 2] - rotations[:, 2, 0],
+            rotations[:, 1, 0] - rotations[:, 0, 1],
+        ],
+        axis=1,
+    )
+    sine = np.linalg.norm(vec, axis=1)
+    cosine = np.clip((np.trace(rotations, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arctan2(sine, cosine)
+    scale = np.where(sine > 1e-12, angle / np.maximum(sine, 1e-300), 1.0)
+    out: Matrix = vec * scale[:, None]
+    return out
+
+
+def inverse_matrix(transform: Matrix) -> Matrix:
+    """The inverse of a rigid 4x4 transform."""
+    out = np.eye(4)
+    out[:3, :3] = transform[:3, :3].T
+    out[:3, 3] = -transform[:3, :3].T @ transform[:3, 3]
+    return out

@@ -167,7 +167,7 @@ class SpatialTuning:
     #: landmark and from the nearest goal configuration); 0: none
     transfer_tree_landmarks: int = 8
     #: goal configurations (count) a goal tree is rooted at: the first SEARCH_TRANSFER's best goal
-    #: configuration (:meth:`SpatialSpace.goal_configurations`: the way out that carries the object farthest,
+    #: configuration (:func:`~clew_ros.spatial.targets.goal_configurations`: the way out carrying the object farthest,
     #: then the nearest), then each later one's best where it is at least ``transfer_goal_apart_rad`` (largest
     #: joint difference) from every root (its inverse kinematics found a posture the first did not)
     transfer_goal_roots: int = 3

@@ -6,7 +6,7 @@ import numpy as np
 
 from clew_ros.core.explore import Explorer
 from clew_ros.core.settings import PlannerSettings, Termination
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.core.tree import LandmarkTree
 from clew_ros.planar.space import PlanarSpace
 from clew_ros.planar.world import load_world
@@ -38,7 +38,7 @@ def test_explore_beats_random_single_manipulation_paths():
     distances = []
     for candidate in candidates:
         genes = rng.normal(0, 1.2, (64, settings.manhattan_order, n))
-        paths = ctx.manhattan(candidate.start, genes, grasp_rel=candidate.grasp_rel[None])
+        paths = ctx.manhattan(candidate.start, genes, Mode.held(candidate.grasp_rel[None]))
         ends = ctx.space.landmark_features(paths.final, paths.object_poses, settings.joint_weight)
         distances.append(np.linalg.norm(ends - features, axis=1))
     distances = np.concatenate(distances)

@@ -12,7 +12,7 @@ import math
 from pathlib import Path
 
 import pytest
-from helpers.saved_plans import DIRECTORY, plan_file
+from helpers.saved_plans import DIRECTORY, WORLDS, plan_file
 
 SAVED = sorted(DIRECTORY.glob("*.json"))
 
@@ -34,7 +34,10 @@ def _differences(saved, fresh, where="plan") -> list[str]:
 
 
 def test_saved_plans_exist() -> None:
-    assert len(SAVED) >= 8
+    """A saved plan for every world and seed of :data:`helpers.saved_plans.WORLDS`, and none other."""
+    expected = {f"{world}_seed{seed}" for world, (_, seeds, _) in WORLDS.items() for seed in seeds}
+    assert {p.stem for p in SAVED} == expected
+    assert sum(world.startswith("spatial_") for world in WORLDS) >= 4
 
 
 @pytest.mark.parametrize("saved_path", SAVED, ids=[p.stem for p in SAVED])
@@ -45,6 +48,7 @@ def test_same_seed_same_plan_as_saved(saved_path: Path, tmp_path: Path) -> None:
     code, fresh = plan_file(world, int(seed), tmp_path / "plan.json")
     saved = json.loads(saved_path.read_text())
     assert code == (0 if saved["success"] else 1)
-    if fresh["success"]:
+    if fresh["success"] and not world.startswith("spatial_"):
+        # (a spatial plan's dragging transfers are mended even without improvement time: spatial.lift)
         assert fresh["stats"]["joint_travel_rad"] == fresh["stats"]["first_joint_travel_rad"]
     assert _differences(saved, fresh) == []

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from clew_ros.core.settings import PlannerSettings, SearchSettings
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.planar.collision import is_valid
 from clew_ros.planar.kinematics import compose, tip_poses, transform_points
 from clew_ros.planar.plan import interpolate
@@ -86,7 +86,7 @@ def _joint_space_job(world, q0: np.ndarray, goal: np.ndarray):
         lambda q, _poses: 0.1 * np.linalg.norm(q - goal, axis=1),
         lambda q: 0.1 * (q - goal),
         1e-5,
-        {"object_poses": world.object.initial[None]},
+        Mode.resting(world.object.initial[None]),
         toward=goal,
     )
 

@@ -9,7 +9,7 @@ import pytest
 
 from clew_ros.core.search import SearchJob, local_search
 from clew_ros.core.settings import ManyJoints, PlannerSettings, Termination
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.planar import search as planar_search
 from clew_ros.planar.collision import is_valid
 from clew_ros.planar.continuous import path_valid, straight_moves_clear
@@ -25,7 +25,7 @@ def _context(world: World, seed: int = 0) -> PlanningContext:
 
 def _job(world: World, start: np.ndarray, goal: np.ndarray) -> SearchJob:
     """A transit to the configuration ``goal`` (the OMPL peer's problem), with it as straight target."""
-    mode = {"object_poses": np.asarray(world.object.initial, float)[None]}
+    mode = Mode.resting(np.asarray(world.object.initial, float)[None])
 
     def objective(q: np.ndarray, _poses: np.ndarray) -> np.ndarray:
         distance: np.ndarray = 0.1 * np.linalg.norm(q - goal, axis=1)

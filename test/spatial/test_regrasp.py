@@ -16,16 +16,18 @@ pytest.importorskip("coal")
 from clew_ros.core.explore import Exploration, Explorer
 from clew_ros.core.plan import Plan
 from clew_ros.core.settings import Outcome, PlannerSettings
-from clew_ros.core.space import PlanningContext
+from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.core.tree import Landmark, Segment
 from clew_ros.spatial.handling import DragSettings, drag_problems, slides
 from clew_ros.spatial.lift import drag_free, lifted_segments, slid_level
 from clew_ros.spatial.placements import face_yaw, sample_placements
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
 from clew_ros.spatial.space import SpatialSpace, plan
+from clew_ros.spatial.targets import goal_configurations
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.turns import turnable
+from clew_ros.spatial.ways import way_out
 from clew_ros.spatial.world import SpatialWorld
 from clew_ros.worlds.spatial import SpatialGenerated, generate_spatial
 from clew_ros.worlds.spatial_regrasp import RejectedError, hand_blocked, single_grasp_refutation
@@ -209,11 +211,11 @@ def test_goal_configurations_with_a_way_in_come_first() -> None:
     assert grasp is not None
     rel = space.grasp_rel(grasp)
     checker = space.transfer_checker(rel)
-    found = space.goal_configurations(ctx, np.asarray(world.initial, dtype=float), rel, goal)
+    found = goal_configurations(space.parts, ctx, np.asarray(world.initial, dtype=float), rel, goal)
     assert len(found) >= 2
     outs = []
     for q in found:
-        way = space.way_out(checker, {"grasp_rel": rel[None]}, q)
+        way = way_out(space.parts, checker, Mode.held(rel[None]), q)
         held = space.held_object_poses(np.vstack([q[None], q[None] if way is None else way[-1:]]), rel)
         outs.append(float(np.linalg.norm(held[1, :3] - held[0, :3])))
     assert outs[0] > 0.1  # the first slides the object out of the cubby (and so comes in that way)

@@ -14,8 +14,11 @@ import pytest
 
 from clew_ros.core.manhattan import bounce
 from clew_ros.core.settings import Outcome, PlannerSettings, Termination
+from clew_ros.core.space import Mode
 from clew_ros.core.tree import LandmarkTree
+from clew_ros.spatial.distances import at_goal
 from clew_ros.spatial.motion_plan import _MotionRun
+from clew_ros.spatial.settle import rests, settle
 from clew_ros.spatial.space import SpatialSpace, matrices, plan
 from clew_ros.spatial.spheres import SphereSettings
 from clew_ros.spatial.validate import ValidationSettings, validate_transit, validation_samples
@@ -118,9 +121,9 @@ def check_plan(world: SpatialWorld, segments: list[Any], final: np.ndarray) -> N
         assert np.allclose(tcp, held_at, atol=1e-4)  # it holds the grasp where the object rests
         assert transfer_problems(space, segment.grasp, path) == []
         resting = space.held_object_poses(path[-1:], space.grasp_rel(segment.grasp))[0]
-        assert space.rests(resting)
+        assert rests(space.world, resting)
     assert np.allclose(resting, final, atol=1e-4)
-    assert space.at_goal(final, np.array(world.object.goal))
+    assert at_goal(space.parts, final, np.array(world.object.goal))
 
 
 def test_a_motion_among_boxes_is_valid_at_the_validators_step(boxes: SpatialWorld) -> None:
@@ -157,8 +160,8 @@ def test_a_motion_joined_at_a_goal_tree_landmark_runs_from_start_to_goal(boxes: 
     ends = {}
     for tree, root, name in ((run.tree, boxes.initial, "start"), (run.goal_tree, boxes.goal, "goal")):
         decoded = space.manhattan(
-            root[None], rng.normal(0.0, 0.5, size=(1, 1, 7)), margin_m=1e-3, counters=None, should_stop=None,
-            threads=1, object_poses=none[None],
+            root[None], rng.normal(0.0, 0.5, size=(1, 1, 7)), Mode.resting(none[None]), margin_m=1e-3,
+            counters=None, should_stop=None, threads=1,
         )  # fmt: skip
         way = decoded.waypoints[0]
         tree.add(parent=0, joints=way[-1], object_pose=none, grasp=None, grasp_rel=None, transit=way, transfer=None)
@@ -200,7 +203,7 @@ def test_a_pick_and_place_on_a_table(table: SpatialWorld) -> None:
     check_plan(table, result.segments, result.final_object_pose)
     # every landmark's object rests on a support (EXPLORE's transfers end at stable placements)
     space = SpatialSpace(table)
-    assert all(space.rests(landmark.object_pose) for landmark in result.tree)
+    assert all(rests(space.world, landmark.object_pose) for landmark in result.tree)
 
 
 def test_same_seed_same_plan(table: SpatialWorld) -> None:
@@ -225,8 +228,8 @@ def test_the_improvement_joins_a_transfer_carried_back_and_forth_and_taken_again
     from clew_ros.core.settings import Termination
     from clew_ros.core.space import PlanningContext
     from clew_ros.core.tree import Segment
+    from clew_ros.spatial.improvement import shortcut_segments
     from clew_ros.spatial.plan import make_plan, path_problems
-    from clew_ros.spatial.space import _shortcut_segments
 
     found = plan(table, PlannerSettings(seed=0, time_limit=60.0, improve_time=0.0))
     assert found.outcome is Outcome.SUCCEEDED, found.message
@@ -243,7 +246,7 @@ def test_the_improvement_joins_a_transfer_carried_back_and_forth_and_taken_again
     assert path_problems(table, make_plan(table, built)) == []  # the premise: a valid plan
     space = SpatialSpace(table)
     ctx = PlanningContext(space, PlannerSettings(seed=0, improve_time=0.5), np.random.default_rng(0), Termination(60))
-    better = _shortcut_segments(space, ctx, segments, found.final_object_pose)
+    better = shortcut_segments(space.parts, ctx, segments, found.final_object_pose)
     assert (better.first_transfers, better.transfers) == (found.stats["transfers"] + 1, found.stats["transfers"])
     assert better.travel <= found.stats["joint_travel_rad"] + 1e-9 < better.first_travel
     check_plan(table, better.segments, found.final_object_pose)
@@ -297,21 +300,21 @@ def test_decoded_transfers_end_with_the_object_resting(table: SpatialWorld) -> N
     lifted_pose[2, 3] += 0.08
     lifted = space.ik(0).solve(lifted_pose, np.random.default_rng(0), seeds=start[None])
     assert len(lifted) > 0
-    settled, ok = space.settle(space.transfer_checker(rel), rel, lifted[:1])
+    settled, ok = settle(space.parts, space.transfer_checker(rel), rel, lifted[:1])
     assert ok.tolist() == [True]
-    assert space.rests(space.held_object_poses(settled, rel)[0])
+    assert rests(space.world, space.held_object_poses(settled, rel)[0])
     # random Manhattan transfers from the hold: every end rests (set down, or the path stays at its start)
     genes = np.random.default_rng(1).normal(0.0, 0.6, size=(12, 1, space.dof))
     paths = space.manhattan(
         np.repeat(start[None], 12, axis=0),
         genes,
+        Mode.held(np.repeat(rel[None], 12, axis=0)),
         margin_m=0.0,
         counters=None,
         should_stop=None,
         threads=1,
-        grasp_rel=np.repeat(rel[None], 12, axis=0),
     )
-    assert all(space.rests(pose) for pose in paths.object_poses)
+    assert all(rests(space.world, pose) for pose in paths.object_poses)
     checker = space.transfer_checker(rel)
     for path in paths.waypoints:
         assert checker.valid(path).all()
@@ -382,22 +385,22 @@ def test_an_improvement_the_validator_refuses_is_not_returned(monkeypatch: pytes
     limit) is not returned: the run returns its first plan (valid), saying what was refused."""
     from dataclasses import replace as replaced
 
+    from clew_ros.spatial import improvement
     from clew_ros.spatial.offline import checked_plan
-    from clew_ros.spatial.space import SpatialSpace
     from clew_ros.worlds.spatial import generate_spatial
 
     world = generate_spatial("spatial_table", 0, "panda").world()
-    improved = SpatialSpace.improved
+    improved = improvement.improved
 
-    def faulty(self: SpatialSpace, *args: Any, **kwargs: Any) -> Any:
-        better = improved(self, *args, **kwargs)
+    def faulty(*args: Any, **kwargs: Any) -> Any:
+        better = improved(*args, **kwargs)
         first = better.segments[0]
         past = np.array(first.waypoints[0], dtype=float)
         past[0] = world.robot.upper[0] + 0.1
         broken = replaced(first, waypoints=[first.waypoints[0], past, *first.waypoints])
         return replaced(better, segments=[broken, *better.segments[1:]])
 
-    monkeypatch.setattr(SpatialSpace, "improved", faulty)
+    monkeypatch.setattr(improvement, "improved", faulty)
     result = plan(world, PlannerSettings(seed=0, time_limit=30.0))
     assert result.outcome is Outcome.SUCCEEDED, result.message
     assert "outside its limits" in result.stats["improve_refused"]

@@ -11,8 +11,12 @@ import pytest
 
 from clew_ros.core.settings import PlannerSettings, Termination
 from clew_ros.core.space import PlanningContext
+from clew_ros.spatial.distances import at_goal
 from clew_ros.spatial.offline import checked_plan
+from clew_ros.spatial.search import goal_tree, transfer_trees
+from clew_ros.spatial.settle import rests, settle
 from clew_ros.spatial.space import SpatialSpace, SpatialTuning, plan
+from clew_ros.spatial.targets import goal_configurations
 from clew_ros.spatial.validate import ValidationSettings, validation_samples
 from clew_ros.worlds.spatial import generate_spatial
 
@@ -30,11 +34,11 @@ def test_a_lifted_object_is_set_down_level_by_an_arm_of_few_joints(family: str, 
     for level in (True, False):
         space = SpatialSpace(world, SpatialTuning(level_settle=level))
         rel = space.grasp_rel(transfer.grasp)
-        assert not any(space.rests(pose) for pose in space.held_object_poses(lifted, rel))
-        settled, ok = space.settle(space.transfer_checker(rel), rel, lifted)
+        assert not any(rests(world, pose) for pose in space.held_object_poses(lifted, rel))
+        settled, ok = settle(space.parts, space.transfer_checker(rel), rel, lifted)
         assert ok.all() if level else not ok.any()
         for q, start in zip(settled[ok], lifted[ok], strict=True):
-            assert space.rests(space.held_object_poses(q[None], rel)[0])
+            assert rests(world, space.held_object_poses(q[None], rel)[0])
             assert np.max(np.abs(q - start)) <= space.tuning.settle_max_rad
 
 
@@ -51,7 +55,7 @@ def test_a_pick_and_place_by_an_arm_of_four_joints_is_planned_and_valid() -> Non
 
 
 def test_a_failed_transfers_two_trees_carry_the_object_out_of_one_shelf_into_another() -> None:
-    """EXPLORE for transfer paths (``SpatialSpace.transfer_trees``): from the witness's grasp in one narrow
+    """EXPLORE for transfer paths (``spatial.search.transfer_trees``): from the witness's grasp in one narrow
     shelf, the two trees (rooted there and at a goal configuration) find a path whose every piece is valid
     at the validator's 0.002 rad with the object held, and which sets it down at the goal; the goal tree is
     kept for the next SEARCH_TRANSFER of the same grasp and goal, which grows it further; with no
@@ -67,15 +71,15 @@ def test_a_failed_transfers_two_trees_carry_the_object_out_of_one_shelf_into_ano
     space = SpatialSpace(world)
     rel = space.grasp_rel(transfer.grasp)
     ctx = PlanningContext(space, settings, np.random.default_rng(0), Termination(60.0), many=space.tuning.many)
-    found = space.goal_configurations(ctx, q0, rel, goal)
+    found = goal_configurations(space.parts, ctx, q0, rel, goal)
     assert len(found)
     for _ in range(10):  # SEARCH_TRANSFERs from the same landmark: the goal tree grows from one to the next
-        path = space.transfer_trees(ctx, q0, rel, goal, found)
+        path = transfer_trees(space, ctx, q0, rel, goal, found=found)
         if path is not None:
             break
     assert path is not None
     assert np.array_equal(path[0], q0)
-    assert space.at_goal(space.held_object_poses(path[-1:], rel)[0], goal)
+    assert at_goal(space.parts, space.held_object_poses(path[-1:], rel)[0], goal)
     checker = space.transfer_checker(rel)
     steps = np.full(space.dof, ValidationSettings().step_rad)
     assert all(checker.valid(validation_samples(a, b, steps)).all() for a, b in itertools.pairwise(path))
@@ -83,11 +87,11 @@ def test_a_failed_transfers_two_trees_carry_the_object_out_of_one_shelf_into_ano
     grown = SpatialSpace(world, SpatialTuning(transfer_tree_landmarks=2))
     before = 0
     for _ in range(3):
-        grown.transfer_trees(ctx, q0 + 0.0, rel, goal, found)
-        tree = grown.goal_tree(rel, goal)
+        transfer_trees(grown, ctx, q0 + 0.0, rel, goal, found=found)
+        tree = goal_tree(grown.parts, rel, goal)
         assert tree is not None
         assert len(tree) >= before
         before = len(tree)
     assert before > 1
     none = SpatialSpace(world, SpatialTuning(transfer_tree_landmarks=0))
-    assert none.transfer_trees(ctx, q0, rel, goal, found) is None
+    assert transfer_trees(none, ctx, q0, rel, goal, found=found) is None

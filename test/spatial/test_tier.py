@@ -18,8 +18,8 @@ from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.exact import ExactChecker
 from clew_ros.spatial.robot import RobotModel, robot_from_parameters
 from clew_ros.spatial.scene import Obstacle
-from clew_ros.spatial.space import straight_samples_clear
 from clew_ros.spatial.spheres import SphereModel, SphereSettings, inner_cover
+from clew_ros.spatial.straight import straight_samples_clear
 from clew_ros.spatial.tier import link_shapes, robot_distance
 from clew_ros.spatial.validate import ValidationSettings, validate_transit
 from clew_ros.spatial.world import SpatialWorld

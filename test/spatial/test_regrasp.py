@@ -22,6 +22,7 @@ from clew_ros.spatial.handling import DragSettings, drag_problems, slides
 from clew_ros.spatial.lift import drag_free, lifted_segments, slid_level
 from clew_ros.spatial.placements import face_yaw, sample_placements
 from clew_ros.spatial.plan import make_plan, replay, validate_plan
+from clew_ros.spatial.settle import rests
 from clew_ros.spatial.space import SpatialSpace, plan
 from clew_ros.spatial.targets import goal_configurations
 from clew_ros.spatial.transforms import pose_matrix
@@ -294,9 +295,8 @@ def test_placements_are_drawn_again_near_those_one_grasp_holds() -> None:
         found[draws] = aims.placements(start, first.grasp)
     assert found[0] == []  # the first draw: no placement both grasps hold
     assert found[8]
-    space = SpatialSpace(world)
-    for pose in found[8][:3]:  # each a stable placement on a support, free of the obstacles
-        assert space.rests(np.asarray(pose))
+    for pose in found[8][:3]:  # each a stable placement on a support
+        assert rests(world, np.asarray(pose))
 
 
 def test_placements_drawn_near_a_pose_stay_near_it() -> None:

@@ -80,17 +80,7 @@ def improved(
         single, pose = straight
         direct = shortcut_segments(parts, ctx, single, pose)
         if direct.travel < better.travel:
-            better = Improvement(
-                direct.segments,
-                pose,
-                better.first_travel,
-                better.first_transfers,
-                direct.travel,
-                direct.transfers,
-                better.shortcuts + direct.shortcuts,
-                better.work + direct.work + 1,
-                direct.stopped,
-            )
+            better = _replaced(better, direct, pose)
     if better.transfers <= 1 or better.stopped:
         return better
     world = parts.world
@@ -113,18 +103,24 @@ def improved(
         ]
         direct = shortcut_segments(parts, ctx, single, carried.object_pose)
         if direct.travel <= better.travel:
-            return Improvement(
-                direct.segments,
-                direct.final_object_pose,
-                better.first_travel,
-                better.first_transfers,
-                direct.travel,
-                direct.transfers,
-                better.shortcuts + direct.shortcuts,
-                better.work + direct.work + 1,
-                direct.stopped,
-            )
+            return _replaced(better, direct, direct.final_object_pose)
     return better
+
+
+def _replaced(better: Improvement, direct: Improvement, pose: Array) -> Improvement:
+    """``direct`` (a plan of one transfer, shortcut) in place of ``better``, ending with the object at ``pose``:
+    the first plan's figures kept, the work of both counted."""
+    return Improvement(
+        direct.segments,
+        pose,
+        better.first_travel,
+        better.first_transfers,
+        direct.travel,
+        direct.transfers,
+        better.shortcuts + direct.shortcuts,
+        better.work + direct.work + 1,
+        direct.stopped,
+    )
 
 
 def straight_plan(parts: SpaceParts, ctx: PlanningContext, goal: Array) -> tuple[list[Segment], Array] | None:

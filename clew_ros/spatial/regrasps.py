@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from clew_ros.core.tree import Landmark
 from clew_ros.spatial.placements import sample_placements
-from clew_ros.spatial.transforms import matrix_pose, rpy_matrix
+from clew_ros.spatial.transforms import matrix_pose, rpy_matrix, turned_about_z
 from clew_ros.spatial.views import HeldObjectView
 
 __all__ = ["RegraspSettings", "SpatialAims"]
@@ -93,6 +93,7 @@ class SpatialAims:
         self._refined: set[int] = set()  # the grasps whose placements were refined (_refine)
         self._holds: dict[int, list[Array]] = {}  # grasp -> per candidate, the configurations holding it
         self._goal_solutions: dict[int, Array] = {}  # goal grasp -> configurations holding the object at the goal
+        self._take_costs: dict[tuple[int, bytes], float] = {}  # (grasp, placement) -> take_cost
         self._rng = np.random.default_rng([int(v * 1e6) & 0xFFFFFFFF for v in self.goal])
 
     # -- the core's RegraspAims
@@ -122,8 +123,12 @@ class SpatialAims:
         ``grasp`` at ``object_pose`` (6 numbers) to one holding it at the goal (inf: either is not found)."""
         if grasp not in self.goal_grasps():
             return math.inf
-        here = _matrix(np.asarray(object_pose, dtype=float))[None]
-        return self._nearest(self._solve(grasp, here, self.settings.ik_seeds)[0], self._goal_solutions[grasp])
+        key = (grasp, np.asarray(object_pose, dtype=float).tobytes())
+        if key not in self._take_costs:
+            here = _matrix(np.asarray(object_pose, dtype=float))[None]
+            found = self._solve(grasp, here, self.settings.ik_seeds)[0]
+            self._take_costs[key] = self._nearest(found, self._goal_solutions[grasp])
+        return self._take_costs[key]
 
     def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
         """Intermediate placements (6 numbers each), best first: ``grasp`` holds the object there and so does
@@ -173,14 +178,8 @@ class SpatialAims:
         goal's tolerance) in a valid configuration inverse kinematics finds."""
         if self._goal_grasps is None:
             space = self.space
-            base = _matrix(self.goal)
             tolerance = space.world.tolerances["goal_angle_tolerance"]
-            poses = []
-            for yaw in self.settings.goal_yaws:
-                if abs(yaw) <= tolerance + 1e-12:
-                    turned = base.copy()
-                    turned[:3, :3] = rpy_matrix(0.0, 0.0, yaw) @ base[:3, :3]
-                    poses.append(turned)
+            poses = turned_about_z(_matrix(self.goal), self.settings.goal_yaws, tolerance)
             self._goal_grasps = [g for g in range(space.grasp_count) if self._holds_any(g, np.array(poses))]
         return self._goal_grasps
 

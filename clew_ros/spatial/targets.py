@@ -11,7 +11,7 @@ from clew_ros.core.search import own_generator
 from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.space_parts import SpaceParts, cache_key
-from clew_ros.spatial.transforms import inverse_matrix, matrices, rpy_matrix
+from clew_ros.spatial.transforms import inverse_matrix, matrices, turned_about_z
 from clew_ros.spatial.ways import way_out
 
 __all__ = ["GOAL_STREAM", "HOLD_STREAM", "goal_configurations", "goal_poses", "holds"]
@@ -80,12 +80,5 @@ def goal_poses(parts: SpaceParts, goal: Array) -> list[Array]:
     """The goal placement (4x4) turned about world z through its centre by each of
     :attr:`SpatialTuning.goal_yaws` within ``world.goal_angle_tolerance`` (the goal's own first): every
     one of them reaches the goal."""
-    base = matrices(goal)[0]
     tolerance = parts.world.tolerances["goal_angle_tolerance"]
-    out = []
-    for yaw in parts.tuning.goal_yaws:
-        if abs(yaw) <= tolerance + 1e-12:
-            turned = base.copy()
-            turned[:3, :3] = rpy_matrix(0.0, 0.0, yaw) @ base[:3, :3]
-            out.append(turned)
-    return out
+    return turned_about_z(matrices(goal)[0], parts.tuning.goal_yaws, tolerance)

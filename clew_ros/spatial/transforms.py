@@ -24,6 +24,7 @@ __all__ = [
     "rotation_vectors",
     "rpy_matrix",
     "translation_matrix",
+    "turned_about_z",
 ]
 
 Matrix = NDArray[np.float64]
@@ -163,4 +164,16 @@ def inverse_matrix(transform: Matrix) -> Matrix:
     out = np.eye(4)
     out[:3, :3] = transform[:3, :3].T
     out[:3, 3] = -transform[:3, :3].T @ transform[:3, 3]
+    return out
+
+
+def turned_about_z(base: Matrix, yaws: Sequence[float], tolerance: float) -> list[Matrix]:
+    """``base`` (4x4) turned about world z through its own centre by each of ``yaws`` (rad) within
+    ``tolerance`` (rad, either way), in their order."""
+    out = []
+    for yaw in yaws:
+        if abs(yaw) <= tolerance + 1e-12:
+            turned = base.copy()
+            turned[:3, :3] = rpy_matrix(0.0, 0.0, yaw) @ base[:3, :3]
+            out.append(turned)
     return out

@@ -290,7 +290,7 @@ def _search_via(
     every candidate's best placement first, then every one's second, and so on; each one reached becomes a
     landmark, and SEARCH (its regrasps in place) goes on from it. Returns that landmark and SEARCH's
     successful answer from it, or ``None``."""
-    proposed = [(c, aims.placements(landmark, c.grasp)[: ctx.search.via_placements]) for c in candidates]
+    proposed = [(c, aims.placements(landmark, c.grasp, c.start)[: ctx.search.via_placements]) for c in candidates]
     rounds = max((len(poses) for _, poses in proposed), default=0)
     tries = [(c, poses[r]) for r in range(rounds) for c, poses in proposed if r < len(poses)]  # breadth first
     for candidate, pose in tries:

@@ -164,10 +164,10 @@ class RegraspAims(Protocol):
         to try them (planar: as they are)."""
         ...
 
-    def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
+    def placements(self, landmark: Landmark, grasp: int, start: np.ndarray) -> list[np.ndarray]:
         """Intermediate placements (object poses), best first, to which ``grasp`` could carry the object from
-        ``landmark`` and where a grasp serving the goal could take it on (SEARCH's aimed regrasp,
-        ``SearchSettings.via_placements``); empty: none proposed."""
+        ``landmark`` (held at configuration ``start``) and where a grasp serving the goal could take it on
+        (SEARCH's aimed regrasp, ``SearchSettings.via_placements``); empty: none proposed."""
         ...
 
 

@@ -129,7 +129,7 @@ class PlanarAims:
     def ranked(self, landmark: Landmark, grasps: list[int]) -> list[int]:
         return grasps  # the aim (approach cells) decides, not the order
 
-    def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
+    def placements(self, landmark: Landmark, grasp: int, start: np.ndarray) -> list[np.ndarray]:
         return []  # the planar planner proposes no intermediate placements (SearchSettings.via_placements 0)
 
     def regrasp_approaches(self, object_pose: np.ndarray, grasp: int) -> np.ndarray:

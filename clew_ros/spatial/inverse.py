@@ -36,7 +36,7 @@ from clew_ros.spatial.kernels.packed import chain_of
 from clew_ros.spatial.robot import RobotModel
 from clew_ros.spatial.transforms import pose_matrix
 
-__all__ = ["POSE_ROWS", "IKSettings", "InverseKinematics", "distinct", "grasp_targets", "pose_rows"]
+__all__ = ["LEVEL_ROWS", "POSE_ROWS", "IKSettings", "InverseKinematics", "distinct", "grasp_targets", "pose_rows"]
 
 #: The rows of a pose error, in order: position x, y, z (m in ``world``), then the rotation vector's x, y, z
 #: (rad in ``world``; its x and y are 0 exactly when the two frames differ by a turn about world z alone).
@@ -105,6 +105,10 @@ def pose_rows(names: Sequence[str]) -> NDArray[np.bool_]:
     if unknown or not names:
         raise ValueError(f"rows: expected names among {', '.join(POSE_ROWS)}, got {list(names)!r}")
     return np.array([row in names for row in POSE_ROWS], dtype=bool)
+
+
+#: a level face at a height: the pose error's z and its rotation's x and y (its x, y and yaw free)
+LEVEL_ROWS = pose_rows(("z", "rx", "ry"))
 
 
 def distinct(solutions: NDArray[np.float64], distance: float) -> NDArray[np.float64]:

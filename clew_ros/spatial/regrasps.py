@@ -22,13 +22,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.core.tree import Landmark
-from clew_ros.spatial.placements import sample_placements
+from clew_ros.spatial.inverse import pose_rows
+from clew_ros.spatial.placements import Support, placement_pose, sample_placements
 from clew_ros.spatial.transforms import matrix_pose, rpy_matrix, turned_about_z
 from clew_ros.spatial.views import HeldObjectView
 
 __all__ = ["RegraspSettings", "SpatialAims"]
 
 Array = NDArray[np.float64]
+
+#: a placement solved for: the object's centre at a point of the support and level (its yaw free)
+_LEVEL_AT = pose_rows(("x", "y", "z", "rx", "ry"))
 
 
 class SpatialSpace(HeldObjectView, Protocol):
@@ -44,6 +48,8 @@ class SpatialSpace(HeldObjectView, Protocol):
     def initial_joints(self) -> np.ndarray: ...
 
     def nearest_turns(self, q0: Array, found: Array) -> Array: ...
+
+    def tcp(self, q: Array) -> Array: ...
 
 
 def _matrix(pose: Array) -> Array:
@@ -78,6 +84,22 @@ class RegraspSettings:
     refine_sources: int = 8
     refine_m: float = 0.05
     refine_rad: float = 0.7
+    #: where that finds none either, placements are solved for: per grasp (the landmark's and the goal
+    #: grasps), support and face, inverse kinematics from this many random configurations (count) per point
+    #: (the top's centre and half-way to each corner) sets the object down level there (its yaw free); at
+    #: most ``solve_keep`` kept per grasp (count; 0: no solving), then refined as above
+    solve_seeds: int = 4
+    solve_keep: int = 8
+
+
+def _spots(support: Support) -> list[tuple[float, float]]:
+    """Points (x, y) of ``support``'s top a placement is solved at: its centre, then half-way to each corner."""
+    cos, sin = math.cos(support.yaw), math.sin(support.yaw)
+    out = [(float(support.center[0]), float(support.center[1]))]
+    for u, v in ((0.5, 0.5), (-0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)):
+        du, dv = u * support.half[0], v * support.half[1]
+        out.append((float(support.center[0] + cos * du - sin * dv), float(support.center[1] + sin * du + cos * dv)))
+    return out
 
 
 class SpatialAims:
@@ -130,24 +152,32 @@ class SpatialAims:
             self._take_costs[key] = self._nearest(found, self._goal_solutions[grasp])
         return self._take_costs[key]
 
-    def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
+    def placements(self, landmark: Landmark, grasp: int, start: np.ndarray) -> list[np.ndarray]:
         """Intermediate placements (6 numbers each), best first: ``grasp`` holds the object there and so does
-        a goal grasp other than it. The best are nearest in the joints: ``grasp``'s configuration there to the
-        landmark's, plus the goal grasp's there to its configuration at the goal (rad, L1; the nearest of the
-        solutions found): the transfers on either side of the regrasp stay in one posture family."""
+        a goal grasp other than it. The best are nearest in the joints: ``grasp``'s configuration there to
+        ``start`` (holding it at ``landmark``'s placement), plus the goal grasp's there to its configuration
+        at the goal (rad, L1; the nearest of the solutions found): the transfers on either side of the regrasp
+        stay in one posture family."""
         goal_grasps = [g for g in self.goal_grasps() if g != grasp]
         if not goal_grasps:
             return []
         if not len(self._candidates()):
             return []
-        found = self._placements(landmark, grasp, goal_grasps)
+        found = self._placements(landmark, grasp, goal_grasps, start)
         if not found and grasp not in self._refined:
             self._refined.add(grasp)
             self._refine([grasp, *goal_grasps])
-            found = self._placements(landmark, grasp, goal_grasps)
+            found = self._placements(landmark, grasp, goal_grasps, start)
+            if not found and self.settings.solve_keep > 0:
+                since = len(self._candidates())
+                self._solve_for([grasp, *goal_grasps])
+                self._refine([grasp, *goal_grasps], since)
+                found = self._placements(landmark, grasp, goal_grasps, start)
         return found
 
-    def _placements(self, landmark: Landmark, grasp: int, goal_grasps: list[int]) -> list[np.ndarray]:
+    def _placements(
+        self, landmark: Landmark, grasp: int, goal_grasps: list[int], start: np.ndarray
+    ) -> list[np.ndarray]:
         """:meth:`placements` among the candidates drawn so far."""
         drawn = self._candidates()
         here = _matrix(np.asarray(landmark.object_pose, dtype=float))[:3, 3]
@@ -156,7 +186,7 @@ class SpatialAims:
         apart = (np.linalg.norm(centres - here, axis=1) > self.settings.min_move_m) & (
             np.linalg.norm(centres - there, axis=1) > self.settings.min_move_m
         )
-        joints = np.asarray(landmark.joints, dtype=float)
+        joints = np.asarray(start, dtype=float)
         cost = np.full(len(drawn), np.inf)
         mine = self._solutions(grasp)
         for k in np.flatnonzero(apart).tolist():
@@ -225,9 +255,9 @@ class SpatialAims:
             self._where = where
         return self._drawn
 
-    def _refine(self, grasps: list[int]) -> None:
-        """New candidates near those ``grasps`` hold (:attr:`RegraspSettings.refine_draws`), solved for every
-        grasp asked so far."""
+    def _refine(self, grasps: list[int], since: int = 0) -> None:
+        """New candidates near those ``grasps`` hold (:attr:`RegraspSettings.refine_draws`) among the candidates
+        from index ``since`` on, solved for every grasp asked so far."""
         world, settings = self.space.world, self.settings
         thing = world.object
         assert thing is not None
@@ -236,7 +266,9 @@ class SpatialAims:
             {
                 k
                 for g in grasps
-                for k in [k for k, q in enumerate(self._solutions(g)) if len(q)][: settings.refine_sources]
+                for k in [k for k, q in enumerate(self._solutions(g)) if len(q) and k >= since][
+                    : settings.refine_sources
+                ]
             }
         )
         near = [
@@ -251,13 +283,56 @@ class SpatialAims:
             )
             for k in sources
         ]
-        if not near or not sum(len(n) for n in near):
+        self._add([n for n in near if len(n)], [self._where[k] for k, n in zip(sources, near, strict=True) if len(n)])
+
+    def _add(self, poses: list[Array], where: list[tuple[int, str]]) -> None:
+        """Candidates ``poses`` (each (k, 4, 4), on the support and face of ``where``'s entry), solved for every
+        grasp asked so far."""
+        if not poses:
             return
-        added = np.concatenate(near)
-        self._drawn = np.concatenate([drawn, added])
-        self._where += [self._where[k] for k, n in zip(sources, near, strict=True) for _ in range(len(n))]
+        added = np.concatenate(poses)
+        self._drawn = np.concatenate([self._candidates(), added])
+        self._where += [w for w, p in zip(where, poses, strict=True) for _ in range(len(p))]
         for g in self._holds:
-            self._holds[g] = self._holds[g] + self._solve(g, added, settings.ik_seeds)
+            self._holds[g] = self._holds[g] + self._solve(g, added, self.settings.ik_seeds)
+
+    def _solve_for(self, grasps: list[int]) -> None:
+        """Candidates solved for where each of ``grasps`` holds the object (none drawn is held by both the
+        landmark's grasp and a goal grasp: an arm that holds it on a sliver of a table): per support and face,
+        from :attr:`RegraspSettings.solve_seeds` random configurations, the object set down level at the
+        support's height (its x, y and yaw free), kept where it rests inside the top touching nothing else, at
+        most :attr:`RegraspSettings.solve_keep` per grasp."""
+        world, settings = self.space.world, self.settings
+        thing = world.object
+        assert thing is not None
+        robot = world.robot
+        ik = self.space.ik(1)
+        for grasp in grasps:
+            frame = _matrix(np.asarray(self.space.grasp_rel(grasp), dtype=float))
+            kept: list[Array] = []
+            where: list[tuple[int, str]] = []
+            for s, support in enumerate(world.supports):
+                for face in thing.shape.faces:
+                    if len(kept) >= settings.solve_keep:
+                        break
+                    targets = np.array(
+                        [placement_pose(thing.shape, support, face, x=x, y=y, yaw=0.0) for x, y in _spots(support)]
+                    )
+                    targets = np.repeat(targets, settings.solve_seeds, axis=0)
+                    seeds = self._rng.uniform(robot.lower, robot.upper, size=(len(targets), robot.dof))
+                    reached, ok = ik.solve_rows(targets, seeds, _LEVEL_AT, frame=frame)
+                    for q in reached[ok]:
+                        if len(kept) >= settings.solve_keep:
+                            break
+                        pose = self.space.tcp(q[None])[0] @ frame
+                        placed = sample_placements(
+                            thing.shape, support, face, world.obstacles, count=1, rng=self._rng, tries=1,
+                            around=(pose, 0.0, 0.0),
+                        )  # fmt: skip
+                        if len(placed):
+                            kept.append(placed)
+                            where.append((s, face))
+            self._add(kept, where)
 
     def _solutions(self, grasp: int) -> list[Array]:
         """Per candidate placement, the valid configurations found holding it by ``grasp``."""

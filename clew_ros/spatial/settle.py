@@ -7,7 +7,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from clew_ros.spatial.checker import SpatialChecker
-from clew_ros.spatial.inverse import pose_rows
+from clew_ros.spatial.inverse import LEVEL_ROWS
 from clew_ros.spatial.placements import Support, face_down, placement_pose, resting_on
 from clew_ros.spatial.space_parts import SpaceParts
 from clew_ros.spatial.transforms import inverse_matrix, matrices
@@ -16,9 +16,6 @@ from clew_ros.spatial.world import SpatialWorld
 __all__ = ["footprint_inside", "rest_below", "rests", "settle"]
 
 Array = NDArray[np.float64]
-
-#: a level face at a height: the pose error's z and its rotation's x and y (the object's x, y and yaw free)
-_LEVEL_ROWS = pose_rows(("z", "rx", "ry"))
 
 
 def footprint_inside(world: SpatialWorld, support: Support, face: str, pose: Array) -> bool:
@@ -113,7 +110,7 @@ def _level_settle(
     if not rows:
         return []
     object_targets = np.array([target @ rel for target in targets])
-    reached, ok = parts.settle_ik.solve_rows(object_targets, ends[rows], _LEVEL_ROWS, frame=rel)
+    reached, ok = parts.settle_ik.solve_rows(object_targets, ends[rows], LEVEL_ROWS, frame=rel)
     world = parts.world
     thing = world.object
     assert thing is not None

@@ -34,7 +34,44 @@ def holds(parts: SpaceParts, ctx: PlanningContext, q0: Array, object_pose: Array
     if len(found):
         found = parts.nearest_turns(q0, found[parts.transfer_checker(parts.grasp_rel(grasp)).valid(found)])
     ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
-    return ordered
+    return _movable_first(parts, ordered, object_pose, grasp)
+
+
+def _movable_first(parts: SpaceParts, found: Array, object_pose: Array, grasp: int) -> Array:
+    """``found`` (holding configurations, nearest first) without those of the first
+    :attr:`SpatialTuning.hold_way_out_checks` whose way out carries the object less than
+    :attr:`SpatialTuning.approach_m`, where one of them carries it that far; as they are where the nearest does
+    (one way out measured) or none does."""
+    tuning = parts.tuning
+    if not len(found) or tuning.hold_way_out_checks <= 0:
+        return found
+    rel = parts.grasp_rel(grasp)
+    checker = parts.transfer_checker(rel)
+    far = np.zeros(min(len(found), tuning.hold_way_out_checks), dtype=bool)
+    for k in range(len(far)):
+        far[k] = _carried_out_m(parts, checker, rel, object_pose, found[k]) >= tuning.approach_m - 1e-9
+        if k == 0 and far[0]:
+            return found
+    if not far.any():
+        return found
+    kept: Array = np.vstack([found[: len(far)][far], found[len(far) :]])
+    return kept
+
+
+def _carried_out_m(parts: SpaceParts, checker: SpatialChecker, grasp_rel: Array, object_pose: Array, q: Array) -> float:
+    """How far (m) the object held as ``grasp_rel`` from ``q`` gets by its way out
+    (:func:`~clew_ros.spatial.ways.way_out`), once per grasp, placement and configuration."""
+    return _out_m(parts, checker, grasp_rel, q, cache_key(grasp_rel, object_pose, q))
+
+
+def _out_m(parts: SpaceParts, checker: SpatialChecker, grasp_rel: Array, q: Array, key: bytes) -> float:
+    """How far (m) the object held as ``grasp_rel`` from ``q`` gets by its way out, cached under ``key``."""
+    if key not in parts.way_out_lengths:
+        rel = np.asarray(grasp_rel, dtype=float)
+        way = way_out(parts, checker, Mode.held(rel[None]), q)
+        held = parts.held_object_poses(np.vstack([q[None], q[None] if way is None else way[-1:]]), rel)
+        parts.way_out_lengths[key] = float(np.linalg.norm(held[1, :3] - held[0, :3]))
+    return parts.way_out_lengths[key]
 
 
 def goal_configurations(parts: SpaceParts, ctx: PlanningContext, q0: Array, grasp_rel: Array, goal: Array) -> Array:
@@ -67,13 +104,7 @@ def _way_out_m(
     """How far (m) the object held as ``grasp_rel`` at the goal pose ``pose`` (:func:`goal_poses`' index) gets
     by its way out (:func:`~clew_ros.spatial.ways.way_out`) from ``q``, once per grasp, goal and pose: a hand
     that can only lift its object a little in a cubby (its slide out meets a wall) comes in that way no more."""
-    key = cache_key(grasp_rel, goal, np.array([float(pose)]))
-    if key not in parts.way_out_lengths:
-        rel = np.asarray(grasp_rel, dtype=float)
-        way = way_out(parts, checker, Mode.held(rel[None]), q)
-        held = parts.held_object_poses(np.vstack([q[None], q[None] if way is None else way[-1:]]), rel)
-        parts.way_out_lengths[key] = float(np.linalg.norm(held[1, :3] - held[0, :3]))
-    return parts.way_out_lengths[key]
+    return _out_m(parts, checker, grasp_rel, q, cache_key(grasp_rel, goal, np.array([float(pose)])))
 
 
 def goal_poses(parts: SpaceParts, goal: Array) -> list[Array]:

@@ -176,6 +176,11 @@ class SpatialTuning:
     #: along its approach, in steps of ``approach_m`` while they are clear: out of a shelf deeper than one
     #: approach
     transfer_way_out_m: float = 0.3
+    #: a transit's holding configurations (count, nearest first) whose way out (:func:`~clew_ros.spatial.ways.way_out`)
+    #: is measured when the nearest's does not carry the object ``approach_m``: in a cubby, a posture whose
+    #: arm meets a wall as it slides the object out holds it where no transfer can start; those measured so
+    #: are dropped where one measured carries it out (0: no measuring)
+    hold_way_out_checks: int = 6
     #: whether a transfer's Manhattan moves may start near a contact (free intervals sampled on the exact
     #: geometry where the spheres refuse the row); False: a carried object leaves a tight spot by its straight
     #: way out and set-down moves only, and the GA's moves stay where the spheres clear them (a search of

@@ -115,7 +115,7 @@ def _other_ways(parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array
     the retreat and the approach, directly or over the top (both raised :attr:`SpatialTuning.carry_raise_m`)."""
     kinds = approach_poses(parts, mode, np.vstack([q[None], targets]))
     if len(kinds) < 2:
-        return None
+        return _over_the_top(parts, checker, q, targets, kinds[0][0])
     rows = np.vstack([q[None], targets])
     slid = _approach_joints(parts, kinds[1][0], rows)
     raised = parts.tcp(rows)
@@ -137,6 +137,27 @@ def _other_ways(parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array
                     if _path_clear(parts, checker, [a, *middle, b]):
                         found: Array = np.array([*retreat, *middle, *coming, targets[k]])
                         return found
+    return None
+
+
+def _over_the_top(parts: SpaceParts, checker: SpatialChecker, q: Array, targets: Array, backed: Array) -> Array | None:
+    """A transit's way from ``q`` (or its retreat) to the approach of one of the first
+    :attr:`SpatialTuning.slide_targets` ``targets`` (the tcp backed off, ``backed``: (m + 1, 4, 4), ``q``'s
+    first) and in, over the top: both ends raised :attr:`SpatialTuning.carry_raise_m` (a hand reaching
+    into a cubby past the table it stands on)."""
+    rows = np.vstack([q[None], targets])
+    approaches = _approach_joints(parts, backed, rows)
+    high: dict[bytes, Array] = {}
+    starts = [[]] + ([[approaches[0]]] if _path_clear(parts, checker, [q, approaches[0]]) else [])
+    for k in range(min(len(targets), parts.tuning.slide_targets)):
+        if not _path_clear(parts, checker, [approaches[k + 1], targets[k]]):
+            continue
+        for start in starts:
+            a = start[-1] if start else q
+            middle = [_raised(parts, a, high), _raised(parts, approaches[k + 1], high)]
+            if _path_clear(parts, checker, [a, *middle, approaches[k + 1]]):
+                found: Array = np.array([*start, *middle, approaches[k + 1], targets[k]])
+                return found
     return None
 
 

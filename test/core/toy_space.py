@@ -63,7 +63,7 @@ class ToyAims:
     def ranked(self, landmark: Landmark, grasps: list[int]) -> list[int]:
         return grasps
 
-    def placements(self, landmark: Landmark, grasp: int) -> list[np.ndarray]:
+    def placements(self, landmark: Landmark, grasp: int, start: np.ndarray) -> list[np.ndarray]:
         return []
 
 

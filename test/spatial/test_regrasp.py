@@ -289,10 +289,11 @@ def test_placements_are_drawn_again_near_those_one_grasp_holds() -> None:
     found = {}
     for draws in (0, 8):
         space = SpatialSpace(
-            world, replace(SpatialTuning(), regrasp=replace(SpatialTuning().regrasp, refine_draws=draws))
+            world,
+            replace(SpatialTuning(), regrasp=replace(SpatialTuning().regrasp, refine_draws=draws, solve_keep=0)),
         )
         aims = space.regrasp_aims(np.asarray(world.object.goal, dtype=float))
-        found[draws] = aims.placements(start, first.grasp)
+        found[draws] = aims.placements(start, first.grasp, np.asarray(first.waypoints[0]))
     assert found[0] == []  # the first draw: no placement both grasps hold
     assert found[8]
     for pose in found[8][:3]:  # each a stable placement on a support

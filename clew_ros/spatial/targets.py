@@ -14,7 +14,7 @@ from clew_ros.spatial.space_parts import SpaceParts, cache_key
 from clew_ros.spatial.transforms import inverse_matrix, matrices, turned_about_z
 from clew_ros.spatial.ways import way_out
 
-__all__ = ["GOAL_STREAM", "HOLD_STREAM", "goal_configurations", "goal_poses", "holds"]
+__all__ = ["GOAL_STREAM", "HOLD_STREAM", "goal_configurations", "goal_poses", "holds", "movable_first"]
 
 Array = NDArray[np.float64]
 
@@ -34,10 +34,10 @@ def holds(parts: SpaceParts, ctx: PlanningContext, q0: Array, object_pose: Array
     if len(found):
         found = parts.nearest_turns(q0, found[parts.transfer_checker(parts.grasp_rel(grasp)).valid(found)])
     ordered: Array = found[np.argsort(np.abs(found - q0).sum(axis=1), kind="stable")]
-    return _movable_first(parts, ordered, object_pose, grasp)
+    return movable_first(parts, ordered, object_pose, grasp)
 
 
-def _movable_first(parts: SpaceParts, found: Array, object_pose: Array, grasp: int) -> Array:
+def movable_first(parts: SpaceParts, found: Array, object_pose: Array, grasp: int) -> Array:
     """``found`` (holding configurations, nearest first) without those of the first
     :attr:`SpatialTuning.hold_way_out_checks` whose way out carries the object less than
     :attr:`SpatialTuning.approach_m`, where one of them carries it that far; as they are where the nearest does

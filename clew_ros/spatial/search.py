@@ -28,7 +28,14 @@ from clew_ros.spatial.targets import goal_configurations, holds
 from clew_ros.spatial.transforms import matrices, rotation_vectors
 from clew_ros.spatial.ways import way, way_out
 
-__all__ = ["TRANSFER_TREES_STREAM", "SearchSpace", "search_transfer", "search_transits", "straight_probe"]
+__all__ = [
+    "TRANSFER_TREES_STREAM",
+    "SearchSpace",
+    "carried_out_then_in",
+    "search_transfer",
+    "search_transits",
+    "straight_probe",
+]
 
 Array = NDArray[np.float64]
 
@@ -162,6 +169,10 @@ def search_transfer(
         space.in_air = False
     waypoints = _finish(parts, ctx, job, waypoints, found)
     held = parts.held_object_poses(waypoints, rel)
+    if not at_goal(parts, held[-1], goal) and len(found) and not ctx.termination():
+        out_and_in = carried_out_then_in(parts, q0, rel, found)
+        if out_and_in is not None:
+            waypoints, held = out_and_in, parts.held_object_poses(out_and_in, rel)
     if not at_goal(parts, held[-1], goal):
         joined = transfer_trees(space, ctx, q0, rel, goal, found=found, searched=waypoints)
         if joined is not None:
@@ -178,6 +189,20 @@ def search_transfer(
     success = at_goal(parts, held[-1], goal)
     distance = float(goal_distance(parts, held[-1:], goal)[0])
     return PathResult(success, waypoints, 0.0 if success else distance, object_pose=held[-1])
+
+
+def carried_out_then_in(parts: SpaceParts, q0: Array, grasp_rel: Array, found: Array) -> Array | None:
+    """The object (held as ``grasp_rel``) carried out of where it rests at ``q0`` by its way out
+    (:func:`~clew_ros.spatial.ways.way_out`: out of a cubby or a shelf), then by straight moves to the first
+    goal configuration ``found`` it reaches (:func:`~clew_ros.spatial.ways.way`: directly, by its approach
+    or slid in); ``None`` where either is blocked. The waypoints from ``q0``."""
+    rel = np.asarray(grasp_rel, dtype=float)
+    mode = Mode.held(rel[None])
+    out = way_out(parts, parts.transfer_checker(rel), mode, q0)
+    if out is None:
+        return None
+    into = way(parts, mode, out[-1], found)
+    return None if into is None else np.vstack([out, into])
 
 
 def transfer_trees(

@@ -15,6 +15,7 @@ pytest.importorskip("coal")
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.core.tree import Landmark
+from clew_ros.spatial.search import carried_out_then_in
 from clew_ros.spatial.settle import rests
 from clew_ros.spatial.space import SpatialSpace
 from clew_ros.spatial.targets import holds, movable_first
@@ -103,3 +104,24 @@ def test_holding_configurations_that_cannot_carry_the_object_out_are_dropped() -
     assert np.allclose(kept[0], good[0])
     alone = movable_first(parts, stuck[None], pose, grasp)
     assert len(alone) == 1  # none carries it out: as they were
+
+
+def test_a_transfer_carries_the_object_out_of_a_cubby_then_in_to_its_target() -> None:
+    """From the witness's grasp in a UR5's cubby, the object's way out and then straight moves reach the
+    configuration that sets it down on the table: every move clear with the object held, the object out of
+    the cubby on the way (its way out carries it ``approach_m`` at least)."""
+    made = generated("spatial_cubby_bin", 502, "ur5")
+    world = made.world()
+    first = next(s for s in made.witness.segments if s.kind == "transfer")
+    assert first.grasp is not None
+    space = SpatialSpace(world)
+    parts = space.parts
+    rel = space.grasp_rel(first.grasp)
+    q0, target = np.asarray(first.waypoints[0]), np.asarray(first.waypoints[-1])
+    path = carried_out_then_in(parts, q0, rel, target[None])
+    assert path is not None
+    assert np.allclose(path[-1], target)
+    points = np.vstack([q0[None], path])
+    assert parts.clear(parts.transfer_checker(rel), points[:-1], points[1:]).all()
+    carried = parts.held_object_poses(points, rel)
+    assert np.max(np.linalg.norm(carried[:, :3] - carried[0, :3], axis=1)) >= parts.tuning.approach_m

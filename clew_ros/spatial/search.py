@@ -29,6 +29,7 @@ from clew_ros.spatial.transforms import matrices, rotation_vectors
 from clew_ros.spatial.ways import way, way_out
 
 __all__ = [
+    "CARRY_STREAM",
     "TRANSFER_TREES_STREAM",
     "SearchSpace",
     "carried_out_then_in",
@@ -41,6 +42,8 @@ Array = NDArray[np.float64]
 
 #: A failed SEARCH_TRANSFER's two trees (:func:`transfer_trees`): their own stream (core.search.own_generator).
 TRANSFER_TREES_STREAM = 23
+#: The object carried out and in through a drawn configuration (:func:`carried_out_then_in`): its own stream.
+CARRY_STREAM = 24
 
 
 class SearchSpace(MotionSpace, Protocol):
@@ -170,7 +173,8 @@ def search_transfer(
     waypoints = _finish(parts, ctx, job, waypoints, found)
     held = parts.held_object_poses(waypoints, rel)
     if not at_goal(parts, held[-1], goal) and len(found) and not ctx.termination():
-        out_and_in = carried_out_then_in(parts, q0, rel, found)
+        rng = own_generator(ctx, CARRY_STREAM, q0, np.r_[rel, goal])
+        out_and_in = carried_out_then_in(parts, q0, rel, found, rng)
         if out_and_in is not None:
             waypoints, held = out_and_in, parts.held_object_poses(out_and_in, rel)
     if not at_goal(parts, held[-1], goal):
@@ -191,18 +195,37 @@ def search_transfer(
     return PathResult(success, waypoints, 0.0 if success else distance, object_pose=held[-1])
 
 
-def carried_out_then_in(parts: SpaceParts, q0: Array, grasp_rel: Array, found: Array) -> Array | None:
+def carried_out_then_in(
+    parts: SpaceParts, q0: Array, grasp_rel: Array, found: Array, rng: np.random.Generator
+) -> Array | None:
     """The object (held as ``grasp_rel``) carried out of where it rests at ``q0`` by its way out
-    (:func:`~clew_ros.spatial.ways.way_out`: out of a cubby or a shelf), then by straight moves to the first
-    goal configuration ``found`` it reaches (:func:`~clew_ros.spatial.ways.way`: directly, by its approach
-    or slid in); ``None`` where either is blocked. The waypoints from ``q0``."""
+    (:func:`~clew_ros.spatial.ways.way_out`: out of a bin, a cubby or a shelf), then by straight moves to the
+    first goal configuration ``found`` it reaches (:func:`~clew_ros.spatial.ways.way`: directly, by its
+    approach or slid in); else to the end of the way out of one of the first two of ``found``, through one
+    of :attr:`SpatialTuning.carry_vias` valid configurations drawn from ``rng`` (a long swing of the arm's
+    first joints that a straight move cannot make), and in along it. ``None`` where none is clear; the
+    waypoints from ``q0``."""
     rel = np.asarray(grasp_rel, dtype=float)
     mode = Mode.held(rel[None])
-    out = way_out(parts, parts.transfer_checker(rel), mode, q0)
+    checker = parts.transfer_checker(rel)
+    out = way_out(parts, checker, mode, q0)
     if out is None:
         return None
     into = way(parts, mode, out[-1], found)
-    return None if into is None else np.vstack([out, into])
+    if into is not None:
+        return np.vstack([out, into])
+    robot = parts.world.robot
+    vias = rng.uniform(robot.lower, robot.upper, size=(parts.tuning.carry_vias, robot.dof))
+    vias = vias[checker.valid(vias)]
+    for target in found[:2]:
+        back = way_out(parts, checker, mode, target)
+        if back is None or not len(vias):
+            continue
+        ends = np.broadcast_to(back[-1], vias.shape)
+        through = parts.clear(checker, np.broadcast_to(out[-1], vias.shape), vias) & parts.clear(checker, vias, ends)
+        if through.any():
+            return np.vstack([out, vias[int(np.argmax(through))][None], back[::-1]])
+    return None
 
 
 def transfer_trees(

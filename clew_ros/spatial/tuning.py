@@ -181,6 +181,9 @@ class SpatialTuning:
     #: arm meets a wall as it slides the object out holds it where no transfer can start; those measured so
     #: are dropped where one measured carries it out (0: no measuring)
     hold_way_out_checks: int = 6
+    #: where SEARCH_TRANSFER's GA stops short, the object carried out and in (ways out at both ends) through
+    #: one of this many random configurations (count; 0: none) where no straight move joins the two ways out
+    carry_vias: int = 24
     #: whether a transfer's Manhattan moves may start near a contact (free intervals sampled on the exact
     #: geometry where the spheres refuse the row); False: a carried object leaves a tight spot by its straight
     #: way out and set-down moves only, and the GA's moves stay where the spheres clear them (a search of

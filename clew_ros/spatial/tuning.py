@@ -151,7 +151,10 @@ class SpatialTuning:
     slide_targets: int = 2
     #: ... the slide in this many straight moves (count), each to inverse kinematics' configuration seeded at
     #: the one before: a straight joint move over the whole slide sags into a ceiling a few mm above
-    slide_steps: int = 4
+    slide_steps: int = 8
+    #: a transit's way in from a grasp's approach, where the straight joint move sags into a cubby's wall, in
+    #: this many short moves (count) along the tcp's line, each seeded at the one further in
+    approach_steps: int = 8
     #: ... and from that retreat to that approach, where the straight move between them is blocked, over the
     #: top: both raised this much (m)
     carry_raise_m: float = 0.2

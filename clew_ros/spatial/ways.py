@@ -143,22 +143,63 @@ def _other_ways(parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array
 def _over_the_top(parts: SpaceParts, checker: SpatialChecker, q: Array, targets: Array, backed: Array) -> Array | None:
     """A transit's way from ``q`` (or its retreat) to the approach of one of the first
     :attr:`SpatialTuning.slide_targets` ``targets`` (the tcp backed off, ``backed``: (m + 1, 4, 4), ``q``'s
-    first) and in, over the top: both ends raised :attr:`SpatialTuning.carry_raise_m` (a hand reaching
-    into a cubby past the table it stands on)."""
+    first) and in, straight or in :attr:`SpatialTuning.approach_steps` short moves (a straight joint move from
+    the approach sags into a cubby's wall): directly, over the top (both ends raised
+    :attr:`SpatialTuning.carry_raise_m`: a hand reaching into a cubby past the table it stands on), or through
+    one of :attr:`SpatialTuning.carry_vias` valid configurations drawn from a generator of the call's own (a
+    long swing that a straight move cannot make)."""
     rows = np.vstack([q[None], targets])
     approaches = _approach_joints(parts, backed, rows)
     high: dict[bytes, Array] = {}
-    starts = [[]] + ([[approaches[0]]] if _path_clear(parts, checker, [q, approaches[0]]) else [])
-    for k in range(min(len(targets), parts.tuning.slide_targets)):
-        if not _path_clear(parts, checker, [approaches[k + 1], targets[k]]):
-            continue
+    starts: list[list[Array]] = [[]]
+    if _path_clear(parts, checker, [q, approaches[0]]):
+        starts.append([approaches[0]])
+    comings: list[list[Array] | None] = [
+        _coming(parts, checker, backed[k + 1], approaches[k + 1], targets[k])
+        for k in range(min(len(targets), parts.tuning.slide_targets))
+    ]
+    ins = [c for c in comings if c is not None]
+    robot = parts.world.robot
+    vias = np.random.default_rng(0).uniform(robot.lower, robot.upper, size=(parts.tuning.carry_vias, robot.dof))
+    vias = vias[checker.valid(vias)] if len(vias) else vias
+    for coming in ins:
         for start in starts:
             a = start[-1] if start else q
-            middle = [_raised(parts, a, high), _raised(parts, approaches[k + 1], high)]
-            if _path_clear(parts, checker, [a, *middle, approaches[k + 1]]):
-                found: Array = np.array([*start, *middle, approaches[k + 1], targets[k]])
-                return found
+            for middle in ([], [_raised(parts, a, high), _raised(parts, coming[0], high)]):
+                if _path_clear(parts, checker, [a, *middle, coming[0]]):
+                    found: Array = np.array([*start, *middle, *coming])
+                    return found
+    for coming in ins:
+        for start in starts:
+            a = start[-1] if start else q
+            through = parts.clear(checker, np.broadcast_to(a, vias.shape), vias) & parts.clear(
+                checker, vias, np.broadcast_to(coming[0], vias.shape)
+            )
+            if through.any():
+                return np.array([*start, vias[int(np.argmax(through))], *coming])
     return None
+
+
+def _coming(
+    parts: SpaceParts, checker: SpatialChecker, backed: Array, approach: Array, target: Array
+) -> list[Array] | None:
+    """The moves in from a grasp's approach (the tcp at ``backed``, 4x4) to ``target``: straight from
+    ``approach`` where it is clear, else in :attr:`SpatialTuning.approach_steps` short moves along the tcp's
+    line, each configuration seeded at the next one in (``None``: neither is clear)."""
+    if not np.isnan(approach).any() and _path_clear(parts, checker, [approach, target]):
+        return [approach, target]
+    count = parts.tuning.approach_steps
+    here = parts.tcp(target[None])[0]
+    path, last = [target], target
+    for i in range(count, 0, -1):
+        pose = here.copy()
+        pose[:3, 3] += (backed[:3, 3] - here[:3, 3]) * (count - i + 1) / count
+        step = _approach_joints(parts, pose[None], last[None])[0]
+        if np.isnan(step).any():
+            return None
+        path.insert(0, step)
+        last = step
+    return path if _path_clear(parts, checker, path) else None
 
 
 def _slide_steps(parts: SpaceParts, raised: Array, along: Array, lifted: Array) -> Array:

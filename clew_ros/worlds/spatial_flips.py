@@ -8,12 +8,12 @@
   fingers meets them too). The witness takes the bar from above, stands it on its end on a third table (both
   grasps then come from the side, from opposite sides), takes it with the other grasp and lays it down turned
   over.
-- **laid down** (``spatial_laid_down``): a tall box (12-20 cm, too tall to stand in the goal's cubby) stands in
-  a cubby whose ceiling is 2-3 cm above it (grasps from its open side only) and must end lying on one of its
-  sides in a low cubby, its long axis pointing in, where only the grasps into its end face fit: the ceiling,
-  the board and the side walls a few mm away (4 cm thick: a hand without fingers meets them too) refuse the
-  others. The witness takes it out from the side, stands it on a table, takes it from above (its end) and
-  pushes it in lying down.
+- **laid down** (``spatial_laid_down``): a tall box (12-20 cm, too tall to stand in the goal's cubby) stands on a
+  shelf under its lid, 2-3 cm above it (grasps from the side only), and must end lying on one of its sides in a
+  low cubby, its long axis pointing in, where only the grasps into its end face fit: the ceiling, the board and
+  the side walls a few mm away (6 cm thick: a hand without fingers meets them too) refuse the others; the cubby
+  ends 2.5 cm short of the box's end, so the hand holding it there stays out. The witness takes it out from the
+  side, stands it on a table, takes it from above (its end) and pushes it in lying down.
 
 The proof that no single transfer exists is
 :func:`~clew_ros.worlds.spatial_regrasp.single_grasp_refutation`; a world where one grasp escapes it is not kept.
@@ -47,13 +47,18 @@ __all__ = ["TURNED_WORLDS", "flip_world", "laid_down_world"]
 BAR_LENGTH_M = (0.1, 0.16)
 BAR_WIDTH_M = (0.03, 0.05)
 BAR_THICKNESS_M = (0.03, 0.05)
-#: A flip's start and goal tables, and the boards and walls of a laid-down box's goal cubby, are this thick (m):
-#: the hand of a grasp from below or through a wall (a wrist without fingers too, the UR5's tool 5 cm behind its
-#: tcp) meets them.
+#: A flip's start and goal tables are this thick (m): the hand of the grasp from below (a wrist without fingers
+#: too, the UR5's tool 5 cm behind its tcp) meets them.
 THICK_SUPPORT_M = 0.1
 #: A laid-down box: its height (m, along z: it cannot stand in the goal's cubby) and its two other sides.
 TALL_M = (0.12, 0.2)
 TALL_SIDE_M = (0.03, 0.06)
+#: The board, ceiling and walls of its goal cubby are this thick (m): the hand of a grasp from below or through a
+#: wall meets them (the UR5's tool, 5 cm behind its tcp, at most 4.4 cm beyond the box's face).
+LOW_CUBBY_WALL_M = 0.06
+#: Its goal cubby ends this far (m) behind its end face: the hand holding it by its end (the tcp 1.5 cm inside)
+#: stays out of the cubby.
+LOW_CUBBY_RECESS_M = 0.025
 #: Its holds back off along the hand's approach this far (m) beyond its height (at least the settings' approach).
 LAID_CLEAR_M = 0.06
 
@@ -128,16 +133,15 @@ def laid_down_world(builder: Any) -> tuple[dict[str, Any], Plan, list[str]]:
     if goal is None:
         raise RejectedError("the hand cannot back off the goal past the object's length")
     start, holds = holds[0], (*holds[:3], goal)
-    for name, hold, thickness in (
-        ("start", start, settings.board_thickness_m),
-        ("goal", goal, THICK_SUPPORT_M),
-    ):
+    for hold, thickness, shelf in ((start, settings.board_thickness_m, True), (goal, LOW_CUBBY_WALL_M, False)):
         approach = solver.kinematics.tcp_poses(hold.q[None])[0][:3, 2]
-        items = cubby_around(builder.thing, hold, approach, rng, thickness)
-        builder.obstacles.update({key.replace("cubby", f"cubby_{name}"): entry for key, entry in items.items()})
+        recess = 0.0 if shelf else LOW_CUBBY_RECESS_M
+        builder.obstacles.update(
+            cubby_around(builder.thing, hold, approach, rng, thickness, shelf=shelf, recess=recess)
+        )
     builder.table("table", holds[1])
     _check_clear(builder, holds)
-    builder.supports[:] = ["cubby_start_board", "table", "cubby_goal_board"]
+    builder.supports[:] = ["shelf_board", "table", "cubby_board"]
     tree, plan, refutation = witness_world(
         builder,
         (first, second),

@@ -255,11 +255,12 @@ def cubby_around(
     thickness: float,
     *,
     shelf: bool = False,
+    recess: float = 0.0,
 ) -> dict[str, dict[str, Any]]:
     """A cubby around ``hold``'s placement, open against ``approach`` (the hand's horizontal approach
     direction): a board (the support), a ceiling 2-3 cm above the object, a back wall and two side walls a few
-    mm from it; the board and ceiling end at the object's front face. A ``shelf`` has no side walls: its board
-    and lid run on 8-25 cm beyond the object on either side."""
+    mm from it; the board and ceiling end at the object's front face (``recess`` m behind it). A ``shelf`` has no
+    side walls: its board and lid run on 8-25 cm beyond the object on either side."""
     centre = hold.pose[:3, 3]
     bottom = float(centre[2] - thing.height(hold.face))
     height = 2 * thing.height(hold.face)
@@ -271,7 +272,7 @@ def cubby_around(
     if shelf:
         left, right = rng.uniform(*SHELF_SIDE_M, size=2)
     ceiling = float(rng.uniform(*CEILING_RANGE_M))
-    front = -half[0]
+    front = -half[0] + recess
     rear = half[0] + back
     width_lo, width_hi = -half[1] - right, half[1] + left
     inside = height + ceiling

@@ -90,17 +90,17 @@ def test_a_flip_on_thin_tables_lets_a_wrist_without_fingers_pass_under_them(thic
         single_grasp_refutation(replace(world, obstacles=thin))
 
 
-def test_the_laid_down_box_stands_in_a_cubby_and_ends_lying_in_a_low_one() -> None:
+def test_the_laid_down_box_stands_on_a_shelf_and_ends_lying_in_a_low_cubby() -> None:
     made = generated("spatial_laid_down")
     world = made.world()
     assert world.object is not None
     thing = world.object.shape
     assert 0.12 <= thing.size[2] <= 0.2
-    assert world.object.initial_on == ("cubby_start_board", "-z")
-    assert world.object.goal_on[0] == "cubby_goal_board"
+    assert world.object.initial_on == ("shelf_board", "-z")
+    assert world.object.goal_on[0] == "cubby_board"
     assert world.object.goal_on[1] in ("+x", "-x", "+y", "-y")
-    board = next(s for s in world.supports if s.name == "cubby_goal_board")
-    ceiling = next(o for o in world.obstacles if o.name == "cubby_goal_ceiling")
+    board = next(s for s in world.supports if s.name == "cubby_board")
+    ceiling = next(o for o in world.obstacles if o.name == "cubby_ceiling")
     assert ceiling.pose[2, 3] - ceiling.size[2] / 2 - board.top < thing.size[2]  # it cannot stand in there
     goal = pose_matrix(list(world.object.goal))
     assert abs(goal[2, 2]) < 1e-6  # its long axis level
@@ -108,9 +108,9 @@ def test_the_laid_down_box_stands_in_a_cubby_and_ends_lying_in_a_low_one() -> No
     assert transfers[1].grasp in (0, 1)  # the grasps into its end face (clew_ros.worlds.spatial_holds.grasps_of)
 
 
-def test_a_laid_down_world_whose_start_cubby_opens_needs_no_regrasp() -> None:
+def test_a_laid_down_world_whose_start_shelf_opens_needs_no_regrasp() -> None:
     world = generated("spatial_laid_down").world()
-    walls = ("cubby_start_ceiling", "cubby_start_back", "cubby_start_left", "cubby_start_right")
+    walls = ("shelf_ceiling", "shelf_back")
     opened = replace(world, obstacles=tuple(o for o in world.obstacles if o.name not in walls))
     with pytest.raises(RejectedError, match="blocked neither"):
         single_grasp_refutation(opened)  # a grasp into its end face now fits at the start too

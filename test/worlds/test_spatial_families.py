@@ -118,8 +118,8 @@ def test_the_layouts_are_the_families(written: dict[tuple[str, str], Path], robo
 
         laid, _ = load(written["spatial_laid_down", robot])
         assert laid.object is not None
-        assert laid.object.initial_on == ("cubby_start_board", "-z")
-        assert laid.object.goal_on[0] == "cubby_goal_board"
+        assert laid.object.initial_on == ("shelf_board", "-z")
+        assert laid.object.goal_on[0] == "cubby_board"
         assert laid.object.goal_on[1] in ("+x", "-x", "+y", "-y")  # lying on a side
 
     reorient, _ = load(written["spatial_reorient", robot])

@@ -1,12 +1,13 @@
 """The planner on spatial worlds where a regrasp is necessary (:mod:`clew_ros.worlds.spatial_regrasp`).
 
-For each family (``spatial_bin_cubby``, ``spatial_cubby_bin``, ``spatial_shelf_bin``, ``spatial_bin_shelf``), arm
-(Panda, UR5, random arms of 6-7 joints ending in a wrist) and
-world seed, the world is generated (not timed; its witness has two transfers and no grasp is valid at both the
-start and the goal) and planned once within ``--time-limit``. Printed per family and arm: success, median
-time, transfers against the witness's, false "no path" answers (NO_PATH_AT_RESOLUTION on a world with a
-witness: must be 0), plans valid on the exact geometry (:func:`clew_ros.spatial.plan.validate_plan`, coal)
-and plans that drag the object (:func:`clew_ros.spatial.handling.drag_problems`).
+For each family (``spatial_bin_cubby``, ``spatial_cubby_bin``, ``spatial_shelf_bin``, ``spatial_bin_shelf``, and
+those that turn the object, :mod:`clew_ros.worlds.spatial_flips`: ``spatial_flip``, ``spatial_laid_down``), arm
+(Panda, UR5, random arms of 6-7 joints ending in a wrist) and world seed, the world is generated (not timed; its
+witness has two transfers and no grasp is valid at both the start and the goal) and planned once within
+``--time-limit``. Printed per family and arm: success, median time, transfers against the witness's, false "no path"
+answers (NO_PATH_AT_RESOLUTION on a world with a witness: must be 0), plans valid on the exact geometry
+(:func:`clew_ros.spatial.plan.validate_plan`, coal) and plans that drag the object
+(:func:`clew_ros.spatial.handling.drag_problems`).
 
     python -m benchmarks spatial_regrasp --seeds 4 --first-seed 100 --time-limit 10
 """

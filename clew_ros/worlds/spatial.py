@@ -51,6 +51,7 @@ from clew_ros.spatial.transforms import matrix_pose, pose_matrix, rpy_matrix
 from clew_ros.spatial.validate import validate_transit
 from clew_ros.spatial.world import SpatialWorld, spatial_world_from_parameters
 from clew_ros.worlds.errors import GenerationError, UnknownFamilyError
+from clew_ros.worlds.spatial_flips import TURNED_WORLDS
 from clew_ros.worlds.spatial_holds import (
     Hold,
     Solver,
@@ -99,7 +100,8 @@ class SpatialFamily:
     angle_tolerances: tuple[float, ...] = (math.pi, 0.3)
     #: the arm starts at the approach of the start's grasp (not at its home, which may reach over a shelf)
     start_at_approach: bool = False
-    #: a regrasp family: the key of :data:`~clew_ros.worlds.spatial_regrasp.REGRASP_LAYOUTS` ("": none)
+    #: a regrasp family: the key of :data:`~clew_ros.worlds.spatial_regrasp.REGRASP_LAYOUTS` or of
+    #: :data:`~clew_ros.worlds.spatial_flips.TURNED_WORLDS` ("": none)
     regrasp: str = ""
     #: the arms it is generated on (a regrasp family's random arm ends in a wrist: without one, a random arm
     #: rarely holds an object both from above and from the side at one placement, 0 worlds in 200 draws)
@@ -155,6 +157,18 @@ SPATIAL_FAMILIES: dict[str, SpatialFamily] = {
             "spatial: a regrasp is needed: from a bin (grasps from above only) onto a shelf under its lid",
             "regrasp",
             regrasp="bin_shelf",
+        ),
+        SpatialFamily(
+            "spatial_flip",
+            "spatial: a regrasp is needed: a bar turned over (grasps into its top and bottom faces only)",
+            "regrasp",
+            regrasp="flip",
+        ),
+        SpatialFamily(
+            "spatial_laid_down",
+            "spatial: a regrasp is needed: a tall box from a cubby (side grasps) laid down in a low one (its end)",
+            "regrasp",
+            regrasp="laid_down",
         ),
         SpatialFamily(
             "spatial_unsolvable",
@@ -584,7 +598,10 @@ def _witness_stats(builder: _Builder, plan: Plan) -> tuple[float, dict[str, Any]
 def _regrasp(builder: _Builder) -> SpatialGenerated:
     """A world where a regrasp is needed (:mod:`clew_ros.worlds.spatial_regrasp`)."""
     family = builder.family
-    tree, plan, notes = regrasp_world(builder, REGRASP_LAYOUTS[family.regrasp])
+    if family.regrasp in TURNED_WORLDS:
+        tree, plan, notes = TURNED_WORLDS[family.regrasp](builder)
+    else:
+        tree, plan, notes = regrasp_world(builder, REGRASP_LAYOUTS[family.regrasp])
     world = builder.world(tree)
     travel, stats = _witness_stats(builder, plan)
     what = f"{builder.robot_name} ({world.robot.dof} joints), a {builder.thing.shape} {list(builder.thing.size)} m"

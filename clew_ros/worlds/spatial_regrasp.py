@@ -45,9 +45,13 @@ __all__ = [
     "REGRASP_LAYOUTS",
     "RegraspLayout",
     "RejectedError",
+    "cubby_around",
+    "enclosure_clear",
     "hand_blocked",
     "regrasp_world",
     "single_grasp_refutation",
+    "witness_holds",
+    "witness_world",
 ]
 
 Matrix = NDArray[np.float64]
@@ -251,11 +255,12 @@ def cubby_around(
     thickness: float,
     *,
     shelf: bool = False,
+    recess: float = 0.0,
 ) -> dict[str, dict[str, Any]]:
     """A cubby around ``hold``'s placement, open against ``approach`` (the hand's horizontal approach
     direction): a board (the support), a ceiling 2-3 cm above the object, a back wall and two side walls a few
-    mm from it; the board and ceiling end at the object's front face. A ``shelf`` has no side walls: its board
-    and lid run on 8-25 cm beyond the object on either side."""
+    mm from it; the board and ceiling end at the object's front face (``recess`` m behind it). A ``shelf`` has no
+    side walls: its board and lid run on 8-25 cm beyond the object on either side."""
     centre = hold.pose[:3, 3]
     bottom = float(centre[2] - thing.height(hold.face))
     height = 2 * thing.height(hold.face)
@@ -267,7 +272,7 @@ def cubby_around(
     if shelf:
         left, right = rng.uniform(*SHELF_SIDE_M, size=2)
     ceiling = float(rng.uniform(*CEILING_RANGE_M))
-    front = -half[0]
+    front = -half[0] + recess
     rear = half[0] + back
     width_lo, width_hi = -half[1] - right, half[1] + left
     inside = height + ceiling
@@ -307,6 +312,11 @@ def _clear(arm: Arm, configurations: Sequence[NDArray[np.float64]], items: dict[
     return bool(checker.valid(np.asarray(configurations)).all())
 
 
+def enclosure_clear(arm: Arm, holds: Sequence[Hold], items: dict[str, dict[str, Any]]) -> bool:
+    """Whether the arm clears the obstacles ``items`` at every hold's configurations (leaving and lifting)."""
+    return _clear(arm, [q for hold in holds for q in (*hold.leaving, *hold.raising)], items)
+
+
 def hold_at(
     solver: Solver,
     arm: Arm,
@@ -315,9 +325,11 @@ def hold_at(
     *,
     rng: np.random.Generator,
     near: NDArray[np.float64],
+    face: str = "-z",
 ) -> Hold | None:
-    """A hold of the object at exactly ``pose`` by ``grasp`` (inverse kinematics of the whole tcp pose, arms of
-    6 joints or more), with its approach and lift; ``None`` when no valid solution is found."""
+    """A hold of the object at exactly ``pose`` (resting on ``face``) by ``grasp`` (inverse kinematics of the
+    whole tcp pose, arms of 6 joints or more), with its approach and lift; ``None`` when no valid solution is
+    found."""
     if arm.robot.dof < 6:
         return None
     target = pose @ grasp
@@ -328,7 +340,7 @@ def hold_at(
     if not len(valid):
         return None
     q = valid[np.argmin(np.abs(valid - near).sum(axis=1))]
-    return hold_from(solver, arm, q, pose, "-z", rng=rng)
+    return hold_from(solver, arm, q, pose, face, rng=rng)
 
 
 def _raised(robot: RobotModel, q: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64] | None:
@@ -420,25 +432,30 @@ def regrasp_segments(
     ]
 
 
-def _holds(
-    builder: Any, layout: RegraspLayout, firsts: list[int], second: int
+def witness_holds(
+    builder: Any,
+    layout: RegraspLayout,
+    firsts: list[int],
+    second: int,
+    faces: tuple[str, str, str] = ("-z", "-z", "-z"),
 ) -> tuple[int, tuple[Hold, Hold, Hold, Hold]]:
     """The first grasp (the first of ``firsts`` that serves) and the witness's four holds: the start (first
-    grasp), the table (first grasp, then ``second``, one pose), the goal (``second``)."""
+    grasp), the table (first grasp, then ``second``, one pose), the goal (``second``); ``faces``: the face the
+    object rests on at the start, on the table and at the goal."""
     arm, solver, rng, settings = builder.arm, builder.solver, builder.rng, builder.settings
     g2 = pose_matrix(builder.grasps[second][1])
     angle = rng.uniform(-math.pi, math.pi)
     turn = rng.uniform(*TURN_RAD) * rng.choice([-1.0, 1.0])
-    lifts = {"bin": None, "cubby": CUBBY_LIFT_M, "shelf": CUBBY_LIFT_M}
+    lifts = {"bin": None, "table": None, "cubby": CUBBY_LIFT_M, "shelf": CUBBY_LIFT_M}
     point = builder.point
-    goal = find_hold(solver, arm, g2, "-z", point(angle + turn), height=None, rng=rng, lift_m=lifts[layout.goal])
+    goal = find_hold(solver, arm, g2, faces[2], point(angle + turn), height=None, rng=rng, lift_m=lifts[layout.goal])
     if goal is None:
         raise RejectedError("no hold near the goal point")
     where = point(angle)
     starts: dict[int, Hold | None] = {}
     for fraction in TABLE_FRACTIONS:  # the table half-way round, else nearer either end
         table_second = find_hold(
-            solver, arm, g2, "-z", point(angle + fraction * turn), height=None, rng=rng, near=goal.q
+            solver, arm, g2, faces[1], point(angle + fraction * turn), height=None, rng=rng, near=goal.q
         )
         if table_second is None:
             continue
@@ -446,7 +463,7 @@ def _holds(
             if first not in starts:
                 g1 = pose_matrix(builder.grasps[first][1])
                 starts[first] = find_hold(
-                    solver, arm, g1, "-z", where, height=None, rng=rng, near=goal.q, lift_m=lifts[layout.start]
+                    solver, arm, g1, faces[0], where, height=None, rng=rng, near=goal.q, lift_m=lifts[layout.start]
                 )
             start = starts[first]
             if start is None:
@@ -472,11 +489,12 @@ def _table_holds(
     """The table's two holds at one pose: the first grasp at ``second``'s pose; else the other way round (the
     first grasp's own level hold there, the second grasp at its pose). ``ends``: the start and goal holds."""
     arm, solver, rng = builder.arm, builder.solver, builder.rng
-    first = hold_at(solver, arm, grasps[0], second.pose, rng=rng, near=ends[0].q)
+    face = second.face
+    first = hold_at(solver, arm, grasps[0], second.pose, rng=rng, near=ends[0].q, face=face)
     if first is not None:
         return first, second
-    other = find_hold(solver, arm, grasps[0], "-z", second.pose[:3, 3], height=None, rng=rng, near=ends[0].q)
-    there = None if other is None else hold_at(solver, arm, grasps[1], other.pose, rng=rng, near=ends[1].q)
+    other = find_hold(solver, arm, grasps[0], face, second.pose[:3, 3], height=None, rng=rng, near=ends[0].q)
+    there = None if other is None else hold_at(solver, arm, grasps[1], other.pose, rng=rng, near=ends[1].q, face=face)
     return None if other is None or there is None else (other, there)
 
 
@@ -516,7 +534,7 @@ def regrasp_world(builder: Any, layout: RegraspLayout) -> tuple[dict[str, Any], 
     first_kind, second_kind = layout.grasp_kind(layout.start), layout.grasp_kind(layout.goal)
     firsts = [int(i) for i in rng.permutation([i for i, k in enumerate(kinds) if k == first_kind])]
     second = int(rng.choice([i for i, k in enumerate(kinds) if k == second_kind]))
-    first, holds = _holds(builder, layout, firsts, second)
+    first, holds = witness_holds(builder, layout, firsts, second)
     start, goal = holds[0], holds[3]
     enclosures = {}
     for kind, hold in ((layout.start, start), (layout.goal, goal)):
@@ -524,22 +542,15 @@ def regrasp_world(builder: Any, layout: RegraspLayout) -> tuple[dict[str, Any], 
         enclosures[kind] = next(iter(items))
         builder.obstacles.update(items)
     builder.table("table", holds[2])
-    if not _clear(arm, [q for hold in holds for q in (*hold.leaving, *hold.raising)], builder.obstacles):
+    if not enclosure_clear(arm, holds, builder.obstacles):
         raise RejectedError("an enclosure or the table is in the way of the witness's holds")
     builder.supports[:] = [enclosures[layout.start], "table", enclosures[layout.goal]]
-    tree = builder.tree(start, goal, start.up)
-    tree["goal_angle_tolerance"] = float(rng.choice([0.3, math.pi]))
-    world = builder.world(tree)
-    tree["robot"]["initial"] = [round(float(v), 9) for v in builder.initial(world, start)]
-    world = builder.world(tree)
-    segments = regrasp_segments(world, (first, second), holds, rng=rng, tries=settings.via_tries)
-    plan = make_plan(
-        world, segments, message="witness: out of the first enclosure, regrasped on the table, into the second"
+    tree, plan, refutation = witness_world(
+        builder,
+        (first, second),
+        holds,
+        "witness: out of the first enclosure, regrasped on the table, into the second",
     )
-    problems = validate_plan(world, plan) or drag_problems(world, plan)
-    if problems:
-        raise RejectedError(f"the witness does not validate: {problems[0]}")
-    refutation = single_grasp_refutation(world)
     notes = [
         (
             f"{layout.start} to {layout.goal}: grasp {first} ({first_kind}) out of the {layout.start}, set down "
@@ -548,3 +559,24 @@ def regrasp_world(builder: Any, layout: RegraspLayout) -> tuple[dict[str, Any], 
         "No single transfer: " + "; ".join(refutation),
     ]
     return tree, plan, notes
+
+
+def witness_world(
+    builder: Any, grasps: tuple[int, int], holds: tuple[Hold, Hold, Hold, Hold], message: str
+) -> tuple[dict[str, Any], Plan, list[str]]:
+    """The world's parameter tree (its obstacles and supports already on ``builder``), the witness through
+    ``holds`` by ``grasps`` (checked on the exact geometry, not dragging the object) and the refutation of a
+    single transfer; :class:`RejectedError` when either fails."""
+    rng = builder.rng
+    start, goal = holds[0], holds[3]
+    tree = builder.tree(start, goal, start.up)
+    tree["goal_angle_tolerance"] = float(rng.choice([0.3, math.pi]))
+    world = builder.world(tree)
+    tree["robot"]["initial"] = [round(float(v), 9) for v in builder.initial(world, start)]
+    world = builder.world(tree)
+    segments = regrasp_segments(world, grasps, holds, rng=rng, tries=builder.settings.via_tries)
+    plan = make_plan(world, segments, message=message)
+    problems = validate_plan(world, plan) or drag_problems(world, plan)
+    if problems:
+        raise RejectedError(f"the witness does not validate: {problems[0]}")
+    return tree, plan, single_grasp_refutation(world)

@@ -110,6 +110,18 @@ def test_the_layouts_are_the_families(written: dict[tuple[str, str], Path], robo
         assert regrasp.object.goal_on[0] == "cubby_board"
         assert {"bin_wall_px", "cubby_ceiling", "table"} <= {o.name for o in regrasp.obstacles}
 
+        flip, _ = load(written["spatial_flip", robot])
+        assert flip.object is not None
+        assert flip.object.initial_on == ("table_a", "-z")
+        assert flip.object.goal_on == ("table_b", "+z")  # turned over
+        assert len(flip.object.grasps) == 2
+
+        laid, _ = load(written["spatial_laid_down", robot])
+        assert laid.object is not None
+        assert laid.object.initial_on == ("shelf_board", "-z")
+        assert laid.object.goal_on[0] == "cubby_board"
+        assert laid.object.goal_on[1] in ("+x", "-x", "+y", "-y")  # lying on a side
+
     reorient, _ = load(written["spatial_reorient", robot])
     assert reorient.object is not None
     assert reorient.object.initial_on[1] == "-z"

@@ -19,13 +19,17 @@ from numpy.typing import NDArray
 from clew_ros.core.tree import Segment
 from clew_ros.spatial.checker import SpatialChecker
 from clew_ros.spatial.handling import DragSettings, slides
+from clew_ros.spatial.inverse import pose_rows
 from clew_ros.spatial.transforms import pose_matrix
 from clew_ros.spatial.validate import validation_samples
 from clew_ros.spatial.views import HeldObjectView
 
-__all__ = ["LiftSettings", "drag_free", "lifted_segments", "slid_level"]
+__all__ = ["LiftSettings", "drag_free", "lift_up", "lifted_segments", "slid_level"]
 
 Array = NDArray[np.float64]
+
+#: a tcp pose with its turn about the vertical free: the pose error's rows but its rotation's z
+_YAW_FREE = pose_rows(("x", "y", "z", "rx", "ry"))
 
 
 class SpatialSpace(HeldObjectView, Protocol):
@@ -122,12 +126,24 @@ def _matrices(space: SpatialSpace, q: Array, rel: Array) -> Array:
     return np.asarray(space.tcp(q) @ pose_matrix([float(v) for v in rel]))
 
 
-def _up(space: SpatialSpace, q: Array, rise: float, checker: SpatialChecker) -> Array | None:
+def lift_up(space: SpatialSpace, q: Array, rise: float, checker: SpatialChecker) -> Array | None:
     """The valid configuration nearest ``q`` with the tcp ``rise`` higher, its orientation kept (``None``: none)."""
     target = space.tcp(q[None])[0].copy()
     target[2, 3] += rise
+    return _tcp_at(space, target, q, checker)
+
+
+def _tcp_at(space: SpatialSpace, target: Array, q: Array, checker: SpatialChecker) -> Array | None:
+    """The valid configuration nearest ``q`` with the tcp at ``target`` (4x4); where inverse kinematics finds
+    none for the whole pose (an arm at a joint limit), one seeded at ``q`` with the tcp's turn about the vertical
+    left free (the object still level, turned a little as it rises or slides: no drag); ``None``: neither."""
     found = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[q[None]], checker=checker)[0]
-    return None if not len(found) else np.asarray(found[np.argmin(np.abs(found - q).sum(axis=1))])
+    if len(found):
+        return np.asarray(found[np.argmin(np.abs(found - q).sum(axis=1))])
+    reached, ok = space.ik(1).solve_rows(target[None], q[None], _YAW_FREE)
+    if not ok[0] or not checker.valid(reached[:1])[0]:
+        return None
+    return np.asarray(reached[0])
 
 
 def _lifted_middle(space: SpatialSpace, waypoints: Array, rel: Array, settings: LiftSettings) -> Array | None:
@@ -149,7 +165,7 @@ def _lifted_middle(space: SpatialSpace, waypoints: Array, rel: Array, settings: 
     checker = space.transfer_checker(rel)
     before, after = waypoints[: int(piece[first - 1]) + 1], waypoints[int(piece[end + 1]) + 1 :]
     for rise in settings.lifts_m:
-        a_up, b_up = _up(space, a, rise, checker), _up(space, b, rise, checker)
+        a_up, b_up = lift_up(space, a, rise, checker), lift_up(space, b, rise, checker)
         if a_up is None or b_up is None:
             continue
         path = np.vstack([before[-1:], a, a_up, b_up, b, after[:1]])
@@ -176,13 +192,8 @@ def _lifted_start(space: SpatialSpace, waypoints: Array, rel: Array, settings: L
     start = samples[0]
     joins = np.unique(np.linspace(leave, len(samples) - 1, settings.joins).astype(np.int64))
     for rise in settings.lifts_m:
-        target = space.tcp(start[None])[0].copy()
-        target[2, 3] += rise
-        found = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[start[None]], checker=checker)[0]
-        if not len(found):
-            continue
-        up = found[np.argmin(np.abs(found - start).sum(axis=1))]
-        if not space.clear(checker, start[None], up[None])[0]:
+        up = lift_up(space, start, rise, checker)
+        if up is None or not space.clear(checker, start[None], up[None])[0]:
             continue
         shift = poses[leave, :3, 3] - poses[0, :3, 3]
         shift[2] = 0.0
@@ -239,11 +250,8 @@ def slid_level(space: SpatialSpace, up: Array, shift: Array, steps: int, checker
     for i in range(1, steps + 1):
         target = start.copy()
         target[:3, 3] += shift * i / steps
-        found = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[way[-1][None]], checker=checker)[0]
-        if not len(found):
-            return None
-        step = found[np.argmin(np.abs(found - way[-1]).sum(axis=1))]
-        if not space.clear(checker, way[-1][None], step[None])[0]:
+        step = _tcp_at(space, target, way[-1], checker)
+        if step is None or not space.clear(checker, way[-1][None], step[None])[0]:
             return None
         way.append(step)
     return way

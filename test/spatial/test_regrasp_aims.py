@@ -15,9 +15,12 @@ pytest.importorskip("coal")
 from clew_ros.core.settings import PlannerSettings
 from clew_ros.core.space import Mode, PlanningContext
 from clew_ros.core.tree import Landmark
+from clew_ros.spatial.handling import drag_problems
+from clew_ros.spatial.lift import lift_up
+from clew_ros.spatial.plan import make_plan
 from clew_ros.spatial.search import carried_out_then_in
 from clew_ros.spatial.settle import rests
-from clew_ros.spatial.space import SpatialSpace
+from clew_ros.spatial.space import SpatialSpace, plan
 from clew_ros.spatial.targets import holds, movable_first
 from clew_ros.spatial.tuning import SpatialTuning
 from clew_ros.spatial.ways import way
@@ -125,3 +128,30 @@ def test_a_transfer_carries_the_object_out_of_a_cubby_then_in_to_its_target() ->
     assert parts.clear(parts.transfer_checker(rel), points[:-1], points[1:]).all()
     carried = parts.held_object_poses(points, rel)
     assert np.max(np.linalg.norm(carried[:, :3] - carried[0, :3], axis=1)) >= parts.tuning.approach_m
+
+
+def test_an_arm_that_cannot_keep_its_tcp_turn_still_lifts_the_object_off_level() -> None:
+    """A random arm holds the object on a shelf's board where inverse kinematics finds no configuration with
+    the tcp 8 mm higher and its orientation kept: the lift leaves the tcp's turn about the vertical free (the
+    object stays level), so the plan's transfer lifts the object off instead of sliding it along the board."""
+    made = generated("spatial_shelf_bin", 702, "random")
+    world = made.world()
+    result = plan(world, PlannerSettings(seed=0, time_limit=30.0))
+    assert result.success, result.message
+    built = make_plan(world, [(s.kind, s.grasp, s.waypoints) for s in result.segments])
+    assert drag_problems(world, built) == []
+    space = SpatialSpace(world)
+    first = next(s for s in result.segments if s.kind == "transfer")
+    assert first.grasp is not None
+    start = np.asarray(first.waypoints[0], dtype=float)
+    checker = space.transfer_checker(space.grasp_rel(first.grasp))
+    target = space.tcp(start[None])[0].copy()
+    target[2, 3] += 0.008
+    whole = space.ik(1).solve_many([target], np.random.default_rng(0), seeds=[start[None]], checker=checker)[0]
+    up = lift_up(space, start, 0.008, checker)
+    assert up is not None
+    reached = space.tcp(up[None])[0]
+    assert np.allclose(reached[:3, 3], target[:3, 3], atol=1e-4)
+    assert abs(float(reached[2, 2]) - float(target[2, 2])) < 1e-4  # the tcp's tilt kept
+    if len(whole):
+        pytest.skip("inverse kinematics found the whole pose here: the fallback was not needed")

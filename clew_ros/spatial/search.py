@@ -129,7 +129,7 @@ def _finish(parts: SpaceParts, ctx: PlanningContext, job: SearchJob, waypoints: 
     if np.min(np.max(np.abs(targets - end), axis=1)) < 1e-9:
         return waypoints
     order = np.argsort(np.abs(targets - end).sum(axis=1), kind="stable")
-    found = way(parts, job.mode, end, targets[order])
+    found = way(parts, job.mode, end, targets[order], far=True)
     return waypoints if found is None else np.vstack([waypoints, found])
 
 

@@ -24,11 +24,12 @@ Array = NDArray[np.float64]
 _POSITION_ROWS = pose_rows(("x", "y", "z"))
 
 
-def way(parts: SpaceParts, mode: Mode, q: Array, targets: Array) -> Array | None:
+def way(parts: SpaceParts, mode: Mode, q: Array, targets: Array, *, far: bool = False) -> Array | None:
     """Waypoints (without ``q``) of straight joint-space moves from ``q`` to the first of ``targets``
     (nearest first) it reaches, each move checked at the validator's 0.002 rad in ``mode``: directly, or by
     way of the target's approach (:func:`offsets`: the tcp backed off, the object lifted), or from ``q``'s
-    own retreat; ``None`` if none is clear."""
+    own retreat; ``None`` if none is clear. ``far``: a transit may also go through a drawn configuration
+    (:func:`_over_the_top`; a search's last move, not each of its probes)."""
     checker = parts.checker_of(mode)
     targets = targets[: parts.tuning.straight_probes]
     count = len(targets)
@@ -51,7 +52,7 @@ def way(parts: SpaceParts, mode: Mode, q: Array, targets: Array) -> Array | None
         if parts.clear(checker, points[:-1], points[1:]).all():
             via: Array = points[1:]
             return via
-    return _other_ways(parts, mode, checker, q, targets)
+    return _other_ways(parts, mode, checker, q, targets, far=far)
 
 
 def offsets(parts: SpaceParts, mode: Mode, qs: Array) -> Array:
@@ -107,7 +108,9 @@ def _approach_joints(parts: SpaceParts, targets: Array, qs: Array) -> Array:
     return out
 
 
-def _other_ways(parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array, targets: Array) -> Array | None:
+def _other_ways(
+    parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array, targets: Array, *, far: bool
+) -> Array | None:
     """:func:`way`'s moves by way of a carried object's other approach (:func:`approach_poses`: lifted
     :attr:`SpatialTuning.slide_lift_m` and slid out along the tcp's -z, where lifting it straight up is
     blocked by a shelf's lid or a cubby's ceiling), which :func:`offsets` passes over when the first is
@@ -115,7 +118,7 @@ def _other_ways(parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array
     the retreat and the approach, directly or over the top (both raised :attr:`SpatialTuning.carry_raise_m`)."""
     kinds = approach_poses(parts, mode, np.vstack([q[None], targets]))
     if len(kinds) < 2:
-        return _over_the_top(parts, checker, q, targets, kinds[0][0])
+        return _over_the_top(parts, checker, q, targets, kinds[0][0], far=far)
     rows = np.vstack([q[None], targets])
     slid = _approach_joints(parts, kinds[1][0], rows)
     raised = parts.tcp(rows)
@@ -140,14 +143,16 @@ def _other_ways(parts: SpaceParts, mode: Mode, checker: SpatialChecker, q: Array
     return None
 
 
-def _over_the_top(parts: SpaceParts, checker: SpatialChecker, q: Array, targets: Array, backed: Array) -> Array | None:
+def _over_the_top(
+    parts: SpaceParts, checker: SpatialChecker, q: Array, targets: Array, backed: Array, *, far: bool
+) -> Array | None:
     """A transit's way from ``q`` (or its retreat) to the approach of one of the first
     :attr:`SpatialTuning.slide_targets` ``targets`` (the tcp backed off, ``backed``: (m + 1, 4, 4), ``q``'s
     first) and in, straight or in :attr:`SpatialTuning.approach_steps` short moves (a straight joint move from
     the approach sags into a cubby's wall): directly, over the top (both ends raised
     :attr:`SpatialTuning.carry_raise_m`: a hand reaching into a cubby past the table it stands on), or through
     one of :attr:`SpatialTuning.carry_vias` valid configurations drawn from a generator of the call's own (a
-    long swing that a straight move cannot make)."""
+    long swing that a straight move cannot make; ``far`` only)."""
     rows = np.vstack([q[None], targets])
     approaches = _approach_joints(parts, backed, rows)
     high: dict[bytes, Array] = {}
@@ -159,9 +164,6 @@ def _over_the_top(parts: SpaceParts, checker: SpatialChecker, q: Array, targets:
         for k in range(min(len(targets), parts.tuning.slide_targets))
     ]
     ins = [c for c in comings if c is not None]
-    robot = parts.world.robot
-    vias = np.random.default_rng(0).uniform(robot.lower, robot.upper, size=(parts.tuning.carry_vias, robot.dof))
-    vias = vias[checker.valid(vias)] if len(vias) else vias
     for coming in ins:
         for start in starts:
             a = start[-1] if start else q
@@ -169,6 +171,11 @@ def _over_the_top(parts: SpaceParts, checker: SpatialChecker, q: Array, targets:
                 if _path_clear(parts, checker, [a, *middle, coming[0]]):
                     found: Array = np.array([*start, *middle, *coming])
                     return found
+    if not far or not ins:
+        return None
+    robot = parts.world.robot
+    vias = np.random.default_rng(0).uniform(robot.lower, robot.upper, size=(parts.tuning.carry_vias, robot.dof))
+    vias = vias[checker.valid(vias)] if len(vias) else vias
     for coming in ins:
         for start in starts:
             a = start[-1] if start else q
